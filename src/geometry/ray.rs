@@ -1,0 +1,98 @@
+use glam::{DVec2, DVec3, UVec2, Vec3};
+
+/// A ray in world space. `direction` is not necessarily unit length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: DVec3,
+    pub direction: DVec3,
+}
+
+impl Ray {
+    pub fn normalized(self) -> Self {
+        Self {
+            origin: self.origin,
+            direction: self.direction.normalize(),
+        }
+    }
+
+    /// Distance from `p` to the infinite line carrying the ray.
+    pub fn distance_to_point(&self, p: DVec3) -> f64 {
+        let d = self.direction.normalize();
+        let v = p - self.origin;
+        (v - v.dot(d) * d).length()
+    }
+
+    /// Where the ray's line meets a plane, or `None` if parallel to it.
+    pub fn hit_plane(&self, point: DVec3, normal: DVec3) -> Option<DVec3> {
+        let denom = self.direction.dot(normal);
+        if denom.abs() <= f64::EPSILON * self.direction.length() * normal.length() {
+            return None;
+        }
+        let t = (point - self.origin).dot(normal) / denom;
+        Some(self.origin + t * self.direction)
+    }
+}
+
+/// Normalised image coordinates of pixel (x, y)'s centre in an image of
+/// `size`; (0, 0) is the lower-left corner of the image, (1, 1) the upper-right.
+pub fn pixel_centre(x: u32, y: u32, size: UVec2) -> DVec2 {
+    DVec2::new(
+        (f64::from(x) + 0.5) / f64::from(size.x),
+        (f64::from(y) + 0.5) / f64::from(size.y),
+    )
+}
+
+/// Anything that turns image positions into primary rays.
+pub trait PrimaryRays {
+    /// The ray through normalised image position `s` (see [`pixel_centre`]).
+    /// Origin and unnormalised direction are affine in `s`; that is what
+    /// lets every camera lower to a [`RayGen`].
+    fn ray_through(&self, s: DVec2) -> Ray;
+
+    /// The unit-direction primary ray of pixel (x, y).
+    fn pixel_ray(&self, x: u32, y: u32, size: UVec2) -> Ray {
+        self.ray_through(pixel_centre(x, y, size)).normalized()
+    }
+
+    /// This camera as a per-pixel linear ray generator for an image of `size`.
+    fn ray_gen(&self, size: UVec2) -> RayGen {
+        let at = |x: f64, y: f64| {
+            self.ray_through(DVec2::new(
+                (x + 0.5) / f64::from(size.x),
+                (y + 0.5) / f64::from(size.y),
+            ))
+        };
+        let (r0, rx, ry) = (at(0.0, 0.0), at(1.0, 0.0), at(0.0, 1.0));
+        RayGen {
+            origin: r0.origin.as_vec3(),
+            origin_dx: (rx.origin - r0.origin).as_vec3(),
+            origin_dy: (ry.origin - r0.origin).as_vec3(),
+            direction: r0.direction.as_vec3(),
+            direction_dx: (rx.direction - r0.direction).as_vec3(),
+            direction_dy: (ry.direction - r0.direction).as_vec3(),
+        }
+    }
+}
+
+/// The small single-precision value every camera lowers to: the ray of pixel
+/// (0, 0) and how origin and direction change per pixel step. The CPU
+/// reference renderer and the GPU shaders both generate rays from it alone.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RayGen {
+    pub origin: Vec3,
+    pub origin_dx: Vec3,
+    pub origin_dy: Vec3,
+    pub direction: Vec3,
+    pub direction_dx: Vec3,
+    pub direction_dy: Vec3,
+}
+
+impl RayGen {
+    /// Origin and unit direction of pixel (x, y), in single precision.
+    pub fn pixel_ray(&self, x: u32, y: u32) -> (Vec3, Vec3) {
+        let (fx, fy) = (x as f32, y as f32);
+        let origin = self.origin + fx * self.origin_dx + fy * self.origin_dy;
+        let direction = self.direction + fx * self.direction_dx + fy * self.direction_dy;
+        (origin, direction.normalize())
+    }
+}

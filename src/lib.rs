@@ -1,0 +1,2 @@
+pub mod cave;
+pub mod geometry;
