@@ -1,0 +1,395 @@
+//! The TOML rig format: parsing, validation and errors that name the file,
+//! the line and the field.
+
+use std::collections::HashSet;
+use std::ops::Range;
+use std::path::Path;
+
+use glam::{DVec3, UVec2};
+use serde::Deserialize;
+use thiserror::Error;
+use toml::Spanned;
+
+use super::head::{HeadFrame, HeadPose, PathKey};
+use super::rig::{Eye, Rig, Units, Viewer, Wall};
+use super::source_map::locate;
+use crate::geometry::{GeometryError, Screen};
+
+/// Clip planes for rigs that do not set them, in metres.
+const DEFAULT_NEAR_M: f64 = 0.01;
+const DEFAULT_FAR_M: f64 = 100.0;
+const DEFAULT_IPD_M: f64 = 0.063;
+
+#[derive(Debug, Error)]
+pub enum ConfigError {
+    #[error("{file}: cannot read rig file: {source}")]
+    Io {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file}:{line}:{column}: {field}: {message}")]
+    Invalid {
+        file: String,
+        line: usize,
+        column: usize,
+        field: String,
+        message: String,
+    },
+}
+
+impl ConfigError {
+    /// The dotted path of the offending field, e.g. `walls[1].ul`.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            ConfigError::Invalid { field, .. } => Some(field),
+            ConfigError::Io { .. } => None,
+        }
+    }
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            ConfigError::Invalid { line, .. } => Some(*line),
+            ConfigError::Io { .. } => None,
+        }
+    }
+}
+
+type Vec3 = Spanned<[f64; 3]>;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRig {
+    name: Option<String>,
+    units: Spanned<Units>,
+    near: Option<Spanned<f64>>,
+    far: Option<Spanned<f64>>,
+    viewer: RawViewer,
+    walls: Spanned<Vec<Spanned<RawWall>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawViewer {
+    ipd: Option<Spanned<f64>>,
+    head: Vec3,
+    head_ypr: Option<Vec3>,
+    forward: Option<Vec3>,
+    up: Option<Vec3>,
+    eye_offset: Option<Vec3>,
+    tracked_space: Option<Spanned<RawBox>>,
+    #[serde(default)]
+    path: Vec<RawPathKey>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBox {
+    min: Vec3,
+    max: Vec3,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPathKey {
+    t: Spanned<f64>,
+    head: Vec3,
+    #[serde(default)]
+    ypr: Option<Vec3>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWall {
+    name: Spanned<String>,
+    ll: Vec3,
+    lr: Vec3,
+    ur: Vec3,
+    ul: Option<Vec3>,
+    resolution: Spanned<[u32; 2]>,
+    eyes: Option<Spanned<Vec<Eye>>>,
+}
+
+pub(crate) fn load(path: &Path) -> Result<Rig, ConfigError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    parse(&text, &file)
+}
+
+pub(crate) fn parse(text: &str, file: &str) -> Result<Rig, ConfigError> {
+    let ctx = Ctx { text, file };
+    let raw: RawRig = toml::from_str(text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        ctx.error(span, None, e.message().to_string())
+    })?;
+    ctx.validate(raw)
+}
+
+struct Ctx<'a> {
+    text: &'a str,
+    file: &'a str,
+}
+
+impl Ctx<'_> {
+    /// An error at `span`; `field` overrides the path found from the text
+    /// (which at a table header only names the table).
+    fn error(&self, span: Range<usize>, field: Option<String>, message: String) -> ConfigError {
+        let loc = locate(self.text, span.start);
+        let mut path = loc.path;
+        if field.is_none() {
+            if let Some(missing) = backticked(&message, "missing field `") {
+                path = join(&path, missing);
+            }
+        }
+        ConfigError::Invalid {
+            file: self.file.to_string(),
+            line: loc.line,
+            column: loc.column,
+            field: field.unwrap_or(path),
+            message,
+        }
+    }
+
+    fn at<T>(&self, value: &Spanned<T>, field: String, message: String) -> ConfigError {
+        self.error(value.span(), Some(field), message)
+    }
+
+    fn vec3(&self, v: &Vec3, field: impl Fn() -> String) -> Result<DVec3, ConfigError> {
+        let p = DVec3::from_array(*v.get_ref());
+        if p.is_finite() {
+            Ok(p)
+        } else {
+            Err(self.at(v, field(), "coordinates must be finite numbers".into()))
+        }
+    }
+
+    fn positive(
+        &self,
+        v: &Spanned<f64>,
+        field: &str,
+        allow_zero: bool,
+    ) -> Result<f64, ConfigError> {
+        let x = *v.get_ref();
+        if x.is_finite() && (x > 0.0 || (allow_zero && x == 0.0)) {
+            Ok(x)
+        } else {
+            let want = if allow_zero { ">= 0" } else { "> 0" };
+            Err(self.at(
+                v,
+                field.into(),
+                format!("must be a finite number {want}, got {x}"),
+            ))
+        }
+    }
+
+    fn validate(&self, raw: RawRig) -> Result<Rig, ConfigError> {
+        let units = *raw.units.get_ref();
+        let per_m = 1.0 / units.metres_per_unit();
+        let near = match &raw.near {
+            Some(v) => self.positive(v, "near", false)?,
+            None => DEFAULT_NEAR_M * per_m,
+        };
+        let far = match &raw.far {
+            Some(v) => self.positive(v, "far", false)?,
+            None => DEFAULT_FAR_M * per_m,
+        };
+        if far <= near {
+            let span = raw
+                .far
+                .as_ref()
+                .or(raw.near.as_ref())
+                .map_or(0..0, |v| v.span());
+            return Err(self.error(
+                span,
+                Some("far".into()),
+                format!("far ({far}) must be greater than near ({near})"),
+            ));
+        }
+        let viewer = self.viewer(&raw.viewer, per_m)?;
+        if raw.walls.get_ref().is_empty() {
+            return Err(self.at(
+                &raw.walls,
+                "walls".into(),
+                "a rig needs at least one wall".into(),
+            ));
+        }
+        let mut names = HashSet::new();
+        let mut walls = Vec::new();
+        for (i, w) in raw.walls.get_ref().iter().enumerate() {
+            let wall = self.wall(w.get_ref(), i)?;
+            if !names.insert(wall.name.to_ascii_lowercase()) {
+                let name = &w.get_ref().name;
+                return Err(self.at(
+                    name,
+                    format!("walls[{i}].name"),
+                    format!("duplicate wall name \"{}\"", wall.name),
+                ));
+            }
+            walls.push(wall);
+        }
+        Ok(Rig {
+            name: raw.name.unwrap_or_else(|| self.file.to_string()),
+            units,
+            near,
+            far,
+            viewer,
+            walls,
+        })
+    }
+
+    fn viewer(&self, raw: &RawViewer, per_m: f64) -> Result<Viewer, ConfigError> {
+        let ipd = match &raw.ipd {
+            Some(v) => self.positive(v, "viewer.ipd", true)?,
+            None => DEFAULT_IPD_M * per_m,
+        };
+        let forward = match &raw.forward {
+            Some(v) => self.vec3(v, || "viewer.forward".into())?,
+            None => DVec3::NEG_Z,
+        };
+        let up = match &raw.up {
+            Some(v) => self.vec3(v, || "viewer.up".into())?,
+            None => DVec3::Y,
+        };
+        let frame = HeadFrame::new(forward, up).ok_or_else(|| {
+            let span = raw
+                .up
+                .as_ref()
+                .or(raw.forward.as_ref())
+                .map_or(0..0, |v| v.span());
+            self.error(
+                span,
+                Some("viewer.up".into()),
+                "forward and up must be non-zero and not parallel".into(),
+            )
+        })?;
+        let pose =
+            |head: &Vec3, ypr: Option<&Vec3>, field: &str| -> Result<HeadPose, ConfigError> {
+                let position = self.vec3(head, || format!("{field}.head"))?;
+                let ypr = match ypr {
+                    Some(v) => self.vec3(v, || format!("{field}.ypr"))?,
+                    None => DVec3::ZERO,
+                };
+                Ok(HeadPose {
+                    position,
+                    orientation: frame.orientation(ypr),
+                })
+            };
+        let head = pose(&raw.head, raw.head_ypr.as_ref(), "viewer")?;
+        let eye_offset = match &raw.eye_offset {
+            Some(v) => self.vec3(v, || "viewer.eye_offset".into())?,
+            None => DVec3::ZERO,
+        };
+        let tracked_space = match &raw.tracked_space {
+            Some(b) => {
+                let min = self.vec3(&b.get_ref().min, || "viewer.tracked_space.min".into())?;
+                let max = self.vec3(&b.get_ref().max, || "viewer.tracked_space.max".into())?;
+                if !min.cmplt(max).all() {
+                    return Err(self.at(
+                        b,
+                        "viewer.tracked_space".into(),
+                        "min must be below max on every axis".into(),
+                    ));
+                }
+                Some((min, max))
+            }
+            None => None,
+        };
+        let mut path: Vec<PathKey> = Vec::new();
+        for (i, k) in raw.path.iter().enumerate() {
+            let field = format!("viewer.path[{i}]");
+            let time = *k.t.get_ref();
+            if !time.is_finite() || path.last().is_some_and(|p| time <= p.time) {
+                return Err(self.at(
+                    &k.t,
+                    format!("{field}.t"),
+                    format!("times must be finite and increasing, got {time}"),
+                ));
+            }
+            path.push(PathKey {
+                time,
+                pose: pose(&k.head, k.ypr.as_ref(), &field)?,
+            });
+        }
+        Ok(Viewer {
+            ipd,
+            frame,
+            eye_offset,
+            head,
+            tracked_space,
+            path,
+        })
+    }
+
+    fn wall(&self, raw: &RawWall, i: usize) -> Result<Wall, ConfigError> {
+        let field = |f: &str| format!("walls[{i}].{f}");
+        let name = raw.name.get_ref().trim().to_string();
+        if name.is_empty() {
+            return Err(self.at(
+                &raw.name,
+                field("name"),
+                "wall name must not be empty".into(),
+            ));
+        }
+        let ll = self.vec3(&raw.ll, || field("ll"))?;
+        let lr = self.vec3(&raw.lr, || field("lr"))?;
+        let ur = self.vec3(&raw.ur, || field("ur"))?;
+        let screen = match &raw.ul {
+            Some(ul) => Screen::with_upper_left(ll, lr, ur, self.vec3(ul, || field("ul"))?),
+            None => Screen::new(ll, lr, ur),
+        };
+        let screen = screen.map_err(|e| {
+            // Point at the corner that makes the wall wrong.
+            let (culprit, key) = match &e {
+                GeometryError::NotPlanar { .. } => (raw.ul.as_ref().unwrap_or(&raw.ur), "ul"),
+                GeometryError::ZeroAreaWall { width, .. } if *width == 0.0 => (&raw.lr, "lr"),
+                _ => (&raw.ur, "ur"),
+            };
+            self.at(culprit, field(key), format!("wall \"{name}\": {e}"))
+        })?;
+        let [w, h] = *raw.resolution.get_ref();
+        if w == 0 || h == 0 {
+            return Err(self.at(
+                &raw.resolution,
+                field("resolution"),
+                format!("wall \"{name}\": resolution must be at least 1 x 1, got {w} x {h}"),
+            ));
+        }
+        let eyes = match &raw.eyes {
+            Some(e) => {
+                let list = e.get_ref();
+                let unique: HashSet<_> = list.iter().collect();
+                if list.is_empty() || unique.len() != list.len() {
+                    return Err(self.at(
+                        e,
+                        field("eyes"),
+                        format!(
+                            "wall \"{name}\": eyes must list left, right or mono at most once each"
+                        ),
+                    ));
+                }
+                list.clone()
+            }
+            None => vec![Eye::Left, Eye::Right],
+        };
+        Ok(Wall {
+            name,
+            screen,
+            resolution: UVec2::new(w, h),
+            eyes,
+        })
+    }
+}
+
+fn backticked<'m>(message: &'m str, prefix: &str) -> Option<&'m str> {
+    let rest = message.split_once(prefix)?.1;
+    rest.split('`').next()
+}
+
+fn join(path: &str, key: &str) -> String {
+    if path.is_empty() {
+        key.to_string()
+    } else {
+        format!("{path}.{key}")
+    }
+}

@@ -1,0 +1,12 @@
+//! CAVE rigs: walls, viewer and tracked head, loaded from TOML, turned into
+//! one off-axis view per wall and eye for any head pose.
+
+mod config;
+mod head;
+pub mod inspect;
+mod rig;
+mod source_map;
+
+pub use config::ConfigError;
+pub use head::{HeadFrame, HeadPose, PathKey};
+pub use rig::{Eye, Rig, Units, View, Viewer, Wall};
