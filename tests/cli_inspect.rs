@@ -27,14 +27,7 @@ fn json(args: &[&str]) -> Value {
 }
 
 fn v3(v: &Value) -> DVec3 {
-    let a: Vec<f64> = v
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
-    assert_eq!(a.len(), 3);
-    DVec3::new(a[0], a[1], a[2])
+    DVec3::from_slice(&floats(v, 3))
 }
 
 fn floats(v: &Value, n: usize) -> Vec<f64> {

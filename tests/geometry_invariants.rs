@@ -91,9 +91,22 @@ fn check_view(rig: &Rig, view: &View, context: &str) {
         );
     }
 
-    // Strategy 3 recovers the eye.
+    // Strategy 3 recovers the eye, and its far-plane corners are the wall's
+    // corners seen from the eye.
     let err = (recovered.eye - view.eye_position).length();
     assert!(err <= len_tol, "{context}: recovered eye off by {err}");
+    for (far, corner) in recovered.corners.iter().zip(screen.corners()) {
+        let towards = Ray {
+            origin: view.eye_position,
+            direction: corner - view.eye_position,
+        };
+        let off = towards.distance_to_point(*far) / (*far - view.eye_position).length();
+        assert!(
+            off <= F64_TOL,
+            "{context}: far corner {far} is {off} off the eye-corner line"
+        );
+        assert!((*far - view.eye_position).length() > (corner - view.eye_position).length());
+    }
 
     // The image region is inside [0,1]^2 and touches an edge on each axis.
     for (name, cam) in [("pinhole", &pinhole), ("from-matrices", &recovered.camera)] {

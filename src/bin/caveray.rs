@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anari_library_caveray::cave::inspect::{inspect, Report, Selection, ViewReport};
+use anari_library_caveray::cave::inspect::{inspect, Pinhole, Report, Selection, ViewReport};
 use anari_library_caveray::cave::{Eye, Rig};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
@@ -212,33 +212,13 @@ fn print_view(v: &ViewReport, u: &str) {
     println!("   strategy 1, matrix camera (OpenGL view and projection, shown row by row)");
     print_matrix("view", &c.matrix.view);
     print_matrix("proj", &c.matrix.proj);
-    let p = &c.pinhole;
     println!("   strategy 2, pinhole + image region");
-    println!(
-        "     position {}  direction {}  up {}",
-        v3(&p.position),
-        v3(&p.direction),
-        v3(&p.up)
-    );
-    println!(
-        "     fovy {:.4} deg  aspect {:.6}  imageRegion [{}]",
-        p.fovy.to_degrees(),
-        p.aspect,
-        vn(&p.image_region, 6)
-    );
-    let q = &c.from_matrices.pinhole;
+    print_pinhole("position", &c.pinhole.position, &c.pinhole);
     println!("   strategy 3, pinhole recovered from the matrices");
-    println!(
-        "     recovered eye {}  direction {}  up {}",
-        v3(&c.from_matrices.recovered_eye),
-        v3(&q.direction),
-        v3(&q.up)
-    );
-    println!(
-        "     fovy {:.4} deg  aspect {:.6}  imageRegion [{}]",
-        q.fovy.to_degrees(),
-        q.aspect,
-        vn(&q.image_region, 6)
+    print_pinhole(
+        "recovered eye",
+        &c.from_matrices.recovered_eye,
+        &c.from_matrices.pinhole,
     );
     println!(
         "   largest disagreement of the 4 ray generators over {} pixels: {:.3e} {u}",
@@ -253,6 +233,21 @@ fn print_view(v: &ViewReport, u: &str) {
             vn(&ray.direction, 6)
         );
     }
+}
+
+fn print_pinhole(label: &str, position: &[f64; 3], p: &Pinhole) {
+    println!(
+        "     {label} {}  direction {}  up {}",
+        v3(position),
+        v3(&p.direction),
+        v3(&p.up)
+    );
+    println!(
+        "     fovy {:.4} deg  aspect {:.6}  imageRegion [{}]",
+        p.fovy.to_degrees(),
+        p.aspect,
+        vn(&p.image_region, 6)
+    );
 }
 
 fn print_matrix(name: &str, cols: &[f64; 16]) {

@@ -92,7 +92,6 @@ struct RawBox {
 struct RawPathKey {
     t: Spanned<f64>,
     head: Vec3,
-    #[serde(default)]
     ypr: Option<Vec3>,
 }
 

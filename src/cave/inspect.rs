@@ -1,7 +1,7 @@
 //! `caveray inspect`: what every wall and eye sees under each strategy, and
 //! how far the four ray generators disagree.
 
-use glam::{DMat4, UVec2};
+use glam::UVec2;
 use serde::Serialize;
 
 use super::{Eye, HeadPose, Rig, View, Wall};
@@ -149,8 +149,8 @@ fn cameras(view: &View, rays: u32) -> Result<Cameras> {
         .fold(0.0, f64::max);
     Ok(Cameras {
         matrix: Matrices {
-            view: mat(view.projection.view),
-            proj: mat(view.projection.proj),
+            view: view.projection.view.to_cols_array(),
+            proj: view.projection.proj.to_cols_array(),
         },
         pinhole: pinhole_report(&pinhole),
         from_matrices: Recovered {
@@ -199,10 +199,6 @@ fn pinhole_report(p: &PinholeCamera) -> Pinhole {
         aspect: p.aspect(),
         image_region: p.image_region().to_array(),
     }
-}
-
-fn mat(m: DMat4) -> [f64; 16] {
-    m.to_cols_array()
 }
 
 /// An n x n grid of pixels from the first to the last row and column.

@@ -103,15 +103,6 @@ impl Screen {
         self.ll + s.x * (self.lr - self.ll) + s.y * (self.ur - self.lr)
     }
 
-    /// Inverse of [`Screen::point`] for points on (or projected onto) the wall.
-    pub fn wall_coordinates(&self, p: DVec3) -> DVec2 {
-        let rel = p - self.ll;
-        DVec2::new(
-            rel.dot(self.x_axis()) / self.width(),
-            rel.dot(self.y_axis()) / self.height(),
-        )
-    }
-
     /// The eye's position relative to the wall; an eye on or behind the
     /// wall plane has no frustum and is an error.
     pub fn extents(&self, eye: DVec3) -> Result<WallExtents> {
