@@ -1,2 +1,4 @@
 pub mod cave;
+pub mod data;
+pub mod device;
 pub mod geometry;

@@ -1,0 +1,138 @@
+use std::path::{Path, PathBuf};
+
+use glam::{UVec3, Vec3};
+use serde::Deserialize;
+use sha2::{Digest, Sha256};
+
+use super::{load_raw, DataError, VoxelType};
+use crate::device::StructuredVolume;
+
+/// A `volumes.toml` manifest: named raw volumes beside it.
+#[derive(Debug)]
+pub struct Manifest {
+    path: PathBuf,
+    volumes: Vec<ManifestEntry>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+pub struct ManifestEntry {
+    pub name: String,
+    pub file: String,
+    pub dims: [u32; 3],
+    pub dtype: String,
+    pub spacing: [f32; 3],
+    #[serde(default)]
+    pub quality: String,
+    #[serde(default)]
+    pub category: String,
+    #[serde(default)]
+    pub small: bool,
+    pub sha256: Option<String>,
+    #[serde(default)]
+    pub source: String,
+}
+
+#[derive(Deserialize)]
+struct RawManifest {
+    volume: Vec<ManifestEntry>,
+}
+
+impl Manifest {
+    pub fn load(path: &Path) -> Result<Self, DataError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        let raw: RawManifest = toml::from_str(&text).map_err(|e| DataError::Manifest {
+            file,
+            message: e.message().to_string(),
+        })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            volumes: raw.volume,
+        })
+    }
+
+    /// The manifest to use: `explicit` if given, else
+    /// `$CAVERAY_DATA/volumes.toml`, else `../shared/data/volumes/volumes.toml`.
+    pub fn locate(explicit: Option<&Path>) -> Result<Self, DataError> {
+        if let Some(path) = explicit {
+            return Self::load(path);
+        }
+        let mut tried = Vec::new();
+        let env = std::env::var_os("CAVERAY_DATA").map(|d| PathBuf::from(d).join("volumes.toml"));
+        for candidate in env
+            .into_iter()
+            .chain([PathBuf::from("../shared/data/volumes/volumes.toml")])
+        {
+            if candidate.is_file() {
+                return Self::load(&candidate);
+            }
+            tried.push(candidate.display().to_string());
+        }
+        Err(DataError::NoManifest {
+            tried: tried.join(", "),
+        })
+    }
+
+    pub fn entries(&self) -> &[ManifestEntry] {
+        &self.volumes
+    }
+
+    pub fn find(&self, name: &str) -> Result<&ManifestEntry, DataError> {
+        self.volumes
+            .iter()
+            .find(|v| v.name.eq_ignore_ascii_case(name))
+            .ok_or_else(|| DataError::UnknownVolume {
+                name: name.to_string(),
+                manifest: self.path.display().to_string(),
+                known: self
+                    .volumes
+                    .iter()
+                    .map(|v| v.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
+    }
+
+    /// Path of an entry's raw file (relative to the manifest).
+    pub fn file_of(&self, entry: &ManifestEntry) -> PathBuf {
+        self.path
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(&entry.file)
+    }
+
+    /// Loads a named volume, checking its size and (if the manifest gives
+    /// one) its SHA-256 before use.
+    pub fn load_volume(&self, name: &str) -> Result<StructuredVolume, DataError> {
+        let entry = self.find(name)?;
+        let path = self.file_of(entry);
+        let dims = UVec3::from_array(entry.dims);
+        let volume = load_raw(
+            &path,
+            dims,
+            VoxelType::parse(&entry.dtype)?,
+            Vec3::from_array(entry.spacing),
+        )?;
+        if let Some(expected) = &entry.sha256 {
+            let bytes = std::fs::read(&path).map_err(|source| DataError::Io {
+                file: path.display().to_string(),
+                source,
+            })?;
+            let actual: String = Sha256::digest(&bytes)
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect();
+            if !actual.eq_ignore_ascii_case(expected) {
+                return Err(DataError::Checksum {
+                    file: path.display().to_string(),
+                    expected: expected.clone(),
+                    actual,
+                });
+            }
+        }
+        Ok(volume)
+    }
+}

@@ -1,0 +1,62 @@
+//! Where volumes and transfer functions come from: raw files, the
+//! `volumes.toml` manifest, procedural test volumes, presets and ParaView
+//! colour maps.
+
+mod manifest;
+mod paraview;
+mod presets;
+mod procedural;
+mod raw;
+
+pub use manifest::{Manifest, ManifestEntry};
+pub use paraview::load_paraview;
+pub use presets::{preset, PRESETS};
+pub use procedural::{marschner_lobb, shepp_logan, solid_box};
+pub use raw::{load_raw, VoxelType};
+
+use thiserror::Error;
+
+use crate::device::{TransferFunctionError, VolumeError};
+
+#[derive(Debug, Error)]
+pub enum DataError {
+    #[error("{file}: {source}")]
+    Io {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file} has {actual} bytes, but {dims} {dtype} needs {expected} bytes")]
+    FileSize {
+        file: String,
+        dims: String,
+        dtype: &'static str,
+        expected: u64,
+        actual: u64,
+    },
+    #[error("{file}: checksum mismatch: sha256 is {actual}, the manifest says {expected}")]
+    Checksum {
+        file: String,
+        expected: String,
+        actual: String,
+    },
+    #[error("{file}: {message}")]
+    Manifest { file: String, message: String },
+    #[error("no volume named '{name}' in {manifest} (known: {known})")]
+    UnknownVolume {
+        name: String,
+        manifest: String,
+        known: String,
+    },
+    #[error("no volume manifest found (tried {tried})")]
+    NoManifest { tried: String },
+    #[error("unknown voxel type '{0}' (expected uint8, uint16 or float32)")]
+    VoxelType(String),
+    #[error("{file}: not a ParaView colour map: {message}")]
+    ParaView { file: String, message: String },
+    #[error("unknown transfer function preset '{name}' (presets: {known})")]
+    UnknownPreset { name: String, known: String },
+    #[error(transparent)]
+    Volume(#[from] VolumeError),
+    #[error(transparent)]
+    TransferFunction(#[from] TransferFunctionError),
+}
