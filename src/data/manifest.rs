@@ -4,7 +4,8 @@ use glam::{UVec3, Vec3};
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
 
-use super::{load_raw, DataError, VoxelType};
+use super::raw::decode_raw;
+use super::{DataError, VoxelType};
 use crate::device::StructuredVolume;
 
 /// A `volumes.toml` manifest: named raw volumes beside it.
@@ -109,18 +110,11 @@ impl Manifest {
     pub fn load_volume(&self, name: &str) -> Result<StructuredVolume, DataError> {
         let entry = self.find(name)?;
         let path = self.file_of(entry);
-        let dims = UVec3::from_array(entry.dims);
-        let volume = load_raw(
-            &path,
-            dims,
-            VoxelType::parse(&entry.dtype)?,
-            Vec3::from_array(entry.spacing),
-        )?;
+        let bytes = std::fs::read(&path).map_err(|source| DataError::Io {
+            file: path.display().to_string(),
+            source,
+        })?;
         if let Some(expected) = &entry.sha256 {
-            let bytes = std::fs::read(&path).map_err(|source| DataError::Io {
-                file: path.display().to_string(),
-                source,
-            })?;
             let actual: String = Sha256::digest(&bytes)
                 .iter()
                 .map(|b| format!("{b:02x}"))
@@ -133,6 +127,14 @@ impl Manifest {
                 });
             }
         }
-        Ok(volume)
+        let dims = UVec3::from_array(entry.dims);
+        let spacing = Vec3::from_array(entry.spacing);
+        decode_raw(
+            &path,
+            &bytes,
+            dims,
+            VoxelType::parse(&entry.dtype)?,
+            spacing,
+        )
     }
 }

@@ -66,27 +66,35 @@ pub fn load_raw(
     dtype: VoxelType,
     spacing: Vec3,
 ) -> Result<StructuredVolume, DataError> {
-    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| DataError::Io {
+        file: path.display().to_string(),
+        source,
+    })?;
+    decode_raw(path, &bytes, dims, dtype, spacing)
+}
+
+/// Decodes the bytes of a raw file read from `path` (named in errors).
+pub(crate) fn decode_raw(
+    path: &Path,
+    bytes: &[u8],
+    dims: UVec3,
+    dtype: VoxelType,
+    spacing: Vec3,
+) -> Result<StructuredVolume, DataError> {
     let expected = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z) * dtype.bytes();
-    let actual = std::fs::metadata(path)
-        .map_err(|source| DataError::Io {
-            file: file.clone(),
-            source,
-        })?
-        .len();
+    let actual = bytes.len() as u64;
     if actual != expected {
         return Err(DataError::FileSize {
-            file,
+            file: path.display().to_string(),
             dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
             dtype: dtype.name(),
             expected,
             actual,
         });
     }
-    let bytes = std::fs::read(path).map_err(|source| DataError::Io { file, source })?;
     Ok(StructuredVolume::new(
         dims,
-        dtype.decode(&bytes),
+        dtype.decode(bytes),
         Vec3::ZERO,
         spacing,
     )?)
