@@ -2,3 +2,5 @@ pub mod cave;
 pub mod data;
 pub mod device;
 pub mod geometry;
+pub mod output;
+pub mod render;

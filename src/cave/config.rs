@@ -11,7 +11,7 @@ use thiserror::Error;
 use toml::Spanned;
 
 use super::head::{HeadFrame, HeadPose, PathKey};
-use super::rig::{Eye, Rig, Units, Viewer, Wall};
+use super::rig::{Eye, Rig, ScenePlacement, Units, Viewer, Wall};
 use super::source_map::locate;
 use crate::geometry::{GeometryError, Screen};
 
@@ -63,7 +63,15 @@ struct RawRig {
     near: Option<Spanned<f64>>,
     far: Option<Spanned<f64>>,
     viewer: RawViewer,
+    scene: Option<RawScene>,
     walls: Spanned<Vec<Spanned<RawWall>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    centre: Option<Vec3>,
+    size: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -227,12 +235,27 @@ impl Ctx<'_> {
             }
             walls.push(wall);
         }
+        let scene = ScenePlacement::around(&walls);
+        let scene = match &raw.scene {
+            None => scene,
+            Some(s) => ScenePlacement {
+                centre: match &s.centre {
+                    Some(c) => self.vec3(c, || "scene.centre".into())?,
+                    None => scene.centre,
+                },
+                size: match &s.size {
+                    Some(v) => self.positive(v, "scene.size", false)?,
+                    None => scene.size,
+                },
+            },
+        };
         Ok(Rig {
             name: raw.name.unwrap_or_else(|| self.file.to_string()),
             units,
             near,
             far,
             viewer,
+            scene,
             walls,
         })
     }

@@ -9,4 +9,4 @@ mod source_map;
 
 pub use config::ConfigError;
 pub use head::{HeadFrame, HeadPose, PathKey};
-pub use rig::{Eye, Rig, Units, View, Viewer, Wall};
+pub use rig::{Eye, Rig, ScenePlacement, Units, View, Viewer, Wall};

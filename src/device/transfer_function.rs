@@ -84,6 +84,16 @@ impl TransferFunction {
         Ok(self)
     }
 
+    /// The same function with opacities meant per `unit_distance` world
+    /// units (e.g. after the volume was scaled into a rig).
+    pub fn with_unit_distance(mut self, unit_distance: f32) -> Result<Self, TransferFunctionError> {
+        if !(unit_distance.is_finite() && unit_distance > 0.0) {
+            return Err(TransferFunctionError::UnitDistance(unit_distance));
+        }
+        self.unit_distance = unit_distance;
+        Ok(self)
+    }
+
     /// Colour (rgb) and opacity (a), not premultiplied, at position
     /// `t` in [0, 1] of the value range: each array is interpolated linearly
     /// on its own, then the colour's alpha scales the opacity.

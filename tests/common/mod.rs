@@ -1,6 +1,8 @@
 //! Shared helpers for the integration tests.
 #![allow(dead_code)]
 
+pub mod render;
+
 use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::{HeadPose, Rig};

@@ -1,45 +1,20 @@
-//! caveray: render, inspect and benchmark CAVE rigs.
+//! `caveray inspect`: the cameras of every wall and eye, as text or JSON.
 
 use std::path::PathBuf;
-use std::process::ExitCode;
 
 use anari_library_caveray::cave::inspect::{inspect, Pinhole, Report, Selection, ViewReport};
 use anari_library_caveray::cave::{Eye, Rig};
-use clap::{Args, Parser, Subcommand, ValueEnum};
-use glam::DVec3;
+use clap::{Args, ValueEnum};
 
-#[derive(Parser)]
-#[command(
-    name = "caveray",
-    version,
-    about = "Off-axis volume rendering for CAVEs and powerwalls"
-)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand)]
-enum Command {
-    /// Show every wall's and eye's camera under the three off-axis strategies.
-    Inspect(InspectArgs),
-}
+use crate::{Failure, HeadArgs};
 
 #[derive(Args)]
-struct InspectArgs {
+pub struct InspectArgs {
     /// Rig file (TOML), e.g. cave_configs/cologne_5wall.toml.
     #[arg(long)]
     config: PathBuf,
-    /// Head position X,Y,Z in the rig's units (default: the rig's).
-    #[arg(long, value_parser = triple, allow_hyphen_values = true)]
-    head: Option<DVec3>,
-    /// Head yaw,pitch,roll in degrees relative to the rig's rest frame.
-    #[arg(long, value_parser = triple, allow_hyphen_values = true)]
-    head_ypr: Option<DVec3>,
-    /// Take the head pose this many seconds along the rig's head path
-    /// (--head and --head-ypr override its parts).
-    #[arg(long)]
-    time: Option<f64>,
+    #[command(flatten)]
+    head: HeadArgs,
     /// One wall by name, or all.
     #[arg(long, default_value = "all")]
     wall: String,
@@ -62,66 +37,7 @@ enum EyeArg {
     Both,
 }
 
-fn triple(s: &str) -> Result<DVec3, String> {
-    let parts: Vec<&str> = s.split(',').collect();
-    let values: Vec<f64> = parts
-        .iter()
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("expected three numbers X,Y,Z, got '{s}'"))?;
-    match values[..] {
-        [x, y, z] if values.iter().all(|v| v.is_finite()) => Ok(DVec3::new(x, y, z)),
-        _ => Err(format!("expected three finite numbers X,Y,Z, got '{s}'")),
-    }
-}
-
-/// A failure the user caused (exit 2) or one the tool hit (exit 1).
-enum Failure {
-    Usage(String),
-    Runtime(String),
-}
-
-fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
-        Ok(cli) => cli,
-        Err(e) if !e.use_stderr() => {
-            // --help and --version
-            print!("{e}");
-            return ExitCode::SUCCESS;
-        }
-        Err(e) => return fail(Failure::Usage(first_line(&e.to_string()))),
-    };
-    let result = match cli.command {
-        Command::Inspect(args) => run_inspect(args),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(f) => fail(f),
-    }
-}
-
-/// Clap's message without the usage block, folded onto one line.
-fn first_line(message: &str) -> String {
-    let body = message.split("\n\n").next().unwrap_or(message);
-    let folded = body.split_whitespace().collect::<Vec<_>>().join(" ");
-    let folded = folded.trim_start_matches("error: ");
-    if folded.is_empty() {
-        "invalid arguments (see caveray --help)".to_string()
-    } else {
-        folded.to_string()
-    }
-}
-
-fn fail(failure: Failure) -> ExitCode {
-    let (message, code) = match failure {
-        Failure::Usage(m) => (m, 2),
-        Failure::Runtime(m) => (m, 1),
-    };
-    eprintln!("caveray: {message}");
-    ExitCode::from(code)
-}
-
-fn run_inspect(args: InspectArgs) -> Result<(), Failure> {
+pub fn run(args: InspectArgs) -> Result<(), Failure> {
     let rig = Rig::load(&args.config).map_err(|e| Failure::Usage(e.to_string()))?;
     let wall = (!args.wall.eq_ignore_ascii_case("all")).then_some(args.wall.as_str());
     if let Some(name) = wall {
@@ -134,20 +50,7 @@ fn run_inspect(args: InspectArgs) -> Result<(), Failure> {
             )));
         }
     }
-    if let Some(t) = args.time {
-        if !t.is_finite() {
-            return Err(Failure::Usage(format!(
-                "--time must be a finite number, got {t}"
-            )));
-        }
-    }
-    let base = args.time.map_or(rig.viewer.head, |t| rig.head_at(t));
-    let head = anari_library_caveray::cave::HeadPose {
-        position: args.head.unwrap_or(base.position),
-        orientation: args
-            .head_ypr
-            .map_or(base.orientation, |ypr| rig.viewer.frame.orientation(ypr)),
-    };
+    let head = args.head.pose(&rig)?;
     let eyes: &[Eye] = match args.eye {
         EyeArg::Left => &[Eye::Left],
         EyeArg::Right => &[Eye::Right],

@@ -1,0 +1,130 @@
+//! caveray: render, inspect and benchmark CAVE rigs.
+
+mod bench;
+mod inspect;
+mod progress;
+mod render;
+mod scene;
+
+use std::process::ExitCode;
+
+use anari_library_caveray::cave::{HeadPose, Rig};
+use clap::{Args, Parser, Subcommand};
+use glam::DVec3;
+
+#[derive(Parser)]
+#[command(
+    name = "caveray",
+    version,
+    about = "Off-axis volume rendering for CAVEs and powerwalls"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render every wall and eye of a rig to PNGs, contact sheets and timings.
+    Render(render::RenderArgs),
+    /// Show every wall's and eye's camera under the three off-axis strategies.
+    Inspect(inspect::InspectArgs),
+    /// Measure rendering speed (writes JSON, prints a summary).
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+}
+
+/// The tracked head, as the rig states it unless overridden.
+#[derive(Args)]
+pub struct HeadArgs {
+    /// Head position X,Y,Z in the rig's units (default: the rig's).
+    #[arg(long, value_parser = triple, allow_hyphen_values = true)]
+    head: Option<DVec3>,
+    /// Head yaw,pitch,roll in degrees relative to the rig's rest frame.
+    #[arg(long, value_parser = triple, allow_hyphen_values = true)]
+    head_ypr: Option<DVec3>,
+    /// Take the head pose this many seconds along the rig's head path
+    /// (--head and --head-ypr override its parts).
+    #[arg(long)]
+    time: Option<f64>,
+}
+
+impl HeadArgs {
+    pub fn pose(&self, rig: &Rig) -> Result<HeadPose, Failure> {
+        if let Some(t) = self.time {
+            if !t.is_finite() {
+                return Err(Failure::Usage(format!(
+                    "--time must be a finite number, got {t}"
+                )));
+            }
+        }
+        let base = self.time.map_or(rig.viewer.head, |t| rig.head_at(t));
+        Ok(HeadPose {
+            position: self.head.unwrap_or(base.position),
+            orientation: self
+                .head_ypr
+                .map_or(base.orientation, |ypr| rig.viewer.frame.orientation(ypr)),
+        })
+    }
+}
+
+pub fn triple(s: &str) -> Result<DVec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let values: Vec<f64> = parts
+        .iter()
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected three numbers X,Y,Z, got '{s}'"))?;
+    match values[..] {
+        [x, y, z] if values.iter().all(|v| v.is_finite()) => Ok(DVec3::new(x, y, z)),
+        _ => Err(format!("expected three finite numbers X,Y,Z, got '{s}'")),
+    }
+}
+
+/// A failure the user caused (exit 2) or one the tool hit (exit 1).
+pub enum Failure {
+    Usage(String),
+    Runtime(String),
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            // --help and --version
+            print!("{e}");
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => return fail(Failure::Usage(first_line(&e.to_string()))),
+    };
+    let result = match cli.command {
+        Command::Render(args) => render::run(args),
+        Command::Inspect(args) => inspect::run(args),
+        Command::Bench(command) => bench::run(command),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => fail(f),
+    }
+}
+
+/// Clap's message without the usage block, folded onto one line.
+fn first_line(message: &str) -> String {
+    let body = message.split("\n\n").next().unwrap_or(message);
+    let folded = body.split_whitespace().collect::<Vec<_>>().join(" ");
+    let folded = folded.trim_start_matches("error: ");
+    if folded.is_empty() {
+        "invalid arguments (see caveray --help)".to_string()
+    } else {
+        folded.to_string()
+    }
+}
+
+fn fail(failure: Failure) -> ExitCode {
+    let (message, code) = match failure {
+        Failure::Usage(m) => (m, 2),
+        Failure::Runtime(m) => (m, 1),
+    };
+    eprintln!("caveray: {message}");
+    ExitCode::from(code)
+}

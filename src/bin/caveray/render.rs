@@ -1,0 +1,333 @@
+//! `caveray render`: every wall and eye of a rig to PNGs, contact sheets
+//! and a timing table.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anari_library_caveray::cave::{Eye, Rig, View};
+use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
+use anari_library_caveray::output::{contact_sheet, frame_to_rgba, write_rgba_png, SheetLayout};
+use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
+use clap::{Args, ValueEnum};
+use glam::UVec2;
+use serde_json::{json, Value};
+
+use crate::progress::Progress;
+use crate::scene::VolumeArgs;
+use crate::{Failure, HeadArgs};
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Rig file (TOML), e.g. cave_configs/cologne_5wall.toml.
+    #[arg(long)]
+    config: PathBuf,
+    #[command(flatten)]
+    volume: VolumeArgs,
+    #[command(flatten)]
+    head: HeadArgs,
+    #[command(flatten)]
+    render: RenderOptions,
+    /// Render at this fraction of each wall's resolution.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Folder for the images and timings.json (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Renderer choices shared by `render` and `bench`.
+#[derive(Args)]
+pub struct RenderOptions {
+    /// Which camera model turns each view into rays.
+    #[arg(long, value_enum, default_value_t = Strategy::Offaxis)]
+    pub strategy: Strategy,
+    /// none, shadows, ao, shadows+ao or directional:N.
+    #[arg(long, default_value = "none", value_parser = shading)]
+    pub shading: Shading,
+    /// gpu, cpu, or auto (the GPU where there is one, else the CPU reference).
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    pub backend: BackendArg,
+    /// Step length in units of half the smallest voxel.
+    #[arg(long, default_value_t = 1.0)]
+    pub step_factor: f32,
+}
+
+fn shading(s: &str) -> Result<Shading, String> {
+    s.parse()
+        .map_err(|e: anari_library_caveray::render::RenderError| e.to_string())
+}
+
+impl RenderOptions {
+    pub fn settings(&self) -> RenderSettings {
+        RenderSettings {
+            shading: self.shading,
+            step_factor: self.step_factor,
+            ..Default::default()
+        }
+    }
+
+    /// The chosen renderer, saying so (and why the GPU is missing) on stderr.
+    pub fn renderer(&self) -> Result<Renderer, Failure> {
+        let renderer = match self.backend {
+            BackendArg::Gpu => Renderer::new(Backend::Gpu)
+                .map_err(|e| Failure::Runtime(format!("{e} (try --backend cpu)")))?,
+            BackendArg::Cpu => {
+                Renderer::new(Backend::Cpu).map_err(|e| Failure::Runtime(e.to_string()))?
+            }
+            BackendArg::Auto => {
+                let (renderer, missing) = Renderer::gpu_or_cpu();
+                if let Some(e) = missing {
+                    eprintln!("caveray: {e}; falling back to the CPU reference renderer");
+                }
+                renderer
+            }
+        };
+        eprintln!("caveray: rendering on {}", renderer.describe());
+        Ok(renderer)
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    Auto,
+    Gpu,
+    Cpu,
+}
+
+/// The camera models of DESIGN.md section 3.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Strategy {
+    /// Strategy 1: rays from the inverse of the f32 OpenGL matrices.
+    Matrix,
+    /// Strategy 2: a pinhole at the eye plus an image region.
+    Pinhole,
+    /// Strategy 3: a pinhole recovered from the f32 matrices.
+    FromMatrices,
+    /// The native off-axis camera: wall corners and eye.
+    Offaxis,
+}
+
+impl Strategy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Matrix => "matrix",
+            Strategy::Pinhole => "pinhole",
+            Strategy::FromMatrices => "from-matrices",
+            Strategy::Offaxis => "offaxis",
+        }
+    }
+
+    /// The view's rays for an image of `size`. The matrix strategies get
+    /// single-precision matrices, as an OpenGL host hands them over.
+    pub fn rays(self, view: &View, size: UVec2) -> Result<RayGen, String> {
+        let e = |e: anari_library_caveray::geometry::GeometryError| e.to_string();
+        let (v, p) = (
+            view.projection.view.as_mat4(),
+            view.projection.proj.as_mat4(),
+        );
+        Ok(match self {
+            Strategy::Matrix => MatrixCamera::from_f32(v, p).map_err(e)?.ray_gen(size),
+            Strategy::Pinhole => view.pinhole().map_err(e)?.ray_gen(size),
+            Strategy::FromMatrices => pinhole_from_matrices(v.as_dmat4(), p.as_dmat4())
+                .map_err(e)?
+                .camera
+                .ray_gen(size),
+            Strategy::Offaxis => view.camera.ray_gen(size),
+        })
+    }
+}
+
+pub fn run(args: RenderArgs) -> Result<(), Failure> {
+    if !(args.scale.is_finite() && args.scale > 0.0 && args.scale <= 4.0) {
+        return Err(Failure::Usage(format!(
+            "--scale must be in (0, 4], got {}",
+            args.scale
+        )));
+    }
+    let rig = Rig::load(&args.config).map_err(|e| Failure::Usage(e.to_string()))?;
+    let head = args.head.pose(&rig)?;
+    let loaded = args.volume.load()?;
+    let scene = loaded.placed(rig.scene.centre.as_vec3(), rig.scene.size as f32)?;
+    let settings = args.render.settings();
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", args.out.display())))?;
+    let mut renderer = args.render.renderer()?;
+
+    let start = Instant::now();
+    renderer
+        .upload(&scene)
+        .map_err(|e| Failure::Runtime(e.to_string()))?;
+    let upload_ms = start.elapsed().as_secs_f64() * 1e3;
+
+    let views = rig.views(&head);
+    let mut progress = Progress::new(views.len());
+    let mut records = Vec::new();
+    let mut images: Vec<(usize, Eye, image::RgbaImage)> = Vec::new();
+    for (wall, eye, view) in &views {
+        let wall_index = rig
+            .walls
+            .iter()
+            .position(|w| w.name == wall.name)
+            .unwrap_or(0);
+        let label = format!("{}_{}", wall.name, eye.name());
+        let size = (wall.resolution.as_dvec2() * args.scale)
+            .round()
+            .max(glam::DVec2::ONE)
+            .as_uvec2();
+        let rays = view
+            .as_ref()
+            .map_err(|e| e.to_string())
+            .and_then(|v| args.render.strategy.rays(v, size));
+        let rays = match rays {
+            Ok(r) => r,
+            Err(message) => {
+                progress.step(&format!("{label}: skipped ({message})"));
+                records.push(json!({"wall": wall.name, "eye": eye.name(), "error": message}));
+                continue;
+            }
+        };
+        let t = Instant::now();
+        let frame = renderer
+            .render(&scene, &rays, &settings, &FrameDesc::new(size))
+            .map_err(|e| Failure::Runtime(format!("{label}: {e}")))?;
+        let seconds = t.elapsed().as_secs_f64();
+        let file = format!("{label}.png");
+        let image = frame_to_rgba(&frame);
+        write(&image, &args.out.join(&file))?;
+        let rays_per_s = f64::from(size.x * size.y) / seconds;
+        let samples_per_s = frame.samples as f64 / seconds;
+        progress.step(&format!(
+            "{label} {}x{} {:.1} ms",
+            size.x,
+            size.y,
+            seconds * 1e3
+        ));
+        records.push(json!({
+            "wall": wall.name,
+            "eye": eye.name(),
+            "width": size.x,
+            "height": size.y,
+            "ms": seconds * 1e3,
+            "rays_per_s": rays_per_s,
+            "samples": frame.samples,
+            "samples_per_s": samples_per_s,
+            "file": file,
+        }));
+        images.push((wall_index, *eye, image));
+    }
+
+    let sheets = write_sheets(&rig, &images, &args.out)?;
+    let total_ms = start.elapsed().as_secs_f64() * 1e3;
+    let report = json!({
+        "rig": rig.name,
+        "config": args.config.display().to_string(),
+        "renderer": renderer_json(&renderer),
+        "volume": {
+            "name": loaded.name,
+            "dims": scene.volume.dims().to_array(),
+        },
+        "strategy": args.render.strategy.name(),
+        "shading": settings.shading.to_string(),
+        "scale": args.scale,
+        "head": {
+            "position": head.position.to_array(),
+            "orientation_xyzw": head.orientation.to_array(),
+        },
+        "upload_ms": upload_ms,
+        "total_ms": total_ms,
+        "views": records,
+        "contact_sheets": sheets,
+    });
+    let path = args.out.join("timings.json");
+    let text =
+        serde_json::to_string_pretty(&report).map_err(|e| Failure::Runtime(e.to_string()))?;
+    std::fs::write(&path, text + "\n")
+        .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", path.display())))?;
+    print_summary(&report);
+    Ok(())
+}
+
+pub fn renderer_json(renderer: &Renderer) -> Value {
+    match renderer {
+        Renderer::Gpu(g) => {
+            let info = g.adapter();
+            json!({
+                "backend": "gpu",
+                "adapter": info.name,
+                "api": format!("{:?}", info.backend),
+                "driver": format!("{} {}", info.driver, info.driver_info),
+                "device_type": format!("{:?}", info.device_type),
+            })
+        }
+        Renderer::Cpu(_) => json!({
+            "backend": "cpu",
+            "threads": rayon::current_num_threads(),
+        }),
+    }
+}
+
+/// One contact sheet per eye that has any image; returns the file names.
+fn write_sheets(
+    rig: &Rig,
+    images: &[(usize, Eye, image::RgbaImage)],
+    out: &Path,
+) -> Result<Vec<String>, Failure> {
+    let layout = SheetLayout::for_rig(rig);
+    let mut files = Vec::new();
+    for eye in Eye::ALL {
+        let mut cells: Vec<Option<image::RgbaImage>> = vec![None; rig.walls.len()];
+        for (i, e, image) in images {
+            if *e == eye {
+                cells[*i] = Some(image.clone());
+            }
+        }
+        if cells.iter().all(Option::is_none) {
+            continue;
+        }
+        let file = format!("cave_{}.png", eye.name());
+        write(&contact_sheet(&layout, &cells), &out.join(&file))?;
+        files.push(file);
+    }
+    Ok(files)
+}
+
+fn write(image: &image::RgbaImage, path: &Path) -> Result<(), Failure> {
+    write_rgba_png(image, path).map_err(|e| Failure::Runtime(e.to_string()))
+}
+
+fn print_summary(report: &Value) {
+    println!(
+        "{} on {}",
+        report["rig"].as_str().unwrap_or(""),
+        report["renderer"]["adapter"]
+            .as_str()
+            .unwrap_or("the CPU reference")
+    );
+    println!(
+        "{:<10} {:<6} {:>11} {:>10} {:>10} {:>12}",
+        "wall", "eye", "size", "ms", "Mrays/s", "Msamples/s"
+    );
+    for v in report["views"].as_array().into_iter().flatten() {
+        let (wall, eye) = (
+            v["wall"].as_str().unwrap_or(""),
+            v["eye"].as_str().unwrap_or(""),
+        );
+        if let Some(err) = v["error"].as_str() {
+            println!("{wall:<10} {eye:<6} skipped: {err}");
+            continue;
+        }
+        let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+        println!(
+            "{wall:<10} {eye:<6} {:>11} {:>10.1} {:>10.2} {:>12.1}",
+            format!("{}x{}", v["width"], v["height"]),
+            f("ms"),
+            f("rays_per_s") / 1e6,
+            f("samples_per_s") / 1e6
+        );
+    }
+    println!(
+        "upload {:.1} ms, total {:.1} ms; images, contact sheets and timings.json are in the output folder",
+        report["upload_ms"].as_f64().unwrap_or(0.0),
+        report["total_ms"].as_f64().unwrap_or(0.0)
+    );
+}

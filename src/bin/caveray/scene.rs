@@ -1,0 +1,172 @@
+//! The volume and transfer function a command renders, from its flags.
+
+use std::path::{Path, PathBuf};
+
+use anari_library_caveray::data::{
+    load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box, Manifest, VoxelType,
+};
+use anari_library_caveray::device::{StructuredVolume, TransferFunction, Voxels};
+use anari_library_caveray::render::Scene;
+use clap::Args;
+use glam::{UVec3, Vec3};
+
+use crate::{triple, Failure};
+
+/// Procedural volumes' default size per side.
+const PROCEDURAL_SIZE: u32 = 128;
+
+#[derive(Args)]
+pub struct VolumeArgs {
+    /// phantom[:N], marschner-lobb[:N], box[:N], a name from volumes.toml,
+    /// or a raw file (then --dims is required). Default: the phantom.
+    #[arg(long)]
+    volume: Option<String>,
+    /// Raw file dimensions X,Y,Z.
+    #[arg(long, value_parser = dims)]
+    dims: Option<UVec3>,
+    /// Raw file voxel type.
+    #[arg(long, default_value = "u8", value_parser = ["u8", "u16", "f32", "uint8", "uint16", "float32"])]
+    dtype: String,
+    /// Raw file voxel spacing X,Y,Z.
+    #[arg(long, value_parser = triple)]
+    spacing: Option<glam::DVec3>,
+    /// volumes.toml to look names up in (default: $CAVERAY_DATA/volumes.toml,
+    /// else ../shared/data/volumes/volumes.toml).
+    #[arg(long)]
+    manifest: Option<PathBuf>,
+    /// Transfer function: a preset (phantom, ct-skin-bone, ct-bone, mri,
+    /// grey) or a ParaView colour map exported as JSON.
+    #[arg(long)]
+    tf: Option<String>,
+}
+
+fn dims(s: &str) -> Result<UVec3, String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected three whole numbers X,Y,Z, got '{s}'"))?;
+    match v[..] {
+        [x, y, z] => Ok(UVec3::new(x, y, z)),
+        _ => Err(format!("expected three whole numbers X,Y,Z, got '{s}'")),
+    }
+}
+
+/// A loaded volume with the transfer function that suits it, not yet placed.
+pub struct Loaded {
+    pub name: String,
+    pub volume: StructuredVolume,
+    tf: TransferFunction,
+    /// Presets span the data's range; a ParaView map keeps its own.
+    stretch_tf: bool,
+}
+
+impl VolumeArgs {
+    pub fn load(&self) -> Result<Loaded, Failure> {
+        let usage = |e: &dyn std::fmt::Display| Failure::Usage(e.to_string());
+        let spec = self.volume.as_deref().unwrap_or("phantom");
+        let (name, volume, default_tf) = if let Some((name, volume)) = procedural(spec)? {
+            (name, volume, "phantom")
+        } else if self.dims.is_some() || Path::new(spec).is_file() {
+            let dims = self.dims.ok_or_else(|| {
+                Failure::Usage(format!(
+                    "{spec} is a raw file: give its size with --dims X,Y,Z (and --dtype, --spacing)"
+                ))
+            })?;
+            let dtype = VoxelType::parse(&self.dtype).map_err(|e| usage(&e))?;
+            let spacing = self.spacing.unwrap_or(glam::DVec3::ONE).as_vec3();
+            let volume = load_raw(Path::new(spec), dims, dtype, spacing).map_err(|e| usage(&e))?;
+            (file_stem(spec), volume, "grey")
+        } else {
+            let manifest = Manifest::locate(self.manifest.as_deref()).map_err(|e| usage(&e))?;
+            let entry = manifest.find(spec).map_err(|e| usage(&e))?;
+            let tf = match entry.category.as_str() {
+                "CT" => "ct-skin-bone",
+                "MRI" => "mri",
+                _ => "phantom",
+            };
+            let volume = manifest
+                .load_volume(spec)
+                .map_err(|e| Failure::Runtime(e.to_string()))?;
+            (spec.to_string(), volume, tf)
+        };
+        let tf_spec = self.tf.as_deref().unwrap_or(default_tf);
+        let (tf, stretch_tf) = if Path::new(tf_spec).is_file() {
+            let tf = load_paraview(Path::new(tf_spec)).map_err(|e| usage(&e))?;
+            // ParaView ranges are in stored units; fixed-point voxels are
+            // read as [0, 1].
+            let scale = match volume.voxels() {
+                Voxels::U8(_) => 255.0,
+                Voxels::U16(_) => 65535.0,
+                Voxels::F32(_) => 1.0,
+            };
+            let (lo, hi) = tf.value_range();
+            let tf = tf
+                .with_value_range(lo / scale, hi / scale)
+                .map_err(|e| usage(&e))?;
+            (tf, false)
+        } else {
+            (preset(tf_spec).map_err(|e| usage(&e))?, true)
+        };
+        Ok(Loaded {
+            name,
+            volume,
+            tf,
+            stretch_tf,
+        })
+    }
+}
+
+impl Loaded {
+    /// The scene with the volume's bounding box centred at `centre`, its
+    /// longest side `size` long. Opacities keep their look at any size:
+    /// presets are tuned for a volume two units across.
+    pub fn placed(&self, centre: Vec3, size: f32) -> Result<Scene, Failure> {
+        let runtime = |e: &dyn std::fmt::Display| Failure::Runtime(e.to_string());
+        let volume = self.volume.clone().placed(centre, size);
+        let mut tf = self
+            .tf
+            .clone()
+            .with_unit_distance(self.tf.unit_distance() * size / 2.0)
+            .map_err(|e| runtime(&e))?;
+        if self.stretch_tf {
+            let (lo, hi) = volume.value_range();
+            if lo < hi {
+                tf = tf.with_value_range(lo, hi).map_err(|e| runtime(&e))?;
+            }
+        }
+        Ok(Scene::new(volume, tf))
+    }
+}
+
+/// `phantom[:N]`, `marschner-lobb[:N]` or `box[:N]`.
+fn procedural(spec: &str) -> Result<Option<(String, StructuredVolume)>, Failure> {
+    let (kind, size) = match spec.split_once(':') {
+        Some((k, n)) => {
+            let n: u32 = n
+                .parse()
+                .ok()
+                .filter(|&n| (2..=1024).contains(&n))
+                .ok_or_else(|| {
+                    Failure::Usage(format!(
+                        "volume size in '{spec}' must be a whole number in 2..=1024"
+                    ))
+                })?;
+            (k, n)
+        }
+        None => (spec, PROCEDURAL_SIZE),
+    };
+    let make: fn(u32) -> StructuredVolume = match kind {
+        "phantom" | "shepp-logan" => shepp_logan,
+        "marschner-lobb" => marschner_lobb,
+        "box" => solid_box,
+        _ => return Ok(None),
+    };
+    Ok(Some((format!("{kind}:{size}"), make(size))))
+}
+
+fn file_stem(path: &str) -> String {
+    Path::new(path)
+        .file_stem()
+        .map_or_else(|| path.to_string(), |s| s.to_string_lossy().into_owned())
+}

@@ -1,0 +1,136 @@
+use glam::{Vec3, Vec4};
+
+use super::sample::{correct, Field};
+use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_STEPS};
+
+/// Light reaching a shadowed sample, so shadows darken but never black out.
+pub(crate) const SHADOW_AMBIENT: f32 = 0.3;
+
+/// What one primary ray produced.
+pub(super) struct RayResult {
+    /// Composited over the background.
+    pub color: Vec4,
+    pub depth: f32,
+    /// Volume samples taken, primary and shading.
+    pub samples: u32,
+}
+
+/// Marches one primary ray with unit direction `dir`.
+pub(super) fn march(field: &Field, origin: Vec3, dir: Vec3) -> RayResult {
+    let mut samples = 0;
+    let plan = field.plan;
+    let mut acc = Vec4::ZERO;
+    let mut depth = f32::INFINITY;
+    if let Some((t0, t1)) = enter_exit(origin, dir, plan.box_lo, plan.box_hi) {
+        let len = t1 - t0;
+        let n = (len / plan.step).ceil() as u32;
+        for k in 0..n {
+            // Every segment is a full step but the last; each is sampled
+            // at its midpoint and its opacity corrected for its length.
+            let start = k as f32 * plan.step;
+            let seg = plan.step.min(len - start).max(0.0);
+            let t = t0 + start + 0.5 * seg;
+            let p = origin + dir * t;
+            samples += 1;
+            let c = field.classify(field.sample(p));
+            if c.w <= 0.0 {
+                continue;
+            }
+            let a = correct(c.w, seg * plan.inv_unit_distance);
+            let s = shade(field, p, &mut samples);
+            let weight = (1.0 - acc.w) * a;
+            acc = (acc.truncate() + c.truncate() * s * weight).extend(acc.w + weight);
+            if depth == f32::INFINITY {
+                depth = t;
+            }
+            if acc.w >= plan.termination {
+                break;
+            }
+        }
+    }
+    let bg = plan.background;
+    let rgb = acc.truncate() + (1.0 - acc.w) * bg.truncate();
+    RayResult {
+        color: rgb.extend(acc.w + (1.0 - acc.w) * bg.w),
+        depth,
+        samples,
+    }
+}
+
+/// Where a ray enters and leaves the box, clipped to t >= 0.
+pub(super) fn enter_exit(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+    let safe = |x: f32| {
+        if x.abs() < 1e-20 {
+            1e-20_f32.copysign(x)
+        } else {
+            x
+        }
+    };
+    let inv = Vec3::new(safe(d.x), safe(d.y), safe(d.z)).recip();
+    let ta = (lo - o) * inv;
+    let tb = (hi - o) * inv;
+    let t0 = ta.min(tb).max_element().max(0.0);
+    let t1 = ta.max(tb).min_element();
+    (t1 > t0).then_some((t0, t1))
+}
+
+/// Light factor of the sample at `p` under the plan's shading mode.
+fn shade(field: &Field, p: Vec3, samples: &mut u32) -> f32 {
+    let plan = field.plan;
+    let exponent = plan.shading_step * plan.inv_unit_distance;
+    let shadow = |samples: &mut u32| {
+        let t = transmittance(field, p, plan.light, SHADOW_STEPS, exponent, samples);
+        SHADOW_AMBIENT + (1.0 - SHADOW_AMBIENT) * t
+    };
+    let ao = |samples: &mut u32| {
+        let mut occluded = 0.0;
+        for &d in &plan.directions {
+            occluded += opacity_at(field, p + d * plan.ao_radius, samples);
+        }
+        1.0 - occluded / plan.directions.len() as f32
+    };
+    match plan.shading {
+        Shading::None | Shading::Directional(0) => 1.0,
+        Shading::Shadows => shadow(samples),
+        Shading::Ao => ao(samples),
+        Shading::ShadowsAo => shadow(samples) * ao(samples),
+        Shading::Directional(n) => {
+            let mut sum = 0.0;
+            for &d in &plan.directions {
+                sum += transmittance(field, p, d, DIRECTIONAL_STEPS, exponent, samples);
+            }
+            sum / n as f32
+        }
+    }
+}
+
+/// Opacity of the sample at `p`, zero (and no sample taken) outside.
+fn opacity_at(field: &Field, p: Vec3, samples: &mut u32) -> f32 {
+    if field.inside(p) {
+        *samples += 1;
+        field.classify(field.sample(p)).w
+    } else {
+        0.0
+    }
+}
+
+/// Transmittance over up to `steps` shading steps from `p` along `dir`,
+/// ending where the ray leaves the volume.
+fn transmittance(
+    field: &Field,
+    p: Vec3,
+    dir: Vec3,
+    steps: u32,
+    exponent: f32,
+    samples: &mut u32,
+) -> f32 {
+    let mut t = 1.0;
+    for k in 1..=steps {
+        let q = p + dir * (field.plan.shading_step * k as f32);
+        if !field.inside(q) {
+            break;
+        }
+        t *= 1.0 - correct(opacity_at(field, q, samples), exponent);
+    }
+    t
+}

@@ -1,0 +1,172 @@
+use glam::{UVec2, Vec4};
+
+use super::RenderError;
+
+/// Pixel formats of ANARI's `channel.color`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ColorFormat {
+    /// UFIXED8_VEC4: linear colour, 8 bits per channel.
+    #[default]
+    Rgba8,
+    /// UFIXED8_RGBA_SRGB: sRGB-encoded colour, linear alpha.
+    Srgba8,
+    /// FLOAT32_VEC4: linear colour as floats.
+    Rgba32F,
+}
+
+impl ColorFormat {
+    pub fn bytes_per_pixel(self) -> u64 {
+        match self {
+            ColorFormat::Rgba8 | ColorFormat::Srgba8 => 4,
+            ColorFormat::Rgba32F => 16,
+        }
+    }
+    /// The code the shader switches on.
+    pub(crate) fn code(self) -> u32 {
+        match self {
+            ColorFormat::Rgba8 => 0,
+            ColorFormat::Srgba8 => 1,
+            ColorFormat::Rgba32F => 2,
+        }
+    }
+}
+
+/// What a render call should produce.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameDesc {
+    pub size: UVec2,
+    pub color: ColorFormat,
+    /// Also return the distance along each unit ray to the first sample
+    /// that contributed (infinity where none did).
+    pub depth: bool,
+}
+
+impl FrameDesc {
+    pub fn new(size: UVec2) -> Self {
+        Self {
+            size,
+            color: ColorFormat::Rgba8,
+            depth: false,
+        }
+    }
+    pub fn with_color(self, color: ColorFormat) -> Self {
+        Self { color, ..self }
+    }
+    pub fn with_depth(self) -> Self {
+        Self {
+            depth: true,
+            ..self
+        }
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.size.x as usize * self.size.y as usize
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), RenderError> {
+        if self.size.min_element() == 0 {
+            return Err(RenderError::Settings(format!(
+                "frame size must be at least 1x1, got {}x{}",
+                self.size.x, self.size.y
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A rendered colour channel, lower-left pixel first, rows left to right.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColorData {
+    Rgba8(Vec<u8>),
+    Srgba8(Vec<u8>),
+    Rgba32F(Vec<f32>),
+}
+
+/// The result of one render: colour and optional depth, lower-left first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub size: UVec2,
+    pub color: ColorData,
+    pub depth: Option<Vec<f32>>,
+    /// Volume samples taken (primary and shading), for samples/s figures.
+    pub samples: u64,
+}
+
+impl Frame {
+    /// Pixel (x, y) (y = 0 is the bottom row) as linear RGBA floats.
+    pub fn pixel(&self, x: u32, y: u32) -> Vec4 {
+        let i = (y * self.size.x + x) as usize;
+        match &self.color {
+            ColorData::Rgba8(b) => unorm4(&b[4 * i..4 * i + 4]),
+            ColorData::Srgba8(b) => {
+                let c = unorm4(&b[4 * i..4 * i + 4]);
+                Vec4::new(
+                    srgb_to_linear(c.x),
+                    srgb_to_linear(c.y),
+                    srgb_to_linear(c.z),
+                    c.w,
+                )
+            }
+            ColorData::Rgba32F(f) => Vec4::from_slice(&f[4 * i..4 * i + 4]),
+        }
+    }
+
+    /// Every pixel as linear RGBA, lower-left first.
+    pub fn to_linear(&self) -> Vec<Vec4> {
+        (0..self.size.y)
+            .flat_map(|y| (0..self.size.x).map(move |x| (x, y)))
+            .map(|(x, y)| self.pixel(x, y))
+            .collect()
+    }
+
+    /// Display-ready 8-bit sRGB RGBA, top row first (as image files store it).
+    pub fn to_srgb8_top_down(&self) -> Vec<u8> {
+        let (w, h) = (self.size.x as usize, self.size.y as usize);
+        let mut out = Vec::with_capacity(4 * w * h);
+        for y in (0..h).rev() {
+            for x in 0..w {
+                let i = y * w + x;
+                match &self.color {
+                    ColorData::Srgba8(b) => out.extend_from_slice(&b[4 * i..4 * i + 4]),
+                    _ => {
+                        let c = self.pixel(x as u32, y as u32);
+                        let s = Vec4::new(
+                            linear_to_srgb(c.x),
+                            linear_to_srgb(c.y),
+                            linear_to_srgb(c.z),
+                            c.w,
+                        );
+                        out.extend(s.to_array().map(to_unorm8));
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+fn unorm4(b: &[u8]) -> Vec4 {
+    Vec4::new(b[0] as f32, b[1] as f32, b[2] as f32, b[3] as f32) / 255.0
+}
+
+/// WGSL's `pack4x8unorm` rounding (ties to even), so both renderers agree
+/// to the bit on 8-bit output.
+pub(crate) fn to_unorm8(x: f32) -> u8 {
+    (x.clamp(0.0, 1.0) * 255.0).round_ties_even() as u8
+}
+
+pub(crate) fn linear_to_srgb(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+pub(crate) fn srgb_to_linear(x: f32) -> f32 {
+    if x <= 0.040_45 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
+}

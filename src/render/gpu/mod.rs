@@ -1,0 +1,338 @@
+//! The wgpu ray caster: shaders/raycast.wgsl, one invocation per pixel.
+//! Device, pipeline and buffers are made once; the volume and the table
+//! are uploaded when a scene brings new ones and kept otherwise.
+
+mod context;
+mod params;
+mod resources;
+
+use std::sync::Arc;
+
+use glam::UVec2;
+
+use self::context::Context;
+use self::resources::Target;
+use super::cpu::SHADOW_AMBIENT;
+use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
+use super::plan::{MarchPlan, Scene};
+use super::settings::MAX_DIRECTIONS;
+use super::{RenderError, RenderSettings};
+use crate::device::{StructuredVolume, TransferFunction};
+use crate::geometry::RayGen;
+
+const SHADER: &str = include_str!("../../../shaders/raycast.wgsl");
+const WORKGROUP: u32 = 8;
+
+/// How often data went to the GPU; lets tests (and curious users) check
+/// that unchanged scenes are not uploaded again.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Uploads {
+    pub volumes: u32,
+    pub transfer_functions: u32,
+}
+
+pub struct GpuRenderer {
+    ctx: Context,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    directions: wgpu::Buffer,
+    volume: Option<(Arc<StructuredVolume>, wgpu::TextureView)>,
+    table: Option<(Arc<TransferFunction>, wgpu::TextureView)>,
+    target: Option<Target>,
+    bind_group: Option<wgpu::BindGroup>,
+    uploads: Uploads,
+}
+
+impl GpuRenderer {
+    /// Opens the first Vulkan adapter (lavapipe where there is no GPU).
+    pub fn new() -> Result<Self, RenderError> {
+        let ctx = Context::new()?;
+        let device = &ctx.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raycast.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty,
+            count: None,
+        };
+        let texture = |dim| wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: dim,
+            multisampled: false,
+        };
+        let storage = |read_only| wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("raycast"),
+            entries: &[
+                entry(
+                    0,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                entry(1, texture(wgpu::TextureViewDimension::D3)),
+                entry(2, texture(wgpu::TextureViewDimension::D2)),
+                entry(3, storage(true)),
+                entry(4, storage(false)),
+                entry(5, storage(false)),
+                entry(6, storage(false)),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("raycast"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("raycast"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let uniform = |label, size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let params = uniform("params", params::PARAMS_BYTES, wgpu::BufferUsages::UNIFORM);
+        let directions = uniform(
+            "directions",
+            16 * u64::from(MAX_DIRECTIONS),
+            wgpu::BufferUsages::STORAGE,
+        );
+        ctx.check()?;
+        Ok(Self {
+            ctx,
+            pipeline,
+            layout,
+            params,
+            directions,
+            volume: None,
+            table: None,
+            target: None,
+            bind_group: None,
+            uploads: Uploads::default(),
+        })
+    }
+
+    pub fn adapter(&self) -> &wgpu::AdapterInfo {
+        &self.ctx.info
+    }
+    pub fn limits(&self) -> &wgpu::Limits {
+        &self.ctx.limits
+    }
+    pub fn uploads(&self) -> Uploads {
+        self.uploads
+    }
+
+    /// Fails, before touching the GPU, if the scene or frame exceeds what
+    /// this adapter allows.
+    pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
+        let limits = &self.ctx.limits;
+        let dims = scene.volume.dims();
+        let max = limits.max_texture_dimension_3d;
+        if dims.max_element() > max {
+            return Err(RenderError::VolumeTooLarge {
+                dims: [dims.x, dims.y, dims.z],
+                max,
+                adapter: self.ctx.info.name.clone(),
+            });
+        }
+        let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
+        let bytes = pixels * desc.color.bytes_per_pixel();
+        let max_bytes = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let groups = desc.size.max_element().div_ceil(WORKGROUP);
+        if bytes > max_bytes || groups > limits.max_compute_workgroups_per_dimension {
+            return Err(RenderError::FrameTooLarge {
+                size: [desc.size.x, desc.size.y],
+                bytes,
+                max_bytes,
+                adapter: self.ctx.info.name.clone(),
+            });
+        }
+        Ok(())
+    }
+
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+    ) -> Result<Frame, RenderError> {
+        desc.validate()?;
+        let plan = MarchPlan::new(scene, settings)?;
+        self.check_limits(scene, desc)?;
+        self.prepare(scene, desc.size, desc.color);
+        let ctx = &self.ctx;
+        ctx.queue.write_buffer(
+            &self.params,
+            0,
+            &params::pack(rays, &plan, desc.size, desc.color, SHADOW_AMBIENT),
+        );
+        ctx.queue.write_buffer(
+            &self.directions,
+            0,
+            &params::pack_directions(&plan.directions),
+        );
+        let target = self.target.as_ref().expect("prepared above");
+        let bind_group = self.bind_group.as_ref().expect("prepared above");
+
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.dispatch_workgroups(
+                desc.size.x.div_ceil(WORKGROUP),
+                desc.size.y.div_ceil(WORKGROUP),
+                1,
+            );
+        }
+        encoder.copy_buffer_to_buffer(&target.color, 0, &target.color_read, 0, None);
+        if desc.depth {
+            encoder.copy_buffer_to_buffer(&target.depth, 0, &target.depth_read, 0, None);
+        }
+        encoder.copy_buffer_to_buffer(&target.samples, 0, &target.samples_read, 0, None);
+        ctx.queue.submit([encoder.finish()]);
+        ctx.check()?;
+
+        let color = ctx.read(&target.color_read, target.color_bytes())?;
+        let depth = if desc.depth {
+            Some(floats(
+                &ctx.read(&target.depth_read, target.scalar_bytes())?,
+            ))
+        } else {
+            None
+        };
+        let samples = ctx
+            .read(&target.samples_read, target.scalar_bytes())?
+            .chunks_exact(4)
+            .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+            .sum();
+        ctx.check()?;
+        let color = match desc.color {
+            ColorFormat::Rgba8 => ColorData::Rgba8(color),
+            ColorFormat::Srgba8 => ColorData::Srgba8(color),
+            ColorFormat::Rgba32F => ColorData::Rgba32F(floats(&color)),
+        };
+        Ok(Frame {
+            size: desc.size,
+            color,
+            depth,
+            samples,
+        })
+    }
+
+    /// Uploads the scene's volume and transfer function now, if they are
+    /// not on the GPU yet, and waits for the copy: lets callers time
+    /// uploads apart from frames.
+    pub fn upload(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        self.check_limits(scene, &FrameDesc::new(UVec2::ONE))?;
+        self.upload_scene(scene);
+        self.ctx.queue.submit([]);
+        self.ctx.wait()?;
+        self.ctx.check()
+    }
+
+    /// Uploads whatever of the scene is not on the GPU; true if anything was.
+    fn upload_scene(&mut self, scene: &Scene) -> bool {
+        let mut changed = false;
+        if !matches!(&self.volume, Some((v, _)) if Arc::ptr_eq(v, &scene.volume)) {
+            let view = resources::upload_volume(&self.ctx, &scene.volume);
+            self.volume = Some((Arc::clone(&scene.volume), view));
+            self.uploads.volumes += 1;
+            self.bind_group = None;
+            changed = true;
+        }
+        let tf = &scene.transfer_function;
+        if !matches!(&self.table, Some((t, _)) if Arc::ptr_eq(t, tf)) {
+            let view = resources::upload_table(&self.ctx, tf);
+            self.table = Some((Arc::clone(tf), view));
+            self.uploads.transfer_functions += 1;
+            self.bind_group = None;
+            changed = true;
+        }
+        changed
+    }
+
+    /// Uploads what changed and rebuilds the bind group if anything did.
+    fn prepare(&mut self, scene: &Scene, size: UVec2, format: ColorFormat) {
+        let mut changed = self.bind_group.is_none();
+        changed |= self.upload_scene(scene);
+        if !matches!(&self.target, Some(t) if t.size == size && t.format == format) {
+            self.target = Some(Target::new(&self.ctx, size, format));
+            changed = true;
+        }
+        if changed {
+            let (_, volume) = self.volume.as_ref().expect("uploaded above");
+            let (_, table) = self.table.as_ref().expect("uploaded above");
+            let target = self.target.as_ref().expect("made above");
+            fn buffer(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+                b.as_entire_binding()
+            }
+            self.bind_group = Some(
+                self.ctx
+                    .device
+                    .create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("raycast"),
+                        layout: &self.layout,
+                        entries: &[
+                            wgpu::BindGroupEntry {
+                                binding: 0,
+                                resource: buffer(&self.params),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 1,
+                                resource: wgpu::BindingResource::TextureView(volume),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 2,
+                                resource: wgpu::BindingResource::TextureView(table),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 3,
+                                resource: buffer(&self.directions),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 4,
+                                resource: buffer(&target.color),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 5,
+                                resource: buffer(&target.depth),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 6,
+                                resource: buffer(&target.samples),
+                            },
+                        ],
+                    }),
+            );
+        }
+    }
+}
+
+fn floats(bytes: &[u8]) -> Vec<f32> {
+    bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
+}

@@ -1,0 +1,154 @@
+use glam::UVec2;
+
+use super::context::Context;
+use crate::device::{StructuredVolume, TransferFunction, TABLE_SIZE};
+use crate::render::frame::ColorFormat;
+
+/// Slices per write when uploading a volume, so staging memory stays
+/// bounded (about 64 MiB) however large the volume is.
+const UPLOAD_BYTES: u64 = 64 << 20;
+
+/// The volume as an R32Float 3D texture holding normalised values.
+pub(super) fn upload_volume(ctx: &Context, volume: &StructuredVolume) -> wgpu::TextureView {
+    let dims = volume.dims();
+    let size = wgpu::Extent3d {
+        width: dims.x,
+        height: dims.y,
+        depth_or_array_layers: dims.z,
+    };
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("volume"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D3,
+        format: wgpu::TextureFormat::R32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let slice_voxels = dims.x as usize * dims.y as usize;
+    let slices_per_write = (UPLOAD_BYTES / (4 * slice_voxels as u64)).max(1) as u32;
+    let voxels = volume.voxels();
+    let mut z = 0;
+    while z < dims.z {
+        let n = slices_per_write.min(dims.z - z);
+        let first = z as usize * slice_voxels;
+        let bytes: Vec<u8> = (first..first + n as usize * slice_voxels)
+            .flat_map(|i| voxels.value(i).to_le_bytes())
+            .collect();
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: 0, z },
+                aspect: wgpu::TextureAspect::All,
+            },
+            &bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * dims.x),
+                rows_per_image: Some(dims.y),
+            },
+            wgpu::Extent3d {
+                depth_or_array_layers: n,
+                ..size
+            },
+        );
+        z += n;
+    }
+    texture.create_view(&Default::default())
+}
+
+/// The transfer function's table as a TABLE_SIZE x 1 RGBA32Float texture.
+pub(super) fn upload_table(ctx: &Context, tf: &TransferFunction) -> wgpu::TextureView {
+    let size = wgpu::Extent3d {
+        width: TABLE_SIZE as u32,
+        height: 1,
+        depth_or_array_layers: 1,
+    };
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("transfer function"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let bytes: Vec<u8> = tf
+        .table()
+        .iter()
+        .flat_map(|c| c.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    ctx.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        &bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(16 * TABLE_SIZE as u32),
+            rows_per_image: None,
+        },
+        size,
+    );
+    texture.create_view(&Default::default())
+}
+
+/// Output buffers of one frame size and format, kept across frames.
+pub(super) struct Target {
+    pub size: UVec2,
+    pub format: ColorFormat,
+    pub color: wgpu::Buffer,
+    pub depth: wgpu::Buffer,
+    pub samples: wgpu::Buffer,
+    pub color_read: wgpu::Buffer,
+    pub depth_read: wgpu::Buffer,
+    pub samples_read: wgpu::Buffer,
+}
+
+impl Target {
+    pub fn new(ctx: &Context, size: UVec2, format: ColorFormat) -> Self {
+        let pixels = u64::from(size.x) * u64::from(size.y);
+        let storage = |label, bytes| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let readable = |label, bytes| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let color_bytes = pixels * format.bytes_per_pixel();
+        Self {
+            size,
+            format,
+            color: storage("colour", color_bytes),
+            depth: storage("depth", 4 * pixels),
+            samples: storage("samples", 4 * pixels),
+            color_read: readable("colour read-back", color_bytes),
+            depth_read: readable("depth read-back", 4 * pixels),
+            samples_read: readable("samples read-back", 4 * pixels),
+        }
+    }
+
+    pub fn color_bytes(&self) -> u64 {
+        self.color.size()
+    }
+    /// Size of the depth and of the sample-count buffers.
+    pub fn scalar_bytes(&self) -> u64 {
+        self.depth.size()
+    }
+}

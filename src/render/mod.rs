@@ -1,0 +1,121 @@
+//! Volume ray casting: the wgpu renderer, the CPU reference it is checked
+//! against, and what both share (settings, frame formats, the march plan).
+
+mod compare;
+pub mod cpu;
+mod frame;
+pub mod gpu;
+mod plan;
+mod settings;
+
+use thiserror::Error;
+
+pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
+pub use cpu::CpuRenderer;
+pub use frame::{ColorData, ColorFormat, Frame, FrameDesc};
+pub use gpu::{GpuRenderer, Uploads};
+pub use plan::Scene;
+pub use settings::{RenderSettings, Shading, MAX_DIRECTIONS};
+
+use crate::geometry::RayGen;
+
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum RenderError {
+    #[error("{0}")]
+    Settings(String),
+    #[error("no usable Vulkan adapter: {0}")]
+    NoAdapter(String),
+    #[error(
+        "volume of {}x{}x{} voxels exceeds the largest 3D texture {adapter} allows ({max} per side)",
+        .dims[0], .dims[1], .dims[2]
+    )]
+    VolumeTooLarge {
+        dims: [u32; 3],
+        max: u32,
+        adapter: String,
+    },
+    #[error(
+        "frame of {}x{} needs {bytes} bytes of output, more than {adapter} allows in one buffer ({max_bytes})",
+        .size[0], .size[1]
+    )]
+    FrameTooLarge {
+        size: [u32; 2],
+        bytes: u64,
+        max_bytes: u64,
+        adapter: String,
+    },
+    #[error("GPU error: {0}")]
+    Gpu(String),
+}
+
+/// Which implementation renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    Gpu,
+    Cpu,
+}
+
+/// The GPU renderer where an adapter exists, else the CPU reference.
+pub enum Renderer {
+    Gpu(Box<GpuRenderer>),
+    Cpu(CpuRenderer),
+}
+
+impl Renderer {
+    /// `Backend::Gpu` fails if no adapter can be opened; callers that want
+    /// the fallback use [`Renderer::gpu_or_cpu`].
+    pub fn new(backend: Backend) -> Result<Self, RenderError> {
+        Ok(match backend {
+            Backend::Gpu => Renderer::Gpu(Box::new(GpuRenderer::new()?)),
+            Backend::Cpu => Renderer::Cpu(CpuRenderer::new()),
+        })
+    }
+
+    /// The GPU renderer, or the CPU reference plus the reason there is no GPU.
+    pub fn gpu_or_cpu() -> (Self, Option<RenderError>) {
+        match GpuRenderer::new() {
+            Ok(gpu) => (Renderer::Gpu(Box::new(gpu)), None),
+            Err(e) => (Renderer::Cpu(CpuRenderer::new()), Some(e)),
+        }
+    }
+
+    pub fn backend(&self) -> Backend {
+        match self {
+            Renderer::Gpu(_) => Backend::Gpu,
+            Renderer::Cpu(_) => Backend::Cpu,
+        }
+    }
+
+    /// A one-line description: adapter name and graphics API, or the CPU.
+    pub fn describe(&self) -> String {
+        match self {
+            Renderer::Gpu(g) => {
+                let info = g.adapter();
+                format!("GPU: {} ({:?}, {})", info.name, info.backend, info.driver)
+            }
+            Renderer::Cpu(_) => format!("CPU reference ({} threads)", rayon::current_num_threads()),
+        }
+    }
+
+    /// Puts the scene where the renderer reads it (GPU memory), so that
+    /// the next frames time rendering alone.
+    pub fn upload(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        match self {
+            Renderer::Gpu(g) => g.upload(scene),
+            Renderer::Cpu(_) => Ok(()),
+        }
+    }
+
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+    ) -> Result<Frame, RenderError> {
+        match self {
+            Renderer::Gpu(g) => g.render(scene, rays, settings, desc),
+            Renderer::Cpu(c) => c.render(scene, rays, settings, desc),
+        }
+    }
+}

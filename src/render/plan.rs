@@ -1,0 +1,125 @@
+use std::sync::Arc;
+
+use glam::{UVec3, Vec3, Vec4};
+
+use super::settings::{RenderSettings, Shading, AO_DIRECTIONS};
+use super::RenderError;
+use crate::device::{StructuredVolume, TransferFunction};
+
+/// What a renderer draws: a volume classified by a transfer function.
+/// Both are shared so a renderer can keep them uploaded and tell, by
+/// identity, when they were replaced.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub volume: Arc<StructuredVolume>,
+    pub transfer_function: Arc<TransferFunction>,
+}
+
+impl Scene {
+    pub fn new(volume: StructuredVolume, transfer_function: TransferFunction) -> Self {
+        Self {
+            volume: Arc::new(volume),
+            transfer_function: Arc::new(transfer_function),
+        }
+    }
+}
+
+/// Everything both renderers derive from scene and settings before any ray
+/// is cast, so that the CPU reference and the shader share one set of
+/// numbers rather than two derivations.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct MarchPlan {
+    pub dims: UVec3,
+    pub box_lo: Vec3,
+    pub box_hi: Vec3,
+    pub inv_spacing: Vec3,
+    /// Primary step length in world units.
+    pub step: f32,
+    pub inv_unit_distance: f32,
+    /// Step of shadow and directional rays, and the AO radius unit: one
+    /// smallest voxel extent, independent of the primary step factor.
+    pub shading_step: f32,
+    pub ao_radius: f32,
+    pub value_lo: f32,
+    pub value_scale: f32,
+    pub termination: f32,
+    /// Straight RGBA.
+    pub background: Vec4,
+    pub light: Vec3,
+    pub shading: Shading,
+    /// AO sphere points, or the random directions of `directional:N`.
+    pub directions: Vec<Vec3>,
+}
+
+impl MarchPlan {
+    pub fn new(scene: &Scene, settings: &RenderSettings) -> Result<Self, RenderError> {
+        settings.validate()?;
+        let volume = &scene.volume;
+        let tf = &scene.transfer_function;
+        let (lo, hi) = volume.bounds();
+        let smallest = volume.spacing().min_element();
+        let (vlo, vhi) = tf.value_range();
+        let directions = match settings.shading {
+            Shading::Ao | Shading::ShadowsAo => ao_directions(),
+            Shading::Directional(n) => random_directions(n),
+            Shading::None | Shading::Shadows => Vec::new(),
+        };
+        Ok(Self {
+            dims: volume.dims(),
+            box_lo: lo,
+            box_hi: hi,
+            inv_spacing: volume.spacing().recip(),
+            step: 0.5 * smallest * settings.step_factor,
+            inv_unit_distance: tf.unit_distance().recip(),
+            shading_step: smallest,
+            ao_radius: 2.0 * smallest,
+            value_lo: vlo,
+            value_scale: (vhi - vlo).recip(),
+            termination: settings.termination,
+            background: settings.background,
+            light: settings.light.normalize(),
+            shading: settings.shading,
+            directions,
+        })
+    }
+}
+
+/// The 14 AO directions: the 6 axes and the 8 cube diagonals.
+fn ao_directions() -> Vec<Vec3> {
+    let mut dirs = vec![
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+    ];
+    for i in 0..8 {
+        let s = |bit: u32| if i & bit == 0 { 1.0 } else { -1.0 };
+        dirs.push(Vec3::new(s(1), s(2), s(4)).normalize());
+    }
+    debug_assert_eq!(dirs.len(), AO_DIRECTIONS as usize);
+    dirs
+}
+
+/// `n` directions uniform on the sphere from a fixed seed, so every frame
+/// (and both renderers) use the same set.
+fn random_directions(n: u32) -> Vec<Vec3> {
+    let mut state: u64 = 0x5eed_cafe_f00d_0001;
+    let mut next = || {
+        // SplitMix64: small, good enough for a handful of directions.
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| {
+            let z = 1.0 - 2.0 * next();
+            let phi = std::f64::consts::TAU * next();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
+        })
+        .collect()
+}

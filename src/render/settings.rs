@@ -1,0 +1,145 @@
+use std::fmt;
+use std::str::FromStr;
+
+use glam::{Vec3, Vec4};
+
+use super::RenderError;
+
+/// Most directions `directional:N` may ask for (the paper used up to 16).
+pub const MAX_DIRECTIONS: u32 = 64;
+
+/// How each sample is lit, as in the paper's benchmark ladder.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Shading {
+    /// Transfer-function colour only.
+    #[default]
+    None,
+    /// 24 samples towards a parallel light.
+    Shadows,
+    /// Ambient occlusion from 14 samples on a sphere.
+    Ao,
+    ShadowsAo,
+    /// The paper's parametrised shading: N random directions, each traced
+    /// up to 4 steps (N = 0 adds no samples and equals `None`).
+    Directional(u32),
+}
+
+impl Shading {
+    /// Extra volume samples per shaded sample.
+    pub fn extra_samples(self) -> u32 {
+        match self {
+            Shading::None => 0,
+            Shading::Shadows => SHADOW_STEPS,
+            Shading::Ao => AO_DIRECTIONS,
+            Shading::ShadowsAo => SHADOW_STEPS + AO_DIRECTIONS,
+            Shading::Directional(n) => n * DIRECTIONAL_STEPS,
+        }
+    }
+}
+
+pub(crate) const SHADOW_STEPS: u32 = 24;
+pub(crate) const AO_DIRECTIONS: u32 = 14;
+pub(crate) const DIRECTIONAL_STEPS: u32 = 4;
+
+impl fmt::Display for Shading {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Shading::None => f.write_str("none"),
+            Shading::Shadows => f.write_str("shadows"),
+            Shading::Ao => f.write_str("ao"),
+            Shading::ShadowsAo => f.write_str("shadows+ao"),
+            Shading::Directional(n) => write!(f, "directional:{n}"),
+        }
+    }
+}
+
+impl FromStr for Shading {
+    type Err = RenderError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let bad = || {
+            RenderError::Settings(format!(
+            "unknown shading mode \"{s}\": expected none, shadows, ao, shadows+ao or directional:N (N = 0..={MAX_DIRECTIONS})"
+        ))
+        };
+        Ok(match s {
+            "none" => Shading::None,
+            "shadows" => Shading::Shadows,
+            "ao" => Shading::Ao,
+            "shadows+ao" => Shading::ShadowsAo,
+            _ => {
+                let n = s.strip_prefix("directional:").ok_or_else(bad)?;
+                let n: u32 = n.parse().map_err(|_| bad())?;
+                if n > MAX_DIRECTIONS {
+                    return Err(bad());
+                }
+                Shading::Directional(n)
+            }
+        })
+    }
+}
+
+/// Renderer parameters that do not depend on the scene or the camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Straight (not premultiplied) RGBA behind the volume.
+    pub background: Vec4,
+    /// Step length as a multiple of half the smallest voxel extent.
+    pub step_factor: f32,
+    /// Accumulated opacity at which a ray stops (ANARI hosts expect 0.99);
+    /// a value above 1 turns early termination off.
+    pub termination: f32,
+    pub shading: Shading,
+    /// Direction towards the parallel light of `shadows`, in world space.
+    pub light: Vec3,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            background: Vec4::new(0.0, 0.0, 0.0, 1.0),
+            step_factor: 1.0,
+            termination: 0.99,
+            shading: Shading::None,
+            light: Vec3::new(0.3, 0.5, 0.8).normalize(),
+        }
+    }
+}
+
+impl RenderSettings {
+    pub(crate) fn validate(&self) -> Result<(), RenderError> {
+        let unit = |x: f32| x.is_finite() && (0.0..=1.0).contains(&x);
+        if !self.background.to_array().into_iter().all(unit) {
+            return Err(RenderError::Settings(format!(
+                "background must be four numbers in [0, 1], got {}",
+                self.background
+            )));
+        }
+        if !(self.step_factor.is_finite() && self.step_factor > 0.0) {
+            return Err(RenderError::Settings(format!(
+                "step factor must be finite and positive, got {}",
+                self.step_factor
+            )));
+        }
+        if !(self.termination.is_finite() && self.termination > 0.0) {
+            return Err(RenderError::Settings(format!(
+                "termination threshold must be finite and positive, got {}",
+                self.termination
+            )));
+        }
+        if !self.light.is_finite() || self.light.length_squared() < 1e-12 {
+            return Err(RenderError::Settings(format!(
+                "light direction must be a finite non-zero vector, got {}",
+                self.light
+            )));
+        }
+        if let Shading::Directional(n) = self.shading {
+            if n > MAX_DIRECTIONS {
+                return Err(RenderError::Settings(format!(
+                    "directional shading takes at most {MAX_DIRECTIONS} directions, got {n}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
