@@ -263,11 +263,15 @@ fn a_malformed_rig_is_reported_with_file_line_and_field() {
         text.replace("resolution = [3840, 2160]", "resolution = [3840, 0]"),
     )
     .unwrap();
+    let line = 1 + text
+        .lines()
+        .position(|l| l.contains("resolution = [3840, 2160]"))
+        .unwrap();
     let out = caveray(&["inspect", "--config", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(
-        err.contains("bad.toml:20:") && err.contains("walls[0].resolution"),
+        err.contains(&format!("bad.toml:{line}:")) && err.contains("walls[0].resolution"),
         "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
