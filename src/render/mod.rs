@@ -34,14 +34,10 @@ pub enum RenderError {
         max: u32,
         adapter: String,
     },
-    #[error(
-        "frame of {}x{} needs {bytes} bytes of output, more than {adapter} allows in one buffer ({max_bytes})",
-        .size[0], .size[1]
-    )]
+    #[error("frame of {}x{} is too large for {adapter}: {reason}", .size[0], .size[1])]
     FrameTooLarge {
         size: [u32; 2],
-        bytes: u64,
-        max_bytes: u64,
+        reason: String,
         adapter: String,
     },
     #[error("GPU error: {0}")]

@@ -159,11 +159,22 @@ impl GpuRenderer {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
         let groups = desc.size.max_element().div_ceil(WORKGROUP);
-        if bytes > max_bytes || groups > limits.max_compute_workgroups_per_dimension {
+        let reason = if bytes > max_bytes {
+            Some(format!(
+                "its {bytes} bytes of colour exceed the largest storage buffer ({max_bytes} bytes)"
+            ))
+        } else if groups > limits.max_compute_workgroups_per_dimension {
+            Some(format!(
+                "{groups} workgroups per side exceed the limit of {}",
+                limits.max_compute_workgroups_per_dimension
+            ))
+        } else {
+            None
+        };
+        if let Some(reason) = reason {
             return Err(RenderError::FrameTooLarge {
                 size: [desc.size.x, desc.size.y],
-                bytes,
-                max_bytes,
+                reason,
                 adapter: self.ctx.info.name.clone(),
             });
         }

@@ -1,0 +1,214 @@
+//! `caveray render` end to end: files, timings and one-line errors.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn caveray(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_caveray"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("caveray runs")
+}
+
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("caveray-render-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn render(out: &Path, extra: &[&str]) -> Value {
+    let mut args = vec![
+        "render",
+        "--config",
+        "cave_configs/cologne_5wall.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let result = caveray(&args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let text = std::fs::read_to_string(out.join("timings.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+fn png(path: &Path) -> image::RgbaImage {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgba8()
+}
+
+/// Mean absolute difference of two 8-bit images, in levels.
+fn mean_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: u64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| u64::from(x.abs_diff(*y)))
+        .sum();
+    sum as f64 / a.as_raw().len() as f64
+}
+
+#[test]
+fn every_wall_and_eye_of_the_cologne_cave_is_rendered() {
+    let out = scratch("cologne");
+    let report = render(&out, &["--scale", "0.02", "--volume", "phantom:48"]);
+    let views = report["views"].as_array().unwrap();
+    assert_eq!(views.len(), 10);
+    for v in views {
+        let file = v["file"].as_str().unwrap();
+        assert_eq!(
+            file,
+            format!(
+                "{}_{}.png",
+                v["wall"].as_str().unwrap(),
+                v["eye"].as_str().unwrap()
+            )
+        );
+        let image = png(&out.join(file));
+        assert_eq!(image.dimensions(), (32, 32));
+        assert!(v["ms"].as_f64().unwrap() > 0.0);
+        assert!(v["rays_per_s"].as_f64().unwrap() > 0.0);
+        assert!(v["samples_per_s"].as_f64().unwrap() > 0.0);
+    }
+    // The volume floats in front of the viewer: the front wall shows it.
+    let front = png(&out.join("front_left.png"));
+    let lit = front.pixels().filter(|p| p.0[0] > 40).count();
+    assert!(lit > 50, "front wall shows only {lit} lit pixels");
+    // Left and right eyes differ (stereo), but only a little.
+    let right = png(&out.join("front_right.png"));
+    let d = mean_difference(&front, &right);
+    assert!(d > 0.0 && d < 20.0, "eyes differ by {d} levels");
+    for eye in ["left", "right"] {
+        let sheet = png(&out.join(format!("cave_{eye}.png")));
+        // Unfolded cube of 5 walls: 3 x 3 cells of 32 px plus 4 px gaps.
+        assert_eq!(sheet.dimensions(), (3 * 32 + 4 * 4, 3 * 32 + 4 * 4));
+    }
+    assert_eq!(report["renderer"]["backend"], "gpu");
+    assert_eq!(report["renderer"]["api"], "Vulkan");
+    assert_eq!(report["strategy"], "offaxis");
+    assert_eq!(report["volume"]["dims"], serde_json::json!([48, 48, 48]));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn strategies_and_backends_give_the_same_pictures() {
+    let base = scratch("strategies");
+    let common = [
+        "--scale",
+        "0.04",
+        "--volume",
+        "phantom:32",
+        "--shading",
+        "ao",
+    ];
+    let run = |name: &str, extra: &[&str]| {
+        let out = base.join(name);
+        let mut args = common.to_vec();
+        args.extend_from_slice(extra);
+        let report = render(&out, &args);
+        (out, report)
+    };
+    let (reference, _) = run("offaxis", &[]);
+    for (name, extra) in [
+        ("matrix", vec!["--strategy", "matrix"]),
+        ("pinhole", vec!["--strategy", "pinhole"]),
+        ("from-matrices", vec!["--strategy", "from-matrices"]),
+        ("cpu", vec!["--backend", "cpu"]),
+    ] {
+        let (out, report) = run(name, &extra);
+        if name == "cpu" {
+            assert_eq!(report["renderer"]["backend"], "cpu");
+        }
+        for file in [
+            "front_left.png",
+            "left_right.png",
+            "floor_left.png",
+            "cave_right.png",
+        ] {
+            let d = mean_difference(&png(&reference.join(file)), &png(&out.join(file)));
+            assert!(d < 0.5, "{name} {file}: differs by {d} levels on average");
+        }
+    }
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn a_wall_the_eye_is_behind_is_reported_and_the_rest_rendered() {
+    let out = scratch("behind");
+    // Outside the CAVE, beyond the left wall.
+    let report = render(
+        &out,
+        &[
+            "--scale",
+            "0.02",
+            "--volume",
+            "phantom:16",
+            "--head=-2000,0,200",
+        ],
+    );
+    let views = report["views"].as_array().unwrap();
+    let errors: Vec<&Value> = views.iter().filter(|v| v.get("error").is_some()).collect();
+    assert_eq!(errors.len(), 2, "{views:?}");
+    for e in errors {
+        assert_eq!(e["wall"], "left");
+        assert!(e["error"].as_str().unwrap().contains("behind"), "{e}");
+    }
+    assert!(out.join("front_left.png").is_file());
+    assert!(!out.join("left_left.png").exists());
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn bad_arguments_are_one_line_errors() {
+    let out = scratch("errors");
+    let raw = out.join("short.raw");
+    std::fs::write(&raw, [0u8; 100]).unwrap();
+    let o = out.to_str().unwrap();
+    let r = raw.to_str().unwrap();
+    let config = "cave_configs/cologne_5wall.toml";
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--scale", "0"], "--scale must be in (0, 4], got 0"),
+        (vec!["--shading", "phong"], "unknown shading mode \"phong\""),
+        (
+            vec!["--volume", r],
+            "is a raw file: give its size with --dims",
+        ),
+        (
+            vec!["--volume", r, "--dims", "8,8,8"],
+            "has 100 bytes, but 8x8x8 uint8 needs 512 bytes",
+        ),
+        (
+            vec!["--volume", "phantom:1"],
+            "must be a whole number in 2..=1024",
+        ),
+        (
+            vec!["--tf", "rainbow"],
+            "unknown transfer function preset 'rainbow'",
+        ),
+        (vec!["--strategy", "fisheye"], "invalid value 'fisheye'"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", "--config", config, "--out", o];
+        args.extend_from_slice(&extra);
+        let result = caveray(&args);
+        let err = String::from_utf8(result.stderr).unwrap();
+        assert_eq!(result.status.code(), Some(2), "{extra:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{extra:?}: {err}");
+        assert!(
+            err.starts_with("caveray: ") && err.contains(needle),
+            "{extra:?}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&out).unwrap();
+}

@@ -1,0 +1,295 @@
+//! Images whose right answer is known without a renderer, checked on the
+//! GPU and on the CPU reference alike.
+
+mod common;
+
+use anari_library_caveray::data::{preset, shepp_logan, solid_box};
+use anari_library_caveray::device::{StructuredVolume, TransferFunction, Voxels};
+use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays};
+use anari_library_caveray::render::{
+    ssim, ColorData, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Scene,
+    Shading,
+};
+use common::render::{axis_camera, four_cameras, gpu, off_axis_wall};
+use glam::{DVec3, UVec2, UVec3, Vec3, Vec4};
+
+fn renderers() -> Vec<(&'static str, Renderer)> {
+    vec![
+        ("gpu", Renderer::Gpu(Box::new(gpu()))),
+        ("cpu", Renderer::Cpu(CpuRenderer::new())),
+    ]
+}
+
+fn constant_tf(opacity: f32, unit_distance: f32) -> TransferFunction {
+    TransferFunction::new(vec![Vec4::ONE], vec![opacity], (0.0, 1.0), unit_distance).unwrap()
+}
+
+const SHADINGS: [Shading; 5] = [
+    Shading::None,
+    Shading::Shadows,
+    Shading::Ao,
+    Shading::ShadowsAo,
+    Shading::Directional(4),
+];
+
+#[test]
+fn an_empty_volume_gives_exactly_the_background() {
+    // Data that is there but fully transparent, in every shading mode.
+    let scene = Scene::new(shepp_logan(24), constant_tf(0.0, 1.0));
+    let background = Vec4::new(0.2, 0.4, 0.6, 1.0);
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(24, 20);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    for (name, mut r) in renderers() {
+        for shading in SHADINGS {
+            let settings = RenderSettings {
+                background,
+                shading,
+                ..Default::default()
+            };
+            for format in [
+                ColorFormat::Rgba8,
+                ColorFormat::Srgba8,
+                ColorFormat::Rgba32F,
+            ] {
+                let desc = FrameDesc::new(size).with_color(format).with_depth();
+                let f = r.render(&scene, &rays, &settings, &desc).unwrap();
+                let expected = match format {
+                    ColorFormat::Rgba32F => {
+                        ColorData::Rgba32F(background.to_array().repeat(desc.pixels()))
+                    }
+                    ColorFormat::Rgba8 => {
+                        ColorData::Rgba8([51u8, 102, 153, 255].repeat(desc.pixels()))
+                    }
+                    // sRGB of 0.2, 0.4, 0.6: 124, 170, 203.
+                    ColorFormat::Srgba8 => {
+                        ColorData::Srgba8([124u8, 170, 203, 255].repeat(desc.pixels()))
+                    }
+                };
+                assert_eq!(f.color, expected, "{name} {shading} {format:?}");
+                let depth = f.depth.unwrap();
+                assert!(depth.iter().all(|d| d.is_infinite()), "{name}: depth");
+            }
+        }
+    }
+}
+
+/// Length of the chord of the ray through [-1, 1]^3, from t >= 0 on.
+fn chord(origin: DVec3, dir: DVec3) -> f64 {
+    let inv = dir.recip();
+    let ta = (DVec3::NEG_ONE - origin) * inv;
+    let tb = (DVec3::ONE - origin) * inv;
+    let t0 = ta.min(tb).max_element().max(0.0);
+    let t1 = ta.max(tb).min_element();
+    (t1 - t0).max(0.0)
+}
+
+#[test]
+fn a_solid_box_has_the_analytic_transmittance() {
+    let (a, unit) = (0.3f32, 0.7f32);
+    let scene = Scene::new(solid_box(16), constant_tf(a, unit));
+    let (screen, eye) = axis_camera(4.0, 1.5);
+    let size = UVec2::new(33, 33);
+    let camera = OffAxisCamera::new(screen, eye).unwrap();
+    let rays = camera.ray_gen(size);
+    let settings = RenderSettings {
+        background: Vec4::ZERO,
+        ..Default::default()
+    };
+    let desc = FrameDesc::new(size)
+        .with_color(ColorFormat::Rgba32F)
+        .with_depth();
+    let expected = |len: f64| 1.0 - (1.0 - f64::from(a)).powf(len / f64::from(unit));
+    for (name, mut r) in renderers() {
+        let f = r.render(&scene, &rays, &settings, &desc).unwrap();
+        // Through the centre: 2 units of box.
+        let centre = f.pixel(16, 16);
+        let want = expected(2.0);
+        assert!(
+            (f64::from(centre.w) - want).abs() < 1e-3,
+            "{name}: centre alpha {} vs {want}",
+            centre.w
+        );
+        assert!(
+            (centre.x - centre.w).abs() < 1e-6,
+            "{name}: white, premultiplied"
+        );
+        // Every other pixel, by its own chord.
+        let mut worst = 0.0f64;
+        for y in 0..size.y {
+            for x in 0..size.x {
+                let ray = camera.pixel_ray(x, y, size);
+                let want = expected(chord(ray.origin, ray.direction));
+                worst = worst.max((f64::from(f.pixel(x, y).w) - want).abs());
+            }
+        }
+        println!("{name}: largest alpha error {worst:.2e}");
+        assert!(worst < 1e-3, "{name}: alpha off by {worst}");
+        // Depth is the first sample: half a step (1/30) past the entry at 3.
+        let depth = f.depth.as_ref().unwrap()[16 * 33 + 16];
+        assert!(
+            (depth - (3.0 + 1.0 / 30.0)).abs() < 1e-4,
+            "{name}: depth {depth}"
+        );
+    }
+}
+
+fn max_difference(a: &Frame, b: &Frame) -> f32 {
+    a.to_linear()
+        .iter()
+        .zip(b.to_linear())
+        .map(|(p, q)| (*p - q).abs().max_element())
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn early_termination_does_not_change_an_opaque_image() {
+    let tf = preset("grey").unwrap().with_unit_distance(0.01).unwrap();
+    let scene = Scene::new(shepp_logan(32), tf);
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(48, 48);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
+    for (name, mut r) in renderers() {
+        for shading in [Shading::None, Shading::Shadows] {
+            let on = RenderSettings {
+                shading,
+                ..Default::default()
+            };
+            let off = RenderSettings {
+                termination: 2.0,
+                ..on
+            };
+            let a = r.render(&scene, &rays, &on, &desc).unwrap();
+            let b = r.render(&scene, &rays, &off, &desc).unwrap();
+            let diff = max_difference(&a, &b);
+            println!(
+                "{name} {shading}: max difference {diff:.2e}, samples {} with ERT vs {} without",
+                a.samples, b.samples
+            );
+            // What is left after opacity 0.99 can change a pixel by 1%.
+            assert!(
+                diff <= 0.01,
+                "{name} {shading}: ERT changed a pixel by {diff}"
+            );
+            assert!(ssim(&a, &b).unwrap() > 0.999);
+            // Rays through air take every step either way, so expect a
+            // clear saving rather than a fixed ratio.
+            assert!(
+                a.samples * 10 < b.samples * 9,
+                "{name}: early termination saved too little ({} vs {})",
+                a.samples,
+                b.samples
+            );
+        }
+    }
+}
+
+#[test]
+fn both_renderers_take_the_same_samples() {
+    let scene = common::render::phantom(24);
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(32, 32);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let mut gpu = gpu();
+    let cpu = CpuRenderer::new();
+    for shading in SHADINGS {
+        let settings = RenderSettings {
+            shading,
+            ..Default::default()
+        };
+        let g = gpu
+            .render(&scene, &rays, &settings, &FrameDesc::new(size))
+            .unwrap();
+        let c = cpu
+            .render(&scene, &rays, &settings, &FrameDesc::new(size))
+            .unwrap();
+        let rel = (g.samples as f64 - c.samples as f64).abs() / c.samples as f64;
+        assert!(
+            rel < 1e-3,
+            "{shading}: GPU {} vs CPU {} samples",
+            g.samples,
+            c.samples
+        );
+        assert!(
+            c.samples > u64::from(size.x * size.y),
+            "{shading}: too few samples"
+        );
+    }
+}
+
+#[test]
+fn colour_formats_encode_the_same_image() {
+    let scene = common::render::phantom(24);
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(32, 32);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    for (name, mut r) in renderers() {
+        let settings = RenderSettings::default();
+        let render = |r: &mut Renderer, format| {
+            r.render(
+                &scene,
+                &rays,
+                &settings,
+                &FrameDesc::new(size).with_color(format),
+            )
+            .unwrap()
+        };
+        let linear = render(&mut r, ColorFormat::Rgba32F);
+        for format in [ColorFormat::Rgba8, ColorFormat::Srgba8] {
+            let f = render(&mut r, format);
+            // 8-bit quantisation: half a step in the stored encoding.
+            let diff = max_difference(&f, &linear);
+            assert!(diff < 0.01, "{name} {format:?}: off by {diff}");
+        }
+    }
+}
+
+#[test]
+fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
+    let mut gpu = gpu();
+    let scene = common::render::phantom(16);
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(16, 16);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let settings = RenderSettings::default();
+    for _ in 0..3 {
+        gpu.render(&scene, &rays, &settings, &FrameDesc::new(size))
+            .unwrap();
+    }
+    let u = gpu.uploads();
+    assert_eq!((u.volumes, u.transfer_functions), (1, 1));
+    // A new transfer function re-uploads the table only.
+    let recoloured = Scene {
+        volume: scene.volume.clone(),
+        transfer_function: std::sync::Arc::new(preset("mri").unwrap()),
+    };
+    gpu.render(&recoloured, &rays, &settings, &FrameDesc::new(size))
+        .unwrap();
+    let u = gpu.uploads();
+    assert_eq!((u.volumes, u.transfer_functions), (1, 2));
+    // A new volume (u8 this time) re-uploads the volume only.
+    let dims = UVec3::splat(8);
+    let bytes = (0..512u32).map(|i| (i % 251) as u8).collect();
+    let volume = StructuredVolume::new(
+        dims,
+        Voxels::U8(bytes),
+        Vec3::NEG_ONE,
+        Vec3::splat(2.0 / 7.0),
+    )
+    .unwrap();
+    let other = Scene {
+        volume: std::sync::Arc::new(volume),
+        transfer_function: recoloured.transfer_function.clone(),
+    };
+    let g = gpu
+        .render(&other, &rays, &settings, &FrameDesc::new(size))
+        .unwrap();
+    let u = gpu.uploads();
+    assert_eq!((u.volumes, u.transfer_functions), (2, 2));
+    // And the new upload is what gets rendered.
+    let c = CpuRenderer::new()
+        .render(&other, &rays, &settings, &FrameDesc::new(size))
+        .unwrap();
+    assert!(ssim(&g, &c).unwrap() > 0.99);
+}
