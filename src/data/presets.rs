@@ -10,13 +10,17 @@ pub const PRESETS: [&str; 5] = ["phantom", "ct-skin-bone", "ct-bone", "mri", "gr
 /// Control points (value, r, g, b, opacity), linearly interpolated.
 type Points = &'static [(f32, f32, f32, f32, f32)];
 
+// Tuned to the phantom's levels: brain 0.2 translucent, the small 0.3
+// features opaque and warm, the 1.0 skull a thin translucent shell.
 const PHANTOM: Points = &[
     (0.0, 0.0, 0.0, 0.0, 0.0),
-    (0.05, 0.2, 0.1, 0.4, 0.0),
-    (0.15, 0.3, 0.5, 0.9, 0.08),
-    (0.25, 0.9, 0.7, 0.3, 0.25),
-    (0.5, 1.0, 0.9, 0.8, 0.5),
-    (1.0, 1.0, 1.0, 1.0, 0.9),
+    (0.12, 0.6, 0.3, 0.3, 0.0),
+    (0.2, 0.85, 0.55, 0.5, 0.12),
+    (0.26, 0.9, 0.6, 0.45, 0.15),
+    (0.3, 1.0, 0.8, 0.2, 0.9),
+    (0.4, 1.0, 0.8, 0.2, 0.9),
+    (0.6, 0.7, 0.8, 0.95, 0.25),
+    (1.0, 0.8, 0.85, 1.0, 0.5),
 ];
 // Soft tissue as translucent skin, bone opaque and bright.
 const CT_SKIN_BONE: Points = &[
