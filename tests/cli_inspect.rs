@@ -2,19 +2,11 @@
 
 mod common;
 
-use std::process::{Command, Output};
+use common::caveray;
 
 use anari_library_caveray::cave::Eye;
 use glam::{DVec2, DVec3};
 use serde_json::Value;
-
-fn caveray(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caveray"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("caveray runs")
-}
 
 fn json(args: &[&str]) -> Value {
     let out = caveray(args);

@@ -2,18 +2,11 @@
 
 mod common;
 
+use common::caveray;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
-
-fn caveray(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caveray"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("caveray runs")
-}
 
 fn scratch(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("caveray-render-{}-{test}", std::process::id()));

@@ -5,17 +5,10 @@ mod common;
 
 use anari_library_caveray::device::{StructuredVolume, Voxels};
 use anari_library_caveray::render::{
-    ssim, CpuRenderer, FrameDesc, RenderError, RenderSettings, Renderer, Scene, Shading,
+    ssim, CpuRenderer, FrameDesc, RenderError, RenderSettings, Scene, Shading,
 };
-use common::render::{four_cameras, gpu, off_axis_wall, phantom};
+use common::render::{four_cameras, gpu, off_axis_wall, phantom, renderers};
 use glam::{UVec2, UVec3, Vec3, Vec4};
-
-fn renderers() -> Vec<(&'static str, Renderer)> {
-    vec![
-        ("gpu", Renderer::Gpu(Box::new(gpu()))),
-        ("cpu", Renderer::Cpu(CpuRenderer::new())),
-    ]
-}
 
 #[test]
 fn a_volume_larger_than_the_adapter_allows_is_refused_up_front() {

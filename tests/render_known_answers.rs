@@ -10,15 +10,8 @@ use anari_library_caveray::render::{
     ssim, ColorData, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Scene,
     Shading,
 };
-use common::render::{axis_camera, four_cameras, gpu, off_axis_wall};
+use common::render::{axis_camera, four_cameras, gpu, off_axis_wall, renderers};
 use glam::{DVec3, UVec2, UVec3, Vec3, Vec4};
-
-fn renderers() -> Vec<(&'static str, Renderer)> {
-    vec![
-        ("gpu", Renderer::Gpu(Box::new(gpu()))),
-        ("cpu", Renderer::Cpu(CpuRenderer::new())),
-    ]
-}
 
 fn constant_tf(opacity: f32, unit_distance: f32) -> TransferFunction {
     TransferFunction::new(vec![Vec4::ONE], vec![opacity], (0.0, 1.0), unit_distance).unwrap()

@@ -4,6 +4,7 @@
 pub mod render;
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use anari_library_caveray::cave::{HeadPose, Rig};
 use glam::DVec3;
@@ -79,4 +80,13 @@ pub fn random_head(rig: &Rig, rng: &mut Rng) -> HeadPose {
         rng.uniform(-35.0, 35.0),
     );
     rig.head_pose(Some(position), Some(ypr))
+}
+
+/// Runs the built `caveray` tool from the repository root.
+pub fn caveray(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_caveray"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("caveray runs")
 }

@@ -6,7 +6,7 @@ use anari_library_caveray::geometry::{
     pinhole_from_matrices, MatrixCamera, OffAxisCamera, OffAxisProjection, PinholeCamera,
     PrimaryRays, RayGen, Screen,
 };
-use anari_library_caveray::render::{GpuRenderer, Scene};
+use anari_library_caveray::render::{CpuRenderer, GpuRenderer, Renderer, Scene};
 use glam::{DVec3, UVec2, Vec3};
 
 /// The GPU renderer on Vulkan; tests never fall back to another API.
@@ -21,6 +21,14 @@ pub fn gpu() -> GpuRenderer {
         gpu.adapter().name
     );
     gpu
+}
+
+/// Both renderers, by name, to run the same checks on each.
+pub fn renderers() -> Vec<(&'static str, Renderer)> {
+    vec![
+        ("gpu", Renderer::Gpu(Box::new(gpu()))),
+        ("cpu", Renderer::Cpu(CpuRenderer::new())),
+    ]
 }
 
 /// The Shepp-Logan phantom at `n`^3 on [-1, 1]^3 with its preset.

@@ -299,44 +299,33 @@ impl GpuRenderer {
             fn buffer(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
                 b.as_entire_binding()
             }
-            self.bind_group = Some(
-                self.ctx
-                    .device
-                    .create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("raycast"),
-                        layout: &self.layout,
-                        entries: &[
-                            wgpu::BindGroupEntry {
-                                binding: 0,
-                                resource: buffer(&self.params),
-                            },
-                            wgpu::BindGroupEntry {
-                                binding: 1,
-                                resource: wgpu::BindingResource::TextureView(volume),
-                            },
-                            wgpu::BindGroupEntry {
-                                binding: 2,
-                                resource: wgpu::BindingResource::TextureView(table),
-                            },
-                            wgpu::BindGroupEntry {
-                                binding: 3,
-                                resource: buffer(&self.directions),
-                            },
-                            wgpu::BindGroupEntry {
-                                binding: 4,
-                                resource: buffer(&target.color),
-                            },
-                            wgpu::BindGroupEntry {
-                                binding: 5,
-                                resource: buffer(&target.depth),
-                            },
-                            wgpu::BindGroupEntry {
-                                binding: 6,
-                                resource: buffer(&target.samples),
-                            },
-                        ],
-                    }),
-            );
+            // In binding order, as shaders/raycast.wgsl declares them.
+            let resources = [
+                buffer(&self.params),
+                wgpu::BindingResource::TextureView(volume),
+                wgpu::BindingResource::TextureView(table),
+                buffer(&self.directions),
+                buffer(&target.color),
+                buffer(&target.depth),
+                buffer(&target.samples),
+            ];
+            let entries: Vec<wgpu::BindGroupEntry> = resources
+                .into_iter()
+                .enumerate()
+                .map(|(binding, resource)| wgpu::BindGroupEntry {
+                    binding: binding as u32,
+                    resource,
+                })
+                .collect();
+            let group = self
+                .ctx
+                .device
+                .create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("raycast"),
+                    layout: &self.layout,
+                    entries: &entries,
+                });
+            self.bind_group = Some(group);
         }
     }
 }
