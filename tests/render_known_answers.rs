@@ -286,3 +286,30 @@ fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
         .unwrap();
     assert!(ssim(&g, &c).unwrap() > 0.99);
 }
+
+#[test]
+fn the_cpu_reference_notices_a_new_volume_or_transfer_function() {
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(16, 16);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let settings = RenderSettings::default();
+    let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
+    let first = common::render::phantom(16);
+    let recoloured = Scene {
+        volume: first.volume.clone(),
+        transfer_function: std::sync::Arc::new(preset("mri").unwrap()),
+    };
+    let other = Scene::new(shepp_logan(12), (*recoloured.transfer_function).clone());
+    // One renderer across scene changes against a fresh one per scene.
+    let reused = CpuRenderer::new();
+    for scene in [&first, &recoloured, &other, &first] {
+        let a = reused.render(scene, &rays, &settings, &desc).unwrap();
+        let b = CpuRenderer::new()
+            .render(scene, &rays, &settings, &desc)
+            .unwrap();
+        assert_eq!(a, b);
+    }
+    let a = reused.render(&first, &rays, &settings, &desc).unwrap();
+    let b = reused.render(&recoloured, &rays, &settings, &desc).unwrap();
+    assert_ne!(a, b, "a new transfer function must change the image");
+}

@@ -1,13 +1,12 @@
 //! Scenes, cameras and renderers shared by the rendering tests.
 
 use anari_library_caveray::data::{preset, shepp_logan};
-use anari_library_caveray::device::{StructuredVolume, TransferFunction};
 use anari_library_caveray::geometry::{
     pinhole_from_matrices, MatrixCamera, OffAxisCamera, OffAxisProjection, PinholeCamera,
     PrimaryRays, RayGen, Screen,
 };
 use anari_library_caveray::render::{CpuRenderer, GpuRenderer, Renderer, Scene};
-use glam::{DVec3, UVec2, Vec3};
+use glam::{DVec3, UVec2};
 
 /// The GPU renderer on Vulkan; tests never fall back to another API.
 pub fn gpu() -> GpuRenderer {
@@ -35,10 +34,6 @@ pub fn renderers() -> Vec<(&'static str, Renderer)> {
 pub fn phantom(n: u32) -> Scene {
     let volume = shepp_logan(n);
     let tf = preset("phantom").unwrap();
-    Scene::new(volume, tf)
-}
-
-pub fn scene(volume: StructuredVolume, tf: TransferFunction) -> Scene {
     Scene::new(volume, tf)
 }
 
@@ -88,8 +83,4 @@ pub fn axis_camera(distance: f64, half: f64) -> (Screen, DVec3) {
     )
     .unwrap();
     (screen, DVec3::new(0.0, 0.0, distance))
-}
-
-pub fn v3(v: DVec3) -> Vec3 {
-    v.as_vec3()
 }

@@ -5,21 +5,63 @@
 mod march;
 mod sample;
 
+use std::sync::{Arc, Mutex};
+
+use glam::Vec4;
 use rayon::prelude::*;
 
 use super::frame::{linear_to_srgb, to_unorm8, ColorData, ColorFormat, Frame, FrameDesc};
 use super::plan::{MarchPlan, Scene};
 use super::{RenderError, RenderSettings};
+use crate::device::{StructuredVolume, TransferFunction};
 use crate::geometry::RayGen;
 
 pub(crate) use march::SHADOW_AMBIENT;
 
 #[derive(Debug, Default)]
-pub struct CpuRenderer;
+pub struct CpuRenderer {
+    /// The last scene's voxels as f32 and its table, kept while the scene
+    /// brings the same `Arc`s, as the GPU keeps its uploads.
+    cache: Mutex<Option<Prepared>>,
+}
+
+#[derive(Debug)]
+struct Prepared {
+    volume: Arc<StructuredVolume>,
+    values: Arc<Vec<f32>>,
+    transfer_function: Arc<TransferFunction>,
+    table: Arc<Vec<Vec4>>,
+}
 
 impl CpuRenderer {
     pub fn new() -> Self {
-        Self
+        Self::default()
+    }
+
+    /// The scene's voxel values and table, converted only when it changed.
+    fn prepare(&self, scene: &Scene) -> (Arc<Vec<f32>>, Arc<Vec<Vec4>>) {
+        // A poisoned lock only means a panic elsewhere; the cache is rebuilt.
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        let values = match cache.as_ref() {
+            Some(p) if Arc::ptr_eq(&p.volume, &scene.volume) => Arc::clone(&p.values),
+            _ => {
+                let voxels = scene.volume.voxels();
+                Arc::new((0..voxels.len()).map(|i| voxels.value(i)).collect())
+            }
+        };
+        let table = match cache.as_ref() {
+            Some(p) if Arc::ptr_eq(&p.transfer_function, &scene.transfer_function) => {
+                Arc::clone(&p.table)
+            }
+            _ => Arc::new(scene.transfer_function.table()),
+        };
+        *cache = Some(Prepared {
+            volume: Arc::clone(&scene.volume),
+            values: Arc::clone(&values),
+            transfer_function: Arc::clone(&scene.transfer_function),
+            table: Arc::clone(&table),
+        });
+        (values, table)
     }
 
     pub fn render(
@@ -31,7 +73,8 @@ impl CpuRenderer {
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         let plan = MarchPlan::new(scene, settings)?;
-        let field = sample::Field::new(&plan, &scene.volume, scene.transfer_function.table());
+        let (values, table) = self.prepare(scene);
+        let field = sample::Field::new(&plan, &values, &table);
         let w = desc.size.x as usize;
         let mut color = vec![0.0f32; 4 * desc.pixels()];
         let mut depth = vec![0.0f32; desc.pixels()];

@@ -1,20 +1,18 @@
 use glam::{IVec3, Vec3, Vec4};
 
-use crate::device::{StructuredVolume, TABLE_SIZE};
+use crate::device::TABLE_SIZE;
 use crate::render::plan::MarchPlan;
 
 /// The volume and table as the CPU reads them: voxel values already
 /// normalised to f32, exactly what the GPU texture holds.
 pub(super) struct Field<'a> {
     pub plan: &'a MarchPlan,
-    values: Vec<f32>,
-    table: Vec<Vec4>,
+    values: &'a [f32],
+    table: &'a [Vec4],
 }
 
 impl<'a> Field<'a> {
-    pub fn new(plan: &'a MarchPlan, volume: &StructuredVolume, table: Vec<Vec4>) -> Self {
-        let voxels = volume.voxels();
-        let values = (0..voxels.len()).map(|i| voxels.value(i)).collect();
+    pub fn new(plan: &'a MarchPlan, values: &'a [f32], table: &'a [Vec4]) -> Self {
         debug_assert_eq!(table.len(), TABLE_SIZE);
         Self {
             plan,
