@@ -1,3 +1,4 @@
+pub mod capi;
 pub mod cave;
 pub mod data;
 pub mod device;

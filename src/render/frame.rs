@@ -93,6 +93,27 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// A frame showing only `background` (straight RGBA), for a world with
+    /// nothing to render; depth is infinite everywhere.
+    pub fn cleared(desc: &FrameDesc, background: Vec4) -> Self {
+        let n = desc.pixels();
+        let color = match desc.color {
+            ColorFormat::Rgba8 => ColorData::Rgba8(background.to_array().map(to_unorm8).repeat(n)),
+            ColorFormat::Srgba8 => {
+                let c = background.truncate().to_array().map(linear_to_srgb);
+                let px = [c[0], c[1], c[2], background.w].map(to_unorm8);
+                ColorData::Srgba8(px.repeat(n))
+            }
+            ColorFormat::Rgba32F => ColorData::Rgba32F(background.to_array().repeat(n)),
+        };
+        Self {
+            size: desc.size,
+            color,
+            depth: desc.depth.then(|| vec![f32::INFINITY; n]),
+            samples: 0,
+        }
+    }
+
     /// Pixel (x, y) (y = 0 is the bottom row) as linear RGBA floats.
     pub fn pixel(&self, x: u32, y: u32) -> Vec4 {
         let i = (y * self.size.x + x) as usize;

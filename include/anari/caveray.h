@@ -1,0 +1,91 @@
+/*
+ * caveray's extensions to ANARI: extension names, the "matrix" and
+ * "offAxis" cameras, renderer shading parameters, and plain C helpers for
+ * hosts that drive ANARI's perspective camera on CAVE walls.
+ *
+ * Cameras (anariNewCamera(device, subtype)):
+ *   "matrix"   view, proj: ANARI_FLOAT32_MAT4, column-major OpenGL matrices
+ *              (NDC z in [-1, 1]), exactly what a CAVE host already has for
+ *              each wall and eye. Advertised as ANARI_VSNRAY_CAMERA_MATRIX
+ *              (the same names as anari-visionaray) and CAVERAY_CAMERA_MATRIX.
+ *   "offAxis"  lowerLeft, lowerRight, upperRight, eye: ANARI_FLOAT32_VEC3,
+ *              the wall's corners and the tracked eye in world space.
+ * Renderer "default", besides "background" (ANARI_FLOAT32_VEC4):
+ *   "shading"              ANARI_STRING: none | shadows | ao | shadows+ao |
+ *                          directional:N (N <= 64)
+ *   "lightDirection"       ANARI_FLOAT32_VEC3, towards the light
+ *   "stepFactor"           ANARI_FLOAT32, times half the smallest voxel
+ *   "terminationThreshold" ANARI_FLOAT32, default 0.99
+ * Device:
+ *   "backend"  ANARI_STRING: auto (default) | gpu | cpu; the environment
+ *              variable CAVERAY_BACKEND sets the default.
+ *
+ * Do not use the perspective camera's stereoMode on CAVE walls: shifting a
+ * pinhole sideways is not the off-axis view of a wall. Give every eye of
+ * every wall its own camera.
+ */
+#ifndef CAVERAY_CAVERAY_H
+#define CAVERAY_CAVERAY_H
+
+#include "anari.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define CAVERAY_EXTENSION_CAMERA_MATRIX_VSNRAY "ANARI_VSNRAY_CAMERA_MATRIX"
+#define CAVERAY_EXTENSION_CAMERA_MATRIX "CAVERAY_CAMERA_MATRIX"
+#define CAVERAY_EXTENSION_CAMERA_OFF_AXIS "CAVERAY_CAMERA_OFF_AXIS"
+#define CAVERAY_EXTENSION_RENDERER_SHADING "CAVERAY_RENDERER_SHADING"
+
+/* The parameters of ANARI's "perspective" camera that show one wall from
+ * one eye: a symmetric frustum widened to contain the wall, cropped back to
+ * it by imageRegion. Set each field as the parameter of the same name
+ * (position, direction, up: FLOAT32_VEC3; fovy, aspect: FLOAT32;
+ * imageRegion: FLOAT32_BOX2 as min.x, min.y, max.x, max.y). */
+typedef struct CaverayPinhole {
+  float position[3];
+  float direction[3];
+  float up[3];
+  float fovy;
+  float aspect;
+  float imageRegion[4];
+} CaverayPinhole;
+
+/* Off-axis strategy 2: the pinhole for a wall (three corners) and an eye.
+ * Returns ANARI_STATUS_NO_ERROR, or ANARI_STATUS_INVALID_ARGUMENT for a
+ * degenerate wall, an eye on or behind it, or non-finite input; then *out
+ * is untouched and caverayLastError() says why. */
+ANARIStatusCode caverayPinholeFromScreen(const float lowerLeft[3],
+    const float lowerRight[3],
+    const float upperRight[3],
+    const float eye[3],
+    CaverayPinhole *out);
+
+/* Off-axis strategy 3: the pinhole recovered from a host's OpenGL view and
+ * projection matrices (column-major): the eye is where the frustum's side
+ * planes meet. Fails like the above for singular or non-perspective input. */
+ANARIStatusCode caverayPinholeFromMatrices(
+    const float view[16], const float proj[16], CaverayPinhole *out);
+
+/* The OpenGL view and projection matrices (column-major) of a wall seen
+ * from an eye, with clip distances 0 < nearClip < farClip: for the host's own
+ * OpenGL pass, or for the "matrix" camera. */
+ANARIStatusCode caverayMatricesFromScreen(const float lowerLeft[3],
+    const float lowerRight[3],
+    const float upperRight[3],
+    const float eye[3],
+    float nearClip,
+    float farClip,
+    float view[16],
+    float proj[16]);
+
+/* Why the last helper call on this thread failed; "" when it did not.
+ * Valid until the next helper call on the same thread. */
+const char *caverayLastError(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CAVERAY_CAVERAY_H */

@@ -1,0 +1,200 @@
+//! The library and device objects behind `ANARILibrary` and `ANARIDevice`.
+//! Their first fields have the C++ layout the ANARI SDK loader expects
+//! (Itanium ABI: a table pointer, then the base class's data members), so
+//! the loader can call them virtually; everything after is ours.
+
+use std::collections::HashSet;
+use std::ffi::c_void;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use super::status::{emit, Callback};
+use super::sys;
+use super::vtable::{DeviceTable, LibraryTable, DEVICE_TABLE, LIBRARY_TABLE};
+use crate::device::{Device, Reporter, Status};
+
+/// `{vtable*, dlhandle, statusCB, statusUserPtr}`: 32 bytes.
+#[repr(C)]
+pub struct LibraryHandle {
+    table: *const LibraryTable,
+    pub dl_handle: *mut c_void,
+    pub status: sys::ANARIStatusCallback,
+    pub status_user: *const c_void,
+}
+
+/// `{vtable*, statusCB, statusUserPtr}` (24 bytes), then our state.
+#[repr(C)]
+pub struct DeviceHandle {
+    table: *const DeviceTable,
+    pub default_status: sys::ANARIStatusCallback,
+    pub default_status_user: *const c_void,
+    refs: AtomicU32,
+    device: Mutex<Device>,
+    /// The callback in effect: the device's committed `statusCallback`, or
+    /// the library's. Shared with the render thread.
+    callback: Arc<Mutex<Callback>>,
+}
+
+// The raw pointers are the host's opaque values, only handed back to it.
+unsafe impl Send for DeviceHandle {}
+unsafe impl Sync for DeviceHandle {}
+
+/// Live libraries and devices, so that a stale or foreign pointer is
+/// reported instead of dereferenced.
+static LIBRARIES: Mutex<Option<HashSet<usize>>> = Mutex::new(None);
+static DEVICES: Mutex<Option<HashSet<usize>>> = Mutex::new(None);
+
+fn registry(set: &Mutex<Option<HashSet<usize>>>) -> MutexGuard<'_, Option<HashSet<usize>>> {
+    set.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl LibraryHandle {
+    pub fn create(dl_handle: *mut c_void, cb: Callback) -> *mut LibraryHandle {
+        let lib = Box::into_raw(Box::new(LibraryHandle {
+            table: &LIBRARY_TABLE,
+            dl_handle,
+            status: cb.function,
+            status_user: cb.user as *const c_void,
+        }));
+        registry(&LIBRARIES)
+            .get_or_insert_with(HashSet::new)
+            .insert(lib as usize);
+        lib
+    }
+
+    /// The library behind `ptr` if it is one of ours and alive.
+    pub fn get<'a>(ptr: sys::ANARILibrary) -> Option<&'a LibraryHandle> {
+        let live = registry(&LIBRARIES)
+            .as_ref()
+            .is_some_and(|s| s.contains(&(ptr as usize)));
+        // SAFETY: registered pointers are live boxes until `destroy`.
+        live.then(|| unsafe { &*(ptr as *const LibraryHandle) })
+    }
+
+    pub fn callback(&self) -> Callback {
+        Callback {
+            function: self.status,
+            user: self.status_user as usize,
+        }
+    }
+
+    /// Frees the library; false if `ptr` is not a live library.
+    pub fn destroy(ptr: sys::ANARILibrary) -> bool {
+        let removed = registry(&LIBRARIES)
+            .as_mut()
+            .is_some_and(|s| s.remove(&(ptr as usize)));
+        if removed {
+            // SAFETY: it was created by `Box::into_raw` and is now unregistered.
+            drop(unsafe { Box::from_raw(ptr as *mut LibraryHandle) });
+        }
+        removed
+    }
+}
+
+impl DeviceHandle {
+    pub fn create(library_callback: Callback) -> *mut DeviceHandle {
+        let callback = Arc::new(Mutex::new(library_callback));
+        let handle = Box::into_raw(Box::new_uninit());
+        let reporter: Reporter = {
+            let callback = callback.clone();
+            let device = handle as usize;
+            Arc::new(move |s: Status| {
+                let cb = *callback.lock().unwrap_or_else(|e| e.into_inner());
+                emit(cb, device as *mut c_void, &s);
+            })
+        };
+        // SAFETY: `handle` is a fresh allocation of the right layout.
+        unsafe {
+            (*handle).write(DeviceHandle {
+                table: &DEVICE_TABLE,
+                default_status: library_callback.function,
+                default_status_user: library_callback.user as *const c_void,
+                refs: AtomicU32::new(1),
+                device: Mutex::new(Device::new(reporter)),
+                callback,
+            });
+        }
+        let handle = handle as *mut DeviceHandle;
+        registry(&DEVICES)
+            .get_or_insert_with(HashSet::new)
+            .insert(handle as usize);
+        handle
+    }
+
+    /// The device behind `ptr` with one more temporary reference, if it is
+    /// one of ours and alive.
+    pub fn get(ptr: sys::ANARIDevice) -> Option<DeviceRef> {
+        let reg = registry(&DEVICES);
+        if !reg.as_ref().is_some_and(|s| s.contains(&(ptr as usize))) {
+            return None;
+        }
+        // SAFETY: registered pointers are live; the reference taken while
+        // the registry is locked keeps it so until `DeviceRef` drops.
+        let handle = unsafe { &*(ptr as *const DeviceHandle) };
+        handle.refs.fetch_add(1, Ordering::AcqRel);
+        Some(DeviceRef(ptr as *mut DeviceHandle))
+    }
+
+    pub fn lock(&self) -> MutexGuard<'_, Device> {
+        self.device.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub fn callback(&self) -> Callback {
+        *self.callback.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub fn set_callback(&self, cb: Callback) {
+        *self.callback.lock().unwrap_or_else(|e| e.into_inner()) = cb;
+    }
+
+    pub fn default_callback(&self) -> Callback {
+        Callback {
+            function: self.default_status,
+            user: self.default_status_user as usize,
+        }
+    }
+
+    pub fn retain(&self) {
+        self.refs.fetch_add(1, Ordering::AcqRel);
+    }
+
+    /// Drops one reference; the last one frees the device (after its
+    /// render thread finished).
+    pub fn release(ptr: *mut DeviceHandle) {
+        let mut reg = registry(&DEVICES);
+        // SAFETY: callers hold a reference, so the box is alive.
+        let last = unsafe { &*ptr }.refs.fetch_sub(1, Ordering::AcqRel) == 1;
+        if last {
+            if let Some(s) = reg.as_mut() {
+                s.remove(&(ptr as usize));
+            }
+            drop(reg);
+            // SAFETY: the last reference is gone and the pointer unregistered.
+            drop(unsafe { Box::from_raw(ptr) });
+        }
+    }
+}
+
+/// A counted reference to a live device for the length of one call, so a
+/// host releasing the device from another thread cannot free it under us.
+pub struct DeviceRef(*mut DeviceHandle);
+
+impl DeviceRef {
+    pub fn ptr(&self) -> *mut c_void {
+        self.0.cast()
+    }
+}
+
+impl std::ops::Deref for DeviceRef {
+    type Target = DeviceHandle;
+    fn deref(&self) -> &DeviceHandle {
+        // SAFETY: the reference counted in `get` keeps the box alive.
+        unsafe { &*self.0 }
+    }
+}
+
+impl Drop for DeviceRef {
+    fn drop(&mut self) {
+        DeviceHandle::release(self.0);
+    }
+}

@@ -1,0 +1,181 @@
+//! The C views of `device::info`: NULL-terminated string lists, parameter
+//! lists and descriptions, built once and kept for the life of the process
+//! (the pointers handed out must stay valid).
+
+use std::collections::HashMap;
+use std::ffi::{c_char, c_void, CString};
+use std::sync::OnceLock;
+
+use super::sys;
+use crate::device::info::{self, EXTENSIONS, SUBTYPES};
+use crate::device::DataType;
+
+struct List {
+    _strings: Vec<CString>,
+    pointers: Vec<*const c_char>,
+}
+
+impl List {
+    fn new<'a>(items: impl IntoIterator<Item = &'a str>) -> Self {
+        let strings: Vec<CString> = items
+            .into_iter()
+            .map(|s| CString::new(s).expect("table strings have no NUL"))
+            .collect();
+        let mut pointers: Vec<*const c_char> = strings.iter().map(|s| s.as_ptr()).collect();
+        pointers.push(std::ptr::null());
+        Self {
+            _strings: strings,
+            pointers,
+        }
+    }
+}
+
+struct Subtype {
+    description: CString,
+    parameters: Vec<sys::ANARIParameter>,
+    _names: Vec<CString>,
+    extensions: List,
+    param_descriptions: HashMap<&'static str, CString>,
+}
+
+struct Tables {
+    device_subtypes: List,
+    extensions: List,
+    subtypes: HashMap<i32, List>,
+    by_subtype: HashMap<(i32, &'static str), Subtype>,
+}
+
+// SAFETY: the tables are immutable after construction; the raw pointers
+// point into strings the tables own.
+unsafe impl Send for Tables {}
+unsafe impl Sync for Tables {}
+
+static TABLES: OnceLock<Tables> = OnceLock::new();
+
+/// One byte each, for the `required` info (ANARI's BOOL).
+static TRUE: u8 = 1;
+static FALSE: u8 = 0;
+
+fn tables() -> &'static Tables {
+    TABLES.get_or_init(|| {
+        let mut subtypes = HashMap::new();
+        for kind in DataType::ALL.iter().filter(|k| k.is_object()) {
+            subtypes.insert(*kind as i32, List::new(info::subtypes(*kind)));
+        }
+        let by_subtype = SUBTYPES
+            .iter()
+            .map(|s| {
+                let names: Vec<CString> = s
+                    .params
+                    .iter()
+                    .map(|p| CString::new(p.name).unwrap())
+                    .collect();
+                let mut parameters: Vec<sys::ANARIParameter> = s
+                    .params
+                    .iter()
+                    .zip(&names)
+                    .map(|(p, n)| sys::ANARIParameter {
+                        name: n.as_ptr(),
+                        type_: p.types[0] as i32,
+                    })
+                    .collect();
+                parameters.push(sys::ANARIParameter {
+                    name: std::ptr::null(),
+                    type_: DataType::UNKNOWN as i32,
+                });
+                let sub = Subtype {
+                    description: CString::new(s.description).unwrap(),
+                    parameters,
+                    _names: names,
+                    extensions: List::new(s.extensions.iter().copied()),
+                    param_descriptions: s
+                        .params
+                        .iter()
+                        .map(|p| (p.name, CString::new(p.description).unwrap()))
+                        .collect(),
+                };
+                ((s.kind as i32, s.subtype), sub)
+            })
+            .collect();
+        Tables {
+            device_subtypes: List::new(["default"]),
+            extensions: List::new(EXTENSIONS.iter().copied()),
+            subtypes,
+            by_subtype,
+        }
+    })
+}
+
+pub fn device_subtypes() -> *const *const c_char {
+    tables().device_subtypes.pointers.as_ptr()
+}
+
+pub fn extensions() -> *const *const c_char {
+    tables().extensions.pointers.as_ptr()
+}
+
+/// Subtypes of an object kind; an empty list for kinds without any.
+pub fn object_subtypes(kind: i32) -> *const *const c_char {
+    tables()
+        .subtypes
+        .get(&kind)
+        .map_or(std::ptr::null(), |l| l.pointers.as_ptr())
+}
+
+fn subtype(kind: i32, name: &str) -> Option<&'static Subtype> {
+    let ty = DataType::from_code(kind)?;
+    let entry = info::subtype(ty, name)?;
+    tables().by_subtype.get(&(kind, entry.subtype))
+}
+
+/// `anariGetObjectInfo`: "description" (STRING), "parameter"
+/// (PARAMETER_LIST), "extension" (STRING_LIST).
+pub fn object_info(kind: i32, sub: &str, info_name: &str, info_type: i32) -> *const c_void {
+    let Some(s) = subtype(kind, sub) else {
+        return std::ptr::null();
+    };
+    match (info_name, DataType::from_code(info_type)) {
+        ("description", Some(DataType::STRING)) => s.description.as_ptr().cast(),
+        ("parameter", Some(DataType::PARAMETER_LIST)) => s.parameters.as_ptr().cast(),
+        ("extension", Some(DataType::STRING_LIST)) => s.extensions.pointers.as_ptr().cast(),
+        _ => std::ptr::null(),
+    }
+}
+
+/// `anariGetParameterInfo`: "description" (STRING), "required" (BOOL),
+/// "default" (the parameter's own type, for FLOAT32-based parameters).
+pub fn parameter_info(
+    kind: i32,
+    sub: &str,
+    param: &str,
+    param_type: i32,
+    info_name: &str,
+    info_type: i32,
+) -> *const c_void {
+    let (Some(s), Some(ty)) = (subtype(kind, sub), DataType::from_code(kind)) else {
+        return std::ptr::null();
+    };
+    let Some(p) = info::param(ty, sub, param) else {
+        return std::ptr::null();
+    };
+    if !p.types.iter().any(|t| *t as i32 == param_type) {
+        return std::ptr::null();
+    }
+    match (info_name, DataType::from_code(info_type)) {
+        ("description", Some(DataType::STRING)) => s
+            .param_descriptions
+            .get(p.name)
+            .map_or(std::ptr::null(), |d| d.as_ptr().cast()),
+        ("required", Some(DataType::BOOL)) => {
+            let b: &'static u8 = if p.required { &TRUE } else { &FALSE };
+            (b as *const u8).cast()
+        }
+        ("default", _) if info_type == param_type && info_type == p.types[0] as i32 => {
+            match p.default {
+                Some(d) if d.len() * 4 == p.types[0].size() => d.as_ptr().cast(),
+                _ => std::ptr::null(),
+            }
+        }
+        _ => std::ptr::null(),
+    }
+}

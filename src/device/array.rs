@@ -1,0 +1,113 @@
+//! ANARI arrays: device-owned memory, or the host's memory shared until the
+//! device no longer needs it.
+
+use super::object::ObjectRef;
+use super::types::DataType;
+
+/// Memory the host lent to an array. Dropping it returns the memory to the
+/// host (the C layer calls the host's deleter there, exactly once).
+pub trait HostMemory: Send {
+    fn ptr(&self) -> *const u8;
+    /// Gives the memory back without releasing it (the array was never made).
+    fn disown(&mut self);
+}
+
+enum Storage {
+    /// u64 words keep every element type aligned.
+    Owned(Vec<u64>),
+    Host(Box<dyn HostMemory>),
+}
+
+pub struct Array {
+    element: DataType,
+    dims: [u64; 3],
+    storage: Storage,
+    pub(crate) mapped: bool,
+    /// For arrays of objects: the objects, held while the array exists.
+    pub(crate) objects: Vec<Option<ObjectRef>>,
+}
+
+impl Array {
+    /// A zeroed device-owned array; `None` if it cannot be allocated.
+    pub fn owned(element: DataType, dims: [u64; 3]) -> Option<Self> {
+        let bytes = byte_len(element, dims)?;
+        let words = usize::try_from(bytes.div_ceil(8)).ok()?;
+        let mut v = Vec::new();
+        v.try_reserve_exact(words).ok()?;
+        v.resize(words, 0);
+        Some(Self::new(element, dims, Storage::Owned(v)))
+    }
+
+    /// An array over the host's memory, which must hold
+    /// `element.size() * dims.product()` bytes while the array exists.
+    pub fn shared(element: DataType, dims: [u64; 3], memory: Box<dyn HostMemory>) -> Self {
+        Self::new(element, dims, Storage::Host(memory))
+    }
+
+    fn new(element: DataType, dims: [u64; 3], storage: Storage) -> Self {
+        Self {
+            element,
+            dims,
+            storage,
+            mapped: false,
+            objects: Vec::new(),
+        }
+    }
+
+    pub fn element(&self) -> DataType {
+        self.element
+    }
+    pub fn dims(&self) -> [u64; 3] {
+        self.dims
+    }
+    pub fn len(&self) -> u64 {
+        self.dims.iter().product()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub(crate) fn ptr(&mut self) -> *mut u8 {
+        match &mut self.storage {
+            Storage::Owned(v) => v.as_mut_ptr().cast(),
+            Storage::Host(m) => m.ptr().cast_mut(),
+        }
+    }
+
+    /// The elements' bytes.
+    pub fn bytes(&self) -> &[u8] {
+        let len = byte_len(self.element, self.dims).unwrap_or(0) as usize;
+        match &self.storage {
+            Storage::Owned(v) => {
+                // SAFETY: the words hold at least `len` initialised bytes.
+                unsafe { std::slice::from_raw_parts(v.as_ptr().cast(), len) }
+            }
+            Storage::Host(m) if len == 0 || m.ptr().is_null() => &[],
+            // SAFETY: the host promised `len` readable bytes while the array lives.
+            Storage::Host(m) => unsafe { std::slice::from_raw_parts(m.ptr(), len) },
+        }
+    }
+
+    /// The elements as little helpers read them: FLOAT32 components.
+    pub fn f32s(&self) -> Vec<f32> {
+        self.bytes()
+            .chunks_exact(4)
+            .map(|c| f32::from_ne_bytes(c.try_into().unwrap()))
+            .collect()
+    }
+
+    /// Handle values stored in an array of objects.
+    pub(crate) fn handles(&self) -> Vec<u64> {
+        self.bytes()
+            .chunks_exact(std::mem::size_of::<usize>())
+            .map(|c| usize::from_ne_bytes(c.try_into().unwrap()) as u64)
+            .collect()
+    }
+}
+
+/// Bytes of an array, or `None` when the count overflows.
+pub fn byte_len(element: DataType, dims: [u64; 3]) -> Option<u64> {
+    dims.iter()
+        .try_fold(element.size() as u64, |acc, &d| acc.checked_mul(d))
+        .filter(|&b| b <= isize::MAX as u64)
+}

@@ -1,0 +1,312 @@
+//! Frame operations: gather the committed scene, hand it to the render
+//! thread, wait, map and unmap.
+
+use glam::UVec2;
+
+use super::api::Device;
+use super::frame::Channel;
+use super::object::{ObjectRef, State};
+use super::types::{kind_name, DataType, StatusCode};
+use super::worker::Job;
+use crate::render::{ColorData, ColorFormat, FrameDesc, Scene};
+
+/// The renderer's pixel format for a `channel.color` type.
+pub fn color_format(ty: Option<DataType>) -> Option<ColorFormat> {
+    match ty? {
+        DataType::UFIXED8_VEC4 => Some(ColorFormat::Rgba8),
+        DataType::UFIXED8_RGBA_SRGB => Some(ColorFormat::Srgba8),
+        DataType::FLOAT32_VEC4 => Some(ColorFormat::Rgba32F),
+        _ => None,
+    }
+}
+
+/// A mapped channel: pointer to the first (lower-left) pixel, size, type.
+pub struct Mapped {
+    pub ptr: *const u8,
+    pub size: UVec2,
+    pub ty: DataType,
+}
+
+impl Device {
+    fn frame(&mut self, handle: u64, call: &str) -> Option<ObjectRef> {
+        let cell = self.lookup(handle, call)?;
+        if cell.kind != DataType::FRAME {
+            self.error(
+                StatusCode::InvalidArgument,
+                Some(&cell),
+                format!("{call}: {} is not a frame", cell.describe()),
+            );
+            return None;
+        }
+        Some(cell)
+    }
+
+    /// `anariRenderFrame`: returns at once; the render thread fills the frame.
+    /// `on_done` runs on that thread when the frame is ready.
+    pub fn render_frame(&mut self, handle: u64, on_done: Option<Box<dyn FnOnce() + Send>>) {
+        let Some(frame) = self.frame(handle, "anariRenderFrame") else {
+            return;
+        };
+        let slot = {
+            let g = frame.lock();
+            let State::Frame(f) = &g.state else { return };
+            if f.mapped.iter().any(|&m| m) {
+                drop(g);
+                self.error(
+                    StatusCode::InvalidOperation,
+                    Some(&frame),
+                    format!(
+                        "anariRenderFrame: {} is mapped; unmap its channels before rendering into it",
+                        frame.describe()
+                    ),
+                );
+                return;
+            }
+            f.slot.clone()
+        };
+        // One render per frame at a time: the previous one finishes first.
+        drop(slot.wait());
+        match self.prepare(&frame) {
+            Ok((mut job, color_type)) => {
+                if let State::Frame(f) = &mut frame.lock().state {
+                    f.color_type = color_type;
+                }
+                slot.start();
+                job.on_done = on_done;
+                self.worker.submit(job);
+            }
+            Err(e) => {
+                self.error(
+                    StatusCode::InvalidOperation,
+                    Some(&frame),
+                    format!("anariRenderFrame: {}: {e}", frame.describe()),
+                );
+                slot.finish(Err(e), Default::default());
+                if let Some(done) = on_done {
+                    done();
+                }
+            }
+        }
+    }
+
+    /// Everything the render thread needs, copied out of the committed
+    /// objects so the host may change them while the frame renders.
+    fn prepare(&mut self, frame: &ObjectRef) -> Result<(Job, Option<DataType>), String> {
+        let params = frame
+            .lock()
+            .committed
+            .clone()
+            .ok_or("the frame has not been committed")?;
+        let size = match params.get("size").and_then(|v| v.u32s()).as_deref() {
+            Some(&[w, h]) if w > 0 && h > 0 => UVec2::new(w, h),
+            Some(&[w, h]) => return Err(format!("size {w}x{h} has no pixels")),
+            _ => return Err("parameter 'size' (UINT32_VEC2) is not set".into()),
+        };
+        let color_type = match params.get("channel.color").and_then(|v| v.i32()) {
+            None => None,
+            Some(code) => Some(
+                DataType::from_code(code)
+                    .filter(|&t| color_format(Some(t)).is_some())
+                    .ok_or_else(|| format!("channel.color {code} is not UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4"))?,
+            ),
+        };
+        let depth = match params.get("channel.depth").and_then(|v| v.i32()) {
+            None => false,
+            Some(code) if code == DataType::FLOAT32 as i32 => true,
+            Some(code) => return Err(format!("channel.depth {code} is not FLOAT32")),
+        };
+        let needed = |name: &str, kind: DataType| -> Result<ObjectRef, String> {
+            let o = params.object(name).ok_or_else(|| {
+                format!(
+                    "no {0}: set parameter '{name}' to a {0} and commit the frame",
+                    kind_name(kind)
+                )
+            })?;
+            if !o.implemented {
+                return Err(format!("{} is not implemented by caveray", o.describe()));
+            }
+            Ok(o.clone())
+        };
+        let camera = needed("camera", DataType::CAMERA)?;
+        let renderer = needed("renderer", DataType::RENDERER)?;
+        let world = needed("world", DataType::WORLD)?;
+        let rays = match &camera.lock().state {
+            State::Camera(c) => c.ready(&camera.describe())?.ray_gen(size)?,
+            _ => unreachable!("frame parameter types are checked when set"),
+        };
+        let settings = match &renderer.lock().state {
+            State::Renderer(r) => *r.ready(&renderer.describe())?,
+            _ => unreachable!("frame parameter types are checked when set"),
+        };
+        let volumes = match &world.lock().state {
+            State::World(w) => w.ready(&world.describe())?.clone(),
+            _ => unreachable!("frame parameter types are checked when set"),
+        };
+        if volumes.len() > 1 {
+            self.warn(
+                Some(frame),
+                format!(
+                    "{} has {} volumes; caveray renders the first one only",
+                    world.describe(),
+                    volumes.len()
+                ),
+            );
+        }
+        let scene = match volumes.first() {
+            None => None,
+            Some(v) => {
+                let model = match &v.lock().state {
+                    State::Volume(m) => m.ready(&v.describe())?.clone(),
+                    _ => return Err(format!("{} is not implemented by caveray", v.describe())),
+                };
+                let field = &model.field;
+                let volume = match &field.lock().state {
+                    State::Field(f) => f.ready(&field.describe())?.clone(),
+                    _ => {
+                        return Err(format!(
+                            "{} is not implemented by caveray",
+                            field.describe()
+                        ))
+                    }
+                };
+                Some(Scene {
+                    volume,
+                    transfer_function: model.transfer_function,
+                })
+            }
+        };
+        let mut desc =
+            FrameDesc::new(size).with_color(color_format(color_type).unwrap_or_default());
+        desc.depth = depth;
+        let slot = match &frame.lock().state {
+            State::Frame(f) => f.slot.clone(),
+            _ => unreachable!("checked by frame()"),
+        };
+        let job = Job {
+            frame: frame.handle,
+            scene,
+            rays,
+            settings,
+            desc,
+            backend: self.backend(),
+            slot,
+            on_done: None,
+        };
+        Ok((job, color_type))
+    }
+
+    /// `anariFrameReady`: with `wait`, blocks until the frame is rendered.
+    pub fn frame_ready(&mut self, handle: u64, wait: bool) -> bool {
+        let Some(frame) = self.frame(handle, "anariFrameReady") else {
+            return false;
+        };
+        let slot = match &frame.lock().state {
+            State::Frame(f) => f.slot.clone(),
+            _ => return false,
+        };
+        if wait {
+            drop(slot.wait());
+            true
+        } else {
+            !slot.is_busy()
+        }
+    }
+
+    /// `anariMapFrame`: waits for the frame, then lends the channel's pixels
+    /// (lower-left first) until `unmap_frame`.
+    pub fn map_frame(&mut self, handle: u64, channel_name: &str) -> Option<Mapped> {
+        let frame = self.frame(handle, "anariMapFrame")?;
+        let Some(channel) = Channel::parse(channel_name) else {
+            self.error(
+                StatusCode::InvalidArgument,
+                Some(&frame),
+                format!("anariMapFrame: unknown channel '{channel_name}'; expected channel.color or channel.depth"),
+            );
+            return None;
+        };
+        let (slot, color_type, already) = match &frame.lock().state {
+            State::Frame(f) => (f.slot.clone(), f.color_type, f.mapped[channel as usize]),
+            _ => return None,
+        };
+        let fail = |d: &mut Self, code, m: String| {
+            d.error(
+                code,
+                Some(&frame),
+                format!("anariMapFrame: {}: {m}", frame.describe()),
+            );
+            None
+        };
+        if already {
+            return fail(
+                self,
+                StatusCode::InvalidOperation,
+                format!("'{channel_name}' is already mapped; unmap it first"),
+            );
+        }
+        let state = slot.wait();
+        let mapped = match &state.result {
+            None => Err("the frame has not been rendered yet".to_owned()),
+            Some(Err(e)) => Err(format!("the last render failed: {e}")),
+            Some(Ok(f)) => match channel {
+                Channel::Color => match (color_type, &f.color) {
+                    (None, _) => {
+                        Err("the frame has no colour channel; set 'channel.color'".to_owned())
+                    }
+                    (Some(ty), ColorData::Rgba8(b) | ColorData::Srgba8(b)) => Ok((b.as_ptr(), ty)),
+                    (Some(ty), ColorData::Rgba32F(v)) => Ok((v.as_ptr().cast(), ty)),
+                },
+                Channel::Depth => match &f.depth {
+                    Some(d) => Ok((d.as_ptr().cast(), DataType::FLOAT32)),
+                    None => Err(
+                        "the frame has no depth channel; set 'channel.depth' to FLOAT32".to_owned(),
+                    ),
+                },
+            }
+            .map(|(ptr, ty)| Mapped {
+                ptr,
+                size: f.size,
+                ty,
+            }),
+        };
+        drop(state);
+        match mapped {
+            Ok(m) => {
+                if let State::Frame(f) = &mut frame.lock().state {
+                    f.mapped[channel as usize] = true;
+                }
+                Some(m)
+            }
+            Err(e) => fail(self, StatusCode::InvalidOperation, e),
+        }
+    }
+
+    pub fn unmap_frame(&mut self, handle: u64, channel_name: &str) {
+        let Some(frame) = self.frame(handle, "anariUnmapFrame") else {
+            return;
+        };
+        let was = Channel::parse(channel_name).and_then(|c| match &mut frame.lock().state {
+            State::Frame(f) => Some(std::mem::replace(&mut f.mapped[c as usize], false)),
+            _ => None,
+        });
+        if was != Some(true) {
+            self.error(
+                StatusCode::InvalidOperation,
+                Some(&frame),
+                format!(
+                    "anariUnmapFrame: '{channel_name}' of {} is not mapped",
+                    frame.describe()
+                ),
+            );
+        }
+    }
+
+    /// `anariDiscardFrame`: a render cannot be interrupted midway, so the
+    /// frame finishes and the host may ignore it.
+    pub fn discard_frame(&mut self, handle: u64) {
+        if let Some(frame) = self.frame(handle, "anariDiscardFrame") {
+            if let State::Frame(f) = &frame.lock().state {
+                f.slot.lock().cancelled = true;
+            }
+        }
+    }
+}

@@ -1,0 +1,138 @@
+//! One ANARI object: its kind and subtype, the parameters set since the
+//! last commit, the committed ones, and what was derived from them.
+
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use super::array::Array;
+use super::camera::CameraModel;
+use super::frame::FrameState;
+use super::types::{kind_name, DataType};
+use super::value::Params;
+use super::{StructuredVolume, TransferFunction};
+use crate::render::RenderSettings;
+
+/// Objects are shared: the host's handle and every parameter or array that
+/// names the object keep it alive.
+pub type ObjectRef = Arc<ObjectCell>;
+
+pub struct ObjectCell {
+    pub handle: u64,
+    pub kind: DataType,
+    pub subtype: String,
+    /// Whether caveray implements this kind and subtype; other objects are
+    /// created, accept parameters and render nothing.
+    pub implemented: bool,
+    inner: Mutex<Object>,
+}
+
+impl ObjectCell {
+    pub fn new(
+        handle: u64,
+        kind: DataType,
+        subtype: &str,
+        implemented: bool,
+        state: State,
+    ) -> Self {
+        Self {
+            handle,
+            kind,
+            subtype: subtype.to_owned(),
+            implemented,
+            inner: Mutex::new(Object {
+                pending: Params::default(),
+                committed: None,
+                state,
+            }),
+        }
+    }
+
+    /// The object's data. A panic elsewhere must not make the object
+    /// unusable, so a poisoned lock is taken over.
+    pub fn lock(&self) -> MutexGuard<'_, Object> {
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// "camera 'matrix' 0x100000003", for messages.
+    pub fn describe(&self) -> String {
+        if self.subtype.is_empty() {
+            format!("{} {:#x}", kind_name(self.kind), self.handle)
+        } else {
+            format!(
+                "{} '{}' {:#x}",
+                kind_name(self.kind),
+                self.subtype,
+                self.handle
+            )
+        }
+    }
+}
+
+pub struct Object {
+    pub pending: Params,
+    /// `None` until the first commit.
+    pub committed: Option<Params>,
+    pub state: State,
+}
+
+/// Derived from committed parameters: the value, or why there is none.
+#[derive(Clone)]
+pub enum Derived<T> {
+    Uncommitted,
+    Ready(T),
+    Invalid(String),
+}
+
+impl<T> Derived<T> {
+    pub fn from_result(r: Result<T, String>) -> Self {
+        match r {
+            Ok(v) => Derived::Ready(v),
+            Err(e) => Derived::Invalid(e),
+        }
+    }
+
+    /// The value, or a message saying why `what` cannot be used.
+    pub fn ready(&self, what: &str) -> Result<&T, String> {
+        match self {
+            Derived::Ready(v) => Ok(v),
+            Derived::Uncommitted => Err(format!("{what} has not been committed")),
+            Derived::Invalid(e) => Err(format!("{what} is not usable: {e}")),
+        }
+    }
+}
+
+/// A transfer-function volume after commit.
+#[derive(Clone)]
+pub struct VolumeModel {
+    pub field: ObjectRef,
+    pub transfer_function: Arc<TransferFunction>,
+}
+
+pub enum State {
+    Array(Array),
+    Field(Derived<Arc<StructuredVolume>>),
+    Volume(Derived<VolumeModel>),
+    World(Derived<Vec<ObjectRef>>),
+    Camera(Derived<CameraModel>),
+    Renderer(Derived<RenderSettings>),
+    Frame(FrameState),
+    Inert,
+}
+
+impl State {
+    /// The empty state of a new object of `kind` (implemented or not).
+    pub fn for_kind(kind: DataType, implemented: bool) -> Self {
+        if !implemented {
+            return State::Inert;
+        }
+        match kind {
+            DataType::SPATIAL_FIELD => State::Field(Derived::Uncommitted),
+            DataType::VOLUME => State::Volume(Derived::Uncommitted),
+            DataType::WORLD => State::World(Derived::Uncommitted),
+            DataType::CAMERA => State::Camera(Derived::Uncommitted),
+            // A renderer works with its defaults before any commit.
+            DataType::RENDERER => State::Renderer(Derived::Ready(RenderSettings::default())),
+            DataType::FRAME => State::Frame(FrameState::default()),
+            _ => State::Inert,
+        }
+    }
+}

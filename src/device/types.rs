@@ -1,0 +1,209 @@
+//! ANARI's data type codes and object kinds. The numbers are ANARI's; the C
+//! layer checks at compile time that they match `include/anari/anari.h`.
+
+use std::fmt;
+
+const PTR: usize = std::mem::size_of::<usize>();
+
+macro_rules! data_types {
+    ($($name:ident = $code:literal, $size:expr;)*) => {
+        /// One of ANARI's `ANARIDataType` values that caveray knows.
+        #[allow(non_camel_case_types)]
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum DataType {
+            $($name = $code,)*
+        }
+
+        impl DataType {
+            pub const ALL: &'static [DataType] = &[$(DataType::$name,)*];
+
+            pub fn from_code(code: i32) -> Option<Self> {
+                match code {
+                    $($code => Some(DataType::$name),)*
+                    _ => None,
+                }
+            }
+
+            /// The C macro's name, e.g. `ANARI_FLOAT32_VEC3`.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(DataType::$name => concat!("ANARI_", stringify!($name)),)*
+                }
+            }
+
+            /// Bytes of one value as it sits in memory: pointed to by
+            /// `anariSetParameter`'s `mem`, or one element of an array.
+            pub fn size(self) -> usize {
+                match self {
+                    $(DataType::$name => $size,)*
+                }
+            }
+        }
+    };
+}
+
+data_types! {
+    UNKNOWN = 0, 0;
+    DATA_TYPE = 100, 4;
+    STRING = 101, PTR;
+    VOID_POINTER = 102, PTR;
+    BOOL = 103, 1;
+    STRING_LIST = 150, PTR;
+    PARAMETER_LIST = 152, PTR;
+    STATUS_CALLBACK = 202, PTR;
+    FRAME_COMPLETION_CALLBACK = 203, PTR;
+    LIBRARY = 500, PTR;
+    DEVICE = 501, PTR;
+    OBJECT = 502, PTR;
+    ARRAY = 503, PTR;
+    ARRAY1D = 504, PTR;
+    ARRAY2D = 505, PTR;
+    ARRAY3D = 506, PTR;
+    CAMERA = 507, PTR;
+    FRAME = 508, PTR;
+    GEOMETRY = 509, PTR;
+    GROUP = 510, PTR;
+    INSTANCE = 511, PTR;
+    LIGHT = 512, PTR;
+    MATERIAL = 513, PTR;
+    RENDERER = 514, PTR;
+    SURFACE = 515, PTR;
+    SAMPLER = 516, PTR;
+    SPATIAL_FIELD = 517, PTR;
+    VOLUME = 518, PTR;
+    WORLD = 519, PTR;
+    UINT8 = 1004, 1;
+    UINT8_VEC2 = 1005, 2;
+    UINT8_VEC3 = 1006, 3;
+    UINT8_VEC4 = 1007, 4;
+    UINT16 = 1012, 2;
+    UINT16_VEC2 = 1013, 4;
+    UINT16_VEC3 = 1014, 6;
+    UINT16_VEC4 = 1015, 8;
+    INT32 = 1016, 4;
+    INT32_VEC2 = 1017, 8;
+    INT32_VEC3 = 1018, 12;
+    INT32_VEC4 = 1019, 16;
+    UINT32 = 1020, 4;
+    UINT32_VEC2 = 1021, 8;
+    UINT32_VEC3 = 1022, 12;
+    UINT32_VEC4 = 1023, 16;
+    UINT64 = 1028, 8;
+    UINT64_VEC2 = 1029, 16;
+    UINT64_VEC3 = 1030, 24;
+    UINT64_VEC4 = 1031, 32;
+    UFIXED8 = 1036, 1;
+    UFIXED8_VEC2 = 1037, 2;
+    UFIXED8_VEC3 = 1038, 3;
+    UFIXED8_VEC4 = 1039, 4;
+    FIXED16 = 1040, 2;
+    FIXED16_VEC2 = 1041, 4;
+    FIXED16_VEC3 = 1042, 6;
+    FIXED16_VEC4 = 1043, 8;
+    UFIXED16 = 1044, 2;
+    UFIXED16_VEC2 = 1045, 4;
+    UFIXED16_VEC3 = 1046, 6;
+    UFIXED16_VEC4 = 1047, 8;
+    FLOAT32 = 1068, 4;
+    FLOAT32_VEC2 = 1069, 8;
+    FLOAT32_VEC3 = 1070, 12;
+    FLOAT32_VEC4 = 1071, 16;
+    FLOAT64 = 1072, 8;
+    FLOAT64_VEC2 = 1073, 16;
+    FLOAT64_VEC3 = 1074, 24;
+    FLOAT64_VEC4 = 1075, 32;
+    UFIXED8_RGBA_SRGB = 2003, 4;
+    FLOAT32_BOX1 = 2008, 8;
+    FLOAT32_BOX2 = 2009, 16;
+    FLOAT32_BOX3 = 2010, 24;
+    FLOAT32_MAT4 = 2014, 64;
+    FLOAT64_BOX1 = 2208, 16;
+}
+
+impl DataType {
+    /// Handles of ANARI objects (arrays, cameras, ..., the device itself).
+    pub fn is_object(self) -> bool {
+        (500..=519).contains(&(self as i32))
+    }
+
+    /// Types whose value the host passes directly instead of by pointer.
+    pub fn passed_by_value(self) -> bool {
+        matches!(self, DataType::STRING | DataType::VOID_POINTER)
+    }
+
+    /// Whether a handle of kind `actual` may be passed where `self` is
+    /// declared: the same kind, or a generic object or array type.
+    pub fn accepts_object(self, actual: DataType) -> bool {
+        self == actual
+            || self == DataType::OBJECT
+            || (self == DataType::ARRAY
+                && matches!(
+                    actual,
+                    DataType::ARRAY1D | DataType::ARRAY2D | DataType::ARRAY3D
+                ))
+    }
+}
+
+impl fmt::Display for DataType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Human names of object kinds for messages ("camera", "spatial field").
+pub fn kind_name(kind: DataType) -> &'static str {
+    match kind {
+        DataType::DEVICE => "device",
+        DataType::ARRAY1D => "1D array",
+        DataType::ARRAY2D => "2D array",
+        DataType::ARRAY3D => "3D array",
+        DataType::CAMERA => "camera",
+        DataType::FRAME => "frame",
+        DataType::GEOMETRY => "geometry",
+        DataType::GROUP => "group",
+        DataType::INSTANCE => "instance",
+        DataType::LIGHT => "light",
+        DataType::MATERIAL => "material",
+        DataType::RENDERER => "renderer",
+        DataType::SURFACE => "surface",
+        DataType::SAMPLER => "sampler",
+        DataType::SPATIAL_FIELD => "spatial field",
+        DataType::VOLUME => "volume",
+        DataType::WORLD => "world",
+        _ => "object",
+    }
+}
+
+/// ANARI's status severities.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Severity {
+    FatalError = 1,
+    Error = 2,
+    Warning = 3,
+    PerformanceWarning = 4,
+    Info = 5,
+    Debug = 6,
+}
+
+/// ANARI's status codes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StatusCode {
+    NoError = 0,
+    UnknownError = 1,
+    InvalidArgument = 2,
+    InvalidOperation = 3,
+    OutOfMemory = 4,
+    UnsupportedDevice = 5,
+    VersionMismatch = 6,
+}
+
+/// One message for the host's status callback. `source` is the handle the
+/// message is about (0 for none) with its kind.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Status {
+    pub severity: Severity,
+    pub code: StatusCode,
+    pub source: u64,
+    pub source_kind: DataType,
+    pub message: String,
+}

@@ -1,0 +1,176 @@
+//! The render thread of a device: `anariRenderFrame` hands it a job and
+//! returns; the host waits on the frame's slot.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::mpsc::{channel, Sender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use super::frame::FrameSlot;
+use super::types::{DataType, Severity, Status, StatusCode};
+use crate::geometry::RayGen;
+use crate::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer, Scene};
+
+/// Where a device's status messages go; called from any thread.
+pub type Reporter = Arc<dyn Fn(Status) + Send + Sync>;
+
+/// Which renderer a device uses (device parameter `backend`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BackendChoice {
+    /// The GPU when an adapter opens, else the CPU reference.
+    Auto,
+    Gpu,
+    Cpu,
+}
+
+impl BackendChoice {
+    pub fn parse(name: &str) -> Option<Self> {
+        match name {
+            "auto" => Some(BackendChoice::Auto),
+            "gpu" => Some(BackendChoice::Gpu),
+            "cpu" => Some(BackendChoice::Cpu),
+            _ => None,
+        }
+    }
+}
+
+pub struct Job {
+    pub frame: u64,
+    /// `None` renders the background only (an empty world).
+    pub scene: Option<Scene>,
+    pub rays: RayGen,
+    pub settings: RenderSettings,
+    pub desc: FrameDesc,
+    pub backend: BackendChoice,
+    pub slot: Arc<FrameSlot>,
+    pub on_done: Option<Box<dyn FnOnce() + Send>>,
+}
+
+pub struct Worker {
+    sender: Option<Sender<Job>>,
+    thread: Option<JoinHandle<()>>,
+    report: Reporter,
+}
+
+impl Worker {
+    pub fn new(report: Reporter) -> Self {
+        Self {
+            sender: None,
+            thread: None,
+            report,
+        }
+    }
+
+    pub fn submit(&mut self, job: Job) {
+        if self.sender.is_none() {
+            let (tx, rx) = channel::<Job>();
+            let report = self.report.clone();
+            let spawned = std::thread::Builder::new()
+                .name("caveray-render".into())
+                .spawn(move || {
+                    let mut renderer = None;
+                    for job in rx {
+                        run(job, &mut renderer, &report);
+                    }
+                });
+            match spawned {
+                Ok(thread) => {
+                    self.sender = Some(tx);
+                    self.thread = Some(thread);
+                }
+                Err(e) => {
+                    job.slot.finish(
+                        Err(format!("cannot start the render thread: {e}")),
+                        Default::default(),
+                    );
+                    return;
+                }
+            }
+        }
+        if let Some(tx) = &self.sender {
+            if let Err(e) = tx.send(job) {
+                e.0.slot.finish(
+                    Err("the render thread has stopped".into()),
+                    Default::default(),
+                );
+            }
+        }
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        self.sender = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn run(job: Job, renderer: &mut Option<(BackendChoice, Renderer)>, report: &Reporter) {
+    let started = Instant::now();
+    let status = |severity, code, message: String| Status {
+        severity,
+        code,
+        source: job.frame,
+        source_kind: DataType::FRAME,
+        message,
+    };
+    // A panic must neither kill the thread nor leave the host waiting.
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Frame, String> {
+        let Some(scene) = &job.scene else {
+            return Ok(Frame::cleared(&job.desc, job.settings.background));
+        };
+        if renderer.as_ref().map(|r| r.0) != Some(job.backend) {
+            *renderer = None;
+            let made = match job.backend {
+                BackendChoice::Auto => {
+                    let (r, why) = Renderer::gpu_or_cpu();
+                    if let Some(why) = why {
+                        report(status(
+                            Severity::Warning,
+                            StatusCode::NoError,
+                            format!("no GPU ({why}); rendering with the CPU reference"),
+                        ));
+                    }
+                    r
+                }
+                BackendChoice::Gpu => Renderer::new(Backend::Gpu).map_err(|e| e.to_string())?,
+                BackendChoice::Cpu => Renderer::new(Backend::Cpu).map_err(|e| e.to_string())?,
+            };
+            report(status(
+                Severity::Info,
+                StatusCode::NoError,
+                format!("rendering with {}", made.describe()),
+            ));
+            *renderer = Some((job.backend, made));
+        }
+        let (_, r) = renderer.as_mut().expect("renderer was just made");
+        r.render(scene, &job.rays, &job.settings, &job.desc)
+            .map_err(|e| e.to_string())
+    }))
+    .unwrap_or_else(|panic| {
+        *renderer = None;
+        Err(format!("render panicked: {}", panic_message(&panic)))
+    });
+    if let Err(e) = &result {
+        report(status(
+            Severity::Error,
+            StatusCode::UnknownError,
+            format!("rendering frame {:#x} failed: {e}", job.frame),
+        ));
+    }
+    job.slot.finish(result, started.elapsed());
+    if let Some(done) = job.on_done {
+        done();
+    }
+}
+
+pub fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
