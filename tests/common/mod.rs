@@ -1,6 +1,7 @@
 //! Shared helpers for the integration tests.
 #![allow(dead_code)]
 
+pub mod c;
 pub mod render;
 
 use std::path::{Path, PathBuf};
