@@ -6,16 +6,17 @@
 
 mod common;
 
+use anari_library_caveray::data::{preset, Manifest};
 use anari_library_caveray::render::ssim;
-use common::c::{compile, describe, read_rgba, run, scratch, valgrind_available, wall_scene};
+use common::c::{
+    compile, describe, phantom, read_rgba, run, scratch, valgrind_available, wall_scene, WallScene,
+};
 
 /// Test (a): each camera's image from the C API matches the Rust API's.
-fn render_wall(name: &str, longest: u32, valgrind: bool) {
-    let dir = scratch(name);
-    let scene = wall_scene(&dir, longest);
+fn render_wall(dir: &std::path::Path, scene: &WallScene, valgrind: bool) {
     let program = dir.join("render_wall");
     compile(&["tests/c/render_wall.c"], &program, false, true);
-    let output = run(&program, &[&scene.file, &dir], valgrind);
+    let output = run(&program, &[&scene.file, dir], valgrind);
     assert!(
         output.status.success(),
         "render_wall: {}",
@@ -24,6 +25,7 @@ fn render_wall(name: &str, longest: u32, valgrind: bool) {
     for camera in ["perspective", "matrix", "offAxis"] {
         let image = read_rgba(&dir.join(format!("{camera}.rgba")), scene.size);
         let s = ssim(&image, &scene.reference).unwrap();
+        eprintln!("{camera}: SSIM {s:.6} against the Rust API");
         assert!(
             s > 0.98,
             "{camera} camera through the C API: SSIM {s:.4} against the Rust API's image"
@@ -33,7 +35,25 @@ fn render_wall(name: &str, longest: u32, valgrind: bool) {
 
 #[test]
 fn c_host_renders_a_cave_wall_with_each_camera() {
-    render_wall("c_render_wall", 96, false);
+    let dir = scratch("c_render_wall");
+    render_wall(&dir, &wall_scene(&dir, 96, phantom(), false), false);
+}
+
+/// The bar: a C program renders a CT volume through the matrix
+/// camera (and the other two). Needs the shared data; skips without it.
+#[test]
+fn c_host_renders_a_ct_volume() {
+    let loaded = Manifest::locate(None).and_then(|m| m.load_volume("cthead"));
+    let volume = match loaded {
+        Ok(v) => v,
+        Err(e) => {
+            eprintln!("skipped: the CT head is not available ({e})");
+            return;
+        }
+    };
+    let dir = scratch("c_render_ct");
+    let tf = preset("ct-skin-bone").unwrap();
+    render_wall(&dir, &wall_scene(&dir, 96, (volume, tf), true), false);
 }
 
 #[test]
@@ -42,7 +62,8 @@ fn c_host_render_is_clean_under_valgrind() {
         eprintln!("skipped: valgrind is not installed");
         return;
     }
-    render_wall("c_render_wall_valgrind", 32, true);
+    let dir = scratch("c_render_wall_valgrind");
+    render_wall(&dir, &wall_scene(&dir, 32, phantom(), false), true);
 }
 
 /// Test (b): every misuse reaches the status callback with the right
@@ -83,7 +104,7 @@ fn misuse_is_clean_under_valgrind() {
 #[test]
 fn sdk_loader_protocol_renders_the_wall() {
     let dir = scratch("c_loader");
-    let scene = wall_scene(&dir, 64);
+    let scene = wall_scene(&dir, 64, phantom(), false);
     let program = dir.join("loader");
     compile(&["tests/c/loader.cpp"], &program, true, false);
     let lib = common::c::lib_dir().join("libanari_library_caveray.so");

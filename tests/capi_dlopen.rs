@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anari_library_caveray::capi::sys::*;
 use anari_library_caveray::render::ssim;
-use common::c::{lib_dir, read_rgba, scratch, wall_scene};
+use common::c::{lib_dir, phantom, read_rgba, scratch, wall_scene};
 
 static PROBLEMS: AtomicUsize = AtomicUsize::new(0);
 
@@ -45,7 +45,7 @@ fn numbers(text: &str, key: &str) -> Vec<f32> {
 #[test]
 fn dlopened_library_renders_a_wall_through_the_c_abi() {
     let dir = scratch("capi_dlopen");
-    let scene = wall_scene(&dir, 64);
+    let scene = wall_scene(&dir, 64, phantom(), false);
     let text = std::fs::read_to_string(&scene.file).unwrap();
     let raw = text
         .lines()

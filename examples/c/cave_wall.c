@@ -59,7 +59,8 @@ int main(void)
 {
   static float voxels[N * N * N];
   float origin[3] = {-0.4f, 1.0f, -1.4f}, spacing[3] = {0.8f / (N - 1), 0.8f / (N - 1), 0.8f / (N - 1)};
-  float colors[2 * 3] = {0.2f, 0.4f, 1.0f, 1.0f, 0.8f, 0.3f}, opacities[2] = {0.0f, 0.4f};
+  float colors[2 * 3] = {0.2f, 0.4f, 1.0f, 1.0f, 0.8f, 0.3f}, opacities[2] = {0.0f, 1.0f};
+  float unit = 0.05f; /* opacities per 5 cm: the ball is 80 cm across */
   float ll[3] = {-1, 0.4f, -2}, lr[3] = {1, 0.4f, -2}, ur[3] = {1, 2.4f, -2};
   float eyes[2][3] = {{0.0675f, 1.6f, 0}, {0.1325f, 1.6f, 0}}; /* head at x = 0.1 m, ipd 65 mm */
   float view[16], proj[16];
@@ -92,6 +93,7 @@ int main(void)
   anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
   anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &c);
   anariSetParameter(dev, volume, "opacity", ANARI_ARRAY1D, &o);
+  anariSetParameter(dev, volume, "unitDistance", ANARI_FLOAT32, &unit);
   anariCommitParameters(dev, volume);
 
   ANARIWorld world = anariNewWorld(dev);

@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 
 use anari_library_caveray::cave::Eye;
 use anari_library_caveray::data::{preset, shepp_logan};
+use anari_library_caveray::device::{StructuredVolume, TransferFunction};
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::render::{CpuRenderer, Frame, FrameDesc, RenderSettings, Scene};
 use glam::UVec2;
@@ -101,8 +102,9 @@ pub fn describe(output: &Output) -> String {
     )
 }
 
-/// The scene of the C host tests: the Shepp-Logan phantom placed in the
-/// Cologne CAVE, seen on its front wall by the default head's left eye.
+/// The scene of the C host tests: a volume placed in the Cologne CAVE as
+/// `caveray render` places it, seen on the front wall by the default head's
+/// left eye.
 pub struct WallScene {
     pub file: PathBuf,
     pub size: UVec2,
@@ -110,7 +112,19 @@ pub struct WallScene {
     pub reference: Frame,
 }
 
-pub fn wall_scene(dir: &Path, longest: u32) -> WallScene {
+/// The Shepp-Logan phantom at 32³ with its preset.
+pub fn phantom() -> (StructuredVolume, TransferFunction) {
+    (shepp_logan(32), preset("phantom").unwrap())
+}
+
+/// `longest`: the frame's longer side in pixels. A preset `tf` is stretched
+/// over the data's value range when `stretch` is set (as for CT presets).
+pub fn wall_scene(
+    dir: &Path,
+    longest: u32,
+    (volume, tf): (StructuredVolume, TransferFunction),
+    stretch: bool,
+) -> WallScene {
     let rig = rig("cologne_5wall");
     let wall = rig.wall("front").unwrap();
     let head = rig.viewer.head;
@@ -119,11 +133,12 @@ pub fn wall_scene(dir: &Path, longest: u32) -> WallScene {
     let size = (wall.resolution.as_dvec2() * scale).round().as_uvec2();
 
     let (centre, extent) = (rig.scene.centre.as_vec3(), rig.scene.size as f32);
-    let volume = shepp_logan(32).placed(centre, extent);
-    let tf = preset("phantom")
-        .unwrap()
-        .with_unit_distance(0.5 * extent)
-        .unwrap();
+    let volume = volume.placed(centre, extent);
+    let mut tf = tf.with_unit_distance(0.5 * extent).unwrap();
+    if stretch {
+        let (lo, hi) = volume.value_range();
+        tf = tf.with_value_range(lo, hi).unwrap();
+    }
 
     let raw = dir.join("phantom.f32");
     let voxels: Vec<u8> = (0..volume.voxels().len())
