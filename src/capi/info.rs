@@ -170,12 +170,11 @@ pub fn parameter_info(
             let b: &'static u8 = if p.required { &TRUE } else { &FALSE };
             (b as *const u8).cast()
         }
-        ("default", _) if info_type == param_type && info_type == p.types[0] as i32 => {
-            match p.default {
-                Some(d) if d.len() * 4 == p.types[0].size() => d.as_ptr().cast(),
-                _ => std::ptr::null(),
-            }
-        }
+        // Defaults are FLOAT32 components, for the FLOAT32-based types.
+        ("default", Some(t)) if info_type == param_type && !t.is_object() => match p.default {
+            Some(d) if d.len() * 4 == t.size() => d.as_ptr().cast(),
+            _ => std::ptr::null(),
+        },
         _ => std::ptr::null(),
     }
 }

@@ -150,10 +150,12 @@ fn library(lib: ANARILibrary, call: &str) -> Option<&'static LibraryHandle> {
     l
 }
 
-pub unsafe extern "C" fn load_module(lib: ANARILibrary, name: *const c_char) {
-    guard("anariLoadModule", (), || {
-        if let Some(l) = library(lib, "anariLoadModule") {
-            let name = string(name, "the module name").unwrap_or_default();
+/// caveray is one library with no loadable modules.
+unsafe fn no_modules(lib: ANARILibrary, call: &str, name: *const c_char, what: &str) {
+    guard(call, (), || {
+        if let Some(l) = library(lib, call) {
+            // SAFETY: the host passes a C string or NULL.
+            let name = unsafe { string(name, "the module name") }.unwrap_or_default();
             emit(
                 l.callback(),
                 std::ptr::null_mut(),
@@ -162,34 +164,19 @@ pub unsafe extern "C" fn load_module(lib: ANARILibrary, name: *const c_char) {
                     code: StatusCode::InvalidArgument,
                     source: 0,
                     source_kind: DataType::LIBRARY,
-                    message: format!(
-                        "anariLoadModule: caveray has no modules; '{name}' was not loaded"
-                    ),
+                    message: format!("{call}: caveray has no modules; '{name}' {what}"),
                 },
             );
         }
     })
 }
 
+pub unsafe extern "C" fn load_module(lib: ANARILibrary, name: *const c_char) {
+    no_modules(lib, "anariLoadModule", name, "was not loaded")
+}
+
 pub unsafe extern "C" fn unload_module(lib: ANARILibrary, name: *const c_char) {
-    guard("anariUnloadModule", (), || {
-        if let Some(l) = library(lib, "anariUnloadModule") {
-            let name = string(name, "the module name").unwrap_or_default();
-            emit(
-                l.callback(),
-                std::ptr::null_mut(),
-                &Status {
-                    severity: Severity::Warning,
-                    code: StatusCode::InvalidArgument,
-                    source: 0,
-                    source_kind: DataType::LIBRARY,
-                    message: format!(
-                        "anariUnloadModule: caveray has no modules; '{name}' is not loaded"
-                    ),
-                },
-            );
-        }
-    })
+    no_modules(lib, "anariUnloadModule", name, "is not loaded")
 }
 
 fn check_device_subtype(l: &LibraryHandle, call: &str, subtype: *const c_char) -> bool {

@@ -214,3 +214,54 @@ pub fn subtype(kind: T, subtype: &str) -> Option<&'static SubtypeInfo> {
 pub fn param(kind: T, sub: &str, name: &str) -> Option<&'static ParamInfo> {
     subtype(kind, sub)?.params.iter().find(|p| p.name == name)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_fit_their_types_and_names_are_unique() {
+        for s in SUBTYPES {
+            for (i, p) in s.params.iter().enumerate() {
+                assert!(
+                    !p.types.is_empty(),
+                    "{}.{} accepts nothing",
+                    s.subtype,
+                    p.name
+                );
+                if let Some(d) = p.default {
+                    let size = p.types.iter().find(|t| t.size() == 4 * d.len());
+                    assert!(
+                        size.is_some(),
+                        "{}.{}: default {d:?} fits none of {:?}",
+                        s.subtype,
+                        p.name,
+                        p.types
+                    );
+                }
+                assert!(
+                    s.params[..i].iter().all(|q| q.name != p.name),
+                    "{}.{} listed twice",
+                    s.subtype,
+                    p.name
+                );
+            }
+            for e in s.extensions {
+                assert!(
+                    EXTENSIONS.contains(e),
+                    "{e} of {} is not advertised",
+                    s.subtype
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn kinds_without_subtypes_match_any_name() {
+        assert!(subtype(T::WORLD, "").is_some());
+        assert!(subtype(T::FRAME, "anything").is_some());
+        assert!(subtype(T::CAMERA, "fisheye").is_none());
+        assert_eq!(subtypes(T::CAMERA), ["perspective", "matrix", "offAxis"]);
+        assert!(subtypes(T::GEOMETRY).is_empty());
+    }
+}

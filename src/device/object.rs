@@ -83,13 +83,6 @@ pub enum Derived<T> {
 }
 
 impl<T> Derived<T> {
-    pub fn from_result(r: Result<T, String>) -> Self {
-        match r {
-            Ok(v) => Derived::Ready(v),
-            Err(e) => Derived::Invalid(e),
-        }
-    }
-
     /// The value, or a message saying why `what` cannot be used.
     pub fn ready(&self, what: &str) -> Result<&T, String> {
         match self {

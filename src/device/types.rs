@@ -126,11 +126,6 @@ impl DataType {
         (500..=519).contains(&(self as i32))
     }
 
-    /// Types whose value the host passes directly instead of by pointer.
-    pub fn passed_by_value(self) -> bool {
-        matches!(self, DataType::STRING | DataType::VOID_POINTER)
-    }
-
     /// Whether a handle of kind `actual` may be passed where `self` is
     /// declared: the same kind, or a generic object or array type.
     pub fn accepts_object(self, actual: DataType) -> bool {

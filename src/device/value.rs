@@ -29,13 +29,6 @@ pub enum Value {
 }
 
 impl Value {
-    pub fn ty(&self) -> DataType {
-        match self {
-            Value::Bytes { ty, .. } | Value::Pointer { ty, .. } | Value::Object { ty, .. } => *ty,
-            Value::String(_) => DataType::STRING,
-        }
-    }
-
     /// The numbers of a FLOAT32-based value (scalar, vector, box, matrix).
     pub fn f32s(&self) -> Option<Vec<f32>> {
         match self {
@@ -145,10 +138,6 @@ impl Params {
     pub fn clear(&mut self) {
         self.0.clear();
     }
-    pub fn names(&self) -> impl Iterator<Item = &str> {
-        self.0.keys().map(String::as_str)
-    }
-
     fn floats<const N: usize>(&self, name: &str) -> Option<[f32; N]> {
         self.get(name)?.f32s()?.try_into().ok()
     }

@@ -160,6 +160,15 @@ int main(int argc, char **argv)
   const float *fovy = (const float *)dev->getParameterInfo(
       ANARI_CAMERA, "perspective", "fovy", ANARI_FLOAT32, "default", ANARI_FLOAT32);
   check("perspective fovy default", fovy && std::fabs(*fovy - 1.0471976f) < 1e-6f);
+  const float *white = (const float *)dev->getParameterInfo(ANARI_VOLUME,
+      "transferFunction1D", "color", ANARI_FLOAT32_VEC3, "default", ANARI_FLOAT32_VEC3);
+  check("colour default for a single colour", white && white[0] == 1.0f && white[2] == 1.0f);
+  const char *required = (const char *)dev->getParameterInfo(
+      ANARI_CAMERA, "matrix", "view", ANARI_FLOAT32_MAT4, "required", ANARI_BOOL);
+  check("matrix view is required", required && *required == 1);
+  const char *about = (const char *)dev->getObjectInfo(
+      ANARI_CAMERA, "offAxis", "description", ANARI_STRING);
+  check("offAxis description", about && strstr(about, "wall") != nullptr);
   check("no extra procedures", dev->getProcAddress("anariFoo") == nullptr);
 
   ANARIArray3D voxels = dev->newArray3D(

@@ -13,10 +13,12 @@ use glam::UVec2;
 
 use super::rig;
 
-/// `target/<profile>`, where cargo put `libanari_library_caveray.so`.
+/// `target/<profile>/deps`: `cargo test` builds the library there next to
+/// the test binaries (only `cargo build` copies it up to `target/<profile>`,
+/// so a copy there may be stale).
 pub fn lib_dir() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
-    let dir = exe.parent().unwrap().parent().unwrap().to_path_buf();
+    let dir = exe.parent().unwrap().to_path_buf();
     assert!(
         dir.join("libanari_library_caveray.so").exists(),
         "{} has no libanari_library_caveray.so",
