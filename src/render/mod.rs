@@ -7,6 +7,7 @@ mod frame;
 pub mod gpu;
 mod plan;
 mod settings;
+pub mod stereo;
 
 use thiserror::Error;
 

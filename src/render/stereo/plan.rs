@@ -1,0 +1,279 @@
+//! The re-projection planner for the paper's HMD-style setup: two
+//! coplanar image planes at focal length h, eyes e apart, a volume inside
+//! a bounding sphere of radius r whose near side touches the image plane.
+//!
+//! A left ray re-projects onto a segment of the right eye's epipolar line;
+//! its longest such segment, in pixels, is the number of layers needed so
+//! that no two left rays write the same texel of the same layer.
+
+use thiserror::Error;
+
+#[derive(Debug, Error, PartialEq)]
+pub enum StereoError {
+    #[error("{what} must be finite and positive, got {value}")]
+    NotPositive { what: &'static str, value: f64 },
+    #[error("eye distance must be finite and not negative, got {0}")]
+    NegativeEyeDistance(f64),
+    #[error("field of view must be in (0, 180) degrees, got {0} degrees")]
+    FieldOfView(f64),
+    #[error(
+        "{layers} layers cannot hold a re-projected span of {span:.2} pixels; {needed} are needed"
+    )]
+    TooFewLayers { layers: u32, span: f64, needed: u32 },
+    #[error("at least one re-projection layer is needed, got 0")]
+    NoLayers,
+}
+
+/// Pixels per image-plane unit: `s = w / (2 h tan a)`.
+pub fn pixel_scale(width: f64, focal: f64, half_fov: f64) -> f64 {
+    width / (2.0 * focal * half_fov.tan())
+}
+
+/// Epipolar segment of a ray from the image plane to infinity: `d_inf = e`.
+pub fn span_to_infinity(eye_distance: f64) -> f64 {
+    eye_distance
+}
+
+/// ... from the image plane to depth `z`: `d_z = e - e h / z`.
+pub fn span_to_depth(eye_distance: f64, focal: f64, z: f64) -> f64 {
+    eye_distance - eye_distance * focal / z
+}
+
+/// ... through a bounding sphere of radius `r` whose near side touches the
+/// image plane: `d_r = e - e h / (h + 2r)`.
+pub fn span_to_sphere(eye_distance: f64, focal: f64, radius: f64) -> f64 {
+    span_to_depth(eye_distance, focal, focal + 2.0 * radius)
+}
+
+/// The shortest focal length at which a sphere of radius `r` re-projects
+/// onto at most `span_px` pixels: `h = -r + sqrt(r^2 + e r w / (d_p tan a))`.
+pub fn minimal_focal_length(
+    radius: f64,
+    eye_distance: f64,
+    width: f64,
+    span_px: f64,
+    half_fov: f64,
+) -> f64 {
+    -radius + (radius * radius + eye_distance * radius * width / (span_px * half_fov.tan())).sqrt()
+}
+
+/// Layers for a span of `d` pixels: samples land in the pixel they fall
+/// in, and a segment of length d can reach into ceil(d) + 1 pixels.
+pub fn layers_for(span_px: f64) -> u32 {
+    // Rounding noise must not cost a layer (and 144 MiB at 768^2).
+    (span_px - 1e-9).ceil().max(0.0) as u32 + 1
+}
+
+/// Bytes of `layers` layers of `width`^2 texels: `M = w^2 L bytes channels`.
+pub fn layer_memory(width: u64, layers: u32, bytes_per_channel: u64, channels: u64) -> u64 {
+    width * width * u64::from(layers) * bytes_per_channel * channels
+}
+
+/// The paper's setup, in metres and radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HmdStereo {
+    /// Image width (and height) in pixels.
+    pub width: u32,
+    /// Full horizontal field of view 2a.
+    pub fov: f64,
+    pub eye_distance: f64,
+    /// Distance h from the eyes to the image plane.
+    pub focal: f64,
+    /// Bounding sphere radius r; `None` plans for rays to infinity.
+    pub radius: Option<f64>,
+}
+
+/// How many layers a view needs and what they cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LayerPlan {
+    /// Longest re-projected span d_p in pixels.
+    pub span_px: f64,
+    /// Layers needed: every pixel a span touches gets its own layer.
+    pub layers: u32,
+    /// Bytes of that many RGBA16F layers.
+    pub memory: u64,
+}
+
+impl HmdStereo {
+    /// The paper's protocol with the shortest focal length that `layers`
+    /// layers allow: a span of `layers - 1` pixels.
+    pub fn paper_for_layers(layers: u32) -> Self {
+        Self::paper(f64::from(layers.max(2) - 1))
+    }
+
+    /// The paper's protocol: 768^2, 2a = 110 degrees, e = 0.065 m, r = 1 m,
+    /// and the focal length at which the sphere spans `span_px` pixels.
+    pub fn paper(span_px: f64) -> Self {
+        let (width, fov, e, r) = (768, 110f64.to_radians(), 0.065, 1.0);
+        Self {
+            width,
+            fov,
+            eye_distance: e,
+            focal: minimal_focal_length(r, e, f64::from(width), span_px, 0.5 * fov),
+            radius: Some(r),
+        }
+    }
+
+    fn check(&self) -> Result<(), StereoError> {
+        let positive = |what, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(StereoError::NotPositive { what, value })
+            }
+        };
+        positive("image width", f64::from(self.width))?;
+        positive("focal length", self.focal)?;
+        if let Some(r) = self.radius {
+            positive("bounding radius", r)?;
+        }
+        if !(self.eye_distance.is_finite() && self.eye_distance >= 0.0) {
+            return Err(StereoError::NegativeEyeDistance(self.eye_distance));
+        }
+        if !(self.fov > 0.0 && self.fov < std::f64::consts::PI) {
+            return Err(StereoError::FieldOfView(self.fov.to_degrees()));
+        }
+        Ok(())
+    }
+
+    /// The longest span and the layers it needs.
+    pub fn plan(&self) -> Result<LayerPlan, StereoError> {
+        self.check()?;
+        let span = match self.radius {
+            Some(r) => span_to_sphere(self.eye_distance, self.focal, r),
+            None => span_to_infinity(self.eye_distance),
+        };
+        let span_px = span * pixel_scale(f64::from(self.width), self.focal, 0.5 * self.fov);
+        let layers = layers_for(span_px);
+        Ok(LayerPlan {
+            span_px,
+            layers,
+            memory: layer_memory(u64::from(self.width), layers, 2, 4),
+        })
+    }
+
+    /// The plan, held to a given layer count: too few layers is an error
+    /// naming how many are needed.
+    pub fn plan_with(&self, layers: u32) -> Result<LayerPlan, StereoError> {
+        if layers == 0 {
+            return Err(StereoError::NoLayers);
+        }
+        let needed = self.plan()?;
+        if needed.layers > layers {
+            return Err(StereoError::TooFewLayers {
+                layers,
+                span: needed.span_px,
+                needed: needed.layers,
+            });
+        }
+        Ok(LayerPlan {
+            layers,
+            memory: layer_memory(u64::from(self.width), layers, 2, 4),
+            ..needed
+        })
+    }
+}
+
+/// The plan for any pair of views that share epipolar rows: a CAVE wall
+/// seen by both eyes (one image plane), or an HMD's two coplanar planes.
+/// Offsets are right-image x minus left-image x, in pixels, of the bounding
+/// sphere's nearest and farthest points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewPlan {
+    pub near_offset: f64,
+    pub far_offset: f64,
+    pub layers: u32,
+    pub memory: u64,
+}
+
+/// Why a view pair cannot use re-projection (it then renders two passes).
+#[derive(Debug, Error, PartialEq)]
+pub enum NotEpipolar {
+    #[error("the eyes' rows do not line up: a point moves {0:.2} pixels vertically between the eyes (baseline not parallel to the image rows)")]
+    VerticalDisparity(f64),
+    #[error("the horizontal shift between the eyes varies by {0:.2} pixels at one depth (image planes not parallel)")]
+    UnevenShift(f64),
+    #[error(
+        "the right eye sees points further left than the left eye does (baseline points left)"
+    )]
+    Reversed,
+    #[error("the bounding sphere is behind the eyes")]
+    Behind,
+    #[error("{0}")]
+    Matrices(String),
+}
+
+/// Plans re-projection from the actual OpenGL matrices of both eyes for an
+/// image of `width` x `height` pixels and a bounding sphere. Fails with the
+/// reason when the geometry does not keep epipolar lines on pixel rows.
+pub fn plan_views(
+    left: &crate::geometry::MatrixCamera,
+    right: &crate::geometry::MatrixCamera,
+    width: u32,
+    height: u32,
+    centre: glam::DVec3,
+    radius: f64,
+) -> Result<ViewPlan, NotEpipolar> {
+    use glam::{DVec2, DVec3};
+    let pixel = |m: &crate::geometry::MatrixCamera, p: DVec3| -> DVec2 {
+        let ndc = m.project(p);
+        DVec2::new(
+            (ndc.x + 1.0) * 0.5 * f64::from(width) - 0.5,
+            (ndc.y + 1.0) * 0.5 * f64::from(height) - 0.5,
+        )
+    };
+    // The left eye and its viewing axis, from the unprojected near and far
+    // plane centres.
+    let near_c = left.unproject(DVec3::new(0.0, 0.0, -1.0));
+    let eye = crate::geometry::pinhole_from_matrices(left.view(), left.proj())
+        .map_err(|e| NotEpipolar::Matrices(e.to_string()))?
+        .eye;
+    // Depth is measured along the view's -Z (the wall normal on a CAVE
+    // wall), not through the off-axis frustum's centre.
+    let axis = left
+        .view()
+        .inverse()
+        .transform_vector3(DVec3::NEG_Z)
+        .normalize();
+    let near = (near_c - eye).dot(axis);
+    let zc = (centre - eye).dot(axis);
+    let (z_near, z_far) = ((zc - radius).max(near), zc + radius);
+    if z_far <= near {
+        return Err(NotEpipolar::Behind);
+    }
+    // At each depth, points across the whole view must shift alike and
+    // stay on their row.
+    let mut offsets = [0.0; 2];
+    for (slot, z) in [z_near, z_far].into_iter().enumerate() {
+        let (mut lo, mut hi, mut vertical) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+        for u in [-1.0, 0.0, 1.0] {
+            for v in [-1.0, 0.0, 1.0] {
+                let through = left.unproject(DVec3::new(u, v, 0.0));
+                let dir = (through - eye).normalize();
+                let p = eye + dir * (z / dir.dot(axis));
+                let (l, r) = (pixel(left, p), pixel(right, p));
+                lo = lo.min(r.x - l.x);
+                hi = hi.max(r.x - l.x);
+                vertical = vertical.max((r.y - l.y).abs());
+            }
+        }
+        if vertical > 0.5 {
+            return Err(NotEpipolar::VerticalDisparity(vertical));
+        }
+        if hi - lo > 0.5 {
+            return Err(NotEpipolar::UnevenShift(hi - lo));
+        }
+        offsets[slot] = 0.5 * (lo + hi);
+    }
+    let [near_offset, far_offset] = offsets;
+    if far_offset < near_offset - 1e-9 {
+        return Err(NotEpipolar::Reversed);
+    }
+    let layers = layers_for(far_offset - near_offset);
+    Ok(ViewPlan {
+        near_offset,
+        far_offset,
+        layers,
+        memory: u64::from(width) * u64::from(height) * u64::from(layers) * 2 * 4,
+    })
+}
