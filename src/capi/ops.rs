@@ -45,6 +45,28 @@ fn with_device<R: Clone>(
     })
 }
 
+/// `with_device` for calls with one string argument, which is checked
+/// first and reported if it is NULL or not UTF-8.
+fn with_named<R: Clone>(
+    dev: ANARIDevice,
+    call: &str,
+    name: *const c_char,
+    what: &str,
+    neutral: R,
+    f: impl FnOnce(&DeviceRef, &mut Device, String) -> R,
+) -> R {
+    with_device(dev, call, neutral.clone(), |d, device| {
+        // SAFETY: the host passes a C string or NULL.
+        match unsafe { string(name, what) } {
+            Ok(n) => f(d, device, n),
+            Err(e) => {
+                device_error(device, StatusCode::InvalidArgument, format!("{call}: {e}"));
+                neutral
+            }
+        }
+    })
+}
+
 fn target(d: &DeviceRef, obj: ANARIObject) -> Target {
     if obj == d.ptr() {
         Target::Device
@@ -508,17 +530,14 @@ pub unsafe extern "C" fn set_parameter(
 }
 
 pub unsafe extern "C" fn unset_parameter(dev: ANARIDevice, obj: ANARIObject, name: *const c_char) {
-    with_device(dev, "anariUnsetParameter", (), |d, device| {
-        // SAFETY: the host passes a C string.
-        match unsafe { string(name, "the parameter name") } {
-            Ok(n) => device.unset_param(target(d, obj), &n),
-            Err(e) => device_error(
-                device,
-                StatusCode::InvalidArgument,
-                format!("anariUnsetParameter: {e}"),
-            ),
-        }
-    })
+    with_named(
+        dev,
+        "anariUnsetParameter",
+        name,
+        "the parameter name",
+        (),
+        |d, device, n| device.unset_param(target(d, obj), &n),
+    )
 }
 
 pub unsafe extern "C" fn unset_all_parameters(dev: ANARIDevice, obj: ANARIObject) {
@@ -603,17 +622,14 @@ pub unsafe extern "C" fn unmap_parameter_array(
     obj: ANARIObject,
     name: *const c_char,
 ) {
-    with_device(dev, "anariUnmapParameterArray", (), |_, device| {
-        // SAFETY: the host passes a C string.
-        match unsafe { string(name, "the parameter name") } {
-            Ok(n) => device.unmap_param_array(obj as usize as u64, &n),
-            Err(e) => device_error(
-                device,
-                StatusCode::InvalidArgument,
-                format!("anariUnmapParameterArray: {e}"),
-            ),
-        }
-    })
+    with_named(
+        dev,
+        "anariUnmapParameterArray",
+        name,
+        "the parameter name",
+        (),
+        |_, device, n| device.unmap_param_array(obj as usize as u64, &n),
+    )
 }
 
 pub unsafe extern "C" fn commit_parameters(dev: ANARIDevice, obj: ANARIObject) {
@@ -861,17 +877,14 @@ pub unsafe extern "C" fn map_frame(
 }
 
 pub unsafe extern "C" fn unmap_frame(dev: ANARIDevice, frame: ANARIFrame, channel: *const c_char) {
-    with_device(dev, "anariUnmapFrame", (), |_, device| {
-        // SAFETY: the host passes a C string.
-        match unsafe { string(channel, "the channel name") } {
-            Ok(c) => device.unmap_frame(frame as usize as u64, &c),
-            Err(e) => device_error(
-                device,
-                StatusCode::InvalidArgument,
-                format!("anariUnmapFrame: {e}"),
-            ),
-        }
-    })
+    with_named(
+        dev,
+        "anariUnmapFrame",
+        channel,
+        "the channel name",
+        (),
+        |_, device, c| device.unmap_frame(frame as usize as u64, &c),
+    )
 }
 
 pub unsafe extern "C" fn render_frame(dev: ANARIDevice, frame: ANARIFrame) {
