@@ -198,3 +198,17 @@ impl Drop for DeviceRef {
         DeviceHandle::release(self.0);
     }
 }
+
+// Where libanari reads the C++ data members: the library's dlhandle, status
+// callback and user pointer, and the device's default status callback and
+// user pointer, each right after the table pointer.
+const _: () = {
+    use std::mem::{offset_of, size_of};
+    assert!(size_of::<LibraryHandle>() == 32);
+    assert!(offset_of!(LibraryHandle, dl_handle) == 8);
+    assert!(offset_of!(LibraryHandle, status) == 16);
+    assert!(offset_of!(LibraryHandle, status_user) == 24);
+    assert!(offset_of!(DeviceHandle, table) == 0);
+    assert!(offset_of!(DeviceHandle, default_status) == 8);
+    assert!(offset_of!(DeviceHandle, default_status_user) == 16);
+};

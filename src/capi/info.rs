@@ -15,12 +15,15 @@ struct List {
     pointers: Vec<*const c_char>,
 }
 
+/// The tables are ours and hold no NUL; if one ever did, the string is
+/// cut there rather than panicking on the host's thread.
+fn c_string(s: &str) -> CString {
+    CString::new(s.split('\0').next().unwrap_or_default()).unwrap_or_default()
+}
+
 impl List {
     fn new<'a>(items: impl IntoIterator<Item = &'a str>) -> Self {
-        let strings: Vec<CString> = items
-            .into_iter()
-            .map(|s| CString::new(s).expect("table strings have no NUL"))
-            .collect();
+        let strings: Vec<CString> = items.into_iter().map(c_string).collect();
         let mut pointers: Vec<*const c_char> = strings.iter().map(|s| s.as_ptr()).collect();
         pointers.push(std::ptr::null());
         Self {
@@ -65,11 +68,7 @@ fn tables() -> &'static Tables {
         let by_subtype = SUBTYPES
             .iter()
             .map(|s| {
-                let names: Vec<CString> = s
-                    .params
-                    .iter()
-                    .map(|p| CString::new(p.name).unwrap())
-                    .collect();
+                let names: Vec<CString> = s.params.iter().map(|p| c_string(p.name)).collect();
                 let mut parameters: Vec<sys::ANARIParameter> = s
                     .params
                     .iter()
@@ -84,14 +83,14 @@ fn tables() -> &'static Tables {
                     type_: DataType::UNKNOWN as i32,
                 });
                 let sub = Subtype {
-                    description: CString::new(s.description).unwrap(),
+                    description: c_string(s.description),
                     parameters,
                     _names: names,
                     extensions: List::new(s.extensions.iter().copied()),
                     param_descriptions: s
                         .params
                         .iter()
-                        .map(|p| (p.name, CString::new(p.description).unwrap()))
+                        .map(|p| (p.name, c_string(p.description)))
                         .collect(),
                 };
                 ((s.kind as i32, s.subtype), sub)

@@ -551,33 +551,23 @@ unsafe fn map_parameter_array(
     obj: ANARIObject,
     name: *const c_char,
     ty: ANARIDataType,
+    kind: DataType,
     dims: [u64; 3],
     stride: *mut u64,
 ) -> *mut c_void {
-    with_device(
+    let (ptr, element) = with_named(
         dev,
         "anariMapParameterArray",
-        std::ptr::null_mut(),
-        |_, device| {
-            // SAFETY: the host passes a C string.
-            let (ptr, element) = match unsafe { string(name, "the parameter name") } {
-                Ok(n) => device.map_param_array(obj as usize as u64, &n, ty, dims),
-                Err(e) => {
-                    device_error(
-                        device,
-                        StatusCode::InvalidArgument,
-                        format!("anariMapParameterArray: {e}"),
-                    );
-                    (std::ptr::null_mut(), 0)
-                }
-            };
-            if !stride.is_null() {
-                // SAFETY: the host passes room for one uint64_t or NULL.
-                unsafe { stride.write(element) };
-            }
-            ptr.cast()
-        },
-    )
+        name,
+        "the parameter name",
+        (std::ptr::null_mut(), 0),
+        |_, device, n| device.map_param_array(obj as usize as u64, &n, kind, ty, dims),
+    );
+    if !stride.is_null() {
+        // SAFETY: the host passes room for one uint64_t or NULL.
+        stride.write(element);
+    }
+    ptr.cast()
 }
 
 pub unsafe extern "C" fn map_parameter_array_1d(
@@ -588,7 +578,7 @@ pub unsafe extern "C" fn map_parameter_array_1d(
     n1: u64,
     stride: *mut u64,
 ) -> *mut c_void {
-    map_parameter_array(dev, obj, name, ty, [n1, 1, 1], stride)
+    map_parameter_array(dev, obj, name, ty, DataType::ARRAY1D, [n1, 1, 1], stride)
 }
 
 pub unsafe extern "C" fn map_parameter_array_2d(
@@ -600,7 +590,7 @@ pub unsafe extern "C" fn map_parameter_array_2d(
     n2: u64,
     stride: *mut u64,
 ) -> *mut c_void {
-    map_parameter_array(dev, obj, name, ty, [n1, n2, 1], stride)
+    map_parameter_array(dev, obj, name, ty, DataType::ARRAY2D, [n1, n2, 1], stride)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -614,7 +604,7 @@ pub unsafe extern "C" fn map_parameter_array_3d(
     n3: u64,
     stride: *mut u64,
 ) -> *mut c_void {
-    map_parameter_array(dev, obj, name, ty, [n1, n2, n3], stride)
+    map_parameter_array(dev, obj, name, ty, DataType::ARRAY3D, [n1, n2, n3], stride)
 }
 
 pub unsafe extern "C" fn unmap_parameter_array(
@@ -707,21 +697,18 @@ pub unsafe extern "C" fn get_object_info(
     info_name: *const c_char,
     info_type: ANARIDataType,
 ) -> *const c_void {
-    with_device(dev, "anariGetObjectInfo", std::ptr::null(), |_, device| {
-        // SAFETY: the host passes C strings.
-        let sub = unsafe { string(subtype, "the subtype") }.unwrap_or_default();
-        match unsafe { string(info_name, "the info name") } {
-            Ok(n) => info::object_info(kind, &sub, &n, info_type),
-            Err(e) => {
-                device_error(
-                    device,
-                    StatusCode::InvalidArgument,
-                    format!("anariGetObjectInfo: {e}"),
-                );
-                std::ptr::null()
-            }
-        }
-    })
+    with_named(
+        dev,
+        "anariGetObjectInfo",
+        info_name,
+        "the info name",
+        std::ptr::null(),
+        |_, _, n| {
+            // SAFETY: the host passes a C string or NULL (no subtype).
+            let sub = unsafe { string(subtype, "the subtype") }.unwrap_or_default();
+            info::object_info(kind, &sub, &n, info_type)
+        },
+    )
 }
 
 pub unsafe extern "C" fn get_parameter_info(
@@ -775,54 +762,50 @@ pub unsafe extern "C" fn get_property(
             wait_for(dev, "anariGetProperty", obj);
         }
     }
-    with_device(dev, "anariGetProperty", 0, |d, device| {
-        // SAFETY: the host passes a C string.
-        let name = match unsafe { string(name, "the property name") } {
-            Ok(n) => n,
-            Err(e) => {
+    with_named(
+        dev,
+        "anariGetProperty",
+        name,
+        "the property name",
+        0,
+        |d, device, name| {
+            let Some(value) = device.property(target(d, obj), &name, mask & 1 != 0) else {
+                return 0;
+            };
+            let (expected, bytes): (DataType, Vec<u8>) = match value {
+                Property::Int32(v) => (DataType::INT32, v.to_ne_bytes().to_vec()),
+                Property::UInt64(v) => (DataType::UINT64, v.to_ne_bytes().to_vec()),
+                Property::Float32(v) => (DataType::FLOAT32, v.to_ne_bytes().to_vec()),
+                Property::Extensions => (
+                    DataType::STRING_LIST,
+                    (info::extensions() as usize).to_ne_bytes().to_vec(),
+                ),
+            };
+            if ty != expected as i32 {
                 device_error(
                     device,
                     StatusCode::InvalidArgument,
-                    format!("anariGetProperty: {e}"),
+                    format!(
+                        "anariGetProperty: property '{name}' is {expected}, not {}",
+                        DataType::from_code(ty)
+                            .map_or_else(|| ty.to_string(), |t| t.name().to_owned())
+                    ),
                 );
                 return 0;
             }
-        };
-        let Some(value) = device.property(target(d, obj), &name, mask & 1 != 0) else {
-            return 0;
-        };
-        let (expected, bytes): (DataType, Vec<u8>) = match value {
-            Property::Int32(v) => (DataType::INT32, v.to_ne_bytes().to_vec()),
-            Property::UInt64(v) => (DataType::UINT64, v.to_ne_bytes().to_vec()),
-            Property::Float32(v) => (DataType::FLOAT32, v.to_ne_bytes().to_vec()),
-            Property::Extensions => (
-                DataType::STRING_LIST,
-                (info::extensions() as usize).to_ne_bytes().to_vec(),
-            ),
-        };
-        if ty != expected as i32 {
-            device_error(
-                device,
-                StatusCode::InvalidArgument,
-                format!(
-                    "anariGetProperty: property '{name}' is {expected}, not {}",
-                    DataType::from_code(ty).map_or_else(|| ty.to_string(), |t| t.name().to_owned())
-                ),
-            );
-            return 0;
-        }
-        if mem.is_null() || size < bytes.len() as u64 {
-            device_error(
+            if mem.is_null() || size < bytes.len() as u64 {
+                device_error(
                 device,
                 StatusCode::InvalidArgument,
                 format!("anariGetProperty: property '{name}' needs {} bytes at a non-NULL address, got {size}", bytes.len()),
             );
-            return 0;
-        }
-        // SAFETY: the host gave `size` writable bytes at `mem`.
-        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), mem.cast(), bytes.len()) };
-        1
-    })
+                return 0;
+            }
+            // SAFETY: the host gave `size` writable bytes at `mem`.
+            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), mem.cast(), bytes.len()) };
+            1
+        },
+    )
 }
 
 // ---- frames ----
@@ -853,27 +836,20 @@ pub unsafe extern "C" fn map_frame(
     if !wait_for(dev, "anariMapFrame", frame) {
         return std::ptr::null();
     }
-    with_device(dev, "anariMapFrame", std::ptr::null(), |_, device| {
-        // SAFETY: the host passes a C string.
-        let channel = match unsafe { string(channel, "the channel name") } {
-            Ok(c) => c,
-            Err(e) => {
-                device_error(
-                    device,
-                    StatusCode::InvalidArgument,
-                    format!("anariMapFrame: {e}"),
-                );
-                return std::ptr::null();
-            }
-        };
-        match device.map_frame(frame as usize as u64, &channel) {
+    with_named(
+        dev,
+        "anariMapFrame",
+        channel,
+        "the channel name",
+        std::ptr::null(),
+        |_, device, channel| match device.map_frame(frame as usize as u64, &channel) {
             Some(m) => {
                 write(m.size.x, m.size.y, m.ty as i32);
                 m.ptr.cast()
             }
             None => std::ptr::null(),
-        }
-    })
+        },
+    )
 }
 
 pub unsafe extern "C" fn unmap_frame(dev: ANARIDevice, frame: ANARIFrame, channel: *const c_char) {

@@ -131,26 +131,31 @@ impl Device {
         None
     }
 
-    fn insert(&mut self, kind: DataType, subtype: &str, implemented: bool, state: State) -> u64 {
+    fn insert(
+        &mut self,
+        kind: DataType,
+        subtype: &str,
+        implemented: bool,
+        state: State,
+    ) -> ObjectRef {
         let handle = self.serial << 32 | self.next;
         self.next += 1;
         let cell = ObjectRef::new(ObjectCell::new(handle, kind, subtype, implemented, state));
-        self.objects.insert(handle, (cell, 1));
-        handle
+        self.objects.insert(handle, (cell.clone(), 1));
+        cell
     }
 
     /// `anariNew<Kind>` / `anariNewObject`. Kinds and subtypes caveray does
     /// not implement give an inert object and a warning.
     pub fn new_object(&mut self, kind: DataType, subtype: &str) -> u64 {
         let implemented = info::subtype(kind, subtype).is_some();
-        let handle = self.insert(
+        let cell = self.insert(
             kind,
             subtype,
             implemented,
             State::for_kind(kind, implemented),
         );
         if !implemented {
-            let cell = self.objects[&handle].0.clone();
             let known = info::subtypes(kind);
             let hint = if known.is_empty() {
                 String::new()
@@ -165,7 +170,7 @@ impl Device {
                 ),
             );
         }
-        handle
+        cell.handle
     }
 
     /// `anariNewArray{1,2,3}D`. `memory` is the host's (shared array) or
@@ -224,12 +229,11 @@ impl Device {
                 }
             },
         };
-        let handle = self.insert(kind, "", true, State::Array(array));
+        let cell = self.insert(kind, "", true, State::Array(array));
         if element.is_object() {
-            let cell = self.objects[&handle].0.clone();
             self.resolve_array_objects(&cell);
         }
-        Ok(handle)
+        Ok(cell.handle)
     }
 
     /// Takes references to the objects an object array names.
@@ -265,56 +269,60 @@ impl Device {
         }
     }
 
-    fn array_of(&mut self, handle: u64, call: &str) -> Option<ObjectRef> {
+    /// Runs `f` on the array behind `handle`, or reports that it is none.
+    fn with_array<R>(
+        &mut self,
+        handle: u64,
+        call: &str,
+        f: impl FnOnce(&mut Array) -> R,
+    ) -> Option<(ObjectRef, R)> {
         let cell = self.lookup(handle, call)?;
-        if !matches!(cell.lock().state, State::Array(_)) {
-            self.error(
-                StatusCode::InvalidArgument,
-                Some(&cell),
-                format!("{call}: {} is not an array", cell.describe()),
-            );
-            return None;
+        let result = match &mut cell.lock().state {
+            State::Array(a) => Some(f(a)),
+            _ => None,
+        };
+        match result {
+            Some(r) => Some((cell, r)),
+            None => {
+                self.error(
+                    StatusCode::InvalidArgument,
+                    Some(&cell),
+                    format!("{call}: {} is not an array", cell.describe()),
+                );
+                None
+            }
         }
-        Some(cell)
     }
 
     pub fn map_array(&mut self, handle: u64) -> *mut u8 {
-        let Some(cell) = self.array_of(handle, "anariMapArray") else {
-            return std::ptr::null_mut();
-        };
-        let mut g = cell.lock();
-        let State::Array(a) = &mut g.state else {
-            unreachable!("checked by array_of")
-        };
-        if a.mapped {
-            drop(g);
-            self.error(
-                StatusCode::InvalidOperation,
-                Some(&cell),
-                format!(
-                    "anariMapArray: {} is already mapped; unmap it first",
-                    cell.describe()
-                ),
-            );
-            return std::ptr::null_mut();
+        let mapped = self.with_array(handle, "anariMapArray", |a| {
+            (!std::mem::replace(&mut a.mapped, true)).then(|| a.ptr())
+        });
+        match mapped {
+            Some((_, Some(ptr))) => ptr,
+            Some((cell, None)) => {
+                self.error(
+                    StatusCode::InvalidOperation,
+                    Some(&cell),
+                    format!(
+                        "anariMapArray: {} is already mapped; unmap it first",
+                        cell.describe()
+                    ),
+                );
+                std::ptr::null_mut()
+            }
+            None => std::ptr::null_mut(),
         }
-        a.mapped = true;
-        a.ptr()
     }
 
     pub fn unmap_array(&mut self, handle: u64) {
-        let Some(cell) = self.array_of(handle, "anariUnmapArray") else {
-            return;
-        };
-        let (was_mapped, objects) = {
-            let mut g = cell.lock();
-            let State::Array(a) = &mut g.state else {
-                unreachable!("checked by array_of")
-            };
+        let Some((cell, (was_mapped, objects))) = self.with_array(handle, "anariUnmapArray", |a| {
             (
                 std::mem::replace(&mut a.mapped, false),
                 a.element().is_object(),
             )
+        }) else {
+            return;
         };
         if !was_mapped {
             self.error(
@@ -606,27 +614,21 @@ impl Device {
 
     /// `anariMapParameterArray*D`: a device-owned array the host fills,
     /// set as parameter `name` when unmapped.
+    /// `anariMapParameterArray*D`: a device-owned array of `kind` the host
+    /// fills, set as parameter `name` when unmapped.
     pub fn map_param_array(
         &mut self,
         handle: u64,
         name: &str,
+        kind: DataType,
         element_code: i32,
         dims: [u64; 3],
     ) -> (*mut u8, u64) {
         let Some(cell) = self.lookup(handle, &format!("anariMapParameterArray('{name}')")) else {
             return (std::ptr::null_mut(), 0);
         };
-        let kind = match dims {
-            [_, 1, 1] => DataType::ARRAY1D,
-            [_, _, 1] => DataType::ARRAY2D,
-            _ => DataType::ARRAY3D,
-        };
-        let Ok(array) = self.new_array(kind, element_code, dims, None) else {
-            return (std::ptr::null_mut(), 0);
-        };
         let key = (handle, name.to_owned());
         if self.mapped_params.contains_key(&key) {
-            self.release(array);
             self.error(
                 StatusCode::InvalidOperation,
                 Some(&cell),
@@ -637,11 +639,16 @@ impl Device {
             );
             return (std::ptr::null_mut(), 0);
         }
+        let Ok(array) = self.new_array(kind, element_code, dims, None) else {
+            return (std::ptr::null_mut(), 0);
+        };
         let ptr = self.map_array(array);
-        let element = DataType::from_code(element_code).map_or(0, |t| t.size() as u64);
-        let array_cell = self.objects[&array].0.clone();
-        self.mapped_params.insert(key, (kind, array_cell));
+        if let Some((array_cell, _)) = self.objects.get(&array) {
+            self.mapped_params.insert(key, (kind, array_cell.clone()));
+        }
+        // The parameter map holds the array now, not the host.
         self.release(array);
+        let element = DataType::from_code(element_code).map_or(0, |t| t.size() as u64);
         (ptr, element)
     }
 

@@ -3,6 +3,7 @@
 
 use super::object::ObjectRef;
 use super::types::DataType;
+use super::value::words;
 
 /// Memory the host lent to an array. Dropping it returns the memory to the
 /// host (the C layer calls the host's deleter there, exactly once).
@@ -90,17 +91,13 @@ impl Array {
 
     /// The elements as little helpers read them: FLOAT32 components.
     pub fn f32s(&self) -> Vec<f32> {
-        self.bytes()
-            .chunks_exact(4)
-            .map(|c| f32::from_ne_bytes(c.try_into().unwrap()))
-            .collect()
+        words(self.bytes()).map(f32::from_ne_bytes).collect()
     }
 
     /// Handle values stored in an array of objects.
     pub(crate) fn handles(&self) -> Vec<u64> {
-        self.bytes()
-            .chunks_exact(std::mem::size_of::<usize>())
-            .map(|c| usize::from_ne_bytes(c.try_into().unwrap()) as u64)
+        words(self.bytes())
+            .map(|w| usize::from_ne_bytes(w) as u64)
             .collect()
     }
 }

@@ -8,7 +8,7 @@ use glam::{UVec3, Vec3, Vec4};
 
 use super::object::{ObjectRef, State, VolumeModel};
 use super::types::DataType;
-use super::value::Params;
+use super::value::{words, Params};
 use super::{StructuredVolume, TransferFunction, Voxels};
 use crate::render::{RenderSettings, Shading};
 
@@ -40,26 +40,17 @@ pub fn structured_regular(
             if array.element() == DataType::UINT16 {
                 warn("UINT16 voxels are read as UFIXED16 (0..65535 maps to 0..1)".into());
             }
-            Voxels::U16(
-                bytes
-                    .chunks_exact(2)
-                    .map(|c| u16::from_ne_bytes([c[0], c[1]]))
-                    .collect(),
-            )
+            Voxels::U16(words(bytes).map(u16::from_ne_bytes).collect())
         }
         DataType::FIXED16 => Voxels::F32(
-            bytes
-                .chunks_exact(2)
-                .map(|c| (f32::from(i16::from_ne_bytes([c[0], c[1]])) / 32767.0).max(-1.0))
+            words(bytes)
+                .map(|w| (f32::from(i16::from_ne_bytes(w)) / 32767.0).max(-1.0))
                 .collect(),
         ),
         DataType::FLOAT32 => Voxels::F32(array.f32s()),
-        DataType::FLOAT64 => Voxels::F32(
-            bytes
-                .chunks_exact(8)
-                .map(|c| f64::from_ne_bytes(c.try_into().unwrap()) as f32)
-                .collect(),
-        ),
+        DataType::FLOAT64 => {
+            Voxels::F32(words(bytes).map(|w| f64::from_ne_bytes(w) as f32).collect())
+        }
         other => {
             return Err(format!(
                 "'data' holds {other}; a structured regular field needs {VOXEL_TYPES}"

@@ -132,15 +132,30 @@ impl Device {
         let world = needed("world", DataType::WORLD)?;
         let rays = match &camera.lock().state {
             State::Camera(c) => c.ready(&camera.describe())?.ray_gen(size)?,
-            _ => unreachable!("frame parameter types are checked when set"),
+            _ => {
+                return Err(format!(
+                    "{} cannot be used as the frame's camera",
+                    camera.describe()
+                ))
+            }
         };
         let settings = match &renderer.lock().state {
             State::Renderer(r) => *r.ready(&renderer.describe())?,
-            _ => unreachable!("frame parameter types are checked when set"),
+            _ => {
+                return Err(format!(
+                    "{} cannot be used as the frame's renderer",
+                    renderer.describe()
+                ))
+            }
         };
         let volumes = match &world.lock().state {
             State::World(w) => w.ready(&world.describe())?.clone(),
-            _ => unreachable!("frame parameter types are checked when set"),
+            _ => {
+                return Err(format!(
+                    "{} cannot be used as the frame's world",
+                    world.describe()
+                ))
+            }
         };
         if volumes.len() > 1 {
             self.warn(
@@ -180,7 +195,7 @@ impl Device {
         desc.depth = depth;
         let slot = match &frame.lock().state {
             State::Frame(f) => f.slot.clone(),
-            _ => unreachable!("checked by frame()"),
+            _ => return Err(format!("{} is not a frame", frame.describe())),
         };
         let job = Job {
             frame: frame.handle,

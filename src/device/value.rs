@@ -32,18 +32,12 @@ impl Value {
     /// The numbers of a FLOAT32-based value (scalar, vector, box, matrix).
     pub fn f32s(&self) -> Option<Vec<f32>> {
         match self {
-            Value::Bytes { ty, bytes } if is_f32_based(*ty) => Some(
-                bytes
-                    .chunks_exact(4)
-                    .map(|c| f32::from_ne_bytes(c.try_into().unwrap()))
-                    .collect(),
-            ),
-            Value::Bytes { ty, bytes } if is_f64_based(*ty) => Some(
-                bytes
-                    .chunks_exact(8)
-                    .map(|c| f64::from_ne_bytes(c.try_into().unwrap()) as f32)
-                    .collect(),
-            ),
+            Value::Bytes { ty, bytes } if is_f32_based(*ty) => {
+                Some(words(bytes).map(f32::from_ne_bytes).collect())
+            }
+            Value::Bytes { ty, bytes } if is_f64_based(*ty) => {
+                Some(words(bytes).map(|w| f64::from_ne_bytes(w) as f32).collect())
+            }
             _ => None,
         }
     }
@@ -53,12 +47,7 @@ impl Value {
             Value::Bytes {
                 ty: DataType::UINT32 | DataType::UINT32_VEC2,
                 bytes,
-            } => Some(
-                bytes
-                    .chunks_exact(4)
-                    .map(|c| u32::from_ne_bytes(c.try_into().unwrap()))
-                    .collect(),
-            ),
+            } => Some(words(bytes).map(u32::from_ne_bytes).collect()),
             _ => None,
         }
     }
@@ -69,7 +58,7 @@ impl Value {
             Value::Bytes {
                 ty: DataType::INT32 | DataType::DATA_TYPE,
                 bytes,
-            } => Some(i32::from_ne_bytes(bytes[..4].try_into().ok()?)),
+            } => words(bytes).next().map(i32::from_ne_bytes),
             _ => None,
         }
     }
@@ -94,6 +83,15 @@ impl Value {
             _ => None,
         }
     }
+}
+
+/// `bytes` as native-endian values of `N` bytes each (trailing bytes ignored).
+pub(crate) fn words<const N: usize>(bytes: &[u8]) -> impl Iterator<Item = [u8; N]> + '_ {
+    bytes.chunks_exact(N).map(|c| {
+        let mut word = [0u8; N];
+        word.copy_from_slice(c);
+        word
+    })
 }
 
 fn is_f32_based(ty: DataType) -> bool {

@@ -146,7 +146,9 @@ fn run(job: Job, renderer: &mut Option<(BackendChoice, Renderer)>, report: &Repo
             ));
             *renderer = Some((job.backend, made));
         }
-        let (_, r) = renderer.as_mut().expect("renderer was just made");
+        let Some((_, r)) = renderer.as_mut() else {
+            return Err("no renderer could be made".into());
+        };
         r.render(scene, &job.rays, &job.settings, &job.desc)
             .map_err(|e| e.to_string())
     }))
