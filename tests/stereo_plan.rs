@@ -8,7 +8,7 @@ mod common;
 use anari_library_caveray::cave::Eye;
 use anari_library_caveray::render::stereo::{
     layer_memory, layers_for, minimal_focal_length, pixel_scale, plan_views, span_to_sphere,
-    HmdStereo, NotEpipolar, StereoError,
+    Bounds, HmdStereo, NotEpipolar, StereoError,
 };
 use glam::DVec3;
 
@@ -176,7 +176,7 @@ fn front_wall_with_a_level_head_plans_and_a_side_wall_falls_back() {
     };
 
     let (l, r, lv, rv) = cameras("front");
-    let plan = plan_views(&l, &r, 400, 400, centre, radius).unwrap();
+    let plan = plan_views(&l, &r, 400, 400, Bounds::Sphere { centre, radius }).unwrap();
     // On a shared wall the shift is e (1 - d / z) in wall units, zero on
     // the wall itself and growing with depth.
     let wall = rig.wall("front").unwrap();
@@ -190,11 +190,31 @@ fn front_wall_with_a_level_head_plans_and_a_side_wall_falls_back() {
         "{plan:?} vs {expected_far}"
     );
     assert!(plan.near_offset < plan.far_offset);
-    assert_eq!(plan.layers, layers_for(plan.far_offset - plan.near_offset));
+    assert_eq!(plan.near_px, plan.near_offset.round() as i32);
+    assert_eq!(plan.far_px, plan.far_offset.round() as i32);
+    assert_eq!(plan.layers as i32, plan.far_px - plan.near_px + 1);
+    assert!(plan.layers <= layers_for(plan.far_offset - plan.near_offset));
+
+    // The volume's box lies inside its sphere, which here reaches behind
+    // the eyes: the box needs far fewer layers.
+    let half = DVec3::splat(0.5 * rig.scene.size);
+    let boxed = plan_views(
+        &l,
+        &r,
+        400,
+        400,
+        Bounds::Box {
+            lo: centre - half,
+            hi: centre + half,
+        },
+    )
+    .unwrap();
+    assert!(boxed.layers < plan.layers, "{boxed:?} vs {plan:?}");
+    assert!(boxed.near_offset > plan.near_offset && boxed.far_offset <= plan.far_offset);
 
     // Facing the front wall, the baseline points into the side walls.
     let (l, r, _, _) = cameras("left");
-    let why = plan_views(&l, &r, 400, 400, centre, radius).unwrap_err();
+    let why = plan_views(&l, &r, 400, 400, Bounds::Sphere { centre, radius }).unwrap_err();
     assert!(
         matches!(
             why,

@@ -22,6 +22,15 @@ impl Scene {
             transfer_function: Arc::new(transfer_function),
         }
     }
+
+    /// The volume's box, for planning re-projection.
+    pub fn bounds(&self) -> super::stereo::Bounds {
+        let (lo, hi) = self.volume.bounds();
+        super::stereo::Bounds::Box {
+            lo: lo.as_dvec3(),
+            hi: hi.as_dvec3(),
+        }
+    }
 }
 
 /// Everything both renderers derive from scene and settings before any ray

@@ -73,6 +73,32 @@ impl Context {
             .map_err(|e| RenderError::Gpu(e.to_string()))
     }
 
+    /// Runs one compute dispatch on its own and waits for it; returns the
+    /// milliseconds from submission to completion.
+    pub fn dispatch(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        groups: &[&wgpu::BindGroup],
+        workgroups: [u32; 3],
+    ) -> Result<f64, RenderError> {
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            for (i, group) in groups.iter().enumerate() {
+                pass.set_bind_group(i as u32, *group, &[]);
+            }
+            pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
+        }
+        let commands = encoder.finish();
+        let start = std::time::Instant::now();
+        self.queue.submit([commands]);
+        self.wait()?;
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        self.check()?;
+        Ok(ms)
+    }
+
     /// Copies a MAP_READ buffer's first `bytes` back to the host.
     pub fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, RenderError> {
         let slice = buffer.slice(..bytes);

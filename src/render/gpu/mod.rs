@@ -1,10 +1,13 @@
-//! The wgpu ray caster: shaders/raycast.wgsl, one invocation per pixel.
-//! Device, pipeline and buffers are made once; the volume and the table
-//! are uploaded when a scene brings new ones and kept otherwise.
+//! The wgpu ray caster: shaders/raycast.wgsl, one invocation per pixel,
+//! and the re-projection stereo path (layers.rs). Device, pipelines and
+//! buffers are made once; the volume and the table are uploaded when a
+//! scene brings new ones and kept otherwise.
 
 mod context;
+mod layers;
 mod params;
 mod resources;
+mod shaders;
 
 use std::sync::Arc;
 
@@ -20,7 +23,6 @@ use super::{RenderError, RenderSettings};
 use crate::device::{StructuredVolume, TransferFunction};
 use crate::geometry::RayGen;
 
-const SHADER: &str = include_str!("../../../shaders/raycast.wgsl");
 const WORKGROUP: u32 = 8;
 
 /// How often data went to the GPU; lets tests (and curious users) check
@@ -42,6 +44,8 @@ pub struct GpuRenderer {
     target: Option<Target>,
     bind_group: Option<wgpu::BindGroup>,
     uploads: Uploads,
+    stereo: Option<layers::StereoGpu>,
+    last_pass_ms: f64,
 }
 
 impl GpuRenderer {
@@ -49,10 +53,6 @@ impl GpuRenderer {
     pub fn new() -> Result<Self, RenderError> {
         let ctx = Context::new()?;
         let device = &ctx.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("raycast.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -88,19 +88,7 @@ impl GpuRenderer {
                 entry(6, storage(false)),
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("raycast"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("raycast"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = compute_pipeline(device, "raycast", &shaders::raycast(), &[&layout], "main");
         let uniform = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -127,7 +115,15 @@ impl GpuRenderer {
             target: None,
             bind_group: None,
             uploads: Uploads::default(),
+            stereo: None,
+            last_pass_ms: 0.0,
         })
+    }
+
+    /// GPU time of the last frame's ray casting pass (submission to
+    /// completion, no upload or read-back), in milliseconds.
+    pub fn last_pass_ms(&self) -> f64 {
+        self.last_pass_ms
     }
 
     pub fn adapter(&self) -> &wgpu::AdapterInfo {
@@ -203,20 +199,24 @@ impl GpuRenderer {
             0,
             &params::pack_directions(&plan.directions),
         );
-        let target = self.target.as_ref().expect("prepared above");
-        let bind_group = self.bind_group.as_ref().expect("prepared above");
-
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.dispatch_workgroups(
+        let bind_group = self.bind_group.as_ref().ok_or_else(unprepared)?;
+        self.last_pass_ms = ctx.dispatch(
+            &self.pipeline,
+            &[bind_group],
+            [
                 desc.size.x.div_ceil(WORKGROUP),
                 desc.size.y.div_ceil(WORKGROUP),
                 1,
-            );
-        }
+            ],
+        )?;
+        self.read_frame(desc)
+    }
+
+    /// Copies the left (or only) eye's frame out of the target buffers.
+    fn read_frame(&self, desc: &FrameDesc) -> Result<Frame, RenderError> {
+        let ctx = &self.ctx;
+        let target = self.target.as_ref().ok_or_else(unprepared)?;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&target.color, 0, &target.color_read, 0, None);
         if desc.depth {
             encoder.copy_buffer_to_buffer(&target.depth, 0, &target.depth_read, 0, None);
@@ -239,14 +239,9 @@ impl GpuRenderer {
             .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
             .sum();
         ctx.check()?;
-        let color = match desc.color {
-            ColorFormat::Rgba8 => ColorData::Rgba8(color),
-            ColorFormat::Srgba8 => ColorData::Srgba8(color),
-            ColorFormat::Rgba32F => ColorData::Rgba32F(floats(&color)),
-        };
         Ok(Frame {
             size: desc.size,
-            color,
+            color: color_data(desc.color, color),
             depth,
             samples,
         })
@@ -327,6 +322,46 @@ impl GpuRenderer {
                 });
             self.bind_group = Some(group);
         }
+    }
+}
+
+/// Builds a compute pipeline from WGSL source with explicit layouts.
+fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+fn unprepared() -> RenderError {
+    RenderError::Gpu("internal: render target used before it was made".into())
+}
+
+fn color_data(format: ColorFormat, bytes: Vec<u8>) -> ColorData {
+    match format {
+        ColorFormat::Rgba8 => ColorData::Rgba8(bytes),
+        ColorFormat::Srgba8 => ColorData::Srgba8(bytes),
+        ColorFormat::Rgba32F => ColorData::Rgba32F(floats(&bytes)),
     }
 }
 

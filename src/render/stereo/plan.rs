@@ -104,7 +104,12 @@ impl HmdStereo {
     /// The paper's protocol: 768^2, 2a = 110 degrees, e = 0.065 m, r = 1 m,
     /// and the focal length at which the sphere spans `span_px` pixels.
     pub fn paper(span_px: f64) -> Self {
-        let (width, fov, e, r) = (768, 110f64.to_radians(), 0.065, 1.0);
+        Self::protocol(768, span_px)
+    }
+
+    /// The paper's protocol at another image width.
+    pub fn protocol(width: u32, span_px: f64) -> Self {
+        let (fov, e, r) = (110f64.to_radians(), 0.065, 1.0);
         Self {
             width,
             fov,
@@ -182,7 +187,14 @@ impl HmdStereo {
 pub struct ViewPlan {
     pub near_offset: f64,
     pub far_offset: f64,
+    /// The offsets rounded as samples are: a sample lands in the pixel
+    /// its centre is nearest to, and left columns are whole pixels, so
+    /// every column's segments fall in `near_px..=far_px` of its x.
+    pub near_px: i32,
+    pub far_px: i32,
+    /// `far_px - near_px + 1`: at most `layers_for(far - near)`.
     pub layers: u32,
+    /// Bytes of that many RGBA16F layers of the image.
     pub memory: u64,
 }
 
@@ -203,16 +215,50 @@ pub enum NotEpipolar {
     Matrices(String),
 }
 
+/// What the scene occupies, for the depth range re-projection must cover.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bounds {
+    /// The planner's classic bound (the paper's and the thesis').
+    Sphere { centre: glam::DVec3, radius: f64 },
+    /// The volume's box: tighter, and in a CAVE, where the volume often
+    /// comes close to the eyes, far fewer layers.
+    Box { lo: glam::DVec3, hi: glam::DVec3 },
+}
+
+impl Bounds {
+    /// Nearest and farthest depth along `axis` from `eye`.
+    fn depths(&self, eye: glam::DVec3, axis: glam::DVec3) -> (f64, f64) {
+        match *self {
+            Bounds::Sphere { centre, radius } => {
+                let z = (centre - eye).dot(axis);
+                (z - radius, z + radius)
+            }
+            Bounds::Box { lo, hi } => (0..8)
+                .map(|i| {
+                    let pick = |bit: usize, a: f64, b: f64| if i & bit == 0 { a } else { b };
+                    let corner = glam::DVec3::new(
+                        pick(1, lo.x, hi.x),
+                        pick(2, lo.y, hi.y),
+                        pick(4, lo.z, hi.z),
+                    );
+                    (corner - eye).dot(axis)
+                })
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
+                    (a.min(z), b.max(z))
+                }),
+        }
+    }
+}
+
 /// Plans re-projection from the actual OpenGL matrices of both eyes for an
-/// image of `width` x `height` pixels and a bounding sphere. Fails with the
+/// image of `width` x `height` pixels and the scene's bounds. Fails with the
 /// reason when the geometry does not keep epipolar lines on pixel rows.
 pub fn plan_views(
     left: &crate::geometry::MatrixCamera,
     right: &crate::geometry::MatrixCamera,
     width: u32,
     height: u32,
-    centre: glam::DVec3,
-    radius: f64,
+    bounds: Bounds,
 ) -> Result<ViewPlan, NotEpipolar> {
     use glam::{DVec2, DVec3};
     let pixel = |m: &crate::geometry::MatrixCamera, p: DVec3| -> DVec2 {
@@ -236,8 +282,8 @@ pub fn plan_views(
         .transform_vector3(DVec3::NEG_Z)
         .normalize();
     let near = (near_c - eye).dot(axis);
-    let zc = (centre - eye).dot(axis);
-    let (z_near, z_far) = ((zc - radius).max(near), zc + radius);
+    let (z_near, z_far) = bounds.depths(eye, axis);
+    let z_near = z_near.max(near);
     if z_far <= near {
         return Err(NotEpipolar::Behind);
     }
@@ -266,13 +312,21 @@ pub fn plan_views(
         offsets[slot] = 0.5 * (lo + hi);
     }
     let [near_offset, far_offset] = offsets;
+    if !(near_offset.is_finite() && far_offset.is_finite()) {
+        return Err(NotEpipolar::Matrices(
+            "the eyes' matrices give no finite pixel offsets".into(),
+        ));
+    }
     if far_offset < near_offset - 1e-9 {
         return Err(NotEpipolar::Reversed);
     }
-    let layers = layers_for(far_offset - near_offset);
+    let (near_px, far_px) = (near_offset.round() as i32, far_offset.round() as i32);
+    let layers = (far_px - near_px) as u32 + 1;
     Ok(ViewPlan {
         near_offset,
         far_offset,
+        near_px,
+        far_px,
         layers,
         memory: u64::from(width) * u64::from(height) * u64::from(layers) * 2 * 4,
     })

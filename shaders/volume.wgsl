@@ -1,0 +1,210 @@
+// Emission-absorption volume ray casting: the march along one primary ray.
+// Mirrors src/render/cpu/ (the reference) operation for operation, so the
+// two agree to rounding; all derived numbers arrive in `params`.
+// Entry points live in raycast.wgsl and reproject.wgsl, each concatenated
+// after this file with colour.wgsl; each defines `on_sample`, which sees
+// every sample that contributes (the re-projection path splits the ray into
+// right-eye segments there).
+
+struct Params {
+    // RayGen: the ray of pixel (0, 0) and its change per pixel (xyz).
+    ray_origin: vec4f,
+    ray_origin_dx: vec4f,
+    ray_origin_dy: vec4f,
+    ray_dir: vec4f,
+    ray_dir_dx: vec4f,
+    ray_dir_dy: vec4f,
+    box_lo: vec4f,       // w: primary step
+    box_hi: vec4f,       // w: shading step
+    inv_spacing: vec4f,  // w: 1 / unit distance
+    background: vec4f,   // straight RGBA
+    light: vec4f,        // xyz: towards the light; w: shadow ambient
+    value_map: vec4f,    // x: value lo, y: 1 / (hi - lo), z: termination, w: AO radius
+    frame: vec4u,        // x, y: size; z: colour format; w: shading mode
+    dims: vec4u,         // xyz: volume dims; w: number of directions
+}
+
+const SHADE_NONE: u32 = 0u;
+const SHADE_SHADOWS: u32 = 1u;
+const SHADE_AO: u32 = 2u;
+const SHADE_SHADOWS_AO: u32 = 3u;
+const SHADE_DIRECTIONAL: u32 = 4u;
+
+const SHADOW_STEPS: u32 = 24u;
+const DIRECTIONAL_STEPS: u32 = 4u;
+const TABLE_SIZE: u32 = 256u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var volume: texture_3d<f32>;
+@group(0) @binding(2) var table: texture_2d<f32>;
+@group(0) @binding(3) var<storage, read> directions: array<vec4f>;
+@group(0) @binding(4) var<storage, read_write> color_out: array<u32>;
+@group(0) @binding(5) var<storage, read_write> depth_out: array<f32>;
+// Volume samples per pixel (primary and shading), summed on the host.
+@group(0) @binding(6) var<storage, read_write> samples_out: array<u32>;
+
+var<private> samples: u32;
+
+fn voxel(i: vec3i) -> f32 {
+    return textureLoad(volume, i, 0).r;
+}
+
+// Trilinear interpolation of the vertex-centred grid, by hand: R32Float
+// is not filterable everywhere, and the reference does the same.
+fn sample_volume(p: vec3f) -> f32 {
+    samples += 1u;
+    let hi = vec3i(params.dims.xyz) - vec3i(1);
+    let g = clamp((p - params.box_lo.xyz) * params.inv_spacing.xyz, vec3f(0.0), vec3f(hi));
+    let i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
+    let f = g - vec3f(i0);
+    let i1 = min(i0 + vec3i(1), hi);
+    let x00 = mix(voxel(vec3i(i0.x, i0.y, i0.z)), voxel(vec3i(i1.x, i0.y, i0.z)), f.x);
+    let x10 = mix(voxel(vec3i(i0.x, i1.y, i0.z)), voxel(vec3i(i1.x, i1.y, i0.z)), f.x);
+    let x01 = mix(voxel(vec3i(i0.x, i0.y, i1.z)), voxel(vec3i(i1.x, i0.y, i1.z)), f.x);
+    let x11 = mix(voxel(vec3i(i0.x, i1.y, i1.z)), voxel(vec3i(i1.x, i1.y, i1.z)), f.x);
+    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+
+fn classify(v: f32) -> vec4f {
+    let last = f32(TABLE_SIZE - 1u);
+    let t = clamp((v - params.value_map.x) * params.value_map.y, 0.0, 1.0) * last;
+    let i = min(u32(t), TABLE_SIZE - 2u);
+    let f = t - f32(i);
+    let a = textureLoad(table, vec2i(i32(i), 0), 0);
+    let b = textureLoad(table, vec2i(i32(i) + 1, 0), 0);
+    return a * (1.0 - f) + b * f;
+}
+
+fn inside(p: vec3f) -> bool {
+    return all(p >= params.box_lo.xyz) && all(p <= params.box_hi.xyz);
+}
+
+fn opacity_at(p: vec3f) -> f32 {
+    if inside(p) {
+        return classify(sample_volume(p)).a;
+    }
+    return 0.0;
+}
+
+fn correct(a: f32, exponent: f32) -> f32 {
+    if a >= 1.0 {
+        return 1.0;
+    }
+    return 1.0 - pow(1.0 - a, exponent);
+}
+
+fn transmittance(p: vec3f, dir: vec3f, steps: u32, exponent: f32) -> f32 {
+    var t = 1.0;
+    for (var k = 1u; k <= steps; k++) {
+        let q = p + dir * (params.box_hi.w * f32(k));
+        if !inside(q) {
+            break;
+        }
+        t *= 1.0 - correct(opacity_at(q), exponent);
+    }
+    return t;
+}
+
+fn shadow(p: vec3f, exponent: f32) -> f32 {
+    let t = transmittance(p, params.light.xyz, SHADOW_STEPS, exponent);
+    let ambient = params.light.w;
+    return ambient + (1.0 - ambient) * t;
+}
+
+fn ambient_occlusion(p: vec3f) -> f32 {
+    let n = params.dims.w;
+    var occluded = 0.0;
+    for (var i = 0u; i < n; i++) {
+        occluded += opacity_at(p + directions[i].xyz * params.value_map.w);
+    }
+    return 1.0 - occluded / f32(n);
+}
+
+fn shade(p: vec3f) -> f32 {
+    let exponent = params.box_hi.w * params.inv_spacing.w;
+    let n = params.dims.w;
+    switch params.frame.w {
+        case SHADE_SHADOWS: {
+            return shadow(p, exponent);
+        }
+        case SHADE_AO: {
+            return ambient_occlusion(p);
+        }
+        case SHADE_SHADOWS_AO: {
+            return shadow(p, exponent) * ambient_occlusion(p);
+        }
+        case SHADE_DIRECTIONAL: {
+            if n == 0u {
+                return 1.0;
+            }
+            var sum = 0.0;
+            for (var i = 0u; i < n; i++) {
+                sum += transmittance(p, directions[i].xyz, DIRECTIONAL_STEPS, exponent);
+            }
+            return sum / f32(n);
+        }
+        default: {
+            return 1.0;
+        }
+    }
+}
+
+fn safe_inverse(x: f32) -> f32 {
+    if abs(x) < 1e-20 {
+        return 1.0 / select(1e-20, -1e-20, x < 0.0);
+    }
+    return 1.0 / x;
+}
+
+// The ray of pixel (fx, fy); columns outside the image are allowed.
+struct Marched {
+    // Premultiplied colour and opacity accumulated front to back.
+    color: vec4f,
+    // Distance along the unit ray to the first contributing sample.
+    depth: f32,
+}
+
+fn march(fx: f32, fy: f32) -> Marched {
+    let o = params.ray_origin.xyz + fx * params.ray_origin_dx.xyz + fy * params.ray_origin_dy.xyz;
+    let d = normalize(params.ray_dir.xyz + fx * params.ray_dir_dx.xyz + fy * params.ray_dir_dy.xyz);
+
+    let step = params.box_lo.w;
+    var acc = vec4f(0.0);
+    var depth = bitcast<f32>(0x7f800000u);
+    var hit = false;
+
+    let inv = vec3f(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+    let ta = (params.box_lo.xyz - o) * inv;
+    let tb = (params.box_hi.xyz - o) * inv;
+    let tn = min(ta, tb);
+    let tf = max(ta, tb);
+    let t0 = max(max(max(tn.x, tn.y), tn.z), 0.0);
+    let t1 = min(min(tf.x, tf.y), tf.z);
+    if t1 > t0 {
+        let len = t1 - t0;
+        let n = u32(ceil(len / step));
+        for (var k = 0u; k < n; k++) {
+            let start = f32(k) * step;
+            let seg = max(min(step, len - start), 0.0);
+            let t = t0 + start + 0.5 * seg;
+            let p = o + d * t;
+            let c = classify(sample_volume(p));
+            if c.a <= 0.0 {
+                continue;
+            }
+            let a = correct(c.a, seg * params.inv_spacing.w);
+            let lit = c.rgb * shade(p);
+            on_sample(p, lit, a);
+            let weight = (1.0 - acc.a) * a;
+            acc = vec4f(acc.rgb + lit * weight, acc.a + weight);
+            if !hit {
+                depth = t;
+                hit = true;
+            }
+            if acc.a >= params.value_map.z {
+                break;
+            }
+        }
+    }
+    return Marched(acc, depth);
+}

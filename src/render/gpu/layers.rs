@@ -1,0 +1,408 @@
+//! The re-projection stereo path on the GPU: the left eye ray cast with
+//! its segments written into a texture array of layers
+//! (shaders/reproject.wgsl), then the right eye composited from them
+//! (shaders/composite.wgsl). Layers are never cleared: each left column
+//! records the span of right pixels it wrote this frame, and compositing
+//! reads nothing outside it.
+
+use glam::{UVec2, Vec4};
+
+use super::context::Context;
+use super::{color_data, compute_pipeline, params, unprepared, GpuRenderer, WORKGROUP};
+use crate::geometry::RayGen;
+use crate::render::cpu::SHADOW_AMBIENT;
+use crate::render::frame::{ColorFormat, Frame, FrameDesc};
+use crate::render::plan::{MarchPlan, Scene};
+use crate::render::stereo::{LayerFormat, Reprojection, StereoFrames, StereoTimes};
+use crate::render::{RenderError, RenderSettings};
+
+/// Size of the `Stereo` uniform in shaders/stereo.wgsl: 6 vec4s.
+const STEREO_BYTES: u64 = 6 * 16;
+
+/// Pipelines for one layer format, and the resources of the last shape.
+pub(super) struct StereoGpu {
+    format: LayerFormat,
+    reproject: wgpu::ComputePipeline,
+    clear: wgpu::ComputePipeline,
+    composite: wgpu::ComputePipeline,
+    writer_layout: wgpu::BindGroupLayout,
+    composite_layout: wgpu::BindGroupLayout,
+    target: Option<LayerTarget>,
+}
+
+/// What identifies a set of layer resources.
+#[derive(Clone, Copy, PartialEq)]
+struct Shape {
+    size: UVec2,
+    layers: u32,
+    columns: u32,
+    color: ColorFormat,
+}
+
+struct LayerTarget {
+    shape: Shape,
+    uniform: wgpu::Buffer,
+    color: wgpu::Buffer,
+    color_read: wgpu::Buffer,
+    writer: wgpu::BindGroup,
+    composite: wgpu::BindGroup,
+}
+
+fn layout_entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer_type(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+impl StereoGpu {
+    fn new(ctx: &Context, volume_layout: &wgpu::BindGroupLayout, format: LayerFormat) -> Self {
+        let device = &ctx.device;
+        let texture_format = match format {
+            LayerFormat::Rgba16F => wgpu::TextureFormat::Rgba16Float,
+            LayerFormat::Rgba32F => wgpu::TextureFormat::Rgba32Float,
+        };
+        let uniform = buffer_type(wgpu::BufferBindingType::Uniform);
+        let writer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("re-projection layers"),
+            entries: &[
+                layout_entry(0, uniform),
+                layout_entry(
+                    1,
+                    wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: texture_format,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                    },
+                ),
+                layout_entry(
+                    2,
+                    buffer_type(wgpu::BufferBindingType::Storage { read_only: false }),
+                ),
+            ],
+        });
+        let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compositing"),
+            entries: &[
+                layout_entry(0, uniform),
+                layout_entry(
+                    1,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                ),
+                layout_entry(
+                    2,
+                    buffer_type(wgpu::BufferBindingType::Storage { read_only: true }),
+                ),
+                layout_entry(
+                    3,
+                    buffer_type(wgpu::BufferBindingType::Storage { read_only: false }),
+                ),
+            ],
+        });
+        let source = super::shaders::reproject(format);
+        let writer = [volume_layout, &writer_layout];
+        Self {
+            format,
+            reproject: compute_pipeline(device, "re-projection", &source, &writer, "main"),
+            clear: compute_pipeline(device, "layer clear", &source, &writer, "clear"),
+            composite: compute_pipeline(
+                device,
+                "compositing",
+                &super::shaders::composite(),
+                &[&composite_layout],
+                "main",
+            ),
+            writer_layout,
+            composite_layout,
+            target: None,
+        }
+    }
+
+    /// Makes the resources for `shape` unless the last ones fit.
+    fn reshape(&mut self, ctx: &Context, shape: Shape) {
+        if !matches!(&self.target, Some(t) if t.shape == shape) {
+            self.target = Some(LayerTarget::new(self, ctx, shape));
+        }
+    }
+}
+
+impl LayerTarget {
+    fn new(gpu: &StereoGpu, ctx: &Context, shape: Shape) -> Self {
+        let device = &ctx.device;
+        let texture_format = match gpu.format {
+            LayerFormat::Rgba16F => wgpu::TextureFormat::Rgba16Float,
+            LayerFormat::Rgba32F => wgpu::TextureFormat::Rgba32Float,
+        };
+        let layers = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("re-projection layers"),
+            size: wgpu::Extent3d {
+                width: shape.size.x,
+                height: shape.size.y,
+                depth_or_array_layers: shape.layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: texture_format,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        // An explicit array view: with one layer the default would be 2D.
+        let view = layers.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let buffer = |label, size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        let uniform = buffer("stereo", STEREO_BYTES, U::UNIFORM | U::COPY_DST);
+        let spans = buffer(
+            "spans",
+            8 * u64::from(shape.columns) * u64::from(shape.size.y),
+            U::STORAGE,
+        );
+        let color_bytes =
+            u64::from(shape.size.x) * u64::from(shape.size.y) * shape.color.bytes_per_pixel();
+        let color = buffer("right colour", color_bytes, U::STORAGE | U::COPY_SRC);
+        let color_read = buffer("right read-back", color_bytes, U::MAP_READ | U::COPY_DST);
+        let group = |layout, resources: Vec<wgpu::BindingResource>| {
+            let entries: Vec<wgpu::BindGroupEntry> = resources
+                .into_iter()
+                .enumerate()
+                .map(|(binding, resource)| wgpu::BindGroupEntry {
+                    binding: binding as u32,
+                    resource,
+                })
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout,
+                entries: &entries,
+            })
+        };
+        let writer = group(
+            &gpu.writer_layout,
+            vec![
+                uniform.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&view),
+                spans.as_entire_binding(),
+            ],
+        );
+        let composite = group(
+            &gpu.composite_layout,
+            vec![
+                uniform.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&view),
+                spans.as_entire_binding(),
+                color.as_entire_binding(),
+            ],
+        );
+        Self {
+            shape,
+            uniform,
+            color,
+            color_read,
+            writer,
+            composite,
+        }
+    }
+}
+
+/// The `Stereo` uniform, field for field in shaders/stereo.wgsl's order.
+fn pack_stereo(r: &Reprojection, color: ColorFormat, settings: &RenderSettings) -> Vec<u8> {
+    let mut out = Vec::with_capacity(STEREO_BYTES as usize);
+    let floats = |out: &mut Vec<u8>, v: Vec4| {
+        v.to_array()
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes()))
+    };
+    floats(&mut out, r.right_x);
+    floats(&mut out, r.right_w);
+    for x in [
+        r.plan.near_px,
+        r.plan.far_px,
+        r.layers as i32,
+        r.first_column(),
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    for x in [r.size.x, r.size.y, r.columns(), color.code()] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    floats(&mut out, settings.background);
+    floats(&mut out, Vec4::new(settings.termination, 0.0, 0.0, 0.0));
+    debug_assert_eq!(out.len() as u64, STEREO_BYTES);
+    out
+}
+
+impl GpuRenderer {
+    /// Fails, before touching the GPU, if the layers exceed what this
+    /// adapter allows.
+    fn check_layers(&self, r: &Reprojection) -> Result<(), RenderError> {
+        let limits = &self.ctx.limits;
+        let too_large = |reason: String| RenderError::FrameTooLarge {
+            size: [r.size.x, r.size.y],
+            reason,
+            adapter: self.ctx.info.name.clone(),
+        };
+        if r.layers > limits.max_texture_array_layers {
+            return Err(too_large(format!(
+                "{} re-projection layers exceed the adapter's {} array layers",
+                r.layers, limits.max_texture_array_layers
+            )));
+        }
+        if r.size.max_element() > limits.max_texture_dimension_2d {
+            return Err(too_large(format!(
+                "the layers exceed the largest 2D texture ({} per side)",
+                limits.max_texture_dimension_2d
+            )));
+        }
+        let spans = 8 * u64::from(r.columns()) * u64::from(r.size.y);
+        if spans > limits.max_storage_buffer_binding_size {
+            return Err(too_large(format!(
+                "its {spans} bytes of spans exceed the largest storage buffer"
+            )));
+        }
+        if r.columns().div_ceil(WORKGROUP) > limits.max_compute_workgroups_per_dimension {
+            return Err(too_large(format!(
+                "{} left columns need too many workgroups",
+                r.columns()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Both eyes from one ray casting pass: the left eye from `left`'s
+    /// rays, the right eye re-projected from them as `reprojection` plans.
+    /// The frame size is the plan's.
+    pub fn render_reprojected(
+        &mut self,
+        scene: &Scene,
+        left: &RayGen,
+        reprojection: &Reprojection,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+    ) -> Result<StereoFrames, RenderError> {
+        desc.validate()?;
+        if desc.size != reprojection.size {
+            return Err(RenderError::Settings(format!(
+                "the frame is {}x{} but the re-projection was planned for {}x{}",
+                desc.size.x, desc.size.y, reprojection.size.x, reprojection.size.y
+            )));
+        }
+        let plan = MarchPlan::new(scene, settings)?;
+        self.check_limits(scene, desc)?;
+        self.check_layers(reprojection)?;
+        self.prepare(scene, desc.size, desc.color);
+        let ctx = &self.ctx;
+        ctx.queue.write_buffer(
+            &self.params,
+            0,
+            &params::pack(left, &plan, desc.size, desc.color, SHADOW_AMBIENT),
+        );
+        ctx.queue.write_buffer(
+            &self.directions,
+            0,
+            &params::pack_directions(&plan.directions),
+        );
+        if !matches!(&self.stereo, Some(s) if s.format == reprojection.format) {
+            self.stereo = Some(StereoGpu::new(ctx, &self.layout, reprojection.format));
+        }
+        let stereo = self.stereo.as_mut().ok_or_else(unprepared)?;
+        let shape = Shape {
+            size: desc.size,
+            layers: reprojection.layers,
+            columns: reprojection.columns(),
+            color: desc.color,
+        };
+        stereo.reshape(ctx, shape);
+        let stereo = &*stereo;
+        let target = stereo.target.as_ref().ok_or_else(unprepared)?;
+        ctx.queue.write_buffer(
+            &target.uniform,
+            0,
+            &pack_stereo(reprojection, desc.color, settings),
+        );
+        let volume = self.bind_group.as_ref().ok_or_else(unprepared)?;
+        let left_ms = ctx.dispatch(
+            &stereo.reproject,
+            &[volume, &target.writer],
+            [
+                shape.columns.div_ceil(WORKGROUP),
+                desc.size.y.div_ceil(WORKGROUP),
+                1,
+            ],
+        )?;
+        let composite_ms = ctx.dispatch(
+            &stereo.composite,
+            &[&target.composite],
+            [
+                desc.size.x.div_ceil(WORKGROUP),
+                desc.size.y.div_ceil(WORKGROUP),
+                1,
+            ],
+        )?;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&target.color, 0, &target.color_read, 0, None);
+        ctx.queue.submit([encoder.finish()]);
+        let right = ctx.read(&target.color_read, target.color_read.size())?;
+        let right = Frame {
+            size: desc.size,
+            color: color_data(desc.color, right),
+            depth: None,
+            samples: 0,
+        };
+        self.last_pass_ms = left_ms;
+        let left = self.read_frame(desc)?;
+        Ok(StereoFrames {
+            left,
+            right,
+            times: StereoTimes {
+                left_ms,
+                composite_ms,
+            },
+        })
+    }
+
+    /// Milliseconds a full clear of the last frame's layers takes: the
+    /// cost the span scheme avoids, for the benchmark to report.
+    pub fn time_layer_clear(&mut self) -> Result<f64, RenderError> {
+        let stereo = self.stereo.as_ref().ok_or_else(no_layers)?;
+        let target = stereo.target.as_ref().ok_or_else(no_layers)?;
+        let volume = self.bind_group.as_ref().ok_or_else(unprepared)?;
+        let s = target.shape;
+        self.ctx.dispatch(
+            &stereo.clear,
+            &[volume, &target.writer],
+            [
+                s.size.x.div_ceil(WORKGROUP),
+                s.size.y.div_ceil(WORKGROUP),
+                s.layers,
+            ],
+        )
+    }
+}
+
+fn no_layers() -> RenderError {
+    RenderError::Settings("no re-projection layers yet: render a re-projected frame first".into())
+}

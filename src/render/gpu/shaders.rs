@@ -1,0 +1,27 @@
+//! WGSL sources, assembled from the files in shaders/: WGSL has no
+//! includes, so shared code is concatenated in front of each entry file.
+
+use crate::render::stereo::LayerFormat;
+
+const VOLUME: &str = include_str!("../../../shaders/volume.wgsl");
+const COLOUR: &str = include_str!("../../../shaders/colour.wgsl");
+const STEREO: &str = include_str!("../../../shaders/stereo.wgsl");
+const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
+const REPROJECT: &str = include_str!("../../../shaders/reproject.wgsl");
+const COMPOSITE: &str = include_str!("../../../shaders/composite.wgsl");
+
+pub(super) fn raycast() -> String {
+    [VOLUME, COLOUR, RAYCAST].join("\n")
+}
+
+/// The left eye with re-projection; the storage texture's format is part
+/// of the WGSL type, so each layer format is its own module.
+pub(super) fn reproject(format: LayerFormat) -> String {
+    [VOLUME, COLOUR, STEREO, REPROJECT]
+        .join("\n")
+        .replace("LAYER_FORMAT", format.wgsl())
+}
+
+pub(super) fn composite() -> String {
+    [COLOUR, STEREO, COMPOSITE].join("\n")
+}
