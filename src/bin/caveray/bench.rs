@@ -21,6 +21,9 @@ pub enum BenchCommand {
     /// The paper's ray-casting setup: 768^2, 110 degree field of view,
     /// volume scaled to a 1 m bounding radius, 360 degrees about y.
     Raycast(RaycastArgs),
+    /// Single-pass stereo by re-projection against rendering both eyes,
+    /// by the paper's protocol (writes JSON, an SVG plot and heat maps).
+    Stereo(crate::bench_stereo::StereoBenchArgs),
 }
 
 #[derive(Args)]
@@ -67,6 +70,7 @@ fn focal_length(width: u32) -> f64 {
 pub fn run(command: BenchCommand) -> Result<(), Failure> {
     match command {
         BenchCommand::Raycast(args) => raycast(args),
+        BenchCommand::Stereo(args) => crate::bench_stereo::run(args),
     }
 }
 
@@ -245,7 +249,7 @@ fn speedup(results: &serde_json::Map<String, Value>, cpu_views: &[usize]) -> Val
     json!(cpu["mean_ms"].as_f64().unwrap_or(f64::NAN) / gpu_mean)
 }
 
-fn machine() -> Value {
+pub fn machine() -> Value {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {

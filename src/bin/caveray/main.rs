@@ -1,6 +1,7 @@
 //! caveray: render, inspect and benchmark CAVE rigs.
 
 mod bench;
+mod bench_stereo;
 mod inspect;
 mod progress;
 mod render;

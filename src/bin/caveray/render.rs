@@ -7,7 +7,10 @@ use std::time::Instant;
 use anari_library_caveray::cave::{Eye, Rig, View};
 use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
 use anari_library_caveray::output::{contact_sheet, frame_to_rgba, write_rgba_png, SheetLayout};
-use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
+use anari_library_caveray::render::stereo::{LayerFormat, Reprojection};
+use anari_library_caveray::render::{
+    Backend, Frame, FrameDesc, RenderSettings, Renderer, Scene, Shading,
+};
 use clap::{Args, ValueEnum};
 use glam::UVec2;
 use serde_json::{json, Value};
@@ -30,9 +33,33 @@ pub struct RenderArgs {
     /// Render at this fraction of each wall's resolution.
     #[arg(long, default_value_t = 1.0)]
     scale: f64,
+    #[command(flatten)]
+    stereo: StereoArgs,
     /// Folder for the images and timings.json (created if missing).
     #[arg(long)]
     out: PathBuf,
+}
+
+/// How the two eyes of a wall are rendered.
+#[derive(Args)]
+pub struct StereoArgs {
+    /// two-pass: ray cast each eye. reprojection: ray cast the left eye and
+    /// re-project it into the right (GPU only); walls where that does not
+    /// apply fall back to two passes, with the reason in the output.
+    #[arg(long, value_enum, default_value_t = StereoMode::TwoPass)]
+    pub stereo: StereoMode,
+    /// Re-projection layers (default: as many as each wall needs).
+    #[arg(long)]
+    pub layers: Option<u32>,
+    /// Texel format of the layers: rgba16f or rgba32f.
+    #[arg(long, default_value = "rgba16f")]
+    pub layer_format: LayerFormat,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StereoMode {
+    TwoPass,
+    Reprojection,
 }
 
 /// Renderer choices shared by `render` and `bench`.
@@ -163,57 +190,88 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let mut progress = Progress::new(views.len());
     let mut records = Vec::new();
     let mut images: Vec<(usize, Eye, image::RgbaImage)> = Vec::new();
-    for (wall, eye, view) in &views {
-        let wall_index = rig
-            .walls
-            .iter()
-            .position(|w| w.name == wall.name)
-            .unwrap_or(0);
-        let label = format!("{}_{}", wall.name, eye.name());
+    let job = Job {
+        scene: &scene,
+        settings: &settings,
+        strategy: args.render.strategy,
+    };
+    for (wall_index, wall) in rig.walls.iter().enumerate() {
         let size = (wall.resolution.as_dvec2() * args.scale)
             .round()
             .max(glam::DVec2::ONE)
             .as_uvec2();
-        let rays = view
-            .as_ref()
-            .map_err(|e| e.to_string())
-            .and_then(|v| args.render.strategy.rays(v, size));
-        let rays = match rays {
-            Ok(r) => r,
-            Err(message) => {
-                progress.step(&format!("{label}: skipped ({message})"));
-                records.push(json!({"wall": wall.name, "eye": eye.name(), "error": message}));
-                continue;
+        let wall_views: Vec<&(_, Eye, _)> = views
+            .iter()
+            .filter(|(w, _, _)| std::ptr::eq(*w, wall))
+            .collect();
+        let pair = match args.stereo.stereo {
+            StereoMode::TwoPass => Err("--stereo two-pass".to_string()),
+            StereoMode::Reprojection => {
+                stereo_pair(&wall_views, &renderer, &scene, size, &args.stereo)
             }
         };
-        let t = Instant::now();
-        let frame = renderer
-            .render(&scene, &rays, &settings, &FrameDesc::new(size))
-            .map_err(|e| Failure::Runtime(format!("{label}: {e}")))?;
-        let seconds = t.elapsed().as_secs_f64();
-        let file = format!("{label}.png");
-        let image = frame_to_rgba(&frame);
-        write(&image, &args.out.join(&file))?;
-        let rays_per_s = f64::from(size.x * size.y) / seconds;
-        let samples_per_s = frame.samples as f64 / seconds;
-        progress.step(&format!(
-            "{label} {}x{} {:.1} ms",
-            size.x,
-            size.y,
-            seconds * 1e3
-        ));
-        records.push(json!({
-            "wall": wall.name,
-            "eye": eye.name(),
-            "width": size.x,
-            "height": size.y,
-            "ms": seconds * 1e3,
-            "rays_per_s": rays_per_s,
-            "samples": frame.samples,
-            "samples_per_s": samples_per_s,
-            "file": file,
-        }));
-        images.push((wall_index, *eye, image));
+        let mut done = Vec::new();
+        match pair {
+            Ok((left, reprojection)) => {
+                let (frames, mut wall_records) =
+                    job.reprojected(&mut renderer, &wall.name, left, &reprojection)?;
+                for ((eye, frame), record) in frames.into_iter().zip(&mut wall_records) {
+                    let image = frame_to_rgba(&frame);
+                    write(
+                        &image,
+                        &args.out.join(format!("{}_{}.png", wall.name, eye.name())),
+                    )?;
+                    progress.step(&format!(
+                        "{}_{} {}x{} {:.1} ms (re-projection, {} layers)",
+                        wall.name,
+                        eye.name(),
+                        size.x,
+                        size.y,
+                        record["ms"].as_f64().unwrap_or(0.0),
+                        reprojection.layers
+                    ));
+                    images.push((wall_index, eye, image));
+                    done.push(eye);
+                }
+                records.append(&mut wall_records);
+            }
+            Err(reason) => {
+                for (_, eye, view) in &wall_views {
+                    let label = format!("{}_{}", wall.name, eye.name());
+                    let rays = view
+                        .as_ref()
+                        .map_err(|e| e.to_string())
+                        .and_then(|v| args.render.strategy.rays(v, size));
+                    let rays = match rays {
+                        Ok(r) => r,
+                        Err(message) => {
+                            progress.step(&format!("{label}: skipped ({message})"));
+                            records.push(
+                                json!({"wall": wall.name, "eye": eye.name(), "error": message}),
+                            );
+                            continue;
+                        }
+                    };
+                    let (frame, mut record) = job.single(&mut renderer, &label, &rays, size)?;
+                    record["wall"] = json!(wall.name);
+                    record["eye"] = json!(eye.name());
+                    record["path"] = json!("two-pass");
+                    if args.stereo.stereo == StereoMode::Reprojection && *eye != Eye::Mono {
+                        record["fallback"] = json!(reason);
+                    }
+                    let image = frame_to_rgba(&frame);
+                    write(&image, &args.out.join(format!("{label}.png")))?;
+                    progress.step(&format!(
+                        "{label} {}x{} {:.1} ms",
+                        size.x,
+                        size.y,
+                        record["ms"].as_f64().unwrap_or(0.0)
+                    ));
+                    records.push(record);
+                    images.push((wall_index, *eye, image));
+                }
+            }
+        }
     }
 
     let sheets = write_sheets(&rig, &images, &args.out)?;
@@ -229,6 +287,10 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         "strategy": args.render.strategy.name(),
         "shading": settings.shading.to_string(),
         "scale": args.scale,
+        "stereo": match args.stereo.stereo {
+            StereoMode::TwoPass => "two-pass",
+            StereoMode::Reprojection => "reprojection",
+        },
         "head": {
             "position": head.position.to_array(),
             "orientation_xyzw": head.orientation.to_array(),
@@ -245,6 +307,141 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", path.display())))?;
     print_summary(&report);
     Ok(())
+}
+
+/// Frames of a wall's eyes, and their timing records.
+type WallResult = (Vec<(Eye, Frame)>, Vec<Value>);
+
+/// What every view of one run shares.
+struct Job<'a> {
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    strategy: Strategy,
+}
+
+impl Job<'_> {
+    /// One eye, ray cast on its own; the record lacks wall and eye.
+    fn single(
+        &self,
+        renderer: &mut Renderer,
+        label: &str,
+        rays: &RayGen,
+        size: UVec2,
+    ) -> Result<(Frame, Value), Failure> {
+        let t = Instant::now();
+        let frame = renderer
+            .render(self.scene, rays, self.settings, &FrameDesc::new(size))
+            .map_err(|e| Failure::Runtime(format!("{label}: {e}")))?;
+        let seconds = t.elapsed().as_secs_f64();
+        let record = json!({
+            "width": size.x,
+            "height": size.y,
+            "ms": seconds * 1e3,
+            "rays_per_s": f64::from(size.x * size.y) / seconds,
+            "samples": frame.samples,
+            "samples_per_s": frame.samples as f64 / seconds,
+            "file": format!("{label}.png"),
+        });
+        Ok((frame, record))
+    }
+
+    /// Both eyes of a wall from one ray casting pass. The left eye's time
+    /// includes writing the layers, the right eye's is the compositing.
+    fn reprojected(
+        &self,
+        renderer: &mut Renderer,
+        wall: &str,
+        left: &View,
+        reprojection: &Reprojection,
+    ) -> Result<WallResult, Failure> {
+        let Renderer::Gpu(gpu) = renderer else {
+            return Err(Failure::Runtime(
+                "internal: re-projection planned without a GPU".into(),
+            ));
+        };
+        let size = reprojection.size;
+        let rays = self
+            .strategy
+            .rays(left, size)
+            .map_err(|e| Failure::Runtime(format!("{wall}: {e}")))?;
+        let t = Instant::now();
+        let frames = gpu
+            .render_reprojected(
+                self.scene,
+                &rays,
+                reprojection,
+                self.settings,
+                &FrameDesc::new(size),
+            )
+            .map_err(|e| Failure::Runtime(format!("{wall}: {e}")))?;
+        let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+        let path = format!("reprojection ({} layers)", reprojection.layers);
+        let record = |eye: Eye, ms: f64, samples: u64| {
+            json!({
+                "wall": wall,
+                "eye": eye.name(),
+                "width": size.x,
+                "height": size.y,
+                "ms": ms,
+                "rays_per_s": f64::from(size.x * size.y) / (ms / 1e3),
+                "samples": samples,
+                "samples_per_s": samples as f64 / (ms / 1e3),
+                "file": format!("{wall}_{}.png", eye.name()),
+                "path": path,
+                "layers": reprojection.layers,
+                "layer_format": reprojection.format.to_string(),
+                "layer_bytes": reprojection.memory(),
+                "offsets_px": [reprojection.plan.near_px, reprojection.plan.far_px],
+                "wall_ms": wall_ms,
+            })
+        };
+        let records = vec![
+            record(Eye::Left, frames.times.left_ms, frames.left.samples),
+            record(Eye::Right, frames.times.composite_ms, 0),
+        ];
+        Ok((
+            vec![(Eye::Left, frames.left), (Eye::Right, frames.right)],
+            records,
+        ))
+    }
+}
+
+/// A wall's two eyes and their re-projection plan, or why the wall
+/// renders in two passes.
+fn stereo_pair<'v>(
+    views: &[&'v (
+        &anari_library_caveray::cave::Wall,
+        Eye,
+        anari_library_caveray::geometry::Result<View>,
+    )],
+    renderer: &Renderer,
+    scene: &Scene,
+    size: UVec2,
+    args: &StereoArgs,
+) -> Result<(&'v View, Reprojection), String> {
+    if renderer.backend() != Backend::Gpu {
+        return Err("re-projection runs on the GPU renderer only".into());
+    }
+    let find = |eye: Eye| {
+        views
+            .iter()
+            .find(|(_, e, _)| *e == eye)
+            .and_then(|(_, _, v)| v.as_ref().ok())
+    };
+    let (Some(left), Some(right)) = (find(Eye::Left), find(Eye::Right)) else {
+        return Err("the wall does not show a usable left and right eye".into());
+    };
+    let camera = |v: &View| v.matrix_camera().map_err(|e| e.to_string());
+    let reprojection = Reprojection::new(
+        &camera(left)?,
+        &camera(right)?,
+        size,
+        scene.bounds(),
+        args.layers,
+        args.layer_format,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok((left, reprojection))
 }
 
 pub fn renderer_json(renderer: &Renderer) -> Value {
@@ -304,7 +501,7 @@ fn print_summary(report: &Value) {
             .unwrap_or("the CPU reference")
     );
     println!(
-        "{:<10} {:<6} {:>11} {:>10} {:>10} {:>12}",
+        "{:<10} {:<6} {:>11} {:>10} {:>10} {:>12}  path",
         "wall", "eye", "size", "ms", "Mrays/s", "Msamples/s"
     );
     for v in report["views"].as_array().into_iter().flatten() {
@@ -317,8 +514,13 @@ fn print_summary(report: &Value) {
             continue;
         }
         let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+        let path = match (v["path"].as_str(), v["fallback"].as_str()) {
+            (_, Some(why)) => format!("two-pass: {why}"),
+            (Some(p), None) => p.to_string(),
+            (None, None) => String::new(),
+        };
         println!(
-            "{wall:<10} {eye:<6} {:>11} {:>10.1} {:>10.2} {:>12.1}",
+            "{wall:<10} {eye:<6} {:>11} {:>10.1} {:>10.2} {:>12.1}  {path}",
             format!("{}x{}", v["width"], v["height"]),
             f("ms"),
             f("rays_per_s") / 1e6,

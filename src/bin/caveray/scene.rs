@@ -15,7 +15,7 @@ use crate::{triple, Failure};
 /// Procedural volumes' default size per side.
 const PROCEDURAL_SIZE: u32 = 128;
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct VolumeArgs {
     /// phantom[:N], marschner-lobb[:N], box[:N], a name from volumes.toml,
     /// or a raw file (then --dims is required). Default: the phantom.
@@ -62,6 +62,25 @@ pub struct Loaded {
 }
 
 impl VolumeArgs {
+    /// `--volume` read as a comma-separated list, or `default`'s.
+    pub fn volume_list(&self, default: &str) -> Vec<String> {
+        self.volume
+            .as_deref()
+            .unwrap_or(default)
+            .split(',')
+            .map(|v| v.trim().to_string())
+            .filter(|v| !v.is_empty())
+            .collect()
+    }
+
+    /// These arguments with another volume (for commands that sweep several).
+    pub fn with_volume(&self, spec: &str) -> Self {
+        Self {
+            volume: Some(spec.to_string()),
+            ..self.clone()
+        }
+    }
+
     pub fn load(&self) -> Result<Loaded, Failure> {
         let usage = |e: &dyn std::fmt::Display| Failure::Usage(e.to_string());
         let spec = self.volume.as_deref().unwrap_or("phantom");

@@ -30,18 +30,21 @@ pub(super) struct StereoGpu {
     target: Option<LayerTarget>,
 }
 
-/// What identifies a set of layer resources.
+/// What identifies a set of layer resources. The left columns cast vary
+/// from view to view; the spans buffer is sized for at least as many.
 #[derive(Clone, Copy, PartialEq)]
 struct Shape {
     size: UVec2,
     layers: u32,
-    columns: u32,
     color: ColorFormat,
 }
 
 struct LayerTarget {
     shape: Shape,
+    /// Left columns the spans buffer holds.
+    columns: u32,
     uniform: wgpu::Buffer,
+    view: wgpu::TextureView,
     color: wgpu::Buffer,
     color_read: wgpu::Buffer,
     writer: wgpu::BindGroup,
@@ -132,16 +135,22 @@ impl StereoGpu {
         }
     }
 
-    /// Makes the resources for `shape` unless the last ones fit.
-    fn reshape(&mut self, ctx: &Context, shape: Shape) {
-        if !matches!(&self.target, Some(t) if t.shape == shape) {
-            self.target = Some(LayerTarget::new(self, ctx, shape));
+    /// Makes the resources for `shape` and `columns` unless the last ones
+    /// fit. A new texture costs a zero-fill on first use (wgpu's
+    /// initialisation), so views that differ only in columns keep it and
+    /// get a larger spans buffer, with room to spare.
+    fn reshape(&mut self, ctx: &Context, shape: Shape, columns: u32) {
+        let spare = columns + shape.size.x / 4;
+        match self.target.take() {
+            Some(t) if t.shape == shape && t.columns >= columns => self.target = Some(t),
+            Some(t) if t.shape == shape => self.target = Some(t.with_spans(self, ctx, spare)),
+            _ => self.target = Some(LayerTarget::new(self, ctx, shape, spare)),
         }
     }
 }
 
 impl LayerTarget {
-    fn new(gpu: &StereoGpu, ctx: &Context, shape: Shape) -> Self {
+    fn new(gpu: &StereoGpu, ctx: &Context, shape: Shape, columns: u32) -> Self {
         let device = &ctx.device;
         let texture_format = match gpu.format {
             LayerFormat::Rgba16F => wgpu::TextureFormat::Rgba16Float,
@@ -166,25 +175,70 @@ impl LayerTarget {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
-        let buffer = |label, size, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
         use wgpu::BufferUsages as U;
-        let uniform = buffer("stereo", STEREO_BYTES, U::UNIFORM | U::COPY_DST);
-        let spans = buffer(
-            "spans",
-            8 * u64::from(shape.columns) * u64::from(shape.size.y),
-            U::STORAGE,
-        );
+        let uniform = buffer(ctx, "stereo", STEREO_BYTES, U::UNIFORM | U::COPY_DST);
         let color_bytes =
             u64::from(shape.size.x) * u64::from(shape.size.y) * shape.color.bytes_per_pixel();
-        let color = buffer("right colour", color_bytes, U::STORAGE | U::COPY_SRC);
-        let color_read = buffer("right read-back", color_bytes, U::MAP_READ | U::COPY_DST);
+        let color = buffer(ctx, "right colour", color_bytes, U::STORAGE | U::COPY_SRC);
+        let color_read = buffer(
+            ctx,
+            "right read-back",
+            color_bytes,
+            U::MAP_READ | U::COPY_DST,
+        );
+        let spans = spans_buffer(ctx, shape, columns);
+        let (writer, composite) = bind_groups(gpu, ctx, &uniform, &view, &spans, &color);
+        Self {
+            shape,
+            columns,
+            uniform,
+            view,
+            color,
+            color_read,
+            writer,
+            composite,
+        }
+    }
+
+    /// The same layers with a spans buffer for `columns` left columns.
+    fn with_spans(self, gpu: &StereoGpu, ctx: &Context, columns: u32) -> Self {
+        let spans = spans_buffer(ctx, self.shape, columns);
+        let (writer, composite) =
+            bind_groups(gpu, ctx, &self.uniform, &self.view, &spans, &self.color);
+        Self {
+            columns,
+            writer,
+            composite,
+            ..self
+        }
+    }
+}
+
+fn buffer(ctx: &Context, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
+fn spans_buffer(ctx: &Context, shape: Shape, columns: u32) -> wgpu::Buffer {
+    let bytes = 8 * u64::from(columns) * u64::from(shape.size.y);
+    buffer(ctx, "spans", bytes, wgpu::BufferUsages::STORAGE)
+}
+
+/// The re-projection pass's group 1 and the compositing pass's group 0.
+fn bind_groups(
+    gpu: &StereoGpu,
+    ctx: &Context,
+    uniform: &wgpu::Buffer,
+    view: &wgpu::TextureView,
+    spans: &wgpu::Buffer,
+    color: &wgpu::Buffer,
+) -> (wgpu::BindGroup, wgpu::BindGroup) {
+    let device = &ctx.device;
+    {
         let group = |layout, resources: Vec<wgpu::BindingResource>| {
             let entries: Vec<wgpu::BindGroupEntry> = resources
                 .into_iter()
@@ -204,7 +258,7 @@ impl LayerTarget {
             &gpu.writer_layout,
             vec![
                 uniform.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&view),
+                wgpu::BindingResource::TextureView(view),
                 spans.as_entire_binding(),
             ],
         );
@@ -212,19 +266,12 @@ impl LayerTarget {
             &gpu.composite_layout,
             vec![
                 uniform.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&view),
+                wgpu::BindingResource::TextureView(view),
                 spans.as_entire_binding(),
                 color.as_entire_binding(),
             ],
         );
-        Self {
-            shape,
-            uniform,
-            color,
-            color_read,
-            writer,
-            composite,
-        }
+        (writer, composite)
     }
 }
 
@@ -332,10 +379,10 @@ impl GpuRenderer {
         let shape = Shape {
             size: desc.size,
             layers: reprojection.layers,
-            columns: reprojection.columns(),
             color: desc.color,
         };
-        stereo.reshape(ctx, shape);
+        let columns = reprojection.columns();
+        stereo.reshape(ctx, shape, columns);
         let stereo = &*stereo;
         let target = stereo.target.as_ref().ok_or_else(unprepared)?;
         ctx.queue.write_buffer(
@@ -348,7 +395,7 @@ impl GpuRenderer {
             &stereo.reproject,
             &[volume, &target.writer],
             [
-                shape.columns.div_ceil(WORKGROUP),
+                columns.div_ceil(WORKGROUP),
                 desc.size.y.div_ceil(WORKGROUP),
                 1,
             ],

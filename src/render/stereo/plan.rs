@@ -8,6 +8,8 @@
 
 use thiserror::Error;
 
+use super::bounds::Bounds;
+
 #[derive(Debug, Error, PartialEq)]
 pub enum StereoError {
     #[error("{what} must be finite and positive, got {value}")]
@@ -209,45 +211,10 @@ pub enum NotEpipolar {
         "the right eye sees points further left than the left eye does (baseline points left)"
     )]
     Reversed,
-    #[error("the bounding sphere is behind the eyes")]
+    #[error("the volume is outside both eyes' views")]
     Behind,
     #[error("{0}")]
     Matrices(String),
-}
-
-/// What the scene occupies, for the depth range re-projection must cover.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Bounds {
-    /// The planner's classic bound (the paper's and the thesis').
-    Sphere { centre: glam::DVec3, radius: f64 },
-    /// The volume's box: tighter, and in a CAVE, where the volume often
-    /// comes close to the eyes, far fewer layers.
-    Box { lo: glam::DVec3, hi: glam::DVec3 },
-}
-
-impl Bounds {
-    /// Nearest and farthest depth along `axis` from `eye`.
-    fn depths(&self, eye: glam::DVec3, axis: glam::DVec3) -> (f64, f64) {
-        match *self {
-            Bounds::Sphere { centre, radius } => {
-                let z = (centre - eye).dot(axis);
-                (z - radius, z + radius)
-            }
-            Bounds::Box { lo, hi } => (0..8)
-                .map(|i| {
-                    let pick = |bit: usize, a: f64, b: f64| if i & bit == 0 { a } else { b };
-                    let corner = glam::DVec3::new(
-                        pick(1, lo.x, hi.x),
-                        pick(2, lo.y, hi.y),
-                        pick(4, lo.z, hi.z),
-                    );
-                    (corner - eye).dot(axis)
-                })
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
-                    (a.min(z), b.max(z))
-                }),
-        }
-    }
 }
 
 /// Plans re-projection from the actual OpenGL matrices of both eyes for an
@@ -282,7 +249,9 @@ pub fn plan_views(
         .transform_vector3(DVec3::NEG_Z)
         .normalize();
     let near = (near_c - eye).dot(axis);
-    let (z_near, z_far) = bounds.depths(eye, axis);
+    let (z_near, z_far) = bounds
+        .depths(&[left, right], eye, axis)
+        .ok_or(NotEpipolar::Behind)?;
     let z_near = z_near.max(near);
     if z_far <= near {
         return Err(NotEpipolar::Behind);

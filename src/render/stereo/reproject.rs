@@ -9,7 +9,8 @@ use std::str::FromStr;
 use glam::{DVec4, UVec2, Vec4};
 use thiserror::Error;
 
-use super::plan::{plan_views, Bounds, NotEpipolar, ViewPlan};
+use super::bounds::Bounds;
+use super::plan::{plan_views, NotEpipolar, ViewPlan};
 use crate::geometry::MatrixCamera;
 use crate::render::Frame;
 

@@ -1,0 +1,408 @@
+//! `caveray bench stereo`: the paper's protocol for single-pass stereo by
+//! re-projection (Buchacher & Erdt 2017; DESIGN.md section 5). Per data
+//! set and shading level, over a rotation about y: the left eye alone
+//! (T_l), the right eye alone (T_r), the left eye with re-projection plus
+//! compositing (T_l+r), what a full clear of the layers would cost, the
+//! speed-up V = 1 - (T_l+r - T_l) / T_r, and the re-projected right
+//! image's DSSIM against the two-pass right image. Times are GPU passes
+//! from submission to completion, without uploads or read-back.
+
+use std::path::{Path, PathBuf};
+
+use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
+use anari_library_caveray::output::{
+    dssim_heatmap, frame_to_rgba, side_by_side, write_rgba_png, Chart, Series,
+};
+use anari_library_caveray::render::stereo::{HmdStereo, LayerFormat, Reprojection};
+use anari_library_caveray::render::{
+    dssim, ssim_map, Frame, FrameDesc, GpuRenderer, RenderSettings, Scene, Shading,
+};
+use clap::Args;
+use glam::{UVec2, Vec3};
+use serde_json::{json, Value};
+
+use crate::bench::machine;
+use crate::progress::Progress;
+use crate::scene::VolumeArgs;
+use crate::Failure;
+
+/// The paper's data sets, as named in volumes.toml.
+const PAPER_VOLUMES: &str = "cthead,dti,engine,vis_male,bonsai";
+/// DSSIM shown white in the heat maps.
+const HEATMAP_FULL_SCALE: f64 = 0.05;
+
+#[derive(Args)]
+pub struct StereoBenchArgs {
+    /// Volumes, comma-separated (names from volumes.toml, phantom[:N], ...).
+    /// Default: the paper's cthead, dti, engine, vis_male, bonsai.
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// Image width and height in pixels.
+    #[arg(long, default_value_t = 768)]
+    size: u32,
+    /// Re-projection layers; the focal length h is the shortest at which
+    /// the 1 m bounding sphere fits them.
+    #[arg(long, default_value_t = 32)]
+    layers: u32,
+    /// Shading levels, comma-separated; the paper's ladder is none and 1,
+    /// 4 and 16 directions (0, 4, 16, 64 extra samples per sample).
+    #[arg(
+        long,
+        default_value = "none,directional:1,directional:4,directional:16",
+        value_delimiter = ','
+    )]
+    shading: Vec<String>,
+    /// Views in the 360 degree rotation about y.
+    #[arg(long, default_value_t = 50)]
+    steps: u32,
+    /// Texel format of the layers: rgba16f (the paper's) or rgba32f.
+    #[arg(long, default_value = "rgba16f")]
+    layer_format: LayerFormat,
+    /// Where to write the results; the plot (SVG) and the DSSIM heat maps
+    /// (PNG) go next to it.
+    #[arg(long)]
+    json: PathBuf,
+}
+
+/// One view's measurements.
+struct ViewResult {
+    t_l: f64,
+    t_r: f64,
+    reproject: f64,
+    composite: f64,
+    clear: f64,
+    dssim: f64,
+}
+
+pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
+    if args.size < 8 || args.steps == 0 || args.layers < 2 {
+        return Err(Failure::Usage(format!(
+            "need --size >= 8 (SSIM windows are 8x8), --steps > 0 and --layers >= 2 (got {}, {}, {})",
+            args.size, args.steps, args.layers
+        )));
+    }
+    let shadings: Vec<Shading> = args
+        .shading
+        .iter()
+        .map(|s| {
+            s.parse()
+                .map_err(|e: anari_library_caveray::render::RenderError| {
+                    Failure::Usage(e.to_string())
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let names = args.volume.volume_list(PAPER_VOLUMES);
+    let setup = HmdStereo::protocol(args.size, f64::from(args.layers - 1));
+    let sphere_plan = setup
+        .plan_with(args.layers)
+        .map_err(|e| Failure::Usage(e.to_string()))?;
+    let image = UVec2::splat(args.size);
+    let eyes = (0..args.steps)
+        .map(|i| {
+            let angle = std::f64::consts::TAU * f64::from(i) / f64::from(args.steps);
+            setup
+                .eyes(angle)
+                .map_err(|e| Failure::Runtime(e.to_string()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut gpu = GpuRenderer::new().map_err(|e| {
+        Failure::Runtime(format!("{e} (re-projection runs on the GPU renderer only)"))
+    })?;
+    let figures = args.json.parent().unwrap_or(Path::new(".")).to_path_buf();
+    if !figures.as_os_str().is_empty() {
+        std::fs::create_dir_all(&figures)
+            .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", figures.display())))?;
+    }
+    let mut progress = Progress::new(names.len() * shadings.len() * (eyes.len() + 1));
+
+    let mut datasets = Vec::new();
+    for name in &names {
+        let loaded = args.volume.with_volume(name).load()?;
+        let (lo, hi) = loaded.volume.bounds();
+        let extent = hi - lo;
+        // Longest side such that the bounding sphere has radius 1 m.
+        let longest = extent.max_element() * 2.0 / extent.length();
+        let scene = loaded.placed(Vec3::ZERO, longest)?;
+        gpu.upload(&scene).map_err(runtime)?;
+        let plans = eyes
+            .iter()
+            .map(|(l, r)| {
+                Reprojection::new(
+                    l,
+                    r,
+                    image,
+                    scene.bounds(),
+                    Some(args.layers),
+                    args.layer_format,
+                )
+                .map_err(|e| Failure::Runtime(format!("{name}: {e}")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut runs = Vec::new();
+        for (level, shading) in shadings.iter().enumerate() {
+            let settings = RenderSettings {
+                shading: *shading,
+                ..Default::default()
+            };
+            let mut bench = Bench {
+                gpu: &mut gpu,
+                scene: &scene,
+                settings: &settings,
+                image,
+            };
+            // Compiles and warms every pipeline before anything is timed.
+            bench.view(&eyes[0], &plans[0])?;
+            progress.step(&format!("{name} {shading} warm-up"));
+            let mut results = Vec::new();
+            let mut worst: Option<(f64, Frame, Frame)> = None;
+            for (i, (pair, plan)) in eyes.iter().zip(&plans).enumerate() {
+                let (r, frames) = bench.view(pair, plan)?;
+                progress.step(&format!(
+                    "{name} {shading} view {i}: T_l {:.1} T_r {:.1} T_l+r {:.1} ms, DSSIM {:.4}",
+                    r.t_l,
+                    r.t_r,
+                    r.reproject + r.composite,
+                    r.dssim
+                ));
+                if level == 0 && worst.as_ref().is_none_or(|w| r.dssim > w.0) {
+                    worst = Some((r.dssim, frames.0, frames.1));
+                }
+                results.push(r);
+            }
+            if let Some((_, two_pass, reprojected)) = worst {
+                let file = format!("stereo_{}_dssim.png", file_name(name));
+                heatmap(&two_pass, &reprojected, &figures.join(&file))?;
+            }
+            runs.push(summarise(*shading, &results));
+        }
+        datasets.push(json!({
+            "name": name,
+            "dims": scene.volume.dims().to_array(),
+            "runs": runs,
+            "heatmap": format!("stereo_{}_dssim.png", file_name(name)),
+        }));
+    }
+
+    let info = gpu.adapter();
+    let report = json!({
+        "benchmark": "stereo",
+        "machine": machine(),
+        "adapter": {"name": info.name, "api": format!("{:?}", info.backend), "driver": info.driver},
+        "image": [args.size, args.size],
+        "layers": args.layers,
+        "layer_format": args.layer_format.to_string(),
+        "layer_bytes": image.x as u64 * image.y as u64 * u64::from(args.layers) * args.layer_format.bytes_per_texel(),
+        "fov_degrees": setup.fov.to_degrees(),
+        "eye_distance_m": setup.eye_distance,
+        "focal_length_m": setup.focal,
+        "bounding_radius_m": setup.radius,
+        "sphere_span_px": sphere_plan.span_px,
+        "steps": args.steps,
+        "datasets": datasets,
+    });
+    let text = serde_json::to_string_pretty(&report).map_err(runtime)?;
+    std::fs::write(&args.json, text + "\n")
+        .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", args.json.display())))?;
+    let plot = args.json.with_extension("svg");
+    std::fs::write(&plot, speedup_chart(&report))
+        .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", plot.display())))?;
+    print_table(&report);
+    println!(
+        "wrote {}, {} and the heat maps stereo_<volume>_dssim.png (two-pass | re-projected | DSSIM, white = {HEATMAP_FULL_SCALE}) in {}",
+        args.json.display(),
+        plot.display(),
+        figures.display()
+    );
+    Ok(())
+}
+
+struct Bench<'a> {
+    gpu: &'a mut GpuRenderer,
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    image: UVec2,
+}
+
+impl Bench<'_> {
+    /// Both ways of rendering one view; returns the times and the two
+    /// right images (two-pass, re-projected).
+    fn view(
+        &mut self,
+        (left, right): &(MatrixCamera, MatrixCamera),
+        plan: &Reprojection,
+    ) -> Result<(ViewResult, (Frame, Frame)), Failure> {
+        let desc = FrameDesc::new(self.image);
+        let left_rays = left.ray_gen(self.image);
+        self.gpu
+            .render(self.scene, &left_rays, self.settings, &desc)
+            .map_err(runtime)?;
+        let t_l = self.gpu.last_pass_ms();
+        let two_pass = self
+            .gpu
+            .render(self.scene, &right.ray_gen(self.image), self.settings, &desc)
+            .map_err(runtime)?;
+        let t_r = self.gpu.last_pass_ms();
+        let stereo = self
+            .gpu
+            .render_reprojected(self.scene, &left_rays, plan, self.settings, &desc)
+            .map_err(runtime)?;
+        let clear = self.gpu.time_layer_clear().map_err(runtime)?;
+        let dssim = dssim(&stereo.right, &two_pass).map_err(runtime)?;
+        Ok((
+            ViewResult {
+                t_l,
+                t_r,
+                reproject: stereo.times.left_ms,
+                composite: stereo.times.composite_ms,
+                clear,
+                dssim,
+            },
+            (two_pass, stereo.right),
+        ))
+    }
+}
+
+fn runtime(e: impl std::fmt::Display) -> Failure {
+    Failure::Runtime(e.to_string())
+}
+
+fn file_name(name: &str) -> String {
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    sum / n.max(1) as f64
+}
+
+fn summarise(shading: Shading, results: &[ViewResult]) -> Value {
+    let m = |f: fn(&ViewResult) -> f64| mean(results.iter().map(f));
+    let (t_l, t_r) = (m(|r| r.t_l), m(|r| r.t_r));
+    let t_lr = m(|r| r.reproject + r.composite);
+    let all = |f: fn(&ViewResult) -> f64| results.iter().map(f).collect::<Vec<_>>();
+    json!({
+        "shading": shading.to_string(),
+        "extra_samples_per_sample": shading.extra_samples(),
+        "t_l_ms": t_l,
+        "t_r_ms": t_r,
+        "t_lr_ms": t_lr,
+        "reproject_ms": m(|r| r.reproject),
+        "composite_ms": m(|r| r.composite),
+        "clear_ms": m(|r| r.clear),
+        "speedup_v": 1.0 - (t_lr - t_l) / t_r,
+        "dssim_mean": m(|r| r.dssim),
+        "dssim_max": results.iter().map(|r| r.dssim).fold(0.0, f64::max),
+        "views": {
+            "t_l_ms": all(|r| r.t_l),
+            "t_r_ms": all(|r| r.t_r),
+            "reproject_ms": all(|r| r.reproject),
+            "composite_ms": all(|r| r.composite),
+            "clear_ms": all(|r| r.clear),
+            "dssim": all(|r| r.dssim),
+        },
+    })
+}
+
+/// Two-pass right image, re-projected right image, and their per-window
+/// DSSIM, side by side.
+fn heatmap(two_pass: &Frame, reprojected: &Frame, path: &Path) -> Result<(), Failure> {
+    let map = ssim_map(reprojected, two_pass).map_err(runtime)?;
+    let heat = dssim_heatmap(&map, two_pass.size.x, two_pass.size.y, HEATMAP_FULL_SCALE);
+    let strip = side_by_side(
+        &[&frame_to_rgba(two_pass), &frame_to_rgba(reprojected), &heat],
+        8,
+    );
+    write_rgba_png(&strip, path).map_err(runtime)
+}
+
+/// V in percent against extra samples per sample, a line per data set
+/// (the paper's Figure 10).
+fn speedup_chart(report: &Value) -> String {
+    let series: Vec<Series> = report["datasets"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|d| Series {
+            name: d["name"].as_str().unwrap_or("").to_string(),
+            points: d["runs"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .map(|r| {
+                    (
+                        r["extra_samples_per_sample"].as_f64().unwrap_or(0.0),
+                        100.0 * r["speedup_v"].as_f64().unwrap_or(0.0),
+                    )
+                })
+                .collect(),
+        })
+        .collect();
+    let lowest = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.1))
+        .fold(0.0f64, f64::min);
+    let title = format!(
+        "Re-projection speed-up V, {}x{}, {} layers, {}",
+        report["image"][0],
+        report["image"][1],
+        report["layers"],
+        report["adapter"]["name"].as_str().unwrap_or("")
+    );
+    Chart {
+        title: &title,
+        x_label: "extra volume samples per sample (shading)",
+        y_label: "V = 1 - (T_l+r - T_l) / T_r  [%]",
+        y_range: ((lowest / 20.0).floor() * 20.0, 100.0),
+        series: &series,
+    }
+    .to_svg()
+}
+
+fn print_table(report: &Value) {
+    println!(
+        "stereo by re-projection at {}x{}, {} {} layers ({:.0} MiB), h = {:.3} m, {} views about y, on {}",
+        report["image"][0],
+        report["image"][1],
+        report["layers"],
+        report["layer_format"].as_str().unwrap_or(""),
+        report["layer_bytes"].as_f64().unwrap_or(0.0) / (1024.0 * 1024.0),
+        report["focal_length_m"].as_f64().unwrap_or(0.0),
+        report["steps"],
+        report["adapter"]["name"].as_str().unwrap_or("")
+    );
+    println!(
+        "{:<10} {:<15} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>8} {:>8}",
+        "volume",
+        "shading",
+        "samples",
+        "T_l ms",
+        "T_r ms",
+        "T_l+r ms",
+        "comp ms",
+        "clear ms",
+        "V %",
+        "DSSIM",
+        "max"
+    );
+    for d in report["datasets"].as_array().into_iter().flatten() {
+        for r in d["runs"].as_array().into_iter().flatten() {
+            let f = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+            println!(
+                "{:<10} {:<15} {:>7} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>7.1} {:>8.4} {:>8.4}",
+                d["name"].as_str().unwrap_or(""),
+                r["shading"].as_str().unwrap_or(""),
+                r["extra_samples_per_sample"],
+                f("t_l_ms"),
+                f("t_r_ms"),
+                f("t_lr_ms"),
+                f("composite_ms"),
+                f("clear_ms"),
+                100.0 * f("speedup_v"),
+                f("dssim_mean"),
+                f("dssim_max")
+            );
+        }
+    }
+}

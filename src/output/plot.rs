@@ -1,0 +1,172 @@
+//! Small SVG line charts for benchmark results, written by hand so the
+//! tool needs no plotting library.
+
+use std::fmt::Write;
+
+/// One line of a chart: a name and (x, y) points.
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A line chart. X positions are categorical: each distinct x gets an
+/// equal slot (shading levels 0, 4, 16, 64 would crowd a linear axis).
+pub struct Chart<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    /// Y axis range.
+    pub y_range: (f64, f64),
+    pub series: &'a [Series],
+}
+
+const COLOURS: [&str; 8] = [
+    "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+];
+
+impl Chart<'_> {
+    pub fn to_svg(&self) -> String {
+        let (w, h) = (640.0, 400.0);
+        let (left, right, top, bottom) = (70.0, 150.0, 40.0, 60.0);
+        let (pw, ph) = (w - left - right, h - top - bottom);
+        let mut xs: Vec<f64> = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0))
+            .collect();
+        xs.sort_by(f64::total_cmp);
+        xs.dedup();
+        let slot = |x: f64| {
+            let i = xs.iter().position(|v| *v == x).unwrap_or(0) as f64;
+            left + pw * (i + 0.5) / xs.len().max(1) as f64
+        };
+        let (y0, y1) = self.y_range;
+        let y_of = |y: f64| top + ph * (1.0 - (y - y0) / (y1 - y0));
+        let mut svg = String::new();
+        let _ = writeln!(
+            svg,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">"#
+        );
+        let _ = writeln!(svg, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+        let _ = writeln!(
+            svg,
+            r#"<text x="{}" y="22" text-anchor="middle" font-size="14">{}</text>"#,
+            left + pw / 2.0,
+            escape(self.title)
+        );
+        for k in 0..=5 {
+            let y = y0 + (y1 - y0) * f64::from(k) / 5.0;
+            let py = y_of(y);
+            let _ = writeln!(
+                svg,
+                r##"<line x1="{left}" y1="{py:.1}" x2="{}" y2="{py:.1}" stroke="#ddd"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+                left + pw,
+                left - 6.0,
+                py + 4.0,
+                trim(y)
+            );
+        }
+        for &x in &xs {
+            let _ = writeln!(
+                svg,
+                r#"<text x="{:.1}" y="{}" text-anchor="middle">{}</text>"#,
+                slot(x),
+                top + ph + 18.0,
+                trim(x)
+            );
+        }
+        let _ = writeln!(
+            svg,
+            r#"<rect x="{left}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="black"/>"#
+        );
+        let _ = writeln!(
+            svg,
+            r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+            left + pw / 2.0,
+            h - 18.0,
+            escape(self.x_label)
+        );
+        let _ = writeln!(
+            svg,
+            r#"<text transform="translate(20 {}) rotate(-90)" text-anchor="middle">{}</text>"#,
+            top + ph / 2.0,
+            escape(self.y_label)
+        );
+        for (i, s) in self.series.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            let points: Vec<String> = s
+                .points
+                .iter()
+                .map(|&(x, y)| format!("{:.1},{:.1}", slot(x), y_of(y)))
+                .collect();
+            let _ = writeln!(
+                svg,
+                r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="2"/>"#,
+                points.join(" ")
+            );
+            for p in &points {
+                let (x, y) = p.split_once(',').unwrap_or(("0", "0"));
+                let _ = writeln!(
+                    svg,
+                    r#"<circle cx="{x}" cy="{y}" r="3.5" fill="{colour}"/>"#
+                );
+            }
+            let ly = top + 10.0 + 18.0 * i as f64;
+            let _ = writeln!(
+                svg,
+                r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{colour}" stroke-width="2"/><text x="{}" y="{}">{}</text>"#,
+                left + pw + 12.0,
+                left + pw + 32.0,
+                left + pw + 38.0,
+                ly + 4.0,
+                escape(&s.name)
+            );
+        }
+        svg.push_str("</svg>\n");
+        svg
+    }
+}
+
+fn trim(v: f64) -> String {
+    let s = format!("{v:.2}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_series_is_drawn_and_labelled() {
+        let series = [
+            Series {
+                name: "cthead".into(),
+                points: vec![(0.0, 10.0), (4.0, 40.0), (64.0, 70.0)],
+            },
+            Series {
+                name: "a<b".into(),
+                points: vec![(0.0, -5.0), (64.0, 20.0)],
+            },
+        ];
+        let svg = Chart {
+            title: "V",
+            x_label: "samples",
+            y_label: "%",
+            y_range: (-10.0, 100.0),
+            series: &series,
+        }
+        .to_svg();
+        assert_eq!(svg.matches("<polyline").count(), 2);
+        assert_eq!(svg.matches("<circle").count(), 5);
+        assert!(svg.contains(">cthead<") && svg.contains(">a&lt;b<"));
+        // Three distinct x values, three evenly spaced slots: 0 at the first.
+        assert!(svg.contains(">64<") && svg.contains(">4<"));
+        assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));
+    }
+}
