@@ -190,6 +190,15 @@ fn bad_arguments_are_one_line_errors() {
             "unknown transfer function preset 'rainbow'",
         ),
         (vec!["--strategy", "fisheye"], "invalid value 'fisheye'"),
+        (
+            vec!["--stereo", "reprojection", "--layers", "0"],
+            "--layers must be at least 1",
+        ),
+        (
+            vec!["--layer-format", "rgb8"],
+            "expected rgba16f or rgba32f",
+        ),
+        (vec!["--stereo", "anaglyph"], "invalid value 'anaglyph'"),
     ];
     for (extra, needle) in cases {
         let mut args = vec!["render", "--config", config, "--out", o];
@@ -204,4 +213,88 @@ fn bad_arguments_are_one_line_errors() {
         );
     }
     std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn reprojection_renders_walls_it_applies_to_and_says_why_not_elsewhere() {
+    let common = [
+        "--scale",
+        "0.05",
+        "--volume",
+        "phantom:48",
+        "--step-factor",
+        "0.5",
+        "--backend",
+        "gpu",
+    ];
+    let two = scratch("two-pass");
+    render(&two, &common);
+    let one = scratch("reprojection");
+    let mut args = common.to_vec();
+    args.extend_from_slice(&["--stereo", "reprojection"]);
+    let report = render(&one, &args);
+    assert_eq!(report["stereo"], "reprojection");
+    let views = report["views"].as_array().unwrap();
+    let view = |wall: &str, eye: &str| {
+        views
+            .iter()
+            .find(|v| v["wall"] == wall && v["eye"] == eye)
+            .unwrap_or_else(|| panic!("{wall} {eye} missing"))
+    };
+    for eye in ["left", "right"] {
+        // Facing the front wall with a level head: one pass.
+        let front = view("front", eye);
+        assert!(
+            front["path"]
+                .as_str()
+                .unwrap()
+                .starts_with("reprojection ("),
+            "{front}"
+        );
+        assert!(front["layers"].as_u64().unwrap() >= 2);
+        // The side walls' baseline points into them: two passes, and why.
+        for wall in ["left", "right"] {
+            let side = view(wall, eye);
+            assert_eq!(side["path"], "two-pass");
+            let why = side["fallback"].as_str().unwrap();
+            assert!(why.contains("does not apply"), "{why}");
+        }
+    }
+    // The left eye is ray cast either way; the right one is re-projected.
+    let (a, b) = (
+        png(&two.join("front_left.png")),
+        png(&one.join("front_left.png")),
+    );
+    assert_eq!(mean_difference(&a, &b), 0.0);
+    let (a, b) = (
+        png(&two.join("front_right.png")),
+        png(&one.join("front_right.png")),
+    );
+    let d = mean_difference(&a, &b);
+    assert!(d < 1.5, "mean difference {d} levels");
+    assert!(one.join("cave_right.png").is_file());
+
+    // Too few layers for the front wall: it falls back and says so.
+    let few = scratch("few-layers");
+    let mut args = common.to_vec();
+    args.extend_from_slice(&["--stereo", "reprojection", "--layers", "1"]);
+    let report = render(&few, &args);
+    let front = report["views"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|v| v["wall"] == "front" && v["eye"] == "right")
+        .unwrap()
+        .clone();
+    assert_eq!(front["path"], "two-pass");
+    assert!(
+        front["fallback"]
+            .as_str()
+            .unwrap()
+            .contains("1 layers are too few"),
+        "{front}"
+    );
+    for dir in [two, one, few] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
 }

@@ -171,6 +171,11 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             args.scale
         )));
     }
+    if args.stereo.layers == Some(0) {
+        return Err(Failure::Usage(
+            "--layers must be at least 1 (or left out to let the planner choose)".into(),
+        ));
+    }
     let rig = Rig::load(&args.config).map_err(|e| Failure::Usage(e.to_string()))?;
     let head = args.head.pose(&rig)?;
     let loaded = args.volume.load()?;

@@ -1,4 +1,4 @@
-//! The wgpu ray caster: shaders/raycast.wgsl, one invocation per pixel,
+//! The wgpu ray caster: shaders/volume.wgsl + raycast.wgsl, one invocation per pixel,
 //! and the re-projection stereo path (layers.rs). Device, pipelines and
 //! buffers are made once; the volume and the table are uploaded when a
 //! scene brings new ones and kept otherwise.
@@ -294,7 +294,7 @@ impl GpuRenderer {
             fn buffer(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
                 b.as_entire_binding()
             }
-            // In binding order, as shaders/raycast.wgsl declares them.
+            // In binding order, as shaders/volume.wgsl declares them.
             let resources = [
                 buffer(&self.params),
                 wgpu::BindingResource::TextureView(volume),

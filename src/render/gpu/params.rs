@@ -5,7 +5,7 @@ use crate::render::frame::ColorFormat;
 use crate::render::plan::MarchPlan;
 use crate::render::settings::Shading;
 
-/// Size of the `Params` uniform in shaders/raycast.wgsl: 14 vec4s.
+/// Size of the `Params` uniform in shaders/volume.wgsl: 14 vec4s.
 pub(super) const PARAMS_BYTES: u64 = 14 * 16;
 
 /// Packs the `Params` uniform, field for field in the shader's order.
