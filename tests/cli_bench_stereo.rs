@@ -79,7 +79,10 @@ fn bad_arguments_are_one_line_errors() {
         (vec!["--size", "4"], "--size >= 8"),
         (vec!["--shading", "phong"], "unknown shading mode"),
         (vec!["--layer-format", "rgb"], "expected rgba16f or rgba32f"),
-        (vec!["--volume", "nosuchvolume"], "nosuchvolume"),
+        (
+            vec!["--volume", "phantom:24,phantom:1"],
+            "must be a whole number in 2..=1024",
+        ),
     ] {
         let mut all = vec![
             "bench",

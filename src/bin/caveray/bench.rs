@@ -81,16 +81,7 @@ fn raycast(args: RaycastArgs) -> Result<(), Failure> {
             args.size, args.steps, args.cpu_steps
         )));
     }
-    let shadings: Vec<Shading> = args
-        .shading
-        .iter()
-        .map(|s| {
-            s.parse()
-                .map_err(|e: anari_library_caveray::render::RenderError| {
-                    Failure::Usage(e.to_string())
-                })
-        })
-        .collect::<Result<_, _>>()?;
+    let shadings = parse_shadings(&args.shading)?;
     let loaded = args.volume.load()?;
     // Longest side such that the bounding sphere has radius 1 m.
     let (lo, hi) = loaded.volume.bounds();
@@ -247,6 +238,19 @@ fn speedup(results: &serde_json::Map<String, Value>, cpu_views: &[usize]) -> Val
         .collect();
     let gpu_mean = same.iter().sum::<f64>() / same.len() as f64;
     json!(cpu["mean_ms"].as_f64().unwrap_or(f64::NAN) / gpu_mean)
+}
+
+/// `--shading` values, each checked.
+pub fn parse_shadings(values: &[String]) -> Result<Vec<Shading>, Failure> {
+    values
+        .iter()
+        .map(|s| {
+            s.parse()
+                .map_err(|e: anari_library_caveray::render::RenderError| {
+                    Failure::Usage(e.to_string())
+                })
+        })
+        .collect()
 }
 
 pub fn machine() -> Value {

@@ -21,7 +21,7 @@ use clap::Args;
 use glam::{UVec2, Vec3};
 use serde_json::{json, Value};
 
-use crate::bench::machine;
+use crate::bench::{machine, parse_shadings};
 use crate::progress::Progress;
 use crate::scene::VolumeArgs;
 use crate::Failure;
@@ -81,17 +81,14 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
             args.size, args.steps, args.layers
         )));
     }
-    let shadings: Vec<Shading> = args
-        .shading
-        .iter()
-        .map(|s| {
-            s.parse()
-                .map_err(|e: anari_library_caveray::render::RenderError| {
-                    Failure::Usage(e.to_string())
-                })
-        })
-        .collect::<Result<_, _>>()?;
+    let shadings = parse_shadings(&args.shading)?;
     let names = args.volume.volume_list(PAPER_VOLUMES);
+    // Every volume is read before anything is rendered: a bad name should
+    // not surface an hour into a run.
+    let volumes = names
+        .iter()
+        .map(|name| args.volume.with_volume(name).load())
+        .collect::<Result<Vec<_>, _>>()?;
     let setup = HmdStereo::protocol(args.size, f64::from(args.layers - 1));
     let sphere_plan = setup
         .plan_with(args.layers)
@@ -116,8 +113,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
     let mut progress = Progress::new(names.len() * shadings.len() * (eyes.len() + 1));
 
     let mut datasets = Vec::new();
-    for name in &names {
-        let loaded = args.volume.with_volume(name).load()?;
+    for (name, loaded) in names.iter().zip(&volumes) {
         let (lo, hi) = loaded.volume.bounds();
         let extent = hi - lo;
         // Longest side such that the bounding sphere has radius 1 m.

@@ -8,11 +8,10 @@
 use glam::{UVec2, Vec4};
 
 use super::context::Context;
-use super::{color_data, compute_pipeline, params, unprepared, GpuRenderer, WORKGROUP};
+use super::{color_data, compute_pipeline, unprepared, GpuRenderer, WORKGROUP};
 use crate::geometry::RayGen;
-use crate::render::cpu::SHADOW_AMBIENT;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
-use crate::render::plan::{MarchPlan, Scene};
+use crate::render::plan::Scene;
 use crate::render::stereo::{LayerFormat, Reprojection, StereoFrames, StereoTimes};
 use crate::render::{RenderError, RenderSettings};
 
@@ -357,21 +356,9 @@ impl GpuRenderer {
                 desc.size.x, desc.size.y, reprojection.size.x, reprojection.size.y
             )));
         }
-        let plan = MarchPlan::new(scene, settings)?;
-        self.check_limits(scene, desc)?;
         self.check_layers(reprojection)?;
-        self.prepare(scene, desc.size, desc.color);
+        self.begin(scene, left, settings, desc)?;
         let ctx = &self.ctx;
-        ctx.queue.write_buffer(
-            &self.params,
-            0,
-            &params::pack(left, &plan, desc.size, desc.color, SHADOW_AMBIENT),
-        );
-        ctx.queue.write_buffer(
-            &self.directions,
-            0,
-            &params::pack_directions(&plan.directions),
-        );
         if !matches!(&self.stereo, Some(s) if s.format == reprojection.format) {
             self.stereo = Some(StereoGpu::new(ctx, &self.layout, reprojection.format));
         }

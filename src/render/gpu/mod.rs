@@ -184,21 +184,8 @@ impl GpuRenderer {
         settings: &RenderSettings,
         desc: &FrameDesc,
     ) -> Result<Frame, RenderError> {
-        desc.validate()?;
-        let plan = MarchPlan::new(scene, settings)?;
-        self.check_limits(scene, desc)?;
-        self.prepare(scene, desc.size, desc.color);
+        self.begin(scene, rays, settings, desc)?;
         let ctx = &self.ctx;
-        ctx.queue.write_buffer(
-            &self.params,
-            0,
-            &params::pack(rays, &plan, desc.size, desc.color, SHADOW_AMBIENT),
-        );
-        ctx.queue.write_buffer(
-            &self.directions,
-            0,
-            &params::pack_directions(&plan.directions),
-        );
         let bind_group = self.bind_group.as_ref().ok_or_else(unprepared)?;
         self.last_pass_ms = ctx.dispatch(
             &self.pipeline,
@@ -210,6 +197,33 @@ impl GpuRenderer {
             ],
         )?;
         self.read_frame(desc)
+    }
+
+    /// Checks the frame against the adapter, uploads what changed and
+    /// writes the uniforms for ray casting `rays`.
+    fn begin(
+        &mut self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+    ) -> Result<(), RenderError> {
+        desc.validate()?;
+        let plan = MarchPlan::new(scene, settings)?;
+        self.check_limits(scene, desc)?;
+        self.prepare(scene, desc.size, desc.color);
+        let queue = &self.ctx.queue;
+        queue.write_buffer(
+            &self.params,
+            0,
+            &params::pack(rays, &plan, desc.size, desc.color, SHADOW_AMBIENT),
+        );
+        queue.write_buffer(
+            &self.directions,
+            0,
+            &params::pack_directions(&plan.directions),
+        );
+        Ok(())
     }
 
     /// Copies the left (or only) eye's frame out of the target buffers.
