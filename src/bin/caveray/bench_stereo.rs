@@ -13,7 +13,7 @@ use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
 use anari_library_caveray::output::{
     dssim_heatmap, frame_to_rgba, side_by_side, write_rgba_png, Chart, Series,
 };
-use anari_library_caveray::render::stereo::{HmdStereo, LayerFormat, Reprojection};
+use anari_library_caveray::render::stereo::{layer_memory, HmdStereo, LayerFormat, Reprojection};
 use anari_library_caveray::render::{
     dssim, ssim_map, Frame, FrameDesc, GpuRenderer, RenderSettings, Scene, Shading,
 };
@@ -187,7 +187,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
         "image": [args.size, args.size],
         "layers": args.layers,
         "layer_format": args.layer_format.to_string(),
-        "layer_bytes": image.x as u64 * image.y as u64 * u64::from(args.layers) * args.layer_format.bytes_per_texel(),
+        "layer_bytes": layer_memory(u64::from(args.size), args.layers, args.layer_format.bytes_per_texel() / 4, 4),
         "fov_degrees": setup.fov.to_degrees(),
         "eye_distance_m": setup.eye_distance,
         "focal_length_m": setup.focal,

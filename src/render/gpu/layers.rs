@@ -8,7 +8,10 @@
 use glam::{UVec2, Vec4};
 
 use super::context::Context;
-use super::{color_data, compute_pipeline, unprepared, GpuRenderer, WORKGROUP};
+use super::{
+    bind_group, buffer_type, color_data, compute_pipeline, layout_entry, unprepared, GpuRenderer,
+    WORKGROUP,
+};
 use crate::geometry::RayGen;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
 use crate::render::plan::Scene;
@@ -50,30 +53,16 @@ struct LayerTarget {
     composite: wgpu::BindGroup,
 }
 
-fn layout_entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty,
-        count: None,
-    }
-}
-
-fn buffer_type(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty,
-        has_dynamic_offset: false,
-        min_binding_size: None,
+fn texture_format(format: LayerFormat) -> wgpu::TextureFormat {
+    match format {
+        LayerFormat::Rgba16F => wgpu::TextureFormat::Rgba16Float,
+        LayerFormat::Rgba32F => wgpu::TextureFormat::Rgba32Float,
     }
 }
 
 impl StereoGpu {
     fn new(ctx: &Context, volume_layout: &wgpu::BindGroupLayout, format: LayerFormat) -> Self {
         let device = &ctx.device;
-        let texture_format = match format {
-            LayerFormat::Rgba16F => wgpu::TextureFormat::Rgba16Float,
-            LayerFormat::Rgba32F => wgpu::TextureFormat::Rgba32Float,
-        };
         let uniform = buffer_type(wgpu::BufferBindingType::Uniform);
         let writer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("re-projection layers"),
@@ -83,7 +72,7 @@ impl StereoGpu {
                     1,
                     wgpu::BindingType::StorageTexture {
                         access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: texture_format,
+                        format: texture_format(format),
                         view_dimension: wgpu::TextureViewDimension::D2Array,
                     },
                 ),
@@ -151,10 +140,6 @@ impl StereoGpu {
 impl LayerTarget {
     fn new(gpu: &StereoGpu, ctx: &Context, shape: Shape, columns: u32) -> Self {
         let device = &ctx.device;
-        let texture_format = match gpu.format {
-            LayerFormat::Rgba16F => wgpu::TextureFormat::Rgba16Float,
-            LayerFormat::Rgba32F => wgpu::TextureFormat::Rgba32Float,
-        };
         let layers = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("re-projection layers"),
             size: wgpu::Extent3d {
@@ -165,7 +150,7 @@ impl LayerTarget {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: texture_format,
+            format: texture_format(gpu.format),
             usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
@@ -237,41 +222,28 @@ fn bind_groups(
     color: &wgpu::Buffer,
 ) -> (wgpu::BindGroup, wgpu::BindGroup) {
     let device = &ctx.device;
-    {
-        let group = |layout, resources: Vec<wgpu::BindingResource>| {
-            let entries: Vec<wgpu::BindGroupEntry> = resources
-                .into_iter()
-                .enumerate()
-                .map(|(binding, resource)| wgpu::BindGroupEntry {
-                    binding: binding as u32,
-                    resource,
-                })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout,
-                entries: &entries,
-            })
-        };
-        let writer = group(
-            &gpu.writer_layout,
-            vec![
-                uniform.as_entire_binding(),
-                wgpu::BindingResource::TextureView(view),
-                spans.as_entire_binding(),
-            ],
-        );
-        let composite = group(
-            &gpu.composite_layout,
-            vec![
-                uniform.as_entire_binding(),
-                wgpu::BindingResource::TextureView(view),
-                spans.as_entire_binding(),
-                color.as_entire_binding(),
-            ],
-        );
-        (writer, composite)
-    }
+    let writer = bind_group(
+        device,
+        "re-projection layers",
+        &gpu.writer_layout,
+        [
+            uniform.as_entire_binding(),
+            wgpu::BindingResource::TextureView(view),
+            spans.as_entire_binding(),
+        ],
+    );
+    let composite = bind_group(
+        device,
+        "compositing",
+        &gpu.composite_layout,
+        [
+            uniform.as_entire_binding(),
+            wgpu::BindingResource::TextureView(view),
+            spans.as_entire_binding(),
+            color.as_entire_binding(),
+        ],
+    );
+    (writer, composite)
 }
 
 /// The `Stereo` uniform, field for field in shaders/stereo.wgsl's order.

@@ -53,39 +53,22 @@ impl GpuRenderer {
     pub fn new() -> Result<Self, RenderError> {
         let ctx = Context::new()?;
         let device = &ctx.device;
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty,
-            count: None,
-        };
         let texture = |dim| wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: false },
             view_dimension: dim,
             multisampled: false,
         };
-        let storage = |read_only| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
+        let storage = |read_only| buffer_type(wgpu::BufferBindingType::Storage { read_only });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raycast"),
             entries: &[
-                entry(
-                    0,
-                    wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                ),
-                entry(1, texture(wgpu::TextureViewDimension::D3)),
-                entry(2, texture(wgpu::TextureViewDimension::D2)),
-                entry(3, storage(true)),
-                entry(4, storage(false)),
-                entry(5, storage(false)),
-                entry(6, storage(false)),
+                layout_entry(0, buffer_type(wgpu::BufferBindingType::Uniform)),
+                layout_entry(1, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(2, texture(wgpu::TextureViewDimension::D2)),
+                layout_entry(3, storage(true)),
+                layout_entry(4, storage(false)),
+                layout_entry(5, storage(false)),
+                layout_entry(6, storage(false)),
             ],
         });
         let pipeline = compute_pipeline(device, "raycast", &shaders::raycast(), &[&layout], "main");
@@ -318,22 +301,7 @@ impl GpuRenderer {
                 buffer(&target.depth),
                 buffer(&target.samples),
             ];
-            let entries: Vec<wgpu::BindGroupEntry> = resources
-                .into_iter()
-                .enumerate()
-                .map(|(binding, resource)| wgpu::BindGroupEntry {
-                    binding: binding as u32,
-                    resource,
-                })
-                .collect();
-            let group = self
-                .ctx
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("raycast"),
-                    layout: &self.layout,
-                    entries: &entries,
-                });
+            let group = bind_group(&self.ctx.device, "raycast", &self.layout, resources);
             self.bind_group = Some(group);
         }
     }
@@ -364,6 +332,46 @@ fn compute_pipeline(
         entry_point: Some(entry),
         compilation_options: Default::default(),
         cache: None,
+    })
+}
+
+/// A compute-only bind group layout entry.
+fn layout_entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer_type(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+/// A bind group whose resources are bound at 0, 1, 2, ... in order.
+fn bind_group<const N: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: [wgpu::BindingResource; N],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = resources
+        .into_iter()
+        .enumerate()
+        .map(|(binding, resource)| wgpu::BindGroupEntry {
+            binding: binding as u32,
+            resource,
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
     })
 }
 
