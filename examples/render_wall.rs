@@ -6,7 +6,8 @@ use anari_library_caveray::cave::{Eye, Rig};
 use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
-use anari_library_caveray::render::{FrameDesc, RenderSettings, Renderer, Scene, Shading};
+use anari_library_caveray::render::{FrameDesc, RenderSettings, Renderer, Shading};
+use anari_library_caveray::scene::Scene;
 use glam::UVec2;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

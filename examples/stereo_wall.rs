@@ -7,8 +7,9 @@ use anari_library_caveray::cave::{Eye, Rig};
 use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
-use anari_library_caveray::render::stereo::{LayerFormat, Reprojection};
-use anari_library_caveray::render::{FrameDesc, GpuRenderer, RenderSettings, Scene};
+use anari_library_caveray::render::stereo::{Bounds, LayerFormat, Reprojection};
+use anari_library_caveray::render::{FrameDesc, GpuRenderer, RenderSettings};
+use anari_library_caveray::scene::Scene;
 use glam::UVec2;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -27,7 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &left,
         &right,
         image,
-        scene.bounds(),
+        Bounds::of(&scene),
         None,
         LayerFormat::Rgba16F,
     )?;

@@ -5,3 +5,4 @@ pub mod device;
 pub mod geometry;
 pub mod output;
 pub mod render;
+pub mod scene;

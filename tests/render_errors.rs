@@ -3,10 +3,10 @@
 
 mod common;
 
-use anari_library_caveray::device::{StructuredVolume, Voxels};
 use anari_library_caveray::render::{
-    ssim, CpuRenderer, FrameDesc, RenderError, RenderSettings, Scene, Shading,
+    ssim, CpuRenderer, FrameDesc, RenderError, RenderSettings, Shading,
 };
+use anari_library_caveray::scene::{Scene, StructuredVolume, Voxels};
 use common::render::{four_cameras, gpu, off_axis_wall, phantom, renderers};
 use glam::{UVec2, UVec3, Vec3, Vec4};
 

@@ -6,8 +6,9 @@ mod common;
 use anari_library_caveray::cave::Eye;
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::render::{
-    ssim, ssim_map, CpuRenderer, FrameDesc, RenderSettings, Scene, Shading,
+    ssim, ssim_map, CpuRenderer, FrameDesc, RenderSettings, Shading,
 };
+use anari_library_caveray::scene::Scene;
 use common::render::{four_cameras, gpu, off_axis_wall, phantom};
 use glam::{UVec2, Vec3};
 

@@ -4,12 +4,11 @@
 mod common;
 
 use anari_library_caveray::data::{preset, shepp_logan, solid_box};
-use anari_library_caveray::device::{StructuredVolume, TransferFunction, Voxels};
 use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays};
 use anari_library_caveray::render::{
-    ssim, ColorData, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Scene,
-    Shading,
+    ssim, ColorData, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Shading,
 };
+use anari_library_caveray::scene::{Scene, StructuredVolume, TransferFunction, Voxels};
 use common::render::{axis_camera, four_cameras, gpu, off_axis_wall, renderers};
 use glam::{DVec3, UVec2, UVec3, Vec3, Vec4};
 

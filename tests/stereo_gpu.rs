@@ -12,8 +12,9 @@ use anari_library_caveray::render::stereo::{
     Bounds, HmdStereo, LayerFormat, NotEpipolar, Reprojection, ReprojectionError,
 };
 use anari_library_caveray::render::{
-    dssim, ColorFormat, FrameDesc, GpuRenderer, RenderSettings, Scene, Shading,
+    dssim, ColorFormat, FrameDesc, GpuRenderer, RenderSettings, Shading,
 };
+use anari_library_caveray::scene::Scene;
 use glam::{DVec3, UVec2, Vec3};
 
 /// The phantom at `n`^3, centred at the origin, bounding radius 1.
@@ -74,7 +75,7 @@ fn reprojected(
         &pair.left,
         &pair.right,
         pair.size,
-        scene.bounds(),
+        Bounds::of(scene),
         None,
         format,
     )
@@ -191,7 +192,7 @@ fn layers_from_an_earlier_frame_never_show() {
             &pair.left,
             &pair.right,
             pair.size,
-            s.bounds(),
+            Bounds::of(s),
             Some(16),
             LayerFormat::Rgba16F,
         )
@@ -261,7 +262,7 @@ fn cave_front_wall_with_a_level_head_matches_two_pass() {
 #[test]
 fn geometry_and_layer_counts_it_cannot_serve_are_refused() {
     let scene = unit_phantom(16);
-    let sphere = scene.bounds();
+    let sphere = Bounds::of(&scene);
     let pair = hmd(64, 10.0, 0.0);
     let plan = |layers| {
         Reprojection::new(

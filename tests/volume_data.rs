@@ -7,7 +7,7 @@ use anari_library_caveray::data::{
     load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box, DataError, Manifest,
     VoxelType, PRESETS,
 };
-use anari_library_caveray::device::{
+use anari_library_caveray::scene::{
     StructuredVolume, TransferFunction, TransferFunctionError, VolumeError, Voxels,
 };
 use glam::{UVec3, Vec3, Vec4};
@@ -171,7 +171,7 @@ fn transfer_functions_interpolate_and_alpha_scales_opacity() {
     assert_eq!(tf.evaluate(0.5), Vec4::new(0.5, 0.0, 0.5, 0.375));
     assert_eq!(tf.evaluate(2.0), Vec4::new(1.0, 0.0, 0.0, 0.5));
     let table = tf.table();
-    assert_eq!(table.len(), anari_library_caveray::device::TABLE_SIZE);
+    assert_eq!(table.len(), anari_library_caveray::scene::TABLE_SIZE);
     assert_eq!(table[0], tf.evaluate(0.0));
     assert_eq!(*table.last().unwrap(), tf.evaluate(1.0));
 }

@@ -8,9 +8,9 @@ use std::ffi::c_void;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
+use super::entry_points::{DeviceTable, LibraryTable, DEVICE_TABLE, LIBRARY_TABLE};
 use super::status::{emit, Callback};
 use super::sys;
-use super::vtable::{DeviceTable, LibraryTable, DEVICE_TABLE, LIBRARY_TABLE};
 use crate::device::{Device, Reporter, Status};
 
 /// `{vtable*, dlhandle, statusCB, statusUserPtr}`: 32 bytes.

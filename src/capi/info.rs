@@ -7,7 +7,7 @@ use std::ffi::{c_char, c_void, CString};
 use std::sync::OnceLock;
 
 use super::sys;
-use crate::device::info::{self, EXTENSIONS, SUBTYPES};
+use crate::device::info::{self, Default, EXTENSIONS, SUBTYPES};
 use crate::device::DataType;
 
 struct List {
@@ -171,7 +171,7 @@ pub fn parameter_info(
         }
         // Defaults are FLOAT32 components, for the FLOAT32-based types.
         ("default", Some(t)) if info_type == param_type && !t.is_object() => match p.default {
-            Some(d) if d.len() * 4 == t.size() => d.as_ptr().cast(),
+            Default::Floats(d) if d.len() * 4 == t.size() => d.as_ptr().cast(),
             _ => std::ptr::null(),
         },
         _ => std::ptr::null(),

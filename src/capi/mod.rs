@@ -4,7 +4,7 @@
 //! and converts the host's arguments and forwards to `crate::device`.
 
 mod convert;
-pub mod exports;
+pub mod entry_points;
 mod handles;
 mod helpers;
 mod info;
@@ -19,7 +19,6 @@ mod status;
 )]
 #[rustfmt::skip]
 pub mod sys;
-mod vtable;
 
 use crate::device::{DataType, Severity, StatusCode};
 

@@ -12,7 +12,9 @@ use super::handles::{DeviceHandle, DeviceRef, LibraryHandle};
 use super::info;
 use super::status::{call_error, emit, guard, set_library_callback, Callback};
 use super::sys::*;
-use crate::device::{DataType, Device, HostMemory, Property, Severity, Status, StatusCode, Target};
+use crate::device::{
+    DataType, Device, HostMemory, Property, Severity, Status, StatusCode, Subject,
+};
 
 /// Runs `f` on the live device behind `dev`, then delivers the messages the
 /// call produced, after the device is unlocked (a callback may call us).
@@ -67,11 +69,11 @@ fn with_named<R: Clone>(
     })
 }
 
-fn target(d: &DeviceRef, obj: ANARIObject) -> Target {
+fn target(d: &DeviceRef, obj: ANARIObject) -> Subject {
     if obj == d.ptr() {
-        Target::Device
+        Subject::Device
     } else {
-        Target::Object(obj as usize as u64)
+        Subject::Object(obj as usize as u64)
     }
 }
 
@@ -626,7 +628,7 @@ pub unsafe extern "C" fn commit_parameters(dev: ANARIDevice, obj: ANARIObject) {
     with_device(dev, "anariCommitParameters", (), |d, device| {
         let t = target(d, obj);
         device.commit(t);
-        if t == Target::Device {
+        if t == Subject::Device {
             let function = device
                 .device_param("statusCallback")
                 .and_then(|v| v.pointer())
@@ -664,15 +666,15 @@ pub unsafe extern "C" fn commit_parameters(dev: ANARIDevice, obj: ANARIObject) {
 pub unsafe extern "C" fn release(dev: ANARIDevice, obj: ANARIObject) {
     with_device(dev, "anariRelease", (), |d, device| match target(d, obj) {
         // The device goes when this call's own reference is dropped too.
-        Target::Device => DeviceHandle::release(d.ptr().cast()),
-        Target::Object(h) => device.release(h),
+        Subject::Device => DeviceHandle::release(d.ptr().cast()),
+        Subject::Object(h) => device.release(h),
     })
 }
 
 pub unsafe extern "C" fn retain(dev: ANARIDevice, obj: ANARIObject) {
     with_device(dev, "anariRetain", (), |d, device| match target(d, obj) {
-        Target::Device => d.retain(),
-        Target::Object(h) => device.retain(h),
+        Subject::Device => d.retain(),
+        Subject::Object(h) => device.retain(h),
     })
 }
 

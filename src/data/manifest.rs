@@ -6,7 +6,7 @@ use sha2::{Digest, Sha256};
 
 use super::raw::decode_raw;
 use super::{DataError, VoxelType};
-use crate::device::StructuredVolume;
+use crate::scene::StructuredVolume;
 
 /// A `volumes.toml` manifest: named raw volumes beside it.
 #[derive(Debug)]

@@ -16,7 +16,7 @@ pub use raw::{load_raw, VoxelType};
 
 use thiserror::Error;
 
-use crate::device::{TransferFunctionError, VolumeError};
+use crate::scene::{TransferFunctionError, VolumeError};
 
 #[derive(Debug, Error)]
 pub enum DataError {

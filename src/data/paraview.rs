@@ -4,7 +4,7 @@ use serde_json::Value;
 
 use super::presets::tabulate;
 use super::DataError;
-use crate::device::TransferFunction;
+use crate::scene::TransferFunction;
 
 /// Loads a colour map exported from ParaView as JSON: `RGBPoints` (x, r, g,
 /// b quadruples) and, if present, `Points` (x, opacity, midpoint,

@@ -1,7 +1,7 @@
 use glam::Vec4;
 
 use super::DataError;
-use crate::device::{TransferFunction, TransferFunctionError, TABLE_SIZE};
+use crate::scene::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 
 /// Built-in transfer functions over the normalised value range [0, 1]
 /// (callers usually stretch them over the data's range).

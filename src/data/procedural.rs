@@ -3,7 +3,7 @@
 
 use glam::{UVec3, Vec3};
 
-use crate::device::{StructuredVolume, Voxels};
+use crate::scene::{StructuredVolume, Voxels};
 
 /// Ellipsoids of the 3D Shepp-Logan head phantom (Kak & Slaney), with the
 /// higher-contrast intensities of Toft's modified version:

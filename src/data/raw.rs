@@ -3,7 +3,7 @@ use std::path::Path;
 use glam::{UVec3, Vec3};
 
 use super::DataError;
-use crate::device::{StructuredVolume, Voxels};
+use crate::scene::{StructuredVolume, Voxels};
 
 /// Voxel types of headerless little-endian raw files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,19 +1,38 @@
-//! What caveray implements, per object kind and subtype: the parameters it
-//! reads, their accepted types, defaults and descriptions. Setting a
-//! parameter is checked against this table, and the info queries
-//! (`anariGetObjectInfo`, `anariGetParameterInfo`) answer from it.
+//! What caveray implements: one `SubtypeInfo` per object kind and subtype,
+//! each in its own module beside its commit, listed once in `SUBTYPES`.
+//! Setting a parameter is checked against these tables, commits read their
+//! defaults from them, and the info queries (`anariGetObjectInfo`,
+//! `anariGetParameterInfo`) answer from them.
 
+use super::object::State;
+use super::read::Read;
 use super::types::DataType as T;
+use super::{camera, device_object, frame, renderer, spatial_field, volume, world};
 
 pub struct ParamInfo {
     pub name: &'static str,
     /// Accepted types, the preferred one first.
     pub types: &'static [T],
     pub required: bool,
-    /// Default value as FLOAT32 components (for FLOAT32-based types).
-    pub default: Option<&'static [f32]>,
+    pub default: Default,
     pub description: &'static str,
 }
+
+/// A parameter's value when the host sets none.
+pub enum Default {
+    None,
+    /// FLOAT32 components (for FLOAT32-based types); the info queries
+    /// answer these.
+    Floats(&'static [f32]),
+    /// An enumeration's default name.
+    Text(&'static str),
+}
+
+/// What committing a subtype derives from its parameters: its new state,
+/// `None` where parameters are read later (frames, at render time), or
+/// why the parameters cannot be used. Warnings about accepted-but-odd
+/// input go to the callback.
+pub type Commit = fn(&Read<'_>, &mut dyn FnMut(String)) -> Result<Option<State>, String>;
 
 pub struct SubtypeInfo {
     pub kind: T,
@@ -22,13 +41,15 @@ pub struct SubtypeInfo {
     /// Extensions (by name) this subtype belongs to.
     pub extensions: &'static [&'static str],
     pub params: &'static [ParamInfo],
+    /// `None` for the device, whose commit is the device's own.
+    pub commit: Option<Commit>,
 }
 
-const fn p(
+pub const fn p(
     name: &'static str,
     types: &'static [T],
     required: bool,
-    default: Option<&'static [f32]>,
+    default: Default,
     description: &'static str,
 ) -> ParamInfo {
     ParamInfo {
@@ -39,6 +60,10 @@ const fn p(
         description,
     }
 }
+
+pub const VEC3: &[T] = &[T::FLOAT32_VEC3];
+pub const F32: &[T] = &[T::FLOAT32];
+pub const MAT4: &[T] = &[T::FLOAT32_MAT4];
 
 /// The matrix camera's extension under anari-visionaray's name (clients
 /// written for it work unchanged) and under ours.
@@ -59,139 +84,17 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_SHADING,
 ];
 
-const VEC3: &[T] = &[T::FLOAT32_VEC3];
-const F32: &[T] = &[T::FLOAT32];
-const MAT4: &[T] = &[T::FLOAT32_MAT4];
-
-pub static SUBTYPES: &[SubtypeInfo] = &[
-    SubtypeInfo {
-        kind: T::DEVICE,
-        subtype: "default",
-        description: "caveray: off-axis volume ray casting for CAVEs and powerwalls",
-        extensions: &[],
-        params: &[
-            p("statusCallback", &[T::STATUS_CALLBACK], false, None,
-              "function receiving every error, warning and info message; takes effect on commit"),
-            p("statusCallbackUserData", &[T::VOID_POINTER], false, None,
-              "passed back as the status callback's first argument"),
-            p("backend", &[T::STRING], false, None,
-              "auto | gpu | cpu: the Vulkan ray caster, the CPU reference, or the GPU when one opens \
-               (default auto, or $CAVERAY_BACKEND)"),
-        ],
-    },
-    SubtypeInfo {
-        kind: T::CAMERA,
-        subtype: "perspective",
-        description: "pinhole camera; an off-axis wall is a widened frustum cropped by imageRegion",
-        extensions: &["ANARI_KHR_CAMERA_PERSPECTIVE"],
-        params: &[
-            p("position", VEC3, false, Some(&[0.0, 0.0, 0.0]), "eye position"),
-            p("direction", VEC3, false, Some(&[0.0, 0.0, -1.0]), "viewing direction"),
-            p("up", VEC3, false, Some(&[0.0, 1.0, 0.0]), "up vector"),
-            p("fovy", F32, false, Some(&[std::f32::consts::FRAC_PI_3]),
-              "vertical field of view in radians"),
-            p("aspect", F32, false, None, "width / height (default: the frame's)"),
-            p("imageRegion", &[T::FLOAT32_BOX2], false, Some(&[0.0, 0.0, 1.0, 1.0]),
-              "part of the image that is rendered, (min.x, min.y, max.x, max.y) in [0, 1]"),
-        ],
-    },
-    SubtypeInfo {
-        kind: T::CAMERA,
-        subtype: "matrix",
-        description: "rays from the inverse of OpenGL view and projection matrices (off-axis strategy 1)",
-        extensions: &[EXT_MATRIX_VSNRAY, EXT_MATRIX],
-        params: &[
-            p("view", MAT4, true, None, "OpenGL view matrix, column-major"),
-            p("proj", MAT4, true, None, "OpenGL projection matrix, column-major, NDC z in [-1, 1]"),
-        ],
-    },
-    SubtypeInfo {
-        kind: T::CAMERA,
-        subtype: "offAxis",
-        description: "rays from a tracked eye through a wall given by three corners",
-        extensions: &[EXT_OFF_AXIS],
-        params: &[
-            p("lowerLeft", VEC3, true, None, "wall's lower-left corner"),
-            p("lowerRight", VEC3, true, None, "wall's lower-right corner"),
-            p("upperRight", VEC3, true, None, "wall's upper-right corner"),
-            p("eye", VEC3, true, None, "eye position, in front of the wall"),
-        ],
-    },
-    SubtypeInfo {
-        kind: T::SPATIAL_FIELD,
-        subtype: "structuredRegular",
-        description: "vertex-centred regular grid, x fastest, sampled trilinearly",
-        extensions: &["ANARI_KHR_SPATIAL_FIELD_STRUCTURED_REGULAR"],
-        params: &[
-            p("data", &[T::ARRAY3D], true, None,
-              "voxels: UFIXED8, UFIXED16, FIXED16, FLOAT32 or FLOAT64 (UINT8/UINT16 read as UFIXED)"),
-            p("origin", VEC3, false, Some(&[0.0, 0.0, 0.0]), "position of voxel (0, 0, 0)"),
-            p("spacing", VEC3, false, Some(&[1.0, 1.0, 1.0]), "distance between voxel centres"),
-            p("filter", &[T::STRING], false, None, "linear (nearest is read as linear)"),
-        ],
-    },
-    SubtypeInfo {
-        kind: T::VOLUME,
-        subtype: "transferFunction1D",
-        description: "a spatial field classified by a 1D colour and opacity map",
-        extensions: &["ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D"],
-        params: &[
-            p("value", &[T::SPATIAL_FIELD], true, None, "the spatial field"),
-            p("valueRange", &[T::FLOAT32_BOX1, T::FLOAT64_BOX1], false, Some(&[0.0, 1.0]),
-              "field values mapped to the first and last entries"),
-            p("color", &[T::ARRAY1D, T::FLOAT32_VEC3, T::FLOAT32_VEC4], false, Some(&[1.0, 1.0, 1.0]),
-              "ARRAY1D of FLOAT32_VEC3/VEC4 spread over valueRange, or one colour"),
-            p("opacity", &[T::ARRAY1D, T::FLOAT32], false, Some(&[1.0]),
-              "ARRAY1D of FLOAT32 spread over valueRange, or one opacity"),
-            p("unitDistance", F32, false, Some(&[1.0]),
-              "world distance over which the opacities apply"),
-        ],
-    },
-    SubtypeInfo {
-        kind: T::WORLD,
-        subtype: "",
-        description: "the scene: caveray renders its first volume",
-        extensions: &[],
-        params: &[p("volume", &[T::ARRAY1D], false, None, "ARRAY1D of ANARI_VOLUME")],
-    },
-    SubtypeInfo {
-        kind: T::RENDERER,
-        subtype: "default",
-        description: "emission-absorption ray casting with optional shadows and ambient occlusion",
-        extensions: &[EXT_SHADING],
-        params: &[
-            p("background", &[T::FLOAT32_VEC4], false, Some(&[0.0, 0.0, 0.0, 1.0]),
-              "colour behind the volume, straight alpha"),
-            p("shading", &[T::STRING], false, None,
-              "none | shadows | ao | shadows+ao | directional:N (N <= 64); default none"),
-            p("lightDirection", VEC3, false, Some(&[0.3, 0.5, 0.8]),
-              "direction towards the parallel light of shadows"),
-            p("stepFactor", F32, false, Some(&[1.0]),
-              "step length in units of half the smallest voxel extent"),
-            p("terminationThreshold", F32, false, Some(&[0.99]),
-              "opacity at which a ray stops; above 1 disables early termination"),
-        ],
-    },
-    SubtypeInfo {
-        kind: T::FRAME,
-        subtype: "",
-        description: "render target: colour and depth, lower-left pixel first",
-        extensions: &[],
-        params: &[
-            p("size", &[T::UINT32_VEC2], true, None, "width and height in pixels"),
-            p("world", &[T::WORLD], true, None, "what to render"),
-            p("camera", &[T::CAMERA], true, None, "where from"),
-            p("renderer", &[T::RENDERER], true, None, "how"),
-            p("channel.color", &[T::DATA_TYPE], false, None,
-              "UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4 (unset: no colour channel)"),
-            p("channel.depth", &[T::DATA_TYPE], false, None,
-              "FLOAT32: distance from the camera to the first visible sample"),
-            p("frameCompletionCallback", &[T::FRAME_COMPLETION_CALLBACK], false, None,
-              "called on the render thread when a frame is done"),
-            p("frameCompletionCallbackUserData", &[T::VOID_POINTER], false, None,
-              "first argument of the frame completion callback"),
-        ],
-    },
+/// The registry: adding a subtype is a module and a line here.
+pub static SUBTYPES: &[&SubtypeInfo] = &[
+    &device_object::INFO,
+    &camera::perspective::INFO,
+    &camera::matrix::INFO,
+    &camera::off_axis::INFO,
+    &spatial_field::structured_regular::INFO,
+    &volume::transfer_function_1d::INFO,
+    &world::INFO,
+    &renderer::INFO,
+    &frame::INFO,
 ];
 
 /// Subtype names of `kind` that caveray implements, in table order.
@@ -208,6 +111,7 @@ pub fn subtypes(kind: T) -> Vec<&'static str> {
 pub fn subtype(kind: T, subtype: &str) -> Option<&'static SubtypeInfo> {
     SUBTYPES
         .iter()
+        .copied()
         .find(|s| s.kind == kind && (s.subtype.is_empty() || s.subtype == subtype))
 }
 
@@ -229,15 +133,21 @@ mod tests {
                     s.subtype,
                     p.name
                 );
-                if let Some(d) = p.default {
-                    let size = p.types.iter().find(|t| t.size() == 4 * d.len());
-                    assert!(
-                        size.is_some(),
+                match p.default {
+                    Default::Floats(d) => assert!(
+                        p.types.iter().any(|t| t.size() == 4 * d.len()),
                         "{}.{}: default {d:?} fits none of {:?}",
                         s.subtype,
                         p.name,
                         p.types
-                    );
+                    ),
+                    Default::Text(_) => assert!(
+                        p.types.contains(&T::STRING),
+                        "{}.{}: a text default for a parameter that takes no STRING",
+                        s.subtype,
+                        p.name
+                    ),
+                    Default::None => {}
                 }
                 assert!(
                     s.params[..i].iter().all(|q| q.name != p.name),
@@ -263,5 +173,12 @@ mod tests {
         assert!(subtype(T::CAMERA, "fisheye").is_none());
         assert_eq!(subtypes(T::CAMERA), ["perspective", "matrix", "offAxis"]);
         assert!(subtypes(T::GEOMETRY).is_empty());
+    }
+
+    #[test]
+    fn every_subtype_but_the_device_commits() {
+        for s in SUBTYPES {
+            assert_eq!(s.commit.is_none(), s.kind == T::DEVICE, "{}", s.subtype);
+        }
     }
 }

@@ -1,28 +1,29 @@
 //! The ANARI object model in plain Rust: objects behind handles,
-//! parameters set and committed, arrays, cameras, frames and the render
-//! thread. The C layer (`crate::capi`) converts and forwards to this.
+//! parameters set and committed, arrays, frames and the render thread.
+//! Each implemented subtype is a module of its own (a folder per object
+//! kind, helide-style) holding its parameter table and its commit; `info`
+//! lists them. The C layer (`crate::capi`) converts and forwards to this.
 
-mod api;
 mod array;
-mod camera;
-mod commit;
-mod frame;
-mod frames;
+mod calls;
+pub mod camera;
+mod device_object;
+pub mod frame;
 pub mod info;
 mod object;
-mod transfer_function;
+mod read;
+mod renderer;
+mod spatial_field;
 mod types;
 mod value;
-mod volume;
+pub mod volume;
 mod worker;
+mod world;
 
-pub use api::{Device, Input, Property, Target};
 pub use array::{Array, HostMemory};
+pub use calls::{Device, Input, Mapped, Property, Subject};
 pub use camera::CameraModel;
-pub use frame::FrameSlot;
-pub use frames::Mapped;
-pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
+pub use frame::slot::FrameSlot;
 pub use types::{kind_name, DataType, Severity, Status, StatusCode};
 pub use value::{Params, Value};
-pub use volume::{StructuredVolume, VolumeError, Voxels};
 pub use worker::{panic_message, BackendChoice, Reporter};

@@ -5,11 +5,12 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::array::Array;
 use super::camera::CameraModel;
-use super::frame::FrameState;
+use super::frame::slot::FrameState;
 use super::types::{kind_name, DataType};
 use super::value::Params;
-use super::{StructuredVolume, TransferFunction};
+use super::volume::VolumeModel;
 use crate::render::RenderSettings;
+use crate::scene::StructuredVolume;
 
 /// Objects are shared: the host's handle and every parameter or array that
 /// names the object keep it alive.
@@ -91,13 +92,6 @@ impl<T> Derived<T> {
             Derived::Invalid(e) => Err(format!("{what} is not usable: {e}")),
         }
     }
-}
-
-/// A transfer-function volume after commit.
-#[derive(Clone)]
-pub struct VolumeModel {
-    pub field: ObjectRef,
-    pub transfer_function: Arc<TransferFunction>,
 }
 
 pub enum State {

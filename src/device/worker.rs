@@ -7,10 +7,11 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-use super::frame::FrameSlot;
+use super::frame::slot::FrameSlot;
 use super::types::{DataType, Severity, Status, StatusCode};
 use crate::geometry::RayGen;
-use crate::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer, Scene};
+use crate::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer};
+use crate::scene::Scene;
 
 /// Where a device's status messages go; called from any thread.
 pub type Reporter = Arc<dyn Fn(Status) + Send + Sync>;
@@ -35,7 +36,7 @@ impl BackendChoice {
     }
 }
 
-pub struct Job {
+pub struct RenderJob {
     pub frame: u64,
     /// `None` renders the background only (an empty world).
     pub scene: Option<Scene>,
@@ -48,7 +49,7 @@ pub struct Job {
 }
 
 pub struct Worker {
-    sender: Option<Sender<Job>>,
+    sender: Option<Sender<RenderJob>>,
     thread: Option<JoinHandle<()>>,
     report: Reporter,
 }
@@ -62,9 +63,9 @@ impl Worker {
         }
     }
 
-    pub fn submit(&mut self, job: Job) {
+    pub fn submit(&mut self, job: RenderJob) {
         if self.sender.is_none() {
-            let (tx, rx) = channel::<Job>();
+            let (tx, rx) = channel::<RenderJob>();
             let report = self.report.clone();
             let spawned = std::thread::Builder::new()
                 .name("caveray-render".into())
@@ -108,7 +109,7 @@ impl Drop for Worker {
     }
 }
 
-fn run(job: Job, renderer: &mut Option<(BackendChoice, Renderer)>, report: &Reporter) {
+fn run(job: RenderJob, renderer: &mut Option<(BackendChoice, Renderer)>, report: &Reporter) {
     let started = Instant::now();
     let status = |severity, code, message: String| Status {
         severity,

@@ -5,7 +5,7 @@ mod compare;
 pub mod cpu;
 mod frame;
 pub mod gpu;
-mod plan;
+mod march_plan;
 mod settings;
 pub mod stereo;
 
@@ -15,10 +15,10 @@ pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
 pub use cpu::CpuRenderer;
 pub use frame::{ColorData, ColorFormat, Frame, FrameDesc};
 pub use gpu::{GpuRenderer, Uploads};
-pub use plan::Scene;
 pub use settings::{RenderSettings, Shading, MAX_DIRECTIONS};
 
 use crate::geometry::RayGen;
+use crate::scene::Scene;
 
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum RenderError {

@@ -40,6 +40,8 @@ impl Shading {
 pub(crate) const SHADOW_STEPS: u32 = 24;
 pub(crate) const AO_DIRECTIONS: u32 = 14;
 pub(crate) const DIRECTIONAL_STEPS: u32 = 4;
+/// Light reaching a shadowed sample, so shadows darken but never black out.
+pub(crate) const SHADOW_AMBIENT: f32 = 0.3;
 
 impl fmt::Display for Shading {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

@@ -6,9 +6,9 @@ use std::process::{Command, Output};
 
 use anari_library_caveray::cave::Eye;
 use anari_library_caveray::data::{preset, shepp_logan};
-use anari_library_caveray::device::{StructuredVolume, TransferFunction};
 use anari_library_caveray::geometry::PrimaryRays;
-use anari_library_caveray::render::{CpuRenderer, Frame, FrameDesc, RenderSettings, Scene};
+use anari_library_caveray::render::{CpuRenderer, Frame, FrameDesc, RenderSettings};
+use anari_library_caveray::scene::{Scene, StructuredVolume, TransferFunction};
 use glam::UVec2;
 
 use super::rig;

@@ -5,7 +5,8 @@ use anari_library_caveray::geometry::{
     pinhole_from_matrices, MatrixCamera, OffAxisCamera, OffAxisProjection, PinholeCamera,
     PrimaryRays, RayGen, Screen,
 };
-use anari_library_caveray::render::{CpuRenderer, GpuRenderer, Renderer, Scene};
+use anari_library_caveray::render::{CpuRenderer, GpuRenderer, Renderer};
+use anari_library_caveray::scene::Scene;
 use glam::{DVec3, UVec2};
 
 /// The GPU renderer on Vulkan; tests never fall back to another API.

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays};
-use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Scene, Shading};
+use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
+use anari_library_caveray::scene::Scene;
 use clap::{Args, Subcommand};
 use glam::{DVec3, UVec2, Vec3};
 use serde_json::{json, Value};

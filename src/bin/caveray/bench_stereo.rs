@@ -13,10 +13,13 @@ use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
 use anari_library_caveray::output::{
     dssim_heatmap, frame_to_rgba, side_by_side, write_rgba_png, Chart, Series,
 };
-use anari_library_caveray::render::stereo::{layer_memory, HmdStereo, LayerFormat, Reprojection};
-use anari_library_caveray::render::{
-    dssim, ssim_map, Frame, FrameDesc, GpuRenderer, RenderSettings, Scene, Shading,
+use anari_library_caveray::render::stereo::{
+    layer_memory, Bounds, HmdStereo, LayerFormat, Reprojection,
 };
+use anari_library_caveray::render::{
+    dssim, ssim_map, Frame, FrameDesc, GpuRenderer, RenderSettings, Shading,
+};
+use anari_library_caveray::scene::Scene;
 use clap::Args;
 use glam::{UVec2, Vec3};
 use serde_json::{json, Value};
@@ -127,7 +130,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
                     l,
                     r,
                     image,
-                    scene.bounds(),
+                    Bounds::of(&scene),
                     Some(args.layers),
                     args.layer_format,
                 )

@@ -7,10 +7,9 @@ use std::time::Instant;
 use anari_library_caveray::cave::{Eye, Rig, View};
 use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
 use anari_library_caveray::output::{contact_sheet, frame_to_rgba, write_rgba_png, SheetLayout};
-use anari_library_caveray::render::stereo::{LayerFormat, Reprojection};
-use anari_library_caveray::render::{
-    Backend, Frame, FrameDesc, RenderSettings, Renderer, Scene, Shading,
-};
+use anari_library_caveray::render::stereo::{Bounds, LayerFormat, Reprojection};
+use anari_library_caveray::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer, Shading};
+use anari_library_caveray::scene::Scene;
 use clap::{Args, ValueEnum};
 use glam::UVec2;
 use serde_json::{json, Value};
@@ -441,7 +440,7 @@ fn stereo_pair<'v>(
         &camera(left)?,
         &camera(right)?,
         size,
-        scene.bounds(),
+        Bounds::of(scene),
         args.layers,
         args.layer_format,
     )

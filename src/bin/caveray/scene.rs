@@ -5,8 +5,7 @@ use std::path::{Path, PathBuf};
 use anari_library_caveray::data::{
     load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box, Manifest, VoxelType,
 };
-use anari_library_caveray::device::{StructuredVolume, TransferFunction, Voxels};
-use anari_library_caveray::render::Scene;
+use anari_library_caveray::scene::{Scene, StructuredVolume, TransferFunction, Voxels};
 use clap::Args;
 use glam::{UVec3, Vec3};
 

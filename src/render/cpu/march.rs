@@ -1,10 +1,7 @@
 use glam::{Vec3, Vec4};
 
 use super::sample::{correct, Field};
-use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_STEPS};
-
-/// Light reaching a shadowed sample, so shadows darken but never black out.
-pub(crate) const SHADOW_AMBIENT: f32 = 0.3;
+use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
 
 /// What one primary ray produced.
 pub(super) struct RayResult {

@@ -11,12 +11,11 @@ use glam::Vec4;
 use rayon::prelude::*;
 
 use super::frame::{linear_to_srgb, to_unorm8, ColorData, ColorFormat, Frame, FrameDesc};
-use super::plan::{MarchPlan, Scene};
+use super::march_plan::MarchPlan;
 use super::{RenderError, RenderSettings};
-use crate::device::{StructuredVolume, TransferFunction};
 use crate::geometry::RayGen;
-
-pub(crate) use march::SHADOW_AMBIENT;
+use crate::scene::Scene;
+use crate::scene::{StructuredVolume, TransferFunction};
 
 #[derive(Debug, Default)]
 pub struct CpuRenderer {

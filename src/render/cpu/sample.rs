@@ -1,7 +1,7 @@
 use glam::{IVec3, Vec3, Vec4};
 
-use crate::device::TABLE_SIZE;
-use crate::render::plan::MarchPlan;
+use crate::render::march_plan::MarchPlan;
+use crate::scene::TABLE_SIZE;
 
 /// The volume and table as the CPU reads them: voxel values already
 /// normalised to f32, exactly what the GPU texture holds.

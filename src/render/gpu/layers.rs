@@ -14,9 +14,9 @@ use super::{
 };
 use crate::geometry::RayGen;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
-use crate::render::plan::Scene;
 use crate::render::stereo::{LayerFormat, Reprojection, StereoFrames, StereoTimes};
 use crate::render::{RenderError, RenderSettings};
+use crate::scene::Scene;
 
 /// Size of the `Stereo` uniform in shaders/stereo.wgsl: 6 vec4s.
 const STEREO_BYTES: u64 = 6 * 16;

@@ -15,13 +15,14 @@ use glam::UVec2;
 
 use self::context::Context;
 use self::resources::Target;
-use super::cpu::SHADOW_AMBIENT;
 use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
-use super::plan::{MarchPlan, Scene};
+use super::march_plan::MarchPlan;
 use super::settings::MAX_DIRECTIONS;
+use super::settings::SHADOW_AMBIENT;
 use super::{RenderError, RenderSettings};
-use crate::device::{StructuredVolume, TransferFunction};
 use crate::geometry::RayGen;
+use crate::scene::Scene;
+use crate::scene::{StructuredVolume, TransferFunction};
 
 const WORKGROUP: u32 = 8;
 

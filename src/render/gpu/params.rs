@@ -2,7 +2,7 @@ use glam::{UVec2, Vec3, Vec4};
 
 use crate::geometry::RayGen;
 use crate::render::frame::ColorFormat;
-use crate::render::plan::MarchPlan;
+use crate::render::march_plan::MarchPlan;
 use crate::render::settings::Shading;
 
 /// Size of the `Params` uniform in shaders/volume.wgsl: 14 vec4s.

@@ -1,8 +1,8 @@
 use glam::UVec2;
 
 use super::context::Context;
-use crate::device::{StructuredVolume, TransferFunction, TABLE_SIZE};
 use crate::render::frame::ColorFormat;
+use crate::scene::{StructuredVolume, TransferFunction, TABLE_SIZE};
 
 /// Slices per write when uploading a volume, so staging memory stays
 /// bounded (about 64 MiB) however large the volume is.

@@ -6,6 +6,7 @@
 use glam::{DVec3, DVec4};
 
 use crate::geometry::MatrixCamera;
+use crate::scene::Scene;
 
 /// What the scene occupies.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,6 +19,15 @@ pub enum Bounds {
 }
 
 impl Bounds {
+    /// The box of the scene's volume.
+    pub fn of(scene: &Scene) -> Self {
+        let (lo, hi) = scene.volume.bounds();
+        Bounds::Box {
+            lo: lo.as_dvec3(),
+            hi: hi.as_dvec3(),
+        }
+    }
+
     /// Nearest and farthest depth along `axis` from `eye` of what the
     /// views can see; None if they see none of it.
     pub(super) fn depths(

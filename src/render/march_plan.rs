@@ -1,37 +1,11 @@
-use std::sync::Arc;
+//! The march plan: every number both renderers derive from the scene and
+//! the settings before any ray is cast.
 
 use glam::{UVec3, Vec3, Vec4};
 
 use super::settings::{RenderSettings, Shading, AO_DIRECTIONS};
 use super::RenderError;
-use crate::device::{StructuredVolume, TransferFunction};
-
-/// What a renderer draws: a volume classified by a transfer function.
-/// Both are shared so a renderer can keep them uploaded and tell, by
-/// identity, when they were replaced.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    pub volume: Arc<StructuredVolume>,
-    pub transfer_function: Arc<TransferFunction>,
-}
-
-impl Scene {
-    pub fn new(volume: StructuredVolume, transfer_function: TransferFunction) -> Self {
-        Self {
-            volume: Arc::new(volume),
-            transfer_function: Arc::new(transfer_function),
-        }
-    }
-
-    /// The volume's box, for planning re-projection.
-    pub fn bounds(&self) -> super::stereo::Bounds {
-        let (lo, hi) = self.volume.bounds();
-        super::stereo::Bounds::Box {
-            lo: lo.as_dvec3(),
-            hi: hi.as_dvec3(),
-        }
-    }
-}
+use crate::scene::Scene;
 
 /// Everything both renderers derive from scene and settings before any ray
 /// is cast, so that the CPU reference and the shader share one set of

@@ -3,22 +3,14 @@
 
 use glam::UVec2;
 
-use super::api::Device;
-use super::frame::Channel;
-use super::object::{ObjectRef, State};
-use super::types::{kind_name, DataType, StatusCode};
-use super::worker::Job;
-use crate::render::{ColorData, ColorFormat, FrameDesc, Scene};
-
-/// The renderer's pixel format for a `channel.color` type.
-pub fn color_format(ty: Option<DataType>) -> Option<ColorFormat> {
-    match ty? {
-        DataType::UFIXED8_VEC4 => Some(ColorFormat::Rgba8),
-        DataType::UFIXED8_RGBA_SRGB => Some(ColorFormat::Srgba8),
-        DataType::FLOAT32_VEC4 => Some(ColorFormat::Rgba32F),
-        _ => None,
-    }
-}
+use super::Device;
+use crate::device::frame::slot::Channel;
+use crate::device::frame::{self, color_format};
+use crate::device::object::{ObjectRef, State};
+use crate::device::types::{kind_name, DataType, StatusCode};
+use crate::device::worker::RenderJob;
+use crate::render::{ColorData, FrameDesc};
+use crate::scene::Scene;
 
 /// A mapped channel: pointer to the first (lower-left) pixel, size, type.
 pub struct Mapped {
@@ -91,30 +83,17 @@ impl Device {
 
     /// Everything the render thread needs, copied out of the committed
     /// objects so the host may change them while the frame renders.
-    fn prepare(&mut self, frame: &ObjectRef) -> Result<(Job, Option<DataType>), String> {
+    fn prepare(&mut self, frame: &ObjectRef) -> Result<(RenderJob, Option<DataType>), String> {
         let params = frame
             .lock()
             .committed
             .clone()
             .ok_or("the frame has not been committed")?;
-        let size = match params.get("size").and_then(|v| v.u32s()).as_deref() {
-            Some(&[w, h]) if w > 0 && h > 0 => UVec2::new(w, h),
-            Some(&[w, h]) => return Err(format!("size {w}x{h} has no pixels")),
-            _ => return Err("parameter 'size' (UINT32_VEC2) is not set".into()),
-        };
-        let color_type = match params.get("channel.color").and_then(|v| v.i32()) {
-            None => None,
-            Some(code) => Some(
-                DataType::from_code(code)
-                    .filter(|&t| color_format(Some(t)).is_some())
-                    .ok_or_else(|| format!("channel.color {code} is not UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4"))?,
-            ),
-        };
-        let depth = match params.get("channel.depth").and_then(|v| v.i32()) {
-            None => false,
-            Some(code) if code == DataType::FLOAT32 as i32 => true,
-            Some(code) => return Err(format!("channel.depth {code} is not FLOAT32")),
-        };
+        let frame::Setup {
+            size,
+            color_type,
+            depth,
+        } = frame::setup(&params)?;
         let needed = |name: &str, kind: DataType| -> Result<ObjectRef, String> {
             let o = params.object(name).ok_or_else(|| {
                 format!(
@@ -191,13 +170,13 @@ impl Device {
             }
         };
         let mut desc =
-            FrameDesc::new(size).with_color(color_format(color_type).unwrap_or_default());
+            FrameDesc::new(size).with_color(color_type.and_then(color_format).unwrap_or_default());
         desc.depth = depth;
         let slot = match &frame.lock().state {
             State::Frame(f) => f.slot.clone(),
             _ => return Err(format!("{} is not a frame", frame.describe())),
         };
-        let job = Job {
+        let job = RenderJob {
             frame: frame.handle,
             scene,
             rays,

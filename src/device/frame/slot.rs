@@ -30,7 +30,7 @@ pub struct FrameState {
     /// into, so the pointers it holds stay valid.
     pub mapped: [bool; 2],
     /// The colour channel's ANARI type, if the frame has one.
-    pub color_type: Option<super::DataType>,
+    pub color_type: Option<crate::device::types::DataType>,
 }
 
 /// Shared between the device and the worker rendering into the frame.

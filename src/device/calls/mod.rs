@@ -1,0 +1,268 @@
+//! The device: a table of objects behind handles, and every ANARI call on
+//! them in plain Rust, one file per topic (objects here; arrays,
+//! parameters and commits, frames beside). Misuse is reported as a
+//! `Status` and answered with a neutral value; nothing here panics on bad
+//! input.
+
+mod arrays;
+mod frames;
+mod params;
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+
+use super::frame::slot::FrameSlot;
+use super::info;
+use super::object::{ObjectCell, ObjectRef, State};
+use super::types::{kind_name, DataType, Severity, Status, StatusCode};
+use super::value::{Params, Value};
+use super::worker::{BackendChoice, Reporter, Worker};
+
+pub use frames::Mapped;
+
+static NEXT_DEVICE: AtomicU64 = AtomicU64::new(1);
+
+/// A parameter value as the host passed it, before it is checked.
+pub enum Input {
+    Bytes(DataType, Vec<u8>),
+    String(String),
+    Pointer(DataType, usize),
+    /// A handle, with the type the host declared for it.
+    Object(DataType, u64),
+}
+
+/// What a parameter or property call is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Subject {
+    Device,
+    Object(u64),
+}
+
+/// A property value for `anariGetProperty`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Property {
+    Int32(i32),
+    UInt64(u64),
+    Float32(f32),
+    /// The device's extension names (the C layer owns the C strings).
+    Extensions,
+}
+
+pub struct Device {
+    /// Handles are `serial << 32 | n`, so a handle from another device is
+    /// recognised without dereferencing anything.
+    serial: u64,
+    next: u64,
+    objects: HashMap<u64, (ObjectRef, u32)>,
+    pending: Params,
+    committed: Params,
+    /// Arrays handed out by `anariMapParameterArray*D`, by object and name.
+    mapped_params: HashMap<(u64, String), (DataType, ObjectRef)>,
+    backend: BackendChoice,
+    statuses: Vec<Status>,
+    pub(super) worker: Worker,
+}
+
+impl Device {
+    /// `report` receives messages from the render thread; messages from
+    /// calls are queued and taken with [`Device::take_statuses`].
+    pub fn new(report: Reporter) -> Self {
+        let backend = std::env::var("CAVERAY_BACKEND")
+            .ok()
+            .and_then(|b| BackendChoice::parse(&b))
+            .unwrap_or(BackendChoice::Auto);
+        Self {
+            serial: NEXT_DEVICE.fetch_add(1, Ordering::Relaxed),
+            next: 1,
+            objects: HashMap::new(),
+            pending: Params::default(),
+            committed: Params::default(),
+            mapped_params: HashMap::new(),
+            backend,
+            statuses: Vec::new(),
+            worker: Worker::new(report),
+        }
+    }
+
+    pub fn take_statuses(&mut self) -> Vec<Status> {
+        std::mem::take(&mut self.statuses)
+    }
+
+    pub fn backend(&self) -> BackendChoice {
+        self.backend
+    }
+
+    pub(super) fn status(
+        &mut self,
+        severity: Severity,
+        code: StatusCode,
+        source: Option<&ObjectRef>,
+        message: String,
+    ) {
+        self.statuses.push(Status {
+            severity,
+            code,
+            source: source.map_or(0, |o| o.handle),
+            source_kind: source.map_or(DataType::DEVICE, |o| o.kind),
+            message,
+        });
+    }
+
+    pub(super) fn error(&mut self, code: StatusCode, source: Option<&ObjectRef>, message: String) {
+        self.status(Severity::Error, code, source, message);
+    }
+
+    pub(super) fn warn(&mut self, source: Option<&ObjectRef>, message: String) {
+        self.status(Severity::Warning, StatusCode::NoError, source, message);
+    }
+
+    /// The live object behind `handle`, or an error naming what is wrong
+    /// with it (`what` says which argument it was, e.g. "anariCommitParameters").
+    pub fn lookup(&mut self, handle: u64, what: &str) -> Option<ObjectRef> {
+        if let Some((o, _)) = self.objects.get(&handle) {
+            return Some(o.clone());
+        }
+        let message = if handle == 0 {
+            format!("{what}: the object handle is NULL")
+        } else if handle >> 32 == self.serial {
+            format!("{what}: handle {handle:#x} was released (or never created)")
+        } else if handle >> 32 != 0 && handle >> 32 < NEXT_DEVICE.load(Ordering::Relaxed) {
+            format!("{what}: handle {handle:#x} belongs to another device")
+        } else {
+            format!("{what}: {handle:#x} is not an ANARI handle")
+        };
+        self.error(StatusCode::InvalidArgument, None, message);
+        None
+    }
+
+    fn insert(
+        &mut self,
+        kind: DataType,
+        subtype: &str,
+        implemented: bool,
+        state: State,
+    ) -> ObjectRef {
+        let handle = self.serial << 32 | self.next;
+        self.next += 1;
+        let cell = ObjectRef::new(ObjectCell::new(handle, kind, subtype, implemented, state));
+        self.objects.insert(handle, (cell.clone(), 1));
+        cell
+    }
+
+    /// `anariNew<Kind>` / `anariNewObject`. Kinds and subtypes caveray does
+    /// not implement give an inert object and a warning.
+    pub fn new_object(&mut self, kind: DataType, subtype: &str) -> u64 {
+        let implemented = info::subtype(kind, subtype).is_some();
+        let cell = self.insert(
+            kind,
+            subtype,
+            implemented,
+            State::for_kind(kind, implemented),
+        );
+        if !implemented {
+            let known = info::subtypes(kind);
+            let hint = if known.is_empty() {
+                String::new()
+            } else {
+                format!(" (implemented: {})", known.join(", "))
+            };
+            self.warn(
+                Some(&cell),
+                format!(
+                    "caveray does not implement {} '{subtype}'{hint}; the object is created but renders nothing",
+                    kind_name(kind)
+                ),
+            );
+        }
+        cell.handle
+    }
+
+    pub fn retain(&mut self, handle: u64) {
+        if self.lookup(handle, "anariRetain").is_some() {
+            if let Some(e) = self.objects.get_mut(&handle) {
+                e.1 += 1;
+            }
+        }
+    }
+
+    /// Drops the host's reference; the object lives on while parameters,
+    /// arrays or a render in flight still use it.
+    pub fn release(&mut self, handle: u64) {
+        if self.lookup(handle, "anariRelease").is_none() {
+            return;
+        }
+        let gone = match self.objects.get_mut(&handle) {
+            Some(e) => {
+                e.1 -= 1;
+                e.1 == 0
+            }
+            None => false,
+        };
+        if gone {
+            // Dropped outside the table borrow: the drop may run a host
+            // deleter, which may call back into nothing of ours.
+            let entry = self.objects.remove(&handle);
+            drop(entry);
+        }
+    }
+
+    /// `anariGetProperty`. `None`: no such property (not an error).
+    pub fn property(&mut self, target: Subject, name: &str, wait: bool) -> Option<Property> {
+        match target {
+            Subject::Device => match name {
+                "version" => Some(Property::Int32(1)),
+                "extension" => Some(Property::Extensions),
+                "geometryMaxIndex" => Some(Property::UInt64(u64::from(u32::MAX))),
+                _ => None,
+            },
+            Subject::Object(h) => {
+                let cell = self.lookup(h, &format!("anariGetProperty('{name}')"))?;
+                let slot = match (&cell.lock().state, name) {
+                    (State::Frame(f), "duration") => f.slot.clone(),
+                    _ => return None,
+                };
+                let s = if wait { slot.wait() } else { slot.lock() };
+                Some(Property::Float32(s.duration.as_secs_f32()))
+            }
+        }
+    }
+}
+
+impl Device {
+    /// An error about a call's arguments, found before the device model
+    /// was reached (e.g. a string that is not UTF-8).
+    pub fn report_error(&mut self, code: StatusCode, message: String) {
+        self.error(code, None, message);
+    }
+
+    /// The kind of a live object, without reporting anything.
+    pub fn kind_of(&self, handle: u64) -> Option<DataType> {
+        self.objects.get(&handle).map(|e| e.0.kind)
+    }
+
+    /// The slot of a frame, to wait on without holding the device.
+    pub fn frame_slot(&mut self, handle: u64, call: &str) -> Option<Arc<FrameSlot>> {
+        let cell = self.lookup(handle, call)?;
+        let slot = match &cell.lock().state {
+            State::Frame(f) => Some(f.slot.clone()),
+            _ => None,
+        };
+        if slot.is_none() {
+            self.error(
+                StatusCode::InvalidArgument,
+                Some(&cell),
+                format!("{call}: {} is not a frame", cell.describe()),
+            );
+        }
+        slot
+    }
+
+    /// A committed parameter of an object (the C layer reads the frame's
+    /// completion callback here).
+    pub fn committed(&self, handle: u64, name: &str) -> Option<Value> {
+        let cell = self.objects.get(&handle)?.0.clone();
+        let g = cell.lock();
+        g.committed.as_ref()?.get(name).cloned()
+    }
+}

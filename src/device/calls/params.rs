@@ -1,0 +1,225 @@
+//! Parameters: set (checked against the subtype's table), unset, and
+//! committed, when the subtype's commit derives the object's state.
+
+use super::{Device, Input, Subject};
+use crate::device::info;
+use crate::device::object::{Derived, State};
+use crate::device::read::Read;
+use crate::device::types::{DataType, StatusCode};
+use crate::device::value::Value;
+use crate::device::worker::BackendChoice;
+
+impl Device {
+    /// `anariSetParameter`: checked against the subtype's table. Unknown
+    /// names are ignored with a warning; wrong types are errors.
+    pub fn set_param(&mut self, target: Subject, name: &str, input: Input) {
+        let (kind, subtype, cell) = match target {
+            Subject::Device => (DataType::DEVICE, "default".to_owned(), None),
+            Subject::Object(h) => match self.lookup(h, &format!("anariSetParameter('{name}')")) {
+                Some(c) => (c.kind, c.subtype.clone(), Some(c)),
+                None => return,
+            },
+        };
+        let owner = cell
+            .as_ref()
+            .map_or_else(|| "device".to_owned(), |c| c.describe());
+        if cell.as_ref().is_some_and(|c| {
+            !c.implemented
+                || matches!(
+                    c.kind,
+                    DataType::ARRAY1D | DataType::ARRAY2D | DataType::ARRAY3D
+                )
+        }) {
+            // Inert objects were warned about when created; arrays have no
+            // parameters caveray reads.
+            return;
+        }
+        let Some(param) = info::param(kind, &subtype, name) else {
+            self.warn(
+                cell.as_ref(),
+                format!("anariSetParameter: {owner} has no parameter '{name}' that caveray reads; ignored"),
+            );
+            return;
+        };
+        let declared = match &input {
+            Input::Bytes(t, _) | Input::Pointer(t, _) | Input::Object(t, _) => *t,
+            Input::String(_) => DataType::STRING,
+        };
+        let expected = param
+            .types
+            .iter()
+            .map(|t| t.name())
+            .collect::<Vec<_>>()
+            .join(" or ");
+        let value = match input {
+            Input::Object(declared, h) => {
+                let Some(object) = self.lookup(h, &format!("anariSetParameter: {owner} '{name}'"))
+                else {
+                    return;
+                };
+                let fits = param.types.iter().any(|&t| {
+                    t.accepts_object(object.kind) && declared.accepts_object(object.kind)
+                });
+                if !fits {
+                    self.error(
+                        StatusCode::InvalidArgument,
+                        cell.as_ref(),
+                        format!(
+                            "anariSetParameter: {owner} parameter '{name}' expects {expected}, got {} declared as {declared}",
+                            object.describe()
+                        ),
+                    );
+                    return;
+                }
+                Value::Object {
+                    ty: object.kind,
+                    object,
+                }
+            }
+            _ if !param.types.contains(&declared) => {
+                self.error(
+                    StatusCode::InvalidArgument,
+                    cell.as_ref(),
+                    format!("anariSetParameter: {owner} parameter '{name}' expects {expected}, got {declared}"),
+                );
+                return;
+            }
+            Input::Bytes(ty, bytes) => Value::Bytes { ty, bytes },
+            Input::String(s) => Value::String(s),
+            Input::Pointer(ty, addr) => Value::Pointer { ty, addr },
+        };
+        match cell {
+            None => self.pending.set(name, value),
+            Some(c) => c.lock().pending.set(name, value),
+        }
+    }
+
+    pub fn unset_param(&mut self, target: Subject, name: &str) {
+        match target {
+            Subject::Device => {
+                self.pending.unset(name);
+            }
+            Subject::Object(h) => {
+                if let Some(c) = self.lookup(h, "anariUnsetParameter") {
+                    // Dropped outside the lock: it may be the last reference
+                    // to an array whose host deleter then runs.
+                    let removed = c.lock().pending.unset(name);
+                    drop(removed);
+                }
+            }
+        }
+    }
+
+    pub fn unset_all_params(&mut self, target: Subject) {
+        match target {
+            Subject::Device => self.pending.clear(),
+            Subject::Object(h) => {
+                if let Some(c) = self.lookup(h, "anariUnsetAllParameters") {
+                    let old = std::mem::take(&mut c.lock().pending);
+                    drop(old);
+                }
+            }
+        }
+    }
+
+    /// A committed device parameter (the C layer reads its callbacks here).
+    pub fn device_param(&self, name: &str) -> Option<&Value> {
+        self.committed.get(name)
+    }
+
+    /// `anariCommitParameters`: the parameters set so far take effect and
+    /// the subtype's commit rebuilds the object's state; problems are
+    /// reported now.
+    pub fn commit(&mut self, target: Subject) {
+        let cell = match target {
+            Subject::Device => return self.commit_device(),
+            Subject::Object(h) => match self.lookup(h, "anariCommitParameters") {
+                Some(c) => c,
+                None => return,
+            },
+        };
+        let params = {
+            let mut g = cell.lock();
+            let p = g.pending.clone();
+            g.committed = Some(p.clone());
+            p
+        };
+        if !cell.implemented {
+            return;
+        }
+        let Some(subtype) = info::subtype(cell.kind, &cell.subtype) else {
+            return;
+        };
+        // Frames are committed before hosts know all they need; what is
+        // missing is reported when they render.
+        let missing = subtype
+            .params
+            .iter()
+            .find(|p| p.required && params.get(p.name).is_none() && cell.kind != DataType::FRAME);
+        let mut warnings = Vec::new();
+        let derived = match (missing, subtype.commit) {
+            (Some(p), _) => Err(format!(
+                "required parameter '{}' ({}) is not set",
+                p.name, p.types[0]
+            )),
+            (None, Some(commit)) => commit(&Read::new(&params, subtype.params), &mut |w| {
+                warnings.push(w)
+            }),
+            (None, None) => Ok(None),
+        };
+        for w in warnings {
+            self.warn(
+                Some(&cell),
+                format!("anariCommitParameters: {}: {w}", cell.describe()),
+            );
+        }
+        let new_state = match derived {
+            Ok(None) => return,
+            Ok(Some(s)) => s,
+            Err(e) => {
+                self.error(
+                    StatusCode::InvalidArgument,
+                    Some(&cell),
+                    format!("anariCommitParameters: {}: {e}", cell.describe()),
+                );
+                match invalid_state(cell.kind, e) {
+                    Some(s) => s,
+                    None => return,
+                }
+            }
+        };
+        let old = std::mem::replace(&mut cell.lock().state, new_state);
+        drop(old);
+    }
+
+    fn commit_device(&mut self) {
+        self.committed = self.pending.clone();
+        if let Some(b) = self.committed.string("backend") {
+            match BackendChoice::parse(b) {
+                Some(b) => self.backend = b,
+                None => {
+                    let b = b.to_owned();
+                    self.error(
+                        StatusCode::InvalidArgument,
+                        None,
+                        format!("anariCommitParameters: device parameter 'backend' is '{b}'; expected auto, gpu or cpu"),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The state of an object whose commit failed: unusable, with the reason
+/// kept for render time. `None` for kinds whose state a commit never
+/// replaces (frames).
+fn invalid_state(kind: DataType, why: String) -> Option<State> {
+    Some(match kind {
+        DataType::SPATIAL_FIELD => State::Field(Derived::Invalid(why)),
+        DataType::VOLUME => State::Volume(Derived::Invalid(why)),
+        DataType::WORLD => State::World(Derived::Invalid(why)),
+        DataType::CAMERA => State::Camera(Derived::Invalid(why)),
+        DataType::RENDERER => State::Renderer(Derived::Invalid(why)),
+        _ => return None,
+    })
+}

@@ -1,0 +1,59 @@
+//! caveray's `offAxis` camera: a wall by three corners and the tracked
+//! eye, the form CAVE rigs describe themselves in.
+
+use super::CameraModel;
+use crate::device::info::{p, Default, SubtypeInfo, EXT_OFF_AXIS, VEC3};
+use crate::device::object::State;
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
+use crate::geometry::{OffAxisCamera, Screen};
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::CAMERA,
+    subtype: "offAxis",
+    description: "rays from a tracked eye through a wall given by three corners",
+    extensions: &[EXT_OFF_AXIS],
+    params: &[
+        p(
+            "lowerLeft",
+            VEC3,
+            true,
+            Default::None,
+            "wall's lower-left corner",
+        ),
+        p(
+            "lowerRight",
+            VEC3,
+            true,
+            Default::None,
+            "wall's lower-right corner",
+        ),
+        p(
+            "upperRight",
+            VEC3,
+            true,
+            Default::None,
+            "wall's upper-right corner",
+        ),
+        p(
+            "eye",
+            VEC3,
+            true,
+            Default::None,
+            "eye position, in front of the wall",
+        ),
+    ],
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let point = |name| r.vec3(name).map(|v| v.as_dvec3());
+    let screen = Screen::new(
+        point("lowerLeft")?,
+        point("lowerRight")?,
+        point("upperRight")?,
+    )
+    .map_err(|e| e.to_string())?;
+    let camera = OffAxisCamera::new(screen, point("eye")?).map_err(|e| e.to_string())?;
+    CameraModel::OffAxis(camera).committed()
+}

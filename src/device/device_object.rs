@@ -1,0 +1,23 @@
+//! The device as an object: the parameters hosts set on it. Its commit is
+//! the device's own (it switches callbacks and backends), so the table
+//! serves checks and introspection only.
+
+use super::info::{p, Default, SubtypeInfo};
+use super::types::DataType as T;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::DEVICE,
+    subtype: "default",
+    description: "caveray: off-axis volume ray casting for CAVEs and powerwalls",
+    extensions: &[],
+    params: &[
+        p("statusCallback", &[T::STATUS_CALLBACK], false, Default::None,
+          "function receiving every error, warning and info message; takes effect on commit"),
+        p("statusCallbackUserData", &[T::VOID_POINTER], false, Default::None,
+          "passed back as the status callback's first argument"),
+        p("backend", &[T::STRING], false, Default::None,
+          "auto | gpu | cpu: the Vulkan ray caster, the CPU reference, or the GPU when one opens \
+           (default auto, or $CAVERAY_BACKEND)"),
+    ],
+    commit: None,
+};

@@ -1,0 +1,118 @@
+//! The frame: what to render (world, camera, renderer), at which size and
+//! into which channels. Its parameters are read when it renders, since
+//! hosts commit frames before they know the size; commit only reports a
+//! colour channel caveray cannot fill.
+
+pub mod slot;
+
+use glam::UVec2;
+
+use super::info::{p, Default, SubtypeInfo};
+use super::object::State;
+use super::read::Read;
+use super::types::DataType as T;
+use super::value::Params;
+use crate::render::ColorFormat;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::FRAME,
+    subtype: "",
+    description: "render target: colour and depth, lower-left pixel first",
+    extensions: &[],
+    params: &[
+        p(
+            "size",
+            &[T::UINT32_VEC2],
+            true,
+            Default::None,
+            "width and height in pixels",
+        ),
+        p("world", &[T::WORLD], true, Default::None, "what to render"),
+        p("camera", &[T::CAMERA], true, Default::None, "where from"),
+        p("renderer", &[T::RENDERER], true, Default::None, "how"),
+        p(
+            "channel.color",
+            &[T::DATA_TYPE],
+            false,
+            Default::None,
+            "UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4 (unset: no colour channel)",
+        ),
+        p(
+            "channel.depth",
+            &[T::DATA_TYPE],
+            false,
+            Default::None,
+            "FLOAT32: distance from the camera to the first visible sample",
+        ),
+        p(
+            "frameCompletionCallback",
+            &[T::FRAME_COMPLETION_CALLBACK],
+            false,
+            Default::None,
+            "called on the render thread when a frame is done",
+        ),
+        p(
+            "frameCompletionCallbackUserData",
+            &[T::VOID_POINTER],
+            false,
+            Default::None,
+            "first argument of the frame completion callback",
+        ),
+    ],
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    color_type(r.params())?;
+    Ok(None)
+}
+
+/// The renderer's pixel format for a `channel.color` type.
+pub fn color_format(ty: T) -> Option<ColorFormat> {
+    match ty {
+        T::UFIXED8_VEC4 => Some(ColorFormat::Rgba8),
+        T::UFIXED8_RGBA_SRGB => Some(ColorFormat::Srgba8),
+        T::FLOAT32_VEC4 => Some(ColorFormat::Rgba32F),
+        _ => None,
+    }
+}
+
+/// The colour channel's type, `None` if the frame has none.
+pub fn color_type(p: &Params) -> Result<Option<T>, String> {
+    let Some(code) = p.get("channel.color").and_then(|v| v.i32()) else {
+        return Ok(None);
+    };
+    match T::from_code(code) {
+        Some(t) if color_format(t).is_some() => Ok(Some(t)),
+        t => Err(format!(
+            "channel.color {} is not UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4",
+            t.map_or_else(|| code.to_string(), |t| t.name().to_owned())
+        )),
+    }
+}
+
+/// What a committed frame asks for, read when it renders.
+pub struct Setup {
+    pub size: UVec2,
+    pub color_type: Option<T>,
+    pub depth: bool,
+}
+
+pub fn setup(p: &Params) -> Result<Setup, String> {
+    let size = match p.get("size").and_then(|v| v.u32s()).as_deref() {
+        Some(&[w, h]) if w > 0 && h > 0 => UVec2::new(w, h),
+        Some(&[w, h]) => return Err(format!("size {w}x{h} has no pixels")),
+        _ => return Err("parameter 'size' (UINT32_VEC2) is not set".into()),
+    };
+    let color_type = color_type(p)?;
+    let depth = match p.get("channel.depth").and_then(|v| v.i32()) {
+        None => false,
+        Some(code) if code == T::FLOAT32 as i32 => true,
+        Some(code) => return Err(format!("channel.depth {code} is not FLOAT32")),
+    };
+    Ok(Setup {
+        size,
+        color_type,
+        depth,
+    })
+}

@@ -1,0 +1,84 @@
+//! Committed parameters read through a subtype's table: a parameter the
+//! host did not set takes the table's default, so each default is written
+//! once, in the table that `anariGetParameterInfo` answers from too.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::info::{Default, ParamInfo};
+use super::object::ObjectRef;
+use super::value::{Params, Value};
+
+pub struct Read<'a> {
+    params: &'a Params,
+    table: &'static [ParamInfo],
+}
+
+impl<'a> Read<'a> {
+    pub fn new(params: &'a Params, table: &'static [ParamInfo]) -> Self {
+        Self { params, table }
+    }
+
+    pub fn params(&self) -> &'a Params {
+        self.params
+    }
+
+    fn info(&self, name: &str) -> Option<&'static ParamInfo> {
+        self.table.iter().find(|p| p.name == name)
+    }
+
+    /// The value the host set, if any (no default).
+    pub fn set(&self, name: &str) -> Option<&'a Value> {
+        self.params.get(name)
+    }
+
+    /// `N` numbers: the host's value, else the table's default, else an
+    /// error saying the parameter is required.
+    pub fn floats<const N: usize>(&self, name: &str) -> Result<[f32; N], String> {
+        if let Some(v) = self.set(name).and_then(|v| v.f32s()) {
+            if let Ok(a) = v.try_into() {
+                return Ok(a);
+            }
+        }
+        match self.info(name).map(|p| (p, &p.default)) {
+            Some((_, Default::Floats(d))) => (*d)
+                .try_into()
+                .map_err(|_| format!("the default of '{name}' has {} numbers, not {N}", d.len())),
+            Some((p, _)) => Err(format!(
+                "parameter '{name}' ({}) is required",
+                p.types.first().map_or("?", |t| t.name())
+            )),
+            None => Err(format!("'{name}' is not in this subtype's parameter table")),
+        }
+    }
+
+    pub fn f32(&self, name: &str) -> Result<f32, String> {
+        self.floats::<1>(name).map(|[x]| x)
+    }
+
+    pub fn vec3(&self, name: &str) -> Result<Vec3, String> {
+        self.floats::<3>(name).map(Vec3::from)
+    }
+
+    pub fn vec4(&self, name: &str) -> Result<Vec4, String> {
+        self.floats::<4>(name).map(Vec4::from)
+    }
+
+    pub fn mat4(&self, name: &str) -> Result<Mat4, String> {
+        self.floats::<16>(name).map(|m| Mat4::from_cols_array(&m))
+    }
+
+    /// The host's string, else the table's default.
+    pub fn string(&self, name: &str) -> Option<&'a str> {
+        match self.set(name).and_then(|v| v.string()) {
+            Some(s) => Some(s),
+            None => match self.info(name)?.default {
+                Default::Text(t) => Some(t),
+                _ => None,
+            },
+        }
+    }
+
+    pub fn object(&self, name: &str) -> Option<&'a ObjectRef> {
+        self.params.object(name)
+    }
+}

@@ -1,0 +1,3 @@
+//! Spatial fields: one module per subtype.
+
+pub mod structured_regular;

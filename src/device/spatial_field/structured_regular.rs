@@ -1,0 +1,108 @@
+//! The `structuredRegular` field: a vertex-centred grid, x fastest, over
+//! [origin, origin + (dims - 1) * spacing].
+
+use std::sync::Arc;
+
+use glam::UVec3;
+
+use crate::device::info::{p, Default, SubtypeInfo, VEC3};
+use crate::device::object::{Derived, State};
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
+use crate::device::value::words;
+use crate::scene::{StructuredVolume, Voxels};
+
+/// Voxel types a structured regular field accepts; UINT8/UINT16 are read
+/// as their fixed-point twins with a warning.
+const VOXEL_TYPES: &str = "UFIXED8, UFIXED16, FIXED16, FLOAT32 or FLOAT64";
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::SPATIAL_FIELD,
+    subtype: "structuredRegular",
+    description: "vertex-centred regular grid, x fastest, sampled trilinearly",
+    extensions: &["ANARI_KHR_SPATIAL_FIELD_STRUCTURED_REGULAR"],
+    params: &[
+        p(
+            "data",
+            &[T::ARRAY3D],
+            true,
+            Default::None,
+            "voxels: UFIXED8, UFIXED16, FIXED16, FLOAT32 or FLOAT64 (UINT8/UINT16 read as UFIXED)",
+        ),
+        p(
+            "origin",
+            VEC3,
+            false,
+            Default::Floats(&[0.0, 0.0, 0.0]),
+            "position of voxel (0, 0, 0)",
+        ),
+        p(
+            "spacing",
+            VEC3,
+            false,
+            Default::Floats(&[1.0, 1.0, 1.0]),
+            "distance between voxel centres",
+        ),
+        p(
+            "filter",
+            &[T::STRING],
+            false,
+            Default::Text("linear"),
+            "linear (nearest is read as linear)",
+        ),
+    ],
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let data = r
+        .object("data")
+        .ok_or("parameter 'data' (ARRAY3D) is required")?;
+    let array_guard = data.lock();
+    let State::Array(array) = &array_guard.state else {
+        return Err(format!("'data' is {}, not an array", data.describe()));
+    };
+    let [nx, ny, nz] = array.dims();
+    let dims = UVec3::new(dim(nx)?, dim(ny)?, dim(nz)?);
+    let bytes = array.bytes();
+    let voxels = match array.element() {
+        T::UFIXED8 => Voxels::U8(bytes.to_vec()),
+        T::UINT8 => {
+            warn("UINT8 voxels are read as UFIXED8 (0..255 maps to 0..1)".into());
+            Voxels::U8(bytes.to_vec())
+        }
+        T::UFIXED16 | T::UINT16 => {
+            if array.element() == T::UINT16 {
+                warn("UINT16 voxels are read as UFIXED16 (0..65535 maps to 0..1)".into());
+            }
+            Voxels::U16(words(bytes).map(u16::from_ne_bytes).collect())
+        }
+        T::FIXED16 => Voxels::F32(
+            words(bytes)
+                .map(|w| (f32::from(i16::from_ne_bytes(w)) / 32767.0).max(-1.0))
+                .collect(),
+        ),
+        T::FLOAT32 => Voxels::F32(array.f32s()),
+        T::FLOAT64 => Voxels::F32(words(bytes).map(|w| f64::from_ne_bytes(w) as f32).collect()),
+        other => {
+            return Err(format!(
+                "'data' holds {other}; a structured regular field needs {VOXEL_TYPES}"
+            ))
+        }
+    };
+    match r.string("filter") {
+        Some("linear") | None => {}
+        Some("nearest") => warn("filter 'nearest' is not implemented; sampling is linear".into()),
+        Some(other) => return Err(format!("filter '{other}' is not one of nearest, linear")),
+    }
+    let volume = StructuredVolume::new(dims, voxels, r.vec3("origin")?, r.vec3("spacing")?)
+        .map_err(|e| e.to_string())?;
+    Ok(Some(State::Field(Derived::Ready(Arc::new(volume)))))
+}
+
+fn dim(n: u64) -> Result<u32, String> {
+    u32::try_from(n)
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| format!("'data' dimension {n} is not in 1..=4294967295"))
+}
