@@ -1,4 +1,4 @@
-// What the re-projection and compositing passes share (DESIGN.md section 5).
+// What the re-projection and compositing passes share (docs/reprojection_stereo.md).
 // Left column x writes its right-eye segments into layer
 // L - (x mod L) - 1; right pixel j reads, front to back, the columns
 // j - near .. j - far, of which there are at most L, so no two columns it

@@ -1,4 +1,4 @@
-//! The invariants of DESIGN.md section 3, on every wall and eye of every
+//! The invariants of docs/off_axis.md, on every wall and eye of every
 //! shipped rig, for 200 random tracked head poses each (fixed seed).
 //! Tolerances: f64 results to 1e-9 (lengths relative to the rig's size,
 //! unit directions and image coordinates absolute); single-precision

@@ -9,7 +9,7 @@ use anari_library_caveray::cave::Eye;
 use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
 use anari_library_caveray::render::stereo::{
-    Bounds, HmdStereo, LayerFormat, NotEpipolar, Reprojection, ReprojectionError,
+    Bounds, HmdStereo, LayerCountError, LayerFormat, NotEpipolar, Reprojection, ReprojectionError,
 };
 use anari_library_caveray::render::{
     dssim, ColorFormat, FrameDesc, GpuRenderer, RenderSettings, Shading,
@@ -276,7 +276,10 @@ fn geometry_and_layer_counts_it_cannot_serve_are_refused() {
     };
     let planned = plan(None).unwrap();
     assert_eq!(planned.layers, planned.plan.layers);
-    assert_eq!(plan(Some(0)), Err(ReprojectionError::NoLayers));
+    assert_eq!(
+        plan(Some(0)),
+        Err(ReprojectionError::Layers(LayerCountError::NoLayers))
+    );
     let few = plan(Some(planned.layers - 1)).unwrap_err();
     let message = few.to_string();
     assert!(

@@ -1,5 +1,5 @@
 //! The re-projection planner against numbers worked out by hand from the
-//! paper's equations (Buchacher & Erdt 2017; DESIGN.md section 5), the
+//! paper's equations (Buchacher & Erdt 2017; docs/reprojection_stereo.md), the
 //! layer assignment against a CPU model, and the CAVE-wall planner against
 //! real rig geometry.
 
@@ -8,9 +8,9 @@ mod common;
 use anari_library_caveray::cave::Eye;
 use anari_library_caveray::render::stereo::{
     layer_memory, layers_for, minimal_focal_length, pixel_scale, plan_views, span_to_sphere,
-    Bounds, HmdStereo, NotEpipolar, StereoError,
+    Bounds, HmdStereo, LayerCountError, LayerFormat, NotEpipolar, StereoError,
 };
-use glam::DVec3;
+use glam::{DVec3, UVec2};
 
 const MIB: f64 = 1024.0 * 1024.0;
 
@@ -33,9 +33,12 @@ fn paper_numbers() {
     assert!((d_r - 0.0531373).abs() < 1e-6, "d_r = {d_r}");
     assert!((d_r * s - 32.0).abs() < 1e-9);
     // Memory: 768^2 x 32 x RGBA16F = 144 MiB; 1080^2: 284.77 MiB; 1512^2: 558.14 MiB.
-    assert_eq!(layer_memory(768, 32, 2, 4) as f64 / MIB, 144.0);
-    assert!((layer_memory(1080, 32, 2, 4) as f64 / MIB - 284.77).abs() < 0.005);
-    assert!((layer_memory(1512, 32, 2, 4) as f64 / MIB - 558.14).abs() < 0.005);
+    // M = w^2 L bytes channels, RGBA16F: 2 bytes times 4 channels a texel.
+    let m = |w: u32| layer_memory(UVec2::splat(w), 32, LayerFormat::Rgba16F) as f64 / MIB;
+    assert_eq!(LayerFormat::Rgba16F.bytes_per_texel(), 2 * 4);
+    assert_eq!(m(768), 144.0);
+    assert!((m(1080) - 284.77).abs() < 0.005);
+    assert!((m(1512) - 558.14).abs() < 0.005);
 }
 
 #[test]
@@ -45,18 +48,21 @@ fn layers_cover_the_longest_span() {
     let plan = HmdStereo::paper(31.0).plan().unwrap();
     assert!((plan.span_px - 31.0).abs() < 1e-9);
     assert_eq!(plan.layers, 32);
-    assert_eq!(plan.memory, layer_memory(768, 32, 2, 4));
+    assert_eq!(
+        plan.memory,
+        layer_memory(UVec2::splat(768), 32, LayerFormat::Rgba16F)
+    );
     assert_eq!(HmdStereo::paper(31.5).plan().unwrap().layers, 33);
     assert_eq!(HmdStereo::paper_for_layers(32), HmdStereo::paper(31.0));
     // The paper's d_p = 32 with 32 layers would let two rays share texels
     // at the sphere's extremes; the planner asks for 33.
     let setup = HmdStereo::paper(32.0);
     match setup.plan_with(32) {
-        Err(StereoError::TooFewLayers {
+        Err(StereoError::Layers(LayerCountError::TooFewLayers {
             layers: 32,
             needed: 33,
             ..
-        }) => {}
+        })) => {}
         other => panic!("{other:?}"),
     }
     // Rays to infinity span e, more than the sphere's d_r.
@@ -77,7 +83,10 @@ fn zero_eye_distance_needs_one_layer_and_bad_input_is_refused() {
     };
     assert_eq!(mono.plan().unwrap().layers, 1);
     let paper = HmdStereo::paper(32.0);
-    assert_eq!(paper.plan_with(0), Err(StereoError::NoLayers));
+    assert_eq!(
+        paper.plan_with(0),
+        Err(StereoError::Layers(LayerCountError::NoLayers))
+    );
     assert_eq!(
         HmdStereo {
             eye_distance: -0.065,
@@ -103,7 +112,7 @@ fn zero_eye_distance_needs_one_layer_and_bad_input_is_refused() {
     ));
     let message = paper.plan_with(8).unwrap_err().to_string();
     assert!(
-        message.contains("8 layers") && message.contains("33 are needed"),
+        message.contains("8 layers are too few") && message.contains("at least 33"),
         "{message}"
     );
 }

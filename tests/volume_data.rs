@@ -1,6 +1,8 @@
 //! Volumes and transfer functions: raw files, the manifest, procedural
 //! volumes, presets and ParaView colour maps, and their error messages.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use anari_library_caveray::data::{
@@ -336,7 +338,7 @@ fn manifest_volumes_are_checked_before_use() {
         err.contains("volumes.toml") && err.contains("invalid type"),
         "{err}"
     );
-    let err = Manifest::locate(Some(&dir.join("none.toml")))
+    let err = Manifest::locate(Some(&dir.join("none.toml")), &[])
         .unwrap_err()
         .to_string();
     assert!(err.contains("none.toml"), "{err}");
@@ -361,10 +363,10 @@ fn sha256_hex(bytes: &[u8]) -> String {
 }
 
 #[test]
-fn the_shared_real_volumes_load_when_present() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/volumes/volumes.toml");
+fn the_shared_real_volumes_load() {
+    let path = common::shared_manifest();
     if !path.is_file() {
-        eprintln!("skipped: {} is absent", path.display());
+        common::missing(&format!("{} is absent", path.display()));
         return;
     }
     let manifest = Manifest::load(&path).unwrap();

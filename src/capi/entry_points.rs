@@ -11,7 +11,7 @@
 //! `LibraryImpl` / `DeviceImpl` classes: on Linux x86-64 (Itanium C++ ABI)
 //! the object starts with a pointer to the class's virtual table, and a
 //! virtual call passes the object as the first argument, like a C
-//! function. Slot order is that of SDK 0.14 and later (ANARI_FACTS.md).
+//! function. Slot order is that of SDK 0.14 and later (docs/anari_loader.md).
 //!
 //! Table slots point at the implementations in `ops`, never at the
 //! exports: inside the library an exported name could bind to libanari's

@@ -919,7 +919,7 @@ pub unsafe extern "C" fn frame_ready(
         return c_int::from(wait_for(dev, "anariFrameReady", frame));
     }
     with_device(dev, "anariFrameReady", 0, |_, device| {
-        c_int::from(device.frame_ready(frame as usize as u64, false))
+        c_int::from(device.frame_ready(frame as usize as u64))
     })
 }
 

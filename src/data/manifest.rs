@@ -56,17 +56,16 @@ impl Manifest {
     }
 
     /// The manifest to use: `explicit` if given, else
-    /// `$CAVERAY_DATA/volumes.toml`, else `../shared/data/volumes/volumes.toml`.
-    pub fn locate(explicit: Option<&Path>) -> Result<Self, DataError> {
+    /// `$CAVERAY_DATA/volumes.toml`, else the first of the caller's
+    /// `fallbacks` that exists (where a tool keeps its data is the tool's
+    /// business, not the library's).
+    pub fn locate(explicit: Option<&Path>, fallbacks: &[PathBuf]) -> Result<Self, DataError> {
         if let Some(path) = explicit {
             return Self::load(path);
         }
         let mut tried = Vec::new();
         let env = std::env::var_os("CAVERAY_DATA").map(|d| PathBuf::from(d).join("volumes.toml"));
-        for candidate in env
-            .into_iter()
-            .chain([PathBuf::from("../shared/data/volumes/volumes.toml")])
-        {
+        for candidate in env.into_iter().chain(fallbacks.iter().cloned()) {
             if candidate.is_file() {
                 return Self::load(&candidate);
             }

@@ -31,6 +31,21 @@ impl Rng {
     }
 }
 
+/// The volume manifest of the project's shared data, beside the checkout.
+pub fn shared_manifest() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/volumes/volumes.toml")
+}
+
+/// For a test whose input (`what`) is missing: CI installs everything, so
+/// there the test fails; elsewhere it says why it cannot run, and the
+/// caller returns.
+pub fn missing(what: &str) {
+    if std::env::var_os("CI").is_some() {
+        panic!("{what}, but CI must have it (scripts/deps installs the tools; the data is in ../shared)");
+    }
+    eprintln!("not run here: {what} (CI fails on this)");
+}
+
 pub fn config_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs")
 }

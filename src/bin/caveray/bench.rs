@@ -53,7 +53,7 @@ pub struct RaycastArgs {
     json: PathBuf,
 }
 
-/// The paper's HMD setup (DESIGN.md section 5).
+/// The paper's HMD setup (docs/reprojection_stereo.md).
 const FOV_DEGREES: f64 = 110.0;
 const EYE_DISTANCE_M: f64 = 0.065;
 const RADIUS_M: f64 = 1.0;

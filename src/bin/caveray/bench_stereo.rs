@@ -1,5 +1,5 @@
 //! `caveray bench stereo`: the paper's protocol for single-pass stereo by
-//! re-projection (Buchacher & Erdt 2017; DESIGN.md section 5). Per data
+//! re-projection (Buchacher & Erdt 2017; docs/reprojection_stereo.md). Per data
 //! set and shading level, over a rotation about y: the left eye alone
 //! (T_l), the right eye alone (T_r), the left eye with re-projection plus
 //! compositing (T_l+r), what a full clear of the layers would cost, the
@@ -190,7 +190,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
         "image": [args.size, args.size],
         "layers": args.layers,
         "layer_format": args.layer_format.to_string(),
-        "layer_bytes": layer_memory(u64::from(args.size), args.layers, args.layer_format.bytes_per_texel() / 4, 4),
+        "layer_bytes": layer_memory(UVec2::splat(args.size), args.layers, args.layer_format),
         "fov_degrees": setup.fov.to_degrees(),
         "eye_distance_m": setup.eye_distance,
         "focal_length_m": setup.focal,

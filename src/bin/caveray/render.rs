@@ -120,7 +120,7 @@ pub enum BackendArg {
     Cpu,
 }
 
-/// The camera models of DESIGN.md section 3.
+/// The camera models of docs/off_axis.md.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Strategy {
     /// Strategy 1: rays from the inverse of the f32 OpenGL matrices.
@@ -194,7 +194,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let mut progress = Progress::new(views.len());
     let mut records = Vec::new();
     let mut images: Vec<(usize, Eye, image::RgbaImage)> = Vec::new();
-    let job = Job {
+    let job = ViewJob {
         scene: &scene,
         settings: &settings,
         strategy: args.render.strategy,
@@ -317,13 +317,13 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
 type WallResult = (Vec<(Eye, Frame)>, Vec<Value>);
 
 /// What every view of one run shares.
-struct Job<'a> {
+struct ViewJob<'a> {
     scene: &'a Scene,
     settings: &'a RenderSettings,
     strategy: Strategy,
 }
 
-impl Job<'_> {
+impl ViewJob<'_> {
     /// One eye, ray cast on its own; the record lacks wall and eye.
     fn single(
         &self,

@@ -13,6 +13,8 @@ use crate::{triple, Failure};
 
 /// Procedural volumes' default size per side.
 const PROCEDURAL_SIZE: u32 = 128;
+/// Where the project's real volumes sit, beside a checkout.
+const SHARED_MANIFEST: &str = "../shared/data/volumes/volumes.toml";
 
 #[derive(Args, Clone)]
 pub struct VolumeArgs {
@@ -96,7 +98,9 @@ impl VolumeArgs {
             let volume = load_raw(Path::new(spec), dims, dtype, spacing).map_err(|e| usage(&e))?;
             (file_stem(spec), volume, "grey")
         } else {
-            let manifest = Manifest::locate(self.manifest.as_deref()).map_err(|e| usage(&e))?;
+            let manifest =
+                Manifest::locate(self.manifest.as_deref(), &[PathBuf::from(SHARED_MANIFEST)])
+                    .map_err(|e| usage(&e))?;
             let entry = manifest.find(spec).map_err(|e| usage(&e))?;
             let tf = match entry.category.as_str() {
                 "CT" => "ct-skin-bone",

@@ -189,8 +189,9 @@ impl Device {
         Ok((job, color_type))
     }
 
-    /// `anariFrameReady`: with `wait`, blocks until the frame is rendered.
-    pub fn frame_ready(&mut self, handle: u64, wait: bool) -> bool {
+    /// `anariFrameReady(NO_WAIT)`: whether no render is in flight. (The C
+    /// layer waits for `WAIT` itself, without holding the device.)
+    pub fn frame_ready(&mut self, handle: u64) -> bool {
         let Some(frame) = self.frame(handle, "anariFrameReady") else {
             return false;
         };
@@ -198,12 +199,7 @@ impl Device {
             State::Frame(f) => f.slot.clone(),
             _ => return false,
         };
-        if wait {
-            drop(slot.wait());
-            true
-        } else {
-            !slot.is_busy()
-        }
+        !slot.is_busy()
     }
 
     /// `anariMapFrame`: waits for the frame, then lends the channel's pixels
@@ -295,12 +291,9 @@ impl Device {
     }
 
     /// `anariDiscardFrame`: a render cannot be interrupted midway, so the
-    /// frame finishes and the host may ignore it.
+    /// frame finishes and the host may ignore it; only the handle is
+    /// checked.
     pub fn discard_frame(&mut self, handle: u64) {
-        if let Some(frame) = self.frame(handle, "anariDiscardFrame") {
-            if let State::Frame(f) = &frame.lock().state {
-                f.slot.lock().cancelled = true;
-            }
-        }
+        self.frame(handle, "anariDiscardFrame");
     }
 }

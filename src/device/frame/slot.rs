@@ -43,7 +43,6 @@ pub struct FrameSlot {
 #[derive(Default)]
 pub struct SlotState {
     pub busy: bool,
-    pub cancelled: bool,
     pub result: Option<Result<Frame, String>>,
     pub duration: Duration,
 }
@@ -56,7 +55,6 @@ impl FrameSlot {
     pub fn start(&self) {
         let mut s = self.lock();
         s.busy = true;
-        s.cancelled = false;
     }
 
     pub fn finish(&self, result: Result<Frame, String>, duration: Duration) {

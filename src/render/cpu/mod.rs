@@ -1,4 +1,4 @@
-//! The reference ray caster: the model of DESIGN.md section 4 written
+//! The reference ray caster: the model of docs/ray_casting.md written
 //! plainly, one rayon task per image row. Tests hold the GPU to it, and
 //! the tool falls back to it where no adapter exists.
 

@@ -14,7 +14,7 @@ use std::sync::Arc;
 use glam::UVec2;
 
 use self::context::Context;
-use self::resources::Target;
+use self::resources::OutputBuffers;
 use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::settings::MAX_DIRECTIONS;
@@ -42,7 +42,7 @@ pub struct GpuRenderer {
     directions: wgpu::Buffer,
     volume: Option<(Arc<StructuredVolume>, wgpu::TextureView)>,
     table: Option<(Arc<TransferFunction>, wgpu::TextureView)>,
-    target: Option<Target>,
+    target: Option<OutputBuffers>,
     bind_group: Option<wgpu::BindGroup>,
     uploads: Uploads,
     stereo: Option<layers::StereoGpu>,
@@ -282,7 +282,7 @@ impl GpuRenderer {
         let mut changed = self.bind_group.is_none();
         changed |= self.upload_scene(scene);
         if !matches!(&self.target, Some(t) if t.size == size && t.format == format) {
-            self.target = Some(Target::new(&self.ctx, size, format));
+            self.target = Some(OutputBuffers::new(&self.ctx, size, format));
             changed = true;
         }
         if changed {

@@ -101,7 +101,7 @@ pub(super) fn upload_table(ctx: &Context, tf: &TransferFunction) -> wgpu::Textur
 }
 
 /// Output buffers of one frame size and format, kept across frames.
-pub(super) struct Target {
+pub(super) struct OutputBuffers {
     pub size: UVec2,
     pub format: ColorFormat,
     pub color: wgpu::Buffer,
@@ -112,7 +112,7 @@ pub(super) struct Target {
     pub samples_read: wgpu::Buffer,
 }
 
-impl Target {
+impl OutputBuffers {
     pub fn new(ctx: &Context, size: UVec2, format: ColorFormat) -> Self {
         let pixels = u64::from(size.x) * u64::from(size.y);
         let storage = |label, bytes| {

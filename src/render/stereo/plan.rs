@@ -6,9 +6,11 @@
 //! its longest such segment, in pixels, is the number of layers needed so
 //! that no two left rays write the same texel of the same layer.
 
+use glam::UVec2;
 use thiserror::Error;
 
 use super::bounds::Bounds;
+use super::layers::{layer_count, layer_memory, layers_for, LayerCountError, LayerFormat};
 
 #[derive(Debug, Error, PartialEq)]
 pub enum StereoError {
@@ -18,12 +20,8 @@ pub enum StereoError {
     NegativeEyeDistance(f64),
     #[error("field of view must be in (0, 180) degrees, got {0} degrees")]
     FieldOfView(f64),
-    #[error(
-        "{layers} layers cannot hold a re-projected span of {span:.2} pixels; {needed} are needed"
-    )]
-    TooFewLayers { layers: u32, span: f64, needed: u32 },
-    #[error("at least one re-projection layer is needed, got 0")]
-    NoLayers,
+    #[error(transparent)]
+    Layers(#[from] LayerCountError),
 }
 
 /// Pixels per image-plane unit: `s = w / (2 h tan a)`.
@@ -57,18 +55,6 @@ pub fn minimal_focal_length(
     half_fov: f64,
 ) -> f64 {
     -radius + (radius * radius + eye_distance * radius * width / (span_px * half_fov.tan())).sqrt()
-}
-
-/// Layers for a span of `d` pixels: samples land in the pixel they fall
-/// in, and a segment of length d can reach into ceil(d) + 1 pixels.
-pub fn layers_for(span_px: f64) -> u32 {
-    // Rounding noise must not cost a layer (and 144 MiB at 768^2).
-    (span_px - 1e-9).ceil().max(0.0) as u32 + 1
-}
-
-/// Bytes of `layers` layers of `width`^2 texels: `M = w^2 L bytes channels`.
-pub fn layer_memory(width: u64, layers: u32, bytes_per_channel: u64, channels: u64) -> u64 {
-    width * width * u64::from(layers) * bytes_per_channel * channels
 }
 
 /// The paper's setup, in metres and radians.
@@ -155,7 +141,7 @@ impl HmdStereo {
         Ok(LayerPlan {
             span_px,
             layers,
-            memory: layer_memory(u64::from(self.width), layers, 2, 4),
+            memory: layer_memory(UVec2::splat(self.width), layers, LayerFormat::Rgba16F),
         })
     }
 
@@ -163,19 +149,15 @@ impl HmdStereo {
     /// naming how many are needed.
     pub fn plan_with(&self, layers: u32) -> Result<LayerPlan, StereoError> {
         if layers == 0 {
-            return Err(StereoError::NoLayers);
+            return Err(LayerCountError::NoLayers.into());
         }
         let needed = self.plan()?;
-        if needed.layers > layers {
-            return Err(StereoError::TooFewLayers {
-                layers,
-                span: needed.span_px,
-                needed: needed.layers,
-            });
-        }
+        let layers = layer_count(Some(layers), needed.layers, || {
+            format!("a span of {:.2} pixels", needed.span_px)
+        })?;
         Ok(LayerPlan {
             layers,
-            memory: layer_memory(u64::from(self.width), layers, 2, 4),
+            memory: layer_memory(UVec2::splat(self.width), layers, LayerFormat::Rgba16F),
             ..needed
         })
     }
@@ -297,6 +279,6 @@ pub fn plan_views(
         near_px,
         far_px,
         layers,
-        memory: u64::from(width) * u64::from(height) * u64::from(layers) * 2 * 4,
+        memory: layer_memory(UVec2::new(width, height), layers, LayerFormat::Rgba16F),
     })
 }

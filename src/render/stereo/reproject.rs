@@ -3,79 +3,22 @@
 //! offsets every left column's segments fall in, the layer count and the
 //! layer format; and what it gives back.
 
-use std::fmt;
-use std::str::FromStr;
-
 use glam::{DVec4, UVec2, Vec4};
 use thiserror::Error;
 
 use super::bounds::Bounds;
+use super::layers::{layer_count, layer_memory, LayerCountError, LayerFormat};
 use super::plan::{plan_views, NotEpipolar, ViewPlan};
 use crate::geometry::MatrixCamera;
 use crate::render::Frame;
-
-/// Texel format of the re-projection layers.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum LayerFormat {
-    /// The paper's choice: half the memory, colour to about 3 digits.
-    #[default]
-    Rgba16F,
-    /// Exact: with e = 0 the right image equals the left bit for bit.
-    Rgba32F,
-}
-
-impl LayerFormat {
-    pub fn bytes_per_texel(self) -> u64 {
-        match self {
-            LayerFormat::Rgba16F => 8,
-            LayerFormat::Rgba32F => 16,
-        }
-    }
-    /// The WGSL storage texel format.
-    pub fn wgsl(self) -> &'static str {
-        match self {
-            LayerFormat::Rgba16F => "rgba16float",
-            LayerFormat::Rgba32F => "rgba32float",
-        }
-    }
-}
-
-impl fmt::Display for LayerFormat {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            LayerFormat::Rgba16F => "rgba16f",
-            LayerFormat::Rgba32F => "rgba32f",
-        })
-    }
-}
-
-impl FromStr for LayerFormat {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "rgba16f" => Ok(LayerFormat::Rgba16F),
-            "rgba32f" => Ok(LayerFormat::Rgba32F),
-            _ => Err(format!(
-                "unknown layer format \"{s}\": expected rgba16f or rgba32f"
-            )),
-        }
-    }
-}
 
 /// Why a view pair renders in two passes instead.
 #[derive(Debug, Error, PartialEq)]
 pub enum ReprojectionError {
     #[error("re-projection does not apply: {0}")]
     NotEpipolar(#[from] NotEpipolar),
-    #[error("at least one re-projection layer is needed, got 0")]
-    NoLayers,
-    #[error("{layers} layers are too few: this view's segments reach {needed} pixels (offsets {near}..={far}); give at least {needed} or let the planner choose")]
-    TooFewLayers {
-        layers: u32,
-        needed: u32,
-        near: i32,
-        far: i32,
-    },
+    #[error(transparent)]
+    Layers(#[from] LayerCountError),
     #[error("image must be at least 1x1, got {}x{}", .0.x, .0.y)]
     EmptyImage(UVec2),
 }
@@ -108,19 +51,9 @@ impl Reprojection {
             return Err(ReprojectionError::EmptyImage(size));
         }
         let plan = plan_views(left, right, size.x, size.y, bounds)?;
-        let layers = match layers {
-            None => plan.layers,
-            Some(0) => return Err(ReprojectionError::NoLayers),
-            Some(n) if n < plan.layers => {
-                return Err(ReprojectionError::TooFewLayers {
-                    layers: n,
-                    needed: plan.layers,
-                    near: plan.near_px,
-                    far: plan.far_px,
-                })
-            }
-            Some(n) => n,
-        };
+        let layers = layer_count(layers, plan.layers, || {
+            format!("offsets {}..={}", plan.near_px, plan.far_px)
+        })?;
         let m = right.proj() * right.view();
         let (row_x, row_w) = (m.row(0), m.row(3));
         // NDC x in [-1, 1] to pixel x with centres on whole numbers.
@@ -149,10 +82,7 @@ impl Reprojection {
     }
     /// Bytes of the layers.
     pub fn memory(&self) -> u64 {
-        u64::from(self.size.x)
-            * u64::from(self.size.y)
-            * u64::from(self.layers)
-            * self.format.bytes_per_texel()
+        layer_memory(self.size, self.layers, self.format)
     }
 }
 
