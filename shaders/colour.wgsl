@@ -1,9 +1,6 @@
 // Writes one pixel of `color_out` in the frame's format; the file that
 // includes this one declares `color_out` (array<u32>).
 
-const FORMAT_RGBA8: u32 = 0u;
-const FORMAT_SRGBA8: u32 = 1u;
-
 fn linear_to_srgb(x: f32) -> f32 {
     if x <= 0.0031308 {
         return 12.92 * x;

@@ -2,9 +2,9 @@
 
 fn on_sample(p: vec3f, lit: vec3f, a: f32) {}
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
-    let size = params.frame.xy;
+    let size = vec2u(params.width, params.height);
     if id.x >= size.x || id.y >= size.y {
         return;
     }
@@ -12,5 +12,5 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let i = id.y * size.x + id.x;
     depth_out[i] = m.depth;
     samples_out[i] = samples;
-    store_color(i, over(m.color, params.background), params.frame.z);
+    store_color(i, over(m.color, params.background), params.color_format);
 }

@@ -21,12 +21,12 @@ fn right_pixel(p: vec3f) -> i32 {
     let q = vec4f(p, 1.0);
     let x = dot(stereo.right_x, q) / dot(stereo.right_w, q) - f32(column);
     // Clamped in float first: converting an out-of-range float is undefined.
-    let offset = clamp(x, f32(stereo.offsets.x), f32(stereo.offsets.y));
+    let offset = clamp(x, f32(stereo.near_offset), f32(stereo.far_offset));
     return column + i32(round(offset));
 }
 
 fn emit(pixel: i32, value: vec4f) {
-    if pixel >= 0 && pixel < i32(stereo.size.x) {
+    if pixel >= 0 && pixel < i32(stereo.width) {
         textureStore(layers, vec2i(pixel, row), layer, value);
     }
 }
@@ -54,12 +54,12 @@ fn on_sample(p: vec3f, lit: vec3f, a: f32) {
     segment = vec4f(segment.rgb + lit * weight, segment.a + weight);
 }
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
-    if id.x >= stereo.size.z || id.y >= stereo.size.y {
+    if id.x >= stereo.columns || id.y >= stereo.height {
         return;
     }
-    column = i32(id.x) + stereo.offsets.w;
+    column = i32(id.x) + stereo.first_column;
     row = i32(id.y);
     layer = layer_of(column);
     let m = march(f32(column), f32(row));
@@ -70,17 +70,17 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     }
     spans[span_index(column, id.y)] = span;
 
-    let width = i32(stereo.size.x);
+    let width = i32(stereo.width);
     if column >= 0 && column < width {
-        let i = id.y * stereo.size.x + u32(column);
+        let i = id.y * stereo.width + u32(column);
         depth_out[i] = m.depth;
         samples_out[i] = samples;
-        store_color(i, over(m.color, params.background), params.frame.z);
+        store_color(i, over(m.color, params.background), params.color_format);
     }
 }
 
 // Zeroes every texel: what the span scheme avoids, kept to measure it.
-@compute @workgroup_size(8, 8, 1)
+@compute @workgroup_size(WORKGROUP, WORKGROUP, 1)
 fn clear(@builtin(global_invocation_id) id: vec3u) {
     let size = textureDimensions(layers);
     if id.x >= size.x || id.y >= size.y || id.z >= textureNumLayers(layers) {

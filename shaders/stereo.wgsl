@@ -4,23 +4,24 @@
 // j - near .. j - far, of which there are at most L, so no two columns it
 // reads share a layer.
 
+// Mirrors `Stereo` in src/render/gpu/uniforms.rs, which documents the fields.
 struct Stereo {
-    // Right-eye pixel x of world point p: dot(right_x, p1) / dot(right_w, p1).
     right_x: vec4f,
     right_w: vec4f,
-    // x: nearest offset (right pixel minus left column, in whole pixels),
-    // y: farthest offset, z: layers, w: first left column cast.
-    offsets: vec4i,
-    // x, y: image size; z: left columns cast; w: colour format.
-    size: vec4u,
-    // Straight RGBA behind the volume.
     background: vec4f,
-    // x: opacity at which a right pixel stops compositing.
-    termination: vec4f,
+    near_offset: i32,
+    far_offset: i32,
+    layers: i32,
+    first_column: i32,
+    width: u32,
+    height: u32,
+    columns: u32,
+    color_format: u32,
+    termination: f32,
 }
 
 fn layer_of(column: i32) -> i32 {
-    let n = stereo.offsets.z;
+    let n = stereo.layers;
     return n - 1 - (((column % n) + n) % n);
 }
 
@@ -28,5 +29,5 @@ fn layer_of(column: i32) -> i32 {
 // if none. Texels outside that span hold stale data from earlier frames
 // and are never read, which is what spares the layers a clear.
 fn span_index(column: i32, row: u32) -> u32 {
-    return row * stereo.size.z + u32(column - stereo.offsets.w);
+    return row * stereo.columns + u32(column - stereo.first_column);
 }

@@ -1,38 +1,39 @@
 // Emission-absorption volume ray casting: the march along one primary ray.
 // Mirrors src/render/cpu/ (the reference) operation for operation, so the
-// two agree to rounding; all derived numbers arrive in `params`.
+// two agree to rounding; all derived numbers arrive in `params`, whose
+// struct mirrors `Params` in src/render/gpu/uniforms.rs field for field,
+// as the constants (SHADE_, TABLE_SIZE, ...) come from there.
 // Entry points live in raycast.wgsl and reproject.wgsl, each concatenated
 // after this file with colour.wgsl; each defines `on_sample`, which sees
 // every sample that contributes (the re-projection path splits the ray into
 // right-eye segments there).
 
 struct Params {
-    // RayGen: the ray of pixel (0, 0) and its change per pixel (xyz).
-    ray_origin: vec4f,
-    ray_origin_dx: vec4f,
-    ray_origin_dy: vec4f,
-    ray_dir: vec4f,
-    ray_dir_dx: vec4f,
-    ray_dir_dy: vec4f,
-    box_lo: vec4f,       // w: primary step
-    box_hi: vec4f,       // w: shading step
-    inv_spacing: vec4f,  // w: 1 / unit distance
-    background: vec4f,   // straight RGBA
-    light: vec4f,        // xyz: towards the light; w: shadow ambient
-    value_map: vec4f,    // x: value lo, y: 1 / (hi - lo), z: termination, w: AO radius
-    frame: vec4u,        // x, y: size; z: colour format; w: shading mode
-    dims: vec4u,         // xyz: volume dims; w: number of directions
+    ray_origin: vec3f,
+    step: f32,
+    ray_origin_dx: vec3f,
+    shading_step: f32,
+    ray_origin_dy: vec3f,
+    inv_unit_distance: f32,
+    ray_dir: vec3f,
+    value_lo: f32,
+    ray_dir_dx: vec3f,
+    value_scale: f32,
+    ray_dir_dy: vec3f,
+    termination: f32,
+    box_lo: vec3f,
+    ao_radius: f32,
+    box_hi: vec3f,
+    direction_count: u32,
+    inv_spacing: vec3f,
+    shading: u32,
+    light: vec3f,
+    color_format: u32,
+    background: vec4f,
+    dims: vec3u,
+    width: u32,
+    height: u32,
 }
-
-const SHADE_NONE: u32 = 0u;
-const SHADE_SHADOWS: u32 = 1u;
-const SHADE_AO: u32 = 2u;
-const SHADE_SHADOWS_AO: u32 = 3u;
-const SHADE_DIRECTIONAL: u32 = 4u;
-
-const SHADOW_STEPS: u32 = 24u;
-const DIRECTIONAL_STEPS: u32 = 4u;
-const TABLE_SIZE: u32 = 256u;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var volume: texture_3d<f32>;
@@ -53,8 +54,8 @@ fn voxel(i: vec3i) -> f32 {
 // is not filterable everywhere, and the reference does the same.
 fn sample_volume(p: vec3f) -> f32 {
     samples += 1u;
-    let hi = vec3i(params.dims.xyz) - vec3i(1);
-    let g = clamp((p - params.box_lo.xyz) * params.inv_spacing.xyz, vec3f(0.0), vec3f(hi));
+    let hi = vec3i(params.dims) - vec3i(1);
+    let g = clamp((p - params.box_lo) * params.inv_spacing, vec3f(0.0), vec3f(hi));
     let i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
     let f = g - vec3f(i0);
     let i1 = min(i0 + vec3i(1), hi);
@@ -67,7 +68,7 @@ fn sample_volume(p: vec3f) -> f32 {
 
 fn classify(v: f32) -> vec4f {
     let last = f32(TABLE_SIZE - 1u);
-    let t = clamp((v - params.value_map.x) * params.value_map.y, 0.0, 1.0) * last;
+    let t = clamp((v - params.value_lo) * params.value_scale, 0.0, 1.0) * last;
     let i = min(u32(t), TABLE_SIZE - 2u);
     let f = t - f32(i);
     let a = textureLoad(table, vec2i(i32(i), 0), 0);
@@ -76,7 +77,7 @@ fn classify(v: f32) -> vec4f {
 }
 
 fn inside(p: vec3f) -> bool {
-    return all(p >= params.box_lo.xyz) && all(p <= params.box_hi.xyz);
+    return all(p >= params.box_lo) && all(p <= params.box_hi);
 }
 
 fn opacity_at(p: vec3f) -> f32 {
@@ -96,7 +97,7 @@ fn correct(a: f32, exponent: f32) -> f32 {
 fn transmittance(p: vec3f, dir: vec3f, steps: u32, exponent: f32) -> f32 {
     var t = 1.0;
     for (var k = 1u; k <= steps; k++) {
-        let q = p + dir * (params.box_hi.w * f32(k));
+        let q = p + dir * (params.shading_step * f32(k));
         if !inside(q) {
             break;
         }
@@ -106,24 +107,23 @@ fn transmittance(p: vec3f, dir: vec3f, steps: u32, exponent: f32) -> f32 {
 }
 
 fn shadow(p: vec3f, exponent: f32) -> f32 {
-    let t = transmittance(p, params.light.xyz, SHADOW_STEPS, exponent);
-    let ambient = params.light.w;
-    return ambient + (1.0 - ambient) * t;
+    let t = transmittance(p, params.light, SHADOW_STEPS, exponent);
+    return SHADOW_AMBIENT + (1.0 - SHADOW_AMBIENT) * t;
 }
 
 fn ambient_occlusion(p: vec3f) -> f32 {
-    let n = params.dims.w;
+    let n = params.direction_count;
     var occluded = 0.0;
     for (var i = 0u; i < n; i++) {
-        occluded += opacity_at(p + directions[i].xyz * params.value_map.w);
+        occluded += opacity_at(p + directions[i].xyz * params.ao_radius);
     }
     return 1.0 - occluded / f32(n);
 }
 
 fn shade(p: vec3f) -> f32 {
-    let exponent = params.box_hi.w * params.inv_spacing.w;
-    let n = params.dims.w;
-    switch params.frame.w {
+    let exponent = params.shading_step * params.inv_unit_distance;
+    let n = params.direction_count;
+    switch params.shading {
         case SHADE_SHADOWS: {
             return shadow(p, exponent);
         }
@@ -165,17 +165,17 @@ struct Marched {
 }
 
 fn march(fx: f32, fy: f32) -> Marched {
-    let o = params.ray_origin.xyz + fx * params.ray_origin_dx.xyz + fy * params.ray_origin_dy.xyz;
-    let d = normalize(params.ray_dir.xyz + fx * params.ray_dir_dx.xyz + fy * params.ray_dir_dy.xyz);
+    let o = params.ray_origin + fx * params.ray_origin_dx + fy * params.ray_origin_dy;
+    let d = normalize(params.ray_dir + fx * params.ray_dir_dx + fy * params.ray_dir_dy);
 
-    let step = params.box_lo.w;
+    let step = params.step;
     var acc = vec4f(0.0);
     var depth = bitcast<f32>(0x7f800000u);
     var hit = false;
 
     let inv = vec3f(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
-    let ta = (params.box_lo.xyz - o) * inv;
-    let tb = (params.box_hi.xyz - o) * inv;
+    let ta = (params.box_lo - o) * inv;
+    let tb = (params.box_hi - o) * inv;
     let tn = min(ta, tb);
     let tf = max(ta, tb);
     let t0 = max(max(max(tn.x, tn.y), tn.z), 0.0);
@@ -192,7 +192,7 @@ fn march(fx: f32, fy: f32) -> Marched {
             if c.a <= 0.0 {
                 continue;
             }
-            let a = correct(c.a, seg * params.inv_spacing.w);
+            let a = correct(c.a, seg * params.inv_unit_distance);
             let lit = c.rgb * shade(p);
             on_sample(p, lit, a);
             let weight = (1.0 - acc.a) * a;
@@ -201,7 +201,7 @@ fn march(fx: f32, fy: f32) -> Marched {
                 depth = t;
                 hit = true;
             }
-            if acc.a >= params.value_map.z {
+            if acc.a >= params.termination {
                 break;
             }
         }

@@ -14,7 +14,7 @@ use thiserror::Error;
 pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
 pub use cpu::CpuRenderer;
 pub use frame::{ColorData, ColorFormat, Frame, FrameDesc};
-pub use gpu::{GpuRenderer, Uploads};
+pub use gpu::{GpuRenderer, PassClock, Uploads};
 pub use settings::{RenderSettings, Shading, MAX_DIRECTIONS};
 
 use crate::geometry::RayGen;

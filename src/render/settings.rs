@@ -25,6 +25,17 @@ pub enum Shading {
 }
 
 impl Shading {
+    /// The shaders' SHADE_ code (the number of directions travels apart).
+    pub(crate) fn code(self) -> u32 {
+        match self {
+            Shading::None => 0,
+            Shading::Shadows => 1,
+            Shading::Ao => 2,
+            Shading::ShadowsAo => 3,
+            Shading::Directional(_) => 4,
+        }
+    }
+
     /// Extra volume samples per shaded sample.
     pub fn extra_samples(self) -> u32 {
         match self {

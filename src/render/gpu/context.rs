@@ -1,6 +1,38 @@
 use std::sync::{Arc, Mutex};
 
+use serde::Serialize;
+
 use crate::render::RenderError;
+
+/// Where the GPU pass times come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PassClock {
+    /// Timestamps the GPU writes at the start and end of each pass.
+    GpuTimestamps,
+    /// The host's clock from submission to completion (adapters without
+    /// timestamp queries, and software ones); includes the submission's
+    /// overhead.
+    CpuClock,
+}
+
+impl PassClock {
+    pub fn name(self) -> &'static str {
+        match self {
+            PassClock::GpuTimestamps => "gpu-timestamps",
+            PassClock::CpuClock => "cpu-clock",
+        }
+    }
+}
+
+/// A pair of timestamp queries and the buffers that bring them back.
+struct Timestamps {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+    /// Nanoseconds per tick.
+    period: f64,
+}
 
 /// An adapter and device on Vulkan, with wgpu's uncaught errors collected
 /// instead of panicking (its default), so that a bad upload becomes a
@@ -11,6 +43,7 @@ pub(super) struct Context {
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
     errors: Arc<Mutex<Vec<String>>>,
+    timestamps: Option<Timestamps>,
 }
 
 impl Context {
@@ -29,9 +62,17 @@ impl Context {
         .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
         let info = adapter.get_info();
         let limits = adapter.limits();
+        // Software Vulkan (lavapipe) offers timestamps, but writes the end
+        // of a compute pass before its threads finish: a 10 ms ray cast
+        // reads as 0.0 ms there. Its passes are timed by the host's clock.
+        let features = match info.device_type {
+            wgpu::DeviceType::Cpu => wgpu::Features::empty(),
+            _ => adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("caveray"),
             required_limits: limits.clone(),
+            required_features: features,
             ..Default::default()
         }))
         .map_err(|e| RenderError::NoAdapter(format!("{} refused a device: {e}", info.name)))?;
@@ -42,13 +83,42 @@ impl Context {
                 v.push(e.to_string());
             }
         }));
+        let timestamps = features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
+            let buffer = |label, usage| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: 16,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
+            use wgpu::BufferUsages as U;
+            Timestamps {
+                set: device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("pass timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                }),
+                resolve: buffer("timestamps", U::QUERY_RESOLVE | U::COPY_SRC),
+                read: buffer("timestamps read-back", U::MAP_READ | U::COPY_DST),
+                period: f64::from(queue.get_timestamp_period()),
+            }
+        });
         Ok(Self {
             device,
             queue,
             info,
             limits,
             errors,
+            timestamps,
         })
+    }
+
+    pub fn pass_clock(&self) -> PassClock {
+        match self.timestamps {
+            Some(_) => PassClock::GpuTimestamps,
+            None => PassClock::CpuClock,
+        }
     }
 
     /// Fails with the first error wgpu reported since the last check.
@@ -74,7 +144,7 @@ impl Context {
     }
 
     /// Runs one compute dispatch on its own and waits for it; returns the
-    /// milliseconds from submission to completion.
+    /// pass's milliseconds by `pass_clock()`.
     pub fn dispatch(
         &self,
         pipeline: &wgpu::ComputePipeline,
@@ -83,20 +153,46 @@ impl Context {
     ) -> Result<f64, RenderError> {
         let mut encoder = self.device.create_command_encoder(&Default::default());
         {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
+            let timestamp_writes =
+                self.timestamps
+                    .as_ref()
+                    .map(|t| wgpu::ComputePassTimestampWrites {
+                        query_set: &t.set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes,
+            });
             pass.set_pipeline(pipeline);
             for (i, group) in groups.iter().enumerate() {
                 pass.set_bind_group(i as u32, *group, &[]);
             }
             pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
         }
+        if let Some(t) = &self.timestamps {
+            encoder.resolve_query_set(&t.set, 0..2, &t.resolve, 0);
+            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, None);
+        }
         let commands = encoder.finish();
         let start = std::time::Instant::now();
         self.queue.submit([commands]);
         self.wait()?;
-        let ms = start.elapsed().as_secs_f64() * 1e3;
+        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
         self.check()?;
-        Ok(ms)
+        match &self.timestamps {
+            None => Ok(cpu_ms),
+            Some(t) => {
+                let bytes = self.read(&t.read, 16)?;
+                let tick = |i: usize| {
+                    let mut word = [0u8; 8];
+                    word.copy_from_slice(&bytes[8 * i..8 * i + 8]);
+                    u64::from_le_bytes(word)
+                };
+                Ok(tick(1).saturating_sub(tick(0)) as f64 * t.period * 1e-6)
+            }
+        }
     }
 
     /// Copies a MAP_READ buffer's first `bytes` back to the host.

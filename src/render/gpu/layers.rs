@@ -5,21 +5,18 @@
 //! records the span of right pixels it wrote this frame, and compositing
 //! reads nothing outside it.
 
-use glam::{UVec2, Vec4};
+use glam::UVec2;
 
 use super::context::Context;
+use super::uniforms::{Stereo, WORKGROUP};
 use super::{
     bind_group, buffer_type, color_data, compute_pipeline, layout_entry, unprepared, GpuRenderer,
-    WORKGROUP,
 };
 use crate::geometry::RayGen;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
 use crate::render::stereo::{LayerFormat, Reprojection, StereoFrames, StereoTimes};
 use crate::render::{RenderError, RenderSettings};
 use crate::scene::Scene;
-
-/// Size of the `Stereo` uniform in shaders/stereo.wgsl: 6 vec4s.
-const STEREO_BYTES: u64 = 6 * 16;
 
 /// Pipelines for one layer format, and the resources of the last shape.
 pub(super) struct StereoGpu {
@@ -160,7 +157,12 @@ impl LayerTarget {
             ..Default::default()
         });
         use wgpu::BufferUsages as U;
-        let uniform = buffer(ctx, "stereo", STEREO_BYTES, U::UNIFORM | U::COPY_DST);
+        let uniform = buffer(
+            ctx,
+            "stereo",
+            size_of::<Stereo>() as u64,
+            U::UNIFORM | U::COPY_DST,
+        );
         let color_bytes =
             u64::from(shape.size.x) * u64::from(shape.size.y) * shape.color.bytes_per_pixel();
         let color = buffer(ctx, "right colour", color_bytes, U::STORAGE | U::COPY_SRC);
@@ -246,33 +248,6 @@ fn bind_groups(
     (writer, composite)
 }
 
-/// The `Stereo` uniform, field for field in shaders/stereo.wgsl's order.
-fn pack_stereo(r: &Reprojection, color: ColorFormat, settings: &RenderSettings) -> Vec<u8> {
-    let mut out = Vec::with_capacity(STEREO_BYTES as usize);
-    let floats = |out: &mut Vec<u8>, v: Vec4| {
-        v.to_array()
-            .iter()
-            .for_each(|x| out.extend_from_slice(&x.to_le_bytes()))
-    };
-    floats(&mut out, r.right_x);
-    floats(&mut out, r.right_w);
-    for x in [
-        r.plan.near_px,
-        r.plan.far_px,
-        r.layers as i32,
-        r.first_column(),
-    ] {
-        out.extend_from_slice(&x.to_le_bytes());
-    }
-    for x in [r.size.x, r.size.y, r.columns(), color.code()] {
-        out.extend_from_slice(&x.to_le_bytes());
-    }
-    floats(&mut out, settings.background);
-    floats(&mut out, Vec4::new(settings.termination, 0.0, 0.0, 0.0));
-    debug_assert_eq!(out.len() as u64, STEREO_BYTES);
-    out
-}
-
 impl GpuRenderer {
     /// Fails, before touching the GPU, if the layers exceed what this
     /// adapter allows.
@@ -344,11 +319,9 @@ impl GpuRenderer {
         stereo.reshape(ctx, shape, columns);
         let stereo = &*stereo;
         let target = stereo.target.as_ref().ok_or_else(unprepared)?;
-        ctx.queue.write_buffer(
-            &target.uniform,
-            0,
-            &pack_stereo(reprojection, desc.color, settings),
-        );
+        let uniform = Stereo::new(reprojection, desc.color, settings);
+        ctx.queue
+            .write_buffer(&target.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = self.bind_group.as_ref().ok_or_else(unprepared)?;
         let left_ms = ctx.dispatch(
             &stereo.reproject,

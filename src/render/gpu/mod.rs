@@ -5,26 +5,25 @@
 
 mod context;
 mod layers;
-mod params;
 mod resources;
 mod shaders;
+mod uniforms;
 
 use std::sync::Arc;
 
 use glam::UVec2;
 
+pub use self::context::PassClock;
+
 use self::context::Context;
 use self::resources::OutputBuffers;
+use self::uniforms::{Params, WORKGROUP};
 use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::settings::MAX_DIRECTIONS;
-use super::settings::SHADOW_AMBIENT;
 use super::{RenderError, RenderSettings};
 use crate::geometry::RayGen;
-use crate::scene::Scene;
-use crate::scene::{StructuredVolume, TransferFunction};
-
-const WORKGROUP: u32 = 8;
+use crate::scene::{Scene, StructuredVolume, TransferFunction};
 
 /// How often data went to the GPU; lets tests (and curious users) check
 /// that unchanged scenes are not uploaded again.
@@ -81,7 +80,11 @@ impl GpuRenderer {
                 mapped_at_creation: false,
             })
         };
-        let params = uniform("params", params::PARAMS_BYTES, wgpu::BufferUsages::UNIFORM);
+        let params = uniform(
+            "params",
+            size_of::<Params>() as u64,
+            wgpu::BufferUsages::UNIFORM,
+        );
         let directions = uniform(
             "directions",
             16 * u64::from(MAX_DIRECTIONS),
@@ -104,10 +107,15 @@ impl GpuRenderer {
         })
     }
 
-    /// GPU time of the last frame's ray casting pass (submission to
-    /// completion, no upload or read-back), in milliseconds.
+    /// GPU time of the last frame's ray casting pass (no upload or
+    /// read-back), in milliseconds, by [`GpuRenderer::pass_clock`].
     pub fn last_pass_ms(&self) -> f64 {
         self.last_pass_ms
+    }
+
+    /// Whether pass times are GPU timestamps or the host's clock.
+    pub fn pass_clock(&self) -> PassClock {
+        self.ctx.pass_clock()
     }
 
     pub fn adapter(&self) -> &wgpu::AdapterInfo {
@@ -197,15 +205,12 @@ impl GpuRenderer {
         self.check_limits(scene, desc)?;
         self.prepare(scene, desc.size, desc.color);
         let queue = &self.ctx.queue;
-        queue.write_buffer(
-            &self.params,
-            0,
-            &params::pack(rays, &plan, desc.size, desc.color, SHADOW_AMBIENT),
-        );
+        let params = Params::new(rays, &plan, desc.size, desc.color);
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         queue.write_buffer(
             &self.directions,
             0,
-            &params::pack_directions(&plan.directions),
+            bytemuck::cast_slice(&uniforms::directions(&plan.directions)),
         );
         Ok(())
     }

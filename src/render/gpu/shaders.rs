@@ -1,6 +1,8 @@
 //! WGSL sources, assembled from the files in shaders/: WGSL has no
-//! includes, so shared code is concatenated in front of each entry file.
+//! includes, so the shared constants (generated from Rust) and shared code
+//! are concatenated in front of each entry file.
 
+use super::uniforms::constants;
 use crate::render::stereo::LayerFormat;
 
 const VOLUME: &str = include_str!("../../../shaders/volume.wgsl");
@@ -11,17 +13,17 @@ const REPROJECT: &str = include_str!("../../../shaders/reproject.wgsl");
 const COMPOSITE: &str = include_str!("../../../shaders/composite.wgsl");
 
 pub(super) fn raycast() -> String {
-    [VOLUME, COLOUR, RAYCAST].join("\n")
+    [constants().as_str(), VOLUME, COLOUR, RAYCAST].join("\n")
 }
 
 /// The left eye with re-projection; the storage texture's format is part
 /// of the WGSL type, so each layer format is its own module.
 pub(super) fn reproject(format: LayerFormat) -> String {
-    [VOLUME, COLOUR, STEREO, REPROJECT]
+    [constants().as_str(), VOLUME, COLOUR, STEREO, REPROJECT]
         .join("\n")
         .replace("LAYER_FORMAT", format.wgsl())
 }
 
 pub(super) fn composite() -> String {
-    [COLOUR, STEREO, COMPOSITE].join("\n")
+    [constants().as_str(), COLOUR, STEREO, COMPOSITE].join("\n")
 }

@@ -1,0 +1,261 @@
+//! The uniforms the shaders read, as `#[repr(C)]` Rust structs whose
+//! fields the WGSL structs of the same names mirror one for one (a test
+//! parses the shaders and compares names and offsets), and the constants
+//! both sides share, written here once and put in front of every shader.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{UVec2, Vec3};
+
+use crate::geometry::RayGen;
+use crate::render::frame::ColorFormat;
+use crate::render::march_plan::MarchPlan;
+use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
+use crate::render::stereo::Reprojection;
+use crate::render::RenderSettings;
+use crate::scene::TABLE_SIZE;
+
+/// Invocations per workgroup along x and y.
+pub(super) const WORKGROUP: u32 = 8;
+
+/// Defines a uniform struct and the list of its fields with their byte
+/// offsets, which the layout test holds against the WGSL struct.
+macro_rules! uniform {
+    ($(#[$doc:meta])* $name:ident { $($(#[$fdoc:meta])* $field:ident: $ty:ty,)* }) => {
+        $(#[$doc])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+        pub(super) struct $name {
+            $($(#[$fdoc])* pub $field: $ty,)*
+        }
+
+        impl $name {
+            /// Field names and offsets; padding fields start with `_`.
+            #[cfg(test)]
+            const FIELDS: &'static [(&'static str, usize)] =
+                &[$((stringify!($field), std::mem::offset_of!($name, $field)),)*];
+        }
+    };
+}
+
+uniform! {
+    /// `Params` in shaders/volume.wgsl: one eye's rays and the march plan.
+    Params {
+        /// The ray of pixel (0, 0) and its change per pixel.
+        ray_origin: [f32; 3],
+        /// Primary step length, world units.
+        step: f32,
+        ray_origin_dx: [f32; 3],
+        /// Step of shadow and directional rays.
+        shading_step: f32,
+        ray_origin_dy: [f32; 3],
+        inv_unit_distance: f32,
+        ray_dir: [f32; 3],
+        /// Field value mapped to the first table entry.
+        value_lo: f32,
+        ray_dir_dx: [f32; 3],
+        /// 1 / (value hi - value lo).
+        value_scale: f32,
+        ray_dir_dy: [f32; 3],
+        /// Opacity at which a ray stops.
+        termination: f32,
+        box_lo: [f32; 3],
+        ao_radius: f32,
+        box_hi: [f32; 3],
+        /// Entries of `directions` in use.
+        direction_count: u32,
+        inv_spacing: [f32; 3],
+        /// One of the SHADE_ codes.
+        shading: u32,
+        /// Towards the parallel light.
+        light: [f32; 3],
+        /// One of the FORMAT_ codes.
+        color_format: u32,
+        /// Straight RGBA behind the volume.
+        background: [f32; 4],
+        dims: [u32; 3],
+        width: u32,
+        height: u32,
+        _pad: [u32; 3],
+    }
+}
+
+uniform! {
+    /// `Stereo` in shaders/stereo.wgsl: what the re-projection and the
+    /// compositing pass share.
+    Stereo {
+        /// Right-eye pixel x of world point p is
+        /// dot(right_x, (p, 1)) / dot(right_w, (p, 1)).
+        right_x: [f32; 4],
+        right_w: [f32; 4],
+        /// Straight RGBA behind the volume.
+        background: [f32; 4],
+        /// Right pixel minus left column, in whole pixels, of the nearest
+        /// and the farthest visible point.
+        near_offset: i32,
+        far_offset: i32,
+        layers: i32,
+        /// The first left column cast (negative beyond the left border).
+        first_column: i32,
+        width: u32,
+        height: u32,
+        /// Left columns cast.
+        columns: u32,
+        color_format: u32,
+        /// Opacity at which a right pixel stops compositing.
+        termination: f32,
+        _pad: [u32; 3],
+    }
+}
+
+impl Params {
+    pub fn new(rays: &RayGen, plan: &MarchPlan, size: UVec2, format: ColorFormat) -> Self {
+        let v = |v: Vec3| v.to_array();
+        Self {
+            ray_origin: v(rays.origin),
+            step: plan.step,
+            ray_origin_dx: v(rays.origin_dx),
+            shading_step: plan.shading_step,
+            ray_origin_dy: v(rays.origin_dy),
+            inv_unit_distance: plan.inv_unit_distance,
+            ray_dir: v(rays.direction),
+            value_lo: plan.value_lo,
+            ray_dir_dx: v(rays.direction_dx),
+            value_scale: plan.value_scale,
+            ray_dir_dy: v(rays.direction_dy),
+            termination: plan.termination,
+            box_lo: v(plan.box_lo),
+            ao_radius: plan.ao_radius,
+            box_hi: v(plan.box_hi),
+            direction_count: plan.directions.len() as u32,
+            inv_spacing: v(plan.inv_spacing),
+            shading: plan.shading.code(),
+            light: v(plan.light),
+            color_format: format.code(),
+            background: plan.background.to_array(),
+            dims: plan.dims.to_array(),
+            width: size.x,
+            height: size.y,
+            _pad: [0; 3],
+        }
+    }
+}
+
+impl Stereo {
+    pub fn new(r: &Reprojection, format: ColorFormat, settings: &RenderSettings) -> Self {
+        Self {
+            right_x: r.right_x.to_array(),
+            right_w: r.right_w.to_array(),
+            background: settings.background.to_array(),
+            near_offset: r.plan.near_px,
+            far_offset: r.plan.far_px,
+            layers: r.layers as i32,
+            first_column: r.first_column(),
+            width: r.size.x,
+            height: r.size.y,
+            columns: r.columns(),
+            color_format: format.code(),
+            termination: settings.termination,
+            _pad: [0; 3],
+        }
+    }
+}
+
+/// The directions storage buffer: vec4 per direction, at least one entry
+/// because WGSL storage arrays cannot be bound empty.
+pub(super) fn directions(dirs: &[Vec3]) -> Vec<[f32; 4]> {
+    let mut out: Vec<[f32; 4]> = dirs.iter().map(|d| d.extend(0.0).to_array()).collect();
+    if out.is_empty() {
+        out.push([0.0; 4]);
+    }
+    out
+}
+
+/// The WGSL declarations of the constants Rust and the shaders share.
+pub(super) fn constants() -> String {
+    let u32s = [
+        ("WORKGROUP", WORKGROUP),
+        ("TABLE_SIZE", TABLE_SIZE as u32),
+        ("SHADOW_STEPS", SHADOW_STEPS),
+        ("DIRECTIONAL_STEPS", DIRECTIONAL_STEPS),
+        ("SHADE_NONE", Shading::None.code()),
+        ("SHADE_SHADOWS", Shading::Shadows.code()),
+        ("SHADE_AO", Shading::Ao.code()),
+        ("SHADE_SHADOWS_AO", Shading::ShadowsAo.code()),
+        ("SHADE_DIRECTIONAL", Shading::Directional(0).code()),
+        ("FORMAT_RGBA8", ColorFormat::Rgba8.code()),
+        ("FORMAT_SRGBA8", ColorFormat::Srgba8.code()),
+        ("FORMAT_RGBA32F", ColorFormat::Rgba32F.code()),
+    ];
+    let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
+    for (name, value) in u32s {
+        out += &format!("const {name}: u32 = {value}u;\n");
+    }
+    // Rust's shortest round-trip form with the f suffix is the same f32.
+    out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::gpu::shaders;
+    use crate::render::stereo::LayerFormat;
+    use wgpu::naga;
+
+    /// The members of WGSL struct `name` as (name, offset), and its size.
+    fn wgsl_struct(source: &str, name: &str) -> (Vec<(String, usize)>, usize) {
+        let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| {
+            panic!("{}", e.emit_to_string(source));
+        });
+        for (_, ty) in module.types.iter() {
+            if ty.name.as_deref() != Some(name) {
+                continue;
+            }
+            if let naga::TypeInner::Struct { members, span } = &ty.inner {
+                let fields = members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
+                    .collect();
+                return (fields, *span as usize);
+            }
+        }
+        panic!("no struct {name} in the shader");
+    }
+
+    fn same_layout(rust: &[(&str, usize)], size: usize, source: &str, name: &str) {
+        let (wgsl, span) = wgsl_struct(source, name);
+        let rust: Vec<(String, usize)> = rust
+            .iter()
+            .filter(|(f, _)| !f.starts_with('_'))
+            .map(|(f, o)| (f.to_string(), *o))
+            .collect();
+        assert_eq!(wgsl, rust, "{name}: WGSL members differ from Rust's");
+        assert_eq!(span, size, "{name}: WGSL size differs from Rust's");
+    }
+
+    #[test]
+    fn the_wgsl_structs_mirror_the_rust_ones() {
+        let raycast = shaders::raycast();
+        same_layout(Params::FIELDS, size_of::<Params>(), &raycast, "Params");
+        for format in [LayerFormat::Rgba16F, LayerFormat::Rgba32F] {
+            let reproject = shaders::reproject(format);
+            same_layout(Params::FIELDS, size_of::<Params>(), &reproject, "Params");
+            same_layout(Stereo::FIELDS, size_of::<Stereo>(), &reproject, "Stereo");
+        }
+        same_layout(
+            Stereo::FIELDS,
+            size_of::<Stereo>(),
+            &shaders::composite(),
+            "Stereo",
+        );
+    }
+
+    #[test]
+    fn the_shadow_ambient_constant_is_the_same_f32() {
+        let c = constants();
+        let line = c.lines().find(|l| l.contains("SHADOW_AMBIENT")).unwrap();
+        let literal = line.split('=').nth(1).unwrap().trim().trim_end_matches(";");
+        let parsed: f32 = literal.trim_end_matches('f').parse().unwrap();
+        assert_eq!(parsed.to_bits(), SHADOW_AMBIENT.to_bits());
+    }
+}
