@@ -6,7 +6,7 @@ use anari_library_caveray::cave::{Eye, Rig};
 use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
-use anari_library_caveray::render::{FrameDesc, RenderSettings, Renderer, Shading};
+use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
 use anari_library_caveray::scene::Scene;
 use glam::UVec2;
 
@@ -20,7 +20,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tf = preset("phantom")?.with_unit_distance(size / 2.0)?;
     let scene = Scene::new(volume, tf);
 
-    let (mut renderer, no_gpu) = Renderer::gpu_or_cpu();
+    let (mut renderer, no_gpu) = Renderer::choose(Backend::Auto)?;
     if let Some(reason) = no_gpu {
         eprintln!("{reason}; using the CPU reference");
     }

@@ -26,4 +26,4 @@ pub use camera::CameraModel;
 pub use frame::slot::FrameSlot;
 pub use types::{kind_name, DataType, Severity, Status, StatusCode};
 pub use value::{Params, Value};
-pub use worker::{panic_message, BackendChoice, Reporter};
+pub use worker::{panic_message, Reporter};

@@ -16,26 +16,6 @@ use crate::scene::Scene;
 /// Where a device's status messages go; called from any thread.
 pub type Reporter = Arc<dyn Fn(Status) + Send + Sync>;
 
-/// Which renderer a device uses (device parameter `backend`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BackendChoice {
-    /// The GPU when an adapter opens, else the CPU reference.
-    Auto,
-    Gpu,
-    Cpu,
-}
-
-impl BackendChoice {
-    pub fn parse(name: &str) -> Option<Self> {
-        match name {
-            "auto" => Some(BackendChoice::Auto),
-            "gpu" => Some(BackendChoice::Gpu),
-            "cpu" => Some(BackendChoice::Cpu),
-            _ => None,
-        }
-    }
-}
-
 pub struct RenderJob {
     pub frame: u64,
     /// `None` renders the background only (an empty world).
@@ -43,7 +23,7 @@ pub struct RenderJob {
     pub rays: RayGen,
     pub settings: RenderSettings,
     pub desc: FrameDesc,
-    pub backend: BackendChoice,
+    pub backend: Backend,
     pub slot: Arc<FrameSlot>,
     pub on_done: Option<Box<dyn FnOnce() + Send>>,
 }
@@ -109,7 +89,7 @@ impl Drop for Worker {
     }
 }
 
-fn run(job: RenderJob, renderer: &mut Option<(BackendChoice, Renderer)>, report: &Reporter) {
+fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Reporter) {
     let started = Instant::now();
     let status = |severity, code, message: String| Status {
         severity,
@@ -125,21 +105,14 @@ fn run(job: RenderJob, renderer: &mut Option<(BackendChoice, Renderer)>, report:
         };
         if renderer.as_ref().map(|r| r.0) != Some(job.backend) {
             *renderer = None;
-            let made = match job.backend {
-                BackendChoice::Auto => {
-                    let (r, why) = Renderer::gpu_or_cpu();
-                    if let Some(why) = why {
-                        report(status(
-                            Severity::Warning,
-                            StatusCode::NoError,
-                            format!("no GPU ({why}); rendering with the CPU reference"),
-                        ));
-                    }
-                    r
-                }
-                BackendChoice::Gpu => Renderer::new(Backend::Gpu).map_err(|e| e.to_string())?,
-                BackendChoice::Cpu => Renderer::new(Backend::Cpu).map_err(|e| e.to_string())?,
-            };
+            let (made, why) = Renderer::choose(job.backend).map_err(|e| e.to_string())?;
+            if let Some(why) = why {
+                report(status(
+                    Severity::Warning,
+                    StatusCode::NoError,
+                    format!("no GPU ({why}); rendering with the CPU reference"),
+                ));
+            }
             report(status(
                 Severity::Info,
                 StatusCode::NoError,

@@ -45,11 +45,39 @@ pub enum RenderError {
     Gpu(String),
 }
 
-/// Which implementation renders.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Which implementation renders: what the tool's `--backend`, the
+/// device's `backend` parameter and `$CAVERAY_BACKEND` choose from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Backend {
+    /// The GPU where an adapter opens, else the CPU reference.
+    #[default]
+    Auto,
     Gpu,
     Cpu,
+}
+
+impl Backend {
+    pub const NAMES: [&'static str; 3] = ["auto", "gpu", "cpu"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Auto => "auto",
+            Backend::Gpu => "gpu",
+            Backend::Cpu => "cpu",
+        }
+    }
+}
+
+impl std::str::FromStr for Backend {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "auto" => Ok(Backend::Auto),
+            "gpu" => Ok(Backend::Gpu),
+            "cpu" => Ok(Backend::Cpu),
+            _ => Err(format!("unknown backend '{s}'; expected auto, gpu or cpu")),
+        }
+    }
 }
 
 /// The GPU renderer where an adapter exists, else the CPU reference.
@@ -59,23 +87,26 @@ pub enum Renderer {
 }
 
 impl Renderer {
-    /// `Backend::Gpu` fails if no adapter can be opened; callers that want
-    /// the fallback use [`Renderer::gpu_or_cpu`].
+    /// The renderer `backend` names; `Backend::Gpu` fails if no adapter
+    /// can be opened. See [`Renderer::choose`] for why `Auto` fell back.
     pub fn new(backend: Backend) -> Result<Self, RenderError> {
+        Self::choose(backend).map(|(r, _)| r)
+    }
+
+    /// The renderer `backend` names and, where `Auto` fell back to the CPU
+    /// reference, the reason there is no GPU.
+    pub fn choose(backend: Backend) -> Result<(Self, Option<RenderError>), RenderError> {
         Ok(match backend {
-            Backend::Gpu => Renderer::Gpu(Box::new(GpuRenderer::new()?)),
-            Backend::Cpu => Renderer::Cpu(CpuRenderer::new()),
+            Backend::Gpu => (Renderer::Gpu(Box::new(GpuRenderer::new()?)), None),
+            Backend::Cpu => (Renderer::Cpu(CpuRenderer::new()), None),
+            Backend::Auto => match GpuRenderer::new() {
+                Ok(gpu) => (Renderer::Gpu(Box::new(gpu)), None),
+                Err(e) => (Renderer::Cpu(CpuRenderer::new()), Some(e)),
+            },
         })
     }
 
-    /// The GPU renderer, or the CPU reference plus the reason there is no GPU.
-    pub fn gpu_or_cpu() -> (Self, Option<RenderError>) {
-        match GpuRenderer::new() {
-            Ok(gpu) => (Renderer::Gpu(Box::new(gpu)), None),
-            Err(e) => (Renderer::Cpu(CpuRenderer::new()), Some(e)),
-        }
-    }
-
+    /// `Gpu` or `Cpu`: what renders, never `Auto`.
     pub fn backend(&self) -> Backend {
         match self {
             Renderer::Gpu(_) => Backend::Gpu,

@@ -1,10 +1,11 @@
 //! caveray: render, inspect and benchmark CAVE rigs.
 
 mod bench;
-mod bench_stereo;
 mod inspect;
+mod options;
 mod progress;
 mod render;
+mod report;
 mod scene;
 
 use std::process::ExitCode;

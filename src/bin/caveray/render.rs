@@ -1,20 +1,23 @@
 //! `caveray render`: every wall and eye of a rig to PNGs, contact sheets
-//! and a timing table.
+//! and a timing table (timings.json, from the same `RenderReport` the
+//! printed table reads).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anari_library_caveray::cave::{Eye, Rig, View};
-use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
+use anari_library_caveray::geometry::RayGen;
 use anari_library_caveray::output::{contact_sheet, frame_to_rgba, write_rgba_png, SheetLayout};
 use anari_library_caveray::render::stereo::{Bounds, LayerFormat, Reprojection};
-use anari_library_caveray::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer, Shading};
+use anari_library_caveray::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer};
 use anari_library_caveray::scene::Scene;
 use clap::{Args, ValueEnum};
 use glam::UVec2;
-use serde_json::{json, Value};
+use serde::Serialize;
 
+use crate::options::{RenderOptions, Strategy};
 use crate::progress::Progress;
+use crate::report::{write_json, RendererInfo, VolumeInfo};
 use crate::scene::VolumeArgs;
 use crate::{Failure, HeadArgs};
 
@@ -61,105 +64,101 @@ pub enum StereoMode {
     Reprojection,
 }
 
-/// Renderer choices shared by `render` and `bench`.
-#[derive(Args)]
-pub struct RenderOptions {
-    /// Which camera model turns each view into rays.
-    #[arg(long, value_enum, default_value_t = Strategy::Offaxis)]
-    pub strategy: Strategy,
-    /// none, shadows, ao, shadows+ao or directional:N.
-    #[arg(long, default_value = "none", value_parser = shading)]
-    pub shading: Shading,
-    /// gpu, cpu, or auto (the GPU where there is one, else the CPU reference).
-    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
-    pub backend: BackendArg,
-    /// Step length in units of half the smallest voxel.
-    #[arg(long, default_value_t = 1.0)]
-    pub step_factor: f32,
-}
-
-fn shading(s: &str) -> Result<Shading, String> {
-    s.parse()
-        .map_err(|e: anari_library_caveray::render::RenderError| e.to_string())
-}
-
-impl RenderOptions {
-    pub fn settings(&self) -> RenderSettings {
-        RenderSettings {
-            shading: self.shading,
-            step_factor: self.step_factor,
-            ..Default::default()
-        }
-    }
-
-    /// The chosen renderer, saying so (and why the GPU is missing) on stderr.
-    pub fn renderer(&self) -> Result<Renderer, Failure> {
-        let renderer = match self.backend {
-            BackendArg::Gpu => Renderer::new(Backend::Gpu)
-                .map_err(|e| Failure::Runtime(format!("{e} (try --backend cpu)")))?,
-            BackendArg::Cpu => {
-                Renderer::new(Backend::Cpu).map_err(|e| Failure::Runtime(e.to_string()))?
-            }
-            BackendArg::Auto => {
-                let (renderer, missing) = Renderer::gpu_or_cpu();
-                if let Some(e) = missing {
-                    eprintln!("caveray: {e}; falling back to the CPU reference renderer");
-                }
-                renderer
-            }
-        };
-        eprintln!("caveray: rendering on {}", renderer.describe());
-        Ok(renderer)
-    }
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum BackendArg {
-    Auto,
-    Gpu,
-    Cpu,
-}
-
-/// The camera models of docs/off_axis.md.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Strategy {
-    /// Strategy 1: rays from the inverse of the f32 OpenGL matrices.
-    Matrix,
-    /// Strategy 2: a pinhole at the eye plus an image region.
-    Pinhole,
-    /// Strategy 3: a pinhole recovered from the f32 matrices.
-    FromMatrices,
-    /// The native off-axis camera: wall corners and eye.
-    Offaxis,
-}
-
-impl Strategy {
-    pub fn name(self) -> &'static str {
+impl StereoMode {
+    fn name(self) -> &'static str {
         match self {
-            Strategy::Matrix => "matrix",
-            Strategy::Pinhole => "pinhole",
-            Strategy::FromMatrices => "from-matrices",
-            Strategy::Offaxis => "offaxis",
+            StereoMode::TwoPass => "two-pass",
+            StereoMode::Reprojection => "reprojection",
         }
     }
+}
 
-    /// The view's rays for an image of `size`. The matrix strategies get
-    /// single-precision matrices, as an OpenGL host hands them over.
-    pub fn rays(self, view: &View, size: UVec2) -> Result<RayGen, String> {
-        let e = |e: anari_library_caveray::geometry::GeometryError| e.to_string();
-        let (v, p) = (
-            view.projection.view.as_mat4(),
-            view.projection.proj.as_mat4(),
-        );
-        Ok(match self {
-            Strategy::Matrix => MatrixCamera::from_f32(v, p).map_err(e)?.ray_gen(size),
-            Strategy::Pinhole => view.pinhole().map_err(e)?.ray_gen(size),
-            Strategy::FromMatrices => pinhole_from_matrices(v.as_dmat4(), p.as_dmat4())
-                .map_err(e)?
-                .camera
-                .ray_gen(size),
-            Strategy::Offaxis => view.camera.ray_gen(size),
-        })
+/// What `caveray render` writes to timings.json.
+#[derive(Serialize)]
+pub struct RenderReport {
+    pub rig: String,
+    pub config: String,
+    pub renderer: RendererInfo,
+    pub volume: VolumeInfo,
+    pub strategy: &'static str,
+    pub shading: String,
+    pub scale: f64,
+    pub stereo: &'static str,
+    pub head: HeadInfo,
+    pub upload_ms: f64,
+    pub total_ms: f64,
+    pub views: Vec<ViewRecord>,
+    pub contact_sheets: Vec<String>,
+}
+
+#[derive(Serialize)]
+pub struct HeadInfo {
+    pub position: [f64; 3],
+    pub orientation_xyzw: [f64; 4],
+}
+
+/// One wall and eye: rendered, or why not.
+#[derive(Serialize)]
+pub struct ViewRecord {
+    pub wall: String,
+    pub eye: &'static str,
+    #[serde(flatten)]
+    pub outcome: Outcome,
+}
+
+#[derive(Serialize)]
+#[serde(untagged)]
+pub enum Outcome {
+    Rendered(Rendered),
+    Skipped { error: String },
+}
+
+#[derive(Serialize)]
+pub struct Rendered {
+    pub width: u32,
+    pub height: u32,
+    /// Two-pass views: the whole render, read-back included. Re-projected
+    /// views: the pass (the left eye's writes the layers, the right eye's
+    /// composites), by the renderer's pass clock.
+    pub ms: f64,
+    pub rays_per_s: f64,
+    pub samples: u64,
+    pub samples_per_s: f64,
+    pub file: String,
+    /// "two-pass", or "reprojection (N layers)".
+    pub path: String,
+    /// Why a wall asked to re-project rendered in two passes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fallback: Option<String>,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub layers: Option<LayerRecord>,
+}
+
+#[derive(Serialize)]
+pub struct LayerRecord {
+    pub layers: u32,
+    pub layer_format: String,
+    pub layer_bytes: u64,
+    pub offsets_px: [i32; 2],
+    /// Both eyes of the wall, read-back included.
+    pub wall_ms: f64,
+}
+
+impl Rendered {
+    fn new(size: UVec2, ms: f64, samples: u64, file: String, path: String) -> Self {
+        let seconds = ms / 1e3;
+        Self {
+            width: size.x,
+            height: size.y,
+            ms,
+            rays_per_s: f64::from(size.x * size.y) / seconds,
+            samples,
+            samples_per_s: samples as f64 / seconds,
+            file,
+            path,
+            fallback: None,
+            layers: None,
+        }
     }
 }
 
@@ -214,107 +213,89 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
                 stereo_pair(&wall_views, &renderer, &scene, size, &args.stereo)
             }
         };
-        let mut done = Vec::new();
         match pair {
             Ok((left, reprojection)) => {
-                let (frames, mut wall_records) =
-                    job.reprojected(&mut renderer, &wall.name, left, &reprojection)?;
-                for ((eye, frame), record) in frames.into_iter().zip(&mut wall_records) {
+                let frames = job.reprojected(&mut renderer, &wall.name, left, &reprojection)?;
+                for (eye, frame, rendered) in frames {
                     let image = frame_to_rgba(&frame);
-                    write(
-                        &image,
-                        &args.out.join(format!("{}_{}.png", wall.name, eye.name())),
-                    )?;
+                    write(&image, &args.out.join(&rendered.file))?;
                     progress.step(&format!(
                         "{}_{} {}x{} {:.1} ms (re-projection, {} layers)",
                         wall.name,
                         eye.name(),
                         size.x,
                         size.y,
-                        record["ms"].as_f64().unwrap_or(0.0),
+                        rendered.ms,
                         reprojection.layers
                     ));
                     images.push((wall_index, eye, image));
-                    done.push(eye);
+                    records.push(ViewRecord {
+                        wall: wall.name.clone(),
+                        eye: eye.name(),
+                        outcome: Outcome::Rendered(rendered),
+                    });
                 }
-                records.append(&mut wall_records);
             }
             Err(reason) => {
                 for (_, eye, view) in &wall_views {
                     let label = format!("{}_{}", wall.name, eye.name());
+                    let record = |outcome| ViewRecord {
+                        wall: wall.name.clone(),
+                        eye: eye.name(),
+                        outcome,
+                    };
                     let rays = view
                         .as_ref()
                         .map_err(|e| e.to_string())
                         .and_then(|v| args.render.strategy.rays(v, size));
                     let rays = match rays {
                         Ok(r) => r,
-                        Err(message) => {
-                            progress.step(&format!("{label}: skipped ({message})"));
-                            records.push(
-                                json!({"wall": wall.name, "eye": eye.name(), "error": message}),
-                            );
+                        Err(error) => {
+                            progress.step(&format!("{label}: skipped ({error})"));
+                            records.push(record(Outcome::Skipped { error }));
                             continue;
                         }
                     };
-                    let (frame, mut record) = job.single(&mut renderer, &label, &rays, size)?;
-                    record["wall"] = json!(wall.name);
-                    record["eye"] = json!(eye.name());
-                    record["path"] = json!("two-pass");
+                    let (frame, mut rendered) = job.single(&mut renderer, &label, &rays, size)?;
                     if args.stereo.stereo == StereoMode::Reprojection && *eye != Eye::Mono {
-                        record["fallback"] = json!(reason);
+                        rendered.fallback = Some(reason.clone());
                     }
                     let image = frame_to_rgba(&frame);
-                    write(&image, &args.out.join(format!("{label}.png")))?;
+                    write(&image, &args.out.join(&rendered.file))?;
                     progress.step(&format!(
                         "{label} {}x{} {:.1} ms",
-                        size.x,
-                        size.y,
-                        record["ms"].as_f64().unwrap_or(0.0)
+                        size.x, size.y, rendered.ms
                     ));
-                    records.push(record);
+                    records.push(record(Outcome::Rendered(rendered)));
                     images.push((wall_index, *eye, image));
                 }
             }
         }
     }
 
-    let sheets = write_sheets(&rig, &images, &args.out)?;
-    let total_ms = start.elapsed().as_secs_f64() * 1e3;
-    let report = json!({
-        "rig": rig.name,
-        "config": args.config.display().to_string(),
-        "renderer": renderer_json(&renderer),
-        "volume": {
-            "name": loaded.name,
-            "dims": scene.volume.dims().to_array(),
+    let contact_sheets = write_sheets(&rig, &images, &args.out)?;
+    let report = RenderReport {
+        rig: rig.name.clone(),
+        config: args.config.display().to_string(),
+        renderer: RendererInfo::of(&renderer),
+        volume: VolumeInfo::of(&loaded.name, &scene),
+        strategy: args.render.strategy.name(),
+        shading: settings.shading.to_string(),
+        scale: args.scale,
+        stereo: args.stereo.stereo.name(),
+        head: HeadInfo {
+            position: head.position.to_array(),
+            orientation_xyzw: head.orientation.to_array(),
         },
-        "strategy": args.render.strategy.name(),
-        "shading": settings.shading.to_string(),
-        "scale": args.scale,
-        "stereo": match args.stereo.stereo {
-            StereoMode::TwoPass => "two-pass",
-            StereoMode::Reprojection => "reprojection",
-        },
-        "head": {
-            "position": head.position.to_array(),
-            "orientation_xyzw": head.orientation.to_array(),
-        },
-        "upload_ms": upload_ms,
-        "total_ms": total_ms,
-        "views": records,
-        "contact_sheets": sheets,
-    });
-    let path = args.out.join("timings.json");
-    let text =
-        serde_json::to_string_pretty(&report).map_err(|e| Failure::Runtime(e.to_string()))?;
-    std::fs::write(&path, text + "\n")
-        .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", path.display())))?;
+        upload_ms,
+        total_ms: start.elapsed().as_secs_f64() * 1e3,
+        views: records,
+        contact_sheets,
+    };
+    write_json(&report, &args.out.join("timings.json"))?;
     print_summary(&report);
     Ok(())
 }
-
-/// Frames of a wall's eyes, and their timing records.
-type WallResult = (Vec<(Eye, Frame)>, Vec<Value>);
 
 /// What every view of one run shares.
 struct ViewJob<'a> {
@@ -324,40 +305,37 @@ struct ViewJob<'a> {
 }
 
 impl ViewJob<'_> {
-    /// One eye, ray cast on its own; the record lacks wall and eye.
+    /// One eye, ray cast on its own.
     fn single(
         &self,
         renderer: &mut Renderer,
         label: &str,
         rays: &RayGen,
         size: UVec2,
-    ) -> Result<(Frame, Value), Failure> {
+    ) -> Result<(Frame, Rendered), Failure> {
         let t = Instant::now();
         let frame = renderer
             .render(self.scene, rays, self.settings, &FrameDesc::new(size))
             .map_err(|e| Failure::Runtime(format!("{label}: {e}")))?;
-        let seconds = t.elapsed().as_secs_f64();
-        let record = json!({
-            "width": size.x,
-            "height": size.y,
-            "ms": seconds * 1e3,
-            "rays_per_s": f64::from(size.x * size.y) / seconds,
-            "samples": frame.samples,
-            "samples_per_s": frame.samples as f64 / seconds,
-            "file": format!("{label}.png"),
-        });
-        Ok((frame, record))
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let rendered = Rendered::new(
+            size,
+            ms,
+            frame.samples,
+            format!("{label}.png"),
+            "two-pass".into(),
+        );
+        Ok((frame, rendered))
     }
 
-    /// Both eyes of a wall from one ray casting pass. The left eye's time
-    /// includes writing the layers, the right eye's is the compositing.
+    /// Both eyes of a wall from one ray casting pass.
     fn reprojected(
         &self,
         renderer: &mut Renderer,
         wall: &str,
         left: &View,
         reprojection: &Reprojection,
-    ) -> Result<WallResult, Failure> {
+    ) -> Result<Vec<(Eye, Frame, Rendered)>, Failure> {
         let Renderer::Gpu(gpu) = renderer else {
             return Err(Failure::Runtime(
                 "internal: re-projection planned without a GPU".into(),
@@ -379,34 +357,28 @@ impl ViewJob<'_> {
             )
             .map_err(|e| Failure::Runtime(format!("{wall}: {e}")))?;
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
-        let path = format!("reprojection ({} layers)", reprojection.layers);
-        let record = |eye: Eye, ms: f64, samples: u64| {
-            json!({
-                "wall": wall,
-                "eye": eye.name(),
-                "width": size.x,
-                "height": size.y,
-                "ms": ms,
-                "rays_per_s": f64::from(size.x * size.y) / (ms / 1e3),
-                "samples": samples,
-                "samples_per_s": samples as f64 / (ms / 1e3),
-                "file": format!("{wall}_{}.png", eye.name()),
-                "path": path,
-                "layers": reprojection.layers,
-                "layer_format": reprojection.format.to_string(),
-                "layer_bytes": reprojection.memory(),
-                "offsets_px": [reprojection.plan.near_px, reprojection.plan.far_px],
-                "wall_ms": wall_ms,
-            })
+        let rendered = |eye: Eye, ms: f64, samples: u64| Rendered {
+            layers: Some(LayerRecord {
+                layers: reprojection.layers,
+                layer_format: reprojection.format.to_string(),
+                layer_bytes: reprojection.memory(),
+                offsets_px: [reprojection.plan.near_px, reprojection.plan.far_px],
+                wall_ms,
+            }),
+            ..Rendered::new(
+                size,
+                ms,
+                samples,
+                format!("{wall}_{}.png", eye.name()),
+                format!("reprojection ({} layers)", reprojection.layers),
+            )
         };
-        let records = vec![
-            record(Eye::Left, frames.times.left_ms, frames.left.samples),
-            record(Eye::Right, frames.times.composite_ms, 0),
-        ];
-        Ok((
-            vec![(Eye::Left, frames.left), (Eye::Right, frames.right)],
-            records,
-        ))
+        let left = rendered(Eye::Left, frames.times.left_ms, frames.left.samples);
+        let right = rendered(Eye::Right, frames.times.composite_ms, 0);
+        Ok(vec![
+            (Eye::Left, frames.left, left),
+            (Eye::Right, frames.right, right),
+        ])
     }
 }
 
@@ -448,25 +420,6 @@ fn stereo_pair<'v>(
     Ok((left, reprojection))
 }
 
-pub fn renderer_json(renderer: &Renderer) -> Value {
-    match renderer {
-        Renderer::Gpu(g) => {
-            let info = g.adapter();
-            json!({
-                "backend": "gpu",
-                "adapter": info.name,
-                "api": format!("{:?}", info.backend),
-                "driver": format!("{} {}", info.driver, info.driver_info),
-                "device_type": format!("{:?}", info.device_type),
-            })
-        }
-        Renderer::Cpu(_) => json!({
-            "backend": "cpu",
-            "threads": rayon::current_num_threads(),
-        }),
-    }
-}
-
 /// One contact sheet per eye that has any image; returns the file names.
 fn write_sheets(
     rig: &Rig,
@@ -496,44 +449,42 @@ fn write(image: &image::RgbaImage, path: &Path) -> Result<(), Failure> {
     write_rgba_png(image, path).map_err(|e| Failure::Runtime(e.to_string()))
 }
 
-fn print_summary(report: &Value) {
+fn print_summary(report: &RenderReport) {
     println!(
         "{} on {}",
-        report["rig"].as_str().unwrap_or(""),
-        report["renderer"]["adapter"]
-            .as_str()
-            .unwrap_or("the CPU reference")
+        report.rig,
+        report
+            .renderer
+            .adapter()
+            .map_or("the CPU reference", |a| &a.name)
     );
     println!(
         "{:<10} {:<6} {:>11} {:>10} {:>10} {:>12}  path",
         "wall", "eye", "size", "ms", "Mrays/s", "Msamples/s"
     );
-    for v in report["views"].as_array().into_iter().flatten() {
-        let (wall, eye) = (
-            v["wall"].as_str().unwrap_or(""),
-            v["eye"].as_str().unwrap_or(""),
-        );
-        if let Some(err) = v["error"].as_str() {
-            println!("{wall:<10} {eye:<6} skipped: {err}");
-            continue;
-        }
-        let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-        let path = match (v["path"].as_str(), v["fallback"].as_str()) {
-            (_, Some(why)) => format!("two-pass: {why}"),
-            (Some(p), None) => p.to_string(),
-            (None, None) => String::new(),
+    for v in &report.views {
+        let (wall, eye) = (&v.wall, v.eye);
+        let r = match &v.outcome {
+            Outcome::Skipped { error } => {
+                println!("{wall:<10} {eye:<6} skipped: {error}");
+                continue;
+            }
+            Outcome::Rendered(r) => r,
+        };
+        let path = match &r.fallback {
+            Some(why) => format!("two-pass: {why}"),
+            None => r.path.clone(),
         };
         println!(
             "{wall:<10} {eye:<6} {:>11} {:>10.1} {:>10.2} {:>12.1}  {path}",
-            format!("{}x{}", v["width"], v["height"]),
-            f("ms"),
-            f("rays_per_s") / 1e6,
-            f("samples_per_s") / 1e6
+            format!("{}x{}", r.width, r.height),
+            r.ms,
+            r.rays_per_s / 1e6,
+            r.samples_per_s / 1e6
         );
     }
     println!(
         "upload {:.1} ms, total {:.1} ms; images, contact sheets and timings.json are in the output folder",
-        report["upload_ms"].as_f64().unwrap_or(0.0),
-        report["total_ms"].as_f64().unwrap_or(0.0)
+        report.upload_ms, report.total_ms
     );
 }

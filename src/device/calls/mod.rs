@@ -17,7 +17,8 @@ use super::info;
 use super::object::{ObjectCell, ObjectRef, State};
 use super::types::{kind_name, DataType, Severity, Status, StatusCode};
 use super::value::{Params, Value};
-use super::worker::{BackendChoice, Reporter, Worker};
+use super::worker::{Reporter, Worker};
+use crate::render::Backend;
 
 pub use frames::Mapped;
 
@@ -59,7 +60,7 @@ pub struct Device {
     committed: Params,
     /// Arrays handed out by `anariMapParameterArray*D`, by object and name.
     mapped_params: HashMap<(u64, String), (DataType, ObjectRef)>,
-    backend: BackendChoice,
+    backend: Backend,
     statuses: Vec<Status>,
     pub(super) worker: Worker,
 }
@@ -70,8 +71,8 @@ impl Device {
     pub fn new(report: Reporter) -> Self {
         let backend = std::env::var("CAVERAY_BACKEND")
             .ok()
-            .and_then(|b| BackendChoice::parse(&b))
-            .unwrap_or(BackendChoice::Auto);
+            .and_then(|b| b.parse().ok())
+            .unwrap_or_default();
         Self {
             serial: NEXT_DEVICE.fetch_add(1, Ordering::Relaxed),
             next: 1,
@@ -89,7 +90,7 @@ impl Device {
         std::mem::take(&mut self.statuses)
     }
 
-    pub fn backend(&self) -> BackendChoice {
+    pub fn backend(&self) -> Backend {
         self.backend
     }
 

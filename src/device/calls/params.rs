@@ -7,7 +7,6 @@ use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::{DataType, StatusCode};
 use crate::device::value::Value;
-use crate::device::worker::BackendChoice;
 
 impl Device {
     /// `anariSetParameter`: checked against the subtype's table. Unknown
@@ -195,9 +194,9 @@ impl Device {
     fn commit_device(&mut self) {
         self.committed = self.pending.clone();
         if let Some(b) = self.committed.string("backend") {
-            match BackendChoice::parse(b) {
-                Some(b) => self.backend = b,
-                None => {
+            match b.parse() {
+                Ok(b) => self.backend = b,
+                Err(_) => {
                     let b = b.to_owned();
                     self.error(
                         StatusCode::InvalidArgument,

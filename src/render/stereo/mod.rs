@@ -15,7 +15,7 @@ mod reproject;
 pub use bounds::Bounds;
 pub use layers::{layer_count, layer_memory, layers_for, LayerCountError, LayerFormat};
 pub use plan::{
-    minimal_focal_length, pixel_scale, plan_views, span_to_depth, span_to_infinity, span_to_sphere,
-    HmdStereo, LayerPlan, NotEpipolar, StereoError, ViewPlan,
+    minimal_focal_length, paper, pixel_scale, plan_views, span_to_depth, span_to_infinity,
+    span_to_sphere, HmdStereo, LayerPlan, NotEpipolar, StereoError, ViewPlan,
 };
 pub use reproject::{Reprojection, ReprojectionError, StereoFrames, StereoTimes};

@@ -24,6 +24,20 @@ pub enum StereoError {
     Layers(#[from] LayerCountError),
 }
 
+/// The paper's protocol (docs/reprojection_stereo.md): image width and
+/// height, full horizontal field of view, eye distance, bounding radius of
+/// the volume, re-projection layers, largest re-projected span (which
+/// fixes the focal length), and views in the 360 degree turn about y.
+pub mod paper {
+    pub const WIDTH: u32 = 768;
+    pub const FOV_DEGREES: f64 = 110.0;
+    pub const EYE_DISTANCE_M: f64 = 0.065;
+    pub const RADIUS_M: f64 = 1.0;
+    pub const LAYERS: u32 = 32;
+    pub const SPAN_PX: f64 = 32.0;
+    pub const VIEWS: u32 = 50;
+}
+
 /// Pixels per image-plane unit: `s = w / (2 h tan a)`.
 pub fn pixel_scale(width: f64, focal: f64, half_fov: f64) -> f64 {
     width / (2.0 * focal * half_fov.tan())
@@ -92,12 +106,16 @@ impl HmdStereo {
     /// The paper's protocol: 768^2, 2a = 110 degrees, e = 0.065 m, r = 1 m,
     /// and the focal length at which the sphere spans `span_px` pixels.
     pub fn paper(span_px: f64) -> Self {
-        Self::protocol(768, span_px)
+        Self::protocol(paper::WIDTH, span_px)
     }
 
     /// The paper's protocol at another image width.
     pub fn protocol(width: u32, span_px: f64) -> Self {
-        let (fov, e, r) = (110f64.to_radians(), 0.065, 1.0);
+        let (fov, e, r) = (
+            paper::FOV_DEGREES.to_radians(),
+            paper::EYE_DISTANCE_M,
+            paper::RADIUS_M,
+        );
         Self {
             width,
             fov,

@@ -4,8 +4,9 @@
 //! (T_l), the right eye alone (T_r), the left eye with re-projection plus
 //! compositing (T_l+r), what a full clear of the layers would cost, the
 //! speed-up V = 1 - (T_l+r - T_l) / T_r, and the re-projected right
-//! image's DSSIM against the two-pass right image. Times are GPU passes
-//! from submission to completion, without uploads or read-back.
+//! image's DSSIM against the two-pass right image. Times are GPU passes,
+//! without uploads or read-back, by the renderer's pass clock (GPU
+//! timestamps on hardware adapters; the report says which).
 
 use std::path::{Path, PathBuf};
 
@@ -14,7 +15,7 @@ use anari_library_caveray::output::{
     dssim_heatmap, frame_to_rgba, side_by_side, write_rgba_png, Chart, Series,
 };
 use anari_library_caveray::render::stereo::{
-    layer_memory, Bounds, HmdStereo, LayerFormat, Reprojection,
+    layer_memory, paper, Bounds, HmdStereo, LayerFormat, Reprojection,
 };
 use anari_library_caveray::render::{
     dssim, ssim_map, Frame, FrameDesc, GpuRenderer, RenderSettings, Shading,
@@ -22,10 +23,12 @@ use anari_library_caveray::render::{
 use anari_library_caveray::scene::Scene;
 use clap::Args;
 use glam::{UVec2, Vec3};
-use serde_json::{json, Value};
+use serde::Serialize;
 
-use crate::bench::{machine, parse_shadings};
+use super::mean;
+use crate::options::shading;
 use crate::progress::Progress;
+use crate::report::{write_json, Adapter, Machine, RendererInfo};
 use crate::scene::VolumeArgs;
 use crate::Failure;
 
@@ -41,22 +44,23 @@ pub struct StereoBenchArgs {
     #[command(flatten)]
     volume: VolumeArgs,
     /// Image width and height in pixels.
-    #[arg(long, default_value_t = 768)]
+    #[arg(long, default_value_t = paper::WIDTH)]
     size: u32,
     /// Re-projection layers; the focal length h is the shortest at which
     /// the 1 m bounding sphere fits them.
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = paper::LAYERS)]
     layers: u32,
     /// Shading levels, comma-separated; the paper's ladder is none and 1,
     /// 4 and 16 directions (0, 4, 16, 64 extra samples per sample).
     #[arg(
         long,
         default_value = "none,directional:1,directional:4,directional:16",
-        value_delimiter = ','
+        value_delimiter = ',',
+        value_parser = shading
     )]
-    shading: Vec<String>,
+    shading: Vec<Shading>,
     /// Views in the 360 degree rotation about y.
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = paper::VIEWS)]
     steps: u32,
     /// Texel format of the layers: rgba16f (the paper's) or rgba32f.
     #[arg(long, default_value = "rgba16f")]
@@ -65,6 +69,63 @@ pub struct StereoBenchArgs {
     /// (PNG) go next to it.
     #[arg(long)]
     json: PathBuf,
+}
+
+/// What `caveray bench stereo` writes to its JSON file.
+#[derive(Serialize)]
+struct StereoReport {
+    benchmark: &'static str,
+    machine: Machine,
+    /// The GPU renderer: adapter, API, driver and pass clock.
+    renderer: RendererInfo,
+    image: [u32; 2],
+    layers: u32,
+    layer_format: String,
+    layer_bytes: u64,
+    fov_degrees: f64,
+    eye_distance_m: f64,
+    focal_length_m: f64,
+    bounding_radius_m: Option<f64>,
+    sphere_span_px: f64,
+    steps: u32,
+    datasets: Vec<Dataset>,
+}
+
+#[derive(Serialize)]
+struct Dataset {
+    name: String,
+    dims: [u32; 3],
+    runs: Vec<StereoRun>,
+    /// The worst view's images and DSSIM map, beside the JSON file.
+    heatmap: String,
+}
+
+/// Means over the views of one data set and shading level.
+#[derive(Serialize)]
+struct StereoRun {
+    shading: String,
+    extra_samples_per_sample: u32,
+    t_l_ms: f64,
+    t_r_ms: f64,
+    t_lr_ms: f64,
+    reproject_ms: f64,
+    composite_ms: f64,
+    clear_ms: f64,
+    speedup_v: f64,
+    dssim_mean: f64,
+    dssim_max: f64,
+    views: ViewSeries,
+}
+
+/// Each view's numbers, in view order.
+#[derive(Serialize)]
+struct ViewSeries {
+    t_l_ms: Vec<f64>,
+    t_r_ms: Vec<f64>,
+    reproject_ms: Vec<f64>,
+    composite_ms: Vec<f64>,
+    clear_ms: Vec<f64>,
+    dssim: Vec<f64>,
 }
 
 /// One view's measurements.
@@ -84,7 +145,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
             args.size, args.steps, args.layers
         )));
     }
-    let shadings = parse_shadings(&args.shading)?;
+    let shadings = &args.shading;
     let names = args.volume.volume_list(PAPER_VOLUMES);
     // Every volume is read before anything is rendered: a bad name should
     // not surface an hour into a run.
@@ -174,34 +235,31 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
             }
             runs.push(summarise(*shading, &results));
         }
-        datasets.push(json!({
-            "name": name,
-            "dims": scene.volume.dims().to_array(),
-            "runs": runs,
-            "heatmap": format!("stereo_{}_dssim.png", file_name(name)),
-        }));
+        datasets.push(Dataset {
+            name: name.clone(),
+            dims: scene.volume.dims().to_array(),
+            runs,
+            heatmap: format!("stereo_{}_dssim.png", file_name(name)),
+        });
     }
 
-    let info = gpu.adapter();
-    let report = json!({
-        "benchmark": "stereo",
-        "machine": machine(),
-        "adapter": {"name": info.name, "api": format!("{:?}", info.backend), "driver": info.driver},
-        "image": [args.size, args.size],
-        "layers": args.layers,
-        "layer_format": args.layer_format.to_string(),
-        "layer_bytes": layer_memory(UVec2::splat(args.size), args.layers, args.layer_format),
-        "fov_degrees": setup.fov.to_degrees(),
-        "eye_distance_m": setup.eye_distance,
-        "focal_length_m": setup.focal,
-        "bounding_radius_m": setup.radius,
-        "sphere_span_px": sphere_plan.span_px,
-        "steps": args.steps,
-        "datasets": datasets,
-    });
-    let text = serde_json::to_string_pretty(&report).map_err(runtime)?;
-    std::fs::write(&args.json, text + "\n")
-        .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", args.json.display())))?;
+    let report = StereoReport {
+        benchmark: "stereo",
+        machine: Machine::this(),
+        renderer: RendererInfo::Gpu(Adapter::of(&gpu)),
+        image: [args.size, args.size],
+        layers: args.layers,
+        layer_format: args.layer_format.to_string(),
+        layer_bytes: layer_memory(UVec2::splat(args.size), args.layers, args.layer_format),
+        fov_degrees: setup.fov.to_degrees(),
+        eye_distance_m: setup.eye_distance,
+        focal_length_m: setup.focal,
+        bounding_radius_m: setup.radius,
+        sphere_span_px: sphere_plan.span_px,
+        steps: args.steps,
+        datasets,
+    };
+    write_json(&report, &args.json)?;
     let plot = args.json.with_extension("svg");
     std::fs::write(&plot, speedup_chart(&report))
         .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", plot.display())))?;
@@ -271,37 +329,33 @@ fn file_name(name: &str) -> String {
         .collect()
 }
 
-fn mean(v: impl Iterator<Item = f64>) -> f64 {
-    let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
-    sum / n.max(1) as f64
-}
-
-fn summarise(shading: Shading, results: &[ViewResult]) -> Value {
-    let m = |f: fn(&ViewResult) -> f64| mean(results.iter().map(f));
-    let (t_l, t_r) = (m(|r| r.t_l), m(|r| r.t_r));
-    let t_lr = m(|r| r.reproject + r.composite);
+fn summarise(shading: Shading, results: &[ViewResult]) -> StereoRun {
     let all = |f: fn(&ViewResult) -> f64| results.iter().map(f).collect::<Vec<_>>();
-    json!({
-        "shading": shading.to_string(),
-        "extra_samples_per_sample": shading.extra_samples(),
-        "t_l_ms": t_l,
-        "t_r_ms": t_r,
-        "t_lr_ms": t_lr,
-        "reproject_ms": m(|r| r.reproject),
-        "composite_ms": m(|r| r.composite),
-        "clear_ms": m(|r| r.clear),
-        "speedup_v": 1.0 - (t_lr - t_l) / t_r,
-        "dssim_mean": m(|r| r.dssim),
-        "dssim_max": results.iter().map(|r| r.dssim).fold(0.0, f64::max),
-        "views": {
-            "t_l_ms": all(|r| r.t_l),
-            "t_r_ms": all(|r| r.t_r),
-            "reproject_ms": all(|r| r.reproject),
-            "composite_ms": all(|r| r.composite),
-            "clear_ms": all(|r| r.clear),
-            "dssim": all(|r| r.dssim),
-        },
-    })
+    let views = ViewSeries {
+        t_l_ms: all(|r| r.t_l),
+        t_r_ms: all(|r| r.t_r),
+        reproject_ms: all(|r| r.reproject),
+        composite_ms: all(|r| r.composite),
+        clear_ms: all(|r| r.clear),
+        dssim: all(|r| r.dssim),
+    };
+    let m = |v: &[f64]| mean(v.iter().copied());
+    let (t_l, t_r) = (m(&views.t_l_ms), m(&views.t_r_ms));
+    let t_lr = mean(results.iter().map(|r| r.reproject + r.composite));
+    StereoRun {
+        shading: shading.to_string(),
+        extra_samples_per_sample: shading.extra_samples(),
+        t_l_ms: t_l,
+        t_r_ms: t_r,
+        t_lr_ms: t_lr,
+        reproject_ms: m(&views.reproject_ms),
+        composite_ms: m(&views.composite_ms),
+        clear_ms: m(&views.clear_ms),
+        speedup_v: 1.0 - (t_lr - t_l) / t_r,
+        dssim_mean: m(&views.dssim),
+        dssim_max: views.dssim.iter().copied().fold(0.0, f64::max),
+        views,
+    }
 }
 
 /// Two-pass right image, re-projected right image, and their per-window
@@ -318,23 +372,16 @@ fn heatmap(two_pass: &Frame, reprojected: &Frame, path: &Path) -> Result<(), Fai
 
 /// V in percent against extra samples per sample, a line per data set
 /// (the paper's Figure 10).
-fn speedup_chart(report: &Value) -> String {
-    let series: Vec<Series> = report["datasets"]
-        .as_array()
-        .into_iter()
-        .flatten()
+fn speedup_chart(report: &StereoReport) -> String {
+    let series: Vec<Series> = report
+        .datasets
+        .iter()
         .map(|d| Series {
-            name: d["name"].as_str().unwrap_or("").to_string(),
-            points: d["runs"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .map(|r| {
-                    (
-                        r["extra_samples_per_sample"].as_f64().unwrap_or(0.0),
-                        100.0 * r["speedup_v"].as_f64().unwrap_or(0.0),
-                    )
-                })
+            name: d.name.clone(),
+            points: d
+                .runs
+                .iter()
+                .map(|r| (f64::from(r.extra_samples_per_sample), 100.0 * r.speedup_v))
                 .collect(),
         })
         .collect();
@@ -344,10 +391,10 @@ fn speedup_chart(report: &Value) -> String {
         .fold(0.0f64, f64::min);
     let title = format!(
         "Re-projection speed-up V, {}x{}, {} layers, {}",
-        report["image"][0],
-        report["image"][1],
-        report["layers"],
-        report["adapter"]["name"].as_str().unwrap_or("")
+        report.image[0],
+        report.image[1],
+        report.layers,
+        report.renderer.adapter().map_or("", |a| &a.name)
     );
     Chart {
         title: &title,
@@ -359,17 +406,21 @@ fn speedup_chart(report: &Value) -> String {
     .to_svg()
 }
 
-fn print_table(report: &Value) {
+fn print_table(report: &StereoReport) {
     println!(
-        "stereo by re-projection at {}x{}, {} {} layers ({:.0} MiB), h = {:.3} m, {} views about y, on {}",
-        report["image"][0],
-        report["image"][1],
-        report["layers"],
-        report["layer_format"].as_str().unwrap_or(""),
-        report["layer_bytes"].as_f64().unwrap_or(0.0) / (1024.0 * 1024.0),
-        report["focal_length_m"].as_f64().unwrap_or(0.0),
-        report["steps"],
-        report["adapter"]["name"].as_str().unwrap_or("")
+        "stereo by re-projection at {}x{}, {} {} layers ({:.0} MiB), h = {:.3} m, {} views about y, on {} (pass times by {})",
+        report.image[0],
+        report.image[1],
+        report.layers,
+        report.layer_format,
+        report.layer_bytes as f64 / (1024.0 * 1024.0),
+        report.focal_length_m,
+        report.steps,
+        report.renderer.adapter().map_or("", |a| &a.name),
+        report
+            .renderer
+            .adapter()
+            .map_or("", |a| a.pass_clock.name())
     );
     println!(
         "{:<10} {:<15} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>8} {:>8}",
@@ -385,22 +436,21 @@ fn print_table(report: &Value) {
         "DSSIM",
         "max"
     );
-    for d in report["datasets"].as_array().into_iter().flatten() {
-        for r in d["runs"].as_array().into_iter().flatten() {
-            let f = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+    for d in &report.datasets {
+        for r in &d.runs {
             println!(
                 "{:<10} {:<15} {:>7} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>7.1} {:>8.4} {:>8.4}",
-                d["name"].as_str().unwrap_or(""),
-                r["shading"].as_str().unwrap_or(""),
-                r["extra_samples_per_sample"],
-                f("t_l_ms"),
-                f("t_r_ms"),
-                f("t_lr_ms"),
-                f("composite_ms"),
-                f("clear_ms"),
-                100.0 * f("speedup_v"),
-                f("dssim_mean"),
-                f("dssim_max")
+                d.name,
+                r.shading,
+                r.extra_samples_per_sample,
+                r.t_l_ms,
+                r.t_r_ms,
+                r.t_lr_ms,
+                r.composite_ms,
+                r.clear_ms,
+                100.0 * r.speedup_v,
+                r.dssim_mean,
+                r.dssim_max
             );
         }
     }

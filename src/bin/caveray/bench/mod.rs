@@ -1,0 +1,34 @@
+//! `caveray bench`: speed measurements that write JSON (from typed
+//! reports, which the printed tables and the charts read too) and print a
+//! summary. Compare timings only as ratios taken in one run.
+
+mod raycast;
+mod stereo;
+
+use clap::Subcommand;
+
+use crate::Failure;
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// The paper's ray-casting setup: 768^2, 110 degree field of view,
+    /// volume scaled to a 1 m bounding radius, 360 degrees about y.
+    Raycast(raycast::RaycastArgs),
+    /// Single-pass stereo by re-projection against rendering both eyes,
+    /// by the paper's protocol (writes JSON, an SVG plot and heat maps).
+    Stereo(stereo::StereoBenchArgs),
+}
+
+pub fn run(command: BenchCommand) -> Result<(), Failure> {
+    match command {
+        BenchCommand::Raycast(args) => raycast::run(args),
+        BenchCommand::Stereo(args) => stereo::run(args),
+    }
+}
+
+fn mean(v: impl IntoIterator<Item = f64>) -> f64 {
+    let (sum, n) = v
+        .into_iter()
+        .fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    sum / n.max(1) as f64
+}

@@ -1,0 +1,105 @@
+//! Renderer options shared by `render` and `bench`, and the one parser
+//! each for `--shading` and `--backend`.
+
+use anari_library_caveray::cave::View;
+use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
+use anari_library_caveray::render::{Backend, RenderSettings, Renderer, Shading};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use clap::{Args, ValueEnum};
+use glam::UVec2;
+
+use crate::Failure;
+
+/// `--shading` values: none, shadows, ao, shadows+ao or directional:N.
+pub fn shading(s: &str) -> Result<Shading, String> {
+    s.parse()
+        .map_err(|e: anari_library_caveray::render::RenderError| e.to_string())
+}
+
+/// `--backend` values, listed in the help and checked by clap.
+pub fn backend() -> impl TypedValueParser<Value = Backend> {
+    PossibleValuesParser::new(Backend::NAMES).try_map(|s| s.parse::<Backend>())
+}
+
+#[derive(Args)]
+pub struct RenderOptions {
+    /// Which camera model turns each view into rays.
+    #[arg(long, value_enum, default_value_t = Strategy::Offaxis)]
+    pub strategy: Strategy,
+    /// none, shadows, ao, shadows+ao or directional:N.
+    #[arg(long, default_value = "none", value_parser = shading)]
+    pub shading: Shading,
+    /// gpu, cpu, or auto (the GPU where there is one, else the CPU reference).
+    #[arg(long, default_value = "auto", value_parser = backend())]
+    pub backend: Backend,
+    /// Step length in units of half the smallest voxel.
+    #[arg(long, default_value_t = 1.0)]
+    pub step_factor: f32,
+}
+
+impl RenderOptions {
+    pub fn settings(&self) -> RenderSettings {
+        RenderSettings {
+            shading: self.shading,
+            step_factor: self.step_factor,
+            ..Default::default()
+        }
+    }
+
+    /// The chosen renderer, saying so (and why the GPU is missing) on stderr.
+    pub fn renderer(&self) -> Result<Renderer, Failure> {
+        let (renderer, missing) =
+            Renderer::choose(self.backend).map_err(|e| match self.backend {
+                Backend::Gpu => Failure::Runtime(format!("{e} (try --backend cpu)")),
+                _ => Failure::Runtime(e.to_string()),
+            })?;
+        if let Some(e) = missing {
+            eprintln!("caveray: {e}; falling back to the CPU reference renderer");
+        }
+        eprintln!("caveray: rendering on {}", renderer.describe());
+        Ok(renderer)
+    }
+}
+
+/// The camera models of docs/off_axis.md.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Strategy {
+    /// Strategy 1: rays from the inverse of the f32 OpenGL matrices.
+    Matrix,
+    /// Strategy 2: a pinhole at the eye plus an image region.
+    Pinhole,
+    /// Strategy 3: a pinhole recovered from the f32 matrices.
+    FromMatrices,
+    /// The native off-axis camera: wall corners and eye.
+    Offaxis,
+}
+
+impl Strategy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Matrix => "matrix",
+            Strategy::Pinhole => "pinhole",
+            Strategy::FromMatrices => "from-matrices",
+            Strategy::Offaxis => "offaxis",
+        }
+    }
+
+    /// The view's rays for an image of `size`. The matrix strategies get
+    /// single-precision matrices, as an OpenGL host hands them over.
+    pub fn rays(self, view: &View, size: UVec2) -> Result<RayGen, String> {
+        let e = |e: anari_library_caveray::geometry::GeometryError| e.to_string();
+        let (v, p) = (
+            view.projection.view.as_mat4(),
+            view.projection.proj.as_mat4(),
+        );
+        Ok(match self {
+            Strategy::Matrix => MatrixCamera::from_f32(v, p).map_err(e)?.ray_gen(size),
+            Strategy::Pinhole => view.pinhole().map_err(e)?.ray_gen(size),
+            Strategy::FromMatrices => pinhole_from_matrices(v.as_dmat4(), p.as_dmat4())
+                .map_err(e)?
+                .camera
+                .ray_gen(size),
+            Strategy::Offaxis => view.camera.ray_gen(size),
+        })
+    }
+}
