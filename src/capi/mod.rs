@@ -1,7 +1,8 @@
 //! The C ABI: `include/anari/anari.h` and `caveray.h`, exported for hosts
 //! that link `libanari_library_caveray.so` directly, and the entry point
-//! and virtual tables the ANARI SDK loader uses. This layer only checks
-//! and converts the host's arguments and forwards to `crate::device`.
+//! and virtual tables the ANARI SDK loader uses, all generated from one
+//! table (`entry_points.rs`). This layer only checks and converts the
+//! host's arguments and forwards to `crate::device`.
 
 mod convert;
 pub mod entry_points;

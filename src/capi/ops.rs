@@ -1,8 +1,8 @@
-//! Every ANARI entry point, once. The exported `anari*` symbols and the
-//! loader's virtual tables both point here, so direct linkage and the SDK
-//! loader share one code path. These are `extern "C"` but not exported:
-//! calling an exported symbol from inside the library could bind to the
-//! SDK's libanari of the same name.
+//! The implementation of every ANARI entry point. `entry_points.rs`
+//! declares each once; its exports and the loader's virtual tables both
+//! point here, so direct linkage and the SDK loader share one code path.
+//! These are `extern "C"` but not exported: calling an exported symbol from
+//! inside the library could bind to the SDK's libanari of the same name.
 #![allow(clippy::missing_safety_doc)]
 
 use std::ffi::{c_char, c_int, c_void};
