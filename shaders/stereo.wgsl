@@ -4,21 +4,8 @@
 // j - near .. j - far, of which there are at most L, so no two columns it
 // reads share a layer.
 
-// Mirrors `Stereo` in src/render/gpu/uniforms.rs, which documents the fields.
-struct Stereo {
-    right_x: vec4f,
-    right_w: vec4f,
-    background: vec4f,
-    near_offset: i32,
-    far_offset: i32,
-    layers: i32,
-    first_column: i32,
-    width: u32,
-    height: u32,
-    columns: u32,
-    color_format: u32,
-    termination: f32,
-}
+// `Stereo` is declared in front of this file from src/render/gpu/uniforms.rs,
+// which documents its fields.
 
 fn layer_of(column: i32) -> i32 {
     let n = stereo.layers;

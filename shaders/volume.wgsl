@@ -1,39 +1,13 @@
 // Emission-absorption volume ray casting: the march along one primary ray.
 // Mirrors src/render/cpu/ (the reference) operation for operation, so the
-// two agree to rounding; all derived numbers arrive in `params`, whose
-// struct mirrors `Params` in src/render/gpu/uniforms.rs field for field,
-// as the constants (SHADE_, TABLE_SIZE, ...) come from there.
+// two agree to rounding; all derived numbers arrive in `params`. Its
+// struct `Params` and the constants (SHADE_, TABLE_SIZE, ...) are declared
+// in front of this file from src/render/gpu/uniforms.rs, which documents
+// the fields.
 // Entry points live in raycast.wgsl and reproject.wgsl, each concatenated
 // after this file with colour.wgsl; each defines `on_sample`, which sees
 // every sample that contributes (the re-projection path splits the ray into
 // right-eye segments there).
-
-struct Params {
-    ray_origin: vec3f,
-    step: f32,
-    ray_origin_dx: vec3f,
-    shading_step: f32,
-    ray_origin_dy: vec3f,
-    inv_unit_distance: f32,
-    ray_dir: vec3f,
-    value_lo: f32,
-    ray_dir_dx: vec3f,
-    value_scale: f32,
-    ray_dir_dy: vec3f,
-    termination: f32,
-    box_lo: vec3f,
-    ao_radius: f32,
-    box_hi: vec3f,
-    direction_count: u32,
-    inv_spacing: vec3f,
-    shading: u32,
-    light: vec3f,
-    color_format: u32,
-    background: vec4f,
-    dims: vec3u,
-    width: u32,
-    height: u32,
-}
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var volume: texture_3d<f32>;

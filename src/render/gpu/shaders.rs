@@ -1,8 +1,9 @@
 //! WGSL sources, assembled from the files in shaders/: WGSL has no
-//! includes, so the shared constants (generated from Rust) and shared code
-//! are concatenated in front of each entry file.
+//! includes, so the declarations generated from Rust (constants, uniform
+//! structs) and the shared code are concatenated in front of each entry
+//! file.
 
-use super::uniforms::constants;
+use super::uniforms::declarations;
 use crate::render::stereo::LayerFormat;
 
 const VOLUME: &str = include_str!("../../../shaders/volume.wgsl");
@@ -13,17 +14,17 @@ const REPROJECT: &str = include_str!("../../../shaders/reproject.wgsl");
 const COMPOSITE: &str = include_str!("../../../shaders/composite.wgsl");
 
 pub(super) fn raycast() -> String {
-    [constants().as_str(), VOLUME, COLOUR, RAYCAST].join("\n")
+    [declarations().as_str(), VOLUME, COLOUR, RAYCAST].join("\n")
 }
 
 /// The left eye with re-projection; the storage texture's format is part
 /// of the WGSL type, so each layer format is its own module.
 pub(super) fn reproject(format: LayerFormat) -> String {
-    [constants().as_str(), VOLUME, COLOUR, STEREO, REPROJECT]
+    [declarations().as_str(), VOLUME, COLOUR, STEREO, REPROJECT]
         .join("\n")
         .replace("LAYER_FORMAT", format.wgsl())
 }
 
 pub(super) fn composite() -> String {
-    [constants().as_str(), COLOUR, STEREO, COMPOSITE].join("\n")
+    [declarations().as_str(), COLOUR, STEREO, COMPOSITE].join("\n")
 }

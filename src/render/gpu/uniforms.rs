@@ -1,7 +1,7 @@
-//! The uniforms the shaders read, as `#[repr(C)]` Rust structs whose
-//! fields the WGSL structs of the same names mirror one for one (a test
-//! parses the shaders and compares names and offsets), and the constants
-//! both sides share, written here once and put in front of every shader.
+//! The uniforms the shaders read, as `#[repr(C)]` Rust structs, and the
+//! constants both sides share: written here once, and declared to every
+//! shader from here (the WGSL structs are generated from the Rust ones; a
+//! test parses the shaders and checks that WGSL lays them out as Rust does).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec2, Vec3};
@@ -17,8 +17,26 @@ use crate::scene::TABLE_SIZE;
 /// Invocations per workgroup along x and y.
 pub(super) const WORKGROUP: u32 = 8;
 
-/// Defines a uniform struct and the list of its fields with their byte
-/// offsets, which the layout test holds against the WGSL struct.
+/// The WGSL type of a uniform field's Rust type.
+trait WgslType {
+    const WGSL: &'static str;
+}
+
+macro_rules! wgsl_types {
+    ($($rust:ty => $wgsl:literal),* $(,)?) => {
+        $(impl WgslType for $rust { const WGSL: &'static str = $wgsl; })*
+    };
+}
+
+wgsl_types! {
+    f32 => "f32", u32 => "u32", i32 => "i32",
+    [f32; 3] => "vec3f", [f32; 4] => "vec4f", [u32; 3] => "vec3u",
+}
+
+/// Defines a uniform struct, its WGSL declaration, and the list of its
+/// fields with their byte offsets, which the layout test holds against
+/// what WGSL makes of the declaration. Fields named `_...` pad the Rust
+/// struct to WGSL's size and are not declared.
 macro_rules! uniform {
     ($(#[$doc:meta])* $name:ident { $($(#[$fdoc:meta])* $field:ident: $ty:ty,)* }) => {
         $(#[$doc])*
@@ -29,10 +47,20 @@ macro_rules! uniform {
         }
 
         impl $name {
-            /// Field names and offsets; padding fields start with `_`.
+            /// Field names and offsets, padding included.
             #[cfg(test)]
             const FIELDS: &'static [(&'static str, usize)] =
                 &[$((stringify!($field), std::mem::offset_of!($name, $field)),)*];
+
+            /// `struct Name { field: type, ... }` in WGSL.
+            fn wgsl() -> String {
+                let fields: &[(&str, &str)] = &[$((stringify!($field), <$ty as WgslType>::WGSL),)*];
+                let mut out = format!("struct {} {{\n", stringify!($name));
+                for (field, ty) in fields.iter().filter(|(f, _)| !f.starts_with('_')) {
+                    out += &format!("    {field}: {ty},\n");
+                }
+                out + "}\n"
+            }
         }
     };
 }
@@ -170,8 +198,9 @@ pub(super) fn directions(dirs: &[Vec3]) -> Vec<[f32; 4]> {
     out
 }
 
-/// The WGSL declarations of the constants Rust and the shaders share.
-pub(super) fn constants() -> String {
+/// What every shader is given: the constants and the uniform structs
+/// Rust and the shaders share.
+pub(super) fn declarations() -> String {
     let u32s = [
         ("WORKGROUP", WORKGROUP),
         ("TABLE_SIZE", TABLE_SIZE as u32),
@@ -192,7 +221,7 @@ pub(super) fn constants() -> String {
     }
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
-    out
+    out + &Params::wgsl() + &Stereo::wgsl()
 }
 
 #[cfg(test)]
@@ -252,7 +281,7 @@ mod tests {
 
     #[test]
     fn the_shadow_ambient_constant_is_the_same_f32() {
-        let c = constants();
+        let c = declarations();
         let line = c.lines().find(|l| l.contains("SHADOW_AMBIENT")).unwrap();
         let literal = line.split('=').nth(1).unwrap().trim().trim_end_matches(";");
         let parsed: f32 = literal.trim_end_matches('f').parse().unwrap();
