@@ -125,7 +125,7 @@ fn cave_wall_example_renders_both_eyes() {
     let dir = scratch("c_example");
     let program = dir.join("cave_wall");
     compile(&["examples/c/cave_wall.c"], &program, false, true);
-    let output = std::process::Command::new(&program)
+    let output = common::c::host_command(&program)
         .current_dir(&dir)
         .output()
         .unwrap();
@@ -146,4 +146,45 @@ fn cave_wall_example_renders_both_eyes() {
     let left = std::fs::read(dir.join("cave_wall_left.ppm")).unwrap();
     let right = std::fs::read(dir.join("cave_wall_right.ppm")).unwrap();
     assert_ne!(left, right, "the two eyes see the wall from the same place");
+}
+
+/// The SDK test scenes' pattern: arrays on host memory are released, and
+/// the memory overwritten and freed, before the objects using them are
+/// committed. The device must have copied them at release; the image must
+/// be the one the intact scene gives.
+fn release_then_free(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_release_then_free_valgrind"
+    } else {
+        "c_release_then_free"
+    });
+    let scene = wall_scene(&dir, if valgrind { 32 } else { 64 }, phantom(), false);
+    let program = dir.join("release_then_free");
+    compile(&["tests/c/release_then_free.c"], &program, false, true);
+    let output = run(&program, &[&scene.file, &dir], valgrind);
+    assert!(
+        output.status.success(),
+        "release_then_free: {}",
+        describe(&output)
+    );
+    let image = read_rgba(&dir.join("freed.rgba"), scene.size);
+    let s = ssim(&image, &scene.reference).unwrap();
+    assert!(
+        s > 0.98,
+        "arrays freed after release: SSIM {s:.4} against the intact scene"
+    );
+}
+
+#[test]
+fn arrays_freed_after_release_still_render() {
+    release_then_free(false);
+}
+
+#[test]
+fn arrays_freed_after_release_are_never_read_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    release_then_free(true);
 }

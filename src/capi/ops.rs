@@ -306,6 +306,9 @@ impl HostMemory for AppMemory {
     fn disown(&mut self) {
         self.deleter = None;
     }
+    fn captured(&self) -> bool {
+        self.deleter.is_some()
+    }
 }
 
 impl Drop for AppMemory {

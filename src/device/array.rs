@@ -11,6 +11,10 @@ pub trait HostMemory: Send {
     fn ptr(&self) -> *const u8;
     /// Gives the memory back without releasing it (the array was never made).
     fn disown(&mut self);
+    /// A captured array (the host gave a deleter): the memory stays valid
+    /// until the device calls it. A shared one (no deleter) is the host's
+    /// again once the host has released its last handle.
+    fn captured(&self) -> bool;
 }
 
 enum Storage {
@@ -92,6 +96,40 @@ impl Array {
     /// The elements as little helpers read them: FLOAT32 components.
     pub fn f32s(&self) -> Vec<f32> {
         words(self.bytes()).map(f32::from_ne_bytes).collect()
+    }
+
+    /// ANARI's array lifetime: a shared array's memory may be freed by the
+    /// host right after it releases its last handle, so an array that is
+    /// still used then copies its elements into memory of its own. Captured
+    /// and device-owned arrays stay as they are. `Ok(true)` if a copy was
+    /// made; `Err` if it could not be allocated, and then the array holds
+    /// no elements, never the host's freed memory.
+    pub fn privatize(&mut self) -> Result<bool, String> {
+        if !matches!(&self.storage, Storage::Host(m) if !m.captured()) {
+            return Ok(false);
+        }
+        let len = byte_len(self.element, self.dims).unwrap_or(0);
+        let copy = usize::try_from(len.div_ceil(8)).ok().and_then(|words| {
+            let mut v: Vec<u64> = Vec::new();
+            v.try_reserve_exact(words).ok()?;
+            v.resize(words, 0);
+            Some(v)
+        });
+        let Some(mut words) = copy else {
+            self.storage = Storage::Owned(Vec::new());
+            self.dims = [0, 1, 1];
+            return Err(format!(
+                "cannot copy {len} bytes of {} before the host frees them; the array is now empty",
+                self.element
+            ));
+        };
+        let bytes = self.bytes();
+        // SAFETY: `words` has room for `len` bytes, and `bytes` is `len` long.
+        unsafe {
+            std::ptr::copy_nonoverlapping(bytes.as_ptr(), words.as_mut_ptr().cast(), bytes.len())
+        };
+        self.storage = Storage::Owned(words);
+        Ok(true)
     }
 
     /// Handle values stored in an array of objects.

@@ -75,11 +75,26 @@ pub fn valgrind_available() -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
+/// A command for a host program linked to the library: `cargo test` puts
+/// `target/<profile>` on LD_LIBRARY_PATH, which outranks the program's
+/// RUNPATH, so a stale copy there would be loaded instead of the library
+/// just built; the library's own directory goes first.
+pub fn host_command(program: impl AsRef<std::ffi::OsStr>) -> Command {
+    let mut cmd = Command::new(program);
+    let mut path = std::ffi::OsString::from(lib_dir());
+    if let Some(rest) = std::env::var_os("LD_LIBRARY_PATH") {
+        path.push(":");
+        path.push(rest);
+    }
+    cmd.env("LD_LIBRARY_PATH", path);
+    cmd
+}
+
 /// Runs a host program, under valgrind memcheck when asked (then on the
 /// CPU reference: valgrind checks our code, not Mesa's JIT).
 pub fn run(program: &Path, args: &[&Path], valgrind: bool) -> Output {
     let mut cmd = if valgrind {
-        let mut c = Command::new("valgrind");
+        let mut c = host_command("valgrind");
         c.args([
             "--error-exitcode=99",
             "--leak-check=full",
@@ -90,7 +105,7 @@ pub fn run(program: &Path, args: &[&Path], valgrind: bool) -> Output {
         .env("CAVERAY_BACKEND", "cpu");
         c
     } else {
-        Command::new(program)
+        host_command(program)
     };
     cmd.args(args).output().expect("the host program runs")
 }

@@ -201,9 +201,26 @@ impl Device {
             None => false,
         };
         if gone {
+            let entry = self.objects.remove(&handle);
+            if let Some((cell, _)) = &entry {
+                // Still a parameter of something: keep what the host may
+                // now free.
+                if Arc::strong_count(cell) > 1 {
+                    let copied = match &mut cell.lock().state {
+                        State::Array(a) => a.privatize(),
+                        _ => Ok(false),
+                    };
+                    if let Err(e) = copied {
+                        self.error(
+                            StatusCode::OutOfMemory,
+                            Some(cell),
+                            format!("anariRelease: {}: {e}", cell.describe()),
+                        );
+                    }
+                }
+            }
             // Dropped outside the table borrow: the drop may run a host
             // deleter, which may call back into nothing of ours.
-            let entry = self.objects.remove(&handle);
             drop(entry);
         }
     }
