@@ -119,6 +119,35 @@ pub fn param(kind: T, sub: &str, name: &str) -> Option<&'static ParamInfo> {
     subtype(kind, sub)?.params.iter().find(|p| p.name == name)
 }
 
+/// The table a new object of `kind` and `subtype` works by: its own, or
+/// for renderers the default renderer's. Hosts name the renderer their
+/// config holds (`scivis`, `dvr`, `raycast`, ...), and a volume device has
+/// one way to render.
+pub fn for_new_object(kind: T, sub: &str) -> Option<&'static SubtypeInfo> {
+    subtype(kind, sub).or_else(|| (kind == T::RENDERER).then_some(&renderer::INFO))
+}
+
+/// Parameters hosts send that caveray has no use for: they are accepted
+/// without a word (a warning on every `name` a host sets would bury the
+/// ones that matter). Other unknown parameters are warned about once per
+/// object and name.
+pub const IGNORED_PARAMS: &[&str] = &[
+    "name",
+    "id",
+    "visible",
+    "ambientColor",
+    "ambientRadiance",
+    "ambientIntensity",
+    "ambientOcclusionDistance",
+    "ambientSamples",
+    "denoise",
+    "pixelSamples",
+    "maxDepth",
+    "lightFalloff",
+    "apertureRadius",
+    "focusDistance",
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,11 +1,13 @@
 //! One ANARI object: its kind and subtype, the parameters set since the
 //! last commit, the committed ones, and what was derived from them.
 
+use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::array::Array;
 use super::camera::CameraModel;
 use super::frame::slot::FrameState;
+use super::info::SubtypeInfo;
 use super::types::{kind_name, DataType};
 use super::value::Params;
 use super::volume::VolumeModel;
@@ -23,6 +25,8 @@ pub struct ObjectCell {
     /// Whether caveray implements this kind and subtype; other objects are
     /// created, accept parameters and render nothing.
     pub implemented: bool,
+    /// The subtype's table, which checks its parameters and commits it.
+    pub info: Option<&'static SubtypeInfo>,
     inner: Mutex<Object>,
 }
 
@@ -31,7 +35,7 @@ impl ObjectCell {
         handle: u64,
         kind: DataType,
         subtype: &str,
-        implemented: bool,
+        (implemented, info): (bool, Option<&'static SubtypeInfo>),
         state: State,
     ) -> Self {
         Self {
@@ -39,10 +43,12 @@ impl ObjectCell {
             kind,
             subtype: subtype.to_owned(),
             implemented,
+            info,
             inner: Mutex::new(Object {
                 pending: Params::default(),
                 committed: None,
                 state,
+                warned: BTreeSet::new(),
             }),
         }
     }
@@ -73,6 +79,8 @@ pub struct Object {
     /// `None` until the first commit.
     pub committed: Option<Params>,
     pub state: State,
+    /// Unknown parameter names already warned about.
+    pub warned: BTreeSet<String>,
 }
 
 /// Derived from committed parameters: the value, or why there is none.

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use super::frame::slot::FrameSlot;
-use super::info;
+use super::info::{self, SubtypeInfo};
 use super::object::{ObjectCell, ObjectRef, State};
 use super::types::{kind_name, DataType, Severity, Status, StatusCode};
 use super::value::{Params, Value};
@@ -58,6 +58,8 @@ pub struct Device {
     objects: HashMap<u64, (ObjectRef, u32)>,
     pending: Params,
     committed: Params,
+    /// Unknown device parameter names already warned about.
+    warned: std::collections::BTreeSet<String>,
     /// Arrays handed out by `anariMapParameterArray*D`, by object and name.
     mapped_params: HashMap<(u64, String), (DataType, ObjectRef)>,
     backend: Backend,
@@ -79,6 +81,7 @@ impl Device {
             objects: HashMap::new(),
             pending: Params::default(),
             committed: Params::default(),
+            warned: Default::default(),
             mapped_params: HashMap::new(),
             backend,
             statuses: Vec::new(),
@@ -141,26 +144,41 @@ impl Device {
         &mut self,
         kind: DataType,
         subtype: &str,
-        implemented: bool,
+        info: (bool, Option<&'static SubtypeInfo>),
         state: State,
     ) -> ObjectRef {
         let handle = self.serial << 32 | self.next;
         self.next += 1;
-        let cell = ObjectRef::new(ObjectCell::new(handle, kind, subtype, implemented, state));
+        let cell = ObjectRef::new(ObjectCell::new(handle, kind, subtype, info, state));
         self.objects.insert(handle, (cell.clone(), 1));
         cell
     }
 
     /// `anariNew<Kind>` / `anariNewObject`. Kinds and subtypes caveray does
-    /// not implement give an inert object and a warning.
+    /// not implement give an inert object and a warning; any renderer
+    /// subtype renders as the default renderer.
     pub fn new_object(&mut self, kind: DataType, subtype: &str) -> u64 {
-        let implemented = info::subtype(kind, subtype).is_some();
+        let table = info::for_new_object(kind, subtype);
+        let implemented = table.is_some();
         let cell = self.insert(
             kind,
             subtype,
-            implemented,
+            (implemented, table),
             State::for_kind(kind, implemented),
         );
+        if let Some(t) = table.filter(|t| t.subtype != subtype && !t.subtype.is_empty()) {
+            self.status(
+                Severity::Info,
+                StatusCode::NoError,
+                Some(&cell),
+                format!(
+                    "{} '{subtype}' renders as caveray's '{}' {0}: {}",
+                    kind_name(kind),
+                    t.subtype,
+                    t.description
+                ),
+            );
+        }
         if !implemented {
             let known = info::subtypes(kind);
             let hint = if known.is_empty() {

@@ -2,20 +2,20 @@
 //! committed, when the subtype's commit derives the object's state.
 
 use super::{Device, Input, Subject};
-use crate::device::info;
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::{DataType, StatusCode};
 use crate::device::value::Value;
+use crate::device::{device_object, info};
 
 impl Device {
     /// `anariSetParameter`: checked against the subtype's table. Unknown
     /// names are ignored with a warning; wrong types are errors.
     pub fn set_param(&mut self, target: Subject, name: &str, input: Input) {
-        let (kind, subtype, cell) = match target {
-            Subject::Device => (DataType::DEVICE, "default".to_owned(), None),
+        let (table, cell) = match target {
+            Subject::Device => (Some(&device_object::INFO), None),
             Subject::Object(h) => match self.lookup(h, &format!("anariSetParameter('{name}')")) {
-                Some(c) => (c.kind, c.subtype.clone(), Some(c)),
+                Some(c) => (c.info, Some(c)),
                 None => return,
             },
         };
@@ -33,11 +33,20 @@ impl Device {
             // parameters caveray reads.
             return;
         }
-        let Some(param) = info::param(kind, &subtype, name) else {
-            self.warn(
-                cell.as_ref(),
-                format!("anariSetParameter: {owner} has no parameter '{name}' that caveray reads; ignored"),
-            );
+        let Some(param) = table.and_then(|t| t.params.iter().find(|p| p.name == name)) else {
+            if info::IGNORED_PARAMS.contains(&name) {
+                return;
+            }
+            let first = match &cell {
+                Some(c) => c.lock().warned.insert(name.to_owned()),
+                None => self.warned.insert(name.to_owned()),
+            };
+            if first {
+                self.warn(
+                    cell.as_ref(),
+                    format!("anariSetParameter: {owner} has no parameter '{name}' that caveray reads; ignored (said once per object and name)"),
+                );
+            }
             return;
         };
         let declared = match &input {
@@ -146,7 +155,7 @@ impl Device {
         if !cell.implemented {
             return;
         }
-        let Some(subtype) = info::subtype(cell.kind, &cell.subtype) else {
+        let Some(subtype) = cell.info else {
             return;
         };
         // Frames are committed before hosts know all they need; what is
