@@ -149,3 +149,87 @@ fn compare_cameras(
     }
     frames
 }
+
+/// `filter nearest`: both renderers take the nearest vertex (GPU equal to
+/// the CPU reference), the picture differs from trilinear, and a two-voxel
+/// volume shows the step where the vertices' halves meet.
+#[test]
+fn nearest_filter_is_nearest_on_both_renderers() {
+    use anari_library_caveray::scene::{Filter, StructuredVolume, TransferFunction, Voxels};
+    let mut gpu = gpu();
+    let cpu = CpuRenderer::new();
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(64, 64);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let desc = FrameDesc::new(size);
+    let settings = RenderSettings::default();
+    let linear = phantom(16);
+    let nearest = Scene {
+        volume: std::sync::Arc::new((*linear.volume).clone().with_filter(Filter::Nearest)),
+        transfer_function: linear.transfer_function.clone(),
+    };
+    let g = gpu.render(&nearest, &rays, &settings, &desc).unwrap();
+    let c = cpu.render(&nearest, &rays, &settings, &desc).unwrap();
+    let s = ssim(&g, &c).unwrap();
+    assert!(s >= 0.999, "nearest: GPU vs CPU SSIM {s}");
+    let l = cpu.render(&linear, &rays, &settings, &desc).unwrap();
+    let against_linear = ssim(&c, &l).unwrap();
+    assert!(
+        against_linear < 0.99,
+        "nearest looks trilinear ({against_linear})"
+    );
+
+    // Vertices at x = -1 (value 0) and x = 1 (value 1); a slab seen along
+    // z: nearest gives 0 left of x = 0.5 and 1 right of it, with no
+    // ramp, where trilinear ramps.
+    let step = StructuredVolume::new(
+        glam::UVec3::new(2, 2, 2),
+        Voxels::F32(vec![0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0]),
+        Vec3::new(-1.0, -1.0, -0.5),
+        Vec3::new(2.0, 2.0, 1.0),
+    )
+    .unwrap()
+    .with_filter(Filter::Nearest);
+    let white =
+        TransferFunction::new(vec![glam::Vec4::ONE], vec![0.0, 1.0], (0.0, 1.0), 1.0).unwrap();
+    let scene = Scene::new(step, white);
+    let (screen, eye) = common::render::axis_camera(4.0, 1.5);
+    let rays = anari_library_caveray::geometry::OffAxisCamera::new(screen, eye)
+        .unwrap()
+        .ray_gen(size);
+    let settings = RenderSettings {
+        background: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
+        ..Default::default()
+    };
+    for (name, frame) in [
+        ("gpu", gpu.render(&scene, &rays, &settings, &desc).unwrap()),
+        ("cpu", cpu.render(&scene, &rays, &settings, &desc).unwrap()),
+    ] {
+        let px = frame.to_linear();
+        let row = size.y / 2;
+        let levels: Vec<f32> = (0..size.x)
+            .map(|x| px[(row * size.x + x) as usize].x)
+            .collect();
+        // Inside the slab's x extent the level is 0 or the full opacity's
+        // colour, never in between.
+        let distinct: Vec<f32> =
+            levels
+                .iter()
+                .map(|v| (v * 100.0).round() / 100.0)
+                .fold(Vec::new(), |mut seen, v| {
+                    if !seen.contains(&v) {
+                        seen.push(v);
+                    }
+                    seen
+                });
+        assert!(
+            distinct.len() == 2,
+            "{name}: levels along the row {distinct:?}"
+        );
+        let bright = levels.iter().position(|&v| v > 0.5).unwrap();
+        assert!(
+            (bright as i32 - size.x as i32 / 2).abs() <= 1,
+            "{name}: the step is at column {bright}, not in the middle"
+        );
+    }
+}

@@ -5,7 +5,7 @@ use glam::{UVec3, Vec3, Vec4};
 
 use super::settings::{RenderSettings, Shading, AO_DIRECTIONS};
 use super::RenderError;
-use crate::scene::Scene;
+use crate::scene::{Filter, Scene};
 
 /// Everything both renderers derive from scene and settings before any ray
 /// is cast, so that the CPU reference and the shader share one set of
@@ -13,6 +13,7 @@ use crate::scene::Scene;
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct MarchPlan {
     pub dims: UVec3,
+    pub filter: Filter,
     pub box_lo: Vec3,
     pub box_hi: Vec3,
     pub inv_spacing: Vec3,
@@ -49,6 +50,7 @@ impl MarchPlan {
         };
         Ok(Self {
             dims: volume.dims(),
+            filter: volume.filter(),
             box_lo: lo,
             box_hi: hi,
             inv_spacing: volume.spacing().recip(),

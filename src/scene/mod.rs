@@ -9,7 +9,7 @@ mod volume;
 use std::sync::Arc;
 
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
-pub use volume::{StructuredVolume, VolumeError, Voxels};
+pub use volume::{Filter, StructuredVolume, VolumeError, Voxels};
 
 /// What a renderer draws: a volume classified by a transfer function.
 /// Both are shared so a renderer can keep them uploaded and tell, by

@@ -51,6 +51,26 @@ pub enum VolumeError {
     NonFiniteVoxel { index: usize },
 }
 
+/// How a volume is sampled between its grid vertices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Filter {
+    /// Trilinear interpolation of the eight surrounding vertices.
+    #[default]
+    Linear,
+    /// The value of the nearest vertex.
+    Nearest,
+}
+
+impl Filter {
+    /// The shaders' FILTER_ code.
+    pub fn code(self) -> u32 {
+        match self {
+            Filter::Linear => 0,
+            Filter::Nearest => 1,
+        }
+    }
+}
+
 /// A structured regular grid: vertex-centred samples, x fastest, covering
 /// [origin, origin + (dims - 1) * spacing].
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +80,7 @@ pub struct StructuredVolume {
     origin: Vec3,
     spacing: Vec3,
     value_range: (f32, f32),
+    filter: Filter,
 }
 
 impl StructuredVolume {
@@ -102,7 +123,17 @@ impl StructuredVolume {
             origin,
             spacing,
             value_range,
+            filter: Filter::Linear,
         })
+    }
+
+    /// The same grid sampled with `filter`.
+    pub fn with_filter(mut self, filter: Filter) -> Self {
+        self.filter = filter;
+        self
+    }
+    pub fn filter(&self) -> Filter {
+        self.filter
     }
 
     pub fn dims(&self) -> UVec3 {

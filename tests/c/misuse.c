@@ -256,9 +256,14 @@ int main(void)
 
   volume = anariNewVolume(dev, "transferFunction1D");
   anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
-  anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &array);
+  {
+    /* Every FLOAT32/UFIXED8/UFIXED16/sRGB layout is a colour; UINT32 is not. */
+    ANARIArray1D words = anariNewArray1D(dev, NULL, NULL, NULL, ANARI_UINT32, 4);
+    anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &words);
+    anariRelease(dev, words);
+  }
   anariCommitParameters(dev, volume);
-  expect("colour array of FLOAT32", ERR, BAD_ARG, "'color' array holds ANARI_FLOAT32; expected FLOAT32_VEC3 or FLOAT32_VEC4");
+  expect("colour array of UINT32", ERR, BAD_ARG, "'color' array holds ANARI_UINT32; expected FLOAT32, UFIXED8 or UFIXED16");
   anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &camera);
   expect("camera as the field", ERR, BAD_ARG, "'value' expects ANARI_SPATIAL_FIELD");
   {

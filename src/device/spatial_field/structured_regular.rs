@@ -10,7 +10,7 @@ use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
 use crate::device::value::words;
-use crate::scene::{StructuredVolume, Voxels};
+use crate::scene::{Filter, StructuredVolume, Voxels};
 
 /// Voxel types a structured regular field accepts; UINT8/UINT16 are read
 /// as their fixed-point twins with a warning.
@@ -19,7 +19,8 @@ const VOXEL_TYPES: &str = "UFIXED8, UFIXED16, FIXED16, FLOAT32 or FLOAT64";
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::SPATIAL_FIELD,
     subtype: "structuredRegular",
-    description: "vertex-centred regular grid, x fastest, sampled trilinearly",
+    description:
+        "vertex-centred regular grid, x fastest, sampled trilinearly or at the nearest vertex",
     extensions: &["ANARI_KHR_SPATIAL_FIELD_STRUCTURED_REGULAR"],
     params: &[
         p(
@@ -48,7 +49,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::STRING],
             false,
             Default::Text("linear"),
-            "linear (nearest is read as linear)",
+            "linear (trilinear) or nearest (the nearest vertex); other names read as linear",
         ),
     ],
     commit: Some(commit),
@@ -90,13 +91,20 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
             ))
         }
     };
-    match r.string("filter") {
-        Some("linear") | None => {}
-        Some("nearest") => warn("filter 'nearest' is not implemented; sampling is linear".into()),
-        Some(other) => return Err(format!("filter '{other}' is not one of nearest, linear")),
-    }
+    // Unknown enumeration values fall back to the default (the spec's rule).
+    let filter = match r.string("filter") {
+        Some("nearest") => Filter::Nearest,
+        Some("linear") | None => Filter::Linear,
+        Some(other) => {
+            warn(format!(
+                "filter '{other}' is not one of linear, nearest; sampling is linear"
+            ));
+            Filter::Linear
+        }
+    };
     let volume = StructuredVolume::new(dims, voxels, r.vec3("origin")?, r.vec3("spacing")?)
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| e.to_string())?
+        .with_filter(filter);
     Ok(Some(State::Field(Derived::Ready(Arc::new(volume)))))
 }
 

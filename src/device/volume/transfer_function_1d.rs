@@ -3,8 +3,9 @@
 
 use std::sync::Arc;
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 
+use super::elements::{clamp_unit, colors, scalars, COLOR_TYPES};
 use crate::device::info::{p, Default, SubtypeInfo, F32};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::read::Read;
@@ -17,41 +18,20 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "a spatial field classified by a 1D colour and opacity map",
     extensions: &["ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D"],
     params: &[
-        p(
-            "value",
-            &[T::SPATIAL_FIELD],
-            true,
-            Default::None,
-            "the spatial field",
-        ),
-        p(
-            "valueRange",
-            &[T::FLOAT32_BOX1, T::FLOAT64_BOX1],
-            false,
-            Default::Floats(&[0.0, 1.0]),
-            "field values mapped to the first and last entries",
-        ),
-        p(
-            "color",
-            &[T::ARRAY1D, T::FLOAT32_VEC3, T::FLOAT32_VEC4],
-            false,
-            Default::Floats(&[1.0, 1.0, 1.0]),
-            "ARRAY1D of FLOAT32_VEC3/VEC4 spread over valueRange, or one colour",
-        ),
-        p(
-            "opacity",
-            &[T::ARRAY1D, T::FLOAT32],
-            false,
-            Default::Floats(&[1.0]),
-            "ARRAY1D of FLOAT32 spread over valueRange, or one opacity",
-        ),
-        p(
-            "unitDistance",
-            F32,
-            false,
-            Default::Floats(&[1.0]),
-            "world distance over which the opacities apply",
-        ),
+        // Required in practice: `value`, or the older `field`.
+        p("value", &[T::SPATIAL_FIELD], false, Default::None, "the spatial field"),
+        p("field", &[T::SPATIAL_FIELD], false, Default::None,
+          "the spatial field, under its pre-1.0 name (value wins if both are set)"),
+        p("valueRange", &[T::FLOAT32_BOX1, T::FLOAT64_BOX1, T::FLOAT32_VEC2], false,
+          Default::Floats(&[0.0, 1.0]),
+          "field values mapped to the first and last entries; lo == hi (a constant field) maps that value to the middle"),
+        p("color", &[T::ARRAY1D, T::FLOAT32_VEC3, T::FLOAT32_VEC4], false,
+          Default::Floats(&[1.0, 1.0, 1.0]),
+          "ARRAY1D (FLOAT32, UFIXED8 or UFIXED16 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one colour; out of [0, 1] clamped"),
+        p("opacity", &[T::ARRAY1D, T::FLOAT32], false, Default::Floats(&[1.0]),
+          "ARRAY1D of FLOAT32 spread over valueRange, or one opacity; out of [0, 1] clamped"),
+        p("unitDistance", F32, false, Default::Floats(&[1.0]),
+          "world distance over which the opacities apply"),
     ],
     commit: Some(commit),
 };
@@ -63,33 +43,46 @@ pub struct VolumeModel {
     pub transfer_function: Arc<TransferFunction>,
 }
 
-fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let field = r
         .object("value")
+        .or_else(|| r.object("field"))
         .ok_or("parameter 'value' (SPATIAL_FIELD) is required")?
         .clone();
     let [lo, hi] = r.floats::<2>("valueRange")?;
-    let colors = match r.set("color").and_then(|v| v.object()) {
-        Some(array) => array_values(array, "color", |element, f| match element {
-            T::FLOAT32_VEC3 => Some(
-                f.chunks_exact(3)
-                    .map(|c| Vec3::from_slice(c).extend(1.0))
-                    .collect(),
-            ),
-            T::FLOAT32_VEC4 => Some(f.chunks_exact(4).map(Vec4::from_slice).collect()),
-            _ => None,
-        })?,
+    let (lo, hi) = if lo == hi {
+        // A constant field (hosts send its one value as the range): the
+        // value lands in the middle of the maps.
+        let half = 1e-3 * lo.abs().max(1.0);
+        (lo - half, hi + half)
+    } else {
+        (lo, hi)
+    };
+    let mut colors = match r.set("color").and_then(|v| v.object()) {
+        Some(array) => array_values(array, "color", colors, COLOR_TYPES)?,
         None => vec![match r.set("color").and_then(|v| v.f32s()) {
             Some(f) if f.len() == 4 => Vec4::from_slice(&f),
             _ => r.vec3("color")?.extend(1.0),
         }],
     };
-    let opacities = match r.set("opacity").and_then(|v| v.object()) {
-        Some(array) => array_values(array, "opacity", |element, f| {
-            (element == T::FLOAT32).then(|| f.to_vec())
-        })?,
+    let mut opacities = match r.set("opacity").and_then(|v| v.object()) {
+        Some(array) => array_values(array, "opacity", scalars, "FLOAT32 or FLOAT64")?,
         None => vec![r.f32("opacity")?],
     };
+    let mut components: Vec<f32> = colors.iter().flat_map(|c| c.to_array()).collect();
+    if let Some((n, i, x)) = clamp_unit(&mut components) {
+        warn(format!(
+            "{n} colour components lie outside [0, 1] (the first: color[{}] component {} = {x}); clamped",
+            i / 4,
+            i % 4
+        ));
+        colors = components.chunks_exact(4).map(Vec4::from_slice).collect();
+    }
+    if let Some((n, i, x)) = clamp_unit(&mut opacities) {
+        warn(format!(
+            "{n} opacities lie outside [0, 1] (the first: opacity[{i}] = {x}); clamped"
+        ));
+    }
     let tf = TransferFunction::new(colors, opacities, (lo, hi), r.f32("unitDistance")?)
         .map_err(|e| e.to_string())?;
     Ok(Some(State::Volume(Derived::Ready(VolumeModel {
@@ -98,23 +91,19 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     }))))
 }
 
-/// The elements of a 1D array parameter, converted by `convert` from its
-/// FLOAT32 components; `None` from `convert` means the wrong element type.
+/// The elements of a 1D array parameter, read by `read`; `None` from it
+/// means an element type that does not fit (`expected` says which do).
 fn array_values<V>(
     object: &ObjectRef,
     name: &str,
-    convert: impl Fn(T, &[f32]) -> Option<Vec<V>>,
+    read: fn(&crate::device::array::Array) -> Option<Vec<V>>,
+    expected: &str,
 ) -> Result<Vec<V>, String> {
     let guard = object.lock();
     let State::Array(array) = &guard.state else {
         return Err(format!("'{name}' is {}, not an array", object.describe()));
     };
-    let values = convert(array.element(), &array.f32s()).ok_or_else(|| {
-        let expected = if name == "opacity" {
-            "FLOAT32"
-        } else {
-            "FLOAT32_VEC3 or FLOAT32_VEC4"
-        };
+    let values = read(array).ok_or_else(|| {
         format!(
             "'{name}' array holds {}; expected {expected}",
             array.element()

@@ -1,7 +1,7 @@
 use glam::{IVec3, Vec3, Vec4};
 
 use crate::render::march_plan::MarchPlan;
-use crate::scene::TABLE_SIZE;
+use crate::scene::{Filter, TABLE_SIZE};
 
 /// The volume and table as the CPU reads them: voxel values already
 /// normalised to f32, exactly what the GPU texture holds.
@@ -30,11 +30,16 @@ impl<'a> Field<'a> {
         self.values[(i.x + d.x * (i.y + d.y * i.z)) as usize]
     }
 
-    /// Trilinear interpolation between the eight surrounding grid vertices.
+    /// Trilinear interpolation between the eight surrounding grid
+    /// vertices, or the nearest vertex's value.
     pub fn sample(&self, p: Vec3) -> f32 {
         let plan = self.plan;
         let hi = plan.dims.as_ivec3() - IVec3::ONE;
         let g = ((p - plan.box_lo) * plan.inv_spacing).clamp(Vec3::ZERO, hi.as_vec3());
+        if plan.filter == Filter::Nearest {
+            // floor(g + 0.5), not round(): the shader's rounding, halves up.
+            return self.voxel((g + Vec3::splat(0.5)).floor().as_ivec3().min(hi));
+        }
         let i0 = g.floor().as_ivec3().min((hi - IVec3::ONE).max(IVec3::ZERO));
         let f = g - i0.as_vec3();
         let i1 = (i0 + IVec3::ONE).min(hi);

@@ -12,7 +12,7 @@ use crate::render::march_plan::MarchPlan;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
 use crate::render::stereo::Reprojection;
 use crate::render::RenderSettings;
-use crate::scene::TABLE_SIZE;
+use crate::scene::{Filter, TABLE_SIZE};
 
 /// Invocations per workgroup along x and y.
 pub(super) const WORKGROUP: u32 = 8;
@@ -30,7 +30,7 @@ macro_rules! wgsl_types {
 
 wgsl_types! {
     f32 => "f32", u32 => "u32", i32 => "i32",
-    [f32; 3] => "vec3f", [f32; 4] => "vec4f", [u32; 3] => "vec3u",
+    [f32; 3] => "vec3f", [f32; 4] => "vec4f", [u32; 2] => "vec2u", [u32; 3] => "vec3u",
 }
 
 /// Defines a uniform struct, its WGSL declaration, and the list of its
@@ -103,7 +103,9 @@ uniform! {
         dims: [u32; 3],
         width: u32,
         height: u32,
-        _pad: [u32; 3],
+        /// One of the FILTER_ codes.
+        sampling: u32,
+        _pad: [u32; 2],
     }
 }
 
@@ -163,7 +165,8 @@ impl Params {
             dims: plan.dims.to_array(),
             width: size.x,
             height: size.y,
-            _pad: [0; 3],
+            sampling: plan.filter.code(),
+            _pad: [0; 2],
         }
     }
 }
@@ -214,6 +217,8 @@ pub(super) fn declarations() -> String {
         ("FORMAT_RGBA8", ColorFormat::Rgba8.code()),
         ("FORMAT_SRGBA8", ColorFormat::Srgba8.code()),
         ("FORMAT_RGBA32F", ColorFormat::Rgba32F.code()),
+        ("FILTER_LINEAR", Filter::Linear.code()),
+        ("FILTER_NEAREST", Filter::Nearest.code()),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {

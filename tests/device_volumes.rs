@@ -1,0 +1,356 @@
+//! Volumes as hosts build them, through the device model on the CPU
+//! reference: the value range as a VEC2 or collapsed to one value, colour
+//! arrays of every element type, out-of-range maps, the legacy `field`
+//! name and the `filter` values.
+
+use std::sync::Arc;
+
+use anari_library_caveray::device::{DataType, Device, Input, Severity, Status, Subject};
+
+const SIZE: u32 = 24;
+
+struct Host {
+    d: Device,
+}
+
+fn bytes<T: Copy>(values: &[T]) -> Vec<u8> {
+    // SAFETY: plain numbers, read as their bytes.
+    unsafe {
+        std::slice::from_raw_parts(values.as_ptr().cast::<u8>(), std::mem::size_of_val(values))
+    }
+    .to_vec()
+}
+
+impl Host {
+    fn new() -> Self {
+        let mut d = Device::new(Arc::new(|_s: Status| {}));
+        d.set_param(Subject::Device, "backend", Input::String("cpu".into()));
+        d.commit(Subject::Device);
+        Self { d }
+    }
+
+    fn set(&mut self, object: u64, name: &str, ty: DataType, value: Vec<u8>) {
+        self.d
+            .set_param(Subject::Object(object), name, Input::Bytes(ty, value));
+    }
+
+    fn set_object(&mut self, object: u64, name: &str, ty: DataType, handle: u64) {
+        self.d
+            .set_param(Subject::Object(object), name, Input::Object(ty, handle));
+    }
+
+    /// A device-owned array filled with `data`.
+    fn array(&mut self, kind: DataType, element: DataType, dims: [u64; 3], data: &[u8]) -> u64 {
+        let a = self
+            .d
+            .new_array(kind, element as i32, dims, None)
+            .ok()
+            .unwrap();
+        let ptr = self.d.map_array(a);
+        // SAFETY: the device allocated dims * element size bytes.
+        unsafe { std::ptr::copy_nonoverlapping(data.as_ptr(), ptr, data.len()) };
+        self.d.unmap_array(a);
+        a
+    }
+
+    /// A 4^3 field: `value(x)` along x, constant in y and z.
+    fn field(&mut self, value: impl Fn(u32) -> f32, filter: Option<&str>) -> u64 {
+        let voxels: Vec<f32> = (0..64).map(|i| value(i % 4)).collect();
+        let data = self.array(
+            DataType::ARRAY3D,
+            DataType::FLOAT32,
+            [4, 4, 4],
+            &bytes(&voxels),
+        );
+        let f = self
+            .d
+            .new_object(DataType::SPATIAL_FIELD, "structuredRegular");
+        self.set_object(f, "data", DataType::ARRAY3D, data);
+        self.set(f, "origin", DataType::FLOAT32_VEC3, bytes(&[-1.0f32; 3]));
+        self.set(
+            f,
+            "spacing",
+            DataType::FLOAT32_VEC3,
+            bytes(&[2.0f32 / 3.0; 3]),
+        );
+        if let Some(filter) = filter {
+            self.d
+                .set_param(Subject::Object(f), "filter", Input::String(filter.into()));
+        }
+        self.d.commit(Subject::Object(f));
+        self.d.release(data);
+        f
+    }
+
+    /// Renders `volume` head-on and returns RGBA8 pixels.
+    fn render(&mut self, volume: u64) -> Vec<u8> {
+        self.d.commit(Subject::Object(volume));
+        let list = self.array(
+            DataType::ARRAY1D,
+            DataType::VOLUME,
+            [1, 1, 1],
+            &bytes(&[volume as usize]),
+        );
+        let world = self.d.new_object(DataType::WORLD, "");
+        self.set_object(world, "volume", DataType::ARRAY1D, list);
+        self.d.commit(Subject::Object(world));
+        let renderer = self.d.new_object(DataType::RENDERER, "default");
+        self.d.commit(Subject::Object(renderer));
+        let camera = self.d.new_object(DataType::CAMERA, "perspective");
+        self.set(
+            camera,
+            "position",
+            DataType::FLOAT32_VEC3,
+            bytes(&[0.0f32, 0.0, 3.0]),
+        );
+        self.d.commit(Subject::Object(camera));
+        let frame = self.d.new_object(DataType::FRAME, "");
+        self.set(frame, "size", DataType::UINT32_VEC2, bytes(&[SIZE, SIZE]));
+        self.set(
+            frame,
+            "channel.color",
+            DataType::DATA_TYPE,
+            bytes(&[DataType::UFIXED8_VEC4 as i32]),
+        );
+        self.set_object(frame, "world", DataType::WORLD, world);
+        self.set_object(frame, "renderer", DataType::RENDERER, renderer);
+        self.set_object(frame, "camera", DataType::CAMERA, camera);
+        self.d.commit(Subject::Object(frame));
+        self.d.render_frame(frame, None);
+        let mapped = self
+            .d
+            .map_frame(frame, "channel.color")
+            .expect("the frame renders");
+        // SAFETY: a mapped RGBA8 frame of SIZE^2 pixels, valid until unmap.
+        let pixels =
+            unsafe { std::slice::from_raw_parts(mapped.ptr, (4 * SIZE * SIZE) as usize) }.to_vec();
+        self.d.unmap_frame(frame, "channel.color");
+        for h in [frame, camera, renderer, world, list] {
+            self.d.release(h);
+        }
+        pixels
+    }
+
+    /// A transferFunction1D volume over `field`.
+    fn volume(&mut self, field: u64) -> u64 {
+        let v = self.d.new_object(DataType::VOLUME, "transferFunction1D");
+        self.set_object(v, "value", DataType::SPATIAL_FIELD, field);
+        v
+    }
+
+    fn messages(&mut self, severity: Severity) -> Vec<String> {
+        self.d
+            .take_statuses()
+            .into_iter()
+            .filter(|s| s.severity == severity)
+            .map(|s| s.message)
+            .collect()
+    }
+}
+
+/// Whether two images are equal, reported by their first difference.
+fn same(a: &[u8], b: &[u8]) -> Result<(), String> {
+    match a.iter().zip(b).position(|(x, y)| x != y) {
+        None if a.len() == b.len() => Ok(()),
+        None => Err(format!("sizes {} and {}", a.len(), b.len())),
+        Some(i) => Err(format!("byte {i} (pixel {}): {} vs {}", i / 4, a[i], b[i])),
+    }
+}
+
+/// The centre pixel's RGB.
+fn centre(pixels: &[u8]) -> [u8; 3] {
+    let i = 4 * (SIZE / 2 * SIZE + SIZE / 2) as usize;
+    [pixels[i], pixels[i + 1], pixels[i + 2]]
+}
+
+#[test]
+fn value_range_as_a_vec2_equals_the_box1() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let mut image = |ty| {
+        let v = h.volume(field);
+        h.set(v, "valueRange", ty, bytes(&[0.0f32, 1.0]));
+        h.set(v, "opacity", DataType::FLOAT32, bytes(&[0.5f32]));
+        h.render(v)
+    };
+    let boxed = image(DataType::FLOAT32_BOX1);
+    let vec2 = image(DataType::FLOAT32_VEC2);
+    same(&boxed, &vec2).unwrap();
+    assert!(centre(&boxed)[0] > 50, "{:?}", centre(&boxed));
+    assert!(h.messages(Severity::Error).is_empty());
+}
+
+#[test]
+fn a_constant_field_takes_the_middle_of_the_maps() {
+    let mut h = Host::new();
+    let field = h.field(|_| 7.0, None);
+    let v = h.volume(field);
+    h.set(
+        v,
+        "valueRange",
+        DataType::FLOAT32_BOX1,
+        bytes(&[7.0f32, 7.0]),
+    );
+    let colors = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32_VEC3,
+        [3, 1, 1],
+        &bytes(&[1.0f32, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]),
+    );
+    h.set_object(v, "color", DataType::ARRAY1D, colors);
+    h.set(v, "opacity", DataType::FLOAT32, bytes(&[1.0f32]));
+    let image = h.render(v);
+    assert!(h.messages(Severity::Error).is_empty());
+    let [r, g, b] = centre(&image);
+    assert!(
+        g > 200 && r < 10 && b < 10,
+        "the middle colour is green, got {r} {g} {b}"
+    );
+}
+
+#[test]
+fn colour_arrays_of_every_element_type_read_alike() {
+    // Red, then white at full alpha: exact in every encoding.
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let mut image = |ty: DataType, data: Vec<u8>| {
+        let v = h.volume(field);
+        let a = h.array(DataType::ARRAY1D, ty, [2, 1, 1], &data);
+        h.set_object(v, "color", DataType::ARRAY1D, a);
+        h.set(v, "opacity", DataType::FLOAT32, bytes(&[0.6f32]));
+        h.d.release(a);
+        let img = h.render(v);
+        let errors = h.messages(Severity::Error);
+        assert!(errors.is_empty(), "{ty}: {errors:?}");
+        img
+    };
+    let reference = image(
+        DataType::FLOAT32_VEC4,
+        bytes(&[1.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
+    );
+    let alike = [
+        (
+            DataType::FLOAT32_VEC3,
+            bytes(&[1.0f32, 0.0, 0.0, 1.0, 1.0, 1.0]),
+        ),
+        (
+            DataType::UFIXED8_VEC4,
+            vec![255, 0, 0, 255, 255, 255, 255, 255],
+        ),
+        (DataType::UFIXED8_VEC3, vec![255, 0, 0, 255, 255, 255]),
+        (
+            DataType::UFIXED16_VEC4,
+            bytes(&[65535u16, 0, 0, 65535, 65535, 65535, 65535, 65535]),
+        ),
+        (
+            DataType::UFIXED16_VEC3,
+            bytes(&[65535u16, 0, 0, 65535, 65535, 65535]),
+        ),
+        (
+            DataType::UFIXED8_RGBA_SRGB,
+            vec![255, 0, 0, 255, 255, 255, 255, 255],
+        ),
+        (DataType::UFIXED8_RGB_SRGB, vec![255, 0, 0, 255, 255, 255]),
+    ];
+    for (ty, data) in alike {
+        same(&image(ty, data), &reference).unwrap_or_else(|e| panic!("{ty}: {e}"));
+    }
+    // Fewer components: the missing colour reads 0 and alpha 1.
+    let red_only = image(DataType::FLOAT32, bytes(&[1.0f32, 1.0]));
+    let [r, g, b] = centre(&red_only);
+    assert!(
+        r > 50 && g == 0 && b == 0,
+        "one component is red: {r} {g} {b}"
+    );
+    same(&image(DataType::UFIXED8, vec![255, 255]), &red_only).unwrap();
+    same(&image(DataType::UFIXED8_R_SRGB, vec![255, 255]), &red_only).unwrap();
+    // sRGB is decoded: 188 is about 0.5 linear, 128 would be 0.216.
+    let srgb = image(
+        DataType::UFIXED8_RGBA_SRGB,
+        vec![188, 188, 188, 255, 188, 188, 188, 255],
+    );
+    let linear = image(
+        DataType::FLOAT32_VEC4,
+        bytes(&[0.5f32, 0.5, 0.5, 1.0, 0.5, 0.5, 0.5, 1.0]),
+    );
+    let d = centre(&srgb)[0].abs_diff(centre(&linear)[0]);
+    assert!(
+        d <= 2,
+        "sRGB 188 reads {} against linear 0.5's {}",
+        centre(&srgb)[0],
+        centre(&linear)[0]
+    );
+}
+
+#[test]
+fn out_of_range_maps_are_clamped_with_a_warning() {
+    fn image(h: &mut Host, field: u64, rgb: [f32; 3], opacity: f32) -> Vec<u8> {
+        let v = h.volume(field);
+        h.set(v, "color", DataType::FLOAT32_VEC3, bytes(&rgb));
+        let o = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32,
+            [1, 1, 1],
+            &bytes(&[opacity]),
+        );
+        h.set_object(v, "opacity", DataType::ARRAY1D, o);
+        h.d.release(o);
+        h.render(v)
+    }
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let clamped = image(&mut h, field, [1.5, -0.5, 0.5], 2.0);
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("2 colour components lie outside [0, 1]") && w.contains("clamped"))
+            && warnings
+                .iter()
+                .any(|w| w.contains("1 opacities lie outside [0, 1]")
+                    && w.contains("opacity[0] = 2")),
+        "{warnings:?}"
+    );
+    assert!(h.messages(Severity::Error).is_empty());
+    same(&clamped, &image(&mut h, field, [1.0, 0.0, 0.5], 1.0)).unwrap();
+}
+
+#[test]
+fn the_legacy_field_name_and_every_filter_value() {
+    let mut h = Host::new();
+    // A faint ramp, so how the field is sampled shows in the image.
+    let faint = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32,
+        [2, 1, 1],
+        &bytes(&[0.0f32, 0.2]),
+    );
+    let ramp = |x: u32| x as f32 / 3.0;
+    let image = |h: &mut Host, filter: Option<&str>, name: &str| {
+        let f = h.field(ramp, filter);
+        let v = h.d.new_object(DataType::VOLUME, "transferFunction1D");
+        h.set_object(v, name, DataType::SPATIAL_FIELD, f);
+        h.set_object(v, "opacity", DataType::ARRAY1D, faint);
+        h.render(v)
+    };
+    let by_value = image(&mut h, None, "value");
+    let by_field = image(&mut h, None, "field");
+    same(&by_value, &by_field).unwrap();
+    assert!(h.messages(Severity::Error).is_empty());
+
+    let linear = image(&mut h, Some("linear"), "value");
+    same(&linear, &by_value).unwrap();
+    let cubic = image(&mut h, Some("cubic"), "value");
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings.iter().any(|w| w.contains("filter 'cubic' is not one of linear, nearest; sampling is linear")),
+        "{warnings:?}"
+    );
+    same(&cubic, &linear).unwrap();
+    let nearest = image(&mut h, Some("nearest"), "value");
+    assert!(h.messages(Severity::Warning).is_empty());
+    assert!(
+        same(&nearest, &linear).is_err(),
+        "nearest rendered as linear"
+    );
+}
