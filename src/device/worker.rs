@@ -16,6 +16,36 @@ use crate::scene::Scene;
 /// Where a device's status messages go; called from any thread.
 pub type Reporter = Arc<dyn Fn(Status) + Send + Sync>;
 
+/// What a render depends on, to tell an unchanged frame: the scene by
+/// identity (a commit makes new derived values, so any change makes new
+/// ones), everything else by value.
+#[derive(Clone)]
+pub struct RenderInputs {
+    scene: Option<Scene>,
+    rays: RayGen,
+    settings: RenderSettings,
+    desc: FrameDesc,
+    backend: Backend,
+}
+
+impl PartialEq for RenderInputs {
+    fn eq(&self, other: &Self) -> bool {
+        let same_scene = match (&self.scene, &other.scene) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                Arc::ptr_eq(&a.volume, &b.volume)
+                    && Arc::ptr_eq(&a.transfer_function, &b.transfer_function)
+            }
+            _ => false,
+        };
+        same_scene
+            && self.rays == other.rays
+            && self.settings == other.settings
+            && self.desc == other.desc
+            && self.backend == other.backend
+    }
+}
+
 pub struct RenderJob {
     pub frame: u64,
     /// `None` renders the background only (an empty world).
@@ -26,12 +56,26 @@ pub struct RenderJob {
     pub backend: Backend,
     pub slot: Arc<FrameSlot>,
     pub on_done: Option<Box<dyn FnOnce() + Send>>,
+    /// The frame's last image is still right: keep it, render nothing.
+    pub unchanged: bool,
 }
 
 pub struct Worker {
     sender: Option<Sender<RenderJob>>,
     thread: Option<JoinHandle<()>>,
     report: Reporter,
+}
+
+impl RenderJob {
+    pub fn inputs(&self) -> RenderInputs {
+        RenderInputs {
+            scene: self.scene.clone(),
+            rays: self.rays,
+            settings: self.settings,
+            desc: self.desc,
+            backend: self.backend,
+        }
+    }
 }
 
 impl Worker {
@@ -91,6 +135,13 @@ impl Drop for Worker {
 
 fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Reporter) {
     let started = Instant::now();
+    if job.unchanged {
+        job.slot.finish_unchanged(started.elapsed());
+        if let Some(done) = job.on_done {
+            done();
+        }
+        return;
+    }
     let status = |severity, code, message: String| Status {
         severity,
         code,

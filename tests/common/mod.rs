@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod c;
+pub mod device;
 pub mod render;
 
 use std::path::{Path, PathBuf};

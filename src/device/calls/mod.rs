@@ -254,12 +254,18 @@ impl Device {
             },
             Subject::Object(h) => {
                 let cell = self.lookup(h, &format!("anariGetProperty('{name}')"))?;
-                let slot = match (&cell.lock().state, name) {
-                    (State::Frame(f), "duration") => f.slot.clone(),
+                let slot = match &cell.lock().state {
+                    State::Frame(f) => f.slot.clone(),
                     _ => return None,
                 };
                 let s = if wait { slot.wait() } else { slot.lock() };
-                Some(Property::Float32(s.duration.as_secs_f32()))
+                match name {
+                    "duration" => Some(Property::Float32(s.duration.as_secs_f32())),
+                    // A render is whole or not started: no partial progress.
+                    "renderProgress" => Some(Property::Float32(if s.busy { 0.0 } else { 1.0 })),
+                    "numSamples" => Some(Property::Int32(s.samples as i32)),
+                    _ => None,
+                }
             }
         }
     }

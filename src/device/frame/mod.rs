@@ -1,7 +1,8 @@
 //! The frame: what to render (world, camera, renderer), at which size and
 //! into which channels. Its parameters are read when it renders, since
 //! hosts commit frames before they know the size; commit only reports a
-//! colour channel caveray cannot fill.
+//! colour channel caveray cannot fill. A render whose inputs equal the
+//! last one's keeps its image (calls/frames.rs).
 
 pub mod slot;
 
@@ -57,6 +58,13 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             false,
             Default::None,
             "first argument of the frame completion callback",
+        ),
+        p(
+            "accumulation",
+            &[T::BOOL],
+            false,
+            Default::None,
+            "accepted: a render is complete at once, and renders of unchanged inputs keep it (numSamples counts them)",
         ),
     ],
     commit: Some(commit),

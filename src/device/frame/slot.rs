@@ -3,6 +3,7 @@
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
+use crate::device::worker::RenderInputs;
 use crate::render::Frame;
 
 /// Channels a host can map.
@@ -31,6 +32,8 @@ pub struct FrameState {
     pub mapped: [bool; 2],
     /// The colour channel's ANARI type, if the frame has one.
     pub color_type: Option<crate::device::types::DataType>,
+    /// What the last render was made from, while its image is good.
+    pub last: Option<RenderInputs>,
 }
 
 /// Shared between the device and the worker rendering into the frame.
@@ -45,6 +48,9 @@ pub struct SlotState {
     pub busy: bool,
     pub result: Option<Result<Frame, String>>,
     pub duration: Duration,
+    /// Renders the image stands for: 1 after a render, one more for each
+    /// render of unchanged inputs (what an accumulating host counts).
+    pub samples: u32,
 }
 
 impl FrameSlot {
@@ -57,8 +63,24 @@ impl FrameSlot {
         s.busy = true;
     }
 
+    /// Whether the last render succeeded; then a render of the same
+    /// inputs may keep its image.
+    pub fn holds_image(&self) -> bool {
+        matches!(self.lock().result, Some(Ok(_)))
+    }
+
+    /// Ends a render that kept the last image: only the duration changes.
+    pub fn finish_unchanged(&self, duration: Duration) {
+        let mut s = self.lock();
+        s.duration = duration;
+        s.samples = s.samples.saturating_add(1);
+        s.busy = false;
+        self.done.notify_all();
+    }
+
     pub fn finish(&self, result: Result<Frame, String>, duration: Duration) {
         let mut s = self.lock();
+        s.samples = u32::from(result.is_ok());
         s.result = Some(result);
         s.duration = duration;
         s.busy = false;

@@ -1,0 +1,177 @@
+//! A host driving the device model directly (no C), on the CPU
+//! reference: small volumes, frames and their pixels.
+
+use std::sync::Arc;
+
+use anari_library_caveray::device::{DataType, Device, Input, Severity, Status, Subject};
+
+pub const SIZE: u32 = 24;
+
+pub struct Host {
+    pub d: Device,
+}
+
+pub fn bytes<T: Copy>(values: &[T]) -> Vec<u8> {
+    // SAFETY: plain numbers, read as their bytes.
+    unsafe {
+        std::slice::from_raw_parts(values.as_ptr().cast::<u8>(), std::mem::size_of_val(values))
+    }
+    .to_vec()
+}
+
+impl Host {
+    pub fn new() -> Self {
+        let mut d = Device::new(Arc::new(|_s: Status| {}));
+        d.set_param(Subject::Device, "backend", Input::String("cpu".into()));
+        d.commit(Subject::Device);
+        Self { d }
+    }
+
+    pub fn set(&mut self, object: u64, name: &str, ty: DataType, value: Vec<u8>) {
+        self.d
+            .set_param(Subject::Object(object), name, Input::Bytes(ty, value));
+    }
+
+    pub fn set_object(&mut self, object: u64, name: &str, ty: DataType, handle: u64) {
+        self.d
+            .set_param(Subject::Object(object), name, Input::Object(ty, handle));
+    }
+
+    /// A device-owned array filled with `data`.
+    pub fn array(&mut self, kind: DataType, element: DataType, dims: [u64; 3], data: &[u8]) -> u64 {
+        let a = self
+            .d
+            .new_array(kind, element as i32, dims, None)
+            .ok()
+            .unwrap();
+        let ptr = self.d.map_array(a);
+        // SAFETY: the device allocated dims * element size bytes.
+        unsafe { std::ptr::copy_nonoverlapping(data.as_ptr(), ptr, data.len()) };
+        self.d.unmap_array(a);
+        a
+    }
+
+    /// A 4^3 field: `value(x)` along x, constant in y and z.
+    pub fn field(&mut self, value: impl Fn(u32) -> f32, filter: Option<&str>) -> u64 {
+        let voxels: Vec<f32> = (0..64).map(|i| value(i % 4)).collect();
+        let data = self.array(
+            DataType::ARRAY3D,
+            DataType::FLOAT32,
+            [4, 4, 4],
+            &bytes(&voxels),
+        );
+        let f = self
+            .d
+            .new_object(DataType::SPATIAL_FIELD, "structuredRegular");
+        self.set_object(f, "data", DataType::ARRAY3D, data);
+        self.set(f, "origin", DataType::FLOAT32_VEC3, bytes(&[-1.0f32; 3]));
+        self.set(
+            f,
+            "spacing",
+            DataType::FLOAT32_VEC3,
+            bytes(&[2.0f32 / 3.0; 3]),
+        );
+        if let Some(filter) = filter {
+            self.d
+                .set_param(Subject::Object(f), "filter", Input::String(filter.into()));
+        }
+        self.d.commit(Subject::Object(f));
+        self.d.release(data);
+        f
+    }
+
+    /// A frame showing `volume` head-on from `camera_z` on the z axis:
+    /// (frame, camera).
+    pub fn frame(&mut self, volume: u64, camera_z: f32) -> (u64, u64) {
+        self.d.commit(Subject::Object(volume));
+        let list = self.array(
+            DataType::ARRAY1D,
+            DataType::VOLUME,
+            [1, 1, 1],
+            &bytes(&[volume as usize]),
+        );
+        let world = self.d.new_object(DataType::WORLD, "");
+        self.set_object(world, "volume", DataType::ARRAY1D, list);
+        self.d.commit(Subject::Object(world));
+        let renderer = self.d.new_object(DataType::RENDERER, "default");
+        self.d.commit(Subject::Object(renderer));
+        let camera = self.d.new_object(DataType::CAMERA, "perspective");
+        self.set(
+            camera,
+            "position",
+            DataType::FLOAT32_VEC3,
+            bytes(&[0.0f32, 0.0, camera_z]),
+        );
+        self.d.commit(Subject::Object(camera));
+        let frame = self.d.new_object(DataType::FRAME, "");
+        self.set(frame, "size", DataType::UINT32_VEC2, bytes(&[SIZE, SIZE]));
+        self.set(
+            frame,
+            "channel.color",
+            DataType::DATA_TYPE,
+            bytes(&[DataType::UFIXED8_VEC4 as i32]),
+        );
+        self.set_object(frame, "world", DataType::WORLD, world);
+        self.set_object(frame, "renderer", DataType::RENDERER, renderer);
+        self.set_object(frame, "camera", DataType::CAMERA, camera);
+        self.d.commit(Subject::Object(frame));
+        for h in [renderer, world, list] {
+            self.d.release(h);
+        }
+        (frame, camera)
+    }
+
+    /// Renders `frame` and returns its RGBA8 pixels.
+    pub fn pixels(&mut self, frame: u64) -> Vec<u8> {
+        self.d.render_frame(frame, None);
+        let mapped = self
+            .d
+            .map_frame(frame, "channel.color")
+            .expect("the frame renders");
+        // SAFETY: a mapped RGBA8 frame of SIZE^2 pixels, valid until unmap.
+        let pixels =
+            unsafe { std::slice::from_raw_parts(mapped.ptr, (4 * SIZE * SIZE) as usize) }.to_vec();
+        self.d.unmap_frame(frame, "channel.color");
+        pixels
+    }
+
+    /// Renders `volume` head-on and returns RGBA8 pixels.
+    pub fn render(&mut self, volume: u64) -> Vec<u8> {
+        let (frame, camera) = self.frame(volume, 3.0);
+        let pixels = self.pixels(frame);
+        self.d.release(frame);
+        self.d.release(camera);
+        pixels
+    }
+
+    /// A transferFunction1D volume over `field`.
+    pub fn volume(&mut self, field: u64) -> u64 {
+        let v = self.d.new_object(DataType::VOLUME, "transferFunction1D");
+        self.set_object(v, "value", DataType::SPATIAL_FIELD, field);
+        v
+    }
+
+    pub fn messages(&mut self, severity: Severity) -> Vec<String> {
+        self.d
+            .take_statuses()
+            .into_iter()
+            .filter(|s| s.severity == severity)
+            .map(|s| s.message)
+            .collect()
+    }
+}
+
+/// Whether two images are equal, reported by their first difference.
+pub fn same(a: &[u8], b: &[u8]) -> Result<(), String> {
+    match a.iter().zip(b).position(|(x, y)| x != y) {
+        None if a.len() == b.len() => Ok(()),
+        None => Err(format!("sizes {} and {}", a.len(), b.len())),
+        Some(i) => Err(format!("byte {i} (pixel {}): {} vs {}", i / 4, a[i], b[i])),
+    }
+}
+
+/// The centre pixel's RGB.
+pub fn centre(pixels: &[u8]) -> [u8; 3] {
+    let i = 4 * (SIZE / 2 * SIZE + SIZE / 2) as usize;
+    [pixels[i], pixels[i + 1], pixels[i + 2]]
+}

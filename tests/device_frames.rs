@@ -1,0 +1,126 @@
+//! Frames as hosts render them: OpenCOVER renders an unchanged channel up
+//! to 64 times and VTK several times per frame, expecting accumulation;
+//! an unchanged frame keeps its image, counts the renders in `numSamples`,
+//! and any change of its inputs renders anew.
+
+mod common;
+
+use anari_library_caveray::device::{DataType, Property, Severity, Subject};
+use common::device::{bytes, same, Host};
+
+fn property(h: &mut Host, frame: u64, name: &str) -> Option<Property> {
+    h.d.property(Subject::Object(frame), name, true)
+}
+
+#[test]
+fn unchanged_frames_keep_their_image_and_changes_render_anew() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+    let (frame, camera) = h.frame(volume, 3.0);
+    h.set(frame, "accumulation", DataType::BOOL, vec![1]);
+    h.d.commit(Subject::Object(frame));
+
+    let first = h.pixels(frame);
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+    for n in 2..=64 {
+        let again = h.pixels(frame);
+        same(&again, &first).unwrap();
+        assert_eq!(
+            property(&mut h, frame, "numSamples"),
+            Some(Property::Int32(n))
+        );
+    }
+    assert_eq!(
+        property(&mut h, frame, "renderProgress"),
+        Some(Property::Float32(1.0))
+    );
+
+    // Committing the renderer with the same values changes nothing.
+    let renderer = h.d.new_object(DataType::RENDERER, "default");
+    h.d.commit(Subject::Object(renderer));
+    h.set_object(frame, "renderer", DataType::RENDERER, renderer);
+    h.d.commit(Subject::Object(frame));
+    same(&h.pixels(frame), &first).unwrap();
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(65))
+    );
+
+    // A camera that moved: a new image.
+    h.set(
+        camera,
+        "position",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.4f32, 0.0, 2.5]),
+    );
+    h.d.commit(Subject::Object(camera));
+    let moved = h.pixels(frame);
+    assert!(
+        same(&moved, &first).is_err(),
+        "the moved camera shows the old image"
+    );
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+
+    // A recommitted volume (new derived data, even if equal): rendered again.
+    h.d.commit(Subject::Object(volume));
+    same(&h.pixels(frame), &moved).unwrap();
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+
+    // Another size: rendered again, at that size.
+    h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[8u32, 8]));
+    h.d.commit(Subject::Object(frame));
+    h.d.render_frame(frame, None);
+    let mapped = h.d.map_frame(frame, "channel.color").unwrap();
+    assert_eq!(mapped.size.to_array(), [8, 8]);
+    h.d.unmap_frame(frame, "channel.color");
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+    let problems: Vec<_> =
+        h.d.take_statuses()
+            .into_iter()
+            .filter(|s| (s.severity as i32) <= Severity::Warning as i32)
+            .map(|s| s.message)
+            .collect();
+    assert!(problems.is_empty(), "{problems:?}");
+}
+
+#[test]
+fn a_failed_render_is_never_kept() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    let (frame, _camera) = h.frame(volume, 3.0);
+    // Without a size the render fails, twice, and is not "unchanged".
+    h.d.unset_param(Subject::Object(frame), "size");
+    h.d.commit(Subject::Object(frame));
+    for _ in 0..2 {
+        h.d.render_frame(frame, None);
+        assert!(h.d.map_frame(frame, "channel.color").is_none());
+        assert_eq!(
+            property(&mut h, frame, "numSamples"),
+            Some(Property::Int32(0))
+        );
+    }
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .filter(|e| e.starts_with("anariRenderFrame") && e.contains("'size'"))
+            .count()
+            == 2,
+        "{errors:?}"
+    );
+}
