@@ -7,7 +7,7 @@
  *   "matrix"   view, proj: ANARI_FLOAT32_MAT4, column-major OpenGL matrices
  *              (NDC z in [-1, 1]), exactly what a CAVE host already has for
  *              each wall and eye. Advertised as ANARI_VSNRAY_CAMERA_MATRIX
- *              (the same names as anari-visionaray) and CAVERAY_CAMERA_MATRIX.
+ *              (the same names as anari-visionaray) and ANARI_CAVERAY_CAMERA_MATRIX.
  *   "offAxis"  lowerLeft, lowerRight, upperRight, eye: ANARI_FLOAT32_VEC3,
  *              the wall's corners and the tracked eye in world space.
  * Renderer "default", besides "background" (ANARI_FLOAT32_VEC4):
@@ -34,9 +34,9 @@ extern "C" {
 #endif
 
 #define CAVERAY_EXTENSION_CAMERA_MATRIX_VSNRAY "ANARI_VSNRAY_CAMERA_MATRIX"
-#define CAVERAY_EXTENSION_CAMERA_MATRIX "CAVERAY_CAMERA_MATRIX"
-#define CAVERAY_EXTENSION_CAMERA_OFF_AXIS "CAVERAY_CAMERA_OFF_AXIS"
-#define CAVERAY_EXTENSION_RENDERER_SHADING "CAVERAY_RENDERER_SHADING"
+#define CAVERAY_EXTENSION_CAMERA_MATRIX "ANARI_CAVERAY_CAMERA_MATRIX"
+#define CAVERAY_EXTENSION_CAMERA_OFF_AXIS "ANARI_CAVERAY_CAMERA_OFF_AXIS"
+#define CAVERAY_EXTENSION_RENDERER_SHADING "ANARI_CAVERAY_RENDERER_SHADING"
 
 /* The parameters of ANARI's "perspective" camera that show one wall from
  * one eye: a symmetric frustum widened to contain the wall, cropped back to

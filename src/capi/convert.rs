@@ -44,23 +44,3 @@ pub unsafe fn input(code: i32, mem: *const c_void) -> Result<Input, String> {
         }
     }
 }
-
-/// The object kind `anariNewObject` names.
-pub fn object_kind(name: &str) -> Option<DataType> {
-    Some(match name {
-        "camera" => DataType::CAMERA,
-        "frame" => DataType::FRAME,
-        "geometry" => DataType::GEOMETRY,
-        "group" => DataType::GROUP,
-        "instance" => DataType::INSTANCE,
-        "light" => DataType::LIGHT,
-        "material" => DataType::MATERIAL,
-        "renderer" => DataType::RENDERER,
-        "surface" => DataType::SURFACE,
-        "sampler" => DataType::SAMPLER,
-        "spatialField" => DataType::SPATIAL_FIELD,
-        "volume" => DataType::VOLUME,
-        "world" => DataType::WORLD,
-        _ => return None,
-    })
-}

@@ -7,7 +7,7 @@ use std::ffi::{c_char, c_void, CString};
 use std::sync::OnceLock;
 
 use super::sys;
-use crate::device::info::{self, Default, EXTENSIONS, SUBTYPES};
+use crate::device::info::{self, Default, CHANNELS, EXTENSIONS, SUBTYPES};
 use crate::device::DataType;
 
 struct List {
@@ -35,15 +35,38 @@ impl List {
 
 struct Subtype {
     description: CString,
+    /// One entry per parameter and accepted type.
     parameters: Vec<sys::ANARIParameter>,
     _names: Vec<CString>,
     extensions: List,
-    param_descriptions: HashMap<&'static str, CString>,
+    /// The subtype's first extension: each parameter's `sourceExtension`.
+    source: Option<CString>,
+    params: HashMap<&'static str, Param>,
+}
+
+/// One parameter's answers, kept where the pointers stay valid.
+struct Param {
+    description: CString,
+    /// DATA_TYPE_LISTs, ended by ANARI_UNKNOWN.
+    elements: Vec<i32>,
+    data_types: Vec<i32>,
+    names: List,
+    range: Option<[f32; 2]>,
+}
+
+/// A DATA_TYPE_LIST: the codes, then ANARI_UNKNOWN.
+fn type_list(types: &[DataType]) -> Vec<i32> {
+    types
+        .iter()
+        .map(|t| *t as i32)
+        .chain([DataType::UNKNOWN as i32])
+        .collect()
 }
 
 struct Tables {
     device_subtypes: List,
     extensions: List,
+    channels: List,
     subtypes: HashMap<i32, List>,
     by_subtype: HashMap<(i32, &'static str), Subtype>,
 }
@@ -69,29 +92,43 @@ fn tables() -> &'static Tables {
             .iter()
             .map(|s| {
                 let names: Vec<CString> = s.params.iter().map(|p| c_string(p.name)).collect();
+                // A parameter that takes several types is listed once per type.
                 let mut parameters: Vec<sys::ANARIParameter> = s
                     .params
                     .iter()
                     .zip(&names)
-                    .map(|(p, n)| sys::ANARIParameter {
-                        name: n.as_ptr(),
-                        type_: p.types[0] as i32,
+                    .flat_map(|(p, n)| {
+                        p.types.iter().map(move |t| sys::ANARIParameter {
+                            name: n.as_ptr(),
+                            type_: *t as i32,
+                        })
                     })
                     .collect();
                 parameters.push(sys::ANARIParameter {
                     name: std::ptr::null(),
                     type_: DataType::UNKNOWN as i32,
                 });
+                let params = s
+                    .params
+                    .iter()
+                    .map(|p| {
+                        let param = Param {
+                            description: c_string(p.description),
+                            elements: type_list(p.elements),
+                            data_types: type_list(p.data_types),
+                            names: List::new(p.names.iter().copied()),
+                            range: p.range.map(|(lo, hi)| [lo, hi]),
+                        };
+                        (p.name, param)
+                    })
+                    .collect();
                 let sub = Subtype {
                     description: c_string(s.description),
                     parameters,
                     _names: names,
                     extensions: List::new(s.extensions.iter().copied()),
-                    param_descriptions: s
-                        .params
-                        .iter()
-                        .map(|p| (p.name, c_string(p.description)))
-                        .collect(),
+                    source: s.extensions.first().map(|e| c_string(e)),
+                    params,
                 };
                 ((s.kind as i32, s.subtype), sub)
             })
@@ -99,6 +136,7 @@ fn tables() -> &'static Tables {
         Tables {
             device_subtypes: List::new(["default"]),
             extensions: List::new(EXTENSIONS.iter().copied()),
+            channels: List::new(CHANNELS.iter().copied()),
             subtypes,
             by_subtype,
         }
@@ -128,7 +166,8 @@ fn subtype(kind: i32, name: &str) -> Option<&'static Subtype> {
 }
 
 /// `anariGetObjectInfo`: "description" (STRING), "parameter"
-/// (PARAMETER_LIST), "extension" (STRING_LIST).
+/// (PARAMETER_LIST), "extension" (STRING_LIST), and for frames "channel"
+/// (STRING_LIST).
 pub fn object_info(kind: i32, sub: &str, info_name: &str, info_type: i32) -> *const c_void {
     let Some(s) = subtype(kind, sub) else {
         return std::ptr::null();
@@ -137,12 +176,18 @@ pub fn object_info(kind: i32, sub: &str, info_name: &str, info_type: i32) -> *co
         ("description", Some(DataType::STRING)) => s.description.as_ptr().cast(),
         ("parameter", Some(DataType::PARAMETER_LIST)) => s.parameters.as_ptr().cast(),
         ("extension", Some(DataType::STRING_LIST)) => s.extensions.pointers.as_ptr().cast(),
+        ("channel", Some(DataType::STRING_LIST)) if kind == DataType::FRAME as i32 => {
+            tables().channels.pointers.as_ptr().cast()
+        }
         _ => std::ptr::null(),
     }
 }
 
 /// `anariGetParameterInfo`: "description" (STRING), "required" (BOOL),
-/// "default" (the parameter's own type, for FLOAT32-based parameters).
+/// "default" (the parameter's own type, for FLOAT32-based parameters),
+/// "elementType" (DATA_TYPE_LIST, for arrays), "value" (STRING_LIST for
+/// enumerations, DATA_TYPE_LIST for DATA_TYPE parameters), "minimum" and
+/// "maximum" (FLOAT32), "sourceExtension" (STRING).
 pub fn parameter_info(
     kind: i32,
     sub: &str,
@@ -154,17 +199,21 @@ pub fn parameter_info(
     let (Some(s), Some(ty)) = (subtype(kind, sub), DataType::from_code(kind)) else {
         return std::ptr::null();
     };
-    let Some(p) = info::param(ty, sub, param) else {
+    let (Some(p), Some(c)) = (info::param(ty, sub, param), s.params.get(param)) else {
         return std::ptr::null();
     };
     if !p.types.iter().any(|t| *t as i32 == param_type) {
         return std::ptr::null();
     }
+    let list = |l: &Vec<i32>| {
+        if l.len() > 1 {
+            l.as_ptr().cast()
+        } else {
+            std::ptr::null()
+        }
+    };
     match (info_name, DataType::from_code(info_type)) {
-        ("description", Some(DataType::STRING)) => s
-            .param_descriptions
-            .get(p.name)
-            .map_or(std::ptr::null(), |d| d.as_ptr().cast()),
+        ("description", Some(DataType::STRING)) => c.description.as_ptr().cast(),
         ("required", Some(DataType::BOOL)) => {
             let b: &'static u8 = if p.required { &TRUE } else { &FALSE };
             (b as *const u8).cast()
@@ -174,6 +223,23 @@ pub fn parameter_info(
             Default::Floats(d) if d.len() * 4 == t.size() => d.as_ptr().cast(),
             _ => std::ptr::null(),
         },
+        ("elementType", Some(DataType::DATA_TYPE_LIST)) => list(&c.elements),
+        ("value", Some(DataType::DATA_TYPE_LIST)) => list(&c.data_types),
+        ("value", Some(DataType::STRING_LIST)) if !p.names.is_empty() => {
+            c.names.pointers.as_ptr().cast()
+        }
+        ("minimum", Some(DataType::FLOAT32)) => c
+            .range
+            .as_ref()
+            .map_or(std::ptr::null(), |r| (&r[0] as *const f32).cast()),
+        ("maximum", Some(DataType::FLOAT32)) => c
+            .range
+            .as_ref()
+            .map_or(std::ptr::null(), |r| (&r[1] as *const f32).cast()),
+        ("sourceExtension", Some(DataType::STRING)) => s
+            .source
+            .as_ref()
+            .map_or(std::ptr::null(), |e| e.as_ptr().cast()),
         _ => std::ptr::null(),
     }
 }

@@ -7,13 +7,13 @@
 
 use std::ffi::{c_char, c_int, c_void};
 
-use super::convert::{input, object_kind, string};
+use super::convert::{input, string};
 use super::handles::{DeviceHandle, DeviceRef, LibraryHandle};
 use super::info;
 use super::status::{call_error, emit, guard, set_library_callback, Callback};
 use super::sys::*;
 use crate::device::{
-    DataType, Device, HostMemory, Property, Severity, Status, StatusCode, Subject,
+    object_kind, DataType, Device, HostMemory, Property, Severity, Status, StatusCode, Subject,
 };
 
 /// Runs `f` on the live device behind `dev`, then delivers the messages the
@@ -781,9 +781,23 @@ pub unsafe extern "C" fn get_property(
                 Property::Int32(v) => (DataType::INT32, v.to_ne_bytes().to_vec()),
                 Property::UInt64(v) => (DataType::UINT64, v.to_ne_bytes().to_vec()),
                 Property::Float32(v) => (DataType::FLOAT32, v.to_ne_bytes().to_vec()),
+                Property::Box3(b) => (
+                    DataType::FLOAT32_BOX3,
+                    b.iter().flat_map(|x| x.to_ne_bytes()).collect(),
+                ),
+                Property::Text(t) => (
+                    DataType::STRING,
+                    (t.as_ptr() as usize).to_ne_bytes().to_vec(),
+                ),
                 Property::Extensions => (
                     DataType::STRING_LIST,
                     (info::extensions() as usize).to_ne_bytes().to_vec(),
+                ),
+                Property::Subtypes(kind) => (
+                    DataType::STRING_LIST,
+                    (info::object_subtypes(kind as i32) as usize)
+                        .to_ne_bytes()
+                        .to_vec(),
                 ),
             };
             if ty != expected as i32 {

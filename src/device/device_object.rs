@@ -4,6 +4,7 @@
 
 use super::info::{p, Default, SubtypeInfo};
 use super::types::DataType as T;
+use crate::render::Backend;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::DEVICE,
@@ -17,7 +18,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
           "passed back as the status callback's first argument"),
         p("backend", &[T::STRING], false, Default::None,
           "auto | gpu | cpu: the Vulkan ray caster, the CPU reference, or the GPU when one opens \
-           (default auto, or $CAVERAY_BACKEND)"),
+           (default auto, or $CAVERAY_BACKEND)")
+        .names(&Backend::NAMES),
     ],
     commit: None,
 };

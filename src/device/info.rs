@@ -16,6 +16,33 @@ pub struct ParamInfo {
     pub required: bool,
     pub default: Default,
     pub description: &'static str,
+    /// For array parameters: the element types read.
+    pub elements: &'static [T],
+    /// For enumerations (STRING): the names understood.
+    pub names: &'static [&'static str],
+    /// For DATA_TYPE parameters: the types understood.
+    pub data_types: &'static [T],
+    /// For numbers: the smallest and largest sensible value.
+    pub range: Option<(f32, f32)>,
+}
+
+impl ParamInfo {
+    pub const fn elements(mut self, elements: &'static [T]) -> Self {
+        self.elements = elements;
+        self
+    }
+    pub const fn names(mut self, names: &'static [&'static str]) -> Self {
+        self.names = names;
+        self
+    }
+    pub const fn data_types(mut self, types: &'static [T]) -> Self {
+        self.data_types = types;
+        self
+    }
+    pub const fn range(mut self, lo: f32, hi: f32) -> Self {
+        self.range = Some((lo, hi));
+        self
+    }
 }
 
 /// A parameter's value when the host sets none.
@@ -58,6 +85,10 @@ pub const fn p(
         required,
         default,
         description,
+        elements: &[],
+        names: &[],
+        data_types: &[],
+        range: None,
     }
 }
 
@@ -66,23 +97,32 @@ pub const F32: &[T] = &[T::FLOAT32];
 pub const MAT4: &[T] = &[T::FLOAT32_MAT4];
 
 /// The matrix camera's extension under anari-visionaray's name (clients
-/// written for it work unchanged) and under ours.
+/// written for it work unchanged) and under ours. Every name carries the
+/// `ANARI_` prefix, as hosts look extensions up with it.
 pub const EXT_MATRIX_VSNRAY: &str = "ANARI_VSNRAY_CAMERA_MATRIX";
-pub const EXT_MATRIX: &str = "CAVERAY_CAMERA_MATRIX";
-pub const EXT_OFF_AXIS: &str = "CAVERAY_CAMERA_OFF_AXIS";
-pub const EXT_SHADING: &str = "CAVERAY_RENDERER_SHADING";
+pub const EXT_MATRIX: &str = "ANARI_CAVERAY_CAMERA_MATRIX";
+pub const EXT_OFF_AXIS: &str = "ANARI_CAVERAY_CAMERA_OFF_AXIS";
+pub const EXT_SHADING: &str = "ANARI_CAVERAY_RENDERER_SHADING";
+pub const EXT_BACKGROUND: &str = "ANARI_KHR_RENDERER_BACKGROUND_COLOR";
+pub const EXT_COMPLETION: &str = "ANARI_KHR_FRAME_COMPLETION_CALLBACK";
+pub const EXT_ACCUMULATION: &str = "ANARI_KHR_FRAME_ACCUMULATION";
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
     "ANARI_KHR_CAMERA_PERSPECTIVE",
     "ANARI_KHR_SPATIAL_FIELD_STRUCTURED_REGULAR",
     "ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D",
-    "ANARI_KHR_FRAME_COMPLETION_CALLBACK",
+    EXT_COMPLETION,
+    EXT_ACCUMULATION,
+    EXT_BACKGROUND,
     EXT_MATRIX_VSNRAY,
     EXT_MATRIX,
     EXT_OFF_AXIS,
     EXT_SHADING,
 ];
+
+/// Frame channels (`anariGetObjectInfo(FRAME, "channel")`).
+pub const CHANNELS: &[&str] = &["channel.color", "channel.depth"];
 
 /// The registry: adding a subtype is a module and a line here.
 pub static SUBTYPES: &[&SubtypeInfo] = &[

@@ -24,6 +24,6 @@ pub use array::{Array, HostMemory};
 pub use calls::{Device, Input, Mapped, Property, Subject};
 pub use camera::CameraModel;
 pub use frame::slot::FrameSlot;
-pub use types::{kind_name, DataType, Severity, Status, StatusCode};
+pub use types::{kind_name, object_kind, DataType, Severity, Status, StatusCode};
 pub use value::{Params, Value};
 pub use worker::{panic_message, Reporter};

@@ -2,7 +2,7 @@
 //! shading modes. Its table holds the defaults of `RenderSettings`; a test
 //! keeps the two equal.
 
-use super::info::{p, Default, SubtypeInfo, EXT_SHADING, F32, VEC3};
+use super::info::{p, Default, SubtypeInfo, EXT_BACKGROUND, EXT_SHADING, F32, VEC3};
 use super::object::{Derived, State};
 use super::read::Read;
 use super::types::DataType as T;
@@ -12,7 +12,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::RENDERER,
     subtype: "default",
     description: "emission-absorption ray casting with optional shadows and ambient occlusion",
-    extensions: &[EXT_SHADING],
+    extensions: &[EXT_SHADING, EXT_BACKGROUND],
     params: &[
         p(
             "background",
@@ -27,7 +27,16 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             false,
             Default::Text("none"),
             "none | shadows | ao | shadows+ao | directional:N (N <= 64); default none",
-        ),
+        )
+        .names(&[
+            "none",
+            "shadows",
+            "ao",
+            "shadows+ao",
+            "directional:1",
+            "directional:4",
+            "directional:16",
+        ]),
         p(
             "lightDirection",
             VEC3,
@@ -41,14 +50,16 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             false,
             Default::Floats(&[1.0]),
             "step length in units of half the smallest voxel extent",
-        ),
+        )
+        .range(0.1, 10.0),
         p(
             "terminationThreshold",
             F32,
             false,
             Default::Floats(&[0.99]),
             "opacity at which a ray stops; above 1 disables early termination",
-        ),
+        )
+        .range(0.5, 1.01),
     ],
     commit: Some(commit),
 };

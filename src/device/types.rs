@@ -49,6 +49,7 @@ data_types! {
     VOID_POINTER = 102, PTR;
     BOOL = 103, 1;
     STRING_LIST = 150, PTR;
+    DATA_TYPE_LIST = 151, PTR;
     PARAMETER_LIST = 152, PTR;
     STATUS_CALLBACK = 202, PTR;
     FRAME_COMPLETION_CALLBACK = 203, PTR;
@@ -146,6 +147,27 @@ impl fmt::Display for DataType {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
+}
+
+/// The object kind ANARI names as `name` (in `anariNewObject` and in the
+/// device property `subtypes.<name>`).
+pub fn object_kind(name: &str) -> Option<DataType> {
+    Some(match name {
+        "camera" => DataType::CAMERA,
+        "frame" => DataType::FRAME,
+        "geometry" => DataType::GEOMETRY,
+        "group" => DataType::GROUP,
+        "instance" => DataType::INSTANCE,
+        "light" => DataType::LIGHT,
+        "material" => DataType::MATERIAL,
+        "renderer" => DataType::RENDERER,
+        "surface" => DataType::SURFACE,
+        "sampler" => DataType::SAMPLER,
+        "spatialField" => DataType::SPATIAL_FIELD,
+        "volume" => DataType::VOLUME,
+        "world" => DataType::WORLD,
+        _ => return None,
+    })
 }
 
 /// Human names of object kinds for messages ("camera", "spatial field").

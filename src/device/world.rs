@@ -16,7 +16,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         false,
         Default::None,
         "ARRAY1D of ANARI_VOLUME",
-    )],
+    )
+    .elements(&[T::VOLUME])],
     commit: Some(commit),
 };
 

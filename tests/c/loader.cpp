@@ -139,7 +139,7 @@ int main(int argc, char **argv)
   check("device subtypes", contains(lib->getDeviceSubtypes(), "default"));
   check("extensions advertise the matrix camera",
       contains(lib->getDeviceExtensions("default"), "ANARI_VSNRAY_CAMERA_MATRIX")
-          && contains(lib->getDeviceExtensions("default"), "CAVERAY_CAMERA_MATRIX"));
+          && contains(lib->getDeviceExtensions("default"), "ANARI_CAVERAY_CAMERA_MATRIX"));
 
   DeviceImpl *dev = (DeviceImpl *)lib->newDevice("default");
   check("device inherits the library's status callback",

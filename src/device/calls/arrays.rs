@@ -27,7 +27,10 @@ impl Device {
         let element = match DataType::from_code(element_code) {
             Some(t)
                 if t.size() > 0
-                    && !matches!(t, DataType::STRING_LIST | DataType::PARAMETER_LIST) =>
+                    && !matches!(
+                        t,
+                        DataType::STRING_LIST | DataType::DATA_TYPE_LIST | DataType::PARAMETER_LIST
+                    ) =>
             {
                 t
             }

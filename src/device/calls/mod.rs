@@ -15,7 +15,7 @@ use std::sync::Arc;
 use super::frame::slot::FrameSlot;
 use super::info::{self, SubtypeInfo};
 use super::object::{ObjectCell, ObjectRef, State};
-use super::types::{kind_name, DataType, Severity, Status, StatusCode};
+use super::types::{kind_name, object_kind, DataType, Severity, Status, StatusCode};
 use super::value::{Params, Value};
 use super::worker::{Reporter, Worker};
 use crate::render::Backend;
@@ -46,8 +46,25 @@ pub enum Property {
     Int32(i32),
     UInt64(u64),
     Float32(f32),
+    /// FLOAT32_BOX3: lower corner, then upper corner.
+    Box3([f32; 6]),
+    Text(&'static std::ffi::CStr),
     /// The device's extension names (the C layer owns the C strings).
     Extensions,
+    /// The implemented subtypes of an object kind (likewise).
+    Subtypes(DataType),
+}
+
+/// `version.name`.
+const VERSION_NAME: &std::ffi::CStr = match std::ffi::CStr::from_bytes_with_nul(
+    concat!("caveray ", env!("CARGO_PKG_VERSION"), "\0").as_bytes(),
+) {
+    Ok(name) => name,
+    Err(_) => c"caveray",
+};
+
+fn version_part(part: &str) -> i32 {
+    part.parse().unwrap_or(0)
 }
 
 pub struct Device {
@@ -248,14 +265,30 @@ impl Device {
         match target {
             Subject::Device => match name {
                 "version" => Some(Property::Int32(1)),
+                "version.major" => Some(Property::Int32(version_part(env!(
+                    "CARGO_PKG_VERSION_MAJOR"
+                )))),
+                "version.minor" => Some(Property::Int32(version_part(env!(
+                    "CARGO_PKG_VERSION_MINOR"
+                )))),
+                "version.patch" => Some(Property::Int32(version_part(env!(
+                    "CARGO_PKG_VERSION_PATCH"
+                )))),
+                "version.name" => Some(Property::Text(VERSION_NAME)),
                 "extension" => Some(Property::Extensions),
                 "geometryMaxIndex" => Some(Property::UInt64(u64::from(u32::MAX))),
-                _ => None,
+                _ => name
+                    .strip_prefix("subtypes.")
+                    .and_then(object_kind)
+                    .map(Property::Subtypes),
             },
             Subject::Object(h) => {
                 let cell = self.lookup(h, &format!("anariGetProperty('{name}')"))?;
                 let slot = match &cell.lock().state {
                     State::Frame(f) => f.slot.clone(),
+                    State::World(w) if name == "bounds" => {
+                        return w.ready("").ok().and_then(|v| world_bounds(v));
+                    }
                     _ => return None,
                 };
                 let s = if wait { slot.wait() } else { slot.lock() };
@@ -307,4 +340,25 @@ impl Device {
         let g = cell.lock();
         g.committed.as_ref()?.get(name).cloned()
     }
+}
+
+/// The box around a world's volumes, if any is ready.
+fn world_bounds(volumes: &[ObjectRef]) -> Option<Property> {
+    let mut boxes = volumes.iter().filter_map(|v| {
+        let field = match &v.lock().state {
+            State::Volume(m) => m.ready("").ok()?.field.clone(),
+            _ => return None,
+        };
+        let bounds = match &field.lock().state {
+            State::Field(f) => f.ready("").ok().map(|f| f.bounds()),
+            _ => None,
+        };
+        bounds
+    });
+    let (mut lo, mut hi) = boxes.next()?;
+    for (l, h) in boxes {
+        lo = lo.min(l);
+        hi = hi.max(h);
+    }
+    Some(Property::Box3([lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]))
 }

@@ -43,7 +43,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             false,
             Default::Floats(&[std::f32::consts::FRAC_PI_3]),
             "vertical field of view in radians",
-        ),
+        )
+        .range(0.01, 3.1),
         p(
             "aspect",
             F32,

@@ -8,7 +8,7 @@ pub mod slot;
 
 use glam::UVec2;
 
-use super::info::{p, Default, SubtypeInfo};
+use super::info::{p, Default, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION};
 use super::object::State;
 use super::read::Read;
 use super::types::DataType as T;
@@ -19,7 +19,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::FRAME,
     subtype: "",
     description: "render target: colour and depth, lower-left pixel first",
-    extensions: &[],
+    extensions: &[EXT_COMPLETION, EXT_ACCUMULATION],
     params: &[
         p(
             "size",
@@ -37,14 +37,16 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             false,
             Default::None,
             "UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4 (unset: no colour channel)",
-        ),
+        )
+        .data_types(&[T::UFIXED8_VEC4, T::UFIXED8_RGBA_SRGB, T::FLOAT32_VEC4]),
         p(
             "channel.depth",
             &[T::DATA_TYPE],
             false,
             Default::None,
             "FLOAT32: distance from the camera to the first visible sample",
-        ),
+        )
+        .data_types(&[T::FLOAT32]),
         p(
             "frameCompletionCallback",
             &[T::FRAME_COMPLETION_CALLBACK],

@@ -29,7 +29,16 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             true,
             Default::None,
             "voxels: UFIXED8, UFIXED16, FIXED16, FLOAT32 or FLOAT64 (UINT8/UINT16 read as UFIXED)",
-        ),
+        )
+        .elements(&[
+            T::UFIXED8,
+            T::UFIXED16,
+            T::FIXED16,
+            T::FLOAT32,
+            T::FLOAT64,
+            T::UINT8,
+            T::UINT16,
+        ]),
         p(
             "origin",
             VEC3,
@@ -50,7 +59,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             false,
             Default::Text("linear"),
             "linear (trilinear) or nearest (the nearest vertex); other names read as linear",
-        ),
+        )
+        .names(&["linear", "nearest"]),
     ],
     commit: Some(commit),
 };

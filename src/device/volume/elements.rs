@@ -43,7 +43,27 @@ fn layout(t: T) -> Option<(Encoding, usize)> {
     })
 }
 
-/// The colour element types, for messages and introspection.
+/// The element types a colour array may hold (what `layout` reads).
+pub const COLOR_ELEMENTS: &[T] = &[
+    T::FLOAT32,
+    T::FLOAT32_VEC2,
+    T::FLOAT32_VEC3,
+    T::FLOAT32_VEC4,
+    T::UFIXED8,
+    T::UFIXED8_VEC2,
+    T::UFIXED8_VEC3,
+    T::UFIXED8_VEC4,
+    T::UFIXED16,
+    T::UFIXED16_VEC2,
+    T::UFIXED16_VEC3,
+    T::UFIXED16_VEC4,
+    T::UFIXED8_R_SRGB,
+    T::UFIXED8_RA_SRGB,
+    T::UFIXED8_RGB_SRGB,
+    T::UFIXED8_RGBA_SRGB,
+];
+
+/// The colour element types, for messages.
 pub const COLOR_TYPES: &str =
     "FLOAT32, UFIXED8 or UFIXED16 (1 to 4 components), or UFIXED8_R/RA/RGB/RGBA_SRGB";
 
@@ -114,4 +134,28 @@ pub fn clamp_unit(values: &mut [f32]) -> Option<(usize, usize, f32)> {
         }
     }
     first.map(|(i, x)| (count, i, x))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_listed_colour_types_are_exactly_those_read() {
+        for t in T::ALL {
+            assert_eq!(
+                layout(*t).is_some(),
+                COLOR_ELEMENTS.contains(t),
+                "{t} is read as a colour but not listed, or listed but not read"
+            );
+        }
+    }
+
+    #[test]
+    fn srgb_decodes_to_linear() {
+        assert_eq!(srgb_to_linear(0.0), 0.0);
+        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
+        // 188/255 is about half the light.
+        assert!((srgb_to_linear(188.0 / 255.0) - 0.5029).abs() < 1e-3);
+    }
 }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::Vec4;
 
-use super::elements::{clamp_unit, colors, scalars, COLOR_TYPES};
+use super::elements::{clamp_unit, colors, scalars, COLOR_ELEMENTS, COLOR_TYPES};
 use crate::device::info::{p, Default, SubtypeInfo, F32};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::read::Read;
@@ -27,9 +27,12 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
           "field values mapped to the first and last entries; lo == hi (a constant field) maps that value to the middle"),
         p("color", &[T::ARRAY1D, T::FLOAT32_VEC3, T::FLOAT32_VEC4], false,
           Default::Floats(&[1.0, 1.0, 1.0]),
-          "ARRAY1D (FLOAT32, UFIXED8 or UFIXED16 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one colour; out of [0, 1] clamped"),
+          "ARRAY1D (FLOAT32, UFIXED8 or UFIXED16 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one colour; out of [0, 1] clamped")
+            .elements(COLOR_ELEMENTS),
         p("opacity", &[T::ARRAY1D, T::FLOAT32], false, Default::Floats(&[1.0]),
-          "ARRAY1D of FLOAT32 spread over valueRange, or one opacity; out of [0, 1] clamped"),
+          "ARRAY1D of FLOAT32 spread over valueRange, or one opacity; out of [0, 1] clamped")
+            .elements(&[T::FLOAT32, T::FLOAT64])
+            .range(0.0, 1.0),
         p("unitDistance", F32, false, Default::Floats(&[1.0]),
           "world distance over which the opacities apply"),
     ],
