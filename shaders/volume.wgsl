@@ -25,11 +25,15 @@ fn voxel(i: vec3i) -> f32 {
 }
 
 // Trilinear interpolation of the vertex-centred grid, by hand: R32Float
-// is not filterable everywhere, and the reference does the same.
+// is not filterable everywhere, and the reference does the same. Or the
+// nearest vertex, halves rounded up as the reference rounds them.
 fn sample_volume(p: vec3f) -> f32 {
     samples += 1u;
     let hi = vec3i(params.dims) - vec3i(1);
     let g = clamp((p - params.box_lo) * params.inv_spacing, vec3f(0.0), vec3f(hi));
+    if params.sampling == FILTER_NEAREST {
+        return voxel(min(vec3i(floor(g + vec3f(0.5))), hi));
+    }
     let i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
     let f = g - vec3f(i0);
     let i1 = min(i0 + vec3i(1), hi);
@@ -152,8 +156,8 @@ fn march(fx: f32, fy: f32) -> Marched {
     let tb = (params.box_hi - o) * inv;
     let tn = min(ta, tb);
     let tf = max(ta, tb);
-    let t0 = max(max(max(tn.x, tn.y), tn.z), 0.0);
-    let t1 = min(min(tf.x, tf.y), tf.z);
+    let t0 = max(max(max(tn.x, tn.y), tn.z), params.t_near);
+    let t1 = min(min(min(tf.x, tf.y), tf.z), params.t_far);
     if t1 > t0 {
         let len = t1 - t0;
         let n = u32(ceil(len / step));
@@ -171,8 +175,11 @@ fn march(fx: f32, fy: f32) -> Marched {
             on_sample(p, lit, a);
             let weight = (1.0 - acc.a) * a;
             acc = vec4f(acc.rgb + lit * weight, acc.a + weight);
-            if !hit {
+            if !hit && acc.a >= params.depth_threshold {
                 depth = t;
+                if params.has_eye != 0u {
+                    depth = length(p - params.eye);
+                }
                 hit = true;
             }
             if acc.a >= params.termination {

@@ -298,7 +298,7 @@ fn device_and_world_properties() {
         .unwrap();
     assert_eq!(
         unsafe { strings(cameras as *const *const c_char) },
-        ["perspective", "matrix", "offAxis"]
+        ["perspective", "orthographic", "matrix", "offAxis"]
     );
     let minor: i32 = s.property(dev, "version.minor", ANARI_INT32).unwrap();
     assert_eq!(

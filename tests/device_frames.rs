@@ -124,3 +124,49 @@ fn a_failed_render_is_never_kept() {
         "{errors:?}"
     );
 }
+
+#[test]
+fn orthographic_cameras_and_clip_ranges_through_the_device() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+    let (frame, _perspective) = h.frame(volume, 3.0);
+    let perspective = h.pixels(frame);
+
+    let ortho = h.d.new_object(DataType::CAMERA, "orthographic");
+    h.set(
+        ortho,
+        "position",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.0f32, 0.0, 3.0]),
+    );
+    h.set(ortho, "height", DataType::FLOAT32, bytes(&[3.0f32]));
+    h.d.commit(Subject::Object(ortho));
+    h.set_object(frame, "camera", DataType::CAMERA, ortho);
+    h.d.commit(Subject::Object(frame));
+    let parallel = h.pixels(frame);
+    let lit = parallel.chunks(4).filter(|p| p[0] > 10).count();
+    assert!(lit > 100, "the orthographic view shows {lit} lit pixels");
+    assert!(same(&parallel, &perspective).is_err());
+
+    // Far before the volume: the background only.
+    h.set(ortho, "far", DataType::FLOAT32, bytes(&[1.0f32]));
+    h.d.commit(Subject::Object(ortho));
+    let clipped = h.pixels(frame);
+    assert!(
+        clipped.chunks(4).all(|p| p[..3] == [0, 0, 0]),
+        "far 1 still shows the volume"
+    );
+
+    // near >= far, or negative: refused at commit, with the reason.
+    h.set(ortho, "near", DataType::FLOAT32, bytes(&[2.0f32]));
+    h.d.commit(Subject::Object(ortho));
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("near 2 and far 1 must satisfy 0 <= near < far")),
+        "{errors:?}"
+    );
+}

@@ -117,11 +117,28 @@ fn a_solid_box_has_the_analytic_transmittance() {
         }
         println!("{name}: largest alpha error {worst:.2e}");
         assert!(worst < 1e-3, "{name}: alpha off by {worst}");
-        // Depth is the first sample: half a step (1/30) past the entry at 3.
+        // Depth is where the accumulated opacity first reaches the
+        // threshold (0.5 by default): after k samples of opacity a_s each
+        // (steps of 1/15 from the entry at 3, sampled at their middles).
+        let step = 1.0 / 15.0;
+        let a_s = 1.0 - (1.0 - f64::from(a)).powf(step / f64::from(unit));
+        let k = ((1.0f64 - 0.5).ln() / (1.0 - a_s).ln()).ceil();
+        let depth = f.depth.as_ref().unwrap()[16 * 33 + 16];
+        let want = 3.0 + (k - 0.5) * step;
+        assert!(
+            (f64::from(depth) - want).abs() < 1e-4,
+            "{name}: depth {depth}, want {want} ({k} samples)"
+        );
+        // With threshold 0, the first sample: half a step past the entry.
+        let first = RenderSettings {
+            depth_threshold: 0.0,
+            ..settings
+        };
+        let f = r.render(&scene, &rays, &first, &desc).unwrap();
         let depth = f.depth.as_ref().unwrap()[16 * 33 + 16];
         assert!(
             (depth - (3.0 + 1.0 / 30.0)).abs() < 1e-4,
-            "{name}: depth {depth}"
+            "{name}: first-sample depth {depth}"
         );
     }
 }
@@ -311,4 +328,100 @@ fn the_cpu_reference_notices_a_new_volume_or_transfer_function() {
     let a = reused.render(&first, &rays, &settings, &desc).unwrap();
     let b = reused.render(&recoloured, &rays, &settings, &desc).unwrap();
     assert_ne!(a, b, "a new transfer function must change the image");
+}
+
+/// The orthographic camera's parallel rays cross the [-1, 1]^3 box with
+/// the same chord everywhere inside its footprint; near and far clip the
+/// rays, on both renderers.
+#[test]
+fn orthographic_rays_and_clip_ranges() {
+    use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera};
+    let (a, unit) = (0.3f32, 0.7f32);
+    let scene = Scene::new(solid_box(16), constant_tf(a, unit));
+    let size = UVec2::new(32, 32);
+    // A 3 x 3 rectangle at z = 4 looking down -z: pixels within +-1 see 2
+    // units of box, the rest none.
+    let camera = OrthographicCamera::new(
+        DVec3::new(0.0, 0.0, 4.0),
+        DVec3::NEG_Z,
+        DVec3::Y,
+        3.0,
+        1.0,
+        ImageRegion::FULL,
+    )
+    .unwrap();
+    let rays = camera.ray_gen(size);
+    let settings = RenderSettings {
+        background: Vec4::ZERO,
+        ..Default::default()
+    };
+    let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
+    let through = |len: f64| 1.0 - (1.0 - f64::from(a)).powf(len / f64::from(unit));
+    for (name, mut r) in renderers() {
+        let f = r.render(&scene, &rays, &settings, &desc).unwrap();
+        for y in 0..size.y {
+            for x in 0..size.x {
+                let ray = camera.pixel_ray(x, y, size);
+                let inside = ray.origin.x.abs() < 1.0 && ray.origin.y.abs() < 1.0;
+                let want = if inside { through(2.0) } else { 0.0 };
+                let got = f64::from(f.pixel(x, y).w);
+                assert!(
+                    (got - want).abs() < 1e-3,
+                    "{name}: pixel {x},{y} alpha {got} vs {want}"
+                );
+            }
+        }
+        // Near at 3.5 (half a unit into the box), far at 4.5: one unit.
+        let clipped = r
+            .render(&scene, &rays.clipped(3.5, 4.5), &settings, &desc)
+            .unwrap();
+        let got = f64::from(clipped.pixel(16, 16).w);
+        assert!(
+            (got - through(1.0)).abs() < 2e-2,
+            "{name}: clipped alpha {got}"
+        );
+        // Far before the box: nothing.
+        let before = r
+            .render(&scene, &rays.clipped(0.0, 2.5), &settings, &desc)
+            .unwrap();
+        assert_eq!(before.pixel(16, 16).w, 0.0, "{name}: far before the box");
+    }
+}
+
+/// Depth is the distance from the eye for every camera: the matrix
+/// camera's rays start on the near plane, yet its depth equals the
+/// off-axis camera's for the same wall and eye.
+#[test]
+fn depth_is_measured_from_the_eye_for_every_camera() {
+    let scene = Scene::new(solid_box(16), constant_tf(0.3, 0.7));
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(40, 40);
+    let cameras = four_cameras(&screen, eye, size);
+    let desc = FrameDesc::new(size).with_depth();
+    for (name, mut r) in renderers() {
+        let depths: Vec<(&str, Vec<f32>)> = cameras
+            .iter()
+            .map(|(camera, rays)| {
+                let f = r
+                    .render(&scene, rays, &RenderSettings::default(), &desc)
+                    .unwrap();
+                (*camera, f.depth.unwrap())
+            })
+            .collect();
+        let (_, reference) = &depths[0];
+        let hits = reference.iter().filter(|d| d.is_finite()).count();
+        assert!(hits > 100, "{name}: only {hits} pixels hit the box");
+        for (camera, d) in &depths[1..] {
+            let worst = reference
+                .iter()
+                .zip(d)
+                .filter(|(a, _)| a.is_finite())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f32, f32::max);
+            assert!(
+                worst < 2e-3,
+                "{name} {camera}: depth differs by {worst} from the off-axis camera's"
+            );
+        }
+    }
 }

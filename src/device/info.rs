@@ -106,10 +106,12 @@ pub const EXT_SHADING: &str = "ANARI_CAVERAY_RENDERER_SHADING";
 pub const EXT_BACKGROUND: &str = "ANARI_KHR_RENDERER_BACKGROUND_COLOR";
 pub const EXT_COMPLETION: &str = "ANARI_KHR_FRAME_COMPLETION_CALLBACK";
 pub const EXT_ACCUMULATION: &str = "ANARI_KHR_FRAME_ACCUMULATION";
+pub const EXT_ORTHOGRAPHIC: &str = "ANARI_KHR_CAMERA_ORTHOGRAPHIC";
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
     "ANARI_KHR_CAMERA_PERSPECTIVE",
+    EXT_ORTHOGRAPHIC,
     "ANARI_KHR_SPATIAL_FIELD_STRUCTURED_REGULAR",
     "ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D",
     EXT_COMPLETION,
@@ -128,6 +130,7 @@ pub const CHANNELS: &[&str] = &["channel.color", "channel.depth"];
 pub static SUBTYPES: &[&SubtypeInfo] = &[
     &device_object::INFO,
     &camera::perspective::INFO,
+    &camera::orthographic::INFO,
     &camera::matrix::INFO,
     &camera::off_axis::INFO,
     &spatial_field::structured_regular::INFO,
@@ -240,7 +243,10 @@ mod tests {
         assert!(subtype(T::WORLD, "").is_some());
         assert!(subtype(T::FRAME, "anything").is_some());
         assert!(subtype(T::CAMERA, "fisheye").is_none());
-        assert_eq!(subtypes(T::CAMERA), ["perspective", "matrix", "offAxis"]);
+        assert_eq!(
+            subtypes(T::CAMERA),
+            ["perspective", "orthographic", "matrix", "offAxis"]
+        );
         assert!(subtypes(T::GEOMETRY).is_empty());
     }
 

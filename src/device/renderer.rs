@@ -60,6 +60,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "opacity at which a ray stops; above 1 disables early termination",
         )
         .range(0.5, 1.01),
+        p(
+            "depthThreshold",
+            F32,
+            false,
+            Default::Floats(&[0.5]),
+            "accumulated opacity at which channel.depth is taken (0: the first visible sample), so geometry behind a faint haze shows",
+        )
+        .range(0.0, 1.0),
     ],
     commit: Some(commit),
 };
@@ -83,6 +91,7 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
             .ok_or_else(|| format!("lightDirection {light} has no direction"))?,
         step_factor: r.f32("stepFactor")?,
         termination: r.f32("terminationThreshold")?,
+        depth_threshold: r.f32("depthThreshold")?,
     };
     s.validate().map_err(|e| e.to_string())?;
     Ok(s)

@@ -74,6 +74,12 @@ impl MatrixCamera {
 }
 
 impl PrimaryRays for MatrixCamera {
+    /// A perspective projection's rays meet at the eye, the view's origin;
+    /// an orthographic one's have none.
+    fn eye(&self) -> Option<DVec3> {
+        (self.proj.w_axis.w.abs() < 1e-12).then(|| self.view.inverse().w_axis.truncate())
+    }
+
     fn ray_through(&self, s: DVec2) -> Ray {
         let ndc = 2.0 * s - DVec2::ONE;
         let near = self.unproject(ndc.extend(-1.0));

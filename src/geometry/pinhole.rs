@@ -22,7 +22,7 @@ impl ImageRegion {
         [self.min.x, self.min.y, self.max.x, self.max.y]
     }
 
-    fn map(&self, s: DVec2) -> DVec2 {
+    pub(super) fn map(&self, s: DVec2) -> DVec2 {
         self.min + (self.max - self.min) * s
     }
 }

@@ -70,14 +70,24 @@ pub trait PrimaryRays {
             direction: r0.direction.as_vec3(),
             direction_dx: (rx.direction - r0.direction).as_vec3(),
             direction_dy: (ry.direction - r0.direction).as_vec3(),
+            t_near: 0.0,
+            t_far: f32::INFINITY,
+            eye: self.eye().map(|e| e.as_vec3()),
         }
+    }
+
+    /// Where every ray starts from, when the rays leave their origins
+    /// elsewhere (the matrix camera's start on the near plane): depth is
+    /// measured from here. `None`: from each ray's origin.
+    fn eye(&self) -> Option<DVec3> {
+        None
     }
 }
 
 /// The small single-precision value every camera lowers to: the ray of pixel
 /// (0, 0) and how origin and direction change per pixel step. The CPU
 /// reference renderer and the GPU shaders both generate rays from it alone.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayGen {
     pub origin: Vec3,
     pub origin_dx: Vec3,
@@ -85,9 +95,38 @@ pub struct RayGen {
     pub direction: Vec3,
     pub direction_dx: Vec3,
     pub direction_dy: Vec3,
+    /// The part of each ray that sees anything, as distances along the unit
+    /// ray from its origin (a camera's near and far clip).
+    pub t_near: f32,
+    pub t_far: f32,
+    /// The point depth is measured from, if not each ray's origin.
+    pub eye: Option<Vec3>,
+}
+
+impl Default for RayGen {
+    fn default() -> Self {
+        Self {
+            origin: Vec3::ZERO,
+            origin_dx: Vec3::ZERO,
+            origin_dy: Vec3::ZERO,
+            direction: Vec3::ZERO,
+            direction_dx: Vec3::ZERO,
+            direction_dy: Vec3::ZERO,
+            t_near: 0.0,
+            t_far: f32::INFINITY,
+            eye: None,
+        }
+    }
 }
 
 impl RayGen {
+    /// The same rays seeing only from `near` to `far` along each.
+    pub fn clipped(mut self, near: f32, far: f32) -> Self {
+        self.t_near = near;
+        self.t_far = far;
+        self
+    }
+
     /// Origin and unit direction of pixel (x, y), in single precision.
     pub fn pixel_ray(&self, x: u32, y: u32) -> (Vec3, Vec3) {
         let (fx, fy) = (x as f32, y as f32);

@@ -27,6 +27,7 @@ pub(crate) struct MarchPlan {
     pub value_lo: f32,
     pub value_scale: f32,
     pub termination: f32,
+    pub depth_threshold: f32,
     /// Straight RGBA.
     pub background: Vec4,
     pub light: Vec3,
@@ -61,6 +62,7 @@ impl MarchPlan {
             value_lo: vlo,
             value_scale: (vhi - vlo).recip(),
             termination: settings.termination,
+            depth_threshold: settings.depth_threshold,
             background: settings.background,
             light: settings.light.normalize(),
             shading: settings.shading,

@@ -105,6 +105,10 @@ pub struct RenderSettings {
     pub shading: Shading,
     /// Direction towards the parallel light of `shadows`, in world space.
     pub light: Vec3,
+    /// Accumulated opacity at which a ray's depth is taken: a host that
+    /// composites geometry behind the volume sees it through a faint haze
+    /// (0 takes the first sample that contributes anything).
+    pub depth_threshold: f32,
 }
 
 impl Default for RenderSettings {
@@ -115,6 +119,7 @@ impl Default for RenderSettings {
             termination: 0.99,
             shading: Shading::None,
             light: Vec3::new(0.3, 0.5, 0.8).normalize(),
+            depth_threshold: 0.5,
         }
     }
 }
@@ -144,6 +149,12 @@ impl RenderSettings {
             return Err(RenderError::Settings(format!(
                 "light direction must be a finite non-zero vector, got {}",
                 self.light
+            )));
+        }
+        if !(self.depth_threshold.is_finite() && (0.0..=1.0).contains(&self.depth_threshold)) {
+            return Err(RenderError::Settings(format!(
+                "depth threshold must be in [0, 1], got {}",
+                self.depth_threshold
             )));
         }
         if let Shading::Directional(n) = self.shading {

@@ -1,27 +1,146 @@
 //! Cameras: one module per subtype, each lowering to the renderer's
-//! `RayGen` for a frame through `CameraModel`.
+//! `RayGen` for a frame through `CameraModel`. What the perspective and
+//! orthographic cameras share (their frame of reference, image region and
+//! clip range) is read here once.
 
 pub mod matrix;
 pub mod off_axis;
+pub mod orthographic;
 pub mod perspective;
 
-use glam::{DVec3, UVec2};
+use glam::{DVec2, DVec3, UVec2};
 
 use super::object::{Derived, State};
+use super::read::Read;
 use crate::geometry::{
-    ImageRegion, MatrixCamera, OffAxisCamera, PinholeCamera, PrimaryRays, RayGen,
+    ImageRegion, MatrixCamera, OffAxisCamera, OrthographicCamera, PinholeCamera, PrimaryRays,
+    RayGen,
 };
+
+/// The parameters ANARI's perspective and orthographic cameras share,
+/// followed by the subtype's own.
+macro_rules! placed_camera_params {
+    ($($extra:expr),* $(,)?) => {
+        &[
+            $crate::device::info::p(
+                "position",
+                $crate::device::info::VEC3,
+                false,
+                $crate::device::info::Default::Floats(&[0.0, 0.0, 0.0]),
+                "eye position",
+            ),
+            $crate::device::info::p(
+                "direction",
+                $crate::device::info::VEC3,
+                false,
+                $crate::device::info::Default::Floats(&[0.0, 0.0, -1.0]),
+                "viewing direction",
+            ),
+            $crate::device::info::p(
+                "up",
+                $crate::device::info::VEC3,
+                false,
+                $crate::device::info::Default::Floats(&[0.0, 1.0, 0.0]),
+                "up vector",
+            ),
+            $crate::device::info::p(
+                "aspect",
+                $crate::device::info::F32,
+                false,
+                $crate::device::info::Default::None,
+                "width / height (default: the frame's)",
+            ),
+            $crate::device::info::p(
+                "imageRegion",
+                &[$crate::device::DataType::FLOAT32_BOX2],
+                false,
+                $crate::device::info::Default::Floats(&[0.0, 0.0, 1.0, 1.0]),
+                "part of the image that is rendered, (min.x, min.y, max.x, max.y) in [0, 1]",
+            ),
+            $crate::device::info::p(
+                "near",
+                $crate::device::info::F32,
+                false,
+                $crate::device::info::Default::None,
+                "distance along each ray before which nothing is seen (default 0)",
+            ),
+            $crate::device::info::p(
+                "far",
+                $crate::device::info::F32,
+                false,
+                $crate::device::info::Default::None,
+                "distance along each ray beyond which nothing is seen (default: none)",
+            ),
+            $($extra,)*
+        ]
+    };
+}
+pub(crate) use placed_camera_params;
+
+/// Where a perspective or orthographic camera stands and what it shows.
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    pub position: DVec3,
+    pub direction: DVec3,
+    pub up: DVec3,
+    /// `None`: the frame's.
+    pub aspect: Option<f64>,
+    pub region: ImageRegion,
+    pub clip: Option<(f32, f32)>,
+}
+
+impl Placement {
+    pub fn read(r: &Read<'_>) -> Result<Self, String> {
+        let [x0, y0, x1, y1] = r.floats::<4>("imageRegion")?;
+        let optional = |name| r.set(name).map(|_| r.f32(name)).transpose();
+        let clip = match (optional("near")?, optional("far")?) {
+            (None, None) => None,
+            (near, far) => {
+                let (near, far) = (near.unwrap_or(0.0), far.unwrap_or(f32::INFINITY));
+                if !(near >= 0.0 && far > near) {
+                    return Err(format!(
+                        "near {near} and far {far} must satisfy 0 <= near < far"
+                    ));
+                }
+                Some((near, far))
+            }
+        };
+        Ok(Self {
+            position: r.vec3("position")?.as_dvec3(),
+            direction: r.vec3("direction")?.as_dvec3(),
+            up: r.vec3("up")?.as_dvec3(),
+            aspect: optional("aspect")?.map(f64::from),
+            region: ImageRegion {
+                min: DVec2::new(x0.into(), y0.into()),
+                max: DVec2::new(x1.into(), y1.into()),
+            },
+            clip,
+        })
+    }
+
+    fn aspect(&self, size: UVec2) -> f64 {
+        self.aspect.unwrap_or(f64::from(size.x) / f64::from(size.y))
+    }
+
+    fn clipped(&self, rays: RayGen) -> RayGen {
+        match self.clip {
+            Some((near, far)) => rays.clipped(near, far),
+            None => rays,
+        }
+    }
+}
 
 #[derive(Clone, Debug)]
 pub enum CameraModel {
-    /// ANARI's perspective camera; `aspect` falls back to the frame's.
+    /// ANARI's perspective camera.
     Perspective {
-        position: DVec3,
-        direction: DVec3,
-        up: DVec3,
+        placement: Placement,
         fovy: f64,
-        aspect: Option<f64>,
-        region: ImageRegion,
+    },
+    /// ANARI's orthographic camera.
+    Orthographic {
+        placement: Placement,
+        height: f64,
     },
     Matrix(Box<MatrixCamera>),
     OffAxis(OffAxisCamera),
@@ -30,19 +149,29 @@ pub enum CameraModel {
 impl CameraModel {
     pub fn ray_gen(&self, size: UVec2) -> Result<RayGen, String> {
         match self {
-            CameraModel::Perspective {
-                position,
-                direction,
-                up,
-                fovy,
-                aspect,
-                region,
-            } => {
-                let aspect = aspect.unwrap_or(f64::from(size.x) / f64::from(size.y));
-                PinholeCamera::new(*position, *direction, *up, *fovy, aspect, *region)
-                    .map(|c| c.ray_gen(size))
-                    .map_err(|e| e.to_string())
-            }
+            CameraModel::Perspective { placement: p, fovy } => PinholeCamera::new(
+                p.position,
+                p.direction,
+                p.up,
+                *fovy,
+                p.aspect(size),
+                p.region,
+            )
+            .map(|c| p.clipped(c.ray_gen(size)))
+            .map_err(|e| e.to_string()),
+            CameraModel::Orthographic {
+                placement: p,
+                height,
+            } => OrthographicCamera::new(
+                p.position,
+                p.direction,
+                p.up,
+                *height,
+                p.aspect(size),
+                p.region,
+            )
+            .map(|c| p.clipped(c.ray_gen(size)))
+            .map_err(|e| e.to_string()),
             CameraModel::Matrix(c) => Ok(c.ray_gen(size)),
             CameraModel::OffAxis(c) => Ok(c.ray_gen(size)),
         }

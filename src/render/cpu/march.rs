@@ -1,6 +1,7 @@
 use glam::{Vec3, Vec4};
 
 use super::sample::{correct, Field};
+use crate::geometry::RayGen;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
 
 /// What one primary ray produced.
@@ -12,13 +13,14 @@ pub(super) struct RayResult {
     pub samples: u32,
 }
 
-/// Marches one primary ray with unit direction `dir`.
-pub(super) fn march(field: &Field, origin: Vec3, dir: Vec3) -> RayResult {
+/// Marches one primary ray of `rays` with unit direction `dir`.
+pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3) -> RayResult {
     let mut samples = 0;
     let plan = field.plan;
     let mut acc = Vec4::ZERO;
     let mut depth = f32::INFINITY;
-    if let Some((t0, t1)) = enter_exit(origin, dir, plan.box_lo, plan.box_hi) {
+    let clip = (rays.t_near, rays.t_far);
+    if let Some((t0, t1)) = enter_exit(origin, dir, plan.box_lo, plan.box_hi, clip) {
         let len = t1 - t0;
         let n = (len / plan.step).ceil() as u32;
         for k in 0..n {
@@ -37,8 +39,11 @@ pub(super) fn march(field: &Field, origin: Vec3, dir: Vec3) -> RayResult {
             let s = shade(field, p, &mut samples);
             let weight = (1.0 - acc.w) * a;
             acc = (acc.truncate() + c.truncate() * s * weight).extend(acc.w + weight);
-            if depth == f32::INFINITY {
-                depth = t;
+            if depth == f32::INFINITY && acc.w >= plan.depth_threshold {
+                depth = match rays.eye {
+                    Some(eye) => (p - eye).length(),
+                    None => t,
+                };
             }
             if acc.w >= plan.termination {
                 break;
@@ -54,8 +59,15 @@ pub(super) fn march(field: &Field, origin: Vec3, dir: Vec3) -> RayResult {
     }
 }
 
-/// Where a ray enters and leaves the box, clipped to t >= 0.
-pub(super) fn enter_exit(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+/// Where a ray enters and leaves the box, clipped to the camera's
+/// `(near, far)` (`near` >= 0).
+pub(super) fn enter_exit(
+    o: Vec3,
+    d: Vec3,
+    lo: Vec3,
+    hi: Vec3,
+    (near, far): (f32, f32),
+) -> Option<(f32, f32)> {
     let safe = |x: f32| {
         if x.abs() < 1e-20 {
             1e-20_f32.copysign(x)
@@ -66,8 +78,8 @@ pub(super) fn enter_exit(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f
     let inv = Vec3::new(safe(d.x), safe(d.y), safe(d.z)).recip();
     let ta = (lo - o) * inv;
     let tb = (hi - o) * inv;
-    let t0 = ta.min(tb).max_element().max(0.0);
-    let t1 = ta.max(tb).min_element();
+    let t0 = ta.min(tb).max_element().max(near);
+    let t1 = ta.max(tb).min_element().min(far);
     (t1 > t0).then_some((t0, t1))
 }
 

@@ -85,7 +85,7 @@ impl CpuRenderer {
                 let mut samples = 0u64;
                 for x in 0..w {
                     let (o, d) = rays.pixel_ray(x as u32, y as u32);
-                    let ray = march::march(&field, o, d);
+                    let ray = march::march(&field, rays, o, d);
                     crow[4 * x..4 * x + 4].copy_from_slice(&ray.color.to_array());
                     drow[x] = ray.depth;
                     samples += u64::from(ray.samples);

@@ -105,7 +105,16 @@ uniform! {
         height: u32,
         /// One of the FILTER_ codes.
         sampling: u32,
-        _pad: [u32; 2],
+        /// Accumulated opacity at which depth is taken.
+        depth_threshold: f32,
+        /// The camera's clip range along each unit ray: t_near, t_far.
+        t_near: f32,
+        /// Depth is measured from `eye` if `has_eye`, else from each ray's
+        /// origin.
+        eye: [f32; 3],
+        has_eye: u32,
+        t_far: f32,
+        _pad: [u32; 3],
     }
 }
 
@@ -166,7 +175,12 @@ impl Params {
             width: size.x,
             height: size.y,
             sampling: plan.filter.code(),
-            _pad: [0; 2],
+            depth_threshold: plan.depth_threshold,
+            t_near: rays.t_near,
+            t_far: rays.t_far,
+            eye: rays.eye.unwrap_or_default().to_array(),
+            has_eye: u32::from(rays.eye.is_some()),
+            _pad: [0; 3],
         }
     }
 }

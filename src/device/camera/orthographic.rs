@@ -1,0 +1,32 @@
+//! ANARI's `orthographic` camera: parallel rays from a rectangle `height`
+//! tall (VTK and ParaView's parallel projection, the SDK viewer's
+//! orthographic mode).
+
+use super::{placed_camera_params, CameraModel, Placement};
+use crate::device::info::{p, Default, SubtypeInfo, EXT_ORTHOGRAPHIC, F32};
+use crate::device::object::State;
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::CAMERA,
+    subtype: "orthographic",
+    description: "parallel rays from an image rectangle `height` tall",
+    extensions: &[EXT_ORTHOGRAPHIC],
+    params: placed_camera_params![p(
+        "height",
+        F32,
+        false,
+        Default::Floats(&[1.0]),
+        "height of the image rectangle in world units"
+    )],
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    CameraModel::Orthographic {
+        placement: Placement::read(r)?,
+        height: r.f32("height")?.into(),
+    }
+    .committed()
+}
