@@ -156,8 +156,21 @@ fn march(fx: f32, fy: f32) -> Marched {
     let tb = (params.box_hi - o) * inv;
     let tn = min(ta, tb);
     let tf = max(ta, tb);
-    let t0 = max(max(max(tn.x, tn.y), tn.z), params.t_near);
-    let t1 = min(min(min(tf.x, tf.y), tf.z), params.t_far);
+    var t0 = max(max(max(tn.x, tn.y), tn.z), params.t_near);
+    var t1 = min(min(min(tf.x, tf.y), tf.z), params.t_far);
+    // Clip planes (n, d) keep dot(n, o + t d) < d, as the reference does.
+    for (var i = 0u; i < params.clip_count; i++) {
+        let plane = params.clip[i];
+        let along = dot(plane.xyz, d);
+        let at = plane.w - dot(plane.xyz, o);
+        if along > 0.0 {
+            t1 = min(t1, at / along);
+        } else if along < 0.0 {
+            t0 = max(t0, at / along);
+        } else if at <= 0.0 {
+            t1 = t0;
+        }
+    }
     if t1 > t0 {
         let len = t1 - t0;
         let n = u32(ceil(len / step));

@@ -170,3 +170,51 @@ fn orthographic_cameras_and_clip_ranges_through_the_device() {
         "{errors:?}"
     );
 }
+
+#[test]
+fn renderer_clip_planes_and_sampling_rate_through_the_device() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+    let (frame, _camera) = h.frame(volume, 3.0);
+    let with = |h: &mut Host, setup: &dyn Fn(&mut Host, u64)| {
+        let r = h.d.new_object(DataType::RENDERER, "default");
+        setup(h, r);
+        h.d.commit(Subject::Object(r));
+        h.set_object(frame, "renderer", DataType::RENDERER, r);
+        h.d.commit(Subject::Object(frame));
+        h.d.release(r);
+        h.pixels(frame)
+    };
+    let rate4 = with(&mut h, &|h, r| {
+        h.set(r, "volumeSamplingRate", DataType::FLOAT32, bytes(&[4.0f32]))
+    });
+    let half_step = with(&mut h, &|h, r| {
+        h.set(r, "stepFactor", DataType::FLOAT32, bytes(&[0.5f32]))
+    });
+    same(&rate4, &half_step).unwrap();
+
+    let clipped = with(&mut h, &|h, r| {
+        let planes = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32_VEC4,
+            [1, 1, 1],
+            &bytes(&[1.0f32, 0.0, 0.0, 0.0]),
+        );
+        h.set_object(r, "clipPlane", DataType::ARRAY1D, planes);
+        h.d.release(planes);
+    });
+    let size = common::device::SIZE as usize;
+    let lit = |x: usize| (0..size).any(|y| clipped[4 * (y * size + x)] > 0);
+    assert!(
+        (0..size / 2 - 1).any(lit),
+        "the kept half (x < 0) shows nothing"
+    );
+    assert!(
+        !(size / 2 + 1..size).any(lit),
+        "the clipped half (x > 0) shows the volume"
+    );
+    let errors = h.messages(Severity::Error);
+    assert!(errors.is_empty(), "{errors:?}");
+}

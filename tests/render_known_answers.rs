@@ -425,3 +425,72 @@ fn depth_is_measured_from_the_eye_for_every_camera() {
         }
     }
 }
+
+/// Clip planes (n, d) keep dot(n, p) < d along every primary ray: x < 0
+/// leaves the left half of the box, and with x > 0.5 as well nothing.
+#[test]
+fn clip_planes_cut_the_rays_on_both_renderers() {
+    use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera};
+    use anari_library_caveray::render::ClipPlanes;
+    let (a, unit) = (0.3f32, 0.7f32);
+    let scene = Scene::new(solid_box(16), constant_tf(a, unit));
+    let size = UVec2::new(32, 32);
+    let camera = OrthographicCamera::new(
+        DVec3::new(0.0, 0.0, 4.0),
+        DVec3::NEG_Z,
+        DVec3::Y,
+        3.0,
+        1.0,
+        ImageRegion::FULL,
+    )
+    .unwrap();
+    let rays = camera.ray_gen(size);
+    let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
+    let with = |planes: &[Vec4]| RenderSettings {
+        background: Vec4::ZERO,
+        clip_planes: ClipPlanes::new(planes).unwrap(),
+        ..Default::default()
+    };
+    let full = 1.0 - (1.0 - f64::from(a)).powf(2.0 / f64::from(unit));
+    for (name, mut r) in renderers() {
+        let f = r
+            .render(
+                &scene,
+                &rays,
+                &with(&[Vec4::new(1.0, 0.0, 0.0, 0.0)]),
+                &desc,
+            )
+            .unwrap();
+        for y in 0..size.y {
+            for x in 0..size.x {
+                let o = camera.pixel_ray(x, y, size).origin;
+                let inside = o.x.abs() < 1.0 && o.y.abs() < 1.0;
+                let want = if inside && o.x < 0.0 { full } else { 0.0 };
+                let got = f64::from(f.pixel(x, y).w);
+                assert!(
+                    (got - want).abs() < 1e-3,
+                    "{name}: pixel {x},{y} alpha {got} vs {want}"
+                );
+            }
+        }
+        // A plane the rays run along keeps all or nothing; two planes that
+        // leave no space keep nothing.
+        let none = r
+            .render(
+                &scene,
+                &rays,
+                &with(&[
+                    Vec4::new(1.0, 0.0, 0.0, 0.0),
+                    Vec4::new(-1.0, 0.0, 0.0, -0.5),
+                ]),
+                &desc,
+            )
+            .unwrap();
+        assert!(
+            (0..size.x * size.y).all(|i| none.pixel(i % size.x, i / size.x).w == 0.0),
+            "{name}"
+        );
+        // More than eight planes are refused.
+        assert!(ClipPlanes::new(&[Vec4::X; 9]).is_none());
+    }
+}

@@ -6,7 +6,9 @@ use super::info::{p, Default, SubtypeInfo, EXT_BACKGROUND, EXT_SHADING, F32, VEC
 use super::object::{Derived, State};
 use super::read::Read;
 use super::types::DataType as T;
-use crate::render::{RenderSettings, Shading};
+use glam::Vec4;
+
+use crate::render::{ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::RENDERER,
@@ -53,6 +55,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         )
         .range(0.1, 10.0),
         p(
+            "volumeSamplingRate",
+            F32,
+            false,
+            Default::Floats(&[2.0]),
+            "samples per smallest voxel extent (2: half-voxel steps); stepFactor scales the step further",
+        )
+        .range(0.01, 16.0),
+        p(
             "terminationThreshold",
             F32,
             false,
@@ -68,6 +78,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "accumulated opacity at which channel.depth is taken (0: the first visible sample), so geometry behind a faint haze shows",
         )
         .range(0.0, 1.0),
+        p(
+            "clipPlane",
+            &[T::ARRAY1D],
+            false,
+            Default::None,
+            "up to 8 planes (n, d), ARRAY1D of FLOAT32_VEC4: rays keep the points p with dot(n, p) < d",
+        )
+        .elements(&[T::FLOAT32_VEC4]),
     ],
     commit: Some(commit),
 };
@@ -89,12 +107,49 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         light: light
             .try_normalize()
             .ok_or_else(|| format!("lightDirection {light} has no direction"))?,
-        step_factor: r.f32("stepFactor")?,
+        step_factor: r.f32("stepFactor")? * 2.0 / sampling_rate(r)?,
         termination: r.f32("terminationThreshold")?,
         depth_threshold: r.f32("depthThreshold")?,
+        clip_planes: clip_planes(r)?,
     };
     s.validate().map_err(|e| e.to_string())?;
     Ok(s)
+}
+
+/// `volumeSamplingRate`, checked: the step is its inverse.
+fn sampling_rate(r: &Read<'_>) -> Result<f32, String> {
+    let rate = r.f32("volumeSamplingRate")?;
+    if rate.is_finite() && rate > 0.0 {
+        Ok(rate)
+    } else {
+        Err(format!(
+            "volumeSamplingRate must be finite and positive, got {rate}"
+        ))
+    }
+}
+
+/// The `clipPlane` array, if set.
+fn clip_planes(r: &Read<'_>) -> Result<ClipPlanes, String> {
+    let Some(array) = r.object("clipPlane") else {
+        return Ok(ClipPlanes::default());
+    };
+    let guard = array.lock();
+    let State::Array(a) = &guard.state else {
+        return Err(format!("'clipPlane' is {}, not an array", array.describe()));
+    };
+    if a.element() != T::FLOAT32_VEC4 {
+        return Err(format!(
+            "'clipPlane' array holds {}; expected ANARI_FLOAT32_VEC4",
+            a.element()
+        ));
+    }
+    let planes: Vec<Vec4> = a.f32s().chunks_exact(4).map(Vec4::from_slice).collect();
+    ClipPlanes::new(&planes).ok_or_else(|| {
+        format!(
+            "'clipPlane' holds {} planes; caveray takes at most {MAX_CLIP_PLANES}",
+            planes.len()
+        )
+    })
 }
 
 #[cfg(test)]

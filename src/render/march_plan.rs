@@ -28,6 +28,7 @@ pub(crate) struct MarchPlan {
     pub value_scale: f32,
     pub termination: f32,
     pub depth_threshold: f32,
+    pub clip_planes: Vec<Vec4>,
     /// Straight RGBA.
     pub background: Vec4,
     pub light: Vec3,
@@ -63,6 +64,7 @@ impl MarchPlan {
             value_scale: (vhi - vlo).recip(),
             termination: settings.termination,
             depth_threshold: settings.depth_threshold,
+            clip_planes: settings.clip_planes.as_slice().to_vec(),
             background: settings.background,
             light: settings.light.normalize(),
             shading: settings.shading,

@@ -8,6 +8,32 @@ use super::RenderError;
 /// Most directions `directional:N` may ask for (the paper used up to 16).
 pub const MAX_DIRECTIONS: u32 = 64;
 
+/// Most clip planes a renderer takes.
+pub const MAX_CLIP_PLANES: usize = 8;
+
+/// Half-spaces that cut the primary rays: plane (n, d) keeps the points p
+/// with dot(n, p) < d (anari-visionaray's convention, which OpenCOVER
+/// sends).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ClipPlanes {
+    planes: [Vec4; MAX_CLIP_PLANES],
+    count: usize,
+}
+
+impl ClipPlanes {
+    /// `None` if there are more than `MAX_CLIP_PLANES`.
+    pub fn new(planes: &[Vec4]) -> Option<Self> {
+        let mut out = Self::default();
+        out.planes.get_mut(..planes.len())?.copy_from_slice(planes);
+        out.count = planes.len();
+        Some(out)
+    }
+
+    pub fn as_slice(&self) -> &[Vec4] {
+        &self.planes[..self.count]
+    }
+}
+
 /// How each sample is lit, as in the paper's benchmark ladder.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Shading {
@@ -109,6 +135,7 @@ pub struct RenderSettings {
     /// composites geometry behind the volume sees it through a faint haze
     /// (0 takes the first sample that contributes anything).
     pub depth_threshold: f32,
+    pub clip_planes: ClipPlanes,
 }
 
 impl Default for RenderSettings {
@@ -120,6 +147,7 @@ impl Default for RenderSettings {
             shading: Shading::None,
             light: Vec3::new(0.3, 0.5, 0.8).normalize(),
             depth_threshold: 0.5,
+            clip_planes: ClipPlanes::default(),
         }
     }
 }
@@ -155,6 +183,16 @@ impl RenderSettings {
             return Err(RenderError::Settings(format!(
                 "depth threshold must be in [0, 1], got {}",
                 self.depth_threshold
+            )));
+        }
+        if let Some(p) = self
+            .clip_planes
+            .as_slice()
+            .iter()
+            .find(|p| !p.is_finite() || p.truncate().length_squared() == 0.0)
+        {
+            return Err(RenderError::Settings(format!(
+                "clip plane {p} needs a finite, non-zero normal and a finite distance"
             )));
         }
         if let Shading::Directional(n) = self.shading {

@@ -20,7 +20,9 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3) -> Ra
     let mut acc = Vec4::ZERO;
     let mut depth = f32::INFINITY;
     let clip = (rays.t_near, rays.t_far);
-    if let Some((t0, t1)) = enter_exit(origin, dir, plan.box_lo, plan.box_hi, clip) {
+    let range = enter_exit(origin, dir, plan.box_lo, plan.box_hi, clip)
+        .and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
+    if let Some((t0, t1)) = range {
         let len = t1 - t0;
         let n = (len / plan.step).ceil() as u32;
         for k in 0..n {
@@ -80,6 +82,28 @@ pub(super) fn enter_exit(
     let tb = (hi - o) * inv;
     let t0 = ta.min(tb).max_element().max(near);
     let t1 = ta.max(tb).min_element().min(far);
+    (t1 > t0).then_some((t0, t1))
+}
+
+/// The part of `(t0, t1)` on the kept side of every clip plane (n, d):
+/// dot(n, o + t dir) < d.
+pub(super) fn clip_to_planes(
+    (mut t0, mut t1): (f32, f32),
+    o: Vec3,
+    dir: Vec3,
+    planes: &[Vec4],
+) -> Option<(f32, f32)> {
+    for plane in planes {
+        let n = plane.truncate();
+        let (along, at) = (n.dot(dir), plane.w - n.dot(o));
+        if along > 0.0 {
+            t1 = t1.min(at / along);
+        } else if along < 0.0 {
+            t0 = t0.max(at / along);
+        } else if at <= 0.0 {
+            return None;
+        }
+    }
     (t1 > t0).then_some((t0, t1))
 }
 

@@ -9,7 +9,9 @@ use glam::{UVec2, Vec3};
 use crate::geometry::RayGen;
 use crate::render::frame::ColorFormat;
 use crate::render::march_plan::MarchPlan;
-use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
+use crate::render::settings::{
+    Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
+};
 use crate::render::stereo::Reprojection;
 use crate::render::RenderSettings;
 use crate::scene::{Filter, TABLE_SIZE};
@@ -28,9 +30,13 @@ macro_rules! wgsl_types {
     };
 }
 
+// The WGSL type of the clip planes below names the count.
+const _: () = assert!(MAX_CLIP_PLANES == 8);
+
 wgsl_types! {
     f32 => "f32", u32 => "u32", i32 => "i32",
     [f32; 3] => "vec3f", [f32; 4] => "vec4f", [u32; 2] => "vec2u", [u32; 3] => "vec3u",
+    [[f32; 4]; MAX_CLIP_PLANES] => "array<vec4f, 8>",
 }
 
 /// Defines a uniform struct, its WGSL declaration, and the list of its
@@ -114,7 +120,10 @@ uniform! {
         eye: [f32; 3],
         has_eye: u32,
         t_far: f32,
-        _pad: [u32; 3],
+        clip_count: u32,
+        _pad: [u32; 2],
+        /// Clip planes (n, d): keep dot(n, p) < d.
+        clip: [[f32; 4]; MAX_CLIP_PLANES],
     }
 }
 
@@ -180,7 +189,15 @@ impl Params {
             t_far: rays.t_far,
             eye: rays.eye.unwrap_or_default().to_array(),
             has_eye: u32::from(rays.eye.is_some()),
-            _pad: [0; 3],
+            clip_count: plan.clip_planes.len() as u32,
+            _pad: [0; 2],
+            clip: {
+                let mut clip = [[0.0; 4]; MAX_CLIP_PLANES];
+                for (slot, plane) in clip.iter_mut().zip(&plan.clip_planes) {
+                    *slot = plane.to_array();
+                }
+                clip
+            },
         }
     }
 }
