@@ -184,7 +184,7 @@ fn march(fx: f32, fy: f32) -> Marched {
                 continue;
             }
             let a = correct(c.a, seg * params.inv_unit_distance);
-            let lit = c.rgb * shade(p);
+            let lit = c.rgb * shade(p) * params.light_color;
             on_sample(p, lit, a);
             let weight = (1.0 - acc.a) * a;
             acc = vec4f(acc.rgb + lit * weight, acc.a + weight);

@@ -218,3 +218,61 @@ fn renderer_clip_planes_and_sampling_rate_through_the_device() {
     let errors = h.messages(Severity::Error);
     assert!(errors.is_empty(), "{errors:?}");
 }
+
+#[test]
+fn the_first_directional_light_sets_the_shading_light() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.5f32]));
+    let image = |h: &mut Host, lights: &[u64], shading: &str| {
+        let (frame, camera) = h.lit_frame(volume, 3.0, lights);
+        let r = h.d.new_object(DataType::RENDERER, "default");
+        h.d.set_param(
+            Subject::Object(r),
+            "shading",
+            anari_library_caveray::device::Input::String(shading.into()),
+        );
+        h.d.commit(Subject::Object(r));
+        h.set_object(frame, "renderer", DataType::RENDERER, r);
+        h.d.commit(Subject::Object(frame));
+        let pixels = h.pixels(frame);
+        for o in [frame, camera, r] {
+            h.d.release(o);
+        }
+        pixels
+    };
+    let light = |h: &mut Host, direction: [f32; 3], irradiance: f32| {
+        let l = h.d.new_object(DataType::LIGHT, "directional");
+        h.set(l, "direction", DataType::FLOAT32_VEC3, bytes(&direction));
+        h.set(l, "irradiance", DataType::FLOAT32, bytes(&[irradiance]));
+        h.d.commit(Subject::Object(l));
+        l
+    };
+    let unlit = image(&mut h, &[], "none");
+    let half = light(&mut h, [0.0, 0.0, -1.0], 0.5);
+    // A point light (not implemented) first: skipped for the directional one.
+    let point = h.d.new_object(DataType::LIGHT, "point");
+    let dimmed = image(&mut h, &[point, half], "none");
+    let centre = 4 * (12 * 24 + 12);
+    let (a, b) = (f32::from(unlit[centre]), f32::from(dimmed[centre]));
+    assert!(
+        a > 40.0 && (b - 0.5 * a).abs() <= 2.0,
+        "irradiance 0.5: {a} -> {b}"
+    );
+    // Shadows follow the light's direction.
+    let from_left = light(&mut h, [1.0, 0.0, 0.0], 1.0);
+    let from_right = light(&mut h, [-1.0, 0.0, 0.0], 1.0);
+    let left = image(&mut h, &[from_left], "shadows");
+    let right = image(&mut h, &[from_right], "shadows");
+    assert!(
+        same(&left, &right).is_err(),
+        "the light's direction changes nothing"
+    );
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings.len() == 1 && warnings[0].contains("does not implement light 'point'"),
+        "{warnings:?}"
+    );
+    assert!(h.messages(Severity::Error).is_empty());
+}

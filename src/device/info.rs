@@ -7,7 +7,7 @@
 use super::object::State;
 use super::read::Read;
 use super::types::DataType as T;
-use super::{camera, device_object, frame, renderer, spatial_field, volume, world};
+use super::{camera, device_object, frame, light, renderer, spatial_field, volume, world};
 
 pub struct ParamInfo {
     pub name: &'static str,
@@ -117,6 +117,7 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_COMPLETION,
     EXT_ACCUMULATION,
     EXT_BACKGROUND,
+    "ANARI_KHR_LIGHT_DIRECTIONAL",
     EXT_MATRIX_VSNRAY,
     EXT_MATRIX,
     EXT_OFF_AXIS,
@@ -135,6 +136,7 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &camera::off_axis::INFO,
     &spatial_field::structured_regular::INFO,
     &volume::transfer_function_1d::INFO,
+    &light::directional::INFO,
     &world::INFO,
     &renderer::INFO,
     &frame::INFO,

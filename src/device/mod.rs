@@ -10,6 +10,7 @@ pub mod camera;
 mod device_object;
 pub mod frame;
 pub mod info;
+mod light;
 mod object;
 mod read;
 mod renderer;

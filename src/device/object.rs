@@ -8,9 +8,11 @@ use super::array::Array;
 use super::camera::CameraModel;
 use super::frame::slot::FrameState;
 use super::info::SubtypeInfo;
+use super::light::DirectionalLight;
 use super::types::{kind_name, DataType};
 use super::value::Params;
 use super::volume::VolumeModel;
+use super::world::WorldModel;
 use crate::render::RenderSettings;
 use crate::scene::StructuredVolume;
 
@@ -106,7 +108,8 @@ pub enum State {
     Array(Array),
     Field(Derived<Arc<StructuredVolume>>),
     Volume(Derived<VolumeModel>),
-    World(Derived<Vec<ObjectRef>>),
+    World(Derived<WorldModel>),
+    Light(Derived<DirectionalLight>),
     Camera(Derived<CameraModel>),
     Renderer(Derived<RenderSettings>),
     Frame(FrameState),
@@ -123,6 +126,7 @@ impl State {
             DataType::SPATIAL_FIELD => State::Field(Derived::Uncommitted),
             DataType::VOLUME => State::Volume(Derived::Uncommitted),
             DataType::WORLD => State::World(Derived::Uncommitted),
+            DataType::LIGHT => State::Light(Derived::Uncommitted),
             DataType::CAMERA => State::Camera(Derived::Uncommitted),
             // A renderer works with its defaults before any commit.
             DataType::RENDERER => State::Renderer(Derived::Ready(RenderSettings::default())),

@@ -111,6 +111,9 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         termination: r.f32("terminationThreshold")?,
         depth_threshold: r.f32("depthThreshold")?,
         clip_planes: clip_planes(r)?,
+        // Not a renderer parameter: a world's directional light sets it
+        // when a frame renders.
+        ..RenderSettings::default()
     };
     s.validate().map_err(|e| e.to_string())?;
     Ok(s)

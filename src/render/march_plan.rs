@@ -32,6 +32,7 @@ pub(crate) struct MarchPlan {
     /// Straight RGBA.
     pub background: Vec4,
     pub light: Vec3,
+    pub light_color: Vec3,
     pub shading: Shading,
     /// AO sphere points, or the random directions of `directional:N`.
     pub directions: Vec<Vec3>,
@@ -67,6 +68,7 @@ impl MarchPlan {
             clip_planes: settings.clip_planes.as_slice().to_vec(),
             background: settings.background,
             light: settings.light.normalize(),
+            light_color: settings.light_color,
             shading: settings.shading,
             directions,
         })

@@ -136,6 +136,9 @@ pub struct RenderSettings {
     /// (0 takes the first sample that contributes anything).
     pub depth_threshold: f32,
     pub clip_planes: ClipPlanes,
+    /// Colour times strength of the light, multiplying every shaded sample
+    /// (a host's directional light; 1 without one).
+    pub light_color: Vec3,
 }
 
 impl Default for RenderSettings {
@@ -148,6 +151,7 @@ impl Default for RenderSettings {
             light: Vec3::new(0.3, 0.5, 0.8).normalize(),
             depth_threshold: 0.5,
             clip_planes: ClipPlanes::default(),
+            light_color: Vec3::ONE,
         }
     }
 }
@@ -183,6 +187,12 @@ impl RenderSettings {
             return Err(RenderError::Settings(format!(
                 "depth threshold must be in [0, 1], got {}",
                 self.depth_threshold
+            )));
+        }
+        if !self.light_color.is_finite() || self.light_color.min_element() < 0.0 {
+            return Err(RenderError::Settings(format!(
+                "light colour must be finite and not negative, got {}",
+                self.light_color
             )));
         }
         if let Some(p) = self

@@ -9,6 +9,8 @@ pub const SIZE: u32 = 24;
 
 pub struct Host {
     pub d: Device,
+    /// Messages taken from the device but not asked for yet.
+    unread: Vec<Status>,
 }
 
 pub fn bytes<T: Copy>(values: &[T]) -> Vec<u8> {
@@ -24,7 +26,10 @@ impl Host {
         let mut d = Device::new(Arc::new(|_s: Status| {}));
         d.set_param(Subject::Device, "backend", Input::String("cpu".into()));
         d.commit(Subject::Device);
-        Self { d }
+        Self {
+            d,
+            unread: Vec::new(),
+        }
     }
 
     pub fn set(&mut self, object: u64, name: &str, ty: DataType, value: Vec<u8>) {
@@ -83,6 +88,11 @@ impl Host {
     /// A frame showing `volume` head-on from `camera_z` on the z axis:
     /// (frame, camera).
     pub fn frame(&mut self, volume: u64, camera_z: f32) -> (u64, u64) {
+        self.lit_frame(volume, camera_z, &[])
+    }
+
+    /// `frame`, with `lights` in the world's `light` array.
+    pub fn lit_frame(&mut self, volume: u64, camera_z: f32, lights: &[u64]) -> (u64, u64) {
         self.d.commit(Subject::Object(volume));
         let list = self.array(
             DataType::ARRAY1D,
@@ -92,6 +102,17 @@ impl Host {
         );
         let world = self.d.new_object(DataType::WORLD, "");
         self.set_object(world, "volume", DataType::ARRAY1D, list);
+        if !lights.is_empty() {
+            let handles: Vec<usize> = lights.iter().map(|&l| l as usize).collect();
+            let array = self.array(
+                DataType::ARRAY1D,
+                DataType::LIGHT,
+                [lights.len() as u64, 1, 1],
+                &bytes(&handles),
+            );
+            self.set_object(world, "light", DataType::ARRAY1D, array);
+            self.d.release(array);
+        }
         self.d.commit(Subject::Object(world));
         let renderer = self.d.new_object(DataType::RENDERER, "default");
         self.d.commit(Subject::Object(renderer));
@@ -151,13 +172,14 @@ impl Host {
         v
     }
 
+    /// The messages of `severity` since the last ask for them; messages
+    /// of other severities wait for their own ask.
     pub fn messages(&mut self, severity: Severity) -> Vec<String> {
-        self.d
-            .take_statuses()
-            .into_iter()
-            .filter(|s| s.severity == severity)
-            .map(|s| s.message)
-            .collect()
+        self.unread.extend(self.d.take_statuses());
+        let (asked, rest): (Vec<Status>, Vec<Status>) =
+            self.unread.drain(..).partition(|s| s.severity == severity);
+        self.unread = rest;
+        asked.into_iter().map(|s| s.message).collect()
     }
 }
 

@@ -6,7 +6,7 @@ use glam::UVec2;
 use super::Device;
 use crate::device::frame::slot::Channel;
 use crate::device::frame::{self, color_format};
-use crate::device::object::{ObjectRef, State};
+use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::types::{kind_name, DataType, StatusCode};
 use crate::device::worker::RenderJob;
 use crate::render::{ColorData, FrameDesc};
@@ -123,7 +123,7 @@ impl Device {
                 ))
             }
         };
-        let settings = match &renderer.lock().state {
+        let mut settings = match &renderer.lock().state {
             State::Renderer(r) => *r.ready(&renderer.describe())?,
             _ => {
                 return Err(format!(
@@ -132,7 +132,7 @@ impl Device {
                 ))
             }
         };
-        let volumes = match &world.lock().state {
+        let world_model = match &world.lock().state {
             State::World(w) => w.ready(&world.describe())?.clone(),
             _ => {
                 return Err(format!(
@@ -141,6 +141,19 @@ impl Device {
                 ))
             }
         };
+        // The first usable directional light lights the shading.
+        let light = world_model
+            .lights
+            .iter()
+            .find_map(|l| match &l.lock().state {
+                State::Light(Derived::Ready(light)) => Some(*light),
+                _ => None,
+            });
+        if let Some(light) = light {
+            settings.light = light.towards;
+            settings.light_color = light.color;
+        }
+        let volumes = world_model.volumes;
         if volumes.len() > 1 {
             self.warn(
                 Some(frame),

@@ -287,7 +287,7 @@ impl Device {
                 let slot = match &cell.lock().state {
                     State::Frame(f) => f.slot.clone(),
                     State::World(w) if name == "bounds" => {
-                        return w.ready("").ok().and_then(|v| world_bounds(v));
+                        return w.ready("").ok().and_then(|w| world_bounds(&w.volumes));
                     }
                     _ => return None,
                 };

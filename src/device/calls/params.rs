@@ -226,6 +226,7 @@ fn invalid_state(kind: DataType, why: String) -> Option<State> {
         DataType::SPATIAL_FIELD => State::Field(Derived::Invalid(why)),
         DataType::VOLUME => State::Volume(Derived::Invalid(why)),
         DataType::WORLD => State::World(Derived::Invalid(why)),
+        DataType::LIGHT => State::Light(Derived::Invalid(why)),
         DataType::CAMERA => State::Camera(Derived::Invalid(why)),
         DataType::RENDERER => State::Renderer(Derived::Invalid(why)),
         _ => return None,

@@ -40,7 +40,8 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3) -> Ra
             let a = correct(c.w, seg * plan.inv_unit_distance);
             let s = shade(field, p, &mut samples);
             let weight = (1.0 - acc.w) * a;
-            acc = (acc.truncate() + c.truncate() * s * weight).extend(acc.w + weight);
+            acc = (acc.truncate() + c.truncate() * s * plan.light_color * weight)
+                .extend(acc.w + weight);
             if depth == f32::INFINITY && acc.w >= plan.depth_threshold {
                 depth = match rays.eye {
                     Some(eye) => (p - eye).length(),

@@ -124,6 +124,9 @@ uniform! {
         _pad: [u32; 2],
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
+        /// Multiplies every shaded sample.
+        light_color: [f32; 3],
+        _pad2: u32,
     }
 }
 
@@ -198,6 +201,8 @@ impl Params {
                 }
                 clip
             },
+            light_color: plan.light_color.to_array(),
+            _pad2: 0,
         }
     }
 }

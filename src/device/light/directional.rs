@@ -1,0 +1,73 @@
+//! ANARI's `directional` light: parallel light from far away. The first
+//! one in a world's `light` array gives the shading its light direction
+//! and multiplies every shaded sample by `color` times `irradiance`.
+
+use glam::Vec3;
+
+use crate::device::info::{p, Default, SubtypeInfo, F32, VEC3};
+use crate::device::object::{Derived, State};
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::LIGHT,
+    subtype: "directional",
+    description: "parallel light: the shading's light direction and strength",
+    extensions: &["ANARI_KHR_LIGHT_DIRECTIONAL"],
+    params: &[
+        p(
+            "direction",
+            VEC3,
+            false,
+            Default::Floats(&[0.0, 0.0, -1.0]),
+            "direction the light travels in",
+        ),
+        p(
+            "color",
+            VEC3,
+            false,
+            Default::Floats(&[1.0, 1.0, 1.0]),
+            "light colour",
+        ),
+        p(
+            "irradiance",
+            F32,
+            false,
+            Default::Floats(&[1.0]),
+            "strength: shaded samples are multiplied by color times irradiance",
+        )
+        .range(0.0, 10.0),
+    ],
+    commit: Some(commit),
+};
+
+/// A directional light after commit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectionalLight {
+    /// Unit vector towards the light (the shading's convention).
+    pub towards: Vec3,
+    /// Colour times irradiance.
+    pub color: Vec3,
+}
+
+fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let direction = r.vec3("direction")?;
+    let towards = (-direction)
+        .try_normalize()
+        .ok_or_else(|| format!("direction {direction} has no direction"))?;
+    let irradiance = r.f32("irradiance")?;
+    let color = r.vec3("color")?;
+    let usable = irradiance.is_finite()
+        && irradiance >= 0.0
+        && color.is_finite()
+        && color.min_element() >= 0.0;
+    if !usable {
+        return Err(format!(
+            "color {color} and irradiance {irradiance} must be finite and not negative"
+        ));
+    }
+    Ok(Some(State::Light(Derived::Ready(DirectionalLight {
+        towards,
+        color: color * irradiance,
+    }))))
+}
