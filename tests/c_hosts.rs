@@ -188,3 +188,94 @@ fn arrays_freed_after_release_are_never_read_under_valgrind() {
     }
     release_then_free(true);
 }
+
+/// An OpenCOVER-style host (tests/c/opencover_host.c): the call sequence
+/// its plug-in makes, rendered 64 times unchanged; colour (sRGB) and depth
+/// must be the Rust API's for the same wall and eye.
+fn opencover(valgrind: bool) {
+    use anari_library_caveray::render::{
+        ColorData, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings,
+    };
+    let dir = scratch(if valgrind {
+        "c_opencover_valgrind"
+    } else {
+        "c_opencover"
+    });
+    let scene = wall_scene(&dir, if valgrind { 32 } else { 64 }, phantom(), false);
+    let program = dir.join("opencover_host");
+    compile(&["tests/c/opencover_host.c"], &program, false, true);
+    let output = common::c::run_with(
+        &program,
+        &[&scene.file, &dir],
+        valgrind,
+        &[("ANARI_LIBRARY", "caveray")],
+    );
+    assert!(
+        output.status.success(),
+        "opencover_host: {}",
+        describe(&output)
+    );
+
+    let desc = FrameDesc::new(scene.size)
+        .with_color(ColorFormat::Srgba8)
+        .with_depth();
+    let reference = CpuRenderer::new()
+        .render(&scene.scene, &scene.rays, &RenderSettings::default(), &desc)
+        .unwrap();
+    let bytes = std::fs::read(dir.join("opencover.rgba")).unwrap();
+    let image = Frame {
+        size: scene.size,
+        color: ColorData::Srgba8(bytes),
+        depth: None,
+        samples: 0,
+    };
+    let s = ssim(&image, &reference).unwrap();
+    assert!(
+        s > 0.98,
+        "OpenCOVER-style sRGB image: SSIM {s:.4} against the Rust API's"
+    );
+
+    let depth: Vec<f32> = std::fs::read(dir.join("opencover.depth"))
+        .unwrap()
+        .chunks_exact(4)
+        .map(|c| f32::from_ne_bytes(c.try_into().unwrap()))
+        .collect();
+    let want = reference.depth.as_ref().unwrap();
+    let (mut hits, mut disagree, mut worst) = (0, 0, 0.0f32);
+    for (a, b) in depth.iter().zip(want) {
+        match (a.is_finite(), b.is_finite()) {
+            (true, true) => {
+                hits += 1;
+                worst = worst.max((a - b).abs() / b);
+            }
+            (false, false) => {}
+            _ => disagree += 1,
+        }
+    }
+    // The phantom is translucent: only its denser parts pass the depth
+    // threshold (0.5 accumulated opacity), but those must agree.
+    assert!(hits >= 20, "only {hits} pixels have a depth");
+    assert!(
+        disagree * 100 < depth.len(),
+        "{disagree} pixels disagree on hitting anything"
+    );
+    assert!(
+        worst < 0.02,
+        "depth differs by {:.2}% from the Rust API's",
+        100.0 * worst
+    );
+}
+
+#[test]
+fn opencover_style_host_renders_a_wall_channel() {
+    opencover(false);
+}
+
+#[test]
+fn opencover_style_host_is_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    opencover(true);
+}

@@ -93,6 +93,11 @@ pub fn host_command(program: impl AsRef<std::ffi::OsStr>) -> Command {
 /// Runs a host program, under valgrind memcheck when asked (then on the
 /// CPU reference: valgrind checks our code, not Mesa's JIT).
 pub fn run(program: &Path, args: &[&Path], valgrind: bool) -> Output {
+    run_with(program, args, valgrind, &[])
+}
+
+/// `run`, with extra environment variables.
+pub fn run_with(program: &Path, args: &[&Path], valgrind: bool, env: &[(&str, &str)]) -> Output {
     let mut cmd = if valgrind {
         let mut c = host_command("valgrind");
         c.args([
@@ -107,7 +112,10 @@ pub fn run(program: &Path, args: &[&Path], valgrind: bool) -> Output {
     } else {
         host_command(program)
     };
-    cmd.args(args).output().expect("the host program runs")
+    cmd.args(args)
+        .envs(env.iter().copied())
+        .output()
+        .expect("the host program runs")
 }
 
 pub fn describe(output: &Output) -> String {
@@ -127,6 +135,9 @@ pub struct WallScene {
     pub size: UVec2,
     /// The Rust API's image of the same view (CPU reference, RGBA8).
     pub reference: Frame,
+    /// The scene and rays it was made from, for other references.
+    pub scene: Scene,
+    pub rays: anari_library_caveray::geometry::RayGen,
 }
 
 /// The Shepp-Logan phantom at 32³ with its preset.
@@ -194,10 +205,11 @@ pub fn wall_scene(
     std::fs::write(&file, text).unwrap();
 
     let scene = Scene::new(volume, tf);
+    let rays = view.camera.ray_gen(size);
     let reference = CpuRenderer::new()
         .render(
             &scene,
-            &view.camera.ray_gen(size),
+            &rays,
             &RenderSettings::default(),
             &FrameDesc::new(size),
         )
@@ -215,6 +227,8 @@ pub fn wall_scene(
         file,
         size,
         reference,
+        scene,
+        rays,
     }
 }
 
