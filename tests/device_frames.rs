@@ -276,3 +276,45 @@ fn the_first_directional_light_sets_the_shading_light() {
     );
     assert!(h.messages(Severity::Error).is_empty());
 }
+
+/// `anariDiscardFrame` stops the CPU reference between rows: a frame far
+/// too slow to finish first reports the discard, not an image, and the
+/// next render works.
+#[test]
+fn discard_stops_a_render_in_progress() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    let (frame, _camera) = h.frame(volume, 3.0);
+    // 2048^2 with shadows: a minute on the CPU reference if it ran through.
+    h.set(
+        frame,
+        "size",
+        DataType::UINT32_VEC2,
+        bytes(&[2048u32, 2048]),
+    );
+    let r = h.d.new_object(DataType::RENDERER, "default");
+    h.d.set_param(
+        Subject::Object(r),
+        "shading",
+        anari_library_caveray::device::Input::String("shadows".into()),
+    );
+    h.d.commit(Subject::Object(r));
+    h.set_object(frame, "renderer", DataType::RENDERER, r);
+    h.d.commit(Subject::Object(frame));
+    h.d.render_frame(frame, None);
+    h.d.discard_frame(frame);
+    assert!(h.d.map_frame(frame, "channel.color").is_none());
+    let errors = h.messages(Severity::Error);
+    assert!(errors.iter().any(|e| e.contains("discarded")), "{errors:?}");
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(0))
+    );
+    // A small render afterwards is whole.
+    h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[16u32, 16]));
+    h.d.commit(Subject::Object(frame));
+    h.d.render_frame(frame, None);
+    assert!(h.d.map_frame(frame, "channel.color").is_some());
+    h.d.unmap_frame(frame, "channel.color");
+}

@@ -174,16 +174,27 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
         let Some((_, r)) = renderer.as_mut() else {
             return Err("no renderer could be made".into());
         };
-        r.render(scene, &job.rays, &job.settings, &job.desc)
+        r.render_until(scene, &job.rays, &job.settings, &job.desc, &job.slot.stop)
             .map_err(|e| e.to_string())
     }))
     .unwrap_or_else(|panic| {
         *renderer = None;
         Err(format!("render panicked: {}", panic_message(&panic)))
     });
+    let discarded = job.slot.stop.load(std::sync::atomic::Ordering::Relaxed);
+    let result = match result {
+        Err(_) if discarded => Err("the render was discarded (anariDiscardFrame)".to_owned()),
+        other => other,
+    };
     if let Err(e) = &result {
+        // A discard is the host's wish, not a failure.
+        let severity = if discarded {
+            Severity::Info
+        } else {
+            Severity::Error
+        };
         report(status(
-            Severity::Error,
+            severity,
             StatusCode::UnknownError,
             format!("rendering frame {:#x} failed: {e}", job.frame),
         ));

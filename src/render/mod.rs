@@ -9,6 +9,8 @@ mod march_plan;
 mod settings;
 pub mod stereo;
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use thiserror::Error;
 
 pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
@@ -43,6 +45,8 @@ pub enum RenderError {
     },
     #[error("GPU error: {0}")]
     Gpu(String),
+    #[error("the render was stopped before it finished")]
+    Stopped,
 }
 
 /// Which implementation renders: what the tool's `--backend`, the
@@ -141,9 +145,27 @@ impl Renderer {
         settings: &RenderSettings,
         desc: &FrameDesc,
     ) -> Result<Frame, RenderError> {
-        match self {
+        self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
+    }
+
+    /// `render`, giving up with `RenderError::Stopped` once `stop` is set:
+    /// the CPU reference checks it between rows; a GPU pass, once
+    /// submitted, finishes, and its result is dropped.
+    pub fn render_until(
+        &mut self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+        stop: &AtomicBool,
+    ) -> Result<Frame, RenderError> {
+        let frame = match self {
             Renderer::Gpu(g) => g.render(scene, rays, settings, desc),
-            Renderer::Cpu(c) => c.render(scene, rays, settings, desc),
+            Renderer::Cpu(c) => c.render_until(scene, rays, settings, desc, stop),
+        }?;
+        if stop.load(Ordering::Relaxed) {
+            return Err(RenderError::Stopped);
         }
+        Ok(frame)
     }
 }

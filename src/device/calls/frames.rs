@@ -309,10 +309,21 @@ impl Device {
         }
     }
 
-    /// `anariDiscardFrame`: a render cannot be interrupted midway, so the
-    /// frame finishes and the host may ignore it; only the handle is
-    /// checked.
+    /// `anariDiscardFrame`: the render in flight stops (the CPU reference
+    /// between rows; a submitted GPU pass finishes and its image is
+    /// dropped) and the frame keeps no image of it.
     pub fn discard_frame(&mut self, handle: u64) {
-        self.frame(handle, "anariDiscardFrame");
+        let Some(frame) = self.frame(handle, "anariDiscardFrame") else {
+            return;
+        };
+        if let State::Frame(f) = &mut frame.lock().state {
+            if f.slot.is_busy() {
+                f.slot
+                    .stop
+                    .store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+            // What was kept no longer stands for the frame's next render.
+            f.last = None;
+        };
     }
 }

@@ -1,5 +1,6 @@
 //! Frames: the result slot a render worker fills and the host maps.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -41,6 +42,9 @@ pub struct FrameState {
 pub struct FrameSlot {
     state: Mutex<SlotState>,
     done: Condvar,
+    /// Set by `anariDiscardFrame`: the render in flight stops where it
+    /// can (between the CPU reference's rows) and keeps no image.
+    pub stop: AtomicBool,
 }
 
 #[derive(Default)]
@@ -61,6 +65,7 @@ impl FrameSlot {
     pub fn start(&self) {
         let mut s = self.lock();
         s.busy = true;
+        self.stop.store(false, Ordering::Relaxed);
     }
 
     /// Whether the last render succeeded; then a render of the same

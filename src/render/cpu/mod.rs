@@ -5,6 +5,7 @@
 mod march;
 mod sample;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use glam::Vec4;
@@ -70,6 +71,19 @@ impl CpuRenderer {
         settings: &RenderSettings,
         desc: &FrameDesc,
     ) -> Result<Frame, RenderError> {
+        self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
+    }
+
+    /// `render`, skipping the rows not yet started once `stop` is set and
+    /// then returning `RenderError::Stopped`.
+    pub fn render_until(
+        &self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+        stop: &AtomicBool,
+    ) -> Result<Frame, RenderError> {
         desc.validate()?;
         let plan = MarchPlan::new(scene, settings)?;
         let (values, table) = self.prepare(scene);
@@ -83,6 +97,9 @@ impl CpuRenderer {
             .enumerate()
             .map(|(y, (crow, drow))| {
                 let mut samples = 0u64;
+                if stop.load(Ordering::Relaxed) {
+                    return samples;
+                }
                 for x in 0..w {
                     let (o, d) = rays.pixel_ray(x as u32, y as u32);
                     let ray = march::march(&field, rays, o, d);
@@ -93,6 +110,9 @@ impl CpuRenderer {
                 samples
             })
             .sum();
+        if stop.load(Ordering::Relaxed) {
+            return Err(RenderError::Stopped);
+        }
         let encode = |srgb: bool| {
             color
                 .chunks_exact(4)
