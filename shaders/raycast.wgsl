@@ -12,5 +12,5 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let i = id.y * size.x + id.x;
     depth_out[i] = m.depth;
     samples_out[i] = samples;
-    store_color(i, over(m.color, params.background), params.color_format);
+    store_color(i, over(m.color, background_at(id.xy)), params.color_format);
 }

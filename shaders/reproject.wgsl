@@ -75,7 +75,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         let i = id.y * stereo.width + u32(column);
         depth_out[i] = m.depth;
         samples_out[i] = samples;
-        store_color(i, over(m.color, params.background), params.color_format);
+        store_color(i, over(m.color, background_at(vec2u(u32(column), id.y))), params.color_format);
     }
 }
 

@@ -17,6 +17,27 @@
 @group(0) @binding(5) var<storage, read_write> depth_out: array<f32>;
 // Volume samples per pixel (primary and shading), summed on the host.
 @group(0) @binding(6) var<storage, read_write> samples_out: array<u32>;
+@group(0) @binding(7) var background_image: texture_2d<f32>;
+
+// What lies behind pixel `pixel` of the frame: the flat colour, or the
+// background image stretched over the frame, sampled bilinearly at the
+// pixel's centre as BackgroundImage::at does.
+fn background_at(pixel: vec2u) -> vec4f {
+    if params.has_background_image == 0u {
+        return params.background;
+    }
+    let n = textureDimensions(background_image);
+    let frame = vec2f(f32(params.width), f32(params.height));
+    let c = clamp((vec2f(pixel) + 0.5) / frame * vec2f(n) - 0.5, vec2f(0.0), vec2f(n - 1u));
+    let i0 = min(vec2u(floor(c)), n - 1u);
+    let i1 = min(i0 + 1u, n - 1u);
+    let f = c - vec2f(i0);
+    let bottom = textureLoad(background_image, vec2u(i0.x, i0.y), 0) * (1.0 - f.x)
+        + textureLoad(background_image, vec2u(i1.x, i0.y), 0) * f.x;
+    let top = textureLoad(background_image, vec2u(i0.x, i1.y), 0) * (1.0 - f.x)
+        + textureLoad(background_image, vec2u(i1.x, i1.y), 0) * f.x;
+    return bottom * (1.0 - f.y) + top * f.y;
+}
 
 var<private> samples: u32;
 

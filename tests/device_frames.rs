@@ -318,3 +318,31 @@ fn discard_stops_a_render_in_progress() {
     assert!(h.d.map_frame(frame, "channel.color").is_some());
     h.d.unmap_frame(frame, "channel.color");
 }
+
+#[test]
+fn a_background_gradient_through_the_device() {
+    let mut h = Host::new();
+    let field = h.field(|_| 0.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.0f32]));
+    let (frame, _camera) = h.frame(volume, 3.0);
+    let r = h.d.new_object(DataType::RENDERER, "scivis");
+    // VTK's gradient: 1 x N of FLOAT32_VEC4, bottom colour first.
+    let gradient = h.array(
+        DataType::ARRAY2D,
+        DataType::FLOAT32_VEC4,
+        [1, 2, 1],
+        &bytes(&[1.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]),
+    );
+    h.set_object(r, "background", DataType::ARRAY2D, gradient);
+    h.d.release(gradient);
+    h.d.commit(Subject::Object(r));
+    h.set_object(frame, "renderer", DataType::RENDERER, r);
+    h.d.commit(Subject::Object(frame));
+    let pixels = h.pixels(frame);
+    let size = common::device::SIZE as usize;
+    let at = |y: usize| &pixels[4 * y * size..4 * y * size + 3];
+    assert_eq!(at(0), [255, 0, 0], "bottom row");
+    assert_eq!(at(size - 1), [0, 0, 255], "top row");
+    assert!(h.messages(Severity::Error).is_empty());
+}

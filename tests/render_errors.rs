@@ -75,7 +75,7 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
         (
             RenderSettings {
                 step_factor: 0.0,
-                ..ok
+                ..ok.clone()
             },
             FrameDesc::new(size),
             "step factor must be finite and positive, got 0",
@@ -83,7 +83,7 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
         (
             RenderSettings {
                 background: Vec4::new(f32::NAN, 0.0, 0.0, 1.0),
-                ..ok
+                ..ok.clone()
             },
             FrameDesc::new(size),
             "background must be four numbers in [0, 1]",
@@ -91,7 +91,7 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
         (
             RenderSettings {
                 termination: f32::NAN,
-                ..ok
+                ..ok.clone()
             },
             FrameDesc::new(size),
             "termination threshold must be finite and positive",
@@ -99,7 +99,7 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
         (
             RenderSettings {
                 light: Vec3::ZERO,
-                ..ok
+                ..ok.clone()
             },
             FrameDesc::new(size),
             "light direction must be a finite non-zero vector",
@@ -107,13 +107,13 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
         (
             RenderSettings {
                 shading: Shading::Directional(65),
-                ..ok
+                ..ok.clone()
             },
             FrameDesc::new(size),
             "directional shading takes at most 64 directions, got 65",
         ),
         (
-            ok,
+            ok.clone(),
             FrameDesc::new(UVec2::new(0, 4)),
             "frame size must be at least 1x1, got 0x4",
         ),

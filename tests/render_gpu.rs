@@ -233,3 +233,51 @@ fn nearest_filter_is_nearest_on_both_renderers() {
         );
     }
 }
+
+/// A background image (here ANARI's 1 x N gradient) behind an empty
+/// volume: bottom row the first colour, top row the last, blended in
+/// between; the GPU equal to the CPU reference.
+#[test]
+fn background_gradients_on_both_renderers() {
+    use anari_library_caveray::render::{BackgroundImage, ColorFormat};
+    use anari_library_caveray::scene::TransferFunction;
+    use glam::Vec4;
+    let mut gpu = gpu();
+    let cpu = CpuRenderer::new();
+    let empty = Scene {
+        transfer_function: std::sync::Arc::new(
+            TransferFunction::new(vec![Vec4::ONE], vec![0.0], (0.0, 1.0), 1.0).unwrap(),
+        ),
+        ..phantom(8)
+    };
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(24, 40);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let (red, blue) = (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 0.0, 1.0, 1.0));
+    let gradient = BackgroundImage::new(UVec2::new(1, 2), vec![red, blue]).unwrap();
+    let settings = RenderSettings {
+        background_image: Some(std::sync::Arc::new(gradient)),
+        ..Default::default()
+    };
+    let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
+    let g = gpu.render(&empty, &rays, &settings, &desc).unwrap();
+    let c = cpu.render(&empty, &rays, &settings, &desc).unwrap();
+    for y in 0..size.y {
+        for x in 0..size.x {
+            let (a, b) = (g.pixel(x, y), c.pixel(x, y));
+            assert!(
+                (a - b).abs().max_element() < 1e-5,
+                "({x},{y}): GPU {a} vs CPU {b}"
+            );
+        }
+    }
+    assert!((c.pixel(3, 0) - red).abs().max_element() < 1e-6);
+    assert!((c.pixel(3, size.y - 1) - blue).abs().max_element() < 1e-6);
+    let middle = c.pixel(3, size.y / 2);
+    assert!(
+        middle.x > 0.3 && middle.z > 0.3,
+        "the middle blends: {middle}"
+    );
+    // Rows get bluer from bottom to top.
+    assert!((1..size.y).all(|y| c.pixel(0, y).z >= c.pixel(0, y - 1).z));
+}

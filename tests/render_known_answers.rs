@@ -132,7 +132,7 @@ fn a_solid_box_has_the_analytic_transmittance() {
         // With threshold 0, the first sample: half a step past the entry.
         let first = RenderSettings {
             depth_threshold: 0.0,
-            ..settings
+            ..settings.clone()
         };
         let f = r.render(&scene, &rays, &first, &desc).unwrap();
         let depth = f.depth.as_ref().unwrap()[16 * 33 + 16];
@@ -167,7 +167,7 @@ fn early_termination_does_not_change_an_opaque_image() {
             };
             let off = RenderSettings {
                 termination: 2.0,
-                ..on
+                ..on.clone()
             };
             let a = r.render(&scene, &rays, &on, &desc).unwrap();
             let b = r.render(&scene, &rays, &off, &desc).unwrap();

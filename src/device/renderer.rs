@@ -2,27 +2,32 @@
 //! shading modes. Its table holds the defaults of `RenderSettings`; a test
 //! keeps the two equal.
 
-use super::info::{p, Default, SubtypeInfo, EXT_BACKGROUND, EXT_SHADING, F32, VEC3};
+use super::info::{
+    p, Default, SubtypeInfo, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_SHADING, F32, VEC3,
+};
 use super::object::{Derived, State};
 use super::read::Read;
 use super::types::DataType as T;
 use glam::Vec4;
 
-use crate::render::{ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES};
+use std::sync::Arc;
+
+use crate::render::{BackgroundImage, ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::RENDERER,
     subtype: "default",
     description: "emission-absorption ray casting with optional shadows and ambient occlusion",
-    extensions: &[EXT_SHADING, EXT_BACKGROUND],
+    extensions: &[EXT_SHADING, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE],
     params: &[
         p(
             "background",
-            &[T::FLOAT32_VEC4],
+            &[T::FLOAT32_VEC4, T::ARRAY2D],
             false,
             Default::Floats(&[0.0, 0.0, 0.0, 1.0]),
-            "colour behind the volume, straight alpha",
-        ),
+            "colour behind the volume, straight alpha; or an ARRAY2D of FLOAT32_VEC4 stretched over the frame (1 x N: a vertical gradient, bottom first)",
+        )
+        .elements(&[T::FLOAT32_VEC4]),
         p(
             "shading",
             &[T::STRING],
@@ -111,12 +116,42 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         termination: r.f32("terminationThreshold")?,
         depth_threshold: r.f32("depthThreshold")?,
         clip_planes: clip_planes(r)?,
+        background_image: background_image(r)?,
         // Not a renderer parameter: a world's directional light sets it
         // when a frame renders.
         ..RenderSettings::default()
     };
     s.validate().map_err(|e| e.to_string())?;
     Ok(s)
+}
+
+/// `background` as an image, if it is an array.
+fn background_image(r: &Read<'_>) -> Result<Option<Arc<BackgroundImage>>, String> {
+    let Some(array) = r.object("background") else {
+        return Ok(None);
+    };
+    let guard = array.lock();
+    let State::Array(a) = &guard.state else {
+        return Err(format!(
+            "'background' is {}, not an array",
+            array.describe()
+        ));
+    };
+    if a.element() != T::FLOAT32_VEC4 {
+        return Err(format!(
+            "'background' array holds {}; expected ANARI_FLOAT32_VEC4",
+            a.element()
+        ));
+    }
+    let [w, h, _] = a.dims();
+    let pixels: Vec<Vec4> = a.f32s().chunks_exact(4).map(Vec4::from_slice).collect();
+    let size = glam::UVec2::new(
+        u32::try_from(w).map_err(|_| format!("'background' is {w} wide"))?,
+        u32::try_from(h).map_err(|_| format!("'background' is {h} high"))?,
+    );
+    BackgroundImage::new(size, pixels)
+        .map(|i| Some(Arc::new(i)))
+        .ok_or_else(|| format!("'background' of {w}x{h} has no pixels"))
 }
 
 /// `volumeSamplingRate`, checked: the step is its inverse.

@@ -71,7 +71,7 @@ impl RenderJob {
         RenderInputs {
             scene: self.scene.clone(),
             rays: self.rays,
-            settings: self.settings,
+            settings: self.settings.clone(),
             desc: self.desc,
             backend: self.backend,
         }

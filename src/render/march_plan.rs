@@ -33,6 +33,7 @@ pub(crate) struct MarchPlan {
     pub background: Vec4,
     pub light: Vec3,
     pub light_color: Vec3,
+    pub has_background_image: bool,
     pub shading: Shading,
     /// AO sphere points, or the random directions of `directional:N`.
     pub directions: Vec<Vec3>,
@@ -69,6 +70,7 @@ impl MarchPlan {
             background: settings.background,
             light: settings.light.normalize(),
             light_color: settings.light_color,
+            has_background_image: settings.background_image.is_some(),
             shading: settings.shading,
             directions,
         })

@@ -17,7 +17,9 @@ pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
 pub use cpu::CpuRenderer;
 pub use frame::{ColorData, ColorFormat, Frame, FrameDesc};
 pub use gpu::{GpuRenderer, PassClock, Uploads};
-pub use settings::{ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES, MAX_DIRECTIONS};
+pub use settings::{
+    BackgroundImage, ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES, MAX_DIRECTIONS,
+};
 
 use crate::geometry::RayGen;
 use crate::scene::Scene;

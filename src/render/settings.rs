@@ -1,7 +1,9 @@
 use std::fmt;
 use std::str::FromStr;
 
-use glam::{Vec3, Vec4};
+use std::sync::Arc;
+
+use glam::{UVec2, Vec3, Vec4};
 
 use super::RenderError;
 
@@ -118,11 +120,53 @@ impl FromStr for Shading {
     }
 }
 
+/// An image behind the volume, stretched over the frame and sampled
+/// bilinearly at each pixel's centre (a 1 x N image is a vertical
+/// gradient, bottom row first, as ANARI's images are).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BackgroundImage {
+    size: UVec2,
+    /// Straight RGBA, row by row from the bottom.
+    pixels: Vec<Vec4>,
+}
+
+impl BackgroundImage {
+    /// `None` unless `pixels` holds `size.x * size.y` values.
+    pub fn new(size: UVec2, pixels: Vec<Vec4>) -> Option<Self> {
+        (size.min_element() > 0 && pixels.len() as u64 == u64::from(size.x) * u64::from(size.y))
+            .then_some(Self { size, pixels })
+    }
+    pub fn size(&self) -> UVec2 {
+        self.size
+    }
+    pub fn pixels(&self) -> &[Vec4] {
+        &self.pixels
+    }
+
+    /// The colour behind pixel (x, y) of a `frame`-sized image; the shaders
+    /// compute the same (shaders/colour.wgsl).
+    pub fn at(&self, x: u32, y: u32, frame: UVec2) -> Vec4 {
+        let texel = |i: u32, j: u32| self.pixels[(j * self.size.x + i) as usize];
+        let coord = |p: u32, f: u32, n: u32| {
+            let c = ((p as f32 + 0.5) / f as f32 * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
+            let i0 = (c.floor() as u32).min(n - 1);
+            (i0, (i0 + 1).min(n - 1), c - i0 as f32)
+        };
+        let (x0, x1, fx) = coord(x, frame.x, self.size.x);
+        let (y0, y1, fy) = coord(y, frame.y, self.size.y);
+        let bottom = texel(x0, y0) * (1.0 - fx) + texel(x1, y0) * fx;
+        let top = texel(x0, y1) * (1.0 - fx) + texel(x1, y1) * fx;
+        bottom * (1.0 - fy) + top * fy
+    }
+}
+
 /// Renderer parameters that do not depend on the scene or the camera.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
     /// Straight (not premultiplied) RGBA behind the volume.
     pub background: Vec4,
+    /// Behind the volume instead of `background`, if set.
+    pub background_image: Option<Arc<BackgroundImage>>,
     /// Step length as a multiple of half the smallest voxel extent.
     pub step_factor: f32,
     /// Accumulated opacity at which a ray stops (ANARI hosts expect 0.99);
@@ -145,6 +189,7 @@ impl Default for RenderSettings {
     fn default() -> Self {
         Self {
             background: Vec4::new(0.0, 0.0, 0.0, 1.0),
+            background_image: None,
             step_factor: 1.0,
             termination: 0.99,
             shading: Shading::None,

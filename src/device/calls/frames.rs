@@ -124,7 +124,7 @@ impl Device {
             }
         };
         let mut settings = match &renderer.lock().state {
-            State::Renderer(r) => *r.ready(&renderer.describe())?,
+            State::Renderer(r) => r.ready(&renderer.describe())?.clone(),
             _ => {
                 return Err(format!(
                     "{} cannot be used as the frame's renderer",

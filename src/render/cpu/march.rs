@@ -14,7 +14,7 @@ pub(super) struct RayResult {
 }
 
 /// Marches one primary ray of `rays` with unit direction `dir`.
-pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3) -> RayResult {
+pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: Vec4) -> RayResult {
     let mut samples = 0;
     let plan = field.plan;
     let mut acc = Vec4::ZERO;
@@ -53,7 +53,6 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3) -> Ra
             }
         }
     }
-    let bg = plan.background;
     let rgb = acc.truncate() + (1.0 - acc.w) * bg.truncate();
     RayResult {
         color: rgb.extend(acc.w + (1.0 - acc.w) * bg.w),

@@ -102,7 +102,11 @@ impl CpuRenderer {
                 }
                 for x in 0..w {
                     let (o, d) = rays.pixel_ray(x as u32, y as u32);
-                    let ray = march::march(&field, rays, o, d);
+                    let bg = match &settings.background_image {
+                        Some(image) => image.at(x as u32, y as u32, desc.size),
+                        None => plan.background,
+                    };
+                    let ray = march::march(&field, rays, o, d, bg);
                     crow[4 * x..4 * x + 4].copy_from_slice(&ray.color.to_array());
                     drow[x] = ray.depth;
                     samples += u64::from(ray.samples);

@@ -304,6 +304,11 @@ impl GpuRenderer {
             )));
         }
         self.check_layers(reprojection)?;
+        if settings.background_image.is_some() {
+            return Err(RenderError::Settings(
+                "re-projection composites over a flat background only; render background images in two passes".into(),
+            ));
+        }
         self.begin(scene, left, settings, desc)?;
         let ctx = &self.ctx;
         if !matches!(&self.stereo, Some(s) if s.format == reprojection.format) {

@@ -21,7 +21,7 @@ use self::uniforms::{Params, WORKGROUP};
 use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::settings::MAX_DIRECTIONS;
-use super::{RenderError, RenderSettings};
+use super::{BackgroundImage, RenderError, RenderSettings};
 use crate::geometry::RayGen;
 use crate::scene::{Scene, StructuredVolume, TransferFunction};
 
@@ -41,6 +41,10 @@ pub struct GpuRenderer {
     directions: wgpu::Buffer,
     volume: Option<(Arc<StructuredVolume>, wgpu::TextureView)>,
     table: Option<(Arc<TransferFunction>, wgpu::TextureView)>,
+    /// The background image bound now (`None`: the stand-in), and the
+    /// stand-in bound when there is none.
+    background: Option<(Arc<BackgroundImage>, wgpu::TextureView)>,
+    no_background: wgpu::TextureView,
     target: Option<OutputBuffers>,
     bind_group: Option<wgpu::BindGroup>,
     uploads: Uploads,
@@ -69,6 +73,7 @@ impl GpuRenderer {
                 layout_entry(4, storage(false)),
                 layout_entry(5, storage(false)),
                 layout_entry(6, storage(false)),
+                layout_entry(7, texture(wgpu::TextureViewDimension::D2)),
             ],
         });
         let pipeline = compute_pipeline(device, "raycast", &shaders::raycast(), &[&layout], "main");
@@ -90,6 +95,7 @@ impl GpuRenderer {
             16 * u64::from(MAX_DIRECTIONS),
             wgpu::BufferUsages::STORAGE,
         );
+        let no_background = resources::upload_background(&ctx, None);
         ctx.check()?;
         Ok(Self {
             ctx,
@@ -99,6 +105,8 @@ impl GpuRenderer {
             directions,
             volume: None,
             table: None,
+            background: None,
+            no_background,
             target: None,
             bind_group: None,
             uploads: Uploads::default(),
@@ -203,7 +211,12 @@ impl GpuRenderer {
         desc.validate()?;
         let plan = MarchPlan::new(scene, settings)?;
         self.check_limits(scene, desc)?;
-        self.prepare(scene, desc.size, desc.color);
+        self.prepare(
+            scene,
+            desc.size,
+            desc.color,
+            settings.background_image.as_ref(),
+        );
         let queue = &self.ctx.queue;
         let params = Params::new(rays, &plan, desc.size, desc.color);
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -283,9 +296,29 @@ impl GpuRenderer {
     }
 
     /// Uploads what changed and rebuilds the bind group if anything did.
-    fn prepare(&mut self, scene: &Scene, size: UVec2, format: ColorFormat) {
+    fn prepare(
+        &mut self,
+        scene: &Scene,
+        size: UVec2,
+        format: ColorFormat,
+        background: Option<&Arc<BackgroundImage>>,
+    ) {
         let mut changed = self.bind_group.is_none();
         changed |= self.upload_scene(scene);
+        let same_background = match (&self.background, background) {
+            (None, None) => true,
+            (Some((a, _)), Some(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        };
+        if !same_background {
+            self.background = background.map(|b| {
+                (
+                    Arc::clone(b),
+                    resources::upload_background(&self.ctx, Some(b)),
+                )
+            });
+            changed = true;
+        }
         if !matches!(&self.target, Some(t) if t.size == size && t.format == format) {
             self.target = Some(OutputBuffers::new(&self.ctx, size, format));
             changed = true;
@@ -306,6 +339,11 @@ impl GpuRenderer {
                 buffer(&target.color),
                 buffer(&target.depth),
                 buffer(&target.samples),
+                wgpu::BindingResource::TextureView(
+                    self.background
+                        .as_ref()
+                        .map_or(&self.no_background, |(_, v)| v),
+                ),
             ];
             let group = bind_group(&self.ctx.device, "raycast", &self.layout, resources);
             self.bind_group = Some(group);

@@ -2,6 +2,7 @@ use glam::UVec2;
 
 use super::context::Context;
 use crate::render::frame::ColorFormat;
+use crate::render::BackgroundImage;
 use crate::scene::{StructuredVolume, TransferFunction, TABLE_SIZE};
 
 /// Slices per write when uploading a volume, so staging memory stays
@@ -59,16 +60,50 @@ pub(super) fn upload_volume(ctx: &Context, volume: &StructuredVolume) -> wgpu::T
     texture.create_view(&Default::default())
 }
 
+/// A background image as an RGBA32Float texture; a 1 x 1 black one stands
+/// in where there is none (the binding must exist).
+pub(super) fn upload_background(
+    ctx: &Context,
+    image: Option<&BackgroundImage>,
+) -> wgpu::TextureView {
+    let (size, pixels) = match image {
+        Some(i) => (i.size(), i.pixels().to_vec()),
+        None => (UVec2::ONE, vec![glam::Vec4::ZERO]),
+    };
+    let bytes: Vec<u8> = pixels
+        .iter()
+        .flat_map(|c| c.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    rgba_texture(ctx, "background", size, &bytes)
+}
+
 /// The transfer function's table as a TABLE_SIZE x 1 RGBA32Float texture.
 pub(super) fn upload_table(ctx: &Context, tf: &TransferFunction) -> wgpu::TextureView {
-    let size = wgpu::Extent3d {
-        width: TABLE_SIZE as u32,
-        height: 1,
+    let bytes: Vec<u8> = tf
+        .table()
+        .iter()
+        .flat_map(|c| c.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    rgba_texture(
+        ctx,
+        "transfer function",
+        UVec2::new(TABLE_SIZE as u32, 1),
+        &bytes,
+    )
+}
+
+/// A 2D RGBA32Float texture holding `bytes`, row by row.
+fn rgba_texture(ctx: &Context, label: &str, size: UVec2, bytes: &[u8]) -> wgpu::TextureView {
+    let extent = wgpu::Extent3d {
+        width: size.x,
+        height: size.y,
         depth_or_array_layers: 1,
     };
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("transfer function"),
-        size,
+        label: Some(label),
+        size: extent,
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -76,12 +111,6 @@ pub(super) fn upload_table(ctx: &Context, tf: &TransferFunction) -> wgpu::Textur
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let bytes: Vec<u8> = tf
-        .table()
-        .iter()
-        .flat_map(|c| c.to_array())
-        .flat_map(f32::to_le_bytes)
-        .collect();
     ctx.queue.write_texture(
         wgpu::TexelCopyTextureInfo {
             texture: &texture,
@@ -89,13 +118,13 @@ pub(super) fn upload_table(ctx: &Context, tf: &TransferFunction) -> wgpu::Textur
             origin: wgpu::Origin3d::ZERO,
             aspect: wgpu::TextureAspect::All,
         },
-        &bytes,
+        bytes,
         wgpu::TexelCopyBufferLayout {
             offset: 0,
-            bytes_per_row: Some(16 * TABLE_SIZE as u32),
+            bytes_per_row: Some(16 * size.x),
             rows_per_image: None,
         },
-        size,
+        extent,
     );
     texture.create_view(&Default::default())
 }

@@ -126,7 +126,8 @@ uniform! {
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         /// Multiplies every shaded sample.
         light_color: [f32; 3],
-        _pad2: u32,
+        /// 1: the background is the image bound beside, not `background`.
+        has_background_image: u32,
     }
 }
 
@@ -202,7 +203,7 @@ impl Params {
                 clip
             },
             light_color: plan.light_color.to_array(),
-            _pad2: 0,
+            has_background_image: u32::from(plan.has_background_image),
         }
     }
 }
