@@ -330,18 +330,11 @@ fn the_cpu_reference_notices_a_new_volume_or_transfer_function() {
     assert_ne!(a, b, "a new transfer function must change the image");
 }
 
-/// The orthographic camera's parallel rays cross the [-1, 1]^3 box with
-/// the same chord everywhere inside its footprint; near and far clip the
-/// rays, on both renderers.
-#[test]
-fn orthographic_rays_and_clip_ranges() {
+/// A 3 x 3 orthographic view at z = 4 looking down -z on the [-1, 1]^3
+/// box: pixels within +-1 see 2 units of box, the rest none.
+fn box_from_above() -> anari_library_caveray::geometry::OrthographicCamera {
     use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera};
-    let (a, unit) = (0.3f32, 0.7f32);
-    let scene = Scene::new(solid_box(16), constant_tf(a, unit));
-    let size = UVec2::new(32, 32);
-    // A 3 x 3 rectangle at z = 4 looking down -z: pixels within +-1 see 2
-    // units of box, the rest none.
-    let camera = OrthographicCamera::new(
+    OrthographicCamera::new(
         DVec3::new(0.0, 0.0, 4.0),
         DVec3::NEG_Z,
         DVec3::Y,
@@ -349,7 +342,18 @@ fn orthographic_rays_and_clip_ranges() {
         1.0,
         ImageRegion::FULL,
     )
-    .unwrap();
+    .unwrap()
+}
+
+/// The orthographic camera's parallel rays cross the [-1, 1]^3 box with
+/// the same chord everywhere inside its footprint; near and far clip the
+/// rays, on both renderers.
+#[test]
+fn orthographic_rays_and_clip_ranges() {
+    let (a, unit) = (0.3f32, 0.7f32);
+    let scene = Scene::new(solid_box(16), constant_tf(a, unit));
+    let size = UVec2::new(32, 32);
+    let camera = box_from_above();
     let rays = camera.ray_gen(size);
     let settings = RenderSettings {
         background: Vec4::ZERO,
@@ -430,20 +434,11 @@ fn depth_is_measured_from_the_eye_for_every_camera() {
 /// leaves the left half of the box, and with x > 0.5 as well nothing.
 #[test]
 fn clip_planes_cut_the_rays_on_both_renderers() {
-    use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera};
     use anari_library_caveray::render::ClipPlanes;
     let (a, unit) = (0.3f32, 0.7f32);
     let scene = Scene::new(solid_box(16), constant_tf(a, unit));
     let size = UVec2::new(32, 32);
-    let camera = OrthographicCamera::new(
-        DVec3::new(0.0, 0.0, 4.0),
-        DVec3::NEG_Z,
-        DVec3::Y,
-        3.0,
-        1.0,
-        ImageRegion::FULL,
-    )
-    .unwrap();
+    let camera = box_from_above();
     let rays = camera.ray_gen(size);
     let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
     let with = |planes: &[Vec4]| RenderSettings {

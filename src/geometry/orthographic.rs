@@ -5,7 +5,7 @@
 use glam::{DVec2, DVec3};
 
 use super::error::check_finite;
-use super::pinhole::ImageRegion;
+use super::pinhole::{placed_basis, ImageRegion};
 use super::ray::{PrimaryRays, Ray};
 use super::{GeometryError, Result};
 
@@ -29,28 +29,15 @@ impl OrthographicCamera {
         aspect: f64,
         image_region: ImageRegion,
     ) -> Result<Self> {
-        check_finite("camera position", &position.to_array())?;
-        check_finite("camera direction", &direction.to_array())?;
-        check_finite("camera up vector", &up.to_array())?;
         check_finite("height or aspect", &[height, aspect])?;
-        check_finite("image region", &image_region.to_array())?;
-        let invalid = |reason: String| Err(GeometryError::InvalidPinhole { reason });
         if height <= 0.0 || aspect <= 0.0 {
-            return invalid(format!(
-                "orthographic height and aspect must be positive, got {height} and {aspect}"
-            ));
+            return Err(GeometryError::InvalidPinhole {
+                reason: format!(
+                    "orthographic height and aspect must be positive, got {height} and {aspect}"
+                ),
+            });
         }
-        if image_region.max.x == image_region.min.x || image_region.max.y == image_region.min.y {
-            return invalid(format!(
-                "image region {:?} is empty",
-                image_region.to_array()
-            ));
-        }
-        let forward = direction.try_normalize();
-        let right = forward.and_then(|f| f.cross(up).try_normalize());
-        let (Some(forward), Some(right)) = (forward, right) else {
-            return invalid("direction is zero or parallel to up".into());
-        };
+        let (forward, right) = placed_basis(position, direction, up, image_region)?;
         Ok(Self {
             position,
             forward,

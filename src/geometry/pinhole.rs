@@ -49,6 +49,34 @@ pub struct PinholeCamera {
     half_up: DVec3,
 }
 
+/// What ANARI's placed cameras (pinhole and orthographic) check and derive
+/// alike: finite inputs, a non-empty image region, and the unit forward
+/// and right vectors of `direction` and `up`.
+pub(super) fn placed_basis(
+    position: DVec3,
+    direction: DVec3,
+    up: DVec3,
+    image_region: ImageRegion,
+) -> Result<(DVec3, DVec3)> {
+    check_finite("camera position", &position.to_array())?;
+    check_finite("camera direction", &direction.to_array())?;
+    check_finite("camera up vector", &up.to_array())?;
+    check_finite("image region", &image_region.to_array())?;
+    let invalid = |reason: String| Err(GeometryError::InvalidPinhole { reason });
+    if image_region.max.x == image_region.min.x || image_region.max.y == image_region.min.y {
+        return invalid(format!(
+            "image region {:?} is empty",
+            image_region.to_array()
+        ));
+    }
+    let forward = direction.try_normalize();
+    let right = forward.and_then(|f| f.cross(up).try_normalize());
+    match (forward, right) {
+        (Some(forward), Some(right)) => Ok((forward, right)),
+        _ => invalid("direction is zero or parallel to up".into()),
+    }
+}
+
 impl PinholeCamera {
     /// `fovy` in radians; `direction` and `up` need not be unit length or
     /// orthogonal, only not parallel.
@@ -60,11 +88,7 @@ impl PinholeCamera {
         aspect: f64,
         image_region: ImageRegion,
     ) -> Result<Self> {
-        check_finite("camera position", &position.to_array())?;
-        check_finite("camera direction", &direction.to_array())?;
-        check_finite("camera up vector", &up.to_array())?;
         check_finite("fovy, aspect or image region", &[fovy, aspect])?;
-        check_finite("image region", &image_region.to_array())?;
         let invalid = |reason: String| Err(GeometryError::InvalidPinhole { reason });
         if !(fovy > 0.0 && fovy < std::f64::consts::PI) {
             return invalid(format!("fovy must be in (0, pi) radians, got {fovy}"));
@@ -72,17 +96,7 @@ impl PinholeCamera {
         if aspect <= 0.0 {
             return invalid(format!("aspect must be positive, got {aspect}"));
         }
-        if image_region.max.x == image_region.min.x || image_region.max.y == image_region.min.y {
-            return invalid(format!(
-                "image region {:?} is empty",
-                image_region.to_array()
-            ));
-        }
-        let forward = direction.try_normalize();
-        let right = forward.and_then(|f| f.cross(up).try_normalize());
-        let (Some(forward), Some(right)) = (forward, right) else {
-            return invalid("direction is zero or parallel to up".into());
-        };
+        let (forward, right) = placed_basis(position, direction, up, image_region)?;
         let tan_half = (0.5 * fovy).tan();
         Ok(Self {
             position,
