@@ -10,72 +10,71 @@ pub mod perspective;
 
 use glam::{DVec2, DVec3, UVec2};
 
+use super::info::{p, Default, ParamInfo, F32, VEC3};
 use super::object::{Derived, State};
 use super::read::Read;
+use super::types::DataType as T;
 use crate::geometry::{
     ImageRegion, MatrixCamera, OffAxisCamera, OrthographicCamera, PinholeCamera, PrimaryRays,
     RayGen,
 };
 
 /// The parameters ANARI's perspective and orthographic cameras share,
-/// followed by the subtype's own.
-macro_rules! placed_camera_params {
-    ($($extra:expr),* $(,)?) => {
-        &[
-            $crate::device::info::p(
-                "position",
-                $crate::device::info::VEC3,
-                false,
-                $crate::device::info::Default::Floats(&[0.0, 0.0, 0.0]),
-                "eye position",
-            ),
-            $crate::device::info::p(
-                "direction",
-                $crate::device::info::VEC3,
-                false,
-                $crate::device::info::Default::Floats(&[0.0, 0.0, -1.0]),
-                "viewing direction",
-            ),
-            $crate::device::info::p(
-                "up",
-                $crate::device::info::VEC3,
-                false,
-                $crate::device::info::Default::Floats(&[0.0, 1.0, 0.0]),
-                "up vector",
-            ),
-            $crate::device::info::p(
-                "aspect",
-                $crate::device::info::F32,
-                false,
-                $crate::device::info::Default::None,
-                "width / height (default: the frame's)",
-            ),
-            $crate::device::info::p(
-                "imageRegion",
-                &[$crate::device::DataType::FLOAT32_BOX2],
-                false,
-                $crate::device::info::Default::Floats(&[0.0, 0.0, 1.0, 1.0]),
-                "part of the image that is rendered, (min.x, min.y, max.x, max.y) in [0, 1]",
-            ),
-            $crate::device::info::p(
-                "near",
-                $crate::device::info::F32,
-                false,
-                $crate::device::info::Default::None,
-                "distance along each ray before which nothing is seen (default 0)",
-            ),
-            $crate::device::info::p(
-                "far",
-                $crate::device::info::F32,
-                false,
-                $crate::device::info::Default::None,
-                "distance along each ray beyond which nothing is seen (default: none)",
-            ),
-            $($extra,)*
-        ]
-    };
+/// then the subtype's own one (`fovy`, `height`).
+pub const fn placed_params(own: ParamInfo) -> [ParamInfo; 8] {
+    [
+        p(
+            "position",
+            VEC3,
+            false,
+            Default::Floats(&[0.0, 0.0, 0.0]),
+            "eye position",
+        ),
+        p(
+            "direction",
+            VEC3,
+            false,
+            Default::Floats(&[0.0, 0.0, -1.0]),
+            "viewing direction",
+        ),
+        p(
+            "up",
+            VEC3,
+            false,
+            Default::Floats(&[0.0, 1.0, 0.0]),
+            "up vector",
+        ),
+        p(
+            "aspect",
+            F32,
+            false,
+            Default::None,
+            "width / height (default: the frame's)",
+        ),
+        p(
+            "imageRegion",
+            &[T::FLOAT32_BOX2],
+            false,
+            Default::Floats(&[0.0, 0.0, 1.0, 1.0]),
+            "part of the image that is rendered, (min.x, min.y, max.x, max.y) in [0, 1]",
+        ),
+        p(
+            "near",
+            F32,
+            false,
+            Default::None,
+            "distance along each ray before which nothing is seen (default 0)",
+        ),
+        p(
+            "far",
+            F32,
+            false,
+            Default::None,
+            "distance along each ray beyond which nothing is seen (default: none)",
+        ),
+        own,
+    ]
 }
-pub(crate) use placed_camera_params;
 
 /// Where a perspective or orthographic camera stands and what it shows.
 #[derive(Clone, Copy, Debug)]

@@ -2,24 +2,26 @@
 //! tall (VTK and ParaView's parallel projection, the SDK viewer's
 //! orthographic mode).
 
-use super::{placed_camera_params, CameraModel, Placement};
-use crate::device::info::{p, Default, SubtypeInfo, EXT_ORTHOGRAPHIC, F32};
+use super::{placed_params, CameraModel, Placement};
+use crate::device::info::{p, Default, ParamInfo, SubtypeInfo, EXT_ORTHOGRAPHIC, F32};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
+
+static PARAMS: [ParamInfo; 8] = placed_params(p(
+    "height",
+    F32,
+    false,
+    Default::Floats(&[1.0]),
+    "height of the image rectangle in world units",
+));
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::CAMERA,
     subtype: "orthographic",
     description: "parallel rays from an image rectangle `height` tall",
     extensions: &[EXT_ORTHOGRAPHIC],
-    params: placed_camera_params![p(
-        "height",
-        F32,
-        false,
-        Default::Floats(&[1.0]),
-        "height of the image rectangle in world units"
-    )],
+    params: &PARAMS,
     commit: Some(commit),
 };
 

@@ -1,25 +1,29 @@
 //! ANARI's `perspective` camera. An off-axis CAVE wall is a widened
 //! symmetric frustum cropped by `imageRegion` (strategy 2).
 
-use super::{placed_camera_params, CameraModel, Placement};
-use crate::device::info::{p, Default, SubtypeInfo, F32};
+use super::{placed_params, CameraModel, Placement};
+use crate::device::info::{p, Default, ParamInfo, SubtypeInfo, F32};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
+
+static PARAMS: [ParamInfo; 8] = placed_params(
+    p(
+        "fovy",
+        F32,
+        false,
+        Default::Floats(&[std::f32::consts::FRAC_PI_3]),
+        "vertical field of view in radians",
+    )
+    .range(0.01, 3.1),
+);
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::CAMERA,
     subtype: "perspective",
     description: "pinhole camera; an off-axis wall is a widened frustum cropped by imageRegion",
     extensions: &["ANARI_KHR_CAMERA_PERSPECTIVE"],
-    params: placed_camera_params![p(
-        "fovy",
-        F32,
-        false,
-        Default::Floats(&[std::f32::consts::FRAC_PI_3]),
-        "vertical field of view in radians"
-    )
-    .range(0.01, 3.1)],
+    params: &PARAMS,
     commit: Some(commit),
 };
 
