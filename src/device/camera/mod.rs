@@ -121,11 +121,20 @@ impl Placement {
         self.aspect.unwrap_or(f64::from(size.x) / f64::from(size.y))
     }
 
-    fn clipped(&self, rays: RayGen) -> RayGen {
-        match self.clip {
+    /// The rays of the camera `make` builds for this placement and the
+    /// frame's aspect, clipped to `near`..`far`.
+    fn rays<C: PrimaryRays>(
+        &self,
+        size: UVec2,
+        make: impl FnOnce(&Self, f64) -> crate::geometry::Result<C>,
+    ) -> Result<RayGen, String> {
+        let rays = make(self, self.aspect(size))
+            .map_err(|e| e.to_string())?
+            .ray_gen(size);
+        Ok(match self.clip {
             Some((near, far)) => rays.clipped(near, far),
             None => rays,
-        }
+        })
     }
 }
 
@@ -148,29 +157,12 @@ pub enum CameraModel {
 impl CameraModel {
     pub fn ray_gen(&self, size: UVec2) -> Result<RayGen, String> {
         match self {
-            CameraModel::Perspective { placement: p, fovy } => PinholeCamera::new(
-                p.position,
-                p.direction,
-                p.up,
-                *fovy,
-                p.aspect(size),
-                p.region,
-            )
-            .map(|c| p.clipped(c.ray_gen(size)))
-            .map_err(|e| e.to_string()),
-            CameraModel::Orthographic {
-                placement: p,
-                height,
-            } => OrthographicCamera::new(
-                p.position,
-                p.direction,
-                p.up,
-                *height,
-                p.aspect(size),
-                p.region,
-            )
-            .map(|c| p.clipped(c.ray_gen(size)))
-            .map_err(|e| e.to_string()),
+            CameraModel::Perspective { placement, fovy } => placement.rays(size, |p, aspect| {
+                PinholeCamera::new(p.position, p.direction, p.up, *fovy, aspect, p.region)
+            }),
+            CameraModel::Orthographic { placement, height } => placement.rays(size, |p, aspect| {
+                OrthographicCamera::new(p.position, p.direction, p.up, *height, aspect, p.region)
+            }),
             CameraModel::Matrix(c) => Ok(c.ray_gen(size)),
             CameraModel::OffAxis(c) => Ok(c.ray_gen(size)),
         }
