@@ -7,7 +7,9 @@
 use super::object::State;
 use super::read::Read;
 use super::types::DataType as T;
-use super::{camera, device_object, frame, light, renderer, spatial_field, volume, world};
+use super::{
+    camera, device_object, frame, group, instance, light, renderer, spatial_field, volume, world,
+};
 
 pub struct ParamInfo {
     pub name: &'static str,
@@ -120,6 +122,7 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_BACKGROUND,
     EXT_BACKGROUND_IMAGE,
     "ANARI_KHR_LIGHT_DIRECTIONAL",
+    "ANARI_KHR_INSTANCE_TRANSFORM",
     EXT_MATRIX_VSNRAY,
     EXT_MATRIX,
     EXT_OFF_AXIS,
@@ -139,6 +142,8 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &spatial_field::structured_regular::INFO,
     &volume::transfer_function_1d::INFO,
     &light::directional::INFO,
+    &group::INFO,
+    &instance::transform::INFO,
     &world::INFO,
     &renderer::INFO,
     &frame::INFO,

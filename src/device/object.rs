@@ -8,6 +8,7 @@ use super::array::Array;
 use super::camera::CameraModel;
 use super::frame::slot::FrameState;
 use super::info::SubtypeInfo;
+use super::instance::InstanceModel;
 use super::light::DirectionalLight;
 use super::types::{kind_name, DataType};
 use super::value::Params;
@@ -109,6 +110,8 @@ pub enum State {
     Field(Derived<Arc<StructuredVolume>>),
     Volume(Derived<VolumeModel>),
     World(Derived<WorldModel>),
+    Group(Derived<Vec<ObjectRef>>),
+    Instance(Derived<InstanceModel>),
     Light(Derived<DirectionalLight>),
     Camera(Derived<CameraModel>),
     Renderer(Derived<RenderSettings>),
@@ -126,6 +129,8 @@ impl State {
             DataType::SPATIAL_FIELD => State::Field(Derived::Uncommitted),
             DataType::VOLUME => State::Volume(Derived::Uncommitted),
             DataType::WORLD => State::World(Derived::Uncommitted),
+            DataType::GROUP => State::Group(Derived::Uncommitted),
+            DataType::INSTANCE => State::Instance(Derived::Uncommitted),
             DataType::LIGHT => State::Light(Derived::Uncommitted),
             DataType::CAMERA => State::Camera(Derived::Uncommitted),
             // A renderer works with its defaults before any commit.

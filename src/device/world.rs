@@ -1,9 +1,15 @@
-//! The world: the scene a frame renders, its volumes and its lights.
+//! The world: the scene a frame renders, its volumes (directly, or in
+//! groups placed by instances, as VTK builds worlds) and its lights.
+
+use std::sync::{Arc, Mutex};
+
+use glam::Mat4;
 
 use super::info::{p, Default, SubtypeInfo};
 use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
+use crate::scene::StructuredVolume;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::WORLD,
@@ -27,26 +33,88 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "ARRAY1D of ANARI_LIGHT; the first directional light sets the shading's light",
         )
         .elements(&[T::LIGHT]),
+        p(
+            "instance",
+            &[T::ARRAY1D],
+            false,
+            Default::None,
+            "ARRAY1D of ANARI_INSTANCE: groups of volumes, each placed by its transform",
+        )
+        .elements(&[T::INSTANCE]),
     ],
     commit: Some(commit),
 };
 
-/// A world after commit: the objects its arrays name.
+/// A world after commit: the objects its arrays name, each volume with
+/// the transform of the instance that placed it (`None`: in the world
+/// directly).
 #[derive(Clone, Default)]
 pub struct WorldModel {
-    pub volumes: Vec<ObjectRef>,
+    pub volumes: Vec<(ObjectRef, Option<Mat4>)>,
     pub lights: Vec<ObjectRef>,
+    /// The last placed copy of a transformed volume, kept while its field
+    /// and transform stay: renders of an unchanged world reuse it (and the
+    /// GPU keeps it uploaded).
+    pub placed: Arc<Mutex<Option<Placed>>>,
+}
+
+/// A field's grid under an instance transform.
+pub struct Placed {
+    source: Arc<StructuredVolume>,
+    transform: Mat4,
+    volume: Arc<StructuredVolume>,
+}
+
+impl WorldModel {
+    /// `volume` under `transform`: the same `Arc` as the last call's for
+    /// the same arguments.
+    pub fn place(
+        &self,
+        volume: &Arc<StructuredVolume>,
+        transform: Mat4,
+    ) -> Result<Arc<StructuredVolume>, String> {
+        let mut cache = self.placed.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = cache.as_ref() {
+            if Arc::ptr_eq(&p.source, volume) && p.transform == transform {
+                return Ok(Arc::clone(&p.volume));
+            }
+        }
+        let placed = Arc::new(volume.transformed(transform)?);
+        *cache = Some(Placed {
+            source: Arc::clone(volume),
+            transform,
+            volume: Arc::clone(&placed),
+        });
+        Ok(placed)
+    }
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let mut volumes: Vec<(ObjectRef, Option<Mat4>)> = objects(r, "volume", T::VOLUME)?
+        .into_iter()
+        .map(|v| (v, None))
+        .collect();
+    for instance in objects(r, "instance", T::INSTANCE)? {
+        let model = match &instance.lock().state {
+            State::Instance(i) => i.ready(&instance.describe())?.clone(),
+            _ => continue,
+        };
+        let group = &model.group;
+        let members = match &group.lock().state {
+            State::Group(g) => g.ready(&group.describe())?.clone(),
+            _ => continue,
+        };
+        volumes.extend(members.into_iter().map(|v| (v, Some(model.transform))));
+    }
     Ok(Some(State::World(Derived::Ready(WorldModel {
-        volumes: objects(r, "volume", T::VOLUME)?,
+        volumes,
         lights: objects(r, "light", T::LIGHT)?,
+        placed: Arc::new(Mutex::new(None)),
     }))))
 }
 
 /// The objects of array parameter `name`, which must hold `element`s.
-fn objects(r: &Read<'_>, name: &str, element: T) -> Result<Vec<ObjectRef>, String> {
+pub(super) fn objects(r: &Read<'_>, name: &str, element: T) -> Result<Vec<ObjectRef>, String> {
     let Some(array) = r.object(name) else {
         return Ok(Vec::new());
     };

@@ -153,7 +153,7 @@ impl Device {
             settings.light = light.towards;
             settings.light_color = light.color;
         }
-        let volumes = world_model.volumes;
+        let volumes = &world_model.volumes;
         if volumes.len() > 1 {
             self.warn(
                 Some(frame),
@@ -166,7 +166,7 @@ impl Device {
         }
         let scene = match volumes.first() {
             None => None,
-            Some(v) => {
+            Some((v, transform)) => {
                 let model = match &v.lock().state {
                     State::Volume(m) => m.ready(&v.describe())?.clone(),
                     _ => return Err(format!("{} is not implemented by caveray", v.describe())),
@@ -180,6 +180,12 @@ impl Device {
                             field.describe()
                         ))
                     }
+                };
+                let volume = match transform {
+                    None => volume,
+                    Some(m) => world_model
+                        .place(&volume, *m)
+                        .map_err(|e| format!("{}: {e}", v.describe()))?,
                 };
                 Some(Scene {
                     volume,

@@ -18,6 +18,7 @@ use super::object::{ObjectCell, ObjectRef, State};
 use super::types::{kind_name, object_kind, DataType, Severity, Status, StatusCode};
 use super::value::{Params, Value};
 use super::worker::{Reporter, Worker};
+use super::world::WorldModel;
 use crate::render::Backend;
 
 pub use frames::Mapped;
@@ -287,7 +288,7 @@ impl Device {
                 let slot = match &cell.lock().state {
                     State::Frame(f) => f.slot.clone(),
                     State::World(w) if name == "bounds" => {
-                        return w.ready("").ok().and_then(|w| world_bounds(&w.volumes));
+                        return w.ready("").ok().and_then(world_bounds);
                     }
                     _ => return None,
                 };
@@ -343,17 +344,32 @@ impl Device {
 }
 
 /// The box around a world's volumes, if any is ready.
-fn world_bounds(volumes: &[ObjectRef]) -> Option<Property> {
-    let mut boxes = volumes.iter().filter_map(|v| {
+fn world_bounds(world: &WorldModel) -> Option<Property> {
+    let mut boxes = world.volumes.iter().filter_map(|(v, transform)| {
         let field = match &v.lock().state {
             State::Volume(m) => m.ready("").ok()?.field.clone(),
             _ => return None,
         };
-        let bounds = match &field.lock().state {
-            State::Field(f) => f.ready("").ok().map(|f| f.bounds()),
-            _ => None,
+        let (lo, hi) = match &field.lock().state {
+            State::Field(f) => f.ready("").ok()?.bounds(),
+            _ => return None,
         };
-        bounds
+        let Some(m) = transform else {
+            return Some((lo, hi));
+        };
+        // The box around the transformed box's corners.
+        (0..8)
+            .map(|i| {
+                let pick = |bit: u32, a: f32, b: f32| if i & bit == 0 { a } else { b };
+                m.transform_point3(glam::Vec3::new(
+                    pick(1, lo.x, hi.x),
+                    pick(2, lo.y, hi.y),
+                    pick(4, lo.z, hi.z),
+                ))
+            })
+            .fold(None, |acc: Option<(glam::Vec3, glam::Vec3)>, p| {
+                Some(acc.map_or((p, p), |(l, h)| (l.min(p), h.max(p))))
+            })
     });
     let (mut lo, mut hi) = boxes.next()?;
     for (l, h) in boxes {

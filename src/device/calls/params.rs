@@ -227,6 +227,8 @@ fn invalid_state(kind: DataType, why: String) -> Option<State> {
         DataType::VOLUME => State::Volume(Derived::Invalid(why)),
         DataType::WORLD => State::World(Derived::Invalid(why)),
         DataType::LIGHT => State::Light(Derived::Invalid(why)),
+        DataType::GROUP => State::Group(Derived::Invalid(why)),
+        DataType::INSTANCE => State::Instance(Derived::Invalid(why)),
         DataType::CAMERA => State::Camera(Derived::Invalid(why)),
         DataType::RENDERER => State::Renderer(Derived::Invalid(why)),
         _ => return None,

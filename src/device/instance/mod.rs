@@ -1,0 +1,5 @@
+//! Instances: one module per subtype.
+
+pub mod transform;
+
+pub use transform::InstanceModel;

@@ -1,0 +1,58 @@
+//! The `transform` instance (ANARI_KHR_INSTANCE_TRANSFORM): a group placed
+//! in the world by an affine matrix, as VTK and ParaView place each
+//! dataset's volume.
+
+use glam::Mat4;
+
+use crate::device::info::{p, Default, SubtypeInfo, MAT4};
+use crate::device::object::{Derived, ObjectRef, State};
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::INSTANCE,
+    subtype: "transform",
+    description: "a group placed by an affine transform (translation and axis scale for volumes)",
+    extensions: &["ANARI_KHR_INSTANCE_TRANSFORM"],
+    params: &[
+        p(
+            "group",
+            &[T::GROUP],
+            true,
+            Default::None,
+            "the group placed",
+        ),
+        p(
+            "transform",
+            MAT4,
+            false,
+            Default::Floats(&[
+                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+            ]),
+            "object to world, column-major",
+        ),
+    ],
+    commit: Some(commit),
+};
+
+/// An instance after commit.
+#[derive(Clone)]
+pub struct InstanceModel {
+    pub group: ObjectRef,
+    pub transform: Mat4,
+}
+
+fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let group = r
+        .object("group")
+        .ok_or("parameter 'group' (GROUP) is required")?
+        .clone();
+    let transform = r.mat4("transform")?;
+    if !transform.is_finite() {
+        return Err(format!("transform {transform} is not finite"));
+    }
+    Ok(Some(State::Instance(Derived::Ready(InstanceModel {
+        group,
+        transform,
+    }))))
+}
