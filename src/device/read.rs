@@ -4,8 +4,10 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
+use super::array::Array;
 use super::info::{Default, ParamInfo};
-use super::object::ObjectRef;
+use super::object::{ObjectRef, State};
+use super::types::DataType;
 use super::value::{Params, Value};
 
 pub struct Read<'a> {
@@ -80,5 +82,40 @@ impl<'a> Read<'a> {
 
     pub fn object(&self, name: &str) -> Option<&'a ObjectRef> {
         self.params.object(name)
+    }
+
+    /// `read` applied to the array behind object parameter `name`, `None`
+    /// if the parameter is unset; an error if it names something else.
+    pub fn array<R>(
+        &self,
+        name: &str,
+        read: impl FnOnce(&Array) -> Result<R, String>,
+    ) -> Result<Option<R>, String> {
+        let Some(object) = self.object(name) else {
+            return Ok(None);
+        };
+        let guard = object.lock();
+        match &guard.state {
+            State::Array(a) => read(a).map(Some),
+            _ => Err(format!("'{name}' is {}, not an array", object.describe())),
+        }
+    }
+
+    /// `read` applied to array parameter `name` if it holds `element`s.
+    pub fn array_of<R>(
+        &self,
+        name: &str,
+        element: DataType,
+        read: impl FnOnce(&Array) -> Result<R, String>,
+    ) -> Result<Option<R>, String> {
+        self.array(name, |a| {
+            if a.element() != element {
+                return Err(format!(
+                    "'{name}' array holds {}; expected {element}",
+                    a.element()
+                ));
+            }
+            read(a)
+        })
     }
 }

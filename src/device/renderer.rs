@@ -127,31 +127,17 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
 
 /// `background` as an image, if it is an array.
 fn background_image(r: &Read<'_>) -> Result<Option<Arc<BackgroundImage>>, String> {
-    let Some(array) = r.object("background") else {
-        return Ok(None);
-    };
-    let guard = array.lock();
-    let State::Array(a) = &guard.state else {
-        return Err(format!(
-            "'background' is {}, not an array",
-            array.describe()
-        ));
-    };
-    if a.element() != T::FLOAT32_VEC4 {
-        return Err(format!(
-            "'background' array holds {}; expected ANARI_FLOAT32_VEC4",
-            a.element()
-        ));
-    }
-    let [w, h, _] = a.dims();
-    let pixels: Vec<Vec4> = a.f32s().chunks_exact(4).map(Vec4::from_slice).collect();
-    let size = glam::UVec2::new(
-        u32::try_from(w).map_err(|_| format!("'background' is {w} wide"))?,
-        u32::try_from(h).map_err(|_| format!("'background' is {h} high"))?,
-    );
-    BackgroundImage::new(size, pixels)
-        .map(|i| Some(Arc::new(i)))
-        .ok_or_else(|| format!("'background' of {w}x{h} has no pixels"))
+    r.array_of("background", T::FLOAT32_VEC4, |a| {
+        let [w, h, _] = a.dims();
+        let pixels: Vec<Vec4> = a.f32s().chunks_exact(4).map(Vec4::from_slice).collect();
+        let size = glam::UVec2::new(
+            u32::try_from(w).map_err(|_| format!("'background' is {w} wide"))?,
+            u32::try_from(h).map_err(|_| format!("'background' is {h} high"))?,
+        );
+        BackgroundImage::new(size, pixels)
+            .map(Arc::new)
+            .ok_or_else(|| format!("'background' of {w}x{h} has no pixels"))
+    })
 }
 
 /// `volumeSamplingRate`, checked: the step is its inverse.
@@ -168,26 +154,16 @@ fn sampling_rate(r: &Read<'_>) -> Result<f32, String> {
 
 /// The `clipPlane` array, if set.
 fn clip_planes(r: &Read<'_>) -> Result<ClipPlanes, String> {
-    let Some(array) = r.object("clipPlane") else {
-        return Ok(ClipPlanes::default());
-    };
-    let guard = array.lock();
-    let State::Array(a) = &guard.state else {
-        return Err(format!("'clipPlane' is {}, not an array", array.describe()));
-    };
-    if a.element() != T::FLOAT32_VEC4 {
-        return Err(format!(
-            "'clipPlane' array holds {}; expected ANARI_FLOAT32_VEC4",
-            a.element()
-        ));
-    }
-    let planes: Vec<Vec4> = a.f32s().chunks_exact(4).map(Vec4::from_slice).collect();
-    ClipPlanes::new(&planes).ok_or_else(|| {
-        format!(
-            "'clipPlane' holds {} planes; caveray takes at most {MAX_CLIP_PLANES}",
-            planes.len()
-        )
-    })
+    let planes = r.array_of("clipPlane", T::FLOAT32_VEC4, |a| {
+        let planes: Vec<Vec4> = a.f32s().chunks_exact(4).map(Vec4::from_slice).collect();
+        ClipPlanes::new(&planes).ok_or_else(|| {
+            format!(
+                "'clipPlane' holds {} planes; caveray takes at most {MAX_CLIP_PLANES}",
+                planes.len()
+            )
+        })
+    })?;
+    Ok(planes.unwrap_or_default())
 }
 
 #[cfg(test)]

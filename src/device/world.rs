@@ -115,18 +115,8 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
 
 /// The objects of array parameter `name`, which must hold `element`s.
 pub(super) fn objects(r: &Read<'_>, name: &str, element: T) -> Result<Vec<ObjectRef>, String> {
-    let Some(array) = r.object(name) else {
-        return Ok(Vec::new());
-    };
-    let guard = array.lock();
-    let State::Array(a) = &guard.state else {
-        return Err(format!("'{name}' is {}, not an array", array.describe()));
-    };
-    if a.element() != element {
-        return Err(format!(
-            "'{name}' array holds {}; expected {element}",
-            a.element()
-        ));
-    }
-    Ok(a.objects.iter().flatten().cloned().collect())
+    let objects = r.array_of(name, element, |a| {
+        Ok(a.objects.iter().flatten().cloned().collect())
+    })?;
+    Ok(objects.unwrap_or_default())
 }

@@ -16,19 +16,7 @@
 #include <anari/caveray.h>
 
 #include "scene.h"
-
-static int problems = 0;
-
-static void on_status(const void *user, ANARIDevice d, ANARIObject source,
-    ANARIDataType sourceType, ANARIStatusSeverity severity, ANARIStatusCode code,
-    const char *message)
-{
-  (void)user, (void)d, (void)source, (void)sourceType, (void)code;
-  if (severity <= ANARI_SEVERITY_WARNING) {
-    ++problems;
-    fprintf(stderr, "opencover_host: %s\n", message);
-  }
-}
+#include "status.h"
 
 static int write_floats(const char *dir, const char *name, const float *v, size_t n)
 {
@@ -89,7 +77,8 @@ int main(int argc, char **argv)
     fprintf(stderr, "usage: opencover_host SCENE_FILE OUT_DIR\n");
     return 2;
   }
-  lib = anariLoadLibrary("environment", on_status, NULL);
+  status_level = ANARI_SEVERITY_WARNING;
+  lib = anariLoadLibrary("environment", count_status, "opencover_host");
   dev = anariNewDevice(lib, "default");
 
   voxels = anariNewArray3D(dev, s.voxels, NULL, NULL, ANARI_FLOAT32, s.dims[0], s.dims[1], s.dims[2]);
@@ -206,5 +195,5 @@ int main(int argc, char **argv)
   anariRelease(dev, dev);
   anariUnloadLibrary(lib);
   scene_free(&s);
-  return ok && problems == 0 ? 0 : 1;
+  return ok && status_count == 0 ? 0 : 1;
 }

@@ -13,20 +13,9 @@
 #include <math.h>
 
 #include "scene.h"
+#include "status.h"
 
-static int errors = 0;
 static int deleted = 0;
-
-static void on_status(const void *user, ANARIDevice d, ANARIObject source,
-    ANARIDataType sourceType, ANARIStatusSeverity severity, ANARIStatusCode code,
-    const char *message)
-{
-  (void)user, (void)d, (void)source, (void)sourceType, (void)code;
-  if (severity <= ANARI_SEVERITY_ERROR) {
-    ++errors;
-    fprintf(stderr, "release_then_free: error: %s\n", message);
-  }
-}
 
 static void count_delete(const void *user, const void *memory)
 {
@@ -80,7 +69,7 @@ int main(int argc, char **argv)
     return 2;
   }
   count = (size_t)s.dims[0] * s.dims[1] * s.dims[2];
-  lib = anariLoadLibrary("caveray", on_status, NULL);
+  lib = anariLoadLibrary("caveray", count_status, "release_then_free");
   dev = anariNewDevice(lib, "default");
 
   data = host_copy(s.voxels, count);
@@ -157,5 +146,5 @@ int main(int argc, char **argv)
   }
   anariUnloadLibrary(lib);
   scene_free(&s);
-  return ok && errors == 0 ? 0 : 1;
+  return ok && status_count == 0 ? 0 : 1;
 }

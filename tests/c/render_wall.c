@@ -8,19 +8,7 @@
 #include <anari/caveray.h>
 
 #include "scene.h"
-
-static int errors = 0;
-
-static void on_status(const void *user, ANARIDevice d, ANARIObject source,
-    ANARIDataType sourceType, ANARIStatusSeverity severity, ANARIStatusCode code,
-    const char *message)
-{
-  (void)user, (void)d, (void)source, (void)sourceType, (void)code;
-  if (severity <= ANARI_SEVERITY_ERROR) {
-    ++errors;
-    fprintf(stderr, "render_wall: error: %s\n", message);
-  }
-}
+#include "status.h"
 
 static int render(ANARIDevice dev, ANARIFrame frame, ANARICamera camera,
     const char *dir, const char *name)
@@ -63,7 +51,7 @@ int main(int argc, char **argv)
     fprintf(stderr, "usage: render_wall SCENE_FILE OUT_DIR\n");
     return 2;
   }
-  lib = anariLoadLibrary("caveray", on_status, NULL);
+  lib = anariLoadLibrary("caveray", count_status, "render_wall");
   dev = anariNewDevice(lib, "default");
 
   voxels = anariNewArray3D(dev, s.voxels, NULL, NULL, ANARI_FLOAT32, s.dims[0],
@@ -138,5 +126,5 @@ int main(int argc, char **argv)
   anariRelease(dev, dev);
   anariUnloadLibrary(lib);
   scene_free(&s);
-  return ok && errors == 0 ? 0 : 1;
+  return ok && status_count == 0 ? 0 : 1;
 }

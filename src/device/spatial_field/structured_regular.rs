@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use glam::UVec3;
 
+use crate::device::array::Array;
 use crate::device::info::{p, Default, SubtypeInfo, VEC3};
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
@@ -66,13 +67,28 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    let data = r
-        .object("data")
+    let (dims, voxels) = r
+        .array("data", |array| read_voxels(array, warn))?
         .ok_or("parameter 'data' (ARRAY3D) is required")?;
-    let array_guard = data.lock();
-    let State::Array(array) = &array_guard.state else {
-        return Err(format!("'data' is {}, not an array", data.describe()));
+    // Unknown enumeration values fall back to the default (the spec's rule).
+    let filter = match r.string("filter") {
+        Some("nearest") => Filter::Nearest,
+        Some("linear") | None => Filter::Linear,
+        Some(other) => {
+            warn(format!(
+                "filter '{other}' is not one of linear, nearest; sampling is linear"
+            ));
+            Filter::Linear
+        }
     };
+    let volume = StructuredVolume::new(dims, voxels, r.vec3("origin")?, r.vec3("spacing")?)
+        .map_err(|e| e.to_string())?
+        .with_filter(filter);
+    Ok(Some(State::Field(Derived::Ready(Arc::new(volume)))))
+}
+
+/// The grid's dimensions and voxels, converted from the array's type.
+fn read_voxels(array: &Array, warn: &mut dyn FnMut(String)) -> Result<(UVec3, Voxels), String> {
     let [nx, ny, nz] = array.dims();
     let dims = UVec3::new(dim(nx)?, dim(ny)?, dim(nz)?);
     let bytes = array.bytes();
@@ -101,21 +117,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
             ))
         }
     };
-    // Unknown enumeration values fall back to the default (the spec's rule).
-    let filter = match r.string("filter") {
-        Some("nearest") => Filter::Nearest,
-        Some("linear") | None => Filter::Linear,
-        Some(other) => {
-            warn(format!(
-                "filter '{other}' is not one of linear, nearest; sampling is linear"
-            ));
-            Filter::Linear
-        }
-    };
-    let volume = StructuredVolume::new(dims, voxels, r.vec3("origin")?, r.vec3("spacing")?)
-        .map_err(|e| e.to_string())?
-        .with_filter(filter);
-    Ok(Some(State::Field(Derived::Ready(Arc::new(volume)))))
+    Ok((dims, voxels))
 }
 
 fn dim(n: u64) -> Result<u32, String> {

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use glam::Vec4;
 
 use super::elements::{clamp_unit, colors, scalars, COLOR_ELEMENTS, COLOR_TYPES};
+use crate::device::array::Array;
 use crate::device::info::{p, Default, SubtypeInfo, F32};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::read::Read;
@@ -61,15 +62,15 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     } else {
         (lo, hi)
     };
-    let mut colors = match r.set("color").and_then(|v| v.object()) {
-        Some(array) => array_values(array, "color", colors, COLOR_TYPES)?,
+    let mut colors = match array_values(r, "color", colors, COLOR_TYPES)? {
+        Some(array) => array,
         None => vec![match r.set("color").and_then(|v| v.f32s()) {
             Some(f) if f.len() == 4 => Vec4::from_slice(&f),
             _ => r.vec3("color")?.extend(1.0),
         }],
     };
-    let mut opacities = match r.set("opacity").and_then(|v| v.object()) {
-        Some(array) => array_values(array, "opacity", scalars, "FLOAT32 or FLOAT64")?,
+    let mut opacities = match array_values(r, "opacity", scalars, "FLOAT32 or FLOAT64")? {
+        Some(array) => array,
         None => vec![r.f32("opacity")?],
     };
     let mut components: Vec<f32> = colors.iter().flat_map(|c| c.to_array()).collect();
@@ -94,26 +95,24 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     }))))
 }
 
-/// The elements of a 1D array parameter, read by `read`; `None` from it
+/// The elements of array parameter `name`, read by `read`; `None` from it
 /// means an element type that does not fit (`expected` says which do).
 fn array_values<V>(
-    object: &ObjectRef,
+    r: &Read<'_>,
     name: &str,
-    read: fn(&crate::device::array::Array) -> Option<Vec<V>>,
+    read: fn(&Array) -> Option<Vec<V>>,
     expected: &str,
-) -> Result<Vec<V>, String> {
-    let guard = object.lock();
-    let State::Array(array) = &guard.state else {
-        return Err(format!("'{name}' is {}, not an array", object.describe()));
-    };
-    let values = read(array).ok_or_else(|| {
-        format!(
-            "'{name}' array holds {}; expected {expected}",
-            array.element()
-        )
-    })?;
-    if values.is_empty() {
-        return Err(format!("'{name}' array is empty"));
-    }
-    Ok(values)
+) -> Result<Option<Vec<V>>, String> {
+    r.array(name, |array| {
+        let values = read(array).ok_or_else(|| {
+            format!(
+                "'{name}' array holds {}; expected {expected}",
+                array.element()
+            )
+        })?;
+        if values.is_empty() {
+            return Err(format!("'{name}' array is empty"));
+        }
+        Ok(values)
+    })
 }
