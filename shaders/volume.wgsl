@@ -10,7 +10,11 @@
 // right-eye segments there).
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var volume: texture_3d<f32>;
+// Volume v's values; volumes 1 to 7 are bound after the other resources
+// (a 1x1x1 stand-in where the scene has fewer), so WGSL needs no binding
+// arrays, which not every adapter offers.
+@group(0) @binding(1) var volume0: texture_3d<f32>;
+// Row v: volume v's table.
 @group(0) @binding(2) var table: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> directions: array<vec4f>;
 @group(0) @binding(4) var<storage, read_write> color_out: array<u32>;
@@ -18,6 +22,13 @@
 // Volume samples per pixel (primary and shading), summed on the host.
 @group(0) @binding(6) var<storage, read_write> samples_out: array<u32>;
 @group(0) @binding(7) var background_image: texture_2d<f32>;
+@group(0) @binding(8) var volume1: texture_3d<f32>;
+@group(0) @binding(9) var volume2: texture_3d<f32>;
+@group(0) @binding(10) var volume3: texture_3d<f32>;
+@group(0) @binding(11) var volume4: texture_3d<f32>;
+@group(0) @binding(12) var volume5: texture_3d<f32>;
+@group(0) @binding(13) var volume6: texture_3d<f32>;
+@group(0) @binding(14) var volume7: texture_3d<f32>;
 
 // What lies behind pixel `pixel` of the frame: the flat colour, or the
 // background image stretched over the frame, sampled bilinearly at the
@@ -41,49 +52,110 @@ fn background_at(pixel: vec2u) -> vec4f {
 
 var<private> samples: u32;
 
-fn voxel(i: vec3i) -> f32 {
-    return textureLoad(volume, i, 0).r;
+fn voxel(v: u32, i: vec3i) -> f32 {
+    switch v {
+        case 0u: { return textureLoad(volume0, i, 0).r; }
+        case 1u: { return textureLoad(volume1, i, 0).r; }
+        case 2u: { return textureLoad(volume2, i, 0).r; }
+        case 3u: { return textureLoad(volume3, i, 0).r; }
+        case 4u: { return textureLoad(volume4, i, 0).r; }
+        case 5u: { return textureLoad(volume5, i, 0).r; }
+        case 6u: { return textureLoad(volume6, i, 0).r; }
+        default: { return textureLoad(volume7, i, 0).r; }
+    }
+}
+
+// Grid coordinates of world point p in volume v.
+fn grid_of(v: u32, p: vec3f) -> vec3f {
+    let m = params.volumes[v];
+    let q = vec4f(p, 1.0);
+    return vec3f(dot(m.world_to_grid_x, q), dot(m.world_to_grid_y, q), dot(m.world_to_grid_z, q));
+}
+
+fn grid_direction(v: u32, d: vec3f) -> vec3f {
+    let m = params.volumes[v];
+    return vec3f(dot(m.world_to_grid_x.xyz, d), dot(m.world_to_grid_y.xyz, d), dot(m.world_to_grid_z.xyz, d));
+}
+
+fn last_vertex(v: u32) -> vec3f {
+    return vec3f(params.volumes[v].dims - vec3u(1u));
+}
+
+fn contains(v: u32, g: vec3f) -> bool {
+    return all(g >= vec3f(0.0)) && all(g <= last_vertex(v));
 }
 
 // Trilinear interpolation of the vertex-centred grid, by hand: R32Float
 // is not filterable everywhere, and the reference does the same. Or the
 // nearest vertex, halves rounded up as the reference rounds them.
-fn sample_volume(p: vec3f) -> f32 {
+fn sample_volume(v: u32, grid: vec3f) -> f32 {
     samples += 1u;
-    let hi = vec3i(params.dims) - vec3i(1);
-    let g = clamp((p - params.box_lo) * params.inv_spacing, vec3f(0.0), vec3f(hi));
-    if params.sampling == FILTER_NEAREST {
-        return voxel(min(vec3i(floor(g + vec3f(0.5))), hi));
+    let hi = vec3i(params.volumes[v].dims) - vec3i(1);
+    let g = clamp(grid, vec3f(0.0), vec3f(hi));
+    if params.volumes[v].sampling == FILTER_NEAREST {
+        return voxel(v, min(vec3i(floor(g + vec3f(0.5))), hi));
     }
     let i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
     let f = g - vec3f(i0);
     let i1 = min(i0 + vec3i(1), hi);
-    let x00 = mix(voxel(vec3i(i0.x, i0.y, i0.z)), voxel(vec3i(i1.x, i0.y, i0.z)), f.x);
-    let x10 = mix(voxel(vec3i(i0.x, i1.y, i0.z)), voxel(vec3i(i1.x, i1.y, i0.z)), f.x);
-    let x01 = mix(voxel(vec3i(i0.x, i0.y, i1.z)), voxel(vec3i(i1.x, i0.y, i1.z)), f.x);
-    let x11 = mix(voxel(vec3i(i0.x, i1.y, i1.z)), voxel(vec3i(i1.x, i1.y, i1.z)), f.x);
+    let x00 = mix(voxel(v, vec3i(i0.x, i0.y, i0.z)), voxel(v, vec3i(i1.x, i0.y, i0.z)), f.x);
+    let x10 = mix(voxel(v, vec3i(i0.x, i1.y, i0.z)), voxel(v, vec3i(i1.x, i1.y, i0.z)), f.x);
+    let x01 = mix(voxel(v, vec3i(i0.x, i0.y, i1.z)), voxel(v, vec3i(i1.x, i0.y, i1.z)), f.x);
+    let x11 = mix(voxel(v, vec3i(i0.x, i1.y, i1.z)), voxel(v, vec3i(i1.x, i1.y, i1.z)), f.x);
     return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
 }
 
-fn classify(v: f32) -> vec4f {
+fn classify(v: u32, value: f32) -> vec4f {
+    let m = params.volumes[v];
     let last = f32(TABLE_SIZE - 1u);
-    let t = clamp((v - params.value_lo) * params.value_scale, 0.0, 1.0) * last;
+    let t = clamp((value - m.value_lo) * m.value_scale, 0.0, 1.0) * last;
     let i = min(u32(t), TABLE_SIZE - 2u);
     let f = t - f32(i);
-    let a = textureLoad(table, vec2i(i32(i), 0), 0);
-    let b = textureLoad(table, vec2i(i32(i) + 1, 0), 0);
+    let a = textureLoad(table, vec2i(i32(i), i32(v)), 0);
+    let b = textureLoad(table, vec2i(i32(i) + 1, i32(v)), 0);
     return a * (1.0 - f) + b * f;
 }
 
-fn inside(p: vec3f) -> bool {
-    return all(p >= params.box_lo) && all(p <= params.box_hi);
+// Overlapping volumes at one sample as one medium, as the reference's
+// Mixture: opacities combine as independent absorbers, colours in
+// proportion to opacity, whatever the volumes' order.
+struct Mixture {
+    emitted: vec3f,
+    weight: f32,
+    alpha: f32,
 }
 
-fn opacity_at(p: vec3f) -> f32 {
-    if inside(p) {
-        return classify(sample_volume(p)).a;
+fn mixture_add(m: ptr<function, Mixture>, rgb: vec3f, a: f32) {
+    (*m).emitted += rgb * a;
+    (*m).weight += a;
+    (*m).alpha += (1.0 - (*m).alpha) * a;
+}
+
+fn inside(p: vec3f) -> bool {
+    for (var v = 0u; v < params.volume_count; v++) {
+        if contains(v, grid_of(v, p)) {
+            return true;
+        }
     }
-    return 0.0;
+    return false;
+}
+
+// The mixed opacity at p, each volume's corrected to a segment `length`
+// long, or as the table gives it where `per_unit`.
+fn opacity_at(p: vec3f, length: f32, per_unit: bool) -> f32 {
+    var m = Mixture(vec3f(0.0), 0.0, 0.0);
+    for (var v = 0u; v < params.volume_count; v++) {
+        let g = grid_of(v, p);
+        if !contains(v, g) {
+            continue;
+        }
+        var a = classify(v, sample_volume(v, g)).a;
+        if !per_unit {
+            a = correct(a, length * params.volumes[v].inv_unit_distance);
+        }
+        mixture_add(&m, vec3f(0.0), a);
+    }
+    return m.alpha;
 }
 
 fn correct(a: f32, exponent: f32) -> f32 {
@@ -93,20 +165,20 @@ fn correct(a: f32, exponent: f32) -> f32 {
     return 1.0 - pow(1.0 - a, exponent);
 }
 
-fn transmittance(p: vec3f, dir: vec3f, steps: u32, exponent: f32) -> f32 {
+fn transmittance(p: vec3f, dir: vec3f, steps: u32) -> f32 {
     var t = 1.0;
     for (var k = 1u; k <= steps; k++) {
         let q = p + dir * (params.shading_step * f32(k));
         if !inside(q) {
             break;
         }
-        t *= 1.0 - correct(opacity_at(q), exponent);
+        t *= 1.0 - opacity_at(q, params.shading_step, false);
     }
     return t;
 }
 
-fn shadow(p: vec3f, exponent: f32) -> f32 {
-    let t = transmittance(p, params.light, SHADOW_STEPS, exponent);
+fn shadow(p: vec3f) -> f32 {
+    let t = transmittance(p, params.light, SHADOW_STEPS);
     return SHADOW_AMBIENT + (1.0 - SHADOW_AMBIENT) * t;
 }
 
@@ -114,23 +186,22 @@ fn ambient_occlusion(p: vec3f) -> f32 {
     let n = params.direction_count;
     var occluded = 0.0;
     for (var i = 0u; i < n; i++) {
-        occluded += opacity_at(p + directions[i].xyz * params.ao_radius);
+        occluded += opacity_at(p + directions[i].xyz * params.ao_radius, 0.0, true);
     }
     return 1.0 - occluded / f32(n);
 }
 
 fn shade(p: vec3f) -> f32 {
-    let exponent = params.shading_step * params.inv_unit_distance;
     let n = params.direction_count;
     switch params.shading {
         case SHADE_SHADOWS: {
-            return shadow(p, exponent);
+            return shadow(p);
         }
         case SHADE_AO: {
             return ambient_occlusion(p);
         }
         case SHADE_SHADOWS_AO: {
-            return shadow(p, exponent) * ambient_occlusion(p);
+            return shadow(p) * ambient_occlusion(p);
         }
         case SHADE_DIRECTIONAL: {
             if n == 0u {
@@ -138,7 +209,7 @@ fn shade(p: vec3f) -> f32 {
             }
             var sum = 0.0;
             for (var i = 0u; i < n; i++) {
-                sum += transmittance(p, directions[i].xyz, DIRECTIONAL_STEPS, exponent);
+                sum += transmittance(p, directions[i].xyz, DIRECTIONAL_STEPS);
             }
             return sum / f32(n);
         }
@@ -163,6 +234,17 @@ struct Marched {
     depth: f32,
 }
 
+// Where the ray o + t d enters and leaves the box [lo, hi], clipped to the
+// camera's range: (t0, t1), empty unless t1 > t0.
+fn enter_exit(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f) -> vec2f {
+    let inv = vec3f(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+    let ta = (lo - o) * inv;
+    let tb = (hi - o) * inv;
+    let tn = min(ta, tb);
+    let tf = max(ta, tb);
+    return vec2f(max(max(max(tn.x, tn.y), tn.z), params.t_near), min(min(min(tf.x, tf.y), tf.z), params.t_far));
+}
+
 fn march(fx: f32, fy: f32) -> Marched {
     let o = params.ray_origin + fx * params.ray_origin_dx + fy * params.ray_origin_dy;
     let d = normalize(params.ray_dir + fx * params.ray_dir_dx + fy * params.ray_dir_dy);
@@ -172,13 +254,18 @@ fn march(fx: f32, fy: f32) -> Marched {
     var depth = bitcast<f32>(0x7f800000u);
     var hit = false;
 
-    let inv = vec3f(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
-    let ta = (params.box_lo - o) * inv;
-    let tb = (params.box_hi - o) * inv;
-    let tn = min(ta, tb);
-    let tf = max(ta, tb);
-    var t0 = max(max(max(tn.x, tn.y), tn.z), params.t_near);
-    var t1 = min(min(min(tf.x, tf.y), tf.z), params.t_far);
+    // Each volume's span along the ray, found in its grid (the affine map
+    // keeps t), and their union, which the march covers.
+    var spans: array<vec2f, MAX_VOLUMES>;
+    var t0 = bitcast<f32>(0x7f800000u);
+    var t1 = -t0;
+    for (var v = 0u; v < params.volume_count; v++) {
+        spans[v] = enter_exit(grid_of(v, o), grid_direction(v, d), vec3f(0.0), last_vertex(v));
+        if spans[v].y > spans[v].x {
+            t0 = min(t0, spans[v].x);
+            t1 = max(t1, spans[v].y);
+        }
+    }
     // Clip planes (n, d) keep dot(n, o + t d) < d, as the reference does.
     for (var i = 0u; i < params.clip_count; i++) {
         let plane = params.clip[i];
@@ -200,12 +287,22 @@ fn march(fx: f32, fy: f32) -> Marched {
             let seg = max(min(step, len - start), 0.0);
             let t = t0 + start + 0.5 * seg;
             let p = o + d * t;
-            let c = classify(sample_volume(p));
-            if c.a <= 0.0 {
+            var m = Mixture(vec3f(0.0), 0.0, 0.0);
+            for (var v = 0u; v < params.volume_count; v++) {
+                let span = spans[v];
+                if span.y <= span.x || t < span.x || t > span.y {
+                    continue;
+                }
+                let c = classify(v, sample_volume(v, grid_of(v, p)));
+                if c.a > 0.0 {
+                    mixture_add(&m, c.rgb, correct(c.a, seg * params.volumes[v].inv_unit_distance));
+                }
+            }
+            if m.weight <= 0.0 {
                 continue;
             }
-            let a = correct(c.a, seg * params.inv_unit_distance);
-            let lit = c.rgb * shade(p) * params.light_color;
+            let lit = m.emitted / m.weight * shade(p) * params.light_color;
+            let a = m.alpha;
             on_sample(p, lit, a);
             let weight = (1.0 - acc.a) * a;
             acc = vec4f(acc.rgb + lit * weight, acc.a + weight);

@@ -18,7 +18,7 @@ fn a_volume_larger_than_the_adapter_allows_is_refused_up_front() {
     let voxels = Voxels::U8(vec![0; 2 * (max as usize + 1)]);
     let huge = StructuredVolume::new(dims, voxels, Vec3::ZERO, Vec3::ONE).unwrap();
     let good = phantom(16);
-    let scene = Scene::new(huge, (*good.transfer_function).clone());
+    let scene = Scene::new(huge, (*good.volumes()[0].transfer_function).clone());
     let (screen, eye) = off_axis_wall();
     let size = UVec2::new(16, 16);
     let rays = four_cameras(&screen, eye, size)[0].1;

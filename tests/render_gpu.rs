@@ -89,10 +89,10 @@ fn an_off_axis_side_wall_of_the_cologne_cave_renders_alike_on_gpu_and_cpu() {
     // the volume at a steep angle.
     let scene = {
         let s = phantom(48);
-        let volume = (*s.volume)
+        let volume = (*s.volumes()[0].volume)
             .clone()
             .placed(Vec3::new(-900.0, 300.0, 0.0), 800.0);
-        let tf = (*s.transfer_function)
+        let tf = (*s.volumes()[0].transfer_function)
             .clone()
             .with_unit_distance(400.0)
             .unwrap();
@@ -164,10 +164,11 @@ fn nearest_filter_is_nearest_on_both_renderers() {
     let desc = FrameDesc::new(size);
     let settings = RenderSettings::default();
     let linear = phantom(16);
-    let nearest = Scene {
-        volume: std::sync::Arc::new((*linear.volume).clone().with_filter(Filter::Nearest)),
-        transfer_function: linear.transfer_function.clone(),
-    };
+    let first = &linear.volumes()[0];
+    let nearest = Scene::shared(
+        std::sync::Arc::new((*first.volume).clone().with_filter(Filter::Nearest)),
+        first.transfer_function.clone(),
+    );
     let g = gpu.render(&nearest, &rays, &settings, &desc).unwrap();
     let c = cpu.render(&nearest, &rays, &settings, &desc).unwrap();
     let s = ssim(&g, &c).unwrap();
@@ -244,12 +245,12 @@ fn background_gradients_on_both_renderers() {
     use glam::Vec4;
     let mut gpu = gpu();
     let cpu = CpuRenderer::new();
-    let empty = Scene {
-        transfer_function: std::sync::Arc::new(
+    let empty = Scene::shared(
+        phantom(8).volumes()[0].volume.clone(),
+        std::sync::Arc::new(
             TransferFunction::new(vec![Vec4::ONE], vec![0.0], (0.0, 1.0), 1.0).unwrap(),
         ),
-        ..phantom(8)
-    };
+    );
     let (screen, eye) = off_axis_wall();
     let size = UVec2::new(24, 40);
     let rays = four_cameras(&screen, eye, size)[0].1;

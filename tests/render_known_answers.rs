@@ -269,10 +269,10 @@ fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
     let u = gpu.uploads();
     assert_eq!((u.volumes, u.transfer_functions), (1, 1));
     // A new transfer function re-uploads the table only.
-    let recoloured = Scene {
-        volume: scene.volume.clone(),
-        transfer_function: std::sync::Arc::new(preset("mri").unwrap()),
-    };
+    let recoloured = Scene::shared(
+        scene.volumes()[0].volume.clone(),
+        std::sync::Arc::new(preset("mri").unwrap()),
+    );
     gpu.render(&recoloured, &rays, &settings, &FrameDesc::new(size))
         .unwrap();
     let u = gpu.uploads();
@@ -287,10 +287,10 @@ fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
         Vec3::splat(2.0 / 7.0),
     )
     .unwrap();
-    let other = Scene {
-        volume: std::sync::Arc::new(volume),
-        transfer_function: recoloured.transfer_function.clone(),
-    };
+    let other = Scene::shared(
+        std::sync::Arc::new(volume),
+        recoloured.volumes()[0].transfer_function.clone(),
+    );
     let g = gpu
         .render(&other, &rays, &settings, &FrameDesc::new(size))
         .unwrap();
@@ -311,11 +311,14 @@ fn the_cpu_reference_notices_a_new_volume_or_transfer_function() {
     let settings = RenderSettings::default();
     let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
     let first = common::render::phantom(16);
-    let recoloured = Scene {
-        volume: first.volume.clone(),
-        transfer_function: std::sync::Arc::new(preset("mri").unwrap()),
-    };
-    let other = Scene::new(shepp_logan(12), (*recoloured.transfer_function).clone());
+    let recoloured = Scene::shared(
+        first.volumes()[0].volume.clone(),
+        std::sync::Arc::new(preset("mri").unwrap()),
+    );
+    let other = Scene::new(
+        shepp_logan(12),
+        (*recoloured.volumes()[0].transfer_function).clone(),
+    );
     // One renderer across scene changes against a fresh one per scene.
     let reused = CpuRenderer::new();
     for scene in [&first, &recoloured, &other, &first] {

@@ -32,10 +32,7 @@ impl PartialEq for RenderInputs {
     fn eq(&self, other: &Self) -> bool {
         let same_scene = match (&self.scene, &other.scene) {
             (None, None) => true,
-            (Some(a), Some(b)) => {
-                Arc::ptr_eq(&a.volume, &b.volume)
-                    && Arc::ptr_eq(&a.transfer_function, &b.transfer_function)
-            }
+            (Some(a), Some(b)) => a.same(b),
             _ => false,
         };
         same_scene

@@ -1,20 +1,18 @@
 //! The world: the scene a frame renders, its volumes (directly, or in
 //! groups placed by instances, as VTK builds worlds) and its lights.
 
-use std::sync::{Arc, Mutex};
-
 use glam::Mat4;
 
 use super::info::{p, Default, SubtypeInfo};
 use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
-use crate::scene::StructuredVolume;
+use crate::scene::MAX_VOLUMES;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::WORLD,
     subtype: "",
-    description: "the scene: caveray renders its first volume, lit by its first directional light",
+    description: "the scene: up to 8 volumes, composited sample by sample where they overlap, lit by the first directional light",
     extensions: &[],
     params: &[
         p(
@@ -52,41 +50,6 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 pub struct WorldModel {
     pub volumes: Vec<(ObjectRef, Option<Mat4>)>,
     pub lights: Vec<ObjectRef>,
-    /// The last placed copy of a transformed volume, kept while its field
-    /// and transform stay: renders of an unchanged world reuse it (and the
-    /// GPU keeps it uploaded).
-    pub placed: Arc<Mutex<Option<Placed>>>,
-}
-
-/// A field's grid under an instance transform.
-pub struct Placed {
-    source: Arc<StructuredVolume>,
-    transform: Mat4,
-    volume: Arc<StructuredVolume>,
-}
-
-impl WorldModel {
-    /// `volume` under `transform`: the same `Arc` as the last call's for
-    /// the same arguments.
-    pub fn place(
-        &self,
-        volume: &Arc<StructuredVolume>,
-        transform: Mat4,
-    ) -> Result<Arc<StructuredVolume>, String> {
-        let mut cache = self.placed.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = cache.as_ref() {
-            if Arc::ptr_eq(&p.source, volume) && p.transform == transform {
-                return Ok(Arc::clone(&p.volume));
-            }
-        }
-        let placed = Arc::new(volume.transformed(transform)?);
-        *cache = Some(Placed {
-            source: Arc::clone(volume),
-            transform,
-            volume: Arc::clone(&placed),
-        });
-        Ok(placed)
-    }
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
@@ -106,10 +69,15 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         };
         volumes.extend(members.into_iter().map(|v| (v, Some(model.transform))));
     }
+    if volumes.len() > MAX_VOLUMES {
+        return Err(format!(
+            "{} volumes (directly and through instances); caveray composites up to {MAX_VOLUMES} per world",
+            volumes.len()
+        ));
+    }
     Ok(Some(State::World(Derived::Ready(WorldModel {
         volumes,
         lights: objects(r, "light", T::LIGHT)?,
-        placed: Arc::new(Mutex::new(None)),
     }))))
 }
 

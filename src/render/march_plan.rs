@@ -5,27 +5,22 @@ use glam::{UVec3, Vec3, Vec4};
 
 use super::settings::{RenderSettings, Shading, AO_DIRECTIONS};
 use super::RenderError;
-use crate::scene::{Filter, Scene};
+use crate::scene::{Filter, PlacedVolume, Scene};
 
 /// Everything both renderers derive from scene and settings before any ray
 /// is cast, so that the CPU reference and the shader share one set of
 /// numbers rather than two derivations.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct MarchPlan {
-    pub dims: UVec3,
-    pub filter: Filter,
-    pub box_lo: Vec3,
-    pub box_hi: Vec3,
-    pub inv_spacing: Vec3,
-    /// Primary step length in world units.
+    /// One per scene volume, in the scene's order.
+    pub volumes: Vec<VolumePlan>,
+    /// Primary step length in world units: half the smallest cell edge of
+    /// any volume, times the step factor.
     pub step: f32,
-    pub inv_unit_distance: f32,
     /// Step of shadow and directional rays, and the AO radius unit: one
-    /// smallest voxel extent, independent of the primary step factor.
+    /// smallest cell edge, independent of the primary step factor.
     pub shading_step: f32,
     pub ao_radius: f32,
-    pub value_lo: f32,
-    pub value_scale: f32,
     pub termination: f32,
     pub depth_threshold: f32,
     pub clip_planes: Vec<Vec4>,
@@ -39,31 +34,77 @@ pub(crate) struct MarchPlan {
     pub directions: Vec<Vec3>,
 }
 
+/// How one volume is sampled: where a world point falls in its grid, and
+/// how its values meet its table.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct VolumePlan {
+    /// World point to grid coordinates (vertex i at i): rows x, y, z of
+    /// the affine map, applied to (p, 1).
+    pub world_to_grid: [Vec4; 3],
+    pub dims: UVec3,
+    pub filter: Filter,
+    /// Field value mapped to the table's first entry, and 1 / the width
+    /// of the transfer function's value range.
+    pub value_lo: f32,
+    pub value_scale: f32,
+    pub inv_unit_distance: f32,
+}
+
+impl VolumePlan {
+    fn new(placed: &PlacedVolume) -> Self {
+        let m = placed.world_to_grid().as_mat4();
+        let (lo, hi) = placed.transfer_function.value_range();
+        Self {
+            world_to_grid: [m.row(0), m.row(1), m.row(2)],
+            dims: placed.volume.dims(),
+            filter: placed.volume.filter(),
+            value_lo: lo,
+            value_scale: (hi - lo).recip(),
+            inv_unit_distance: placed.transfer_function.unit_distance().recip(),
+        }
+    }
+
+    /// Grid coordinates of world point `p`.
+    pub fn grid(&self, p: Vec3) -> Vec3 {
+        let q = p.extend(1.0);
+        let [x, y, z] = &self.world_to_grid;
+        Vec3::new(x.dot(q), y.dot(q), z.dot(q))
+    }
+
+    /// The grid's change per unit step along world direction `d`.
+    pub fn grid_direction(&self, d: Vec3) -> Vec3 {
+        let [x, y, z] = &self.world_to_grid;
+        Vec3::new(
+            x.truncate().dot(d),
+            y.truncate().dot(d),
+            z.truncate().dot(d),
+        )
+    }
+
+    /// The largest grid coordinate, per axis.
+    pub fn last_vertex(&self) -> Vec3 {
+        (self.dims - UVec3::ONE).as_vec3()
+    }
+}
+
 impl MarchPlan {
     pub fn new(scene: &Scene, settings: &RenderSettings) -> Result<Self, RenderError> {
         settings.validate()?;
-        let volume = &scene.volume;
-        let tf = &scene.transfer_function;
-        let (lo, hi) = volume.bounds();
-        let smallest = volume.spacing().min_element();
-        let (vlo, vhi) = tf.value_range();
+        let smallest = scene
+            .volumes()
+            .iter()
+            .map(PlacedVolume::smallest_cell)
+            .fold(f32::INFINITY, f32::min);
         let directions = match settings.shading {
             Shading::Ao | Shading::ShadowsAo => ao_directions(),
             Shading::Directional(n) => random_directions(n),
             Shading::None | Shading::Shadows => Vec::new(),
         };
         Ok(Self {
-            dims: volume.dims(),
-            filter: volume.filter(),
-            box_lo: lo,
-            box_hi: hi,
-            inv_spacing: volume.spacing().recip(),
+            volumes: scene.volumes().iter().map(VolumePlan::new).collect(),
             step: 0.5 * smallest * settings.step_factor,
-            inv_unit_distance: tf.unit_distance().recip(),
             shading_step: smallest,
             ao_radius: 2.0 * smallest,
-            value_lo: vlo,
-            value_scale: (vhi - vlo).recip(),
             termination: settings.termination,
             depth_threshold: settings.depth_threshold,
             clip_planes: settings.clip_planes.as_slice().to_vec(),

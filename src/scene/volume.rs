@@ -155,33 +155,6 @@ impl StructuredVolume {
     pub fn value_range(&self) -> (f32, f32) {
         self.value_range
     }
-    /// The same grid under the affine `transform` (object to world), which
-    /// must keep the grid's axes: a translation and a positive scale per
-    /// axis. Rotations and shears are refused with the reason; the voxels
-    /// are shared, not copied.
-    pub fn transformed(&self, transform: glam::Mat4) -> Result<Self, String> {
-        let linear = glam::Mat3::from_mat4(transform);
-        let scale = Vec3::new(linear.x_axis.x, linear.y_axis.y, linear.z_axis.z);
-        let off_diagonal = [
-            linear.x_axis.y,
-            linear.x_axis.z,
-            linear.y_axis.x,
-            linear.y_axis.z,
-            linear.z_axis.x,
-            linear.z_axis.y,
-        ];
-        let projective = transform.row(3) != glam::Vec4::W;
-        if projective || off_diagonal.iter().any(|v| *v != 0.0) || scale.min_element() <= 0.0 {
-            return Err(format!(
-                "transform {transform} rotates, shears, mirrors or projects the volume; caveray renders translated and axis-scaled volumes only"
-            ));
-        }
-        let mut placed = self.clone();
-        placed.origin = transform.transform_point3(self.origin);
-        placed.spacing = self.spacing * scale;
-        Ok(placed)
-    }
-
     /// World-space box of the grid's vertices.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let extent = (self.dims - UVec3::ONE).as_vec3() * self.spacing;

@@ -91,7 +91,7 @@ impl VolumeInfo {
     pub fn of(name: &str, scene: &Scene) -> Self {
         Self {
             name: name.to_string(),
-            dims: scene.volume.dims().to_array(),
+            dims: scene.volumes()[0].volume.dims().to_array(),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Frame operations: gather the committed scene, hand it to the render
 //! thread, wait, map and unmap.
 
-use glam::UVec2;
+use glam::{Mat4, UVec2};
 
 use super::Device;
 use crate::device::frame::slot::Channel;
@@ -10,7 +10,7 @@ use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::types::{kind_name, DataType, StatusCode};
 use crate::device::worker::RenderJob;
 use crate::render::{ColorData, FrameDesc};
-use crate::scene::Scene;
+use crate::scene::{PlacedVolume, Scene};
 
 /// A mapped channel: pointer to the first (lower-left) pixel, size, type.
 pub struct Mapped {
@@ -153,45 +153,32 @@ impl Device {
             settings.light = light.towards;
             settings.light_color = light.color;
         }
-        let volumes = &world_model.volumes;
-        if volumes.len() > 1 {
-            self.warn(
-                Some(frame),
-                format!(
-                    "{} has {} volumes; caveray renders the first one only",
-                    world.describe(),
-                    volumes.len()
-                ),
-            );
+        let mut placed = Vec::with_capacity(world_model.volumes.len());
+        for (v, transform) in &world_model.volumes {
+            let model = match &v.lock().state {
+                State::Volume(m) => m.ready(&v.describe())?.clone(),
+                _ => return Err(format!("{} is not implemented by caveray", v.describe())),
+            };
+            let field = &model.field;
+            let volume = match &field.lock().state {
+                State::Field(f) => f.ready(&field.describe())?.clone(),
+                _ => {
+                    return Err(format!(
+                        "{} is not implemented by caveray",
+                        field.describe()
+                    ))
+                }
+            };
+            placed.push(PlacedVolume {
+                volume,
+                transfer_function: model.transfer_function,
+                transform: transform.unwrap_or(Mat4::IDENTITY),
+            });
         }
-        let scene = match volumes.first() {
-            None => None,
-            Some((v, transform)) => {
-                let model = match &v.lock().state {
-                    State::Volume(m) => m.ready(&v.describe())?.clone(),
-                    _ => return Err(format!("{} is not implemented by caveray", v.describe())),
-                };
-                let field = &model.field;
-                let volume = match &field.lock().state {
-                    State::Field(f) => f.ready(&field.describe())?.clone(),
-                    _ => {
-                        return Err(format!(
-                            "{} is not implemented by caveray",
-                            field.describe()
-                        ))
-                    }
-                };
-                let volume = match transform {
-                    None => volume,
-                    Some(m) => world_model
-                        .place(&volume, *m)
-                        .map_err(|e| format!("{}: {e}", v.describe()))?,
-                };
-                Some(Scene {
-                    volume,
-                    transfer_function: model.transfer_function,
-                })
-            }
+        let scene = if placed.is_empty() {
+            None
+        } else {
+            Some(Scene::placed(placed).map_err(|e| format!("{}: {e}", world.describe()))?)
         };
         let mut desc =
             FrameDesc::new(size).with_color(color_type.and_then(color_format).unwrap_or_default());

@@ -8,11 +8,12 @@ use crate::device::info::{p, Default, SubtypeInfo, MAT4};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
+use crate::scene::PlacedVolume;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::INSTANCE,
     subtype: "transform",
-    description: "a group placed by an affine transform (translation and axis scale for volumes)",
+    description: "a group placed by an affine, invertible transform",
     extensions: &["ANARI_KHR_INSTANCE_TRANSFORM"],
     params: &[
         p(
@@ -48,9 +49,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         .ok_or("parameter 'group' (GROUP) is required")?
         .clone();
     let transform = r.mat4("transform")?;
-    if !transform.is_finite() {
-        return Err(format!("transform {transform} is not finite"));
-    }
+    PlacedVolume::check_transform(transform).map_err(|e| format!("transform {transform} {e}"))?;
     Ok(Some(State::Instance(Derived::Ready(InstanceModel {
         group,
         transform,

@@ -1,6 +1,6 @@
 use glam::{Vec3, Vec4};
 
-use super::sample::{correct, Field};
+use super::sample::{correct, Field, Mixture};
 use crate::geometry::RayGen;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
 
@@ -13,15 +13,30 @@ pub(super) struct RayResult {
     pub samples: u32,
 }
 
-/// Marches one primary ray of `rays` with unit direction `dir`.
+/// Marches one primary ray of `rays` with unit direction `dir` through
+/// every volume at once: one step sequence over the union of their spans,
+/// each sample mixing the volumes whose span holds it.
 pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: Vec4) -> RayResult {
     let mut samples = 0;
     let plan = field.plan;
     let mut acc = Vec4::ZERO;
     let mut depth = f32::INFINITY;
     let clip = (rays.t_near, rays.t_far);
-    let range = enter_exit(origin, dir, plan.box_lo, plan.box_hi, clip)
-        .and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
+    // Each volume's span along the ray, found in its grid, where the
+    // affine map keeps the ray's parameter t.
+    let spans: Vec<Option<(f32, f32)>> = field
+        .grids
+        .iter()
+        .map(|g| {
+            let (o, d) = (g.plan.grid(origin), g.plan.grid_direction(dir));
+            enter_exit(o, d, Vec3::ZERO, g.plan.last_vertex(), clip)
+        })
+        .collect();
+    let union = spans.iter().flatten().fold(None, |u, &(a, b)| match u {
+        None => Some((a, b)),
+        Some((lo, hi)) => Some((a.min(lo), b.max(hi))),
+    });
+    let range = union.and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
     if let Some((t0, t1)) = range {
         let len = t1 - t0;
         let n = (len / plan.step).ceil() as u32;
@@ -32,15 +47,25 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
             let seg = plan.step.min(len - start).max(0.0);
             let t = t0 + start + 0.5 * seg;
             let p = origin + dir * t;
-            samples += 1;
-            let c = field.classify(field.sample(p));
-            if c.w <= 0.0 {
+            let mut mixture = Mixture::default();
+            for (grid, span) in field.grids.iter().zip(&spans) {
+                let Some((a, b)) = *span else { continue };
+                if t < a || t > b {
+                    continue;
+                }
+                samples += 1;
+                let c = grid.classify(grid.sample(grid.plan.grid(p)));
+                if c.w > 0.0 {
+                    let a = correct(c.w, seg * grid.plan.inv_unit_distance);
+                    mixture.add(c.truncate(), a);
+                }
+            }
+            if mixture.is_empty() {
                 continue;
             }
-            let a = correct(c.w, seg * plan.inv_unit_distance);
             let s = shade(field, p, &mut samples);
-            let weight = (1.0 - acc.w) * a;
-            acc = (acc.truncate() + c.truncate() * s * plan.light_color * weight)
+            let weight = (1.0 - acc.w) * mixture.alpha;
+            acc = (acc.truncate() + mixture.color() * s * plan.light_color * weight)
                 .extend(acc.w + weight);
             if depth == f32::INFINITY && acc.w >= plan.depth_threshold {
                 depth = match rays.eye {
@@ -110,15 +135,14 @@ pub(super) fn clip_to_planes(
 /// Light factor of the sample at `p` under the plan's shading mode.
 fn shade(field: &Field, p: Vec3, samples: &mut u32) -> f32 {
     let plan = field.plan;
-    let exponent = plan.shading_step * plan.inv_unit_distance;
     let shadow = |samples: &mut u32| {
-        let t = transmittance(field, p, plan.light, SHADOW_STEPS, exponent, samples);
+        let t = transmittance(field, p, plan.light, SHADOW_STEPS, samples);
         SHADOW_AMBIENT + (1.0 - SHADOW_AMBIENT) * t
     };
     let ao = |samples: &mut u32| {
         let mut occluded = 0.0;
         for &d in &plan.directions {
-            occluded += opacity_at(field, p + d * plan.ao_radius, samples);
+            occluded += field.opacity(p + d * plan.ao_radius, None, samples);
         }
         1.0 - occluded / plan.directions.len() as f32
     };
@@ -130,40 +154,24 @@ fn shade(field: &Field, p: Vec3, samples: &mut u32) -> f32 {
         Shading::Directional(n) => {
             let mut sum = 0.0;
             for &d in &plan.directions {
-                sum += transmittance(field, p, d, DIRECTIONAL_STEPS, exponent, samples);
+                sum += transmittance(field, p, d, DIRECTIONAL_STEPS, samples);
             }
             sum / n as f32
         }
     }
 }
 
-/// Opacity of the sample at `p`, zero (and no sample taken) outside.
-fn opacity_at(field: &Field, p: Vec3, samples: &mut u32) -> f32 {
-    if field.inside(p) {
-        *samples += 1;
-        field.classify(field.sample(p)).w
-    } else {
-        0.0
-    }
-}
-
 /// Transmittance over up to `steps` shading steps from `p` along `dir`,
-/// ending where the ray leaves the volume.
-fn transmittance(
-    field: &Field,
-    p: Vec3,
-    dir: Vec3,
-    steps: u32,
-    exponent: f32,
-    samples: &mut u32,
-) -> f32 {
+/// ending where the ray leaves every volume.
+fn transmittance(field: &Field, p: Vec3, dir: Vec3, steps: u32, samples: &mut u32) -> f32 {
+    let step = field.plan.shading_step;
     let mut t = 1.0;
     for k in 1..=steps {
-        let q = p + dir * (field.plan.shading_step * k as f32);
+        let q = p + dir * (step * k as f32);
         if !field.inside(q) {
             break;
         }
-        t *= 1.0 - correct(opacity_at(field, q, samples), exponent);
+        t *= 1.0 - field.opacity(q, Some(step), samples);
     }
     t
 }

@@ -15,22 +15,20 @@ use super::frame::{linear_to_srgb, to_unorm8, ColorData, ColorFormat, Frame, Fra
 use super::march_plan::MarchPlan;
 use super::{RenderError, RenderSettings};
 use crate::geometry::RayGen;
-use crate::scene::Scene;
-use crate::scene::{StructuredVolume, TransferFunction};
+use crate::scene::{Scene, StructuredVolume, TransferFunction};
+use sample::Converted;
 
 #[derive(Debug, Default)]
 pub struct CpuRenderer {
-    /// The last scene's voxels as f32 and its table, kept while the scene
-    /// brings the same `Arc`s, as the GPU keeps its uploads.
-    cache: Mutex<Option<Prepared>>,
+    /// The last scene's voxels as f32 and its tables, kept while scenes
+    /// bring the same `Arc`s, as the GPU keeps its uploads.
+    cache: Mutex<Prepared>,
 }
 
-#[derive(Debug)]
+#[derive(Debug, Default)]
 struct Prepared {
-    volume: Arc<StructuredVolume>,
-    values: Arc<Vec<f32>>,
-    transfer_function: Arc<TransferFunction>,
-    table: Arc<Vec<Vec4>>,
+    values: Vec<(Arc<StructuredVolume>, Arc<Vec<f32>>)>,
+    tables: Vec<(Arc<TransferFunction>, Arc<Vec<Vec4>>)>,
 }
 
 impl CpuRenderer {
@@ -38,30 +36,29 @@ impl CpuRenderer {
         Self::default()
     }
 
-    /// The scene's voxel values and table, converted only when it changed.
-    fn prepare(&self, scene: &Scene) -> (Arc<Vec<f32>>, Arc<Vec<Vec4>>) {
+    /// Each volume's values and table, converted only when new.
+    fn prepare(&self, scene: &Scene) -> Vec<Converted> {
         // A poisoned lock only means a panic elsewhere; the cache is rebuilt.
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
-        let values = match cache.as_ref() {
-            Some(p) if Arc::ptr_eq(&p.volume, &scene.volume) => Arc::clone(&p.values),
-            _ => {
-                let voxels = scene.volume.voxels();
+        let mut next = Prepared::default();
+        for placed in scene.volumes() {
+            let values = reuse(&cache.values, &placed.volume).unwrap_or_else(|| {
+                let voxels = placed.volume.voxels();
                 Arc::new((0..voxels.len()).map(|i| voxels.value(i)).collect())
-            }
-        };
-        let table = match cache.as_ref() {
-            Some(p) if Arc::ptr_eq(&p.transfer_function, &scene.transfer_function) => {
-                Arc::clone(&p.table)
-            }
-            _ => Arc::new(scene.transfer_function.table()),
-        };
-        *cache = Some(Prepared {
-            volume: Arc::clone(&scene.volume),
-            values: Arc::clone(&values),
-            transfer_function: Arc::clone(&scene.transfer_function),
-            table: Arc::clone(&table),
-        });
-        (values, table)
+            });
+            let tf = &placed.transfer_function;
+            let table = reuse(&cache.tables, tf).unwrap_or_else(|| Arc::new(tf.table()));
+            next.values.push((Arc::clone(&placed.volume), values));
+            next.tables.push((Arc::clone(tf), table));
+        }
+        let converted = next
+            .values
+            .iter()
+            .zip(&next.tables)
+            .map(|((_, v), (_, t))| (Arc::clone(v), Arc::clone(t)))
+            .collect();
+        *cache = next;
+        converted
     }
 
     pub fn render(
@@ -86,8 +83,8 @@ impl CpuRenderer {
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         let plan = MarchPlan::new(scene, settings)?;
-        let (values, table) = self.prepare(scene);
-        let field = sample::Field::new(&plan, &values, &table);
+        let data = self.prepare(scene);
+        let field = sample::Field::new(&plan, &data);
         let w = desc.size.x as usize;
         let mut color = vec![0.0f32; 4 * desc.pixels()];
         let mut depth = vec![0.0f32; desc.pixels()];
@@ -138,4 +135,12 @@ impl CpuRenderer {
             samples,
         })
     }
+}
+
+/// What `cache` holds for `key`, if it holds it.
+fn reuse<K, V>(cache: &[(Arc<K>, Arc<V>)], key: &Arc<K>) -> Option<Arc<V>> {
+    cache
+        .iter()
+        .find(|(k, _)| Arc::ptr_eq(k, key))
+        .map(|(_, v)| Arc::clone(v))
 }

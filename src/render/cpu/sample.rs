@@ -1,28 +1,22 @@
+use std::sync::Arc;
+
 use glam::{IVec3, Vec3, Vec4};
 
-use crate::render::march_plan::MarchPlan;
+use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::scene::{Filter, TABLE_SIZE};
 
-/// The volume and table as the CPU reads them: voxel values already
-/// normalised to f32, exactly what the GPU texture holds.
-pub(super) struct Field<'a> {
-    pub plan: &'a MarchPlan,
+/// One volume as the CPU reads it: voxel values already normalised to
+/// f32, exactly what the GPU texture holds, and its table.
+pub(super) struct Grid<'a> {
+    pub plan: &'a VolumePlan,
     values: &'a [f32],
     table: &'a [Vec4],
 }
 
-impl<'a> Field<'a> {
-    pub fn new(plan: &'a MarchPlan, values: &'a [f32], table: &'a [Vec4]) -> Self {
-        debug_assert_eq!(table.len(), TABLE_SIZE);
-        Self {
-            plan,
-            values,
-            table,
-        }
-    }
-
-    pub fn inside(&self, p: Vec3) -> bool {
-        p.cmpge(self.plan.box_lo).all() && p.cmple(self.plan.box_hi).all()
+impl Grid<'_> {
+    /// Whether grid point `g` lies within the grid's vertices.
+    pub fn contains(&self, g: Vec3) -> bool {
+        g.cmpge(Vec3::ZERO).all() && g.cmple(self.plan.last_vertex()).all()
     }
 
     fn voxel(&self, i: IVec3) -> f32 {
@@ -30,13 +24,12 @@ impl<'a> Field<'a> {
         self.values[(i.x + d.x * (i.y + d.y * i.z)) as usize]
     }
 
-    /// Trilinear interpolation between the eight surrounding grid
-    /// vertices, or the nearest vertex's value.
-    pub fn sample(&self, p: Vec3) -> f32 {
-        let plan = self.plan;
-        let hi = plan.dims.as_ivec3() - IVec3::ONE;
-        let g = ((p - plan.box_lo) * plan.inv_spacing).clamp(Vec3::ZERO, hi.as_vec3());
-        if plan.filter == Filter::Nearest {
+    /// Trilinear interpolation between the eight grid vertices around
+    /// grid point `g`, or the nearest vertex's value.
+    pub fn sample(&self, g: Vec3) -> f32 {
+        let hi = self.plan.dims.as_ivec3() - IVec3::ONE;
+        let g = g.clamp(Vec3::ZERO, hi.as_vec3());
+        if self.plan.filter == Filter::Nearest {
             // floor(g + 0.5), not round(): the shader's rounding, halves up.
             return self.voxel((g + Vec3::splat(0.5)).floor().as_ivec3().min(hi));
         }
@@ -62,6 +55,93 @@ impl<'a> Field<'a> {
     }
 }
 
+/// One volume's values as f32 and its table, shared with the renderer's
+/// cache.
+pub(super) type Converted = (Arc<Vec<f32>>, Arc<Vec<Vec4>>);
+
+/// Every volume of the scene, and the plan they are marched by.
+pub(super) struct Field<'a> {
+    pub plan: &'a MarchPlan,
+    pub grids: Vec<Grid<'a>>,
+}
+
+impl<'a> Field<'a> {
+    /// `data` holds each volume's values and table, in the plan's order.
+    pub fn new(plan: &'a MarchPlan, data: &'a [Converted]) -> Self {
+        debug_assert_eq!(plan.volumes.len(), data.len());
+        let grids = plan
+            .volumes
+            .iter()
+            .zip(data)
+            .map(|(plan, (values, table))| {
+                debug_assert_eq!(table.len(), TABLE_SIZE);
+                Grid {
+                    plan,
+                    values,
+                    table,
+                }
+            })
+            .collect();
+        Self { plan, grids }
+    }
+
+    /// Whether world point `p` lies in any volume.
+    pub fn inside(&self, p: Vec3) -> bool {
+        self.grids.iter().any(|g| g.contains(g.plan.grid(p)))
+    }
+
+    /// Opacity at `p` of every volume there, mixed: each volume's table
+    /// opacity, corrected to a segment `length` world units long (`None`:
+    /// as the table gives it, per unit distance).
+    pub fn opacity(&self, p: Vec3, length: Option<f32>, samples: &mut u32) -> f32 {
+        let mut mixture = Mixture::default();
+        for grid in &self.grids {
+            let g = grid.plan.grid(p);
+            if !grid.contains(g) {
+                continue;
+            }
+            *samples += 1;
+            let a = grid.classify(grid.sample(g)).w;
+            let a = match length {
+                Some(l) => correct(a, l * grid.plan.inv_unit_distance),
+                None => a,
+            };
+            mixture.add(Vec3::ZERO, a);
+        }
+        mixture.alpha
+    }
+}
+
+/// Overlapping volumes at one sample, as one medium: their opacities
+/// combine as independent absorbers (1 - product of transmittances) and
+/// their colours in proportion to their opacities, so the result does not
+/// depend on the volumes' order.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Mixture {
+    /// Sum of colour times opacity.
+    emitted: Vec3,
+    /// Sum of opacities.
+    weight: f32,
+    pub alpha: f32,
+}
+
+impl Mixture {
+    pub fn add(&mut self, rgb: Vec3, a: f32) {
+        self.emitted += rgb * a;
+        self.weight += a;
+        self.alpha += (1.0 - self.alpha) * a;
+    }
+
+    /// Straight colour; meaningful once any opacity was added.
+    pub fn color(&self) -> Vec3 {
+        self.emitted / self.weight
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.weight <= 0.0
+    }
+}
+
 /// WGSL's `mix`.
 fn mix(a: f32, b: f32, t: f32) -> f32 {
     a * (1.0 - t) + b * t
@@ -74,5 +154,29 @@ pub(super) fn correct(a: f32, exponent: f32) -> f32 {
         1.0
     } else {
         1.0 - (1.0 - a).powf(exponent)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mixture_does_not_depend_on_order_and_one_volume_is_itself() {
+        let red = (Vec3::X, 0.3);
+        let blue = (Vec3::Z, 0.6);
+        let (mut ab, mut ba, mut one) =
+            (Mixture::default(), Mixture::default(), Mixture::default());
+        ab.add(red.0, red.1);
+        ab.add(blue.0, blue.1);
+        ba.add(blue.0, blue.1);
+        ba.add(red.0, red.1);
+        one.add(red.0, red.1);
+        assert!((ab.alpha - ba.alpha).abs() < 1e-6);
+        assert!((ab.alpha - (1.0 - 0.7 * 0.4)).abs() < 1e-6);
+        assert!((ab.color() - ba.color()).abs().max_element() < 1e-6);
+        assert!((ab.color() - Vec3::new(1.0 / 3.0, 0.0, 2.0 / 3.0)).length() < 1e-6);
+        assert_eq!(one.alpha, 0.3);
+        assert!((one.color() - Vec3::X).length() < 1e-6);
     }
 }

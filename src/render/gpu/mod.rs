@@ -23,7 +23,7 @@ use super::march_plan::MarchPlan;
 use super::settings::MAX_DIRECTIONS;
 use super::{BackgroundImage, RenderError, RenderSettings};
 use crate::geometry::RayGen;
-use crate::scene::{Scene, StructuredVolume, TransferFunction};
+use crate::scene::{Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
 
 /// How often data went to the GPU; lets tests (and curious users) check
 /// that unchanged scenes are not uploaded again.
@@ -39,8 +39,14 @@ pub struct GpuRenderer {
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     directions: wgpu::Buffer,
-    volume: Option<(Arc<StructuredVolume>, wgpu::TextureView)>,
-    table: Option<(Arc<TransferFunction>, wgpu::TextureView)>,
+    /// The scene's volumes on the GPU, in its order.
+    volumes: Vec<(Arc<StructuredVolume>, wgpu::TextureView)>,
+    /// Bound where a scene has fewer than MAX_VOLUMES volumes.
+    no_volume: wgpu::TextureView,
+    /// One row per volume slot; which transfer function each row holds.
+    table: wgpu::Texture,
+    table_view: wgpu::TextureView,
+    tables: [Option<Arc<TransferFunction>>; MAX_VOLUMES],
     /// The background image bound now (`None`: the stand-in), and the
     /// stand-in bound when there is none.
     background: Option<(Arc<BackgroundImage>, wgpu::TextureView)>,
@@ -74,6 +80,13 @@ impl GpuRenderer {
                 layout_entry(5, storage(false)),
                 layout_entry(6, storage(false)),
                 layout_entry(7, texture(wgpu::TextureViewDimension::D2)),
+                layout_entry(8, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(9, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(10, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(11, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(12, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(13, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(14, texture(wgpu::TextureViewDimension::D3)),
             ],
         });
         let pipeline = compute_pipeline(device, "raycast", &shaders::raycast(), &[&layout], "main");
@@ -96,6 +109,9 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE,
         );
         let no_background = resources::upload_background(&ctx, None);
+        let no_volume = resources::stand_in_volume(&ctx);
+        let table = resources::table_texture(&ctx);
+        let table_view = table.create_view(&Default::default());
         ctx.check()?;
         Ok(Self {
             ctx,
@@ -103,8 +119,11 @@ impl GpuRenderer {
             layout,
             params,
             directions,
-            volume: None,
-            table: None,
+            volumes: Vec::new(),
+            no_volume,
+            table,
+            table_view,
+            tables: Default::default(),
             background: None,
             no_background,
             target: None,
@@ -140,14 +159,16 @@ impl GpuRenderer {
     /// this adapter allows.
     pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
         let limits = &self.ctx.limits;
-        let dims = scene.volume.dims();
         let max = limits.max_texture_dimension_3d;
-        if dims.max_element() > max {
-            return Err(RenderError::VolumeTooLarge {
-                dims: [dims.x, dims.y, dims.z],
-                max,
-                adapter: self.ctx.info.name.clone(),
-            });
+        for placed in scene.volumes() {
+            let dims = placed.volume.dims();
+            if dims.max_element() > max {
+                return Err(RenderError::VolumeTooLarge {
+                    dims: [dims.x, dims.y, dims.z],
+                    max,
+                    adapter: self.ctx.info.name.clone(),
+                });
+            }
         }
         let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
         let bytes = pixels * desc.color.bytes_per_pixel();
@@ -274,23 +295,40 @@ impl GpuRenderer {
         self.ctx.check()
     }
 
-    /// Uploads whatever of the scene is not on the GPU; true if anything was.
+    /// Uploads whatever of the scene is not on the GPU; true if the
+    /// volumes bound changed (tables are rows of one texture, rewritten in
+    /// place).
     fn upload_scene(&mut self, scene: &Scene) -> bool {
-        let mut changed = false;
-        if !matches!(&self.volume, Some((v, _)) if Arc::ptr_eq(v, &scene.volume)) {
-            let view = resources::upload_volume(&self.ctx, &scene.volume);
-            self.volume = Some((Arc::clone(&scene.volume), view));
-            self.uploads.volumes += 1;
-            self.bind_group = None;
-            changed = true;
+        let mut volumes = Vec::with_capacity(scene.volumes().len());
+        for placed in scene.volumes() {
+            // A grid placed twice is one texture.
+            let kept = volumes
+                .iter()
+                .chain(&self.volumes)
+                .find(|(v, _)| Arc::ptr_eq(v, &placed.volume))
+                .map(|(_, view)| view.clone());
+            let view = kept.unwrap_or_else(|| {
+                self.uploads.volumes += 1;
+                resources::upload_volume(&self.ctx, &placed.volume)
+            });
+            volumes.push((Arc::clone(&placed.volume), view));
         }
-        let tf = &scene.transfer_function;
-        if !matches!(&self.table, Some((t, _)) if Arc::ptr_eq(t, tf)) {
-            let view = resources::upload_table(&self.ctx, tf);
-            self.table = Some((Arc::clone(tf), view));
-            self.uploads.transfer_functions += 1;
+        let changed = volumes.len() != self.volumes.len()
+            || volumes
+                .iter()
+                .zip(&self.volumes)
+                .any(|((a, _), (b, _))| !Arc::ptr_eq(a, b));
+        self.volumes = volumes;
+        for (row, placed) in scene.volumes().iter().enumerate() {
+            let tf = &placed.transfer_function;
+            if !matches!(&self.tables[row], Some(t) if Arc::ptr_eq(t, tf)) {
+                resources::write_table(&self.ctx, &self.table, row as u32, tf);
+                self.tables[row] = Some(Arc::clone(tf));
+                self.uploads.transfer_functions += 1;
+            }
+        }
+        if changed {
             self.bind_group = None;
-            changed = true;
         }
         changed
     }
@@ -324,8 +362,11 @@ impl GpuRenderer {
             changed = true;
         }
         if changed {
-            let (_, volume) = self.volume.as_ref().expect("uploaded above");
-            let (_, table) = self.table.as_ref().expect("uploaded above");
+            let volume = |i: usize| {
+                wgpu::BindingResource::TextureView(
+                    self.volumes.get(i).map_or(&self.no_volume, |(_, v)| v),
+                )
+            };
             let target = self.target.as_ref().expect("made above");
             fn buffer(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
                 b.as_entire_binding()
@@ -333,8 +374,8 @@ impl GpuRenderer {
             // In binding order, as shaders/volume.wgsl declares them.
             let resources = [
                 buffer(&self.params),
-                wgpu::BindingResource::TextureView(volume),
-                wgpu::BindingResource::TextureView(table),
+                volume(0),
+                wgpu::BindingResource::TextureView(&self.table_view),
                 buffer(&self.directions),
                 buffer(&target.color),
                 buffer(&target.depth),
@@ -344,6 +385,13 @@ impl GpuRenderer {
                         .as_ref()
                         .map_or(&self.no_background, |(_, v)| v),
                 ),
+                volume(1),
+                volume(2),
+                volume(3),
+                volume(4),
+                volume(5),
+                volume(6),
+                volume(7),
             ];
             let group = bind_group(&self.ctx.device, "raycast", &self.layout, resources);
             self.bind_group = Some(group);

@@ -1,9 +1,9 @@
-use glam::UVec2;
+use glam::{UVec2, UVec3};
 
 use super::context::Context;
 use crate::render::frame::ColorFormat;
 use crate::render::BackgroundImage;
-use crate::scene::{StructuredVolume, TransferFunction, TABLE_SIZE};
+use crate::scene::{StructuredVolume, TransferFunction, MAX_VOLUMES, TABLE_SIZE};
 
 /// Slices per write when uploading a volume, so staging memory stays
 /// bounded (about 64 MiB) however large the volume is.
@@ -11,7 +11,17 @@ const UPLOAD_BYTES: u64 = 64 << 20;
 
 /// The volume as an R32Float 3D texture holding normalised values.
 pub(super) fn upload_volume(ctx: &Context, volume: &StructuredVolume) -> wgpu::TextureView {
-    let dims = volume.dims();
+    volume_texture(ctx, volume.dims(), |i| volume.voxels().value(i))
+}
+
+/// A 1 x 1 x 1 volume bound in the slots a scene leaves empty.
+pub(super) fn stand_in_volume(ctx: &Context) -> wgpu::TextureView {
+    volume_texture(ctx, UVec3::ONE, |_| 0.0)
+}
+
+/// An R32Float 3D texture of `dims` holding `value(i)` at voxel i (x
+/// fastest), written a bounded slab at a time.
+fn volume_texture(ctx: &Context, dims: UVec3, value: impl Fn(usize) -> f32) -> wgpu::TextureView {
     let size = wgpu::Extent3d {
         width: dims.x,
         height: dims.y,
@@ -29,13 +39,12 @@ pub(super) fn upload_volume(ctx: &Context, volume: &StructuredVolume) -> wgpu::T
     });
     let slice_voxels = dims.x as usize * dims.y as usize;
     let slices_per_write = (UPLOAD_BYTES / (4 * slice_voxels as u64)).max(1) as u32;
-    let voxels = volume.voxels();
     let mut z = 0;
     while z < dims.z {
         let n = slices_per_write.min(dims.z - z);
         let first = z as usize * slice_voxels;
         let bytes: Vec<u8> = (first..first + n as usize * slice_voxels)
-            .flat_map(|i| voxels.value(i).to_le_bytes())
+            .flat_map(|i| value(i).to_le_bytes())
             .collect();
         ctx.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
@@ -75,35 +84,40 @@ pub(super) fn upload_background(
         .flat_map(|c| c.to_array())
         .flat_map(f32::to_le_bytes)
         .collect();
-    rgba_texture(ctx, "background", size, &bytes)
+    rgba_texture(ctx, "background", size, Some(&bytes)).create_view(&Default::default())
 }
 
-/// The transfer function's table as a TABLE_SIZE x 1 RGBA32Float texture.
-pub(super) fn upload_table(ctx: &Context, tf: &TransferFunction) -> wgpu::TextureView {
+/// The tables: TABLE_SIZE x MAX_VOLUMES RGBA32Float, row v for volume v.
+pub(super) fn table_texture(ctx: &Context) -> wgpu::Texture {
+    rgba_texture(
+        ctx,
+        "transfer functions",
+        UVec2::new(TABLE_SIZE as u32, MAX_VOLUMES as u32),
+        None,
+    )
+}
+
+/// Writes `tf`'s table into row `row` of the tables.
+pub(super) fn write_table(ctx: &Context, tables: &wgpu::Texture, row: u32, tf: &TransferFunction) {
     let bytes: Vec<u8> = tf
         .table()
         .iter()
         .flat_map(|c| c.to_array())
         .flat_map(f32::to_le_bytes)
         .collect();
-    rgba_texture(
-        ctx,
-        "transfer function",
-        UVec2::new(TABLE_SIZE as u32, 1),
-        &bytes,
-    )
+    write_rows(ctx, tables, row, UVec2::new(TABLE_SIZE as u32, 1), &bytes);
 }
 
-/// A 2D RGBA32Float texture holding `bytes`, row by row.
-fn rgba_texture(ctx: &Context, label: &str, size: UVec2, bytes: &[u8]) -> wgpu::TextureView {
-    let extent = wgpu::Extent3d {
-        width: size.x,
-        height: size.y,
-        depth_or_array_layers: 1,
-    };
+/// A 2D RGBA32Float texture of `size`, holding `bytes` row by row if
+/// given.
+fn rgba_texture(ctx: &Context, label: &str, size: UVec2, bytes: Option<&[u8]>) -> wgpu::Texture {
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
-        size: extent,
+        size: wgpu::Extent3d {
+            width: size.x,
+            height: size.y,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -111,11 +125,23 @@ fn rgba_texture(ctx: &Context, label: &str, size: UVec2, bytes: &[u8]) -> wgpu::
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
+    if let Some(bytes) = bytes {
+        write_rows(ctx, &texture, 0, size, bytes);
+    }
+    texture
+}
+
+/// Writes `size` texels of RGBA32Float, row by row, from row `first` on.
+fn write_rows(ctx: &Context, texture: &wgpu::Texture, first: u32, size: UVec2, bytes: &[u8]) {
     ctx.queue.write_texture(
         wgpu::TexelCopyTextureInfo {
-            texture: &texture,
+            texture,
             mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: first,
+                z: 0,
+            },
             aspect: wgpu::TextureAspect::All,
         },
         bytes,
@@ -124,9 +150,12 @@ fn rgba_texture(ctx: &Context, label: &str, size: UVec2, bytes: &[u8]) -> wgpu::
             bytes_per_row: Some(16 * size.x),
             rows_per_image: None,
         },
-        extent,
+        wgpu::Extent3d {
+            width: size.x,
+            height: size.y,
+            depth_or_array_layers: 1,
+        },
     );
-    texture.create_view(&Default::default())
 }
 
 /// Output buffers of one frame size and format, kept across frames.

@@ -8,13 +8,13 @@ use glam::{UVec2, Vec3};
 
 use crate::geometry::RayGen;
 use crate::render::frame::ColorFormat;
-use crate::render::march_plan::MarchPlan;
+use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
 };
 use crate::render::stereo::Reprojection;
 use crate::render::RenderSettings;
-use crate::scene::{Filter, TABLE_SIZE};
+use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
 
 /// Invocations per workgroup along x and y.
 pub(super) const WORKGROUP: u32 = 8;
@@ -30,13 +30,14 @@ macro_rules! wgsl_types {
     };
 }
 
-// The WGSL type of the clip planes below names the count.
-const _: () = assert!(MAX_CLIP_PLANES == 8);
+// The WGSL types of the clip planes and volumes below name the counts.
+const _: () = assert!(MAX_CLIP_PLANES == 8 && MAX_VOLUMES == 8);
 
 wgsl_types! {
     f32 => "f32", u32 => "u32", i32 => "i32",
     [f32; 3] => "vec3f", [f32; 4] => "vec4f", [u32; 2] => "vec2u", [u32; 3] => "vec3u",
     [[f32; 4]; MAX_CLIP_PLANES] => "array<vec4f, 8>",
+    [VolumeSlot; MAX_VOLUMES] => "array<VolumeSlot, 8>",
 }
 
 /// Defines a uniform struct, its WGSL declaration, and the list of its
@@ -72,6 +73,25 @@ macro_rules! uniform {
 }
 
 uniform! {
+    /// `VolumeSlot` in shaders/volume.wgsl: how one volume is sampled.
+    VolumeSlot {
+        /// Rows of the world-to-grid affine map, applied to (p, 1).
+        world_to_grid_x: [f32; 4],
+        world_to_grid_y: [f32; 4],
+        world_to_grid_z: [f32; 4],
+        dims: [u32; 3],
+        /// One of the FILTER_ codes.
+        sampling: u32,
+        /// Field value mapped to the first table entry.
+        value_lo: f32,
+        /// 1 / (value hi - value lo).
+        value_scale: f32,
+        inv_unit_distance: f32,
+        _pad: u32,
+    }
+}
+
+uniform! {
     /// `Params` in shaders/volume.wgsl: one eye's rays and the march plan.
     Params {
         /// The ray of pixel (0, 0) and its change per pixel.
@@ -82,22 +102,14 @@ uniform! {
         /// Step of shadow and directional rays.
         shading_step: f32,
         ray_origin_dy: [f32; 3],
-        inv_unit_distance: f32,
+        ao_radius: f32,
         ray_dir: [f32; 3],
-        /// Field value mapped to the first table entry.
-        value_lo: f32,
-        ray_dir_dx: [f32; 3],
-        /// 1 / (value hi - value lo).
-        value_scale: f32,
-        ray_dir_dy: [f32; 3],
         /// Opacity at which a ray stops.
         termination: f32,
-        box_lo: [f32; 3],
-        ao_radius: f32,
-        box_hi: [f32; 3],
+        ray_dir_dx: [f32; 3],
         /// Entries of `directions` in use.
         direction_count: u32,
-        inv_spacing: [f32; 3],
+        ray_dir_dy: [f32; 3],
         /// One of the SHADE_ codes.
         shading: u32,
         /// Towards the parallel light.
@@ -106,28 +118,28 @@ uniform! {
         color_format: u32,
         /// Straight RGBA behind the volume.
         background: [f32; 4],
-        dims: [u32; 3],
-        width: u32,
-        height: u32,
-        /// One of the FILTER_ codes.
-        sampling: u32,
-        /// Accumulated opacity at which depth is taken.
-        depth_threshold: f32,
-        /// The camera's clip range along each unit ray: t_near, t_far.
-        t_near: f32,
         /// Depth is measured from `eye` if `has_eye`, else from each ray's
         /// origin.
         eye: [f32; 3],
         has_eye: u32,
+        width: u32,
+        height: u32,
+        /// Accumulated opacity at which depth is taken.
+        depth_threshold: f32,
+        /// The camera's clip range along each unit ray: t_near, t_far.
+        t_near: f32,
         t_far: f32,
         clip_count: u32,
-        _pad: [u32; 2],
-        /// Clip planes (n, d): keep dot(n, p) < d.
-        clip: [[f32; 4]; MAX_CLIP_PLANES],
-        /// Multiplies every shaded sample.
-        light_color: [f32; 3],
+        /// Entries of `volumes` in use.
+        volume_count: u32,
         /// 1: the background is the image bound beside, not `background`.
         has_background_image: u32,
+        /// Multiplies every shaded sample.
+        light_color: [f32; 3],
+        _pad: u32,
+        /// Clip planes (n, d): keep dot(n, p) < d.
+        clip: [[f32; 4]; MAX_CLIP_PLANES],
+        volumes: [VolumeSlot; MAX_VOLUMES],
     }
 }
 
@@ -159,51 +171,64 @@ uniform! {
     }
 }
 
+impl VolumeSlot {
+    fn new(plan: &VolumePlan) -> Self {
+        let [x, y, z] = plan.world_to_grid.map(|r| r.to_array());
+        Self {
+            world_to_grid_x: x,
+            world_to_grid_y: y,
+            world_to_grid_z: z,
+            dims: plan.dims.to_array(),
+            sampling: plan.filter.code(),
+            value_lo: plan.value_lo,
+            value_scale: plan.value_scale,
+            inv_unit_distance: plan.inv_unit_distance,
+            _pad: 0,
+        }
+    }
+}
+
 impl Params {
     pub fn new(rays: &RayGen, plan: &MarchPlan, size: UVec2, format: ColorFormat) -> Self {
         let v = |v: Vec3| v.to_array();
+        let mut clip = [[0.0; 4]; MAX_CLIP_PLANES];
+        for (slot, plane) in clip.iter_mut().zip(&plan.clip_planes) {
+            *slot = plane.to_array();
+        }
+        let mut volumes = [VolumeSlot::default(); MAX_VOLUMES];
+        for (slot, volume) in volumes.iter_mut().zip(&plan.volumes) {
+            *slot = VolumeSlot::new(volume);
+        }
         Self {
             ray_origin: v(rays.origin),
             step: plan.step,
             ray_origin_dx: v(rays.origin_dx),
             shading_step: plan.shading_step,
             ray_origin_dy: v(rays.origin_dy),
-            inv_unit_distance: plan.inv_unit_distance,
-            ray_dir: v(rays.direction),
-            value_lo: plan.value_lo,
-            ray_dir_dx: v(rays.direction_dx),
-            value_scale: plan.value_scale,
-            ray_dir_dy: v(rays.direction_dy),
-            termination: plan.termination,
-            box_lo: v(plan.box_lo),
             ao_radius: plan.ao_radius,
-            box_hi: v(plan.box_hi),
+            ray_dir: v(rays.direction),
+            termination: plan.termination,
+            ray_dir_dx: v(rays.direction_dx),
             direction_count: plan.directions.len() as u32,
-            inv_spacing: v(plan.inv_spacing),
+            ray_dir_dy: v(rays.direction_dy),
             shading: plan.shading.code(),
             light: v(plan.light),
             color_format: format.code(),
             background: plan.background.to_array(),
-            dims: plan.dims.to_array(),
+            eye: rays.eye.unwrap_or_default().to_array(),
+            has_eye: u32::from(rays.eye.is_some()),
             width: size.x,
             height: size.y,
-            sampling: plan.filter.code(),
             depth_threshold: plan.depth_threshold,
             t_near: rays.t_near,
             t_far: rays.t_far,
-            eye: rays.eye.unwrap_or_default().to_array(),
-            has_eye: u32::from(rays.eye.is_some()),
             clip_count: plan.clip_planes.len() as u32,
-            _pad: [0; 2],
-            clip: {
-                let mut clip = [[0.0; 4]; MAX_CLIP_PLANES];
-                for (slot, plane) in clip.iter_mut().zip(&plan.clip_planes) {
-                    *slot = plane.to_array();
-                }
-                clip
-            },
-            light_color: plan.light_color.to_array(),
+            volume_count: plan.volumes.len() as u32,
             has_background_image: u32::from(plan.has_background_image),
+            light_color: plan.light_color.to_array(),
+            _pad: 0,
+            clip,
+            volumes,
         }
     }
 }
@@ -244,6 +269,7 @@ pub(super) fn declarations() -> String {
     let u32s = [
         ("WORKGROUP", WORKGROUP),
         ("TABLE_SIZE", TABLE_SIZE as u32),
+        ("MAX_VOLUMES", MAX_VOLUMES as u32),
         ("SHADOW_STEPS", SHADOW_STEPS),
         ("DIRECTIONAL_STEPS", DIRECTIONAL_STEPS),
         ("SHADE_NONE", Shading::None.code()),
@@ -263,7 +289,7 @@ pub(super) fn declarations() -> String {
     }
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
-    out + &Params::wgsl() + &Stereo::wgsl()
+    out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl()
 }
 
 #[cfg(test)]
@@ -308,6 +334,12 @@ mod tests {
     fn the_wgsl_structs_mirror_the_rust_ones() {
         let raycast = shaders::raycast();
         same_layout(Params::FIELDS, size_of::<Params>(), &raycast, "Params");
+        same_layout(
+            VolumeSlot::FIELDS,
+            size_of::<VolumeSlot>(),
+            &raycast,
+            "VolumeSlot",
+        );
         for format in [LayerFormat::Rgba16F, LayerFormat::Rgba32F] {
             let reproject = shaders::reproject(format);
             same_layout(Params::FIELDS, size_of::<Params>(), &reproject, "Params");

@@ -19,9 +19,9 @@ pub enum Bounds {
 }
 
 impl Bounds {
-    /// The box of the scene's volume.
+    /// The box around the scene's volumes.
     pub fn of(scene: &Scene) -> Self {
-        let (lo, hi) = scene.volume.bounds();
+        let (lo, hi) = scene.bounds();
         Bounds::Box {
             lo: lo.as_dvec3(),
             hi: hi.as_dvec3(),

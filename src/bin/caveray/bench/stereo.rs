@@ -237,7 +237,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
         }
         datasets.push(Dataset {
             name: name.clone(),
-            dims: scene.volume.dims().to_array(),
+            dims: scene.volumes()[0].volume.dims().to_array(),
             runs,
             heatmap: format!("stereo_{}_dssim.png", file_name(name)),
         });

@@ -1,0 +1,247 @@
+//! A scene: up to `MAX_VOLUMES` volumes, each with its own transfer
+//! function and its own place in the world, composited sample by sample
+//! where they overlap.
+
+use std::sync::Arc;
+
+use glam::{DMat4, Mat4, Vec3, Vec4};
+use thiserror::Error;
+
+use super::{StructuredVolume, TransferFunction};
+
+/// The most volumes one scene composites. The shaders bind one 3D texture
+/// per volume, and eight plus the other textures stay inside the sixteen
+/// sampled textures per stage every adapter allows.
+pub const MAX_VOLUMES: usize = 8;
+
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SceneError {
+    #[error("a scene needs at least one volume")]
+    Empty,
+    #[error("{count} volumes in one scene; caveray composites up to {MAX_VOLUMES}")]
+    TooManyVolumes { count: usize },
+    #[error("volume {index}: transform {transform} {reason}")]
+    BadTransform {
+        index: usize,
+        transform: String,
+        reason: &'static str,
+    },
+}
+
+/// A volume classified by its transfer function and placed in the world.
+#[derive(Clone, Debug)]
+pub struct PlacedVolume {
+    pub volume: Arc<StructuredVolume>,
+    pub transfer_function: Arc<TransferFunction>,
+    /// Object to world: affine (any rotation, scale, shear or mirror) and
+    /// invertible.
+    pub transform: Mat4,
+}
+
+impl PlacedVolume {
+    /// Why `transform` cannot place a volume, if it cannot.
+    pub fn check_transform(transform: Mat4) -> Result<(), &'static str> {
+        if !transform.is_finite() {
+            return Err("is not finite");
+        }
+        let bottom = transform.row(3) - Vec4::W;
+        if bottom.abs().max_element() > 1e-6 {
+            return Err("is projective; a volume's transform must be affine");
+        }
+        let linear = transform.as_dmat4();
+        let scale = [linear.x_axis, linear.y_axis, linear.z_axis]
+            .iter()
+            .map(|c| c.truncate().length())
+            .fold(0.0, f64::max);
+        let det = glam::DMat3::from_mat4(linear).determinant();
+        if det.abs() <= 1e-9 * scale.powi(3) || scale == 0.0 {
+            return Err("is singular: it flattens the volume");
+        }
+        Ok(())
+    }
+
+    /// World coordinates to grid coordinates (vertex i at i), computed in
+    /// double precision so that large offsets lose nothing.
+    pub fn world_to_grid(&self) -> DMat4 {
+        let v = &self.volume;
+        let object_to_grid = DMat4::from_scale(v.spacing().as_dvec3().recip())
+            * DMat4::from_translation(-v.origin().as_dvec3());
+        object_to_grid * self.transform.as_dmat4().inverse()
+    }
+
+    /// The world-space length of the grid's smallest cell edge.
+    pub fn smallest_cell(&self) -> f32 {
+        let s = self.volume.spacing();
+        let m = glam::Mat3::from_mat4(self.transform);
+        (m.x_axis * s.x)
+            .length()
+            .min((m.y_axis * s.y).length())
+            .min((m.z_axis * s.z).length())
+    }
+
+    /// The world-space box around the placed grid.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let (lo, hi) = self.volume.bounds();
+        (0..8)
+            .map(|i| {
+                let pick = |bit: u32, a: f32, b: f32| if i & bit == 0 { a } else { b };
+                self.transform.transform_point3(Vec3::new(
+                    pick(1, lo.x, hi.x),
+                    pick(2, lo.y, hi.y),
+                    pick(4, lo.z, hi.z),
+                ))
+            })
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
+                (l.min(p), h.max(p))
+            })
+    }
+}
+
+/// What a renderer draws. Volumes and tables are shared so a renderer can
+/// keep them uploaded and tell, by identity, when they were replaced.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    volumes: Vec<PlacedVolume>,
+}
+
+impl Scene {
+    /// One volume where its grid says, classified by `transfer_function`.
+    pub fn new(volume: StructuredVolume, transfer_function: TransferFunction) -> Self {
+        Self::shared(Arc::new(volume), Arc::new(transfer_function))
+    }
+
+    /// `new` with shared parts.
+    pub fn shared(volume: Arc<StructuredVolume>, transfer_function: Arc<TransferFunction>) -> Self {
+        Self {
+            volumes: vec![PlacedVolume {
+                volume,
+                transfer_function,
+                transform: Mat4::IDENTITY,
+            }],
+        }
+    }
+
+    /// Several volumes, each placed by its transform.
+    pub fn placed(volumes: Vec<PlacedVolume>) -> Result<Self, SceneError> {
+        if volumes.is_empty() {
+            return Err(SceneError::Empty);
+        }
+        if volumes.len() > MAX_VOLUMES {
+            return Err(SceneError::TooManyVolumes {
+                count: volumes.len(),
+            });
+        }
+        for (index, v) in volumes.iter().enumerate() {
+            PlacedVolume::check_transform(v.transform).map_err(|reason| {
+                SceneError::BadTransform {
+                    index,
+                    transform: format!("{}", v.transform),
+                    reason,
+                }
+            })?;
+        }
+        Ok(Self { volumes })
+    }
+
+    /// One or more, in the order given.
+    pub fn volumes(&self) -> &[PlacedVolume] {
+        &self.volumes
+    }
+
+    /// The world-space box around every volume.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.volumes
+            .iter()
+            .map(PlacedVolume::bounds)
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), (a, b)| {
+                (l.min(a), h.max(b))
+            })
+    }
+
+    /// Whether `other` draws the same data the same way: the same volumes
+    /// and tables by identity, the same transforms by value.
+    pub fn same(&self, other: &Scene) -> bool {
+        self.volumes.len() == other.volumes.len()
+            && self.volumes.iter().zip(&other.volumes).all(|(a, b)| {
+                Arc::ptr_eq(&a.volume, &b.volume)
+                    && Arc::ptr_eq(&a.transfer_function, &b.transfer_function)
+                    && a.transform == b.transform
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Voxels;
+    use glam::UVec3;
+
+    fn placed(transform: Mat4) -> PlacedVolume {
+        let volume = StructuredVolume::new(
+            UVec3::new(3, 5, 9),
+            Voxels::F32(vec![0.0; 3 * 5 * 9]),
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(0.5, 0.25, 2.0),
+        )
+        .unwrap();
+        let tf =
+            TransferFunction::new(vec![Vec4::ONE; 2], vec![0.0, 1.0], (0.0, 1.0), 1.0).unwrap();
+        PlacedVolume {
+            volume: Arc::new(volume),
+            transfer_function: Arc::new(tf),
+            transform,
+        }
+    }
+
+    #[test]
+    fn world_to_grid_sends_the_placed_vertices_to_their_indices() {
+        let m = Mat4::from_translation(Vec3::new(-4.0, 7.0, 0.5))
+            * Mat4::from_rotation_y(0.7)
+            * Mat4::from_scale(Vec3::new(2.0, 1.0, -0.5));
+        let v = placed(m);
+        let w2g = v.world_to_grid();
+        for index in [UVec3::ZERO, UVec3::new(2, 4, 8), UVec3::new(1, 3, 5)] {
+            let object = v.volume.origin() + index.as_vec3() * v.volume.spacing();
+            let world = m.transform_point3(object);
+            let grid = w2g.transform_point3(world.as_dvec3());
+            assert!(
+                (grid - index.as_dvec3()).abs().max_element() < 1e-5,
+                "{index} -> {grid}"
+            );
+        }
+        // The smallest world edge: y's 0.25 (x 0.5 * 2, z 2 * 0.5).
+        assert!((v.smallest_cell() - 0.25).abs() < 1e-6);
+    }
+
+    #[test]
+    fn projective_singular_and_too_many_are_refused() {
+        let mut projective = Mat4::IDENTITY;
+        projective.x_axis.w = 0.5;
+        let flat = Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0));
+        for (m, reason) in [(projective, "projective"), (flat, "singular")] {
+            let e = Scene::placed(vec![placed(Mat4::IDENTITY), placed(m)]).unwrap_err();
+            assert!(
+                matches!(&e, SceneError::BadTransform { index: 1, .. }),
+                "{e}"
+            );
+            assert!(e.to_string().contains(reason), "{e}");
+        }
+        let nine = vec![placed(Mat4::IDENTITY); MAX_VOLUMES + 1];
+        assert_eq!(
+            Scene::placed(nine).unwrap_err().to_string(),
+            "9 volumes in one scene; caveray composites up to 8"
+        );
+        assert_eq!(Scene::placed(vec![]).unwrap_err(), SceneError::Empty);
+    }
+
+    #[test]
+    fn bounds_enclose_every_placed_volume() {
+        let a = placed(Mat4::IDENTITY);
+        let b = placed(Mat4::from_translation(Vec3::new(10.0, 0.0, 0.0)));
+        let scene = Scene::placed(vec![a.clone(), b]).unwrap();
+        let (lo, hi) = scene.bounds();
+        let (alo, ahi) = a.bounds();
+        assert_eq!(lo, alo);
+        assert_eq!(hi, ahi + Vec3::new(10.0, 0.0, 0.0));
+    }
+}
