@@ -2,15 +2,20 @@
 
 fn on_sample(p: vec3f, lit: vec3f, a: f32) {}
 
+// x: the first row of this band (the frame is cast a band of rows at a
+// time, so a discard can stop it between bands).
+@group(1) @binding(0) var<uniform> band: vec4u;
+
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     let size = vec2u(params.width, params.height);
-    if id.x >= size.x || id.y >= size.y {
+    let pixel = vec2u(id.x, id.y + band.x);
+    if pixel.x >= size.x || pixel.y >= size.y {
         return;
     }
-    let m = march(f32(id.x), f32(id.y));
-    let i = id.y * size.x + id.x;
+    let m = march(f32(pixel.x), f32(pixel.y));
+    let i = pixel.y * size.x + pixel.x;
     depth_out[i] = m.depth;
     samples_out[i] = samples;
-    store_color(i, over(m.color, background_at(id.xy)), params.color_format);
+    store_color(i, over(m.color, background_at(pixel)), params.color_format);
 }

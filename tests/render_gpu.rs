@@ -282,3 +282,42 @@ fn background_gradients_on_both_renderers() {
     // Rows get bluer from bottom to top.
     assert!((1..size.y).all(|y| c.pixel(0, y).z >= c.pixel(0, y - 1).z));
 }
+
+#[test]
+fn a_frame_cast_in_bands_is_whole_and_a_stop_ends_it_between_bands() {
+    use anari_library_caveray::render::RenderError;
+    use std::sync::atomic::AtomicBool;
+    let mut gpu = gpu();
+    let cpu = CpuRenderer::new();
+    let scene = phantom(12);
+    let (screen, eye) = off_axis_wall();
+    // 520 x 520 is more than one band of 2^18 pixels: rows 0-503 and
+    // 504-519.
+    let size = UVec2::new(520, 520);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let settings = RenderSettings::default();
+    let desc = FrameDesc::new(size).with_depth();
+    let g = gpu.render(&scene, &rays, &settings, &desc).unwrap();
+    let c = cpu.render(&scene, &rays, &settings, &desc).unwrap();
+    let s = ssim(&g, &c).unwrap();
+    assert!(s > 0.995, "banded GPU vs CPU SSIM {s}");
+    // The last band's rows are there, not left at zero.
+    let (gd, cd) = (g.depth.as_ref().unwrap(), c.depth.as_ref().unwrap());
+    let last_rows = 504 * 520..520 * 520;
+    assert_eq!(
+        gd[last_rows.clone()]
+            .iter()
+            .filter(|d| d.is_finite())
+            .count(),
+        cd[last_rows].iter().filter(|d| d.is_finite()).count()
+    );
+    // Stopped before the first band: nothing is cast, and the renderer
+    // carries on as before.
+    let stop = AtomicBool::new(true);
+    let e = gpu
+        .render_until(&scene, &rays, &settings, &desc, &stop)
+        .unwrap_err();
+    assert_eq!(e, RenderError::Stopped);
+    let again = gpu.render(&scene, &rays, &settings, &desc).unwrap();
+    assert_eq!(again.color, g.color);
+}

@@ -151,8 +151,8 @@ impl Renderer {
     }
 
     /// `render`, giving up with `RenderError::Stopped` once `stop` is set:
-    /// the CPU reference checks it between rows; a GPU pass, once
-    /// submitted, finishes, and its result is dropped.
+    /// the CPU reference checks it between rows, the GPU between bands of
+    /// rows (about 2^18 pixels each).
     pub fn render_until(
         &mut self,
         scene: &Scene,
@@ -162,7 +162,7 @@ impl Renderer {
         stop: &AtomicBool,
     ) -> Result<Frame, RenderError> {
         let frame = match self {
-            Renderer::Gpu(g) => g.render(scene, rays, settings, desc),
+            Renderer::Gpu(g) => g.render_until(scene, rays, settings, desc, stop),
             Renderer::Cpu(c) => c.render_until(scene, rays, settings, desc, stop),
         }?;
         if stop.load(Ordering::Relaxed) {

@@ -303,8 +303,8 @@ impl Device {
     }
 
     /// `anariDiscardFrame`: the render in flight stops (the CPU reference
-    /// between rows; a submitted GPU pass finishes and its image is
-    /// dropped) and the frame keeps no image of it.
+    /// between rows, the GPU between bands of rows) and the frame keeps no
+    /// image of it.
     pub fn discard_frame(&mut self, handle: u64) {
         let Some(frame) = self.frame(handle, "anariDiscardFrame") else {
             return;

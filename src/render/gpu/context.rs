@@ -1,8 +1,21 @@
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use serde::Serialize;
 
 use crate::render::RenderError;
+
+/// Bytes between bands' entries in a band buffer: the largest uniform
+/// offset alignment WebGPU allows an adapter to ask for.
+pub(super) const BAND_STRIDE: u32 = 256;
+
+/// A compute pass: its pipeline, its bind groups from 0 on, and, for a
+/// banded pass, the group after them, bound at each band's dynamic offset.
+pub(super) struct Pass<'a> {
+    pub pipeline: &'a wgpu::ComputePipeline,
+    pub groups: &'a [&'a wgpu::BindGroup],
+    pub band: Option<&'a wgpu::BindGroup>,
+}
 
 /// Where the GPU pass times come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -151,33 +164,72 @@ impl Context {
         groups: &[&wgpu::BindGroup],
         workgroups: [u32; 3],
     ) -> Result<f64, RenderError> {
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        {
-            let timestamp_writes =
-                self.timestamps
-                    .as_ref()
-                    .map(|t| wgpu::ComputePassTimestampWrites {
-                        query_set: &t.set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    });
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: None,
-                timestamp_writes,
-            });
-            pass.set_pipeline(pipeline);
-            for (i, group) in groups.iter().enumerate() {
-                pass.set_bind_group(i as u32, *group, &[]);
-            }
-            pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
-        }
-        if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..2, &t.resolve, 0);
-            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, None);
-        }
-        let commands = encoder.finish();
+        let pass = Pass {
+            pipeline,
+            groups,
+            band: None,
+        };
+        self.dispatch_bands(&pass, &[workgroups], &AtomicBool::new(false))
+    }
+
+    /// Runs `pass` once per entry of `bands` (band i's workgroups, and its
+    /// band group bound at dynamic offset i * BAND_STRIDE), each its own
+    /// submission with at most two in flight, and gives up with
+    /// `RenderError::Stopped` between bands once `stop` is set. Returns
+    /// the milliseconds from the first band's start to the last's end.
+    pub fn dispatch_bands(
+        &self,
+        pass: &Pass<'_>,
+        bands: &[[u32; 3]],
+        stop: &AtomicBool,
+    ) -> Result<f64, RenderError> {
         let start = std::time::Instant::now();
-        self.queue.submit([commands]);
+        let mut in_flight: Option<wgpu::SubmissionIndex> = None;
+        for (i, workgroups) in bands.iter().enumerate() {
+            if stop.load(Ordering::Relaxed) {
+                self.wait()?;
+                return Err(RenderError::Stopped);
+            }
+            let (first, last) = (i == 0, i + 1 == bands.len());
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            {
+                let timestamp_writes =
+                    self.timestamps
+                        .as_ref()
+                        .map(|t| wgpu::ComputePassTimestampWrites {
+                            query_set: &t.set,
+                            beginning_of_pass_write_index: first.then_some(0),
+                            end_of_pass_write_index: last.then_some(1),
+                        });
+                let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: None,
+                    timestamp_writes,
+                });
+                compute.set_pipeline(pass.pipeline);
+                for (g, group) in pass.groups.iter().enumerate() {
+                    compute.set_bind_group(g as u32, *group, &[]);
+                }
+                if let Some(band) = pass.band {
+                    let offset = i as u32 * BAND_STRIDE;
+                    compute.set_bind_group(pass.groups.len() as u32, band, &[offset]);
+                }
+                compute.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
+            }
+            if let (true, Some(t)) = (last, &self.timestamps) {
+                encoder.resolve_query_set(&t.set, 0..2, &t.resolve, 0);
+                encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, None);
+            }
+            let submitted = self.queue.submit([encoder.finish()]);
+            // Keep the GPU fed: wait for the band before this one only.
+            if let Some(previous) = in_flight.replace(submitted) {
+                self.device
+                    .poll(wgpu::PollType::Wait {
+                        submission_index: Some(previous),
+                        timeout: None,
+                    })
+                    .map_err(|e| RenderError::Gpu(e.to_string()))?;
+            }
+        }
         self.wait()?;
         let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
         self.check()?;

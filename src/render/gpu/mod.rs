@@ -9,13 +9,14 @@ mod resources;
 mod shaders;
 mod uniforms;
 
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use glam::UVec2;
 
 pub use self::context::PassClock;
 
-use self::context::Context;
+use self::context::{Context, Pass, BAND_STRIDE};
 use self::resources::OutputBuffers;
 use self::uniforms::{Params, WORKGROUP};
 use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
@@ -39,6 +40,10 @@ pub struct GpuRenderer {
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     directions: wgpu::Buffer,
+    /// Each band's first row, BAND_STRIDE bytes apart, and the group that
+    /// binds one of them.
+    bands: wgpu::Buffer,
+    band_group: wgpu::BindGroup,
     /// The scene's volumes on the GPU, in its order.
     volumes: Vec<(Arc<StructuredVolume>, wgpu::TextureView)>,
     /// Bound where a scene has fewer than MAX_VOLUMES volumes.
@@ -89,7 +94,24 @@ impl GpuRenderer {
                 layout_entry(14, texture(wgpu::TextureViewDimension::D3)),
             ],
         });
-        let pipeline = compute_pipeline(device, "raycast", &shaders::raycast(), &[&layout], "main");
+        let band_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("band"),
+            entries: &[layout_entry(
+                0,
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(16),
+                },
+            )],
+        });
+        let pipeline = compute_pipeline(
+            device,
+            "raycast",
+            &shaders::raycast(),
+            &[&layout, &band_layout],
+            "main",
+        );
         let uniform = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -110,6 +132,23 @@ impl GpuRenderer {
         );
         let no_background = resources::upload_background(&ctx, None);
         let no_volume = resources::stand_in_volume(&ctx);
+        let bands = uniform(
+            "bands",
+            u64::from(MAX_BANDS * BAND_STRIDE),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let band_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("band"),
+            layout: &band_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &bands,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(16),
+                }),
+            }],
+        });
         let table = resources::table_texture(&ctx);
         let table_view = table.create_view(&Default::default());
         ctx.check()?;
@@ -119,6 +158,8 @@ impl GpuRenderer {
             layout,
             params,
             directions,
+            bands,
+            band_group,
             volumes: Vec::new(),
             no_volume,
             table,
@@ -205,18 +246,48 @@ impl GpuRenderer {
         settings: &RenderSettings,
         desc: &FrameDesc,
     ) -> Result<Frame, RenderError> {
+        self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
+    }
+
+    /// `render`, cast in bands of rows (about BAND_PIXELS each), each its
+    /// own submission: once `stop` is set no further band starts, and
+    /// `RenderError::Stopped` is returned.
+    pub fn render_until(
+        &mut self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+        stop: &AtomicBool,
+    ) -> Result<Frame, RenderError> {
         self.begin(scene, rays, settings, desc)?;
-        let ctx = &self.ctx;
+        let rows = band_rows(desc.size);
+        let first_rows: Vec<u32> = (0..desc.size.y).step_by(rows as usize).collect();
+        let mut words = vec![0u32; first_rows.len() * (BAND_STRIDE / 4) as usize];
+        for (band, first) in first_rows.iter().enumerate() {
+            words[band * (BAND_STRIDE / 4) as usize] = *first;
+        }
+        self.ctx
+            .queue
+            .write_buffer(&self.bands, 0, bytemuck::cast_slice(&words));
+        let bands: Vec<[u32; 3]> = first_rows
+            .iter()
+            .map(|first| {
+                let height = rows.min(desc.size.y - first);
+                [
+                    desc.size.x.div_ceil(WORKGROUP),
+                    height.div_ceil(WORKGROUP),
+                    1,
+                ]
+            })
+            .collect();
         let bind_group = self.bind_group.as_ref().ok_or_else(unprepared)?;
-        self.last_pass_ms = ctx.dispatch(
-            &self.pipeline,
-            &[bind_group],
-            [
-                desc.size.x.div_ceil(WORKGROUP),
-                desc.size.y.div_ceil(WORKGROUP),
-                1,
-            ],
-        )?;
+        let pass = Pass {
+            pipeline: &self.pipeline,
+            groups: &[bind_group],
+            band: Some(&self.band_group),
+        };
+        self.last_pass_ms = self.ctx.dispatch_bands(&pass, &bands, stop)?;
         self.read_frame(desc)
     }
 
@@ -399,6 +470,19 @@ impl GpuRenderer {
     }
 }
 
+/// Pixels per band of a frame cast in bands: 1920 x 1080 is 8 bands.
+const BAND_PIXELS: u32 = 1 << 18;
+/// The most bands a frame is cast in.
+const MAX_BANDS: u32 = 64;
+
+/// Rows per band of a frame of `size`: whole workgroups, about
+/// BAND_PIXELS, and no more than MAX_BANDS bands.
+fn band_rows(size: UVec2) -> u32 {
+    let by_pixels = (BAND_PIXELS / size.x.max(1)).max(1);
+    let by_count = size.y.div_ceil(MAX_BANDS);
+    by_pixels.max(by_count).next_multiple_of(WORKGROUP)
+}
+
 /// Builds a compute pipeline from WGSL source with explicit layouts.
 fn compute_pipeline(
     device: &wgpu::Device,
@@ -484,4 +568,30 @@ fn floats(bytes: &[u8]) -> Vec<f32> {
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_cover_the_frame_in_whole_workgroups() {
+        for size in [
+            UVec2::new(1, 1),
+            UVec2::new(24, 40),
+            UVec2::new(1920, 1080),
+            UVec2::new(16384, 16384),
+            UVec2::new(1, 100_000),
+        ] {
+            let rows = band_rows(size);
+            assert_eq!(rows % WORKGROUP, 0, "{size}");
+            assert!(size.y.div_ceil(rows) <= MAX_BANDS, "{size}: {rows} rows");
+        }
+        assert_eq!(
+            UVec2::new(1920, 1080)
+                .y
+                .div_ceil(band_rows(UVec2::new(1920, 1080))),
+            8
+        );
+    }
 }
