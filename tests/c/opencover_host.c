@@ -18,21 +18,6 @@
 #include "scene.h"
 #include "status.h"
 
-static int write_floats(const char *dir, const char *name, const float *v, size_t n)
-{
-  char path[4200];
-  FILE *f;
-  snprintf(path, sizeof path, "%s/%s", dir, name);
-  f = fopen(path, "wb");
-  if (!f || fwrite(v, sizeof(float), n, f) != n) {
-    if (f)
-      fclose(f);
-    return 0;
-  }
-  fclose(f);
-  return 1;
-}
-
 /* `n` colours (RGB) or opacities resampled from the scene's table. */
 static float *resample(const float *table, unsigned count, unsigned stride,
     unsigned channels, unsigned n)

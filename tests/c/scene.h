@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "output.h"
+
 typedef struct Scene {
   unsigned dims[3];
   float *voxels; /* FLOAT32, x fastest */
@@ -96,24 +98,6 @@ static void scene_free(Scene *s)
   free(s->voxels);
   free(s->colors);
   free(s->opacities);
-}
-
-/* Writes w*h RGBA8 pixels, lower-left first, as they were mapped. */
-static int write_rgba(const char *dir, const char *name, const void *pixels,
-    unsigned w, unsigned h)
-{
-  char path[4200];
-  FILE *f;
-  size_t n = (size_t)w * h * 4;
-  snprintf(path, sizeof path, "%s/%s.rgba", dir, name);
-  f = fopen(path, "wb");
-  if (!f || fwrite(pixels, 1, n, f) != n) {
-    if (f)
-      fclose(f);
-    return 0;
-  }
-  fclose(f);
-  return 1;
 }
 
 #endif
