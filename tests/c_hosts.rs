@@ -264,6 +264,19 @@ fn opencover(valgrind: bool) {
         "depth differs by {:.2}% from the Rust API's",
         100.0 * worst
     );
+    // And as OpenCOVER uses it (eye + unit ray * depth), every depth is a
+    // point inside the volume's box, past the first sample.
+    let (lo, hi) = scene.scene.bounds();
+    let slack = 1e-3 * (hi - lo).max_element();
+    for (i, d) in depth.iter().enumerate().filter(|(_, d)| d.is_finite()) {
+        let (x, y) = (i as u32 % scene.size.x, i as u32 / scene.size.x);
+        let (origin, dir) = scene.rays.pixel_ray(x, y);
+        let p = origin + dir * *d;
+        assert!(
+            p.cmpge(lo - slack).all() && p.cmple(hi + slack).all(),
+            "pixel ({x}, {y}): depth {d} puts the volume at {p}, outside {lo}..{hi}"
+        );
+    }
 }
 
 #[test]
