@@ -281,7 +281,8 @@ fn march(fx: f32, fy: f32) -> Marched {
     }
     if t1 > t0 {
         let len = t1 - t0;
-        let n = u32(ceil(len / step));
+        // f32 to u32 saturates; the cap holds where t has lost its precision.
+        let n = min(u32(ceil(len / step)), params.max_steps);
         for (var k = 0u; k < n; k++) {
             let start = f32(k) * step;
             let seg = max(min(step, len - start), 0.0);

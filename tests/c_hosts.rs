@@ -292,3 +292,37 @@ fn opencover_style_host_is_clean_under_valgrind() {
     }
     opencover(true);
 }
+
+/// Inputs that used to abort or hang the host (tests/c/budgets.c): a
+/// 100000 x 100000 frame, step factors of 1e-6 and 1e-30, eyes at
+/// infinity and NaN, an array of strings, and releasing a frame or the
+/// device while a minutes-long render runs.
+fn budgets(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_budgets_valgrind"
+    } else {
+        "c_budgets"
+    });
+    let program = dir.join("budgets");
+    compile(&["tests/c/budgets.c"], &program, false, true);
+    // The CPU reference, where a release must interrupt a running render.
+    let output = common::c::run_with(&program, &[], valgrind, &[("CAVERAY_BACKEND", "cpu")]);
+    let text = describe(&output);
+    assert!(output.status.success(), "budgets: {text}");
+    assert!(!text.contains("FAIL"), "budgets: {text}");
+    assert!(text.matches("PASS").count() >= 15, "budgets: {text}");
+}
+
+#[test]
+fn inputs_beyond_the_budgets_are_errors_not_aborts() {
+    budgets(false);
+}
+
+#[test]
+fn inputs_beyond_the_budgets_are_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    budgets(true);
+}

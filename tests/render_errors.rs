@@ -78,7 +78,23 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
                 ..ok.clone()
             },
             FrameDesc::new(size),
-            "step factor must be finite and positive, got 0",
+            "step factor must be in [0.015625, 64] (half voxels per step), got 0.0",
+        ),
+        (
+            RenderSettings {
+                step_factor: 1e-30,
+                ..ok.clone()
+            },
+            FrameDesc::new(size),
+            "step factor must be in [0.015625, 64] (half voxels per step), got 1e-30",
+        ),
+        (
+            RenderSettings {
+                step_factor: f32::INFINITY,
+                ..ok.clone()
+            },
+            FrameDesc::new(size),
+            "got inf",
         ),
         (
             RenderSettings {
@@ -116,6 +132,13 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
             ok.clone(),
             FrameDesc::new(UVec2::new(0, 4)),
             "frame size must be at least 1x1, got 0x4",
+        ),
+        // Refused before anything is allocated: it used to abort the host
+        // ("memory allocation of 160000000000 bytes failed").
+        (
+            ok.clone(),
+            FrameDesc::new(UVec2::new(100_000, 100_000)),
+            "a frame of 100000x100000 is 10000000000 pixels; caveray renders up to 268435456 (16384 x 16384) per frame",
         ),
     ];
     for (name, mut r) in renderers() {
@@ -181,4 +204,43 @@ fn ssim_refuses_frames_it_cannot_compare() {
         .to_string()
         .contains("at least 8x8, got 4x4"));
     assert_eq!(ssim(&a, &a).unwrap(), 1.0);
+}
+
+#[test]
+fn rays_through_a_scene_too_fine_to_cross_stop_at_the_cap_with_a_warning() {
+    // A speck (cells of 1e-6) beside the phantom sets the step for both:
+    // crossing the scene would take ~7 million steps per ray. Each ray
+    // stops at MAX_STEPS_PER_RAY, and the warning says why.
+    use anari_library_caveray::geometry::RayGen;
+    use anari_library_caveray::render::{march_warning, MAX_STEPS_PER_RAY};
+    use anari_library_caveray::scene::{PlacedVolume, Scene};
+    use glam::Mat4;
+    let phantom = phantom(8).volumes()[0].clone();
+    let speck = PlacedVolume {
+        transform: Mat4::from_scale(Vec3::splat(1e-6)),
+        ..phantom.clone()
+    };
+    let scene = Scene::placed(vec![phantom, speck]).unwrap();
+    let ok = RenderSettings::default();
+    let warning = march_warning(&scene, &ok).expect("the cap bites");
+    assert!(
+        warning.starts_with(&format!("rays are cut at {MAX_STEPS_PER_RAY} steps")),
+        "{warning}"
+    );
+    // One ray along the z axis, through both.
+    let rays = RayGen {
+        origin: Vec3::new(0.01, 0.02, 5.0),
+        direction: Vec3::NEG_Z,
+        ..RayGen::default()
+    };
+    for (name, mut r) in renderers() {
+        let f = r
+            .render(&scene, &rays, &ok, &FrameDesc::new(UVec2::ONE))
+            .unwrap();
+        assert!(
+            f.samples > 0 && f.samples <= 2 * u64::from(MAX_STEPS_PER_RAY),
+            "{name}: {} samples",
+            f.samples
+        );
+    }
 }

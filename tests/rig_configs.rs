@@ -261,7 +261,7 @@ fn wrong_types_are_named() {
         "ur = [1, 2]",
         12,
         "walls[0].ur",
-        "invalid length 2",
+        "expected 3 numbers, got 2",
     );
     expect_error(
         "resolution = [64, 64]",
@@ -424,4 +424,107 @@ fn an_unreadable_file_names_the_file() {
             .starts_with("/nonexistent/rig.toml: cannot read rig file"),
         "{err}"
     );
+}
+
+#[test]
+fn extra_components_are_errors_naming_the_field() {
+    expect_error(
+        "ll = [-1, 0, -1]",
+        "ll = [-1, 0, -1, 1]",
+        10,
+        "walls[0].ll",
+        "expected 3 numbers, got 4",
+    );
+    expect_error(
+        "resolution = [64, 64]",
+        "resolution = [10, 10, 10]",
+        13,
+        "walls[0].resolution",
+        "expected 2 numbers (width, height), got 3",
+    );
+    expect_error(
+        "head = [0, 1.7, 0]",
+        "head = [0, 1.7, 0, 0]",
+        6,
+        "viewer.head",
+        "expected 3 numbers, got 4",
+    );
+}
+
+#[test]
+fn wall_names_cannot_leave_the_output_folder_or_take_the_contact_sheets() {
+    for bad in [
+        "../escape",
+        "/etc/passwd",
+        "a b",
+        "wall.png",
+        "x\\y",
+        "caf\u{e9}",
+    ] {
+        let line = format!("name = \"{}\"", bad.replace('\\', "\\\\"));
+        expect_error(
+            "name = \"front\"",
+            &line,
+            9,
+            "walls[0].name",
+            "must be 1 to 64 letters",
+        );
+    }
+    let long = format!("name = \"{}\"", "w".repeat(65));
+    expect_error(
+        "name = \"front\"",
+        &long,
+        9,
+        "walls[0].name",
+        "must be 1 to 64",
+    );
+    expect_error(
+        "name = \"front\"",
+        "name = \"Cave\"",
+        9,
+        "walls[0].name",
+        "taken by the contact sheets",
+    );
+    expect_error(
+        "name = \"floor\"",
+        "name = \"FRONT\"",
+        16,
+        "walls[1].name",
+        "duplicate wall name",
+    );
+}
+
+#[test]
+fn characters_of_several_bytes_near_an_equals_sign_are_located() {
+    // The locator used to slice inside the character and panic.
+    let text = GOOD.replacen(
+        "head = [0, 1.7, 0]",
+        "head = [0, 1.7, 0]\neye_offset = { «x» = 1 }",
+        1,
+    );
+    let err = parse(&text).unwrap_err();
+    assert_eq!(err.line(), Some(7), "{err}");
+    assert!(err.field().unwrap().starts_with("viewer"), "{err}");
+    let text = GOOD.replacen("ipd = 0.06", "ipd = \"é\" # ü = ß", 1);
+    let err = parse(&text).unwrap_err();
+    assert_eq!(err.field(), Some("viewer.ipd"), "{err}");
+}
+
+#[test]
+fn a_missing_top_level_field_is_named_not_the_comment_above_it() {
+    let text = format!(
+        "# a rig: width = 3 m\n{}",
+        GOOD.replacen("units = \"m\"\n", "", 1)
+    );
+    let err = parse(&text).unwrap_err();
+    assert_eq!(err.field(), Some("units"), "{err}");
+    assert!(err.to_string().contains("missing field `units`"), "{err}");
+}
+
+#[test]
+fn devices_and_directories_are_not_read_as_rigs() {
+    for special in ["/dev/zero", "/tmp"] {
+        let err = Rig::load(std::path::Path::new(special)).unwrap_err();
+        assert!(err.to_string().contains("not a regular file"), "{err}");
+    }
 }

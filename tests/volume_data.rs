@@ -379,3 +379,47 @@ fn the_shared_real_volumes_load() {
         assert!(hi > lo, "{}: constant volume", entry.name);
     }
 }
+
+#[test]
+fn sizes_that_overflow_or_exceed_the_budget_are_refused_before_reading() {
+    let dir = scratch("rawhuge");
+    let empty = dir.join("empty.raw");
+    std::fs::write(&empty, []).unwrap();
+    // 2^64 bytes wrapped to 0 once; now it is refused by its voxel count.
+    for dims in [
+        UVec3::splat(u32::MAX),
+        UVec3::new(1 << 16, 1 << 16, 1 << 16),
+    ] {
+        let err = load_raw(&empty, dims, VoxelType::F32, Vec3::ONE).unwrap_err();
+        assert!(matches!(err, DataError::TooManyVoxels { .. }), "{err}");
+        assert!(
+            err.to_string().contains("2147483648 voxels at most"),
+            "{err}"
+        );
+    }
+    // A 3 GB (sparse) file for an 8^3 volume: refused by its size, unread.
+    let big = dir.join("big.raw");
+    std::fs::File::create(&big)
+        .unwrap()
+        .set_len(3 << 30)
+        .unwrap();
+    let err = load_raw(&big, UVec3::splat(8), VoxelType::U8, Vec3::ONE).unwrap_err();
+    assert!(
+        err.to_string()
+            .ends_with("has 3221225472 bytes, but 8x8x8 uint8 needs 512 bytes"),
+        "{err}"
+    );
+    for special in ["/dev/zero", "/tmp"] {
+        let err = load_raw(
+            Path::new(special),
+            UVec3::splat(8),
+            VoxelType::U8,
+            Vec3::ONE,
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("not a regular file"), "{err}");
+    }
+    let err = load_paraview(Path::new("/dev/zero")).unwrap_err();
+    assert!(err.to_string().contains("not a regular file"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -53,7 +53,9 @@ impl ConfigError {
     }
 }
 
-type Vec3 = Spanned<[f64; 3]>;
+/// Read as a list, so that a wrong number of components is an error
+/// naming the field rather than something serde may pass over.
+type Vec3 = Spanned<Vec<f64>>;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -111,16 +113,19 @@ struct RawWall {
     lr: Vec3,
     ur: Vec3,
     ul: Option<Vec3>,
-    resolution: Spanned<[u32; 2]>,
+    resolution: Spanned<Vec<u32>>,
     eyes: Option<Spanned<Vec<Eye>>>,
 }
 
 pub(crate) fn load(path: &Path) -> Result<Rig, ConfigError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let text =
+        crate::data::files::read_text(path, crate::data::files::TEXT_LIMIT).map_err(|source| {
+            ConfigError::Io {
+                file: file.clone(),
+                source,
+            }
+        })?;
     parse(&text, &file)
 }
 
@@ -163,7 +168,11 @@ impl Ctx<'_> {
     }
 
     fn vec3(&self, v: &Vec3, field: impl Fn() -> String) -> Result<DVec3, ConfigError> {
-        let p = DVec3::from_array(*v.get_ref());
+        let [x, y, z] = v.get_ref()[..] else {
+            let n = v.get_ref().len();
+            return Err(self.at(v, field(), format!("expected 3 numbers, got {n}")));
+        };
+        let p = DVec3::new(x, y, z);
         if p.is_finite() {
             Ok(p)
         } else {
@@ -346,12 +355,8 @@ impl Ctx<'_> {
     fn wall(&self, raw: &RawWall, i: usize) -> Result<Wall, ConfigError> {
         let field = |f: &str| format!("walls[{i}].{f}");
         let name = raw.name.get_ref().trim().to_string();
-        if name.is_empty() {
-            return Err(self.at(
-                &raw.name,
-                field("name"),
-                "wall name must not be empty".into(),
-            ));
+        if let Err(why) = check_wall_name(&name) {
+            return Err(self.at(&raw.name, field("name"), why));
         }
         let ll = self.vec3(&raw.ll, || field("ll"))?;
         let lr = self.vec3(&raw.lr, || field("lr"))?;
@@ -369,7 +374,14 @@ impl Ctx<'_> {
             };
             self.at(culprit, field(key), format!("wall \"{name}\": {e}"))
         })?;
-        let [w, h] = *raw.resolution.get_ref();
+        let [w, h] = raw.resolution.get_ref()[..] else {
+            let n = raw.resolution.get_ref().len();
+            return Err(self.at(
+                &raw.resolution,
+                field("resolution"),
+                format!("wall \"{name}\": expected 2 numbers (width, height), got {n}"),
+            ));
+        };
         if w == 0 || h == 0 {
             return Err(self.at(
                 &raw.resolution,
@@ -400,6 +412,29 @@ impl Ctx<'_> {
             resolution: UVec2::new(w, h),
             eyes,
         })
+    }
+}
+
+/// The longest wall name: it becomes part of file names.
+pub const MAX_WALL_NAME: usize = 64;
+
+/// Wall names become file names (`<wall>_<eye>.png` beside the contact
+/// sheets `cave_<eye>.png`), so they are kept to characters every file
+/// system takes, cannot climb out of the output folder, and cannot be the
+/// contact sheets' name.
+fn check_wall_name(name: &str) -> Result<(), String> {
+    let safe = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+    if name.is_empty() {
+        Err("wall name must not be empty".into())
+    } else if name.len() > MAX_WALL_NAME || !name.chars().all(safe) {
+        Err(format!(
+            "wall name \"{}\" must be 1 to {MAX_WALL_NAME} letters, digits, '_' or '-' (it names the wall's image files)",
+            name.escape_debug()
+        ))
+    } else if name.eq_ignore_ascii_case("cave") {
+        Err("wall name \"cave\" is taken by the contact sheets (cave_<eye>.png)".into())
+    } else {
+        Ok(())
     }
 }
 

@@ -9,7 +9,8 @@ pub(crate) struct Location {
 }
 
 pub(crate) fn locate(text: &str, offset: usize) -> Location {
-    let offset = offset.min(text.len());
+    // Parsers report byte offsets, which may fall inside a character.
+    let offset = floor_boundary(text, offset);
     let before = &text[..offset];
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |i| i + 1);
@@ -56,13 +57,54 @@ pub(crate) fn locate(text: &str, offset: usize) -> Location {
 /// The key of the last `key =` before byte `column` of `line`, which also
 /// finds keys inside inline tables; the line's own key if the error is on it.
 fn key_at(line: &str, column: usize) -> String {
-    let prefix = &line[..column];
+    let trimmed = line.trim_start();
+    if trimmed.is_empty() || trimmed.starts_with('#') {
+        // A comment or blank line (where errors about the whole file
+        // land) names no field.
+        return String::new();
+    }
+    let prefix = &line[..floor_boundary(line, column)];
     let Some(eq) = prefix.rfind('=') else {
         return line.split('=').next().unwrap_or("").trim().to_string();
     };
     let head = prefix[..eq].trim_end();
+    let is_key = |c: char| c.is_alphanumeric() || c == '_' || c == '-' || c == '.';
     let start = head
-        .rfind(|c: char| !(c.is_alphanumeric() || c == '_' || c == '-' || c == '.'))
-        .map_or(0, |i| i + 1);
+        .char_indices()
+        .rev()
+        .find(|&(_, c)| !is_key(c))
+        .map_or(0, |(i, c)| i + c.len_utf8());
     head[start..].to_string()
+}
+
+/// The largest character boundary of `text` at or before `offset`.
+fn floor_boundary(text: &str, offset: usize) -> usize {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    offset
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offsets_inside_characters_and_keys_after_them_are_found() {
+        let text = "[viewer]\nhead = { « = 1, héad_ÿ = [0, 0] }\n";
+        for offset in 0..=text.len() + 3 {
+            let loc = locate(text, offset);
+            assert!(loc.line >= 1 && loc.column >= 1, "{offset}");
+        }
+        let at = text.find("[0").unwrap();
+        assert_eq!(locate(text, at).path, "viewer.héad_ÿ");
+    }
+
+    #[test]
+    fn a_comment_line_names_no_field() {
+        let text = "# a rig = with an equals sign\nunits = \"m\"\n";
+        assert_eq!(locate(text, 0).path, "");
+        assert_eq!(locate(text, 3).path, "");
+    }
 }

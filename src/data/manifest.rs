@@ -4,7 +4,8 @@ use glam::{UVec3, Vec3};
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
 
-use super::raw::decode_raw;
+use super::files;
+use super::raw::{decode_raw, read_raw};
 use super::{DataError, VoxelType};
 use crate::scene::StructuredVolume;
 
@@ -41,7 +42,7 @@ struct RawManifest {
 impl Manifest {
     pub fn load(path: &Path) -> Result<Self, DataError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
+        let text = files::read_text(path, files::TEXT_LIMIT).map_err(|source| DataError::Io {
             file: file.clone(),
             source,
         })?;
@@ -109,10 +110,9 @@ impl Manifest {
     pub fn load_volume(&self, name: &str) -> Result<StructuredVolume, DataError> {
         let entry = self.find(name)?;
         let path = self.file_of(entry);
-        let bytes = std::fs::read(&path).map_err(|source| DataError::Io {
-            file: path.display().to_string(),
-            source,
-        })?;
+        let dims = UVec3::from_array(entry.dims);
+        let dtype = VoxelType::parse(&entry.dtype)?;
+        let bytes = read_raw(&path, dims, dtype)?;
         if let Some(expected) = &entry.sha256 {
             let actual: String = Sha256::digest(&bytes)
                 .iter()
@@ -126,14 +126,6 @@ impl Manifest {
                 });
             }
         }
-        let dims = UVec3::from_array(entry.dims);
-        let spacing = Vec3::from_array(entry.spacing);
-        decode_raw(
-            &path,
-            &bytes,
-            dims,
-            VoxelType::parse(&entry.dtype)?,
-            spacing,
-        )
+        decode_raw(&bytes, dims, dtype, Vec3::from_array(entry.spacing))
     }
 }

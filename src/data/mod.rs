@@ -2,6 +2,7 @@
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
 //! colour maps.
 
+pub mod files;
 mod manifest;
 mod paraview;
 mod presets;
@@ -33,6 +34,11 @@ pub enum DataError {
         expected: u64,
         actual: u64,
     },
+    #[error(
+        "a volume of {dims} voxels is more than caveray loads ({} voxels at most)",
+        raw::MAX_VOXELS
+    )]
+    TooManyVoxels { dims: String },
     #[error("{file}: checksum mismatch: sha256 is {actual}, the manifest says {expected}")]
     Checksum {
         file: String,

@@ -17,9 +17,11 @@ pub fn load_paraview(path: &Path) -> Result<TransferFunction, DataError> {
         file: file.clone(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
-        file: file.clone(),
-        source,
+    let text = super::files::read_text(path, super::files::TEXT_LIMIT).map_err(|source| {
+        DataError::Io {
+            file: file.clone(),
+            source,
+        }
     })?;
     let json: Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
     let maps = match &json {

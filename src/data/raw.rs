@@ -2,7 +2,7 @@ use std::path::Path;
 
 use glam::{UVec3, Vec3};
 
-use super::DataError;
+use super::{files, DataError};
 use crate::scene::{StructuredVolume, Voxels};
 
 /// Voxel types of headerless little-endian raw files.
@@ -58,31 +58,45 @@ impl VoxelType {
     }
 }
 
+/// The most voxels caveray loads: 2^31 (8 GiB as the renderers' f32),
+/// beyond any GPU's 3D texture and this machine class's memory.
+pub const MAX_VOXELS: u64 = 1 << 31;
+
+/// The byte size of a raw volume of `dims` and `dtype`, every product
+/// checked, or why it cannot be loaded.
+pub fn raw_size(dims: UVec3, dtype: VoxelType) -> Result<u64, DataError> {
+    let voxels = u64::from(dims.x)
+        .checked_mul(u64::from(dims.y))
+        .and_then(|n| n.checked_mul(u64::from(dims.z)))
+        .filter(|&n| n <= MAX_VOXELS)
+        .ok_or_else(|| DataError::TooManyVoxels {
+            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
+        })?;
+    Ok(voxels * dtype.bytes())
+}
+
 /// Loads a headerless little-endian raw volume, x fastest. A file whose
-/// size does not match `dims` and `dtype` is rejected with both numbers.
+/// size does not match `dims` and `dtype` is rejected with both numbers,
+/// before anything is read.
 pub fn load_raw(
     path: &Path,
     dims: UVec3,
     dtype: VoxelType,
     spacing: Vec3,
 ) -> Result<StructuredVolume, DataError> {
-    let bytes = std::fs::read(path).map_err(|source| DataError::Io {
-        file: path.display().to_string(),
-        source,
-    })?;
-    decode_raw(path, &bytes, dims, dtype, spacing)
+    let bytes = read_raw(path, dims, dtype)?;
+    decode_raw(&bytes, dims, dtype, spacing)
 }
 
-/// Decodes the bytes of a raw file read from `path` (named in errors).
-pub(crate) fn decode_raw(
-    path: &Path,
-    bytes: &[u8],
-    dims: UVec3,
-    dtype: VoxelType,
-    spacing: Vec3,
-) -> Result<StructuredVolume, DataError> {
-    let expected = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z) * dtype.bytes();
-    let actual = bytes.len() as u64;
+/// The bytes of the raw file at `path`, which must be exactly the size
+/// `dims` and `dtype` need.
+pub(crate) fn read_raw(path: &Path, dims: UVec3, dtype: VoxelType) -> Result<Vec<u8>, DataError> {
+    let io = |source| DataError::Io {
+        file: path.display().to_string(),
+        source,
+    };
+    let expected = raw_size(dims, dtype)?;
+    let (file, actual) = files::open_regular(path).map_err(io)?;
     if actual != expected {
         return Err(DataError::FileSize {
             file: path.display().to_string(),
@@ -92,6 +106,16 @@ pub(crate) fn decode_raw(
             actual,
         });
     }
+    files::read_len(file, actual).map_err(io)
+}
+
+/// Decodes the bytes of a raw file, already checked to be the right size.
+pub(crate) fn decode_raw(
+    bytes: &[u8],
+    dims: UVec3,
+    dtype: VoxelType,
+    spacing: Vec3,
+) -> Result<StructuredVolume, DataError> {
     Ok(StructuredVolume::new(
         dims,
         dtype.decode(bytes),

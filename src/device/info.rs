@@ -133,6 +133,16 @@ pub const EXTENSIONS: &[&str] = &[
 pub const CHANNELS: &[&str] = &["channel.color", "channel.depth"];
 
 /// The registry: adding a subtype is a module and a line here.
+/// Whether any parameter of any subtype reads arrays of `element`: an
+/// array of another type can never be used, and its host hears so when
+/// it makes one.
+pub fn element_is_read(element: T) -> bool {
+    SUBTYPES
+        .iter()
+        .flat_map(|s| s.params)
+        .any(|p| p.elements.contains(&element))
+}
+
 pub static SUBTYPES: &[&SubtypeInfo] = &[
     &device_object::INFO,
     &camera::perspective::INFO,

@@ -12,7 +12,9 @@ use glam::Vec4;
 
 use std::sync::Arc;
 
-use crate::render::{BackgroundImage, ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES};
+use crate::render::{
+    BackgroundImage, ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES, STEP_FACTOR_RANGE,
+};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::RENDERER,
@@ -112,7 +114,7 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         light: light
             .try_normalize()
             .ok_or_else(|| format!("lightDirection {light} has no direction"))?,
-        step_factor: r.f32("stepFactor")? * 2.0 / sampling_rate(r)?,
+        step_factor: step_factor(r)?,
         termination: r.f32("terminationThreshold")?,
         depth_threshold: r.f32("depthThreshold")?,
         clip_planes: clip_planes(r)?,
@@ -138,6 +140,21 @@ fn background_image(r: &Read<'_>) -> Result<Option<Arc<BackgroundImage>>, String
             .map(Arc::new)
             .ok_or_else(|| format!("'background' of {w}x{h} has no pixels"))
     })
+}
+
+/// The step in half voxels that `stepFactor` and `volumeSamplingRate`
+/// give together, refused (with both) outside STEP_FACTOR_RANGE.
+fn step_factor(r: &Read<'_>) -> Result<f32, String> {
+    let (factor, rate) = (r.f32("stepFactor")?, sampling_rate(r)?);
+    let step = factor * 2.0 / rate;
+    let (lo, hi) = STEP_FACTOR_RANGE;
+    if step.is_finite() && (lo..=hi).contains(&step) {
+        Ok(step)
+    } else {
+        Err(format!(
+            "stepFactor {factor:?} with volumeSamplingRate {rate:?} gives steps of {step:?} half voxels; caveray takes {lo} to {hi} (stepFactor 1/64 to 64 at the default rate 2)"
+        ))
+    }
 }
 
 /// `volumeSamplingRate`, checked: the step is its inverse.

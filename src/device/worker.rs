@@ -61,6 +61,9 @@ pub struct Worker {
     sender: Option<Sender<RenderJob>>,
     thread: Option<JoinHandle<()>>,
     report: Reporter,
+    /// The slots of jobs sent and perhaps not finished: a device being
+    /// released stops them rather than waiting for them.
+    submitted: Vec<Arc<FrameSlot>>,
 }
 
 impl RenderJob {
@@ -81,6 +84,7 @@ impl Worker {
             sender: None,
             thread: None,
             report,
+            submitted: Vec::new(),
         }
     }
 
@@ -110,6 +114,8 @@ impl Worker {
                 }
             }
         }
+        self.submitted.retain(|s| s.is_busy());
+        self.submitted.push(Arc::clone(&job.slot));
         if let Some(tx) = &self.sender {
             if let Err(e) = tx.send(job) {
                 e.0.slot.finish(
@@ -122,7 +128,12 @@ impl Worker {
 }
 
 impl Drop for Worker {
+    /// Stops what is running and queued, then waits for the thread: a
+    /// release returns promptly whatever the render was.
     fn drop(&mut self) {
+        for slot in &self.submitted {
+            slot.cancel();
+        }
         self.sender = None;
         if let Some(t) = self.thread.take() {
             let _ = t.join();
@@ -171,6 +182,9 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
         let Some((_, r)) = renderer.as_mut() else {
             return Err("no renderer could be made".into());
         };
+        if let Some(why) = crate::render::march_warning(scene, &job.settings) {
+            report(status(Severity::Warning, StatusCode::NoError, why));
+        }
         r.render_until(scene, &job.rays, &job.settings, &job.desc, &job.slot.stop)
             .map_err(|e| e.to_string())
     }))

@@ -127,6 +127,25 @@ impl RayGen {
         self
     }
 
+    /// Whether every number is finite (`t_far` may be +inf): a camera
+    /// beyond f32's range (an eye at 1e300 in a double-precision host)
+    /// gives rays that are not.
+    pub fn is_finite(&self) -> bool {
+        [
+            self.origin,
+            self.origin_dx,
+            self.origin_dy,
+            self.direction,
+            self.direction_dx,
+            self.direction_dy,
+            self.eye.unwrap_or_default(),
+        ]
+        .iter()
+        .all(|v| v.is_finite())
+            && self.t_near.is_finite()
+            && !self.t_far.is_nan()
+    }
+
     /// Origin and unit direction of pixel (x, y), in single precision.
     pub fn pixel_ray(&self, x: u32, y: u32) -> (Vec3, Vec3) {
         let (fx, fy) = (x as f32, y as f32);

@@ -41,6 +41,23 @@ pub struct FrameDesc {
     pub depth: bool,
 }
 
+/// The most pixels one frame may have: 2^28 (16384 x 16384), whose
+/// colour, depth and working buffers on the CPU reference take about 6 GiB.
+pub const MAX_FRAME_PIXELS: u64 = 1 << 28;
+
+/// A buffer of `n` copies of `value`, or an error if the memory cannot be
+/// had: a large frame on a small machine fails its render, not the host.
+pub(crate) fn filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>, RenderError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| RenderError::OutOfMemory {
+            bytes: (n as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+            what: what.to_string(),
+        })?;
+    v.resize(n, value);
+    Ok(v)
+}
+
 impl FrameDesc {
     pub fn new(size: UVec2) -> Self {
         Self {
@@ -63,11 +80,19 @@ impl FrameDesc {
         self.size.x as usize * self.size.y as usize
     }
 
-    pub(crate) fn validate(&self) -> Result<(), RenderError> {
+    /// Why a frame of this description cannot be rendered, if it cannot:
+    /// checked before anything is allocated.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let (w, h) = (self.size.x, self.size.y);
         if self.size.min_element() == 0 {
             return Err(RenderError::Settings(format!(
-                "frame size must be at least 1x1, got {}x{}",
-                self.size.x, self.size.y
+                "frame size must be at least 1x1, got {w}x{h}"
+            )));
+        }
+        let pixels = u64::from(w) * u64::from(h);
+        if pixels > MAX_FRAME_PIXELS {
+            return Err(RenderError::Settings(format!(
+                "a frame of {w}x{h} is {pixels} pixels; caveray renders up to {MAX_FRAME_PIXELS} (16384 x 16384) per frame"
             )));
         }
         Ok(())

@@ -3,8 +3,9 @@
 
 use glam::{UVec3, Vec3, Vec4};
 
-use super::settings::{RenderSettings, Shading, AO_DIRECTIONS};
+use super::settings::{RenderSettings, Shading, AO_DIRECTIONS, MAX_STEPS_PER_RAY};
 use super::RenderError;
+use crate::geometry::RayGen;
 use crate::scene::{Filter, PlacedVolume, Scene};
 
 /// Everything both renderers derive from scene and settings before any ray
@@ -17,6 +18,13 @@ pub(crate) struct MarchPlan {
     /// Primary step length in world units: half the smallest cell edge of
     /// any volume, times the step factor.
     pub step: f32,
+    /// The most steps a primary ray takes: enough to cross the scene's
+    /// bounding box diagonally, at most MAX_STEPS_PER_RAY. Without it, a
+    /// camera so far away that t loses its precision would march forever.
+    pub max_steps: u32,
+    /// Whether MAX_STEPS_PER_RAY is below what crossing the scene takes,
+    /// so that some rays stop before they leave it.
+    pub cut_short: bool,
     /// Step of shadow and directional rays, and the AO radius unit: one
     /// smallest cell edge, independent of the primary step factor.
     pub shading_step: f32,
@@ -88,8 +96,17 @@ impl VolumePlan {
 }
 
 impl MarchPlan {
-    pub fn new(scene: &Scene, settings: &RenderSettings) -> Result<Self, RenderError> {
+    pub fn new(
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+    ) -> Result<Self, RenderError> {
         settings.validate()?;
+        if !rays.is_finite() {
+            return Err(RenderError::Settings(
+                "the camera's rays are not finite numbers (an eye or a wall beyond single precision's range?)".into(),
+            ));
+        }
         let smallest = scene
             .volumes()
             .iter()
@@ -100,9 +117,19 @@ impl MarchPlan {
             Shading::Directional(n) => random_directions(n),
             Shading::None | Shading::Shadows => Vec::new(),
         };
+        let step = 0.5 * smallest * settings.step_factor;
+        let (lo, hi) = scene.bounds();
+        let crossing = ((hi - lo).length() / step).ceil() + 2.0;
+        let cut_short = crossing.is_nan() || crossing > MAX_STEPS_PER_RAY as f32;
         Ok(Self {
             volumes: scene.volumes().iter().map(VolumePlan::new).collect(),
-            step: 0.5 * smallest * settings.step_factor,
+            step,
+            max_steps: if cut_short {
+                MAX_STEPS_PER_RAY
+            } else {
+                crossing as u32
+            },
+            cut_short,
             shading_step: smallest,
             ao_radius: 2.0 * smallest,
             termination: settings.termination,

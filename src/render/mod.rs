@@ -15,10 +15,11 @@ use thiserror::Error;
 
 pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
 pub use cpu::CpuRenderer;
-pub use frame::{ColorData, ColorFormat, Frame, FrameDesc};
+pub use frame::{ColorData, ColorFormat, Frame, FrameDesc, MAX_FRAME_PIXELS};
 pub use gpu::{GpuRenderer, PassClock, Uploads};
 pub use settings::{
     BackgroundImage, ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES, MAX_DIRECTIONS,
+    MAX_STEPS_PER_RAY, STEP_FACTOR_RANGE,
 };
 
 use crate::geometry::RayGen;
@@ -49,6 +50,25 @@ pub enum RenderError {
     Gpu(String),
     #[error("the render was stopped before it finished")]
     Stopped,
+    #[error("cannot allocate {bytes} bytes for {what}")]
+    OutOfMemory { bytes: u64, what: String },
+}
+
+/// Why some primary rays of `scene` under `settings` stop before they
+/// have crossed it, if any would: the scene's diagonal takes more than
+/// MAX_STEPS_PER_RAY steps (one volume much finer than the scene is
+/// wide, or a very small step factor).
+pub fn march_warning(scene: &Scene, settings: &RenderSettings) -> Option<String> {
+    let plan = march_plan::MarchPlan::new(scene, &RayGen::default(), settings).ok()?;
+    plan.cut_short.then(|| {
+        let (lo, hi) = scene.bounds();
+        format!(
+            "rays are cut at {} steps of {:.3e}: the scene's diagonal ({:.3e}) takes more; raise the step factor or drop the finest volume",
+            plan.max_steps,
+            plan.step,
+            (hi - lo).length()
+        )
+    })
 }
 
 /// Which implementation renders: what the tool's `--backend`, the

@@ -13,6 +13,17 @@ pub const MAX_DIRECTIONS: u32 = 64;
 /// Most clip planes a renderer takes.
 pub const MAX_CLIP_PLANES: usize = 8;
 
+/// The step factors caveray takes, in half voxels: from 1/64 (128 samples
+/// per voxel) to 64 (one every 32 voxels). Below, a render of any size
+/// takes hours; above, it samples nothing of a volume's detail.
+pub const STEP_FACTOR_RANGE: (f32, f32) = (1.0 / 64.0, 64.0);
+
+/// The most steps one primary ray takes, whatever the scene's size and
+/// step: 2^20 covers the diagonal of a 2048^3 volume at the finest step
+/// factor several times over. Rays that would take more are cut there
+/// (`MarchPlan::cut_short` says when that can happen).
+pub const MAX_STEPS_PER_RAY: u32 = 1 << 20;
+
 /// Half-spaces that cut the primary rays: plane (n, d) keeps the points p
 /// with dot(n, p) < d (anari-visionaray's convention, which OpenCOVER
 /// sends).
@@ -202,7 +213,8 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
-    pub(crate) fn validate(&self) -> Result<(), RenderError> {
+    /// Why these settings cannot render, if they cannot.
+    pub fn validate(&self) -> Result<(), RenderError> {
         let unit = |x: f32| x.is_finite() && (0.0..=1.0).contains(&x);
         if !self.background.to_array().into_iter().all(unit) {
             return Err(RenderError::Settings(format!(
@@ -210,9 +222,10 @@ impl RenderSettings {
                 self.background
             )));
         }
-        if !(self.step_factor.is_finite() && self.step_factor > 0.0) {
+        let (lo, hi) = STEP_FACTOR_RANGE;
+        if !(self.step_factor.is_finite() && (lo..=hi).contains(&self.step_factor)) {
             return Err(RenderError::Settings(format!(
-                "step factor must be finite and positive, got {}",
+                "step factor must be in [{lo}, {hi}] (half voxels per step), got {:?}",
                 self.step_factor
             )));
         }

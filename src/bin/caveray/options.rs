@@ -3,7 +3,9 @@
 
 use anari_library_caveray::cave::View;
 use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
-use anari_library_caveray::render::{Backend, RenderSettings, Renderer, Shading};
+use anari_library_caveray::render::{
+    Backend, RenderSettings, Renderer, Shading, STEP_FACTOR_RANGE,
+};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
 use glam::UVec2;
@@ -14,6 +16,15 @@ use crate::Failure;
 pub fn shading(s: &str) -> Result<Shading, String> {
     s.parse()
         .map_err(|e: anari_library_caveray::render::RenderError| e.to_string())
+}
+
+/// `--step-factor` values: within STEP_FACTOR_RANGE.
+pub fn step_factor(s: &str) -> Result<f32, String> {
+    let (lo, hi) = STEP_FACTOR_RANGE;
+    match s.trim().parse::<f32>() {
+        Ok(x) if (lo..=hi).contains(&x) => Ok(x),
+        _ => Err(format!("expected a number from {lo} to {hi}, got '{s}'")),
+    }
 }
 
 /// `--backend` values, listed in the help and checked by clap.
@@ -32,8 +43,8 @@ pub struct RenderOptions {
     /// gpu, cpu, or auto (the GPU where there is one, else the CPU reference).
     #[arg(long, default_value = "auto", value_parser = backend())]
     pub backend: Backend,
-    /// Step length in units of half the smallest voxel.
-    #[arg(long, default_value_t = 1.0)]
+    /// Step length in units of half the smallest voxel (1/64 to 64).
+    #[arg(long, default_value_t = 1.0, value_parser = step_factor)]
     pub step_factor: f32,
 }
 

@@ -45,6 +45,12 @@ impl Device {
                 return Err(memory);
             }
         };
+        if !crate::device::info::element_is_read(element) {
+            self.warn(
+                None,
+                format!("{what}: no caveray parameter reads arrays of {element}; this one can never be used"),
+            );
+        }
         if byte_len(element, dims).is_none() {
             self.error(
                 StatusCode::OutOfMemory,

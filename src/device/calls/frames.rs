@@ -310,11 +310,7 @@ impl Device {
             return;
         };
         if let State::Frame(f) = &mut frame.lock().state {
-            if f.slot.is_busy() {
-                f.slot
-                    .stop
-                    .store(true, std::sync::atomic::Ordering::Relaxed);
-            }
+            f.slot.cancel();
             // What was kept no longer stands for the frame's next render.
             f.last = None;
         };

@@ -37,6 +37,14 @@ pub struct FrameState {
     pub last: Option<RenderInputs>,
 }
 
+impl Drop for FrameState {
+    /// A frame the host has released for good: a render still running
+    /// for it stops, so nobody waits on an image nobody can map.
+    fn drop(&mut self) {
+        self.slot.cancel();
+    }
+}
+
 /// Shared between the device and the worker rendering into the frame.
 #[derive(Default)]
 pub struct FrameSlot {
@@ -103,5 +111,13 @@ impl FrameSlot {
 
     pub fn is_busy(&self) -> bool {
         self.lock().busy
+    }
+
+    /// Stops the render in flight, if any (discard, release).
+    pub fn cancel(&self) {
+        let s = self.lock();
+        if s.busy {
+            self.stop.store(true, Ordering::Relaxed);
+        }
     }
 }

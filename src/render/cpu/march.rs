@@ -39,7 +39,8 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
     let range = union.and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
     if let Some((t0, t1)) = range {
         let len = t1 - t0;
-        let n = (len / plan.step).ceil() as u32;
+        // `as` saturates; the cap holds where t has lost its precision.
+        let n = ((len / plan.step).ceil() as u32).min(plan.max_steps);
         for k in 0..n {
             // Every segment is a full step but the last; each is sampled
             // at its midpoint and its opacity corrected for its length.

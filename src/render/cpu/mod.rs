@@ -11,7 +11,7 @@ use std::sync::{Arc, Mutex};
 use glam::Vec4;
 use rayon::prelude::*;
 
-use super::frame::{linear_to_srgb, to_unorm8, ColorData, ColorFormat, Frame, FrameDesc};
+use super::frame::{filled, linear_to_srgb, to_unorm8, ColorData, ColorFormat, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::{RenderError, RenderSettings};
 use crate::geometry::RayGen;
@@ -71,8 +71,8 @@ impl CpuRenderer {
         self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
     }
 
-    /// `render`, skipping the rows not yet started once `stop` is set and
-    /// then returning `RenderError::Stopped`.
+    /// `render`, casting no further pixel once `stop` is set and then
+    /// returning `RenderError::Stopped`.
     pub fn render_until(
         &self,
         scene: &Scene,
@@ -82,22 +82,23 @@ impl CpuRenderer {
         stop: &AtomicBool,
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
-        let plan = MarchPlan::new(scene, settings)?;
+        let plan = MarchPlan::new(scene, rays, settings)?;
         let data = self.prepare(scene);
         let field = sample::Field::new(&plan, &data);
         let w = desc.size.x as usize;
-        let mut color = vec![0.0f32; 4 * desc.pixels()];
-        let mut depth = vec![0.0f32; desc.pixels()];
+        let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's colour")?;
+        let mut depth = filled(desc.pixels(), 0.0f32, "the frame's depth")?;
         let samples: u64 = color
             .par_chunks_mut(4 * w)
             .zip(depth.par_chunks_mut(w))
             .enumerate()
             .map(|(y, (crow, drow))| {
                 let mut samples = 0u64;
-                if stop.load(Ordering::Relaxed) {
-                    return samples;
-                }
                 for x in 0..w {
+                    // Per pixel: one slow row must not hold up a stop.
+                    if stop.load(Ordering::Relaxed) {
+                        return samples;
+                    }
                     let (o, d) = rays.pixel_ray(x as u32, y as u32);
                     let bg = match &settings.background_image {
                         Some(image) => image.at(x as u32, y as u32, desc.size),
@@ -114,18 +115,17 @@ impl CpuRenderer {
         if stop.load(Ordering::Relaxed) {
             return Err(RenderError::Stopped);
         }
-        let encode = |srgb: bool| {
-            color
-                .chunks_exact(4)
-                .flat_map(|c| {
-                    let rgb = |x: f32| if srgb { linear_to_srgb(x) } else { x };
-                    [rgb(c[0]), rgb(c[1]), rgb(c[2]), c[3]].map(to_unorm8)
-                })
-                .collect()
+        let encode = |srgb: bool| -> Result<Vec<u8>, RenderError> {
+            let mut out = filled(color.len(), 0u8, "the frame's 8-bit colour")?;
+            for (o, c) in out.chunks_exact_mut(4).zip(color.chunks_exact(4)) {
+                let rgb = |x: f32| if srgb { linear_to_srgb(x) } else { x };
+                o.copy_from_slice(&[rgb(c[0]), rgb(c[1]), rgb(c[2]), c[3]].map(to_unorm8));
+            }
+            Ok(out)
         };
         let color = match desc.color {
-            ColorFormat::Rgba8 => ColorData::Rgba8(encode(false)),
-            ColorFormat::Srgba8 => ColorData::Srgba8(encode(true)),
+            ColorFormat::Rgba8 => ColorData::Rgba8(encode(false)?),
+            ColorFormat::Srgba8 => ColorData::Srgba8(encode(true)?),
             ColorFormat::Rgba32F => ColorData::Rgba32F(color),
         };
         Ok(Frame {

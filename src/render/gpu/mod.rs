@@ -301,7 +301,7 @@ impl GpuRenderer {
         desc: &FrameDesc,
     ) -> Result<(), RenderError> {
         desc.validate()?;
-        let plan = MarchPlan::new(scene, settings)?;
+        let plan = MarchPlan::new(scene, rays, settings)?;
         self.check_limits(scene, desc)?;
         self.prepare(
             scene,

@@ -136,7 +136,8 @@ uniform! {
         has_background_image: u32,
         /// Multiplies every shaded sample.
         light_color: [f32; 3],
-        _pad: u32,
+        /// The most steps a primary ray takes.
+        max_steps: u32,
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
@@ -226,7 +227,7 @@ impl Params {
             volume_count: plan.volumes.len() as u32,
             has_background_image: u32::from(plan.has_background_image),
             light_color: plan.light_color.to_array(),
-            _pad: 0,
+            max_steps: plan.max_steps,
             clip,
             volumes,
         }
