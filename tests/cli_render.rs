@@ -199,6 +199,27 @@ fn bad_arguments_are_one_line_errors() {
             "expected rgba16f or rgba32f",
         ),
         (vec!["--stereo", "anaglyph"], "invalid value 'anaglyph'"),
+        // Inputs that used to hang, abort or read forever.
+        (
+            vec!["--step-factor", "1e-30"],
+            "expected a number from 0.015625 to 64, got '1e-30'",
+        ),
+        (
+            vec!["--head", "1e300,0,0"],
+            "expected three finite numbers X,Y,Z, got '1e300,0,0'",
+        ),
+        (
+            vec!["--step-factor", "0"],
+            "expected a number from 0.015625 to 64, got '0'",
+        ),
+        (
+            vec!["--volume", "/dev/zero", "--dims", "8,8,8"],
+            "not a regular file",
+        ),
+        (
+            vec!["--volume", r, "--dims", "4294967295,4294967295,4294967295"],
+            "more than caveray loads (2147483648 voxels at most)",
+        ),
     ];
     for (extra, needle) in cases {
         let mut args = vec!["render", "--config", config, "--out", o];
@@ -297,4 +318,60 @@ fn reprojection_renders_walls_it_applies_to_and_says_why_not_elsewhere() {
     for dir in [two, one, few] {
         std::fs::remove_dir_all(dir).unwrap();
     }
+}
+
+/// Rigs that would write outside the output folder, over the contact
+/// sheets, or frames beyond memory: refused before anything is written.
+#[test]
+fn rigs_that_would_escape_or_overflow_are_refused() {
+    let out = scratch("rig_errors");
+    let good = std::fs::read_to_string("cave_configs/powerwall.toml").unwrap();
+    let first_name = good
+        .lines()
+        .skip_while(|l| !l.starts_with("[[walls]]"))
+        .find(|l| l.trim_start().starts_with("name"))
+        .unwrap()
+        .to_string();
+    let resolution = good
+        .lines()
+        .find(|l| l.trim_start().starts_with("resolution"))
+        .unwrap()
+        .to_string();
+    let cases = [
+        (
+            good.replacen(&first_name, "name = \"../escape\"", 1),
+            "must be 1 to 64 letters, digits",
+        ),
+        (
+            good.replacen(&first_name, "name = \"/tmp/abs\"", 1),
+            "must be 1 to 64 letters, digits",
+        ),
+        (
+            good.replacen(&first_name, "name = \"cave\"", 1),
+            "taken by the contact sheets",
+        ),
+        (
+            good.replacen(&resolution, "resolution = [100000, 100000]", 1),
+            "is 10000000000 pixels; caveray renders up to 268435456",
+        ),
+    ];
+    for (i, (text, needle)) in cases.iter().enumerate() {
+        let rig = out.join(format!("rig{i}.toml"));
+        std::fs::write(&rig, text).unwrap();
+        let dest = out.join(format!("out{i}"));
+        let result = caveray(&[
+            "render",
+            "--config",
+            rig.to_str().unwrap(),
+            "--out",
+            dest.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8(result.stderr).unwrap();
+        assert_eq!(result.status.code(), Some(2), "{needle}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "{err}");
+        assert!(!dest.exists(), "nothing is written for a refused rig");
+    }
+    assert!(!out.join("../escape_left.png").exists());
+    std::fs::remove_dir_all(&out).unwrap();
 }

@@ -13,13 +13,20 @@ pub const TEXT_LIMIT: u64 = 16 << 20;
 
 /// Opens `path` if it is a regular file; returns it with its length.
 pub fn open_regular(path: &Path) -> Result<(File, u64), Error> {
+    let not_regular = || {
+        Error::new(
+            ErrorKind::InvalidInput,
+            "not a regular file (a directory, FIFO or device cannot be read as one)",
+        )
+    };
+    // Looked at before opening: opening a FIFO blocks until a writer comes.
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
     let file = File::open(path)?;
     let meta = file.metadata()?;
     if !meta.is_file() {
-        return Err(Error::new(
-            ErrorKind::InvalidInput,
-            "not a regular file (a directory, FIFO or device cannot be read as one)",
-        ));
+        return Err(not_regular());
     }
     Ok((file, meta.len()))
 }
@@ -83,6 +90,15 @@ mod tests {
         }
         let dir = std::env::temp_dir().join(format!("caveray_files_{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
+        // A FIFO with no writer: opening it would block forever.
+        let fifo = dir.join("fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(
+            made.is_ok_and(|s| s.success()),
+            "mkfifo (coreutils) is needed"
+        );
+        let e = read_limited(&fifo, 1 << 20).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "fifo: {e}");
         let big = dir.join("big");
         std::fs::write(&big, vec![b'x'; 2000]).unwrap();
         let e = read_limited(&big, 1000).unwrap_err();

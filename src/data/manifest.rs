@@ -42,12 +42,15 @@ struct RawManifest {
 impl Manifest {
     pub fn load(path: &Path) -> Result<Self, DataError> {
         let file = path.display().to_string();
-        let text = files::read_text(path, files::TEXT_LIMIT).map_err(|source| DataError::Io {
-            file: file.clone(),
-            source,
-        })?;
-        let raw: RawManifest = toml::from_str(&text).map_err(|e| DataError::Manifest {
-            file,
+        let text = files::read_text(path, files::TEXT_LIMIT)
+            .map_err(|source| DataError::Io { file, source })?;
+        Self::parse(&text, path)
+    }
+
+    /// A manifest from its text; `path` names it and anchors its files.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, DataError> {
+        let raw: RawManifest = toml::from_str(text).map_err(|e| DataError::Manifest {
+            file: path.display().to_string(),
             message: e.message().to_string(),
         })?;
         Ok(Self {

@@ -10,10 +10,10 @@ mod procedural;
 mod raw;
 
 pub use manifest::{Manifest, ManifestEntry};
-pub use paraview::load_paraview;
+pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};
 pub use procedural::{marschner_lobb, shepp_logan, solid_box};
-pub use raw::{load_raw, VoxelType};
+pub use raw::{load_raw, parse_raw, raw_size, VoxelType};
 
 use thiserror::Error;
 
@@ -36,7 +36,7 @@ pub enum DataError {
     },
     #[error(
         "a volume of {dims} voxels is more than caveray loads ({} voxels at most)",
-        raw::MAX_VOXELS
+        crate::scene::MAX_VOXELS
     )]
     TooManyVoxels { dims: String },
     #[error("{file}: checksum mismatch: sha256 is {actual}, the manifest says {expected}")]

@@ -13,17 +13,22 @@ use crate::scene::TransferFunction;
 /// that of the colour points; without `Points` opacity ramps from 0 to 1.
 pub fn load_paraview(path: &Path) -> Result<TransferFunction, DataError> {
     let file = path.display().to_string();
-    let bad = |message: String| DataError::ParaView {
-        file: file.clone(),
-        message,
-    };
     let text = super::files::read_text(path, super::files::TEXT_LIMIT).map_err(|source| {
         DataError::Io {
             file: file.clone(),
             source,
         }
     })?;
-    let json: Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    parse_paraview(&text, &file)
+}
+
+/// `load_paraview` on text already read; `file` names it in errors.
+pub fn parse_paraview(text: &str, file: &str) -> Result<TransferFunction, DataError> {
+    let bad = |message: String| DataError::ParaView {
+        file: file.to_string(),
+        message,
+    };
+    let json: Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
     let maps = match &json {
         Value::Array(list) => list.iter().collect(),
         other => vec![other],

@@ -3,7 +3,7 @@ use std::path::Path;
 use glam::{UVec3, Vec3};
 
 use super::{files, DataError};
-use crate::scene::{StructuredVolume, Voxels};
+use crate::scene::{StructuredVolume, Voxels, MAX_VOXELS};
 
 /// Voxel types of headerless little-endian raw files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,10 +58,6 @@ impl VoxelType {
     }
 }
 
-/// The most voxels caveray loads: 2^31 (8 GiB as the renderers' f32),
-/// beyond any GPU's 3D texture and this machine class's memory.
-pub const MAX_VOXELS: u64 = 1 << 31;
-
 /// The byte size of a raw volume of `dims` and `dtype`, every product
 /// checked, or why it cannot be loaded.
 pub fn raw_size(dims: UVec3, dtype: VoxelType) -> Result<u64, DataError> {
@@ -107,6 +103,28 @@ pub(crate) fn read_raw(path: &Path, dims: UVec3, dtype: VoxelType) -> Result<Vec
         });
     }
     files::read_len(file, actual).map_err(io)
+}
+
+/// A raw volume from bytes in memory (`name` names them in errors), with
+/// the checks a file gets.
+pub fn parse_raw(
+    bytes: &[u8],
+    name: &str,
+    dims: UVec3,
+    dtype: VoxelType,
+    spacing: Vec3,
+) -> Result<StructuredVolume, DataError> {
+    let expected = raw_size(dims, dtype)?;
+    if bytes.len() as u64 != expected {
+        return Err(DataError::FileSize {
+            file: name.to_string(),
+            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
+            dtype: dtype.name(),
+            expected,
+            actual: bytes.len() as u64,
+        });
+    }
+    decode_raw(bytes, dims, dtype, spacing)
 }
 
 /// Decodes the bytes of a raw file, already checked to be the right size.

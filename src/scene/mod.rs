@@ -9,4 +9,4 @@ mod volume;
 
 pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
-pub use volume::{Filter, StructuredVolume, VolumeError, Voxels};
+pub use volume::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

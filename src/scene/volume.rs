@@ -35,8 +35,15 @@ impl Voxels {
     }
 }
 
+/// The most voxels a volume may have: 2^31 (8 GiB as the renderers' f32),
+/// beyond any GPU's 3D texture limit and what a workstation should hold
+/// twice.
+pub const MAX_VOXELS: u64 = 1 << 31;
+
 #[derive(Debug, Error, PartialEq)]
 pub enum VolumeError {
+    #[error("a volume of {}x{}x{} voxels is more than caveray takes ({MAX_VOXELS} voxels at most)", .dims.x, .dims.y, .dims.z)]
+    TooManyVoxels { dims: UVec3 },
     #[error("volume dimensions must all be at least 1, got {}x{}x{}", .dims.x, .dims.y, .dims.z)]
     ZeroDims { dims: UVec3 },
     #[error("volume of {}x{}x{} needs {expected} voxels, got {got}", .dims.x, .dims.y, .dims.z)]
@@ -97,6 +104,9 @@ impl StructuredVolume {
             return Err(VolumeError::ZeroDims { dims });
         }
         let expected = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
+        if expected > MAX_VOXELS {
+            return Err(VolumeError::TooManyVoxels { dims });
+        }
         if voxels.len() as u64 != expected {
             return Err(VolumeError::WrongLength {
                 dims,

@@ -78,7 +78,8 @@ pub fn triple(s: &str) -> Result<DVec3, String> {
         .collect::<Result<_, _>>()
         .map_err(|_| format!("expected three numbers X,Y,Z, got '{s}'"))?;
     match values[..] {
-        [x, y, z] if values.iter().all(|v| v.is_finite()) => Ok(DVec3::new(x, y, z)),
+        // Finite in single precision too: the rays are.
+        [x, y, z] if values.iter().all(|v| (*v as f32).is_finite()) => Ok(DVec3::new(x, y, z)),
         _ => Err(format!("expected three finite numbers X,Y,Z, got '{s}'")),
     }
 }

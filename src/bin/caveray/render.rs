@@ -162,6 +162,14 @@ impl Rendered {
     }
 }
 
+/// A wall's image size at `scale` (at least 1 x 1).
+fn wall_size(resolution: glam::UVec2, scale: f64) -> glam::UVec2 {
+    (resolution.as_dvec2() * scale)
+        .round()
+        .max(glam::DVec2::ONE)
+        .as_uvec2()
+}
+
 pub fn run(args: RenderArgs) -> Result<(), Failure> {
     if !(args.scale.is_finite() && args.scale > 0.0 && args.scale <= 4.0) {
         return Err(Failure::Usage(format!(
@@ -175,6 +183,12 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         ));
     }
     let rig = Rig::load(&args.config).map_err(|e| Failure::Usage(e.to_string()))?;
+    // Every wall's image must fit before anything is loaded or rendered.
+    for wall in &rig.walls {
+        FrameDesc::new(wall_size(wall.resolution, args.scale))
+            .validate()
+            .map_err(|e| Failure::Usage(format!("wall \"{}\": {e}", wall.name)))?;
+    }
     let head = args.head.pose(&rig)?;
     let loaded = args.volume.load()?;
     let scene = loaded.placed(rig.scene.centre.as_vec3(), rig.scene.size as f32)?;
@@ -199,10 +213,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         strategy: args.render.strategy,
     };
     for (wall_index, wall) in rig.walls.iter().enumerate() {
-        let size = (wall.resolution.as_dvec2() * args.scale)
-            .round()
-            .max(glam::DVec2::ONE)
-            .as_uvec2();
+        let size = wall_size(wall.resolution, args.scale);
         let wall_views: Vec<&(_, Eye, _)> = views
             .iter()
             .filter(|(w, _, _)| std::ptr::eq(*w, wall))

@@ -11,7 +11,7 @@ use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
 use crate::device::value::words;
-use crate::scene::{Filter, StructuredVolume, Voxels};
+use crate::scene::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};
 
 /// Voxel types a structured regular field accepts; UINT8/UINT16 are read
 /// as their fixed-point twins with a warning.
@@ -91,26 +91,33 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
 fn read_voxels(array: &Array, warn: &mut dyn FnMut(String)) -> Result<(UVec3, Voxels), String> {
     let [nx, ny, nz] = array.dims();
     let dims = UVec3::new(dim(nx)?, dim(ny)?, dim(nz)?);
+    let count = nx.saturating_mul(ny).saturating_mul(nz);
+    if count > MAX_VOXELS {
+        return Err(VolumeError::TooManyVoxels { dims }.to_string());
+    }
+    let n = count as usize;
     let bytes = array.bytes();
     let voxels = match array.element() {
-        T::UFIXED8 => Voxels::U8(bytes.to_vec()),
+        T::UFIXED8 => Voxels::U8(gather(n, bytes.iter().copied())?),
         T::UINT8 => {
             warn("UINT8 voxels are read as UFIXED8 (0..255 maps to 0..1)".into());
-            Voxels::U8(bytes.to_vec())
+            Voxels::U8(gather(n, bytes.iter().copied())?)
         }
         T::UFIXED16 | T::UINT16 => {
             if array.element() == T::UINT16 {
                 warn("UINT16 voxels are read as UFIXED16 (0..65535 maps to 0..1)".into());
             }
-            Voxels::U16(words(bytes).map(u16::from_ne_bytes).collect())
+            Voxels::U16(gather(n, words(bytes).map(u16::from_ne_bytes))?)
         }
-        T::FIXED16 => Voxels::F32(
-            words(bytes)
-                .map(|w| (f32::from(i16::from_ne_bytes(w)) / 32767.0).max(-1.0))
-                .collect(),
-        ),
-        T::FLOAT32 => Voxels::F32(array.f32s()),
-        T::FLOAT64 => Voxels::F32(words(bytes).map(|w| f64::from_ne_bytes(w) as f32).collect()),
+        T::FIXED16 => Voxels::F32(gather(
+            n,
+            words(bytes).map(|w| (f32::from(i16::from_ne_bytes(w)) / 32767.0).max(-1.0)),
+        )?),
+        T::FLOAT32 => Voxels::F32(gather(n, words(bytes).map(f32::from_ne_bytes))?),
+        T::FLOAT64 => Voxels::F32(gather(
+            n,
+            words(bytes).map(|w| f64::from_ne_bytes(w) as f32),
+        )?),
         other => {
             return Err(format!(
                 "'data' holds {other}; a structured regular field needs {VOXEL_TYPES}"
@@ -118,6 +125,20 @@ fn read_voxels(array: &Array, warn: &mut dyn FnMut(String)) -> Result<(UVec3, Vo
         }
     };
     Ok((dims, voxels))
+}
+
+/// The items collected into memory reserved up front, fallibly: a field
+/// too large for this machine fails its commit, not the host.
+fn gather<T>(n: usize, items: impl Iterator<Item = T>) -> Result<Vec<T>, String> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        format!(
+            "cannot allocate {} bytes for the field's voxels",
+            n.saturating_mul(std::mem::size_of::<T>())
+        )
+    })?;
+    v.extend(items.take(n));
+    Ok(v)
 }
 
 fn dim(n: u64) -> Result<u32, String> {

@@ -37,15 +37,22 @@ impl CpuRenderer {
     }
 
     /// Each volume's values and table, converted only when new.
-    fn prepare(&self, scene: &Scene) -> Vec<Converted> {
+    fn prepare(&self, scene: &Scene) -> Result<Vec<Converted>, RenderError> {
         // A poisoned lock only means a panic elsewhere; the cache is rebuilt.
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
         let mut next = Prepared::default();
         for placed in scene.volumes() {
-            let values = reuse(&cache.values, &placed.volume).unwrap_or_else(|| {
-                let voxels = placed.volume.voxels();
-                Arc::new((0..voxels.len()).map(|i| voxels.value(i)).collect())
-            });
+            let values = match reuse(&cache.values, &placed.volume) {
+                Some(v) => v,
+                None => {
+                    let voxels = placed.volume.voxels();
+                    let mut values = filled(voxels.len(), 0.0f32, "the volume as f32")?;
+                    for (i, v) in values.iter_mut().enumerate() {
+                        *v = voxels.value(i);
+                    }
+                    Arc::new(values)
+                }
+            };
             let tf = &placed.transfer_function;
             let table = reuse(&cache.tables, tf).unwrap_or_else(|| Arc::new(tf.table()));
             next.values.push((Arc::clone(&placed.volume), values));
@@ -58,7 +65,7 @@ impl CpuRenderer {
             .map(|((_, v), (_, t))| (Arc::clone(v), Arc::clone(t)))
             .collect();
         *cache = next;
-        converted
+        Ok(converted)
     }
 
     pub fn render(
@@ -83,7 +90,7 @@ impl CpuRenderer {
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
-        let data = self.prepare(scene);
+        let data = self.prepare(scene)?;
         let field = sample::Field::new(&plan, &data);
         let w = desc.size.x as usize;
         let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's colour")?;

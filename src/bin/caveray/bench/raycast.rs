@@ -108,6 +108,9 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
         )));
     }
     let loaded = args.volume.load()?;
+    FrameDesc::new(glam::UVec2::splat(args.size))
+        .validate()
+        .map_err(|e| Failure::Usage(format!("--size {}: {e}", args.size)))?;
     let setup = HmdStereo::protocol(args.size, paper::SPAN_PX);
     let radius = setup.radius.unwrap_or(paper::RADIUS_M);
     // Longest side such that the bounding sphere has the protocol's radius.

@@ -153,6 +153,9 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
         .iter()
         .map(|name| args.volume.with_volume(name).load())
         .collect::<Result<Vec<_>, _>>()?;
+    FrameDesc::new(glam::UVec2::splat(args.size))
+        .validate()
+        .map_err(|e| Failure::Usage(format!("--size {}: {e}", args.size)))?;
     let setup = HmdStereo::protocol(args.size, f64::from(args.layers - 1));
     let sphere_plan = setup
         .plan_with(args.layers)

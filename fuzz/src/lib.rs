@@ -1,0 +1,3 @@
+//! The fuzz targets' harness (see harness.rs), shared with the replay
+//! test in the main crate.
+pub mod harness;
