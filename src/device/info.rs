@@ -109,11 +109,13 @@ pub const EXT_BACKGROUND: &str = "ANARI_KHR_RENDERER_BACKGROUND_COLOR";
 pub const EXT_BACKGROUND_IMAGE: &str = "ANARI_KHR_RENDERER_BACKGROUND_IMAGE";
 pub const EXT_COMPLETION: &str = "ANARI_KHR_FRAME_COMPLETION_CALLBACK";
 pub const EXT_ACCUMULATION: &str = "ANARI_KHR_FRAME_ACCUMULATION";
+pub const EXT_STEREO: &str = "ANARI_KHR_CAMERA_STEREO";
 pub const EXT_ORTHOGRAPHIC: &str = "ANARI_KHR_CAMERA_ORTHOGRAPHIC";
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
     "ANARI_KHR_CAMERA_PERSPECTIVE",
+    EXT_STEREO,
     EXT_ORTHOGRAPHIC,
     "ANARI_KHR_SPATIAL_FIELD_STRUCTURED_REGULAR",
     "ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D",
@@ -132,7 +134,6 @@ pub const EXTENSIONS: &[&str] = &[
 /// Frame channels (`anariGetObjectInfo(FRAME, "channel")`).
 pub const CHANNELS: &[&str] = &["channel.color", "channel.depth"];
 
-/// The registry: adding a subtype is a module and a line here.
 /// Whether any parameter of any subtype reads arrays of `element`: an
 /// array of another type can never be used, and its host hears so when
 /// it makes one.
@@ -143,6 +144,7 @@ pub fn element_is_read(element: T) -> bool {
         .any(|p| p.elements.contains(&element))
 }
 
+/// The registry: adding a subtype is a module and a line here.
 pub static SUBTYPES: &[&SubtypeInfo] = &[
     &device_object::INFO,
     &camera::perspective::INFO,

@@ -7,10 +7,12 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Instant;
 
+use super::camera::stereo::EyeView;
 use super::frame::slot::FrameSlot;
 use super::types::{DataType, Severity, Status, StatusCode};
-use crate::geometry::RayGen;
-use crate::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer};
+use crate::geometry::PrimaryRays;
+use crate::render::stereo::{Bounds, LayerFormat, Reprojection};
+use crate::render::{Backend, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
 use crate::scene::Scene;
 
 /// Where a device's status messages go; called from any thread.
@@ -22,7 +24,7 @@ pub type Reporter = Arc<dyn Fn(Status) + Send + Sync>;
 #[derive(Clone)]
 pub struct RenderInputs {
     scene: Option<Scene>,
-    rays: RayGen,
+    views: Vec<EyeView>,
     settings: RenderSettings,
     desc: FrameDesc,
     backend: Backend,
@@ -36,7 +38,7 @@ impl PartialEq for RenderInputs {
             _ => false,
         };
         same_scene
-            && self.rays == other.rays
+            && self.views == other.views
             && self.settings == other.settings
             && self.desc == other.desc
             && self.backend == other.backend
@@ -47,7 +49,8 @@ pub struct RenderJob {
     pub frame: u64,
     /// `None` renders the background only (an empty world).
     pub scene: Option<Scene>,
-    pub rays: RayGen,
+    /// One view of the whole frame, or the two eyes of a stereo camera.
+    pub views: Vec<EyeView>,
     pub settings: RenderSettings,
     pub desc: FrameDesc,
     pub backend: Backend,
@@ -70,7 +73,7 @@ impl RenderJob {
     pub fn inputs(&self) -> RenderInputs {
         RenderInputs {
             scene: self.scene.clone(),
-            rays: self.rays,
+            views: self.views.clone(),
             settings: self.settings.clone(),
             desc: self.desc,
             backend: self.backend,
@@ -185,8 +188,7 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
         if let Some(why) = crate::render::march_warning(scene, &job.settings) {
             report(status(Severity::Warning, StatusCode::NoError, why));
         }
-        r.render_until(scene, &job.rays, &job.settings, &job.desc, &job.slot.stop)
-            .map_err(|e| e.to_string())
+        render_views(r, scene, &job, report).map_err(|e| e.to_string())
     }))
     .unwrap_or_else(|panic| {
         *renderer = None;
@@ -214,6 +216,107 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
     if let Some(done) = job.on_done {
         done();
     }
+}
+
+/// The job's views, each into its rectangle of the frame: one render for
+/// a single view, one per eye (stitched) for a stereo camera.
+fn render_views(
+    r: &mut Renderer,
+    scene: &Scene,
+    job: &RenderJob,
+    report: &Reporter,
+) -> Result<Frame, RenderError> {
+    if let [left, right] = job.views.as_slice() {
+        match reprojected(r, scene, job, left, right) {
+            Ok((frame, layers)) => {
+                report(Status {
+                    severity: Severity::Info,
+                    code: StatusCode::NoError,
+                    source: job.frame,
+                    source_kind: DataType::FRAME,
+                    message: format!(
+                        "stereo frame: both eyes in one re-projection pass ({layers} layers)"
+                    ),
+                });
+                return Ok(frame);
+            }
+            Err(why) => report(Status {
+                severity: Severity::Info,
+                code: StatusCode::NoError,
+                source: job.frame,
+                source_kind: DataType::FRAME,
+                message: format!("stereo frame: two passes ({why})"),
+            }),
+        }
+    }
+    let render = |r: &mut Renderer, view: &EyeView| {
+        let desc = FrameDesc {
+            size: view.size,
+            ..job.desc
+        };
+        r.render_until(scene, &view.rays, &job.settings, &desc, &job.slot.stop)
+    };
+    match job.views.as_slice() {
+        [one] if one.size == job.desc.size => render(r, one),
+        views => {
+            let mut parts = Vec::with_capacity(views.len());
+            for view in views.iter().filter(|v| v.size.min_element() > 0) {
+                parts.push((view.offset, render(r, view)?));
+            }
+            Frame::stitched(&job.desc, &parts)
+        }
+    }
+}
+
+/// Both eyes of a stereo pair from one re-projection pass (the right eye
+/// re-projected from the left one's samples), or why not.
+fn reprojected(
+    r: &mut Renderer,
+    scene: &Scene,
+    job: &RenderJob,
+    left: &EyeView,
+    right: &EyeView,
+) -> Result<(Frame, u32), String> {
+    let Renderer::Gpu(gpu) = r else {
+        return Err("re-projection runs on the GPU renderer only".into());
+    };
+    let (Some(l), Some(rm)) = (left.matrix, right.matrix) else {
+        return Err("the eyes are not whole-image pinholes (imageRegion is set)".into());
+    };
+    if left.size != right.size {
+        return Err(format!(
+            "the eyes differ in size ({}x{} and {}x{}); give the frame an even split",
+            left.size.x, left.size.y, right.size.x, right.size.y
+        ));
+    }
+    if job.desc.depth {
+        return Err("the re-projected eye has no depth channel".into());
+    }
+    if job.settings.background_image.is_some() {
+        return Err("re-projection takes a background colour, not an image".into());
+    }
+    let plan = Reprojection::new(
+        &l,
+        &rm,
+        left.size,
+        Bounds::of(scene),
+        None,
+        LayerFormat::Rgba16F,
+    )
+    .map_err(|e| e.to_string())?;
+    let desc = FrameDesc {
+        size: left.size,
+        ..job.desc
+    };
+    let pair = gpu
+        .render_reprojected(scene, &l.ray_gen(left.size), &plan, &job.settings, &desc)
+        .map_err(|e| e.to_string())?;
+    let frame = Frame::stitched(
+        &job.desc,
+        &[(left.offset, pair.left), (right.offset, pair.right)],
+    )
+    .map_err(|e| e.to_string())?;
+    Ok((frame, plan.layers))
 }
 
 pub fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {

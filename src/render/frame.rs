@@ -139,6 +139,72 @@ impl Frame {
         }
     }
 
+    /// One frame of `desc` made of `parts`, each placed with its lower
+    /// left corner at its offset (a stereo pair side by side or one above
+    /// the other); pixels no part covers stay zero.
+    pub fn stitched(desc: &FrameDesc, parts: &[(UVec2, Frame)]) -> Result<Frame, RenderError> {
+        desc.validate()?;
+        let (w, n) = (desc.size.x as usize, desc.pixels());
+        fn place<T: Copy>(
+            out: &mut [T],
+            part: &[T],
+            offset: UVec2,
+            size: UVec2,
+            w: usize,
+            k: usize,
+        ) {
+            let (pw, ox) = (size.x as usize, offset.x as usize);
+            for y in 0..size.y as usize {
+                let row = (offset.y as usize + y) * w;
+                out[k * (row + ox)..k * (row + ox + pw)]
+                    .copy_from_slice(&part[k * y * pw..k * (y + 1) * pw]);
+            }
+        }
+        let mut color = match desc.color {
+            ColorFormat::Rgba8 => ColorData::Rgba8(filled(4 * n, 0, "the frame's colour")?),
+            ColorFormat::Srgba8 => ColorData::Srgba8(filled(4 * n, 0, "the frame's colour")?),
+            ColorFormat::Rgba32F => ColorData::Rgba32F(filled(4 * n, 0.0, "the frame's colour")?),
+        };
+        let mut depth = match desc.depth {
+            true => Some(filled(n, f32::INFINITY, "the frame's depth")?),
+            false => None,
+        };
+        let mut samples = 0;
+        for (offset, part) in parts {
+            let fits = (*offset + part.size).cmple(desc.size).all();
+            if !fits {
+                return Err(RenderError::Settings(format!(
+                    "internal: a {}x{} part at {offset} does not fit a {}x{} frame",
+                    part.size.x, part.size.y, desc.size.x, desc.size.y
+                )));
+            }
+            match (&mut color, &part.color) {
+                (ColorData::Rgba8(o), ColorData::Rgba8(p))
+                | (ColorData::Srgba8(o), ColorData::Srgba8(p)) => {
+                    place(o, p, *offset, part.size, w, 4)
+                }
+                (ColorData::Rgba32F(o), ColorData::Rgba32F(p)) => {
+                    place(o, p, *offset, part.size, w, 4)
+                }
+                _ => {
+                    return Err(RenderError::Settings(
+                        "internal: stitched parts differ in colour format".into(),
+                    ))
+                }
+            }
+            if let (Some(o), Some(p)) = (&mut depth, &part.depth) {
+                place(o, p, *offset, part.size, w, 1);
+            }
+            samples += part.samples;
+        }
+        Ok(Frame {
+            size: desc.size,
+            color,
+            depth,
+            samples,
+        })
+    }
+
     /// Pixel (x, y) (y = 0 is the bottom row) as linear RGBA floats.
     pub fn pixel(&self, x: u32, y: u32) -> Vec4 {
         let i = (y * self.size.x + x) as usize;

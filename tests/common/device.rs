@@ -23,7 +23,13 @@ pub fn bytes<T: Copy>(values: &[T]) -> Vec<u8> {
 
 impl Host {
     pub fn new() -> Self {
-        let mut d = Device::new(Arc::new(|_s: Status| {}));
+        Self::reporting_to(Arc::new(|_s: Status| {}))
+    }
+
+    /// A host whose render thread's messages (which do not wait for the
+    /// device's own list) go to `report`.
+    pub fn reporting_to(report: anari_library_caveray::device::Reporter) -> Self {
+        let mut d = Device::new(report);
         d.set_param(Subject::Device, "backend", Input::String("cpu".into()));
         d.commit(Subject::Device);
         Self {
@@ -152,6 +158,21 @@ impl Host {
         // SAFETY: a mapped RGBA8 frame of SIZE^2 pixels, valid until unmap.
         let pixels =
             unsafe { std::slice::from_raw_parts(mapped.ptr, (4 * SIZE * SIZE) as usize) }.to_vec();
+        self.d.unmap_frame(frame, "channel.color");
+        pixels
+    }
+
+    /// Renders `frame`, `w` x `h`, and returns its RGBA8 pixels.
+    pub fn pixels_sized(&mut self, frame: u64, w: u32, h: u32) -> Vec<u8> {
+        self.d.render_frame(frame, None);
+        let mapped = self
+            .d
+            .map_frame(frame, "channel.color")
+            .expect("the frame renders");
+        assert_eq!(mapped.size, glam::UVec2::new(w, h));
+        // SAFETY: a mapped RGBA8 frame of w x h pixels, valid until unmap.
+        let pixels =
+            unsafe { std::slice::from_raw_parts(mapped.ptr, (4 * w * h) as usize) }.to_vec();
         self.d.unmap_frame(frame, "channel.color");
         pixels
     }

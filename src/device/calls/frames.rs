@@ -114,8 +114,8 @@ impl Device {
         let camera = needed("camera", DataType::CAMERA)?;
         let renderer = needed("renderer", DataType::RENDERER)?;
         let world = needed("world", DataType::WORLD)?;
-        let rays = match &camera.lock().state {
-            State::Camera(c) => c.ready(&camera.describe())?.ray_gen(size)?,
+        let views = match &camera.lock().state {
+            State::Camera(c) => c.ready(&camera.describe())?.views(size)?,
             _ => {
                 return Err(format!(
                     "{} cannot be used as the frame's camera",
@@ -190,7 +190,7 @@ impl Device {
         let job = RenderJob {
             frame: frame.handle,
             scene,
-            rays,
+            views,
             settings,
             desc,
             backend: self.backend(),

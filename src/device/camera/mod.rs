@@ -7,9 +7,11 @@ pub mod matrix;
 pub mod off_axis;
 pub mod orthographic;
 pub mod perspective;
+pub mod stereo;
 
 use glam::{DVec2, DVec3, UVec2};
 
+use self::stereo::{EyeView, Stereo, StereoMode};
 use super::info::{p, Default, ParamInfo, F32, VEC3};
 use super::object::{Derived, State};
 use super::read::Read;
@@ -117,6 +119,42 @@ impl Placement {
         })
     }
 
+    /// This pinhole as OpenGL view and projection matrices, if it has the
+    /// whole image region (a cropped one is an off-axis frustum the stereo
+    /// planner is not given). The near plane is the camera's `near`, else
+    /// a millimetre-scale 1e-3 units; the far plane its `far`, else 1e9
+    /// times the near.
+    fn matrix_camera(&self, fovy: f64, aspect: f64) -> Option<MatrixCamera> {
+        if self.region != ImageRegion::FULL {
+            return None;
+        }
+        let near = self
+            .clip
+            .map(|(n, _)| f64::from(n))
+            .filter(|n| *n > 0.0)
+            .unwrap_or(1e-3);
+        let far = self
+            .clip
+            .map(|(_, f)| f64::from(f))
+            .filter(|f| f.is_finite())
+            .unwrap_or(near * 1e9);
+        let top = near * (0.5 * fovy).tan();
+        let right = top * aspect;
+        let proj = crate::geometry::frustum(-right, right, -top, top, near, far);
+        // The right-handed look-at: rows right, up, back; the eye at 0.
+        let f = self.direction.try_normalize()?;
+        let s = f.cross(self.up).try_normalize()?;
+        let u = s.cross(f);
+        let e = self.position;
+        let view = glam::DMat4::from_cols(
+            glam::DVec4::new(s.x, u.x, -f.x, 0.0),
+            glam::DVec4::new(s.y, u.y, -f.y, 0.0),
+            glam::DVec4::new(s.z, u.z, -f.z, 0.0),
+            glam::DVec4::new(-s.dot(e), -u.dot(e), f.dot(e), 1.0),
+        );
+        MatrixCamera::new(view, proj).ok()
+    }
+
     fn aspect(&self, size: UVec2) -> f64 {
         self.aspect.unwrap_or(f64::from(size.x) / f64::from(size.y))
     }
@@ -144,6 +182,7 @@ pub enum CameraModel {
     Perspective {
         placement: Placement,
         fovy: f64,
+        stereo: Stereo,
     },
     /// ANARI's orthographic camera.
     Orthographic {
@@ -157,7 +196,9 @@ pub enum CameraModel {
 impl CameraModel {
     pub fn ray_gen(&self, size: UVec2) -> Result<RayGen, String> {
         match self {
-            CameraModel::Perspective { placement, fovy } => placement.rays(size, |p, aspect| {
+            CameraModel::Perspective {
+                placement, fovy, ..
+            } => placement.rays(size, |p, aspect| {
                 PinholeCamera::new(p.position, p.direction, p.up, *fovy, aspect, p.region)
             }),
             CameraModel::Orthographic { placement, height } => placement.rays(size, |p, aspect| {
@@ -166,6 +207,58 @@ impl CameraModel {
             CameraModel::Matrix(c) => Ok(c.ray_gen(size)),
             CameraModel::OffAxis(c) => Ok(c.ray_gen(size)),
         }
+    }
+
+    /// The eyes of a frame of `size` and where each goes in it: one view
+    /// of the whole frame, or two for a stereo perspective camera.
+    pub fn views(&self, size: UVec2) -> Result<Vec<EyeView>, String> {
+        let CameraModel::Perspective {
+            placement,
+            fovy,
+            stereo,
+        } = self
+        else {
+            return Ok(vec![EyeView {
+                rays: self.ray_gen(size)?,
+                offset: UVec2::ZERO,
+                size,
+                matrix: None,
+            }]);
+        };
+        stereo
+            .mode
+            .layout(size)
+            .into_iter()
+            .map(|(side, offset, eye_size)| {
+                let eye = Placement {
+                    position: stereo.eye(
+                        side,
+                        placement.position,
+                        placement.direction,
+                        placement.up,
+                    ),
+                    ..*placement
+                };
+                let camera = CameraModel::Perspective {
+                    placement: eye,
+                    fovy: *fovy,
+                    stereo: Stereo::default(),
+                };
+                let eye_size = eye_size.max(UVec2::ONE);
+                let matrix = match stereo.mode {
+                    StereoMode::SideBySide | StereoMode::TopBottom => {
+                        eye.matrix_camera(*fovy, eye.aspect(eye_size))
+                    }
+                    _ => None,
+                };
+                Ok(EyeView {
+                    rays: camera.ray_gen(eye_size)?,
+                    offset,
+                    size: eye_size,
+                    matrix,
+                })
+            })
+            .collect()
     }
 
     /// The committed state, once the camera makes rays. A perspective

@@ -1,0 +1,152 @@
+//! ANARI_KHR_CAMERA_STEREO on the perspective camera: one eye shifted half
+//! the interpupillary distance along the camera's right vector, or both
+//! eyes side by side or one above the other in one frame. (On a CAVE wall
+//! this is the wrong stereo: each eye needs its own off-axis frustum, so
+//! hosts there give each eye its own camera.)
+
+use glam::{DVec3, UVec2};
+
+use crate::geometry::{MatrixCamera, RayGen};
+
+/// The values of `stereoMode`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StereoMode {
+    #[default]
+    None,
+    Left,
+    Right,
+    /// The left eye in the left half of the frame, the right eye in the
+    /// right half.
+    SideBySide,
+    /// The left eye in the top half (the upper rows: ANARI images start at
+    /// the lower left), the right eye in the bottom half.
+    TopBottom,
+}
+
+impl StereoMode {
+    pub const NAMES: &'static [&'static str] =
+        &["none", "left", "right", "sideBySide", "topBottom"];
+
+    pub fn parse(name: &str) -> Result<Self, String> {
+        Ok(match name {
+            "none" => StereoMode::None,
+            "left" => StereoMode::Left,
+            "right" => StereoMode::Right,
+            "sideBySide" => StereoMode::SideBySide,
+            "topBottom" => StereoMode::TopBottom,
+            other => {
+                return Err(format!(
+                    "stereoMode \"{other}\" is not one of {}",
+                    Self::NAMES.join(", ")
+                ))
+            }
+        })
+    }
+
+    /// The eyes (-1 left, +1 right) and where each goes in a frame of
+    /// `size`: (eye, offset, size).
+    pub fn layout(self, size: UVec2) -> Vec<(f64, UVec2, UVec2)> {
+        match self {
+            StereoMode::None => vec![(0.0, UVec2::ZERO, size)],
+            StereoMode::Left => vec![(-1.0, UVec2::ZERO, size)],
+            StereoMode::Right => vec![(1.0, UVec2::ZERO, size)],
+            StereoMode::SideBySide => {
+                let left = size.x / 2;
+                vec![
+                    (-1.0, UVec2::ZERO, UVec2::new(left, size.y)),
+                    (1.0, UVec2::new(left, 0), UVec2::new(size.x - left, size.y)),
+                ]
+            }
+            StereoMode::TopBottom => {
+                let bottom = size.y / 2;
+                vec![
+                    (
+                        -1.0,
+                        UVec2::new(0, bottom),
+                        UVec2::new(size.x, size.y - bottom),
+                    ),
+                    (1.0, UVec2::ZERO, UVec2::new(size.x, bottom)),
+                ]
+            }
+        }
+    }
+}
+
+/// The camera's stereo parameters after commit.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stereo {
+    pub mode: StereoMode,
+    /// In world units.
+    pub ipd: f64,
+}
+
+impl Stereo {
+    pub fn read(mode: &str, ipd: f32) -> Result<Self, String> {
+        if !(ipd.is_finite() && ipd >= 0.0) {
+            return Err(format!(
+                "interpupillaryDistance must be a finite number >= 0, got {ipd:?}"
+            ));
+        }
+        Ok(Self {
+            mode: StereoMode::parse(mode)?,
+            ipd: ipd.into(),
+        })
+    }
+
+    /// Where eye `side` (-1 left, +1 right) stands for a camera at
+    /// `position` looking along `direction` with `up`.
+    pub fn eye(&self, side: f64, position: DVec3, direction: DVec3, up: DVec3) -> DVec3 {
+        if side == 0.0 {
+            return position;
+        }
+        let right = direction.cross(up).normalize_or_zero();
+        position + right * (0.5 * self.ipd * side)
+    }
+}
+
+/// One eye's rays and the rectangle of the frame they fill.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeView {
+    pub rays: RayGen,
+    pub offset: UVec2,
+    pub size: UVec2,
+    /// The eye as OpenGL matrices, where it has them (a stereo pair with
+    /// the whole image region): what re-projection plans with.
+    pub matrix: Option<MatrixCamera>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layouts_cover_the_frame_once() {
+        for size in [UVec2::new(7, 5), UVec2::new(64, 32), UVec2::new(1, 2)] {
+            for mode in [
+                StereoMode::SideBySide,
+                StereoMode::TopBottom,
+                StereoMode::None,
+            ] {
+                let area: u32 = mode.layout(size).iter().map(|(_, _, s)| s.x * s.y).sum();
+                assert_eq!(area, size.x * size.y, "{mode:?} {size}");
+            }
+        }
+        let tb = StereoMode::TopBottom.layout(UVec2::new(4, 6));
+        assert_eq!(
+            tb[0],
+            (-1.0, UVec2::new(0, 3), UVec2::new(4, 3)),
+            "left on top"
+        );
+    }
+
+    #[test]
+    fn eyes_sit_half_the_distance_along_right() {
+        let s = Stereo::read("left", 0.064).unwrap();
+        let eye = s.eye(-1.0, DVec3::ZERO, DVec3::NEG_Z, DVec3::Y);
+        assert!((eye - DVec3::new(-0.032, 0.0, 0.0)).length() < 1e-7);
+        assert!(Stereo::read("cross-eyed", 0.06)
+            .unwrap_err()
+            .contains("sideBySide"));
+        assert!(Stereo::read("left", -1.0).is_err());
+    }
+}
