@@ -1,5 +1,6 @@
 //! Host programs in C for the call patterns of VTK/ParaView, the SDK's
-//! viewer and the conformance tests (tests/c/{vtk,viewer,cts}_host.c),
+//! viewer and the conformance tests (tests/c/{vtk,viewer,cts}_host.c), and
+//! one using the perspective camera's stereo modes (stereo_host.c),
 //! from what HOSTS.md says each sends. Each must render without a warning
 //! or error, and its images must be the Rust API's for the same scene, or
 //! the analytic answer.
@@ -368,4 +369,73 @@ fn viewer_style_host_is_clean_under_valgrind() {
         return;
     }
     viewer(true);
+}
+
+/// `stereo_host.c`: a perspective camera's left and right eyes as frames
+/// of their own, then side by side in one frame, through the C API.
+fn stereo_pairs(backend: &str, valgrind: bool) -> (Frame, Frame, Frame) {
+    let dir = scratch(&format!(
+        "stereo_host_{backend}{}",
+        if valgrind { "_valgrind" } else { "" }
+    ));
+    let program = dir.join("stereo_host");
+    compile(&["tests/c/stereo_host.c"], &program, false, true);
+    let output = run_with(&program, &[&dir], valgrind, &[("CAVERAY_BACKEND", backend)]);
+    assert!(
+        output.status.success(),
+        "stereo_host: {}",
+        describe(&output)
+    );
+    let eye = UVec2::new(48, 48);
+    let left = read_rgba(&dir.join("left.rgba"), eye);
+    let right = read_rgba(&dir.join("right.rgba"), eye);
+    let pair = read_rgba(&dir.join("pair.rgba"), UVec2::new(96, 48));
+    (left, right, pair)
+}
+
+/// Columns `x0..x0 + 48` of a 96 x 48 frame.
+fn half(pair: &Frame, x0: u32) -> Frame {
+    let ColorData::Rgba8(bytes) = &pair.color else {
+        panic!("RGBA8 expected");
+    };
+    let pixels = (0..48u32)
+        .flat_map(|y| {
+            let start = 4 * (y * 96 + x0) as usize;
+            bytes[start..start + 4 * 48].to_vec()
+        })
+        .collect();
+    Frame {
+        size: UVec2::new(48, 48),
+        color: ColorData::Rgba8(pixels),
+        depth: None,
+        samples: 0,
+    }
+}
+
+#[test]
+fn stereo_side_by_side_through_the_c_api_holds_both_eyes() {
+    // The CPU reference renders the halves as two passes: each exactly
+    // its eye's own image.
+    let (left, right, pair) = stereo_pairs("cpu", false);
+    assert_eq!(half(&pair, 0).color, left.color);
+    assert_eq!(half(&pair, 48).color, right.color);
+    // On the GPU, one re-projection pass: the left eye as its own pass,
+    // the right within the paper's DSSIM bound.
+    let (left, right, pair) = stereo_pairs("gpu", false);
+    let s = ssim(&half(&pair, 0), &left).unwrap();
+    let d = anari_library_caveray::render::dssim(&half(&pair, 48), &right).unwrap();
+    eprintln!("sideBySide through the C API on the GPU: left SSIM {s:.5}, right DSSIM {d:.4}");
+    assert!(s > 0.98, "left eye SSIM {s}");
+    assert!(d < 0.02, "right eye DSSIM {d}");
+}
+
+#[test]
+fn stereo_side_by_side_is_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    let (left, right, pair) = stereo_pairs("cpu", true);
+    assert_eq!(half(&pair, 0).color, left.color);
+    assert_eq!(half(&pair, 48).color, right.color);
 }
