@@ -171,7 +171,7 @@ impl Renderer {
     }
 
     /// `render`, giving up with `RenderError::Stopped` once `stop` is set:
-    /// the CPU reference checks it between rows, the GPU between bands of
+    /// the CPU reference checks it between pixels, the GPU between bands of
     /// rows (about 2^18 pixels each).
     pub fn render_until(
         &mut self,

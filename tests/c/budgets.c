@@ -8,6 +8,7 @@
 #include <stdint.h>
 
 #include "expect.h"
+#include "ramp_world.h"
 
 static ANARIFrame new_frame(ANARIDevice dev, ANARIWorld world, ANARIRenderer renderer,
     ANARICamera camera, uint32_t w, uint32_t h)
@@ -41,25 +42,16 @@ static int renders(ANARIDevice dev, ANARIFrame frame)
 
 int main(void)
 {
-  static float voxels[8 * 8 * 8];
-  float origin[3] = {-1, -1, -1}, spacing[3] = {2.0f / 7, 2.0f / 7, 2.0f / 7};
   float position[3] = {0, 0, 4}, direction[3] = {0, 0, -1}, up[3] = {0, 1, 0};
   float bad[3], tiny = 1e-6f, tinier = 1e-30f, one = 1.0f, opacity = 0.3f;
   const char *word = "x";
   ANARILibrary lib;
   ANARIDevice dev;
-  ANARIArray3D data;
-  ANARIArray1D strings, volumes;
-  ANARISpatialField field;
-  ANARIVolume volume;
+  ANARIArray1D strings;
   ANARIWorld world;
   ANARIRenderer renderer, slow;
   ANARICamera camera;
   ANARIFrame small, huge, big;
-  int i;
-
-  for (i = 0; i < 8 * 8 * 8; ++i)
-    voxels[i] = (float)(i % 8) / 7.0f;
   reset();
   lib = anariLoadLibrary("caveray", on_status, NULL);
   dev = anariNewDevice(lib, "default");
@@ -70,22 +62,7 @@ int main(void)
       "no caveray parameter reads arrays of ANARI_STRING");
   anariRelease(dev, strings);
 
-  data = anariNewArray3D(dev, voxels, NULL, NULL, ANARI_FLOAT32, 8, 8, 8);
-  field = anariNewSpatialField(dev, "structuredRegular");
-  anariSetParameter(dev, field, "data", ANARI_ARRAY3D, &data);
-  anariSetParameter(dev, field, "origin", ANARI_FLOAT32_VEC3, origin);
-  anariSetParameter(dev, field, "spacing", ANARI_FLOAT32_VEC3, spacing);
-  anariCommitParameters(dev, field);
-  anariRelease(dev, data);
-  volume = anariNewVolume(dev, "transferFunction1D");
-  anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
-  anariSetParameter(dev, volume, "opacity", ANARI_FLOAT32, &opacity);
-  anariCommitParameters(dev, volume);
-  world = anariNewWorld(dev);
-  volumes = anariNewArray1D(dev, &volume, NULL, NULL, ANARI_VOLUME, 1);
-  anariSetParameter(dev, world, "volume", ANARI_ARRAY1D, &volumes);
-  anariCommitParameters(dev, world);
-  anariRelease(dev, volumes);
+  world = ramp_world(dev, 0.0f, 1.0f, opacity, NULL, 0);
   camera = anariNewCamera(dev, "perspective");
   anariSetParameter(dev, camera, "position", ANARI_FLOAT32_VEC3, position);
   anariSetParameter(dev, camera, "direction", ANARI_FLOAT32_VEC3, direction);
@@ -150,8 +127,6 @@ int main(void)
   anariRelease(dev, renderer);
   anariRelease(dev, camera);
   anariRelease(dev, world);
-  anariRelease(dev, volume);
-  anariRelease(dev, field);
   anariRelease(dev, dev);
   check("releasing the device stopped the render", discards == 2);
   anariUnloadLibrary(lib);

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "output.h"
+#include "ramp_world.h"
 #include "status.h"
 
 #define W 48
@@ -36,8 +37,6 @@ static int render(ANARIDevice dev, ANARIFrame frame, const char *dir, const char
 
 int main(int argc, char **argv)
 {
-  static float voxels[8 * 8 * 8];
-  float origin[3] = {-1, -1, -1}, spacing[3] = {2.0f / 7, 2.0f / 7, 2.0f / 7};
   float position[3] = {0, 0, 3}, ipd = 0.3f, opacity = 0.3f;
   float colors[6] = {1.0f, 0.2f, 0.1f, 0.1f, 0.3f, 1.0f};
   uint32_t single[2] = {W, H}, pair[2] = {2 * W, H};
@@ -45,10 +44,6 @@ int main(int argc, char **argv)
   const char *const *extensions = NULL;
   ANARILibrary lib;
   ANARIDevice dev;
-  ANARIArray3D data;
-  ANARIArray1D color_array, volumes;
-  ANARISpatialField field;
-  ANARIVolume volume;
   ANARIWorld world;
   ANARIRenderer renderer;
   ANARICamera camera;
@@ -59,8 +54,6 @@ int main(int argc, char **argv)
     fprintf(stderr, "usage: stereo_host OUT_DIR\n");
     return 2;
   }
-  for (i = 0; i < 8 * 8 * 8; ++i)
-    voxels[i] = 0.2f + 0.8f * (float)(i % 8) / 7.0f;
   status_level = ANARI_SEVERITY_WARNING;
   lib = anariLoadLibrary("caveray", count_status, "stereo_host");
   dev = anariNewDevice(lib, "default");
@@ -72,25 +65,7 @@ int main(int argc, char **argv)
     ok = 0;
   }
 
-  data = anariNewArray3D(dev, voxels, NULL, NULL, ANARI_FLOAT32, 8, 8, 8);
-  field = anariNewSpatialField(dev, "structuredRegular");
-  anariSetParameter(dev, field, "data", ANARI_ARRAY3D, &data);
-  anariSetParameter(dev, field, "origin", ANARI_FLOAT32_VEC3, origin);
-  anariSetParameter(dev, field, "spacing", ANARI_FLOAT32_VEC3, spacing);
-  anariCommitParameters(dev, field);
-  anariRelease(dev, data);
-  color_array = anariNewArray1D(dev, colors, NULL, NULL, ANARI_FLOAT32_VEC3, 2);
-  volume = anariNewVolume(dev, "transferFunction1D");
-  anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
-  anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &color_array);
-  anariSetParameter(dev, volume, "opacity", ANARI_FLOAT32, &opacity);
-  anariCommitParameters(dev, volume);
-  anariRelease(dev, color_array);
-  world = anariNewWorld(dev);
-  volumes = anariNewArray1D(dev, &volume, NULL, NULL, ANARI_VOLUME, 1);
-  anariSetParameter(dev, world, "volume", ANARI_ARRAY1D, &volumes);
-  anariCommitParameters(dev, world);
-  anariRelease(dev, volumes);
+  world = ramp_world(dev, 0.2f, 1.0f, opacity, colors, 2);
   renderer = anariNewRenderer(dev, "default");
   anariCommitParameters(dev, renderer);
   camera = anariNewCamera(dev, "perspective");
@@ -120,8 +95,6 @@ int main(int argc, char **argv)
   anariRelease(dev, camera);
   anariRelease(dev, renderer);
   anariRelease(dev, world);
-  anariRelease(dev, volume);
-  anariRelease(dev, field);
   anariRelease(dev, dev);
   anariUnloadLibrary(lib);
   return ok && status_count == 0 ? 0 : 1;
