@@ -232,3 +232,96 @@ fn side_by_side_on_the_gpu_is_one_reprojection_pass_close_to_two() {
     );
     assert!(h.messages(Severity::Error).is_empty());
 }
+
+/// An offAxis camera on a 2.4 x 2.4 wall at z = 2, the eyes centred at
+/// (0.1, -0.2, 4.5), replacing the frame's camera.
+fn wall_camera(h: &mut Host, frame: u64) -> u64 {
+    let camera = h.d.new_object(DataType::CAMERA, "offAxis");
+    for (name, v) in [
+        ("lowerLeft", [-1.2f32, -1.2, 2.0]),
+        ("lowerRight", [1.2, -1.2, 2.0]),
+        ("upperRight", [1.2, 1.2, 2.0]),
+        ("eye", [0.1, -0.2, 4.5]),
+    ] {
+        h.set(camera, name, DataType::FLOAT32_VEC3, bytes(&v));
+    }
+    h.d.commit(Subject::Object(camera));
+    h.set_object(frame, "camera", DataType::CAMERA, camera);
+    h.d.commit(Subject::Object(frame));
+    camera
+}
+
+#[test]
+fn an_off_axis_wall_camera_takes_the_same_stereo_modes() {
+    let mut h = Host::new();
+    let (frame, _) = scene(&mut h);
+    let camera = wall_camera(&mut h, frame);
+    stereo(&mut h, camera, "left", 0.3);
+    let left = h.pixels(frame);
+    stereo(&mut h, camera, "right", 0.3);
+    let right = h.pixels(frame);
+    // By hand: the eye 0.15 along the wall's rows to each side.
+    stereo(&mut h, camera, "none", 0.3);
+    for (x, image) in [(-0.05f32, &left), (0.25, &right)] {
+        h.set(
+            camera,
+            "eye",
+            DataType::FLOAT32_VEC3,
+            bytes(&[x, -0.2, 4.5]),
+        );
+        h.d.commit(Subject::Object(camera));
+        same(&h.pixels(frame), image).unwrap();
+    }
+    // Side by side: each half its eye.
+    h.set(
+        camera,
+        "eye",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.1f32, -0.2, 4.5]),
+    );
+    size(&mut h, frame, 2 * SIZE, SIZE);
+    stereo(&mut h, camera, "sideBySide", 0.3);
+    h.d.render_frame(frame, None);
+    let pair = mapped(&mut h, frame, 2 * SIZE, SIZE);
+    same(&crop(&pair, 2 * SIZE, (0, 0), (SIZE, SIZE)), &left).unwrap();
+    same(&crop(&pair, 2 * SIZE, (SIZE, 0), (SIZE, SIZE)), &right).unwrap();
+    assert!(h.messages(Severity::Error).is_empty());
+}
+
+#[test]
+fn off_axis_pairs_reproject_when_the_eyes_lie_along_the_rows() {
+    use anari_library_caveray::device::Status;
+    use std::sync::{Arc, Mutex};
+    let heard: Arc<Mutex<Vec<String>>> = Arc::default();
+    let log = Arc::clone(&heard);
+    let mut h = Host::reporting_to(Arc::new(move |s: Status| {
+        if s.severity == Severity::Info && s.message.starts_with("stereo frame") {
+            log.lock().unwrap().push(s.message);
+        }
+    }));
+    h.d.set_param(Subject::Device, "backend", Input::String("gpu".into()));
+    h.d.commit(Subject::Device);
+    let (frame, _) = scene(&mut h);
+    let camera = wall_camera(&mut h, frame);
+    size(&mut h, frame, 2 * SIZE, SIZE);
+    stereo(&mut h, camera, "sideBySide", 0.3);
+    let _ = h.pixels_sized(frame, 2 * SIZE, SIZE);
+    // A head turned 37 degrees: the baseline leaves the rows.
+    h.set(
+        camera,
+        "eyeAxis",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.8f32, 0.0, 0.6]),
+    );
+    h.d.commit(Subject::Object(camera));
+    let _ = h.pixels_sized(frame, 2 * SIZE, SIZE);
+    let heard = std::mem::take(&mut *heard.lock().unwrap());
+    assert_eq!(heard.len(), 2, "{heard:?}");
+    assert!(heard[0].contains("one re-projection pass"), "{heard:?}");
+    assert!(
+        heard[1].starts_with("stereo frame: two passes ("),
+        "{heard:?}"
+    );
+    eprintln!("turned head: {}", heard[1]);
+    assert!(h.messages(Severity::Error).is_empty());
+}

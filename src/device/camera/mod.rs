@@ -78,6 +78,15 @@ pub const fn placed_params(own: ParamInfo) -> [ParamInfo; 8] {
     ]
 }
 
+/// A wall seen from `eye` as OpenGL matrices, with a near plane a
+/// thousandth of the eye's distance to the wall.
+fn off_axis_matrices(screen: &crate::geometry::Screen, eye: DVec3) -> Option<MatrixCamera> {
+    let distance = (eye - screen.ll()).dot(screen.normal()).abs();
+    let near = 1e-3 * distance;
+    let p = crate::geometry::OffAxisProjection::new(screen, eye, near, near * 1e9).ok()?;
+    MatrixCamera::new(p.view, p.proj).ok()
+}
+
 /// Where a perspective or orthographic camera stands and what it shows.
 #[derive(Clone, Copy, Debug)]
 pub struct Placement {
@@ -190,7 +199,13 @@ pub enum CameraModel {
         height: f64,
     },
     Matrix(Box<MatrixCamera>),
-    OffAxis(OffAxisCamera),
+    /// caveray's wall-and-eye camera; `axis` runs from the left eye to the
+    /// right one (unit length).
+    OffAxis {
+        camera: OffAxisCamera,
+        stereo: Stereo,
+        axis: DVec3,
+    },
 }
 
 impl CameraModel {
@@ -205,54 +220,71 @@ impl CameraModel {
                 OrthographicCamera::new(p.position, p.direction, p.up, *height, aspect, p.region)
             }),
             CameraModel::Matrix(c) => Ok(c.ray_gen(size)),
-            CameraModel::OffAxis(c) => Ok(c.ray_gen(size)),
+            CameraModel::OffAxis { camera, .. } => Ok(camera.ray_gen(size)),
         }
     }
 
     /// The eyes of a frame of `size` and where each goes in it: one view
     /// of the whole frame, or two for a stereo perspective camera.
     pub fn views(&self, size: UVec2) -> Result<Vec<EyeView>, String> {
-        let CameraModel::Perspective {
-            placement,
-            fovy,
-            stereo,
-        } = self
-        else {
-            return Ok(vec![EyeView {
+        let whole = || {
+            Ok(vec![EyeView {
                 rays: self.ray_gen(size)?,
                 offset: UVec2::ZERO,
                 size,
                 matrix: None,
-            }]);
+            }])
         };
+        let stereo = match self {
+            CameraModel::Perspective { stereo, .. } | CameraModel::OffAxis { stereo, .. } => {
+                *stereo
+            }
+            _ => return whole(),
+        };
+        if stereo.mode == StereoMode::None {
+            return whole();
+        }
+        let pair = matches!(stereo.mode, StereoMode::SideBySide | StereoMode::TopBottom);
         stereo
             .mode
             .layout(size)
             .into_iter()
             .map(|(side, offset, eye_size)| {
-                let eye = Placement {
-                    position: stereo.eye(
-                        side,
-                        placement.position,
-                        placement.direction,
-                        placement.up,
-                    ),
-                    ..*placement
-                };
-                let camera = CameraModel::Perspective {
-                    placement: eye,
-                    fovy: *fovy,
-                    stereo: Stereo::default(),
-                };
                 let eye_size = eye_size.max(UVec2::ONE);
-                let matrix = match stereo.mode {
-                    StereoMode::SideBySide | StereoMode::TopBottom => {
-                        eye.matrix_camera(*fovy, eye.aspect(eye_size))
+                let (rays, matrix) = match self {
+                    CameraModel::Perspective {
+                        placement, fovy, ..
+                    } => {
+                        let eye = Placement {
+                            position: stereo.eye(
+                                side,
+                                placement.position,
+                                placement.direction,
+                                placement.up,
+                            ),
+                            ..*placement
+                        };
+                        let camera = CameraModel::Perspective {
+                            placement: eye,
+                            fovy: *fovy,
+                            stereo: Stereo::default(),
+                        };
+                        let matrix = pair
+                            .then(|| eye.matrix_camera(*fovy, eye.aspect(eye_size)))
+                            .flatten();
+                        (camera.ray_gen(eye_size)?, matrix)
                     }
-                    _ => None,
+                    CameraModel::OffAxis { camera, axis, .. } => {
+                        let eye = stereo.along(side, camera.eye(), *axis);
+                        let screen = *camera.screen();
+                        let one = OffAxisCamera::new(screen, eye).map_err(|e| e.to_string())?;
+                        let matrix = pair.then(|| off_axis_matrices(&screen, eye)).flatten();
+                        (one.ray_gen(eye_size), matrix)
+                    }
+                    _ => unreachable!("only stereo cameras get here"),
                 };
                 Ok(EyeView {
-                    rays: camera.ray_gen(eye_size)?,
+                    rays,
                     offset,
                     size: eye_size,
                     matrix,

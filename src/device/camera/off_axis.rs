@@ -1,8 +1,9 @@
 //! caveray's `offAxis` camera: a wall by three corners and the tracked
 //! eye, the form CAVE rigs describe themselves in.
 
+use super::stereo::{Stereo, StereoMode};
 use super::CameraModel;
-use crate::device::info::{p, Default, SubtypeInfo, EXT_OFF_AXIS, VEC3};
+use crate::device::info::{p, Default, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, F32, VEC3};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -12,7 +13,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::CAMERA,
     subtype: "offAxis",
     description: "rays from a tracked eye through a wall given by three corners",
-    extensions: &[EXT_OFF_AXIS],
+    extensions: &[EXT_OFF_AXIS, EXT_STEREO],
     params: &[
         p(
             "lowerLeft",
@@ -40,7 +41,30 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             VEC3,
             true,
             Default::None,
-            "eye position, in front of the wall",
+            "eye position, in front of the wall (with stereoMode: between the eyes)",
+        ),
+        p(
+            "stereoMode",
+            &[T::STRING],
+            false,
+            Default::Text("none"),
+            "none, left, right, sideBySide (left eye in the left half) or topBottom (left eye on top)",
+        )
+        .names(StereoMode::NAMES),
+        p(
+            "interpupillaryDistance",
+            F32,
+            false,
+            Default::Floats(&[0.0635]),
+            "distance between the eyes of stereoMode, in world units",
+        )
+        .range(0.0, 1.0),
+        p(
+            "eyeAxis",
+            VEC3,
+            false,
+            Default::None,
+            "from the left eye towards the right one (the head's right vector; default: along the wall's rows)",
         ),
     ],
     commit: Some(commit),
@@ -55,5 +79,20 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     )
     .map_err(|e| e.to_string())?;
     let camera = OffAxisCamera::new(screen, point("eye")?).map_err(|e| e.to_string())?;
-    CameraModel::OffAxis(camera).committed()
+    let axis = match r.set("eyeAxis") {
+        Some(_) => point("eyeAxis")?,
+        None => screen.lr() - screen.ll(),
+    };
+    let axis = axis
+        .try_normalize()
+        .ok_or_else(|| format!("eyeAxis {axis} has no direction"))?;
+    CameraModel::OffAxis {
+        camera,
+        stereo: Stereo::read(
+            r.string("stereoMode").unwrap_or("none"),
+            r.f32("interpupillaryDistance")?,
+        )?,
+        axis,
+    }
+    .committed()
 }

@@ -96,11 +96,15 @@ impl Stereo {
     /// Where eye `side` (-1 left, +1 right) stands for a camera at
     /// `position` looking along `direction` with `up`.
     pub fn eye(&self, side: f64, position: DVec3, direction: DVec3, up: DVec3) -> DVec3 {
+        self.along(side, position, direction.cross(up))
+    }
+
+    /// Eye `side` of eyes centred on `centre`, apart along `axis`.
+    pub fn along(&self, side: f64, centre: DVec3, axis: DVec3) -> DVec3 {
         if side == 0.0 {
-            return position;
+            return centre;
         }
-        let right = direction.cross(up).normalize_or_zero();
-        position + right * (0.5 * self.ipd * side)
+        centre + axis.normalize_or_zero() * (0.5 * self.ipd * side)
     }
 }
 
