@@ -95,40 +95,25 @@ fn side_by_side_and_top_bottom_hold_each_eye_as_it_renders_alone() {
     // Side by side in 2 SIZE x SIZE: left eye on the left.
     size(&mut h, frame, 2 * SIZE, SIZE);
     stereo(&mut h, camera, "sideBySide", 0.4);
-    h.d.render_frame(frame, None);
-    let pair = mapped(&mut h, frame, 2 * SIZE, SIZE);
+    let pair = h.pixels_sized(frame, 2 * SIZE, SIZE);
     same(&crop(&pair, 2 * SIZE, (0, 0), (SIZE, SIZE)), &left).unwrap();
     same(&crop(&pair, 2 * SIZE, (SIZE, 0), (SIZE, SIZE)), &right).unwrap();
     // One above the other in SIZE x 2 SIZE: the left eye on top (the
     // upper rows; images start at the lower left).
     size(&mut h, frame, SIZE, 2 * SIZE);
     stereo(&mut h, camera, "topBottom", 0.4);
-    h.d.render_frame(frame, None);
-    let pair = mapped(&mut h, frame, SIZE, 2 * SIZE);
+    let pair = h.pixels_sized(frame, SIZE, 2 * SIZE);
     same(&crop(&pair, SIZE, (0, SIZE), (SIZE, SIZE)), &left).unwrap();
     same(&crop(&pair, SIZE, (0, 0), (SIZE, SIZE)), &right).unwrap();
     // With no distance between the eyes both halves are the same.
     stereo(&mut h, camera, "topBottom", 0.0);
-    h.d.render_frame(frame, None);
-    let pair = mapped(&mut h, frame, SIZE, 2 * SIZE);
+    let pair = h.pixels_sized(frame, SIZE, 2 * SIZE);
     same(
         &crop(&pair, SIZE, (0, SIZE), (SIZE, SIZE)),
         &crop(&pair, SIZE, (0, 0), (SIZE, SIZE)),
     )
     .unwrap();
     assert!(h.messages(Severity::Error).is_empty());
-}
-
-/// The colour channel of an RGBA8 frame of `w` x `hgt`, rendered already.
-fn mapped(h: &mut Host, frame: u64, w: u32, hgt: u32) -> Vec<u8> {
-    let m =
-        h.d.map_frame(frame, "channel.color")
-            .expect("the frame renders");
-    assert_eq!((m.size.x, m.size.y), (w, hgt));
-    // SAFETY: a mapped RGBA8 frame of w x hgt pixels, valid until unmap.
-    let pixels = unsafe { std::slice::from_raw_parts(m.ptr, (4 * w * hgt) as usize) }.to_vec();
-    h.d.unmap_frame(frame, "channel.color");
-    pixels
 }
 
 #[test]
@@ -191,8 +176,7 @@ fn side_by_side_on_the_gpu_is_one_reprojection_pass_close_to_two() {
     let right = eye(&mut h, "right");
     size(&mut h, frame, 2 * n, n);
     stereo(&mut h, camera, "sideBySide", 0.3);
-    h.d.render_frame(frame, None);
-    let pair = mapped(&mut h, frame, 2 * n, n);
+    let pair = h.pixels_sized(frame, 2 * n, n);
     let heard = infos();
     assert!(
         heard
@@ -220,8 +204,7 @@ fn side_by_side_on_the_gpu_is_one_reprojection_pass_close_to_two() {
         bytes(&[DataType::FLOAT32 as i32]),
     );
     h.d.commit(Subject::Object(frame));
-    h.d.render_frame(frame, None);
-    let _ = mapped(&mut h, frame, 2 * n, n);
+    let _ = h.pixels_sized(frame, 2 * n, n);
     let heard = infos();
     assert!(
         heard
@@ -281,8 +264,7 @@ fn an_off_axis_wall_camera_takes_the_same_stereo_modes() {
     );
     size(&mut h, frame, 2 * SIZE, SIZE);
     stereo(&mut h, camera, "sideBySide", 0.3);
-    h.d.render_frame(frame, None);
-    let pair = mapped(&mut h, frame, 2 * SIZE, SIZE);
+    let pair = h.pixels_sized(frame, 2 * SIZE, SIZE);
     same(&crop(&pair, 2 * SIZE, (0, 0), (SIZE, SIZE)), &left).unwrap();
     same(&crop(&pair, 2 * SIZE, (SIZE, 0), (SIZE, SIZE)), &right).unwrap();
     assert!(h.messages(Severity::Error).is_empty());

@@ -58,6 +58,22 @@ impl VoxelType {
     }
 }
 
+/// Checks that `actual` bytes (of the file or buffer `name`) are what a
+/// raw volume of `dims` and `dtype` needs.
+fn check_size(name: &str, dims: UVec3, dtype: VoxelType, actual: u64) -> Result<(), DataError> {
+    let expected = raw_size(dims, dtype)?;
+    if actual == expected {
+        return Ok(());
+    }
+    Err(DataError::FileSize {
+        file: name.to_string(),
+        dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
+        dtype: dtype.name(),
+        expected,
+        actual,
+    })
+}
+
 /// The byte size of a raw volume of `dims` and `dtype`, every product
 /// checked, or why it cannot be loaded.
 pub fn raw_size(dims: UVec3, dtype: VoxelType) -> Result<u64, DataError> {
@@ -91,17 +107,8 @@ pub(crate) fn read_raw(path: &Path, dims: UVec3, dtype: VoxelType) -> Result<Vec
         file: path.display().to_string(),
         source,
     };
-    let expected = raw_size(dims, dtype)?;
     let (file, actual) = files::open_regular(path).map_err(io)?;
-    if actual != expected {
-        return Err(DataError::FileSize {
-            file: path.display().to_string(),
-            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
-            dtype: dtype.name(),
-            expected,
-            actual,
-        });
-    }
+    check_size(&path.display().to_string(), dims, dtype, actual)?;
     files::read_len(file, actual).map_err(io)
 }
 
@@ -114,16 +121,7 @@ pub fn parse_raw(
     dtype: VoxelType,
     spacing: Vec3,
 ) -> Result<StructuredVolume, DataError> {
-    let expected = raw_size(dims, dtype)?;
-    if bytes.len() as u64 != expected {
-        return Err(DataError::FileSize {
-            file: name.to_string(),
-            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
-            dtype: dtype.name(),
-            expected,
-            actual: bytes.len() as u64,
-        });
-    }
+    check_size(name, dims, dtype, bytes.len() as u64)?;
     decode_raw(bytes, dims, dtype, spacing)
 }
 

@@ -81,20 +81,24 @@ impl PlacedVolume {
 
     /// The world-space box around the placed grid.
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        let (lo, hi) = self.volume.bounds();
-        (0..8)
-            .map(|i| {
-                let pick = |bit: u32, a: f32, b: f32| if i & bit == 0 { a } else { b };
-                self.transform.transform_point3(Vec3::new(
-                    pick(1, lo.x, hi.x),
-                    pick(2, lo.y, hi.y),
-                    pick(4, lo.z, hi.z),
-                ))
-            })
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
-                (l.min(p), h.max(p))
-            })
+        transformed_box(self.transform, self.volume.bounds())
     }
+}
+
+/// The box around box `(lo, hi)`'s corners under affine `transform`.
+pub fn transformed_box(transform: Mat4, (lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
+    (0..8)
+        .map(|i| {
+            let pick = |bit: u32, a: f32, b: f32| if i & bit == 0 { a } else { b };
+            transform.transform_point3(Vec3::new(
+                pick(1, lo.x, hi.x),
+                pick(2, lo.y, hi.y),
+                pick(4, lo.z, hi.z),
+            ))
+        })
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
+            (l.min(p), h.max(p))
+        })
 }
 
 /// What a renderer draws. Volumes and tables are shared so a renderer can

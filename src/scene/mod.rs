@@ -7,6 +7,6 @@ mod composition;
 mod transfer_function;
 mod volume;
 
-pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
+pub use composition::{transformed_box, PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 pub use volume::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

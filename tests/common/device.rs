@@ -150,16 +150,7 @@ impl Host {
 
     /// Renders `frame` and returns its RGBA8 pixels.
     pub fn pixels(&mut self, frame: u64) -> Vec<u8> {
-        self.d.render_frame(frame, None);
-        let mapped = self
-            .d
-            .map_frame(frame, "channel.color")
-            .expect("the frame renders");
-        // SAFETY: a mapped RGBA8 frame of SIZE^2 pixels, valid until unmap.
-        let pixels =
-            unsafe { std::slice::from_raw_parts(mapped.ptr, (4 * SIZE * SIZE) as usize) }.to_vec();
-        self.d.unmap_frame(frame, "channel.color");
-        pixels
+        self.pixels_sized(frame, SIZE, SIZE)
     }
 
     /// Renders `frame`, `w` x `h`, and returns its RGBA8 pixels.

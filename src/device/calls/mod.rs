@@ -350,26 +350,14 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
             State::Volume(m) => m.ready("").ok()?.field.clone(),
             _ => return None,
         };
-        let (lo, hi) = match &field.lock().state {
+        let grid = match &field.lock().state {
             State::Field(f) => f.ready("").ok()?.bounds(),
             _ => return None,
         };
-        let Some(m) = transform else {
-            return Some((lo, hi));
-        };
-        // The box around the transformed box's corners.
-        (0..8)
-            .map(|i| {
-                let pick = |bit: u32, a: f32, b: f32| if i & bit == 0 { a } else { b };
-                m.transform_point3(glam::Vec3::new(
-                    pick(1, lo.x, hi.x),
-                    pick(2, lo.y, hi.y),
-                    pick(4, lo.z, hi.z),
-                ))
-            })
-            .fold(None, |acc: Option<(glam::Vec3, glam::Vec3)>, p| {
-                Some(acc.map_or((p, p), |(l, h)| (l.min(p), h.max(p))))
-            })
+        Some(match transform {
+            None => grid,
+            Some(m) => crate::scene::transformed_box(*m, grid),
+        })
     });
     let (mut lo, mut hi) = boxes.next()?;
     for (l, h) in boxes {

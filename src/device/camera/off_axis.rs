@@ -1,9 +1,9 @@
 //! caveray's `offAxis` camera: a wall by three corners and the tracked
 //! eye, the form CAVE rigs describe themselves in.
 
-use super::stereo::{Stereo, StereoMode};
+use super::stereo::{self, Stereo};
 use super::CameraModel;
-use crate::device::info::{p, Default, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, F32, VEC3};
+use crate::device::info::{p, Default, ParamInfo, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, VEC3};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -14,7 +14,13 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     subtype: "offAxis",
     description: "rays from a tracked eye through a wall given by three corners",
     extensions: &[EXT_OFF_AXIS, EXT_STEREO],
-    params: &[
+    params: &PARAMS,
+    commit: Some(commit),
+};
+
+static PARAMS: [ParamInfo; 7] = {
+    let [mode, ipd] = stereo::params();
+    [
         p(
             "lowerLeft",
             VEC3,
@@ -43,22 +49,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             Default::None,
             "eye position, in front of the wall (with stereoMode: between the eyes)",
         ),
-        p(
-            "stereoMode",
-            &[T::STRING],
-            false,
-            Default::Text("none"),
-            "none, left, right, sideBySide (left eye in the left half) or topBottom (left eye on top)",
-        )
-        .names(StereoMode::NAMES),
-        p(
-            "interpupillaryDistance",
-            F32,
-            false,
-            Default::Floats(&[0.0635]),
-            "distance between the eyes of stereoMode, in world units",
-        )
-        .range(0.0, 1.0),
+        mode,
+        ipd,
         p(
             "eyeAxis",
             VEC3,
@@ -66,8 +58,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             Default::None,
             "from the left eye towards the right one (the head's right vector; default: along the wall's rows)",
         ),
-    ],
-    commit: Some(commit),
+    ]
 };
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
@@ -88,10 +79,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         .ok_or_else(|| format!("eyeAxis {axis} has no direction"))?;
     CameraModel::OffAxis {
         camera,
-        stereo: Stereo::read(
-            r.string("stereoMode").unwrap_or("none"),
-            r.f32("interpupillaryDistance")?,
-        )?,
+        stereo: Stereo::from_params(r)?,
         axis,
     }
     .committed()

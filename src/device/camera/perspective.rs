@@ -1,7 +1,7 @@
 //! ANARI's `perspective` camera. An off-axis CAVE wall is a widened
 //! symmetric frustum cropped by `imageRegion` (strategy 2).
 
-use super::stereo::{Stereo, StereoMode};
+use super::stereo::{self, Stereo};
 use super::{placed_params, CameraModel, Placement};
 use crate::device::info::{p, Default, ParamInfo, SubtypeInfo, EXT_STEREO, F32};
 use crate::device::object::State;
@@ -19,38 +19,14 @@ static PARAMS: [ParamInfo; 10] = {
         )
         .range(0.01, 3.1),
     );
-    [
-        a,
-        b,
-        c,
-        d,
-        e,
-        f,
-        g,
-        h,
-        p(
-            "stereoMode",
-            &[T::STRING],
-            false,
-            Default::Text("none"),
-            "none, left, right, sideBySide (left eye in the left half) or topBottom (left eye on top); wrong for CAVE walls, where each eye needs its own camera",
-        )
-        .names(StereoMode::NAMES),
-        p(
-            "interpupillaryDistance",
-            F32,
-            false,
-            Default::Floats(&[0.0635]),
-            "distance between the eyes of stereoMode, in world units",
-        )
-        .range(0.0, 1.0),
-    ]
+    let [mode, ipd] = stereo::params();
+    [a, b, c, d, e, f, g, h, mode, ipd]
 };
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::CAMERA,
     subtype: "perspective",
-    description: "pinhole camera; an off-axis wall is a widened frustum cropped by imageRegion",
+    description: "pinhole camera; an off-axis wall is a widened frustum cropped by imageRegion; its stereoMode is HMD stereo, wrong for CAVE walls",
     extensions: &["ANARI_KHR_CAMERA_PERSPECTIVE", EXT_STEREO],
     params: &PARAMS,
     commit: Some(commit),
@@ -60,10 +36,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     CameraModel::Perspective {
         placement: Placement::read(r)?,
         fovy: r.f32("fovy")?.into(),
-        stereo: Stereo::read(
-            r.string("stereoMode").unwrap_or("none"),
-            r.f32("interpupillaryDistance")?,
-        )?,
+        stereo: Stereo::from_params(r)?,
     }
     .committed()
 }

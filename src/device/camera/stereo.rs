@@ -6,7 +6,33 @@
 
 use glam::{DVec3, UVec2};
 
+use crate::device::info::{p, Default, ParamInfo, F32};
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
 use crate::geometry::{MatrixCamera, RayGen};
+
+/// `stereoMode` and `interpupillaryDistance`, as every stereo camera
+/// declares them.
+pub const fn params() -> [ParamInfo; 2] {
+    [
+        p(
+            "stereoMode",
+            &[T::STRING],
+            false,
+            Default::Text("none"),
+            "none, left, right, sideBySide (left eye in the left half) or topBottom (left eye on top)",
+        )
+        .names(StereoMode::NAMES),
+        p(
+            "interpupillaryDistance",
+            F32,
+            false,
+            Default::Floats(&[0.0635]),
+            "distance between the eyes of stereoMode, in world units",
+        )
+        .range(0.0, 1.0),
+    ]
+}
 
 /// The values of `stereoMode`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -81,6 +107,14 @@ pub struct Stereo {
 }
 
 impl Stereo {
+    /// The committed `params()`.
+    pub fn from_params(r: &Read<'_>) -> Result<Self, String> {
+        Self::read(
+            r.string("stereoMode").unwrap_or_default(),
+            r.f32("interpupillaryDistance")?,
+        )
+    }
+
     pub fn read(mode: &str, ipd: f32) -> Result<Self, String> {
         if !(ipd.is_finite() && ipd >= 0.0) {
             return Err(format!(

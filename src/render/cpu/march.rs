@@ -3,6 +3,7 @@ use glam::{Vec3, Vec4};
 use super::sample::{correct, Field, Mixture};
 use crate::geometry::RayGen;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
+use crate::scene::MAX_VOLUMES;
 
 /// What one primary ray produced.
 pub(super) struct RayResult {
@@ -24,14 +25,12 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
     let clip = (rays.t_near, rays.t_far);
     // Each volume's span along the ray, found in its grid, where the
     // affine map keeps the ray's parameter t.
-    let spans: Vec<Option<(f32, f32)>> = field
-        .grids
-        .iter()
-        .map(|g| {
-            let (o, d) = (g.plan.grid(origin), g.plan.grid_direction(dir));
-            enter_exit(o, d, Vec3::ZERO, g.plan.last_vertex(), clip)
-        })
-        .collect();
+    // On the stack: this runs once per primary ray.
+    let mut spans = [None; MAX_VOLUMES];
+    for (span, g) in spans.iter_mut().zip(&field.grids) {
+        let (o, d) = (g.plan.grid(origin), g.plan.grid_direction(dir));
+        *span = enter_exit(o, d, Vec3::ZERO, g.plan.last_vertex(), clip);
+    }
     let union = spans.iter().flatten().fold(None, |u, &(a, b)| match u {
         None => Some((a, b)),
         Some((lo, hi)) => Some((a.min(lo), b.max(hi))),
