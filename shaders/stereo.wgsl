@@ -1,20 +1,56 @@
-// What the re-projection and compositing passes share (docs/reprojection_stereo.md).
-// Left column x writes its right-eye segments into layer
-// L - (x mod L) - 1; right pixel j reads, front to back, the columns
-// j - near .. j - far, of which there are at most L, so no two columns it
-// reads share a layer.
+// What the re-projection and compositing passes share
+// (docs/reprojection_stereo.md, src/render/stereo/epipolar.rs).
+//
+// A left pixel p's right-eye image moves with depth along g(p), its
+// epipolar line. Lines nearer the rows than the columns are cut at
+// right-eye columns (family 0), the others at right-eye rows (family 1).
+// The ray of left pixel p writes family 0 into texel (right column, p.y)
+// of layer p.x mod L, family 1 into texel (p.x, right row) of layer
+// L + p.y mod L. The rays one texel could receive lie on one line, fewer
+// than L pixels apart along it, so no two of them share a layer.
 
 // `Stereo` is declared in front of this file from src/render/gpu/uniforms.rs,
 // which documents its fields.
 
-fn layer_of(column: i32) -> i32 {
-    let n = stereo.layers;
-    return n - 1 - (((column % n) + n) % n);
+fn g_of(p: vec2i) -> vec2f {
+    return stereo.epipole.z * vec2f(p) - stereo.epipole.xy;
 }
 
-// Right-eye pixels column `column` wrote, as [first, last]; first > last
-// if none. Texels outside that span hold stale data from earlier frames
-// and are never read, which is what spares the layers a clear.
-fn span_index(column: i32, row: u32) -> u32 {
-    return row * stereo.columns + u32(column - stereo.first_column);
+// The coordinate of p along family `axis` (x for 0, y for 1), and across.
+fn along(p: vec2i, axis: u32) -> i32 {
+    return select(p.x, p.y, axis == 1u);
+}
+fn alongf(v: vec2f, axis: u32) -> f32 {
+    return select(v.x, v.y, axis == 1u);
+}
+fn acrossf(v: vec2f, axis: u32) -> f32 {
+    return select(v.y, v.x, axis == 1u);
+}
+
+fn layer_of(p: vec2i, axis: u32) -> i32 {
+    let n = stereo.layers;
+    let k = along(p, axis);
+    return ((k % n) + n) % n + select(0, n, axis == 1u);
+}
+
+// The texel of left pixel p's segment at right coordinate `at` along `axis`.
+fn texel_of(p: vec2i, at: i32, axis: u32) -> vec2i {
+    if axis == 0u {
+        return vec2i(at, p.y - stereo.first.y);
+    }
+    return vec2i(p.x - stereo.first.x, at);
+}
+
+// The right-eye columns (x, y) and rows (z, w) left pixel p wrote this
+// frame, first > last if none. Texels outside them hold stale data from
+// earlier frames and are never read, which is what spares the layers a
+// clear.
+fn span_index(p: vec2i) -> u32 {
+    let c = p - stereo.first;
+    return u32(c.y) * stereo.cast_pixels.x + u32(c.x);
+}
+
+fn is_cast(p: vec2i) -> bool {
+    let c = p - stereo.first;
+    return all(c >= vec2i(0)) && all(vec2u(c) < stereo.cast_pixels);
 }

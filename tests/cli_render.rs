@@ -237,7 +237,7 @@ fn bad_arguments_are_one_line_errors() {
 }
 
 #[test]
-fn reprojection_renders_walls_it_applies_to_and_says_why_not_elsewhere() {
+fn reprojection_renders_every_wall_and_says_why_when_it_cannot() {
     let common = [
         "--scale",
         "0.05",
@@ -273,12 +273,16 @@ fn reprojection_renders_walls_it_applies_to_and_says_why_not_elsewhere() {
             "{front}"
         );
         assert!(front["layers"].as_u64().unwrap() >= 2);
-        // The side walls' baseline points into them: two passes, and why.
+        assert_eq!(front["families"], 1, "{front}");
+        // The side walls' baseline points into them: lines radiate from
+        // the epipole, both families, still one pass.
         for wall in ["left", "right"] {
             let side = view(wall, eye);
-            assert_eq!(side["path"], "two-pass");
-            let why = side["fallback"].as_str().unwrap();
-            assert!(why.contains("does not apply"), "{why}");
+            assert!(
+                side["path"].as_str().unwrap().starts_with("reprojection ("),
+                "{side}"
+            );
+            assert_eq!(side["families"], 2, "{side}");
         }
     }
     // The left eye is ray cast either way; the right one is re-projected.

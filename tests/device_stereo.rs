@@ -196,7 +196,8 @@ fn side_by_side_on_the_gpu_is_one_reprojection_pass_close_to_two() {
         d < 0.02 && d < unmoved,
         "right eye: DSSIM {d} (left as right {unmoved})"
     );
-    // With a depth channel the right eye needs its own pass, and says so.
+    // A depth channel keeps the single pass: the right eye's depth comes
+    // from the layers.
     h.set(
         frame,
         "channel.depth",
@@ -209,8 +210,7 @@ fn side_by_side_on_the_gpu_is_one_reprojection_pass_close_to_two() {
     assert!(
         heard
             .iter()
-            .any(|m| m
-                .contains("stereo frame: two passes (the re-projected eye has no depth channel)")),
+            .any(|m| m.contains("stereo frame: both eyes in one re-projection pass")),
         "{heard:?}"
     );
     assert!(h.messages(Severity::Error).is_empty());
@@ -271,8 +271,9 @@ fn an_off_axis_wall_camera_takes_the_same_stereo_modes() {
 }
 
 #[test]
-fn off_axis_pairs_reproject_when_the_eyes_lie_along_the_rows() {
+fn off_axis_pairs_reproject_for_level_turned_and_rolled_heads() {
     use anari_library_caveray::device::Status;
+    use anari_library_caveray::render::{dssim, ssim};
     use std::sync::{Arc, Mutex};
     let heard: Arc<Mutex<Vec<String>>> = Arc::default();
     let log = Arc::clone(&heard);
@@ -285,25 +286,36 @@ fn off_axis_pairs_reproject_when_the_eyes_lie_along_the_rows() {
     h.d.commit(Subject::Device);
     let (frame, _) = scene(&mut h);
     let camera = wall_camera(&mut h, frame);
-    size(&mut h, frame, 2 * SIZE, SIZE);
-    stereo(&mut h, camera, "sideBySide", 0.3);
-    let _ = h.pixels_sized(frame, 2 * SIZE, SIZE);
-    // A head turned 37 degrees: the baseline leaves the rows.
-    h.set(
-        camera,
-        "eyeAxis",
-        DataType::FLOAT32_VEC3,
-        bytes(&[0.8f32, 0.0, 0.6]),
-    );
-    h.d.commit(Subject::Object(camera));
-    let _ = h.pixels_sized(frame, 2 * SIZE, SIZE);
-    let heard = std::mem::take(&mut *heard.lock().unwrap());
-    assert_eq!(heard.len(), 2, "{heard:?}");
-    assert!(heard[0].contains("one re-projection pass"), "{heard:?}");
-    assert!(
-        heard[1].starts_with("stereo frame: two passes ("),
-        "{heard:?}"
-    );
-    eprintln!("turned head: {}", heard[1]);
+    let n = 2 * SIZE;
+    // Level, turned 37 degrees (the baseline leaves the wall's plane),
+    // rolled 15 degrees (it tilts in the plane).
+    for axis in [[1.0f32, 0.0, 0.0], [0.8, 0.0, 0.6], [0.966, 0.259, 0.0]] {
+        h.set(camera, "eyeAxis", DataType::FLOAT32_VEC3, bytes(&axis));
+        size(&mut h, frame, n, n);
+        stereo(&mut h, camera, "left", 0.3);
+        let left = as_frame(h.pixels_sized(frame, n, n), n, n);
+        stereo(&mut h, camera, "right", 0.3);
+        let right = as_frame(h.pixels_sized(frame, n, n), n, n);
+        size(&mut h, frame, 2 * n, n);
+        stereo(&mut h, camera, "sideBySide", 0.3);
+        let pair = h.pixels_sized(frame, 2 * n, n);
+        let heard = std::mem::take(&mut *heard.lock().unwrap());
+        assert!(
+            heard.iter().any(|m| m.contains("one re-projection pass")),
+            "{axis:?}: {heard:?}"
+        );
+        let half = |x0| as_frame(crop(&pair, 2 * n, (x0, 0), (n, n)), n, n);
+        let s = ssim(&half(0), &left).unwrap();
+        let d = dssim(&half(n), &right).unwrap();
+        let unmoved = dssim(&left, &right).unwrap();
+        eprintln!(
+            "eyeAxis {axis:?}: left SSIM {s:.5}, right DSSIM {d:.4}, left as right {unmoved:.4}"
+        );
+        assert!(s > 0.98, "{axis:?}: left SSIM {s}");
+        assert!(
+            d < 0.03 && d < 0.5 * unmoved,
+            "{axis:?}: DSSIM {d} vs {unmoved}"
+        );
+    }
     assert!(h.messages(Severity::Error).is_empty());
 }

@@ -289,9 +289,6 @@ fn reprojected(
             left.size.x, left.size.y, right.size.x, right.size.y
         ));
     }
-    if job.desc.depth {
-        return Err("the re-projected eye has no depth channel".into());
-    }
     if job.settings.background_image.is_some() {
         return Err("re-projection takes a background colour, not an image".into());
     }

@@ -139,7 +139,11 @@ pub struct LayerRecord {
     pub layers: u32,
     pub layer_format: String,
     pub layer_bytes: u64,
-    pub offsets_px: [i32; 2],
+    /// Longest run of right pixels one left ray writes.
+    pub span_px: f64,
+    /// 1: the epipolar lines are all nearer the rows (or all nearer the
+    /// columns); 2: both kinds cross the wall.
+    pub families: u32,
     /// Both eyes of the wall, read-back included.
     pub wall_ms: f64,
 }
@@ -373,7 +377,8 @@ impl ViewJob<'_> {
                 layers: reprojection.layers,
                 layer_format: reprojection.format.to_string(),
                 layer_bytes: reprojection.memory(),
-                offsets_px: [reprojection.plan.near_px, reprojection.plan.far_px],
+                span_px: reprojection.plan.span_px,
+                families: reprojection.plan.family_count(),
                 wall_ms,
             }),
             ..Rendered::new(

@@ -1,7 +1,7 @@
 //! The re-projection stereo path on the GPU: the left eye ray cast with
 //! its segments written into a texture array of layers
 //! (shaders/reproject.wgsl), then the right eye composited from them
-//! (shaders/composite.wgsl). Layers are never cleared: each left column
+//! (shaders/composite.wgsl). Layers are never cleared: each left ray
 //! records the span of right pixels it wrote this frame, and compositing
 //! reads nothing outside it.
 
@@ -10,7 +10,8 @@ use glam::UVec2;
 use super::context::Context;
 use super::uniforms::{Stereo, WORKGROUP};
 use super::{
-    bind_group, buffer_type, color_data, compute_pipeline, layout_entry, unprepared, GpuRenderer,
+    bind_group, buffer_type, color_data, compute_pipeline, floats, layout_entry, unprepared,
+    GpuRenderer,
 };
 use crate::geometry::RayGen;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
@@ -29,25 +30,38 @@ pub(super) struct StereoGpu {
     target: Option<LayerTarget>,
 }
 
-/// What identifies a set of layer resources. The left columns cast vary
-/// from view to view; the spans buffer is sized for at least as many.
+/// What identifies a set of layer textures and right-eye buffers. The
+/// left pixels cast vary from view to view; the spans buffer is sized
+/// for at least as many.
 #[derive(Clone, Copy, PartialEq)]
 struct Shape {
     size: UVec2,
+    /// Texels of one layer.
+    texels: UVec2,
+    /// Layers of all families together.
     layers: u32,
     color: ColorFormat,
+    depth: bool,
 }
 
 struct LayerTarget {
     shape: Shape,
-    /// Left columns the spans buffer holds.
-    columns: u32,
-    uniform: wgpu::Buffer,
-    view: wgpu::TextureView,
-    color: wgpu::Buffer,
-    color_read: wgpu::Buffer,
+    /// Left pixels the spans buffer holds.
+    cast: u64,
+    res: Resources,
     writer: wgpu::BindGroup,
     composite: wgpu::BindGroup,
+}
+
+/// Everything of a target but the spans and the bind groups.
+struct Resources {
+    uniform: wgpu::Buffer,
+    layers: wgpu::TextureView,
+    depths: wgpu::TextureView,
+    color: wgpu::Buffer,
+    color_read: wgpu::Buffer,
+    depth: wgpu::Buffer,
+    depth_read: wgpu::Buffer,
 }
 
 fn texture_format(format: LayerFormat) -> wgpu::TextureFormat {
@@ -57,48 +71,54 @@ fn texture_format(format: LayerFormat) -> wgpu::TextureFormat {
     }
 }
 
+fn storage_texture(index: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    layout_entry(
+        index,
+        wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+        },
+    )
+}
+
+fn sampled_texture(index: u32) -> wgpu::BindGroupLayoutEntry {
+    layout_entry(
+        index,
+        wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+    )
+}
+
 impl StereoGpu {
     fn new(ctx: &Context, volume_layout: &wgpu::BindGroupLayout, format: LayerFormat) -> Self {
         let device = &ctx.device;
         let uniform = buffer_type(wgpu::BufferBindingType::Uniform);
+        let read_write = buffer_type(wgpu::BufferBindingType::Storage { read_only: false });
         let writer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("re-projection layers"),
             entries: &[
                 layout_entry(0, uniform),
-                layout_entry(
-                    1,
-                    wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: texture_format(format),
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                    },
-                ),
-                layout_entry(
-                    2,
-                    buffer_type(wgpu::BufferBindingType::Storage { read_only: false }),
-                ),
+                storage_texture(1, texture_format(format)),
+                layout_entry(2, read_write),
+                storage_texture(3, wgpu::TextureFormat::Rgba32Float),
             ],
         });
         let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compositing"),
             entries: &[
                 layout_entry(0, uniform),
-                layout_entry(
-                    1,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                ),
+                sampled_texture(1),
                 layout_entry(
                     2,
                     buffer_type(wgpu::BufferBindingType::Storage { read_only: true }),
                 ),
-                layout_entry(
-                    3,
-                    buffer_type(wgpu::BufferBindingType::Storage { read_only: false }),
-                ),
+                layout_entry(3, read_write),
+                sampled_texture(4),
+                layout_entry(5, read_write),
             ],
         });
         let source = super::shaders::reproject(format);
@@ -120,42 +140,70 @@ impl StereoGpu {
         }
     }
 
-    /// Makes the resources for `shape` and `columns` unless the last ones
-    /// fit. A new texture costs a zero-fill on first use (wgpu's
-    /// initialisation), so views that differ only in columns keep it and
-    /// get a larger spans buffer, with room to spare.
-    fn reshape(&mut self, ctx: &Context, shape: Shape, columns: u32) {
-        let spare = columns + shape.size.x / 4;
+    /// Makes the resources for `shape` and `cast` left pixels unless the
+    /// last ones fit. A new texture costs a zero-fill on first use (wgpu's
+    /// initialisation), so views that differ only in the pixels cast keep
+    /// it and get a larger spans buffer, with room to spare.
+    fn reshape(&mut self, ctx: &Context, shape: Shape, cast: u64) {
+        let spare = cast + cast / 4;
         match self.target.take() {
-            Some(t) if t.shape == shape && t.columns >= columns => self.target = Some(t),
+            Some(t) if t.shape == shape && t.cast >= cast => self.target = Some(t),
             Some(t) if t.shape == shape => self.target = Some(t.with_spans(self, ctx, spare)),
             _ => self.target = Some(LayerTarget::new(self, ctx, shape, spare)),
         }
     }
 }
 
+fn array_texture(
+    ctx: &Context,
+    label: &str,
+    size: UVec2,
+    layers: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::TextureView {
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size.x,
+            height: size.y,
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    // An explicit array view: with one layer the default would be 2D.
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
 impl LayerTarget {
-    fn new(gpu: &StereoGpu, ctx: &Context, shape: Shape, columns: u32) -> Self {
-        let device = &ctx.device;
-        let layers = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("re-projection layers"),
-            size: wgpu::Extent3d {
-                width: shape.size.x,
-                height: shape.size.y,
-                depth_or_array_layers: shape.layers,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: texture_format(gpu.format),
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        // An explicit array view: with one layer the default would be 2D.
-        let view = layers.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+    fn new(gpu: &StereoGpu, ctx: &Context, shape: Shape, cast: u64) -> Self {
+        let layers = array_texture(
+            ctx,
+            "re-projection layers",
+            shape.texels,
+            shape.layers,
+            texture_format(gpu.format),
+        );
+        // Without a depth channel one texel stands in for the depths.
+        let (depth_texels, depth_layers) = if shape.depth {
+            (shape.texels, shape.layers)
+        } else {
+            (UVec2::ONE, 1)
+        };
+        let depths = array_texture(
+            ctx,
+            "re-projection depths",
+            depth_texels,
+            depth_layers,
+            wgpu::TextureFormat::Rgba32Float,
+        );
         use wgpu::BufferUsages as U;
         let uniform = buffer(
             ctx,
@@ -163,8 +211,8 @@ impl LayerTarget {
             size_of::<Stereo>() as u64,
             U::UNIFORM | U::COPY_DST,
         );
-        let color_bytes =
-            u64::from(shape.size.x) * u64::from(shape.size.y) * shape.color.bytes_per_pixel();
+        let pixels = u64::from(shape.size.x) * u64::from(shape.size.y);
+        let color_bytes = pixels * shape.color.bytes_per_pixel();
         let color = buffer(ctx, "right colour", color_bytes, U::STORAGE | U::COPY_SRC);
         let color_read = buffer(
             ctx,
@@ -172,32 +220,78 @@ impl LayerTarget {
             color_bytes,
             U::MAP_READ | U::COPY_DST,
         );
-        let spans = spans_buffer(ctx, shape, columns);
-        let (writer, composite) = bind_groups(gpu, ctx, &uniform, &view, &spans, &color);
-        Self {
-            shape,
-            columns,
+        let depth_bytes = if shape.depth { 4 * pixels } else { 4 };
+        let depth = buffer(ctx, "right depth", depth_bytes, U::STORAGE | U::COPY_SRC);
+        let depth_read = buffer(
+            ctx,
+            "right depth read-back",
+            depth_bytes,
+            U::MAP_READ | U::COPY_DST,
+        );
+        let res = Resources {
             uniform,
-            view,
+            layers,
+            depths,
             color,
             color_read,
+            depth,
+            depth_read,
+        };
+        let (writer, composite) = bind_groups(gpu, ctx, &res, &spans_buffer(ctx, cast));
+        Self {
+            shape,
+            cast,
+            res,
             writer,
             composite,
         }
     }
 
-    /// The same layers with a spans buffer for `columns` left columns.
-    fn with_spans(self, gpu: &StereoGpu, ctx: &Context, columns: u32) -> Self {
-        let spans = spans_buffer(ctx, self.shape, columns);
-        let (writer, composite) =
-            bind_groups(gpu, ctx, &self.uniform, &self.view, &spans, &self.color);
+    /// The same layers with a spans buffer for `cast` left pixels.
+    fn with_spans(self, gpu: &StereoGpu, ctx: &Context, cast: u64) -> Self {
+        let (writer, composite) = bind_groups(gpu, ctx, &self.res, &spans_buffer(ctx, cast));
         Self {
-            columns,
+            cast,
             writer,
             composite,
             ..self
         }
     }
+}
+
+/// The re-projection pass's group 1 and the compositing pass's group 0.
+fn bind_groups(
+    gpu: &StereoGpu,
+    ctx: &Context,
+    res: &Resources,
+    spans: &wgpu::Buffer,
+) -> (wgpu::BindGroup, wgpu::BindGroup) {
+    let device = &ctx.device;
+    let writer = bind_group(
+        device,
+        "re-projection layers",
+        &gpu.writer_layout,
+        [
+            res.uniform.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&res.layers),
+            spans.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&res.depths),
+        ],
+    );
+    let composite = bind_group(
+        device,
+        "compositing",
+        &gpu.composite_layout,
+        [
+            res.uniform.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&res.layers),
+            spans.as_entire_binding(),
+            res.color.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&res.depths),
+            res.depth.as_entire_binding(),
+        ],
+    );
+    (writer, composite)
 }
 
 fn buffer(ctx: &Context, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
@@ -209,43 +303,11 @@ fn buffer(ctx: &Context, label: &str, size: u64, usage: wgpu::BufferUsages) -> w
     })
 }
 
-fn spans_buffer(ctx: &Context, shape: Shape, columns: u32) -> wgpu::Buffer {
-    let bytes = 8 * u64::from(columns) * u64::from(shape.size.y);
-    buffer(ctx, "spans", bytes, wgpu::BufferUsages::STORAGE)
-}
+/// Four i32 per left pixel cast: the columns and the rows it wrote.
+const SPAN_BYTES: u64 = 16;
 
-/// The re-projection pass's group 1 and the compositing pass's group 0.
-fn bind_groups(
-    gpu: &StereoGpu,
-    ctx: &Context,
-    uniform: &wgpu::Buffer,
-    view: &wgpu::TextureView,
-    spans: &wgpu::Buffer,
-    color: &wgpu::Buffer,
-) -> (wgpu::BindGroup, wgpu::BindGroup) {
-    let device = &ctx.device;
-    let writer = bind_group(
-        device,
-        "re-projection layers",
-        &gpu.writer_layout,
-        [
-            uniform.as_entire_binding(),
-            wgpu::BindingResource::TextureView(view),
-            spans.as_entire_binding(),
-        ],
-    );
-    let composite = bind_group(
-        device,
-        "compositing",
-        &gpu.composite_layout,
-        [
-            uniform.as_entire_binding(),
-            wgpu::BindingResource::TextureView(view),
-            spans.as_entire_binding(),
-            color.as_entire_binding(),
-        ],
-    );
-    (writer, composite)
+fn spans_buffer(ctx: &Context, cast: u64) -> wgpu::Buffer {
+    buffer(ctx, "spans", SPAN_BYTES * cast, wgpu::BufferUsages::STORAGE)
 }
 
 impl GpuRenderer {
@@ -258,36 +320,39 @@ impl GpuRenderer {
             reason,
             adapter: self.ctx.info.name.clone(),
         };
-        if r.layers > limits.max_texture_array_layers {
+        let layers = r.layers * r.plan.family_count();
+        if layers > limits.max_texture_array_layers {
             return Err(too_large(format!(
-                "{} re-projection layers exceed the adapter's {} array layers",
-                r.layers, limits.max_texture_array_layers
+                "{layers} re-projection layers exceed the adapter's {} array layers",
+                limits.max_texture_array_layers
             )));
         }
-        if r.size.max_element() > limits.max_texture_dimension_2d {
+        if r.plan.texture_size().max_element() > limits.max_texture_dimension_2d {
             return Err(too_large(format!(
                 "the layers exceed the largest 2D texture ({} per side)",
                 limits.max_texture_dimension_2d
             )));
         }
-        let spans = 8 * u64::from(r.columns()) * u64::from(r.size.y);
-        if spans > limits.max_storage_buffer_binding_size {
+        let cast = r.plan.cast;
+        let spans = SPAN_BYTES * u64::from(cast.x) * u64::from(cast.y);
+        if spans + spans / 4 > limits.max_storage_buffer_binding_size {
             return Err(too_large(format!(
                 "its {spans} bytes of spans exceed the largest storage buffer"
             )));
         }
-        if r.columns().div_ceil(WORKGROUP) > limits.max_compute_workgroups_per_dimension {
+        if cast.max_element().div_ceil(WORKGROUP) > limits.max_compute_workgroups_per_dimension {
             return Err(too_large(format!(
-                "{} left columns need too many workgroups",
-                r.columns()
+                "{}x{} left pixels cast need too many workgroups",
+                cast.x, cast.y
             )));
         }
         Ok(())
     }
 
     /// Both eyes from one ray casting pass: the left eye from `left`'s
-    /// rays, the right eye re-projected from them as `reprojection` plans.
-    /// The frame size is the plan's.
+    /// rays, the right eye re-projected from them as `reprojection` plans,
+    /// with a depth channel if `desc` has one. The frame size is the
+    /// plan's.
     pub fn render_reprojected(
         &mut self,
         scene: &Scene,
@@ -315,27 +380,27 @@ impl GpuRenderer {
             self.stereo = Some(StereoGpu::new(ctx, &self.layout, reprojection.format));
         }
         let stereo = self.stereo.as_mut().ok_or_else(unprepared)?;
+        let plan = &reprojection.plan;
         let shape = Shape {
             size: desc.size,
-            layers: reprojection.layers,
+            texels: plan.texture_size(),
+            layers: reprojection.layers * plan.family_count(),
             color: desc.color,
+            depth: desc.depth,
         };
-        let columns = reprojection.columns();
-        stereo.reshape(ctx, shape, columns);
+        let cast = plan.cast;
+        stereo.reshape(ctx, shape, u64::from(cast.x) * u64::from(cast.y));
         let stereo = &*stereo;
         let target = stereo.target.as_ref().ok_or_else(unprepared)?;
-        let uniform = Stereo::new(reprojection, desc.color, settings);
+        let res = &target.res;
+        let uniform = Stereo::new(reprojection, desc.color, settings, desc.depth);
         ctx.queue
-            .write_buffer(&target.uniform, 0, bytemuck::bytes_of(&uniform));
+            .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = self.bind_group.as_ref().ok_or_else(unprepared)?;
         let left_ms = ctx.dispatch(
             &stereo.reproject,
             &[volume, &target.writer],
-            [
-                columns.div_ceil(WORKGROUP),
-                desc.size.y.div_ceil(WORKGROUP),
-                1,
-            ],
+            [cast.x.div_ceil(WORKGROUP), cast.y.div_ceil(WORKGROUP), 1],
         )?;
         let composite_ms = ctx.dispatch(
             &stereo.composite,
@@ -347,13 +412,21 @@ impl GpuRenderer {
             ],
         )?;
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&target.color, 0, &target.color_read, 0, None);
+        encoder.copy_buffer_to_buffer(&res.color, 0, &res.color_read, 0, None);
+        if desc.depth {
+            encoder.copy_buffer_to_buffer(&res.depth, 0, &res.depth_read, 0, None);
+        }
         ctx.queue.submit([encoder.finish()]);
-        let right = ctx.read(&target.color_read, target.color_read.size())?;
+        let color = ctx.read(&res.color_read, res.color_read.size())?;
+        let depth = if desc.depth {
+            Some(floats(&ctx.read(&res.depth_read, res.depth_read.size())?))
+        } else {
+            None
+        };
         let right = Frame {
             size: desc.size,
-            color: color_data(desc.color, right),
-            depth: None,
+            color: color_data(desc.color, color),
+            depth,
             samples: 0,
         };
         self.last_pass_ms = left_ms;
@@ -379,8 +452,8 @@ impl GpuRenderer {
             &stereo.clear,
             &[volume, &target.writer],
             [
-                s.size.x.div_ceil(WORKGROUP),
-                s.size.y.div_ceil(WORKGROUP),
+                s.texels.x.div_ceil(WORKGROUP),
+                s.texels.y.div_ceil(WORKGROUP),
                 s.layers,
             ],
         )

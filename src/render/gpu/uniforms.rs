@@ -36,6 +36,7 @@ const _: () = assert!(MAX_CLIP_PLANES == 8 && MAX_VOLUMES == 8);
 wgsl_types! {
     f32 => "f32", u32 => "u32", i32 => "i32",
     [f32; 3] => "vec3f", [f32; 4] => "vec4f", [u32; 2] => "vec2u", [u32; 3] => "vec3u",
+    [i32; 2] => "vec2i",
     [[f32; 4]; MAX_CLIP_PLANES] => "array<vec4f, 8>",
     [VolumeSlot; MAX_VOLUMES] => "array<VolumeSlot, 8>",
 }
@@ -146,28 +147,38 @@ uniform! {
 
 uniform! {
     /// `Stereo` in shaders/stereo.wgsl: what the re-projection and the
-    /// compositing pass share.
+    /// compositing pass share (src/render/stereo/epipolar.rs explains
+    /// the epipole and lambda).
     Stereo {
-        /// Right-eye pixel x of world point p is
-        /// dot(right_x, (p, 1)) / dot(right_w, (p, 1)).
+        /// Right-eye pixel (x, y) of world point p is
+        /// (dot(right_x, (p, 1)), dot(right_y, (p, 1))) / dot(right_w, (p, 1)).
         right_x: [f32; 4],
+        right_y: [f32; 4],
         right_w: [f32; 4],
         /// Straight RGBA behind the volume.
         background: [f32; 4],
-        /// Right pixel minus left column, in whole pixels, of the nearest
-        /// and the farthest visible point.
-        near_offset: i32,
-        far_offset: i32,
+        /// The epipole (x, y, w, unused) in homogeneous pixels.
+        epipole: [f32; 4],
+        /// Right-eye depth is the distance from here.
+        right_eye: [f32; 3],
+        depth_threshold: f32,
+        /// lambda at the nearest and the farthest visible depth.
+        lambda_near: f32,
+        lambda_far: f32,
+        /// Layers of each family; the rows family's follow the columns'.
         layers: i32,
-        /// The first left column cast (negative beyond the left border).
-        first_column: i32,
+        /// Bit 0: the columns family is written, bit 1: the rows family.
+        families: u32,
+        /// The first left pixel cast and how many.
+        first: [i32; 2],
+        cast_pixels: [u32; 2],
         width: u32,
         height: u32,
-        /// Left columns cast.
-        columns: u32,
         color_format: u32,
         /// Opacity at which a right pixel stops compositing.
         termination: f32,
+        /// Whether segments record and the composite writes depth.
+        has_depth: u32,
         _pad: [u32; 3],
     }
 }
@@ -235,20 +246,32 @@ impl Params {
 }
 
 impl Stereo {
-    pub fn new(r: &Reprojection, format: ColorFormat, settings: &RenderSettings) -> Self {
+    pub fn new(
+        r: &Reprojection,
+        format: ColorFormat,
+        settings: &RenderSettings,
+        depth: bool,
+    ) -> Self {
+        let plan = &r.plan;
         Self {
             right_x: r.right_x.to_array(),
+            right_y: r.right_y.to_array(),
             right_w: r.right_w.to_array(),
             background: settings.background.to_array(),
-            near_offset: r.plan.near_px,
-            far_offset: r.plan.far_px,
+            epipole: plan.epipole.as_vec3().extend(0.0).to_array(),
+            right_eye: r.right_eye.to_array(),
+            depth_threshold: settings.depth_threshold,
+            lambda_near: plan.lambda[0] as f32,
+            lambda_far: plan.lambda[1] as f32,
             layers: r.layers as i32,
-            first_column: r.first_column(),
+            families: u32::from(plan.families[0]) | u32::from(plan.families[1]) << 1,
+            first: plan.first.to_array(),
+            cast_pixels: plan.cast.to_array(),
             width: r.size.x,
             height: r.size.y,
-            columns: r.columns(),
             color_format: format.code(),
             termination: settings.termination,
+            has_depth: u32::from(depth),
             _pad: [0; 3],
         }
     }

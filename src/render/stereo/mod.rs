@@ -1,21 +1,24 @@
 //! Single-pass stereo by re-projection layers (Buchacher & Erdt, EGSR
 //! 2017): the left eye is ray cast, its ray segments are re-projected into
 //! the right eye's image through a texture array of layers, and a
-//! compositing pass blends them. `plan` sizes the layers
+//! compositing pass blends them. `plan` sizes the layers for the paper's
+//! setup, `epipolar` plans any pair of views from their matrices
 //! (docs/reprojection_stereo.md), `layers` holds what the layers are and
 //! cost, `reproject` turns a plan into what the GPU pass needs; the passes
 //! are shaders/reproject.wgsl and shaders/composite.wgsl.
 
 mod bounds;
+mod epipolar;
 mod hmd;
 mod layers;
 mod plan;
 mod reproject;
 
 pub use bounds::Bounds;
+pub use epipolar::{plan_views, Axis, NotEpipolar, ViewPlan};
 pub use layers::{layer_count, layer_memory, layers_for, LayerCountError, LayerFormat};
 pub use plan::{
-    minimal_focal_length, paper, pixel_scale, plan_views, span_to_depth, span_to_infinity,
-    span_to_sphere, HmdStereo, LayerPlan, NotEpipolar, StereoError, ViewPlan,
+    minimal_focal_length, paper, pixel_scale, span_to_depth, span_to_infinity, span_to_sphere,
+    HmdStereo, LayerPlan, StereoError,
 };
 pub use reproject::{Reprojection, ReprojectionError, StereoFrames, StereoTimes};

@@ -1,16 +1,19 @@
 //! What the GPU's re-projection path needs from the planner: the right
-//! eye's pixel column as a function of a world point, the whole-pixel
-//! offsets every left column's segments fall in, the layer count and the
-//! layer format; and what it gives back.
+//! eye's pixel as a function of a world point, the epipolar plan, the
+//! layer count and format; and what it gives back.
 
-use glam::{DVec4, UVec2, Vec4};
+use glam::{DVec4, UVec2, Vec3, Vec4};
 use thiserror::Error;
 
 use super::bounds::Bounds;
-use super::layers::{layer_count, layer_memory, LayerCountError, LayerFormat};
-use super::plan::{plan_views, NotEpipolar, ViewPlan};
-use crate::geometry::MatrixCamera;
+use super::epipolar::{plan_views, NotEpipolar, ViewPlan};
+use super::layers::{layer_count, LayerCountError, LayerFormat};
+use crate::geometry::{MatrixCamera, PrimaryRays};
 use crate::render::Frame;
+
+/// Layer memory a plan may ask for: beyond it the two passes are the
+/// better use of the GPU.
+pub const LAYER_BUDGET: u64 = 1 << 30;
 
 /// Why a view pair renders in two passes instead.
 #[derive(Debug, Error, PartialEq)]
@@ -21,6 +24,13 @@ pub enum ReprojectionError {
     Layers(#[from] LayerCountError),
     #[error("image must be at least 1x1, got {}x{}", .0.x, .0.y)]
     EmptyImage(UVec2),
+    #[error("the layers would take {} MiB ({layers} layers of {}x{}, {families} famil{}), over the {} MiB budget", .bytes >> 20, .texels.x, .texels.y, if *.families == 1 { "y" } else { "ies" }, LAYER_BUDGET >> 20)]
+    OverBudget {
+        bytes: u64,
+        layers: u32,
+        families: u32,
+        texels: UVec2,
+    },
 }
 
 /// A planned re-projection of the left eye's rays into the right eye.
@@ -28,12 +38,16 @@ pub enum ReprojectionError {
 pub struct Reprojection {
     pub size: UVec2,
     pub plan: ViewPlan,
-    /// Layers allocated: the plan's, or more if asked for.
+    /// Layers of each family: the plan's, or more if asked for.
     pub layers: u32,
     pub format: LayerFormat,
-    /// Right-eye pixel x of world point p is `right_x . (p, 1) / right_w . (p, 1)`.
+    /// Right-eye pixel (x, y) of world point p is
+    /// `(right_x, right_y) . (p, 1) / right_w . (p, 1)`.
     pub right_x: Vec4,
+    pub right_y: Vec4,
     pub right_w: Vec4,
+    /// Where right-eye depth is measured from.
+    pub right_eye: Vec3,
 }
 
 impl Reprojection {
@@ -52,37 +66,39 @@ impl Reprojection {
         }
         let plan = plan_views(left, right, size.x, size.y, bounds)?;
         let layers = layer_count(layers, plan.layers, || {
-            format!("offsets {}..={}", plan.near_px, plan.far_px)
+            format!("{:.1} pixels along one ray", plan.span_px)
         })?;
+        let bytes = plan.memory(layers, format);
+        if bytes > LAYER_BUDGET {
+            return Err(ReprojectionError::OverBudget {
+                bytes,
+                layers,
+                families: plan.family_count(),
+                texels: plan.texture_size(),
+            });
+        }
         let m = right.proj() * right.view();
-        let (row_x, row_w) = (m.row(0), m.row(3));
-        // NDC x in [-1, 1] to pixel x with centres on whole numbers.
-        let w = f64::from(size.x);
-        let right_x: DVec4 = 0.5 * w * (row_x + row_w) - 0.5 * row_w;
+        let (row_x, row_y, row_w) = (m.row(0), m.row(1), m.row(3));
+        // NDC in [-1, 1] to pixels with centres on whole numbers.
+        let to_pixel = |row: DVec4, n: u32| -> Vec4 {
+            (0.5 * f64::from(n) * (row + row_w) - 0.5 * row_w).as_vec4()
+        };
+        let right_eye = right.eye().unwrap_or_default().as_vec3();
         Ok(Self {
             size,
             plan,
             layers,
             format,
-            right_x: right_x.as_vec4(),
+            right_x: to_pixel(row_x, size.x),
+            right_y: to_pixel(row_y, size.y),
             right_w: row_w.as_vec4(),
+            right_eye,
         })
     }
 
-    /// The first left column cast: right pixels near the left border need
-    /// columns left of the image when far points shift right.
-    pub fn first_column(&self) -> i32 {
-        (-self.plan.far_px).min(0)
-    }
-    /// Left columns cast: the image plus what the right eye sees beyond it.
-    pub fn columns(&self) -> u32 {
-        let w = self.size.x as i32;
-        let last = (w - 1).max(w - 1 - self.plan.near_px);
-        (last - self.first_column() + 1) as u32
-    }
     /// Bytes of the layers.
     pub fn memory(&self) -> u64 {
-        layer_memory(self.size, self.layers, self.format)
+        self.plan.memory(self.layers, self.format)
     }
 }
 
@@ -98,7 +114,7 @@ pub struct StereoTimes {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StereoFrames {
     pub left: Frame,
-    /// Colour only; `depth` is None and `samples` 0 (nothing is sampled).
+    /// Depth as the frame asked; `samples` 0 (nothing is sampled).
     pub right: Frame,
     pub times: StereoTimes,
 }
