@@ -528,3 +528,44 @@ fn devices_and_directories_are_not_read_as_rigs() {
         assert!(err.to_string().contains("not a regular file"), "{err}");
     }
 }
+
+#[test]
+fn head_paths_load_in_the_rigs_units_and_bad_ones_name_the_line() {
+    let rig = common::rig("cologne_5wall");
+    let walk = rig
+        .load_head_path(&common::config_dir().join("head_paths/cologne_walk.toml"))
+        .unwrap();
+    assert_eq!(walk.len(), 11);
+    assert_eq!(walk[0].pose.position, DVec3::new(0.0, -300.0, 200.0));
+    // Facing the left wall at t = 4: yaw 90 turns forward (+y) to -x.
+    let forward = walk[2].pose.orientation * rig.viewer.frame.forward;
+    assert!((forward - DVec3::NEG_X).length() < 1e-12, "{forward}");
+    // A path in metres lands in the millimetre rig scaled.
+    let metres = rig
+        .head_path_from_toml(
+            "units = \"m\"\n[[pose]]\nt = 0\nhead = [0.1, -0.3, 0.2]\n",
+            "m.toml",
+        )
+        .unwrap();
+    assert!((metres[0].pose.position - DVec3::new(100.0, -300.0, 200.0)).length() < 1e-9);
+    for (text, field, line, needle) in [
+        (
+            "units = \"mm\"\n[[pose]]\nt = 0\nhead = [0, 0]\n",
+            "pose[0].head",
+            4,
+            "expected 3 numbers",
+        ),
+        (
+            "units = \"mm\"\n[[pose]]\nt = 0\nhead = [0, 0, 0]\nspeed = 2\n",
+            "pose[0].speed",
+            5,
+            "unknown field `speed`",
+        ),
+        ("units = \"furlong\"\n", "units", 1, "unknown variant"),
+    ] {
+        let e = rig.head_path_from_toml(text, "p.toml").unwrap_err();
+        assert_eq!(e.field(), Some(field), "{e}");
+        assert_eq!(e.line(), Some(line), "{e}");
+        assert!(e.to_string().contains(needle), "{e}");
+    }
+}

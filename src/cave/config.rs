@@ -105,6 +105,15 @@ struct RawPathKey {
     ypr: Option<Vec3>,
 }
 
+/// A head path file: a recorded or scripted walk through a rig.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHeadPath {
+    units: Spanned<Units>,
+    #[serde(default)]
+    pose: Vec<RawPathKey>,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawWall {
@@ -136,6 +145,41 @@ pub(crate) fn parse(text: &str, file: &str) -> Result<Rig, ConfigError> {
         ctx.error(span, None, e.message().to_string())
     })?;
     ctx.validate(raw)
+}
+
+/// A head path file's poses, in `rig`'s units and head frame.
+pub(crate) fn parse_head_path(
+    text: &str,
+    file: &str,
+    rig: &Rig,
+) -> Result<Vec<PathKey>, ConfigError> {
+    let ctx = Ctx { text, file };
+    let raw: RawHeadPath = toml::from_str(text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        ctx.error(span, None, e.message().to_string())
+    })?;
+    if raw.pose.is_empty() {
+        return Err(ctx.error(
+            0..0,
+            Some("pose".into()),
+            "a head path needs at least one [[pose]] (t, head, ypr)".into(),
+        ));
+    }
+    let scale = raw.units.get_ref().metres_per_unit() / rig.units.metres_per_unit();
+    ctx.path(&raw.pose, "pose", &rig.viewer.frame, scale)
+}
+
+/// Reads a head path file (see `parse_head_path`).
+pub(crate) fn load_head_path(path: &Path, rig: &Rig) -> Result<Vec<PathKey>, ConfigError> {
+    let file = path.display().to_string();
+    let text =
+        crate::data::files::read_text(path, crate::data::files::TEXT_LIMIT).map_err(|source| {
+            ConfigError::Io {
+                file: file.clone(),
+                source,
+            }
+        })?;
+    parse_head_path(&text, &file, rig)
 }
 
 struct Ctx<'a> {
@@ -294,19 +338,7 @@ impl Ctx<'_> {
                 "forward and up must be non-zero and not parallel".into(),
             )
         })?;
-        let pose =
-            |head: &Vec3, ypr: Option<&Vec3>, field: &str| -> Result<HeadPose, ConfigError> {
-                let position = self.vec3(head, || format!("{field}.head"))?;
-                let ypr = match ypr {
-                    Some(v) => self.vec3(v, || format!("{field}.ypr"))?,
-                    None => DVec3::ZERO,
-                };
-                Ok(HeadPose {
-                    position,
-                    orientation: frame.orientation(ypr),
-                })
-            };
-        let head = pose(&raw.head, raw.head_ypr.as_ref(), "viewer")?;
+        let head = self.pose(&raw.head, raw.head_ypr.as_ref(), "viewer", &frame, 1.0)?;
         let eye_offset = match &raw.eye_offset {
             Some(v) => self.vec3(v, || "viewer.eye_offset".into())?,
             None => DVec3::ZERO,
@@ -326,9 +358,49 @@ impl Ctx<'_> {
             }
             None => None,
         };
-        let mut path: Vec<PathKey> = Vec::new();
-        for (i, k) in raw.path.iter().enumerate() {
-            let field = format!("viewer.path[{i}]");
+        let path = self.path(&raw.path, "viewer.path", &frame, 1.0)?;
+        Ok(Viewer {
+            ipd,
+            frame,
+            eye_offset,
+            head,
+            tracked_space,
+            path,
+        })
+    }
+
+    /// A head position (times `scale`, to the rig's units) and yaw,
+    /// pitch, roll in degrees.
+    fn pose(
+        &self,
+        head: &Vec3,
+        ypr: Option<&Vec3>,
+        field: &str,
+        frame: &HeadFrame,
+        scale: f64,
+    ) -> Result<HeadPose, ConfigError> {
+        let position = self.vec3(head, || format!("{field}.head"))? * scale;
+        let ypr = match ypr {
+            Some(v) => self.vec3(v, || format!("{field}.ypr"))?,
+            None => DVec3::ZERO,
+        };
+        Ok(HeadPose {
+            position,
+            orientation: frame.orientation(ypr),
+        })
+    }
+
+    /// Timed poses, times finite and increasing.
+    fn path(
+        &self,
+        keys: &[RawPathKey],
+        field: &str,
+        frame: &HeadFrame,
+        scale: f64,
+    ) -> Result<Vec<PathKey>, ConfigError> {
+        let mut path: Vec<PathKey> = Vec::with_capacity(keys.len());
+        for (i, k) in keys.iter().enumerate() {
+            let field = format!("{field}[{i}]");
             let time = *k.t.get_ref();
             if !time.is_finite() || path.last().is_some_and(|p| time <= p.time) {
                 return Err(self.at(
@@ -339,17 +411,10 @@ impl Ctx<'_> {
             }
             path.push(PathKey {
                 time,
-                pose: pose(&k.head, k.ypr.as_ref(), &field)?,
+                pose: self.pose(&k.head, k.ypr.as_ref(), &field, frame, scale)?,
             });
         }
-        Ok(Viewer {
-            ipd,
-            frame,
-            eye_offset,
-            head,
-            tracked_space,
-            path,
-        })
+        Ok(path)
     }
 
     fn wall(&self, raw: &RawWall, i: usize) -> Result<Wall, ConfigError> {

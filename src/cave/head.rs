@@ -51,7 +51,7 @@ pub struct PathKey {
 /// The pose at `time` along keys sorted by time: linear in position,
 /// spherical in orientation, held constant before the first and after the
 /// last key. `None` for an empty path.
-pub(crate) fn interpolate(keys: &[PathKey], time: f64) -> Option<HeadPose> {
+pub fn pose_along(keys: &[PathKey], time: f64) -> Option<HeadPose> {
     let first = keys.first()?;
     let last = keys.last()?;
     if time <= first.time {

@@ -5,7 +5,7 @@ use glam::{DVec3, UVec2};
 use serde::{Deserialize, Serialize};
 
 use super::config::{self, ConfigError};
-use super::head::{interpolate, HeadFrame, HeadPose, PathKey};
+use super::head::{pose_along, HeadFrame, HeadPose, PathKey};
 use crate::geometry::{
     pinhole_from_matrices, MatrixCamera, OffAxisCamera, OffAxisProjection, PinholeCamera,
     RecoveredPinhole, Result, Screen,
@@ -194,10 +194,25 @@ impl Rig {
         }
     }
 
+    /// A head path file's poses (`[[pose]]` with `t`, `head`, `ypr`, in
+    /// the file's `units`), in this rig's units and head frame.
+    pub fn load_head_path(&self, path: &Path) -> std::result::Result<Vec<PathKey>, ConfigError> {
+        config::load_head_path(path, self)
+    }
+
+    /// A head path from TOML text; `file` names it in error messages.
+    pub fn head_path_from_toml(
+        &self,
+        text: &str,
+        file: &str,
+    ) -> std::result::Result<Vec<PathKey>, ConfigError> {
+        config::parse_head_path(text, file, self)
+    }
+
     /// The head pose `time` seconds along the rig's path, or the default
     /// pose if the rig has no path.
     pub fn head_at(&self, time: f64) -> HeadPose {
-        interpolate(&self.viewer.path, time).unwrap_or(self.viewer.head)
+        pose_along(&self.viewer.path, time).unwrap_or(self.viewer.head)
     }
 
     /// Eyes sit at the head's eye point +/- ipd/2 along the head's right axis.

@@ -9,8 +9,9 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
-/// A line chart. X positions are categorical: each distinct x gets an
-/// equal slot (shading levels 0, 4, 16, 64 would crowd a linear axis).
+/// A line chart. X positions are categorical unless `x_axis` says
+/// otherwise: each distinct x gets an equal slot (shading levels 0, 4, 16,
+/// 64 would crowd a linear axis).
 pub struct Chart<'a> {
     pub title: &'a str,
     pub x_label: &'a str,
@@ -18,6 +19,17 @@ pub struct Chart<'a> {
     /// Y axis range.
     pub y_range: (f64, f64),
     pub series: &'a [Series],
+    pub x_axis: XAxis,
+}
+
+/// How x values are placed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum XAxis {
+    /// Each distinct x its own equal slot, each labelled.
+    #[default]
+    Slots,
+    /// Proportional over the range, six labelled ticks (time series).
+    Linear,
 }
 
 const COLOURS: [&str; 8] = [
@@ -36,10 +48,25 @@ impl Chart<'_> {
             .collect();
         xs.sort_by(f64::total_cmp);
         xs.dedup();
-        let slot = |x: f64| {
-            let i = xs.iter().position(|v| *v == x).unwrap_or(0) as f64;
-            left + pw * (i + 0.5) / xs.len().max(1) as f64
+        let (x_lo, x_hi) = (
+            xs.first().copied().unwrap_or(0.0),
+            xs.last().copied().unwrap_or(1.0),
+        );
+        let slot = |x: f64| match self.x_axis {
+            XAxis::Slots => {
+                let i = xs.iter().position(|v| *v == x).unwrap_or(0) as f64;
+                left + pw * (i + 0.5) / xs.len().max(1) as f64
+            }
+            XAxis::Linear if x_hi > x_lo => left + pw * (x - x_lo) / (x_hi - x_lo),
+            XAxis::Linear => left + 0.5 * pw,
         };
+        let mut ticks = xs.clone();
+        if self.x_axis == XAxis::Linear {
+            ticks = (0..=5)
+                .map(|k| x_lo + (x_hi - x_lo) * f64::from(k) / 5.0)
+                .collect();
+            ticks.dedup();
+        }
         let (y0, y1) = self.y_range;
         let y_of = |y: f64| top + ph * (1.0 - (y - y0) / (y1 - y0));
         let mut svg = String::new();
@@ -66,7 +93,7 @@ impl Chart<'_> {
                 trim(y)
             );
         }
-        for &x in &xs {
+        for &x in &ticks {
             let _ = writeln!(
                 svg,
                 r#"<text x="{:.1}" y="{}" text-anchor="middle">{}</text>"#,
@@ -94,6 +121,11 @@ impl Chart<'_> {
         );
         for (i, s) in self.series.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
+            let radius = if self.x_axis == XAxis::Linear {
+                2.0
+            } else {
+                3.5
+            };
             let points: Vec<String> = s
                 .points
                 .iter()
@@ -108,7 +140,7 @@ impl Chart<'_> {
                 let (x, y) = p.split_once(',').unwrap_or(("0", "0"));
                 let _ = writeln!(
                     svg,
-                    r#"<circle cx="{x}" cy="{y}" r="3.5" fill="{colour}"/>"#
+                    r#"<circle cx="{x}" cy="{y}" r="{radius}" fill="{colour}"/>"#
                 );
             }
             let ly = top + 10.0 + 18.0 * i as f64;
@@ -160,6 +192,7 @@ mod tests {
             y_label: "%",
             y_range: (-10.0, 100.0),
             series: &series,
+            x_axis: XAxis::Slots,
         }
         .to_svg();
         assert_eq!(svg.matches("<polyline").count(), 2);
@@ -168,5 +201,29 @@ mod tests {
         // Three distinct x values, three evenly spaced slots: 0 at the first.
         assert!(svg.contains(">64<") && svg.contains(">4<"));
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));
+    }
+
+    #[test]
+    fn a_linear_axis_places_points_by_value() {
+        let series = [Series {
+            name: "front".into(),
+            points: vec![(0.0, 0.0), (1.0, 1.0), (10.0, 1.0)],
+        }];
+        let svg = Chart {
+            title: "t",
+            x_label: "s",
+            y_label: "y",
+            y_range: (0.0, 1.0),
+            series: &series,
+            x_axis: XAxis::Linear,
+        }
+        .to_svg();
+        // Plot area from x = 70 to 490: 0 at 70, 1 at 112, 10 at 490.
+        assert!(
+            svg.contains(r#"points="70.0,340.0 112.0,40.0 490.0,40.0""#),
+            "{svg}"
+        );
+        // Ticks at 0, 2, ..., 10, not one per point.
+        assert!(svg.contains(">6<") && svg.contains(">10<") && !svg.contains(">5<"));
     }
 }

@@ -30,18 +30,51 @@ pub(super) struct StereoGpu {
     target: Option<LayerTarget>,
 }
 
-/// What identifies a set of layer textures and right-eye buffers. The
-/// left pixels cast vary from view to view; the spans buffer is sized
-/// for at least as many.
+/// What a set of layer textures and right-eye buffers can hold. Walls of
+/// a CAVE differ in their plans frame to frame; resources that hold a
+/// plan are kept, since a new texture costs a zero-fill on first use
+/// (wgpu's initialisation): the clear the span scheme exists to avoid.
 #[derive(Clone, Copy, PartialEq)]
 struct Shape {
-    size: UVec2,
+    /// Right-eye pixels.
+    pixels: u64,
     /// Texels of one layer.
     texels: UVec2,
     /// Layers of all families together.
     layers: u32,
     color: ColorFormat,
     depth: bool,
+}
+
+impl Shape {
+    fn holds(&self, other: &Shape) -> bool {
+        self.pixels >= other.pixels
+            && self.texels.cmpge(other.texels).all()
+            && self.layers >= other.layers
+            && self.color == other.color
+            && (self.depth || !other.depth)
+    }
+
+    /// Room for both, if that stays within twice the layer budget;
+    /// else just `other`.
+    fn grown(&self, other: &Shape, format: LayerFormat) -> Shape {
+        if self.color != other.color {
+            return *other;
+        }
+        let both = Shape {
+            pixels: self.pixels.max(other.pixels),
+            texels: self.texels.max(other.texels),
+            layers: self.layers.max(other.layers),
+            color: other.color,
+            depth: self.depth || other.depth,
+        };
+        let bytes = crate::render::stereo::layer_memory(both.texels, both.layers, format);
+        if bytes <= 2 * crate::render::stereo::LAYER_BUDGET {
+            both
+        } else {
+            *other
+        }
+    }
 }
 
 struct LayerTarget {
@@ -140,17 +173,22 @@ impl StereoGpu {
         }
     }
 
-    /// Makes the resources for `shape` and `cast` left pixels unless the
-    /// last ones fit. A new texture costs a zero-fill on first use (wgpu's
-    /// initialisation), so views that differ only in the pixels cast keep
-    /// it and get a larger spans buffer, with room to spare.
+    /// Makes resources for `shape` and `cast` left pixels unless the last
+    /// ones hold them: views that need only more pixels cast get a larger
+    /// spans buffer, others resources that hold both the old and the new
+    /// shape, with room to spare.
     fn reshape(&mut self, ctx: &Context, shape: Shape, cast: u64) {
         let spare = cast + cast / 4;
-        match self.target.take() {
-            Some(t) if t.shape == shape && t.cast >= cast => self.target = Some(t),
-            Some(t) if t.shape == shape => self.target = Some(t.with_spans(self, ctx, spare)),
-            _ => self.target = Some(LayerTarget::new(self, ctx, shape, spare)),
-        }
+        self.target = Some(match self.target.take() {
+            Some(t) if t.shape.holds(&shape) && t.cast >= cast => t,
+            Some(t) if t.shape.holds(&shape) => t.with_spans(self, ctx, spare),
+            Some(t) => {
+                let grown = t.shape.grown(&shape, self.format);
+                drop(t);
+                LayerTarget::new(self, ctx, grown, spare.max(cast))
+            }
+            None => LayerTarget::new(self, ctx, shape, spare),
+        });
     }
 }
 
@@ -211,7 +249,7 @@ impl LayerTarget {
             size_of::<Stereo>() as u64,
             U::UNIFORM | U::COPY_DST,
         );
-        let pixels = u64::from(shape.size.x) * u64::from(shape.size.y);
+        let pixels = shape.pixels;
         let color_bytes = pixels * shape.color.bytes_per_pixel();
         let color = buffer(ctx, "right colour", color_bytes, U::STORAGE | U::COPY_SRC);
         let color_read = buffer(
@@ -381,8 +419,9 @@ impl GpuRenderer {
         }
         let stereo = self.stereo.as_mut().ok_or_else(unprepared)?;
         let plan = &reprojection.plan;
+        let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
         let shape = Shape {
-            size: desc.size,
+            pixels,
             texels: plan.texture_size(),
             layers: reprojection.layers * plan.family_count(),
             color: desc.color,
@@ -411,15 +450,16 @@ impl GpuRenderer {
                 1,
             ],
         )?;
+        let (color_bytes, depth_bytes) = (pixels * desc.color.bytes_per_pixel(), 4 * pixels);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&res.color, 0, &res.color_read, 0, None);
+        encoder.copy_buffer_to_buffer(&res.color, 0, &res.color_read, 0, color_bytes);
         if desc.depth {
-            encoder.copy_buffer_to_buffer(&res.depth, 0, &res.depth_read, 0, None);
+            encoder.copy_buffer_to_buffer(&res.depth, 0, &res.depth_read, 0, depth_bytes);
         }
         ctx.queue.submit([encoder.finish()]);
-        let color = ctx.read(&res.color_read, res.color_read.size())?;
+        let color = ctx.read(&res.color_read, color_bytes)?;
         let depth = if desc.depth {
-            Some(floats(&ctx.read(&res.depth_read, res.depth_read.size())?))
+            Some(floats(&ctx.read(&res.depth_read, depth_bytes)?))
         } else {
             None
         };

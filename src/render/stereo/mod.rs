@@ -21,4 +21,4 @@ pub use plan::{
     minimal_focal_length, paper, pixel_scale, span_to_depth, span_to_infinity, span_to_sphere,
     HmdStereo, LayerPlan, StereoError,
 };
-pub use reproject::{Reprojection, ReprojectionError, StereoFrames, StereoTimes};
+pub use reproject::{Reprojection, ReprojectionError, StereoFrames, StereoTimes, LAYER_BUDGET};

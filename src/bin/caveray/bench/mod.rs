@@ -2,6 +2,7 @@
 //! reports, which the printed tables and the charts read too) and print a
 //! summary. Compare timings only as ratios taken in one run.
 
+mod cave_stereo;
 mod raycast;
 mod stereo;
 
@@ -17,12 +18,17 @@ pub enum BenchCommand {
     /// Single-pass stereo by re-projection against rendering both eyes,
     /// by the paper's protocol (writes JSON, an SVG plot and heat maps).
     Stereo(stereo::StereoBenchArgs),
+    /// Single-pass stereo on every wall of a CAVE along a head path: the
+    /// share of wall-frames re-projected, V and DSSIM per wall (writes
+    /// JSON, plots over time and the worst wall-frame's heat map).
+    CaveStereo(cave_stereo::CaveStereoArgs),
 }
 
 pub fn run(command: BenchCommand) -> Result<(), Failure> {
     match command {
         BenchCommand::Raycast(args) => raycast::run(args),
         BenchCommand::Stereo(args) => stereo::run(args),
+        BenchCommand::CaveStereo(args) => cave_stereo::run(args),
     }
 }
 

@@ -363,7 +363,7 @@ fn summarise(shading: Shading, results: &[ViewResult]) -> StereoRun {
 
 /// Two-pass right image, re-projected right image, and their per-window
 /// DSSIM, side by side.
-fn heatmap(two_pass: &Frame, reprojected: &Frame, path: &Path) -> Result<(), Failure> {
+pub(super) fn heatmap(two_pass: &Frame, reprojected: &Frame, path: &Path) -> Result<(), Failure> {
     let map = ssim_map(reprojected, two_pass).map_err(runtime)?;
     let heat = dssim_heatmap(&map, two_pass.size.x, two_pass.size.y, HEATMAP_FULL_SCALE);
     let strip = side_by_side(
@@ -405,6 +405,7 @@ fn speedup_chart(report: &StereoReport) -> String {
         y_label: "V = 1 - (T_l+r - T_l) / T_r  [%]",
         y_range: ((lowest / 20.0).floor() * 20.0, 100.0),
         series: &series,
+        x_axis: Default::default(),
     }
     .to_svg()
 }

@@ -1,0 +1,661 @@
+//! `caveray bench cave-stereo`: single-pass stereo by re-projection on
+//! every wall of a CAVE, along a head path (walking, turning, rolling,
+//! looking down). Per frame and wall: whether the wall's two eyes could be
+//! re-projected (and why not), the pass times of the left eye, the right
+//! eye and the re-projection (V = 1 - (T_l+r - T_l) / T_r), and the DSSIM
+//! of the re-projected right eye against its own pass. Writes JSON, two
+//! plots over time and the worst wall-frame's DSSIM heat map.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anari_library_caveray::cave::{pose_along, Eye, HeadPose, PathKey, Rig, Wall};
+use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
+use anari_library_caveray::output::{Chart, Series, XAxis};
+use anari_library_caveray::render::stereo::{
+    Bounds, LayerFormat, NotEpipolar, Reprojection, ReprojectionError,
+};
+use anari_library_caveray::render::{
+    dssim, Frame, FrameDesc, GpuRenderer, RenderSettings, Shading,
+};
+use anari_library_caveray::scene::Scene;
+use clap::Args;
+use glam::UVec2;
+use serde::Serialize;
+
+use super::mean;
+use super::stereo::heatmap;
+use crate::options::{shading, step_factor};
+use crate::progress::Progress;
+use crate::report::{write_json, Adapter, Machine, RendererInfo};
+use crate::scene::VolumeArgs;
+use crate::Failure;
+
+#[derive(Args)]
+pub struct CaveStereoArgs {
+    /// Rig file (TOML).
+    #[arg(long, default_value = "cave_configs/cologne_5wall.toml")]
+    config: PathBuf,
+    /// Head path (TOML: `units` and `[[pose]]` with `t` in seconds, `head`
+    /// and `ypr` in degrees). Default: the Cologne walk shipped with caveray.
+    #[arg(long, default_value = "cave_configs/head_paths/cologne_walk.toml")]
+    path: PathBuf,
+    /// Render at this fraction of each wall's resolution.
+    #[arg(long, default_value_t = 0.25)]
+    scale: f64,
+    /// Frames, evenly spaced from the path's first pose to its last.
+    #[arg(long, default_value_t = 60)]
+    frames: u32,
+    /// The volume (default: cthead), placed where the rig's `[scene]` says.
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// none, shadows, ao, shadows+ao or directional:N.
+    #[arg(long, default_value = "none", value_parser = shading)]
+    shading: Shading,
+    /// Step length in units of half the smallest voxel.
+    #[arg(long, default_value_t = 1.0, value_parser = step_factor)]
+    step_factor: f32,
+    /// Texel format of the layers: rgba16f or rgba32f.
+    #[arg(long, default_value = "rgba16f")]
+    layer_format: LayerFormat,
+    /// Where to write the results; the plots and the heat map go next to it.
+    #[arg(long)]
+    json: PathBuf,
+}
+
+/// What `caveray bench cave-stereo` writes to its JSON file.
+#[derive(Serialize)]
+struct CaveStereoReport {
+    benchmark: &'static str,
+    machine: Machine,
+    renderer: RendererInfo,
+    rig: String,
+    config: String,
+    path: String,
+    duration_s: f64,
+    frames: u32,
+    scale: f64,
+    volume: String,
+    shading: String,
+    layer_format: String,
+    wall_frames: usize,
+    /// Wall-frames on which either eye sees some of the volume; the others
+    /// show only the background and need no stereo method.
+    visible_wall_frames: usize,
+    reprojected_wall_frames: usize,
+    /// Re-projected among the visible wall-frames.
+    reprojected_share: f64,
+    /// Over the re-projected wall-frames.
+    dssim_mean: f64,
+    dssim_max: f64,
+    /// 1 - (sum T_l+r - sum T_l) / sum T_r over the re-projected wall-frames.
+    speedup_v: f64,
+    walls: Vec<WallSummary>,
+    /// Why visible wall-frames rendered in two passes, most frequent first.
+    fallbacks: Vec<Fallback>,
+    timeline: Vec<FrameRecord>,
+    dssim_plot: String,
+    speedup_plot: String,
+    heatmap: Option<String>,
+}
+
+#[derive(Serialize)]
+struct WallSummary {
+    name: String,
+    size: [u32; 2],
+    wall_frames: usize,
+    visible: usize,
+    reprojected: usize,
+    reprojected_share: f64,
+    t_l_ms: f64,
+    t_r_ms: f64,
+    t_lr_ms: f64,
+    speedup_v: f64,
+    dssim_mean: f64,
+    dssim_max: f64,
+    layers_max: u32,
+    /// Share of the re-projected frames whose epipolar lines run along
+    /// both rows and columns (an epipole on or near the wall).
+    radial_share: f64,
+}
+
+#[derive(Serialize)]
+struct Fallback {
+    reason: String,
+    count: usize,
+    walls: Vec<String>,
+    first_t: f64,
+}
+
+#[derive(Serialize)]
+struct FrameRecord {
+    t: f64,
+    head: [f64; 3],
+    walls: Vec<WallFrame>,
+}
+
+#[derive(Serialize, Clone)]
+struct WallFrame {
+    wall: String,
+    /// reprojected, two-pass or not visible.
+    path: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reason: Option<String>,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    measured: Option<Measured>,
+}
+
+#[derive(Serialize, Clone, Copy)]
+struct Measured {
+    layers: u32,
+    families: u32,
+    span_px: f64,
+    t_l_ms: f64,
+    t_r_ms: f64,
+    t_lr_ms: f64,
+    speedup_v: f64,
+    dssim: f64,
+}
+
+pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
+    if !(args.scale.is_finite() && args.scale > 0.0 && args.scale <= 4.0) {
+        return Err(Failure::Usage(format!(
+            "--scale must be in (0, 4], got {}",
+            args.scale
+        )));
+    }
+    if args.frames == 0 {
+        return Err(Failure::Usage("--frames must be at least 1".into()));
+    }
+    let rig = Rig::load(&args.config).map_err(|e| Failure::Usage(e.to_string()))?;
+    let keys = rig
+        .load_head_path(&args.path)
+        .map_err(|e| Failure::Usage(e.to_string()))?;
+    let sizes: Vec<UVec2> = rig
+        .walls
+        .iter()
+        .map(|w| wall_size(w.resolution, args.scale))
+        .collect();
+    for (wall, size) in rig.walls.iter().zip(&sizes) {
+        FrameDesc::new(*size)
+            .validate()
+            .map_err(|e| Failure::Usage(format!("wall {}: {e}", wall.name)))?;
+        if size.min_element() < 8 {
+            return Err(Failure::Usage(format!(
+                "wall {} is {}x{} at --scale {}: DSSIM needs 8x8 pixels",
+                wall.name, size.x, size.y, args.scale
+            )));
+        }
+    }
+    let name = args
+        .volume
+        .volume_list("cthead")
+        .into_iter()
+        .next()
+        .unwrap_or_else(|| "cthead".into());
+    let loaded = args.volume.with_volume(&name).load()?;
+    let scene = loaded.placed(rig.scene.centre.as_vec3(), rig.scene.size as f32)?;
+    let mut gpu = GpuRenderer::new().map_err(|e| {
+        Failure::Runtime(format!("{e} (re-projection runs on the GPU renderer only)"))
+    })?;
+    gpu.upload(&scene).map_err(runtime)?;
+    let figures = args.json.parent().unwrap_or(Path::new(".")).to_path_buf();
+    if !figures.as_os_str().is_empty() {
+        std::fs::create_dir_all(&figures)
+            .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", figures.display())))?;
+    }
+    let settings = RenderSettings {
+        shading: args.shading,
+        step_factor: args.step_factor,
+        ..Default::default()
+    };
+    let (start, end) = (keys[0].time, keys[keys.len() - 1].time);
+    let times: Vec<f64> = (0..args.frames)
+        .map(|i| match args.frames {
+            1 => start,
+            n => start + (end - start) * f64::from(i) / f64::from(n - 1),
+        })
+        .collect();
+    let mut bench = Bench {
+        rig: &rig,
+        gpu: &mut gpu,
+        scene: &scene,
+        settings: &settings,
+        format: args.layer_format,
+        worst: None,
+    };
+    // Compiles and warms every pipeline before anything is timed.
+    let first = pose(&keys, start);
+    for (wall, size) in rig.walls.iter().zip(&sizes) {
+        bench.wall(wall, *size, &first)?;
+    }
+    let mut progress = Progress::new(times.len());
+    let mut timeline = Vec::with_capacity(times.len());
+    for &t in &times {
+        let head = pose(&keys, t);
+        let mut walls = Vec::with_capacity(rig.walls.len());
+        for (wall, size) in rig.walls.iter().zip(&sizes) {
+            walls.push(bench.wall(wall, *size, &head)?);
+        }
+        let done = walls.iter().filter(|w| w.path == "reprojected").count();
+        let seen = walls.iter().filter(|w| w.path != "not visible").count();
+        progress.step(&format!(
+            "t = {t:.2} s: {done} of {seen} walls that see the volume re-projected"
+        ));
+        timeline.push(FrameRecord {
+            t,
+            head: head.position.to_array(),
+            walls,
+        });
+    }
+    let heatmap_file = match bench.worst.take() {
+        Some((_, two_pass, reprojected)) => {
+            let file = file_name(&args.json, "worst.png");
+            heatmap(&two_pass, &reprojected, &figures.join(&file))?;
+            Some(file)
+        }
+        None => None,
+    };
+    let report = summarise(
+        &args,
+        &rig,
+        &sizes,
+        &name,
+        RendererInfo::Gpu(Adapter::of(&gpu)),
+        timeline,
+        heatmap_file,
+    );
+    write_json(&report, &args.json)?;
+    for (file, svg) in [
+        (&report.dssim_plot, dssim_chart(&report)),
+        (&report.speedup_plot, speedup_chart(&report)),
+    ] {
+        let path = figures.join(file);
+        std::fs::write(&path, svg)
+            .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", path.display())))?;
+    }
+    print_table(&report);
+    println!(
+        "wrote {}, {}, {}{} in {}",
+        args.json.display(),
+        report.dssim_plot,
+        report.speedup_plot,
+        report.heatmap.as_ref().map_or(String::new(), |h| format!(
+            " and {h} (the worst wall-frame: two-pass | re-projected | DSSIM)"
+        )),
+        figures.display()
+    );
+    Ok(())
+}
+
+fn wall_size(resolution: UVec2, scale: f64) -> UVec2 {
+    (resolution.as_dvec2() * scale)
+        .round()
+        .max(glam::DVec2::ONE)
+        .as_uvec2()
+}
+
+fn pose(keys: &[PathKey], t: f64) -> HeadPose {
+    // A loaded path has at least one pose.
+    pose_along(keys, t).unwrap_or(keys[0].pose)
+}
+
+/// `<json stem>_<suffix>`.
+fn file_name(json: &Path, suffix: &str) -> String {
+    let stem = json.file_stem().map_or_else(
+        || "cave_stereo".into(),
+        |s| s.to_string_lossy().into_owned(),
+    );
+    format!("{stem}_{suffix}")
+}
+
+fn runtime(e: impl std::fmt::Display) -> Failure {
+    Failure::Runtime(e.to_string())
+}
+
+struct Bench<'a> {
+    rig: &'a Rig,
+    gpu: &'a mut GpuRenderer,
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    format: LayerFormat,
+    /// The highest DSSIM so far: (DSSIM, two-pass right, re-projected right).
+    worst: Option<(f64, Frame, Frame)>,
+}
+
+impl Bench<'_> {
+    /// One wall at one head pose: re-projected if the planner and the
+    /// GPU allow it, measured against two passes; else why not.
+    fn wall(&mut self, wall: &Wall, size: UVec2, head: &HeadPose) -> Result<WallFrame, Failure> {
+        let record = |path, reason: Option<String>, measured| WallFrame {
+            wall: wall.name.clone(),
+            path,
+            reason,
+            measured,
+        };
+        let eyes = |eye| {
+            self.rig
+                .view(wall, eye, head)
+                .and_then(|v| v.matrix_camera())
+        };
+        let (left, right) = match (eyes(Eye::Left), eyes(Eye::Right)) {
+            (Ok(l), Ok(r)) => (l, r),
+            (Err(e), _) | (_, Err(e)) => {
+                return Ok(record("not visible", Some(e.to_string()), None))
+            }
+        };
+        let plan = match Reprojection::new(
+            &left,
+            &right,
+            size,
+            Bounds::of(self.scene),
+            None,
+            self.format,
+        ) {
+            Ok(plan) => plan,
+            Err(ReprojectionError::NotEpipolar(NotEpipolar::Behind)) => {
+                return Ok(record("not visible", None, None))
+            }
+            Err(e) => return Ok(record("two-pass", Some(e.to_string()), None)),
+        };
+        match self.measure(&left, &right, &plan)? {
+            Ok(measured) => Ok(record("reprojected", None, Some(measured))),
+            Err(why) => Ok(record("two-pass", Some(why), None)),
+        }
+    }
+
+    /// Both ways of rendering the wall; the outer error is a failure of
+    /// the benchmark, the inner one a re-projection the GPU refused.
+    fn measure(
+        &mut self,
+        left: &MatrixCamera,
+        right: &MatrixCamera,
+        plan: &Reprojection,
+    ) -> Result<Result<Measured, String>, Failure> {
+        let size = plan.size;
+        let desc = FrameDesc::new(size);
+        let left_rays = left.ray_gen(size);
+        self.gpu
+            .render(self.scene, &left_rays, self.settings, &desc)
+            .map_err(runtime)?;
+        let t_l = self.gpu.last_pass_ms();
+        let two_pass = self
+            .gpu
+            .render(self.scene, &right.ray_gen(size), self.settings, &desc)
+            .map_err(runtime)?;
+        let t_r = self.gpu.last_pass_ms();
+        let stereo =
+            match self
+                .gpu
+                .render_reprojected(self.scene, &left_rays, plan, self.settings, &desc)
+            {
+                Ok(s) => s,
+                Err(e) => return Ok(Err(e.to_string())),
+            };
+        let d = dssim(&stereo.right, &two_pass).map_err(runtime)?;
+        let t_lr = stereo.times.left_ms + stereo.times.composite_ms;
+        if self.worst.as_ref().is_none_or(|w| d > w.0) {
+            self.worst = Some((d, two_pass, stereo.right));
+        }
+        Ok(Ok(Measured {
+            layers: plan.layers,
+            families: plan.plan.family_count(),
+            span_px: plan.plan.span_px,
+            t_l_ms: t_l,
+            t_r_ms: t_r,
+            t_lr_ms: t_lr,
+            speedup_v: 1.0 - (t_lr - t_l) / t_r,
+            dssim: d,
+        }))
+    }
+}
+
+/// V over a set of measurements: sums, not a mean of ratios.
+fn speedup(m: &[Measured]) -> f64 {
+    let sum = |f: fn(&Measured) -> f64| m.iter().map(f).sum::<f64>();
+    let (l, r, lr) = (sum(|m| m.t_l_ms), sum(|m| m.t_r_ms), sum(|m| m.t_lr_ms));
+    if r > 0.0 {
+        1.0 - (lr - l) / r
+    } else {
+        0.0
+    }
+}
+
+fn share(part: usize, whole: usize) -> f64 {
+    if whole == 0 {
+        0.0
+    } else {
+        part as f64 / whole as f64
+    }
+}
+
+fn summarise(
+    args: &CaveStereoArgs,
+    rig: &Rig,
+    sizes: &[UVec2],
+    volume: &str,
+    renderer: RendererInfo,
+    timeline: Vec<FrameRecord>,
+    heatmap: Option<String>,
+) -> CaveStereoReport {
+    let all: Vec<(f64, &WallFrame)> = timeline
+        .iter()
+        .flat_map(|f| f.walls.iter().map(move |w| (f.t, w)))
+        .collect();
+    let measured = |wall: Option<&str>| -> Vec<Measured> {
+        all.iter()
+            .filter(|(_, w)| wall.is_none_or(|n| w.wall == n))
+            .filter_map(|(_, w)| w.measured)
+            .collect()
+    };
+    let visible = |wall: Option<&str>| {
+        all.iter()
+            .filter(|(_, w)| wall.is_none_or(|n| w.wall == n) && w.path != "not visible")
+            .count()
+    };
+    let walls = rig
+        .walls
+        .iter()
+        .zip(sizes)
+        .map(|(wall, size)| {
+            let name = Some(wall.name.as_str());
+            let m = measured(name);
+            let seen = visible(name);
+            WallSummary {
+                name: wall.name.clone(),
+                size: size.to_array(),
+                wall_frames: timeline.len(),
+                visible: seen,
+                reprojected: m.len(),
+                reprojected_share: share(m.len(), seen),
+                t_l_ms: mean(m.iter().map(|m| m.t_l_ms)),
+                t_r_ms: mean(m.iter().map(|m| m.t_r_ms)),
+                t_lr_ms: mean(m.iter().map(|m| m.t_lr_ms)),
+                speedup_v: speedup(&m),
+                dssim_mean: mean(m.iter().map(|m| m.dssim)),
+                dssim_max: m.iter().map(|m| m.dssim).fold(0.0, f64::max),
+                layers_max: m.iter().map(|m| m.layers).max().unwrap_or(0),
+                radial_share: share(m.iter().filter(|m| m.families == 2).count(), m.len()),
+            }
+        })
+        .collect();
+    let mut groups: BTreeMap<String, Fallback> = BTreeMap::new();
+    for (t, w) in &all {
+        let (Some(reason), "two-pass") = (&w.reason, w.path) else {
+            continue;
+        };
+        // Reasons differ in their numbers only: group by the words.
+        let key = reason
+            .split(|c: char| c.is_ascii_digit())
+            .next()
+            .unwrap_or(reason)
+            .trim_end()
+            .to_string();
+        let group = groups.entry(key).or_insert_with(|| Fallback {
+            reason: reason.clone(),
+            count: 0,
+            walls: Vec::new(),
+            first_t: *t,
+        });
+        group.count += 1;
+        if !group.walls.contains(&w.wall) {
+            group.walls.push(w.wall.clone());
+        }
+    }
+    let mut fallbacks: Vec<Fallback> = groups.into_values().collect();
+    fallbacks.sort_by_key(|f| std::cmp::Reverse(f.count));
+    let m = measured(None);
+    let seen = visible(None);
+    let stem = |suffix| file_name(&args.json, suffix);
+    CaveStereoReport {
+        benchmark: "cave-stereo",
+        machine: Machine::this(),
+        renderer,
+        rig: rig.name.clone(),
+        config: args.config.display().to_string(),
+        path: args.path.display().to_string(),
+        duration_s: timeline.last().map_or(0.0, |f| f.t) - timeline.first().map_or(0.0, |f| f.t),
+        frames: args.frames,
+        scale: args.scale,
+        volume: volume.to_string(),
+        shading: args.shading.to_string(),
+        layer_format: args.layer_format.to_string(),
+        wall_frames: all.len(),
+        visible_wall_frames: seen,
+        reprojected_wall_frames: m.len(),
+        reprojected_share: share(m.len(), seen),
+        dssim_mean: mean(m.iter().map(|m| m.dssim)),
+        dssim_max: m.iter().map(|m| m.dssim).fold(0.0, f64::max),
+        speedup_v: speedup(&m),
+        walls,
+        fallbacks,
+        timeline,
+        dssim_plot: stem("dssim.svg"),
+        speedup_plot: stem("speedup.svg"),
+        heatmap,
+    }
+}
+
+/// One series per wall of `value` over time, re-projected frames only.
+fn per_wall(report: &CaveStereoReport, value: fn(&Measured) -> f64) -> Vec<Series> {
+    report
+        .walls
+        .iter()
+        .map(|w| Series {
+            name: w.name.clone(),
+            points: report
+                .timeline
+                .iter()
+                .filter_map(|f| {
+                    f.walls
+                        .iter()
+                        .find(|x| x.wall == w.name)
+                        .and_then(|x| x.measured)
+                        .map(|m| (f.t, value(&m)))
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+fn dssim_chart(report: &CaveStereoReport) -> String {
+    let series = per_wall(report, |m| m.dssim);
+    let top = (report.dssim_max * 100.0).ceil().max(1.0) / 100.0;
+    let title = format!(
+        "Re-projected right eye vs two passes, {} ({:.0}% of visible wall-frames re-projected)",
+        report.rig,
+        100.0 * report.reprojected_share
+    );
+    Chart {
+        title: &title,
+        x_label: "time along the head path [s]",
+        y_label: "DSSIM",
+        y_range: (0.0, top),
+        series: &series,
+        x_axis: XAxis::Linear,
+    }
+    .to_svg()
+}
+
+fn speedup_chart(report: &CaveStereoReport) -> String {
+    let series = per_wall(report, |m| 100.0 * m.speedup_v);
+    let lowest = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.1))
+        .fold(0.0f64, f64::min);
+    let title = format!(
+        "Re-projection speed-up V per wall, {}",
+        report.renderer.adapter().map_or("", |a| &a.name)
+    );
+    Chart {
+        title: &title,
+        x_label: "time along the head path [s]",
+        y_label: "V = 1 - (T_l+r - T_l) / T_r  [%]",
+        y_range: ((lowest / 20.0).floor() * 20.0, 100.0),
+        series: &series,
+        x_axis: XAxis::Linear,
+    }
+    .to_svg()
+}
+
+fn print_table(report: &CaveStereoReport) {
+    println!(
+        "stereo by re-projection on {} along {} ({} frames over {:.1} s, scale {}, {}), on {}",
+        report.rig,
+        report.path,
+        report.frames,
+        report.duration_s,
+        report.scale,
+        report.volume,
+        report.renderer.adapter().map_or("", |a| &a.name)
+    );
+    println!(
+        "{:<10} {:>9} {:>8} {:>12} {:>7} {:>8} {:>8} {:>8} {:>7} {:>8} {:>8}",
+        "wall",
+        "size",
+        "visible",
+        "reprojected",
+        "radial",
+        "T_l ms",
+        "T_r ms",
+        "T_l+r ms",
+        "V %",
+        "DSSIM",
+        "max"
+    );
+    for w in &report.walls {
+        println!(
+            "{:<10} {:>9} {:>8} {:>7} {:>3.0}% {:>6.0}% {:>8.1} {:>8.1} {:>8.1} {:>7.1} {:>8.4} {:>8.4}",
+            w.name,
+            format!("{}x{}", w.size[0], w.size[1]),
+            w.visible,
+            w.reprojected,
+            100.0 * w.reprojected_share,
+            100.0 * w.radial_share,
+            w.t_l_ms,
+            w.t_r_ms,
+            w.t_lr_ms,
+            100.0 * w.speedup_v,
+            w.dssim_mean,
+            w.dssim_max
+        );
+    }
+    println!(
+        "all: {} of {} visible wall-frames re-projected ({:.1}%), V {:.1}%, DSSIM mean {:.4}, max {:.4}",
+        report.reprojected_wall_frames,
+        report.visible_wall_frames,
+        100.0 * report.reprojected_share,
+        100.0 * report.speedup_v,
+        report.dssim_mean,
+        report.dssim_max
+    );
+    for f in &report.fallbacks {
+        println!(
+            "two passes {} times ({}), first at t = {:.2} s: {}",
+            f.count,
+            f.walls.join(", "),
+            f.first_t,
+            f.reason
+        );
+    }
+}
