@@ -37,6 +37,10 @@ extern "C" {
 #define CAVERAY_EXTENSION_CAMERA_MATRIX "ANARI_CAVERAY_CAMERA_MATRIX"
 #define CAVERAY_EXTENSION_CAMERA_OFF_AXIS "ANARI_CAVERAY_CAMERA_OFF_AXIS"
 #define CAVERAY_EXTENSION_RENDERER_SHADING "ANARI_CAVERAY_RENDERER_SHADING"
+/* Frames showing the two eyes of one wall render in one re-projection pass:
+ * frame parameter "stereoPartner" (ANARI_FRAME), device parameter
+ * "pairStereoFrames" (ANARI_BOOL, default true). */
+#define CAVERAY_EXTENSION_FRAME_STEREO_PAIR "ANARI_CAVERAY_FRAME_STEREO_PAIR"
 
 /* The parameters of ANARI's "perspective" camera that show one wall from
  * one eye: a symmetric frustum widened to contain the wall, cropped back to

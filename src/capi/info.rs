@@ -218,9 +218,14 @@ pub fn parameter_info(
             let b: &'static u8 = if p.required { &TRUE } else { &FALSE };
             (b as *const u8).cast()
         }
-        // Defaults are FLOAT32 components, for the FLOAT32-based types.
+        // Defaults are FLOAT32 components for the FLOAT32-based types, or
+        // a BOOL's byte.
         ("default", Some(t)) if info_type == param_type && !t.is_object() => match p.default {
             Default::Floats(d) if d.len() * 4 == t.size() => d.as_ptr().cast(),
+            Default::Bool(b) if t == DataType::BOOL => {
+                let b: &'static u8 = if b { &TRUE } else { &FALSE };
+                (b as *const u8).cast()
+            }
             _ => std::ptr::null(),
         },
         ("elementType", Some(DataType::DATA_TYPE_LIST)) => list(&c.elements),

@@ -2,7 +2,7 @@
 //! the device's own (it switches callbacks and backends), so the table
 //! serves checks and introspection only.
 
-use super::info::{p, Default, SubtypeInfo};
+use super::info::{p, Default, SubtypeInfo, EXT_FRAME_PAIR};
 use super::types::DataType as T;
 use crate::render::Backend;
 
@@ -10,7 +10,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::DEVICE,
     subtype: "default",
     description: "caveray: off-axis volume ray casting for CAVEs and powerwalls",
-    extensions: &[],
+    extensions: &[EXT_FRAME_PAIR],
     params: &[
         p("statusCallback", &[T::STATUS_CALLBACK], false, Default::None,
           "function receiving every error, warning and info message; takes effect on commit"),
@@ -20,6 +20,9 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
           "auto | gpu | cpu: the Vulkan ray caster, the CPU reference, or the GPU when one opens \
            (default auto, or $CAVERAY_BACKEND)")
         .names(&Backend::NAMES),
+        p("pairStereoFrames", &[T::BOOL], false, Default::Bool(true),
+          "render two frames that show the eyes of one wall in one re-projection pass when the first \
+           renders, keeping the second's image for its render (ANARI_CAVERAY_FRAME_STEREO_PAIR)"),
     ],
     commit: None,
 };

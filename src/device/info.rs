@@ -55,6 +55,8 @@ pub enum Default {
     Floats(&'static [f32]),
     /// An enumeration's default name.
     Text(&'static str),
+    /// A BOOL's.
+    Bool(bool),
 }
 
 /// What committing a subtype derives from its parameters: its new state,
@@ -111,6 +113,9 @@ pub const EXT_COMPLETION: &str = "ANARI_KHR_FRAME_COMPLETION_CALLBACK";
 pub const EXT_ACCUMULATION: &str = "ANARI_KHR_FRAME_ACCUMULATION";
 pub const EXT_STEREO: &str = "ANARI_KHR_CAMERA_STEREO";
 pub const EXT_ORTHOGRAPHIC: &str = "ANARI_KHR_CAMERA_ORTHOGRAPHIC";
+/// Per-eye frames rendered in one re-projection pass (frame
+/// `stereoPartner`, device `pairStereoFrames`).
+pub const EXT_FRAME_PAIR: &str = "ANARI_CAVERAY_FRAME_STEREO_PAIR";
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
@@ -129,6 +134,7 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_MATRIX,
     EXT_OFF_AXIS,
     EXT_SHADING,
+    EXT_FRAME_PAIR,
 ];
 
 /// Frame channels (`anariGetObjectInfo(FRAME, "channel")`).
@@ -237,6 +243,12 @@ mod tests {
                     Default::Text(_) => assert!(
                         p.types.contains(&T::STRING),
                         "{}.{}: a text default for a parameter that takes no STRING",
+                        s.subtype,
+                        p.name
+                    ),
+                    Default::Bool(_) => assert!(
+                        p.types.contains(&T::BOOL),
+                        "{}.{}: a BOOL default for a parameter that takes no BOOL",
                         s.subtype,
                         p.name
                     ),

@@ -63,6 +63,17 @@ impl Value {
         }
     }
 
+    /// A BOOL value (one byte, non-zero is true).
+    pub fn bool(&self) -> Option<bool> {
+        match self {
+            Value::Bytes {
+                ty: DataType::BOOL,
+                bytes,
+            } => bytes.first().map(|b| *b != 0),
+            _ => None,
+        }
+    }
+
     pub fn string(&self) -> Option<&str> {
         match self {
             Value::String(s) => Some(s),
@@ -154,6 +165,10 @@ impl Params {
     pub fn mat4(&self, name: &str) -> Option<Mat4> {
         self.floats::<16>(name).map(|m| Mat4::from_cols_array(&m))
     }
+    pub fn bool(&self, name: &str) -> Option<bool> {
+        self.get(name).and_then(Value::bool)
+    }
+
     pub fn string(&self, name: &str) -> Option<&str> {
         self.get(name)?.string()
     }

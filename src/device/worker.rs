@@ -5,13 +5,12 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::mpsc::{channel, Sender};
 use std::sync::Arc;
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::camera::stereo::EyeView;
-use super::frame::slot::FrameSlot;
+use super::frame::slot::{FrameSlot, Kept};
 use super::types::{DataType, Severity, Status, StatusCode};
-use crate::geometry::PrimaryRays;
-use crate::render::stereo::{Bounds, LayerFormat, Reprojection};
+use crate::render::stereo::{Bounds, LayerFormat, Reprojection, StereoFrames};
 use crate::render::{Backend, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
 use crate::scene::Scene;
 
@@ -58,6 +57,19 @@ pub struct RenderJob {
     pub on_done: Option<Box<dyn FnOnce() + Send>>,
     /// The frame's last image is still right: keep it, render nothing.
     pub unchanged: bool,
+    /// Another frame's eye to render with this one in one pass.
+    pub partner: Option<Partner>,
+}
+
+/// The other eye of a stereo pair, shown by another frame of the device:
+/// rendered with the job in one re-projection pass and kept for that
+/// frame's next render.
+pub struct Partner {
+    pub frame: u64,
+    pub view: EyeView,
+    pub slot: Arc<FrameSlot>,
+    /// What that frame's render must ask for to be given the image.
+    pub inputs: RenderInputs,
 }
 
 pub struct Worker {
@@ -146,13 +158,6 @@ impl Drop for Worker {
 
 fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Reporter) {
     let started = Instant::now();
-    if job.unchanged {
-        job.slot.finish_unchanged(started.elapsed());
-        if let Some(done) = job.on_done {
-            done();
-        }
-        return;
-    }
     let status = |severity, code, message: String| Status {
         severity,
         code,
@@ -160,6 +165,29 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
         source_kind: DataType::FRAME,
         message,
     };
+    if job.unchanged {
+        job.slot.finish_unchanged(started.elapsed());
+        if let Some(done) = job.on_done {
+            done();
+        }
+        return;
+    }
+    if let Some(kept) = job.slot.take_kept(&job.inputs()) {
+        report(status(
+            Severity::Info,
+            StatusCode::NoError,
+            format!(
+                "stereo pair: frame {:#x} shows the eye frame {:#x}'s pass re-projected for it",
+                job.frame, kept.by
+            ),
+        ));
+        job.slot.finish(Ok(kept.frame), kept.duration);
+        if let Some(done) = job.on_done {
+            done();
+        }
+        return;
+    }
+    let mut handed = Duration::ZERO;
     // A panic must neither kill the thread nor leave the host waiting.
     let result = catch_unwind(AssertUnwindSafe(|| -> Result<Frame, String> {
         let Some(scene) = &job.scene else {
@@ -188,7 +216,7 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
         if let Some(why) = crate::render::march_warning(scene, &job.settings) {
             report(status(Severity::Warning, StatusCode::NoError, why));
         }
-        render_views(r, scene, &job, report).map_err(|e| e.to_string())
+        render_views(r, scene, &job, report, &mut handed).map_err(|e| e.to_string())
     }))
     .unwrap_or_else(|panic| {
         *renderer = None;
@@ -212,42 +240,70 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
             format!("rendering frame {:#x} failed: {e}", job.frame),
         ));
     }
-    job.slot.finish(result, started.elapsed());
+    // The partner's share of a paired pass is its frame's duration.
+    job.slot
+        .finish(result, started.elapsed().saturating_sub(handed));
     if let Some(done) = job.on_done {
         done();
     }
 }
 
 /// The job's views, each into its rectangle of the frame: one render for
-/// a single view, one per eye (stitched) for a stereo camera.
+/// a single view, one per eye (stitched) for a stereo camera, and one
+/// pass for both eyes where re-projection applies: the two eyes of a
+/// stereo camera, or the frame's view and its partner frame's, whose share
+/// of the pass goes to `handed`.
 fn render_views(
     r: &mut Renderer,
     scene: &Scene,
     job: &RenderJob,
     report: &Reporter,
+    handed: &mut Duration,
 ) -> Result<Frame, RenderError> {
-    if let [left, right] = job.views.as_slice() {
-        match reprojected(r, scene, job, left, right) {
-            Ok((frame, layers)) => {
-                report(Status {
-                    severity: Severity::Info,
-                    code: StatusCode::NoError,
-                    source: job.frame,
-                    source_kind: DataType::FRAME,
-                    message: format!(
-                        "stereo frame: both eyes in one re-projection pass ({layers} layers)"
-                    ),
-                });
-                return Ok(frame);
+    let info = |message: String| {
+        report(Status {
+            severity: Severity::Info,
+            code: StatusCode::NoError,
+            source: job.frame,
+            source_kind: DataType::FRAME,
+            message,
+        })
+    };
+    match (job.views.as_slice(), &job.partner) {
+        ([left, right], _) => match reprojected(r, scene, job, left, right) {
+            Ok((pair, layers)) => {
+                info(format!(
+                    "stereo frame: both eyes in one re-projection pass ({layers} layers)"
+                ));
+                return Frame::stitched(
+                    &job.desc,
+                    &[(left.offset, pair.left), (right.offset, pair.right)],
+                );
             }
-            Err(why) => report(Status {
-                severity: Severity::Info,
-                code: StatusCode::NoError,
-                source: job.frame,
-                source_kind: DataType::FRAME,
-                message: format!("stereo frame: two passes ({why})"),
-            }),
-        }
+            Err(why) => info(format!("stereo frame: two passes ({why})")),
+        },
+        ([one], Some(partner)) => match reprojected(r, scene, job, one, &partner.view) {
+            Ok((pair, layers)) => {
+                let share = Duration::from_secs_f64(pair.times.composite_ms.max(0.0) / 1e3);
+                partner.slot.keep(Kept {
+                    inputs: partner.inputs.clone(),
+                    frame: pair.right,
+                    duration: share,
+                    by: job.frame,
+                });
+                *handed = share;
+                info(format!(
+                    "stereo pair: frame {:#x} and frame {:#x} in one re-projection pass ({layers} layers)",
+                    job.frame, partner.frame
+                ));
+                return Ok(pair.left);
+            }
+            Err(why) => info(format!(
+                "stereo pair: frame {:#x} renders alone, not with frame {:#x} ({why})",
+                job.frame, partner.frame
+            )),
+        },
+        _ => {}
     }
     let render = |r: &mut Renderer, view: &EyeView| {
         let desc = FrameDesc {
@@ -268,20 +324,21 @@ fn render_views(
     }
 }
 
-/// Both eyes of a stereo pair from one re-projection pass (the right eye
-/// re-projected from the left one's samples), or why not.
+/// Both eyes from one re-projection pass, the right eye re-projected from
+/// the left one's samples, each of its eye's size; or why not. The left
+/// eye is cast with its own rays, so it is the image it renders alone.
 fn reprojected(
     r: &mut Renderer,
     scene: &Scene,
     job: &RenderJob,
     left: &EyeView,
     right: &EyeView,
-) -> Result<(Frame, u32), String> {
+) -> Result<(StereoFrames, u32), String> {
     let Renderer::Gpu(gpu) = r else {
         return Err("re-projection runs on the GPU renderer only".into());
     };
     let (Some(l), Some(rm)) = (left.matrix, right.matrix) else {
-        return Err("the eyes are not whole-image pinholes (imageRegion is set)".into());
+        return Err("an eye is not a perspective camera".into());
     };
     if left.size != right.size {
         return Err(format!(
@@ -306,14 +363,9 @@ fn reprojected(
         ..job.desc
     };
     let pair = gpu
-        .render_reprojected(scene, &l.ray_gen(left.size), &plan, &job.settings, &desc)
+        .render_reprojected(scene, &left.rays, &plan, &job.settings, &desc)
         .map_err(|e| e.to_string())?;
-    let frame = Frame::stitched(
-        &job.desc,
-        &[(left.offset, pair.left), (right.offset, pair.right)],
-    )
-    .map_err(|e| e.to_string())?;
-    Ok((frame, plan.layers))
+    Ok((pair, plan.layers))
 }
 
 pub fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {

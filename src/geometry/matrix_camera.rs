@@ -36,7 +36,10 @@ impl MatrixCamera {
                 reason: "near or far plane maps to infinity or behind the eye".into(),
             });
         }
-        if w_row.x.abs() + w_row.y.abs() > 1e-9 * w_near.abs().min(w_far.abs()) {
+        // Relative to the larger w: a far plane a billion near planes away
+        // (what hosts without a far plane get) leaves rounding noise of
+        // the near plane's size in an off-axis frustum's inverse.
+        if w_row.x.abs() + w_row.y.abs() > 1e-9 * w_near.abs().max(w_far.abs()) {
             return Err(GeometryError::NonPerspective {
                 reason: "depth varies across the image plane (projective skew)".into(),
             });

@@ -8,9 +8,19 @@ use crate::device::frame::slot::Channel;
 use crate::device::frame::{self, color_format};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::types::{kind_name, DataType, StatusCode};
-use crate::device::worker::RenderJob;
-use crate::render::{ColorData, FrameDesc};
+use crate::device::worker::{Partner, RenderJob};
+use crate::geometry::PrimaryRays;
+use crate::render::stereo::{Bounds, LayerFormat, Reprojection};
+use crate::render::{Backend, ColorData, FrameDesc};
 use crate::scene::{PlacedVolume, Scene};
+
+/// Why a frame is not a job's partner.
+enum Unpaired {
+    /// It cannot be: the host should hear why if it named it.
+    Unsuited(String),
+    /// Pairing would gain nothing: it already has its image.
+    Pointless,
+}
 
 /// A mapped channel: pointer to the first (lower-left) pixel, size, type.
 pub struct Mapped {
@@ -66,7 +76,10 @@ impl Device {
                 if let State::Frame(f) = &mut frame.lock().state {
                     f.color_type = color_type;
                     job.unchanged = f.last.as_ref() == Some(&inputs) && slot.holds_image();
-                    f.last = Some(inputs);
+                    f.last = Some(inputs.clone());
+                }
+                if !job.unchanged && !slot.keeps(&inputs) {
+                    job.partner = self.partner(&frame, &job);
                 }
                 slot.start();
                 job.on_done = on_done;
@@ -197,8 +210,128 @@ impl Device {
             slot,
             on_done: None,
             unchanged: false,
+            partner: None,
         };
         Ok((job, color_type))
+    }
+
+    /// The other eye of a stereo pair for `frame`'s job: the frame its
+    /// `stereoPartner` names, or, with `pairStereoFrames` on, the device's
+    /// frame with the same world, renderer, size and channels whose eye is
+    /// nearest, a small baseline away on the same image plane, and whose
+    /// inputs have changed since its last render.
+    fn partner(&mut self, frame: &ObjectRef, job: &RenderJob) -> Option<Partner> {
+        let named = frame
+            .lock()
+            .committed
+            .as_ref()
+            .and_then(|p| p.object("stereoPartner").cloned());
+        if (named.is_none() && !self.pairing) || self.backend == Backend::Cpu {
+            return None;
+        }
+        let candidates: Vec<ObjectRef> = match &named {
+            Some(o) => vec![o.clone()],
+            None => self
+                .objects
+                .values()
+                .map(|(o, _)| o)
+                .filter(|o| o.kind == DataType::FRAME && o.handle != frame.handle)
+                .cloned()
+                .collect(),
+        };
+        let mut best: Option<(f64, Partner)> = None;
+        for c in &candidates {
+            match self.pair_with(c, job) {
+                Ok((baseline, p)) => {
+                    if best.as_ref().is_none_or(|b| baseline < b.0) {
+                        best = Some((baseline, p));
+                    }
+                }
+                Err(Unpaired::Unsuited(why)) if named.is_some() => self.warn(
+                    Some(frame),
+                    format!(
+                        "anariRenderFrame: {} renders alone: its stereoPartner {} {why}",
+                        frame.describe(),
+                        c.describe()
+                    ),
+                ),
+                Err(_) => {}
+            }
+        }
+        best.map(|(_, p)| p)
+    }
+
+    /// `candidate` as `job`'s partner, with the eyes' distance.
+    fn pair_with(
+        &mut self,
+        candidate: &ObjectRef,
+        job: &RenderJob,
+    ) -> Result<(f64, Partner), Unpaired> {
+        let unsuited = |why: &str| Unpaired::Unsuited(why.to_owned());
+        let ([view], Some(scene)) = (job.views.as_slice(), &job.scene) else {
+            return Err(Unpaired::Pointless);
+        };
+        let own = view.matrix.ok_or_else(|| {
+            unsuited("is paired with a frame whose camera is not a perspective one")
+        })?;
+        let (theirs, _) = self
+            .prepare(candidate)
+            .map_err(|e| Unpaired::Unsuited(format!("cannot render: {e}")))?;
+        if !theirs.scene.as_ref().is_some_and(|s| s.same(scene)) {
+            return Err(unsuited("shows another world"));
+        }
+        if theirs.settings != job.settings || theirs.backend != job.backend {
+            return Err(unsuited("has another renderer"));
+        }
+        if theirs.desc != job.desc {
+            return Err(unsuited("differs in size or channels"));
+        }
+        let [other] = theirs.views.as_slice() else {
+            return Err(unsuited("renders both eyes itself (stereoMode)"));
+        };
+        let matrix = other
+            .matrix
+            .ok_or_else(|| unsuited("has a camera that is not a perspective one"))?;
+        let (Some(a), Some(b)) = (own.eye(), matrix.eye()) else {
+            return Err(unsuited("has a camera that is not a perspective one"));
+        };
+        let (lo, hi) = scene.bounds();
+        let distance = (0.5 * (lo + hi)).as_dvec3().distance(a);
+        let baseline = a.distance(b);
+        if baseline == 0.0 {
+            return Err(unsuited("sees from the same eye"));
+        }
+        if baseline > 0.25 * distance {
+            return Err(Unpaired::Unsuited(format!(
+                "has its eye {baseline:.4} away, more than a quarter of the distance to the volume ({distance:.4})"
+            )));
+        }
+        let inputs = theirs.inputs();
+        let holds = match &candidate.lock().state {
+            State::Frame(f) => f.last.as_ref() == Some(&inputs) && f.slot.holds_image(),
+            _ => false,
+        };
+        if holds || theirs.slot.keeps(&inputs) {
+            return Err(Unpaired::Pointless);
+        }
+        Reprojection::new(
+            &own,
+            &matrix,
+            job.desc.size,
+            Bounds::of(scene),
+            None,
+            LayerFormat::Rgba16F,
+        )
+        .map_err(|e| Unpaired::Unsuited(format!("cannot be re-projected: {e}")))?;
+        Ok((
+            baseline,
+            Partner {
+                frame: candidate.handle,
+                view: *other,
+                slot: theirs.slot,
+                inputs,
+            },
+        ))
     }
 
     /// `anariFrameReady(NO_WAIT)`: whether no render is in flight. (The C

@@ -81,6 +81,9 @@ pub struct Device {
     /// Arrays handed out by `anariMapParameterArray*D`, by object and name.
     mapped_params: HashMap<(u64, String), (DataType, ObjectRef)>,
     backend: Backend,
+    /// `pairStereoFrames`: frames that show the two eyes of one wall are
+    /// found and rendered together.
+    pairing: bool,
     statuses: Vec<Status>,
     pub(super) worker: Worker,
 }
@@ -102,6 +105,7 @@ impl Device {
             warned: Default::default(),
             mapped_params: HashMap::new(),
             backend,
+            pairing: true,
             statuses: Vec::new(),
             worker: Worker::new(report),
         }
@@ -239,6 +243,11 @@ impl Device {
         if gone {
             let entry = self.objects.remove(&handle);
             if let Some((cell, _)) = &entry {
+                // Frames that name each other as stereo partners would
+                // keep each other alive; a released frame renders no more.
+                if cell.kind == DataType::FRAME {
+                    forget_partner(cell);
+                }
                 // Still a parameter of something: keep what the host may
                 // now free.
                 if Arc::strong_count(cell) > 1 {
@@ -258,6 +267,16 @@ impl Device {
             // Dropped outside the table borrow: the drop may run a host
             // deleter, which may call back into nothing of ours.
             drop(entry);
+        }
+    }
+
+    /// The frames' partner references, so that frames naming each other
+    /// do not outlive the device.
+    fn forget_partners(&mut self) {
+        for (cell, _) in self.objects.values() {
+            if cell.kind == DataType::FRAME {
+                forget_partner(cell);
+            }
         }
     }
 
@@ -365,4 +384,19 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
         hi = hi.max(h);
     }
     Some(Property::Box3([lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]))
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        self.forget_partners();
+    }
+}
+
+/// Drops a frame's `stereoPartner`, pending and committed.
+fn forget_partner(cell: &ObjectRef) {
+    let mut o = cell.lock();
+    o.pending.unset("stereoPartner");
+    if let Some(c) = &mut o.committed {
+        c.unset("stereoPartner");
+    }
 }

@@ -202,6 +202,7 @@ impl Device {
 
     fn commit_device(&mut self) {
         self.committed = self.pending.clone();
+        self.pairing = self.committed.bool("pairStereoFrames").unwrap_or(true);
         if let Some(b) = self.committed.string("backend") {
             match b.parse() {
                 Ok(b) => self.backend = b,

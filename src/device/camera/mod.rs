@@ -128,15 +128,11 @@ impl Placement {
         })
     }
 
-    /// This pinhole as OpenGL view and projection matrices, if it has the
-    /// whole image region (a cropped one is an off-axis frustum the stereo
-    /// planner is not given). The near plane is the camera's `near`, else
-    /// a millimetre-scale 1e-3 units; the far plane its `far`, else 1e9
-    /// times the near.
+    /// This pinhole as OpenGL view and projection matrices; an image
+    /// region crops the frustum off axis. The near plane is the camera's
+    /// `near`, else a millimetre-scale 1e-3 units; the far plane its `far`,
+    /// else 1e9 times the near.
     fn matrix_camera(&self, fovy: f64, aspect: f64) -> Option<MatrixCamera> {
-        if self.region != ImageRegion::FULL {
-            return None;
-        }
         let near = self
             .clip
             .map(|(n, _)| f64::from(n))
@@ -148,8 +144,12 @@ impl Placement {
             .filter(|f| f.is_finite())
             .unwrap_or(near * 1e9);
         let top = near * (0.5 * fovy).tan();
-        let right = top * aspect;
-        let proj = crate::geometry::frustum(-right, right, -top, top, near, far);
+        let half = DVec2::new(top * aspect, top);
+        let (lo, hi) = (
+            half * (2.0 * self.region.min - 1.0),
+            half * (2.0 * self.region.max - 1.0),
+        );
+        let proj = crate::geometry::frustum(lo.x, hi.x, lo.y, hi.y, near, far);
         // The right-handed look-at: rows right, up, back; the eye at 0.
         let f = self.direction.try_normalize()?;
         let s = f.cross(self.up).try_normalize()?;
@@ -224,6 +224,19 @@ impl CameraModel {
         }
     }
 
+    /// The camera as OpenGL matrices for a frame of `size`, where it is
+    /// a perspective one: what stereo re-projection plans with.
+    pub fn matrix(&self, size: UVec2) -> Option<MatrixCamera> {
+        match self {
+            CameraModel::Perspective {
+                placement, fovy, ..
+            } => placement.matrix_camera(*fovy, placement.aspect(size)),
+            CameraModel::OffAxis { camera, .. } => off_axis_matrices(camera.screen(), camera.eye()),
+            CameraModel::Matrix(c) => c.eye().is_some().then_some(**c),
+            CameraModel::Orthographic { .. } => None,
+        }
+    }
+
     /// The eyes of a frame of `size` and where each goes in it: one view
     /// of the whole frame, or two for a stereo perspective camera.
     pub fn views(&self, size: UVec2) -> Result<Vec<EyeView>, String> {
@@ -232,7 +245,7 @@ impl CameraModel {
                 rays: self.ray_gen(size)?,
                 offset: UVec2::ZERO,
                 size,
-                matrix: None,
+                matrix: self.matrix(size),
             }])
         };
         let stereo = match self {
@@ -299,5 +312,40 @@ impl CameraModel {
     fn committed(self) -> Result<Option<State>, String> {
         self.ray_gen(UVec2::ONE)?;
         Ok(Some(State::Camera(Derived::Ready(self))))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The matrices a stereo pair is planned with must be the rays the
+    /// camera casts (to the rays' single precision), an image region
+    /// included (OpenCOVER's cropped walls).
+    #[test]
+    fn a_cropped_perspective_camera_has_the_matrices_of_its_rays() {
+        let placement = Placement {
+            position: DVec3::new(0.1, -0.2, 3.0),
+            direction: DVec3::new(0.1, 0.0, -1.0),
+            up: DVec3::Y,
+            aspect: Some(1.6),
+            region: ImageRegion {
+                min: DVec2::new(0.1, 0.25),
+                max: DVec2::new(0.7, 0.95),
+            },
+            clip: None,
+        };
+        let camera = CameraModel::Perspective {
+            placement,
+            fovy: 0.9,
+            stereo: Stereo::default(),
+        };
+        let size = UVec2::new(30, 20);
+        let rays = camera.ray_gen(size).unwrap();
+        let matrix = camera.matrix(size).unwrap().ray_gen(size);
+        for (x, y) in [(0, 0), (29, 0), (0, 19), (29, 19), (13, 7)] {
+            let (a, b) = (rays.pixel_ray(x, y).1, matrix.pixel_ray(x, y).1);
+            assert!((a - b).length() < 1e-5, "pixel ({x}, {y}): {a} vs {b}");
+        }
     }
 }

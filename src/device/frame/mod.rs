@@ -8,7 +8,7 @@ pub mod slot;
 
 use glam::UVec2;
 
-use super::info::{p, Default, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION};
+use super::info::{p, Default, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION, EXT_FRAME_PAIR};
 use super::object::State;
 use super::read::Read;
 use super::types::DataType as T;
@@ -19,7 +19,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::FRAME,
     subtype: "",
     description: "render target: colour and depth, lower-left pixel first",
-    extensions: &[EXT_COMPLETION, EXT_ACCUMULATION],
+    extensions: &[EXT_COMPLETION, EXT_ACCUMULATION, EXT_FRAME_PAIR],
     params: &[
         p(
             "size",
@@ -67,6 +67,13 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             false,
             Default::None,
             "accepted: a render is complete at once, and renders of unchanged inputs keep it (numSamples counts them)",
+        ),
+        p(
+            "stereoPartner",
+            &[T::FRAME],
+            false,
+            Default::None,
+            "the frame showing the other eye of this wall: rendered with this one in one re-projection pass, its image kept for its next render if its inputs are unchanged",
         ),
     ],
     commit: Some(commit),

@@ -53,6 +53,20 @@ pub struct FrameSlot {
     /// Set by `anariDiscardFrame`: the render in flight stops where it
     /// can (between the CPU reference's rows) and keeps no image.
     pub stop: AtomicBool,
+    /// This frame's eye from a stereo pass another frame rendered, for
+    /// the inputs it was made from.
+    kept: Mutex<Option<Kept>>,
+}
+
+/// An image made for a frame by its stereo partner's render.
+pub struct Kept {
+    /// What this frame's render must ask for to be given the image.
+    pub inputs: RenderInputs,
+    pub frame: Frame,
+    /// This eye's share of the pass.
+    pub duration: Duration,
+    /// The frame whose render made it.
+    pub by: u64,
 }
 
 #[derive(Default)]
@@ -98,6 +112,27 @@ impl FrameSlot {
         s.duration = duration;
         s.busy = false;
         self.done.notify_all();
+    }
+
+    /// Keeps `kept` for this frame's next render.
+    pub fn keep(&self, kept: Kept) {
+        *self.kept.lock().unwrap_or_else(|e| e.into_inner()) = Some(kept);
+    }
+
+    /// The kept image if it was made for `inputs`; a kept image for other
+    /// inputs is dropped, never shown.
+    pub fn take_kept(&self, inputs: &RenderInputs) -> Option<Kept> {
+        let kept = self.kept.lock().unwrap_or_else(|e| e.into_inner()).take()?;
+        (kept.inputs == *inputs).then_some(kept)
+    }
+
+    /// Whether a kept image waits for `inputs`.
+    pub fn keeps(&self, inputs: &RenderInputs) -> bool {
+        self.kept
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .as_ref()
+            .is_some_and(|k| k.inputs == *inputs)
     }
 
     /// Blocks until no render is in flight; returns the state locked.
