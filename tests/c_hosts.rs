@@ -105,17 +105,67 @@ fn misuse_is_clean_under_valgrind() {
 #[test]
 fn sdk_loader_protocol_renders_the_wall() {
     let dir = scratch("c_loader");
-    let scene = wall_scene(&dir, 64, phantom(), false);
+    let scene = wall_scene(&dir, 128, phantom(), false);
     let program = dir.join("loader");
     compile(&["tests/c/loader.cpp"], &program, true, false);
     let lib = common::c::lib_dir().join("libanari_library_caveray.so");
-    let output = run(&program, &[&lib, &scene.file, &dir], false);
+    let rig = common::rig("cologne_5wall");
+    let head = rig.viewer.head;
+    let b = rig.eye_position(&head, anari_library_caveray::cave::Eye::Right)
+        - rig.eye_position(&head, anari_library_caveray::cave::Eye::Left);
+    let baseline = format!("{},{},{}", b.x, b.y, b.z);
+    let output = common::c::run_with(
+        &program,
+        &[&lib, &scene.file, &dir, std::path::Path::new(&baseline)],
+        false,
+        &[("CAVERAY_BACKEND", "gpu")],
+    );
     assert!(output.status.success(), "loader: {}", describe(&output));
     let image = read_rgba(&dir.join("loader.rgba"), scene.size);
     let s = ssim(&image, &scene.reference).unwrap();
     assert!(
         s > 0.98,
         "matrix camera through the loader protocol: SSIM {s:.4}"
+    );
+    // Both eyes: a per-eye pair and a sideBySide frame, each right eye
+    // within the re-projection's bound of the right eye rendered alone.
+    use anari_library_caveray::render::{dssim, ColorData, Frame};
+    let eye = |name: &str| read_rgba(&dir.join(format!("{name}.rgba")), scene.size);
+    let alone = eye("alone_right");
+    let (w, h) = (scene.size.x as usize, scene.size.y as usize);
+    let wide = read_rgba(
+        &dir.join("side_by_side.rgba"),
+        glam::UVec2::new(2 * scene.size.x, scene.size.y),
+    );
+    let half = |x0: usize| {
+        let ColorData::Rgba8(bytes) = &wide.color else {
+            panic!("RGBA8 expected")
+        };
+        Frame {
+            color: ColorData::Rgba8(
+                (0..h)
+                    .flat_map(|y| bytes[4 * (y * 2 * w + x0)..4 * (y * 2 * w + x0 + w)].to_vec())
+                    .collect(),
+            ),
+            ..alone.clone()
+        }
+    };
+    let unmoved = dssim(&eye("pair_left"), &alone).unwrap();
+    for (what, right) in [
+        ("stereoPartner", eye("pair_right")),
+        ("sideBySide", half(w)),
+    ] {
+        let d = dssim(&right, &alone).unwrap();
+        eprintln!("{what} through the loader protocol: right eye DSSIM {d:.4} (left as right {unmoved:.4})");
+        assert!(
+            d < 0.03 && d < 0.5 * unmoved,
+            "{what}: DSSIM {d} vs {unmoved}"
+        );
+    }
+    let s = ssim(&half(0), &eye("pair_left")).unwrap();
+    assert!(
+        s > 0.99,
+        "sideBySide left eye against the left frame: SSIM {s:.4}"
     );
 }
 

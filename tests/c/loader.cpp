@@ -3,7 +3,11 @@
 // anari_library_caveray_new_library, and from then on treats the returned
 // library and device as C++ objects of the SDK's abstract classes, calling
 // only virtual functions declared in the SDK's slot order (0.14 and later).
-// Usage: loader LIBRARY.so SCENE_FILE OUT_DIR.
+// Then both eyes of the wall through the same tables: two per-eye frames
+// (offAxis cameras, the second named as the first's stereoPartner), the
+// right eye alone in a third frame, and both in one sideBySide frame.
+// Usage: loader LIBRARY.so SCENE_FILE OUT_DIR DX,DY,DZ (the right eye
+// minus the scene's eye).
 #include <anari/anari.h>
 
 #include <dlfcn.h>
@@ -117,8 +121,10 @@ typedef void *(*NewLibrary)(void *, ANARIStatusCallback, const void *);
 int main(int argc, char **argv)
 {
   Scene s;
-  if (argc != 4 || !scene_load(argv[2], &s)) {
-    fprintf(stderr, "usage: loader LIBRARY.so SCENE_FILE OUT_DIR\n");
+  float baseline[3];
+  if (argc != 5 || sscanf(argv[4], "%f,%f,%f", &baseline[0], &baseline[1], &baseline[2]) != 3
+      || !scene_load(argv[2], &s)) {
+    fprintf(stderr, "usage: loader LIBRARY.so SCENE_FILE OUT_DIR DX,DY,DZ\n");
     return 2;
   }
   static int tag = 7;
@@ -234,7 +240,76 @@ int main(int argc, char **argv)
   dev->frameBufferUnmap(frame, "channel.depth");
   dev->frameBufferUnmap(frame, "channel.color");
 
-  ANARIObject objects[] = {frame, camera, renderer, world, volumes, volume, field, voxels};
+  // Stereo: each eye an offAxis camera on the wall, at half the step (the
+  // phantom's shells alias into moire at the default step, in each eye's
+  // own pattern, which no re-projection reproduces).
+  ANARIRenderer fine = dev->newRenderer("default");
+  float half_step = 0.5f;
+  dev->setParameter(fine, "stepFactor", ANARI_FLOAT32, &half_step);
+  dev->commitParameters(fine);
+  auto wall_camera = [&](const float *eye) {
+    ANARICamera c = dev->newCamera("offAxis");
+    dev->setParameter(c, "lowerLeft", ANARI_FLOAT32_VEC3, s.ll);
+    dev->setParameter(c, "lowerRight", ANARI_FLOAT32_VEC3, s.lr);
+    dev->setParameter(c, "upperRight", ANARI_FLOAT32_VEC3, s.ur);
+    dev->setParameter(c, "eye", ANARI_FLOAT32_VEC3, eye);
+    return c;
+  };
+  auto eye_frame = [&](ANARICamera c, uint32_t width) {
+    uint32_t size[2] = {width, s.size[1]};
+    ANARIFrame f = dev->newFrame();
+    dev->setParameter(f, "size", ANARI_UINT32_VEC2, size);
+    dev->setParameter(f, "channel.color", ANARI_DATA_TYPE, &color);
+    dev->setParameter(f, "world", ANARI_WORLD, &world);
+    dev->setParameter(f, "renderer", ANARI_RENDERER, &fine);
+    dev->setParameter(f, "camera", ANARI_CAMERA, &c);
+    return f;
+  };
+  auto render_to = [&](ANARIFrame f, const char *name) {
+    dev->renderFrame(f);
+    bool ok = dev->frameReady(f, ANARI_WAIT) == 1;
+    uint32_t fw = 0, fh = 0;
+    const void *p = dev->frameBufferMap(f, "channel.color", &fw, &fh, &type);
+    ok = ok && p && write_rgba(argv[3], name, p, fw, fh);
+    dev->frameBufferUnmap(f, "channel.color");
+    check(name, ok);
+  };
+  float right_eye[3], centre[3];
+  for (int k = 0; k < 3; ++k) {
+    right_eye[k] = s.eye[k] + baseline[k];
+    centre[k] = s.eye[k] + 0.5f * baseline[k];
+  }
+  ANARICamera left_camera = wall_camera(s.eye), right_camera = wall_camera(right_eye);
+  dev->commitParameters(left_camera);
+  dev->commitParameters(right_camera);
+  ANARIFrame left = eye_frame(left_camera, s.size[0]);
+  ANARIFrame right = eye_frame(right_camera, s.size[0]);
+  dev->setParameter(left, "stereoPartner", ANARI_FRAME, &right);
+  dev->commitParameters(left);
+  dev->commitParameters(right);
+  render_to(left, "pair_left");
+  render_to(right, "pair_right");
+  // The right eye alone: its own frame, no partner.
+  uint8_t off = 0;
+  dev->setParameter(self, "pairStereoFrames", ANARI_BOOL, &off);
+  dev->commitParameters(self);
+  ANARIFrame alone = eye_frame(right_camera, s.size[0]);
+  dev->commitParameters(alone);
+  render_to(alone, "alone_right");
+  // Both eyes side by side in one frame.
+  ANARICamera both = wall_camera(centre);
+  float ipd = std::sqrt(baseline[0] * baseline[0] + baseline[1] * baseline[1]
+      + baseline[2] * baseline[2]);
+  dev->setParameter(both, "stereoMode", ANARI_STRING, "sideBySide");
+  dev->setParameter(both, "interpupillaryDistance", ANARI_FLOAT32, &ipd);
+  dev->setParameter(both, "eyeAxis", ANARI_FLOAT32_VEC3, baseline);
+  dev->commitParameters(both);
+  ANARIFrame pair = eye_frame(both, 2 * s.size[0]);
+  dev->commitParameters(pair);
+  render_to(pair, "side_by_side");
+
+  ANARIObject objects[] = {frame, camera, left, right, alone, pair, left_camera, right_camera,
+      both, fine, renderer, world, volumes, volume, field, voxels};
   for (ANARIObject o : objects)
     dev->release(o);
   dev->release(self); // the loader releases a device through slot 24
