@@ -22,9 +22,11 @@ const DEFAULT_IPD_M: f64 = 0.063;
 
 #[derive(Debug, Error)]
 pub enum ConfigError {
-    #[error("{file}: cannot read rig file: {source}")]
+    #[error("{file}: cannot read {what}: {source}")]
     Io {
         file: String,
+        /// "rig file" or "head path".
+        what: &'static str,
         source: std::io::Error,
     },
     #[error("{file}:{line}:{column}: {field}: {message}")]
@@ -127,15 +129,17 @@ struct RawWall {
 }
 
 pub(crate) fn load(path: &Path) -> Result<Rig, ConfigError> {
-    let file = path.display().to_string();
-    let text =
-        crate::data::files::read_text(path, crate::data::files::TEXT_LIMIT).map_err(|source| {
-            ConfigError::Io {
-                file: file.clone(),
-                source,
-            }
-        })?;
+    let (text, file) = read(path, "rig file")?;
     parse(&text, &file)
+}
+
+/// A TOML file's text and its name for messages.
+fn read(path: &Path, what: &'static str) -> Result<(String, String), ConfigError> {
+    let file = path.display().to_string();
+    match crate::data::files::read_text(path, crate::data::files::TEXT_LIMIT) {
+        Ok(text) => Ok((text, file)),
+        Err(source) => Err(ConfigError::Io { file, what, source }),
+    }
 }
 
 pub(crate) fn parse(text: &str, file: &str) -> Result<Rig, ConfigError> {
@@ -171,14 +175,7 @@ pub(crate) fn parse_head_path(
 
 /// Reads a head path file (see `parse_head_path`).
 pub(crate) fn load_head_path(path: &Path, rig: &Rig) -> Result<Vec<PathKey>, ConfigError> {
-    let file = path.display().to_string();
-    let text =
-        crate::data::files::read_text(path, crate::data::files::TEXT_LIMIT).map_err(|source| {
-            ConfigError::Io {
-                file: file.clone(),
-                source,
-            }
-        })?;
+    let (text, file) = read(path, "head path")?;
     parse_head_path(&text, &file, rig)
 }
 

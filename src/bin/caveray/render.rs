@@ -167,7 +167,8 @@ impl Rendered {
 }
 
 /// A wall's image size at `scale` (at least 1 x 1).
-fn wall_size(resolution: glam::UVec2, scale: f64) -> glam::UVec2 {
+/// A wall's image size at `scale` of its resolution, at least 1x1.
+pub fn wall_size(resolution: glam::UVec2, scale: f64) -> glam::UVec2 {
     (resolution.as_dvec2() * scale)
         .round()
         .max(glam::DVec2::ONE)

@@ -23,10 +23,11 @@ use clap::Args;
 use glam::UVec2;
 use serde::Serialize;
 
-use super::mean;
 use super::stereo::heatmap;
+use super::{mean, runtime};
 use crate::options::{shading, step_factor};
 use crate::progress::Progress;
+use crate::render::wall_size;
 use crate::report::{write_json, Adapter, Machine, RendererInfo};
 use crate::scene::VolumeArgs;
 use crate::Failure;
@@ -288,13 +289,6 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn wall_size(resolution: UVec2, scale: f64) -> UVec2 {
-    (resolution.as_dvec2() * scale)
-        .round()
-        .max(glam::DVec2::ONE)
-        .as_uvec2()
-}
-
 fn pose(keys: &[PathKey], t: f64) -> HeadPose {
     // A loaded path has at least one pose.
     pose_along(keys, t).unwrap_or(keys[0].pose)
@@ -307,10 +301,6 @@ fn file_name(json: &Path, suffix: &str) -> String {
         |s| s.to_string_lossy().into_owned(),
     );
     format!("{stem}_{suffix}")
-}
-
-fn runtime(e: impl std::fmt::Display) -> Failure {
-    Failure::Runtime(e.to_string())
 }
 
 struct Bench<'a> {

@@ -38,3 +38,7 @@ fn mean(v: impl IntoIterator<Item = f64>) -> f64 {
         .fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
     sum / n.max(1) as f64
 }
+
+fn runtime(e: impl std::fmt::Display) -> Failure {
+    Failure::Runtime(e.to_string())
+}

@@ -25,7 +25,7 @@ use clap::Args;
 use glam::{UVec2, Vec3};
 use serde::Serialize;
 
-use super::mean;
+use super::{mean, runtime};
 use crate::options::shading;
 use crate::progress::Progress;
 use crate::report::{write_json, Adapter, Machine, RendererInfo};
@@ -320,10 +320,6 @@ impl Bench<'_> {
             (two_pass, stereo.right),
         ))
     }
-}
-
-fn runtime(e: impl std::fmt::Display) -> Failure {
-    Failure::Runtime(e.to_string())
 }
 
 fn file_name(name: &str) -> String {
