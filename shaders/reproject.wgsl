@@ -58,6 +58,12 @@ fn on_sample(p: vec3f, lit: vec3f, a: f32) {
         let offset = clamp(alongf(right, axis) - f32(own), f32(open[axis].lo), f32(open[axis].hi));
         var pixel = own + i32(round(offset));
         let dir = open[axis].dir;
+        // The sample stands for the stretch of ray since the last one; where
+        // that stretch crosses several right pixels (the volume near the
+        // eyes), each gets the opacity of its share of the stretch rather
+        // than one getting all and the others none.
+        var share = a;
+        let distance = length(p - stereo.right_eye);
         if open[axis].first == NO_PIXEL {
             open[axis].first = pixel;
             open[axis].pixel = pixel;
@@ -66,18 +72,21 @@ fn on_sample(p: vec3f, lit: vec3f, a: f32) {
             pixel = select(min(pixel, open[axis].pixel), max(pixel, open[axis].pixel), dir > 0);
             if pixel != open[axis].pixel {
                 emit(axis, open[axis].pixel, open[axis].color, open[axis].depth);
-                // Pixels the ray stepped over get empty segments, so every
-                // texel inside the span is this frame's.
                 let gap = abs(pixel - open[axis].pixel);
+                if gap > 1 {
+                    share = 1.0 - pow(1.0 - min(a, 1.0), 1.0 / f32(gap));
+                }
+                let crossed = select(INFINITY, distance, share >= stereo.depth_threshold);
+                // Every texel inside the span is this frame's: the pixels
+                // stepped over get their share.
                 for (var k = 1; k < gap; k++) {
-                    emit(axis, open[axis].pixel + k * dir, vec4f(0.0), vec3f(INFINITY));
+                    emit(axis, open[axis].pixel + k * dir, vec4f(lit * share, share), vec3f(distance, distance, crossed));
                 }
                 open[axis].color = vec4f(0.0);
                 open[axis].depth = vec3f(INFINITY);
                 open[axis].pixel = pixel;
             }
         }
-        let distance = length(p - stereo.right_eye);
         if open[axis].depth.x == INFINITY {
             open[axis].depth.x = distance;
         }
@@ -85,7 +94,7 @@ fn on_sample(p: vec3f, lit: vec3f, a: f32) {
         // The same arithmetic as the left eye's accumulation, so a single
         // segment (e = 0) equals the left pixel exactly.
         let s = open[axis].color;
-        let weight = (1.0 - s.a) * a;
+        let weight = (1.0 - s.a) * share;
         open[axis].color = vec4f(s.rgb + lit * weight, s.a + weight);
         if open[axis].depth.z == INFINITY && open[axis].color.a >= stereo.depth_threshold {
             open[axis].depth.z = distance;

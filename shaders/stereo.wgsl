@@ -6,7 +6,7 @@
 // right-eye columns (family 0), the others at right-eye rows (family 1).
 // The ray of left pixel p writes family 0 into texel (right column, p.y)
 // of layer p.x mod L, family 1 into texel (p.x, right row) of layer
-// L + p.y mod L. The rays one texel could receive lie on one line, fewer
+// p.y mod L, after family 0's L layers where both are in use. The rays one texel could receive lie on one line, fewer
 // than L pixels apart along it, so no two of them share a layer.
 
 // `Stereo` is declared in front of this file from src/render/gpu/uniforms.rs,
@@ -27,10 +27,12 @@ fn acrossf(v: vec2f, axis: u32) -> f32 {
     return select(v.y, v.x, axis == 1u);
 }
 
+// The rows family's layers follow the columns family's, if there are any.
 fn layer_of(p: vec2i, axis: u32) -> i32 {
     let n = stereo.layers;
     let k = along(p, axis);
-    return ((k % n) + n) % n + select(0, n, axis == 1u);
+    let after_columns = axis == 1u && (stereo.families & 1u) != 0u;
+    return ((k % n) + n) % n + select(0, n, after_columns);
 }
 
 // The texel of left pixel p's segment at right coordinate `at` along `axis`.

@@ -436,6 +436,8 @@ fn every_wall_and_head_pose_reprojects_like_two_pass_with_depth() {
         ("front", DVec3::new(90.0, 0.0, 0.0), false),
         ("front", DVec3::new(0.0, 0.0, 15.0), false),
         ("floor", DVec3::new(30.0, -60.0, -15.0), false),
+        // Lines along the floor's columns only: the rows family alone.
+        ("floor", DVec3::new(90.0, 0.0, 0.0), false),
         ("right", DVec3::new(20.0, 10.0, 5.0), true),
     ];
     for (wall_name, ypr, swapped) in cases {

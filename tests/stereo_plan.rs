@@ -386,3 +386,61 @@ fn image_planes_that_are_not_parallel_fall_back() {
     );
     assert!(why.to_string().contains("pixels"), "{why}");
 }
+
+#[test]
+fn a_volume_around_the_eyes_is_refused_with_the_reason() {
+    use anari_library_caveray::render::stereo::{LayerFormat, Reprojection, ReprojectionError};
+    let rig = common::rig("cologne_5wall");
+    let walk = rig
+        .load_head_path(&common::config_dir().join("head_paths/cologne_walk.toml"))
+        .unwrap();
+    // A 2.6 m volume the walk stays inside of.
+    let half = DVec3::splat(1300.0);
+    let centre = DVec3::new(0.0, 500.0, -300.0);
+    let bounds = Bounds::Box {
+        lo: centre - half,
+        hi: centre + half,
+    };
+    let mut reasons = std::collections::BTreeSet::new();
+    for key in &walk {
+        for wall in &rig.walls {
+            let view = |eye| {
+                rig.view(wall, eye, &key.pose)
+                    .unwrap()
+                    .matrix_camera()
+                    .unwrap()
+            };
+            let size = UVec2::splat(64);
+            match Reprojection::new(
+                &view(Eye::Left),
+                &view(Eye::Right),
+                size,
+                bounds,
+                None,
+                LayerFormat::Rgba16F,
+            ) {
+                Ok(r) => {
+                    // What is accepted casts at most twice the image.
+                    assert!(r.plan.cast.x * r.plan.cast.y <= 2 * 64 * 64, "{:?}", r.plan)
+                }
+                Err(ReprojectionError::Costlier { cast, size: s }) => {
+                    assert!(cast.x * cast.y > 2 * s.x * s.y);
+                    reasons.insert("costlier");
+                }
+                Err(ReprojectionError::NotEpipolar(NotEpipolar::BetweenEyes)) => {
+                    reasons.insert("between");
+                }
+                Err(ReprojectionError::NotEpipolar(NotEpipolar::TooClose(scale))) => {
+                    assert!(scale > 2.0, "{scale}");
+                    reasons.insert("close");
+                }
+                Err(e) => panic!("{} at t = {}: {e}", wall.name, key.time),
+            }
+        }
+    }
+    // Each way of being too close occurs on this walk.
+    assert_eq!(
+        reasons.into_iter().collect::<Vec<_>>(),
+        ["between", "close", "costlier"]
+    );
+}

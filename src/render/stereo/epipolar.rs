@@ -34,6 +34,8 @@ pub enum NotEpipolar {
     UnevenShift(f64),
     #[error("the volume reaches so close to the right eye that the left eye sees it {0:.2}x as large (at most 2x re-projects)")]
     TooClose(f64),
+    #[error("the volume reaches between the eyes' planes parallel to the image: one eye sees parts of it that lie behind the other")]
+    BetweenEyes,
     #[error("the volume is outside both eyes' views")]
     Behind,
     #[error("{0}")]
@@ -250,6 +252,9 @@ pub fn plan_views(
     // 1 + lambda w is the scale from the left image to the right one
     // about the epipole; below 1 the rays a texel could receive crowd.
     let shrink = shrink(&plan);
+    if shrink <= 0.0 {
+        return Err(NotEpipolar::BetweenEyes);
+    }
     if shrink < 0.5 {
         return Err(NotEpipolar::TooClose(1.0 / shrink));
     }

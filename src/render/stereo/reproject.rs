@@ -31,6 +31,8 @@ pub enum ReprojectionError {
         families: u32,
         texels: UVec2,
     },
+    #[error("the left eye would cast {}x{} rays for a {}x{} image, more than both eyes cast in two passes (the volume reaches too close to the eyes)", .cast.x, .cast.y, .size.x, .size.y)]
+    Costlier { cast: UVec2, size: UVec2 },
 }
 
 /// A planned re-projection of the left eye's rays into the right eye.
@@ -65,6 +67,13 @@ impl Reprojection {
             return Err(ReprojectionError::EmptyImage(size));
         }
         let plan = plan_views(left, right, size.x, size.y, bounds)?;
+        let pixels = |s: UVec2| u64::from(s.x) * u64::from(s.y);
+        if pixels(plan.cast) > 2 * pixels(size) {
+            return Err(ReprojectionError::Costlier {
+                cast: plan.cast,
+                size,
+            });
+        }
         let layers = layer_count(layers, plan.layers, || {
             format!("{:.1} pixels along one ray", plan.span_px)
         })?;

@@ -30,7 +30,7 @@ use crate::progress::Progress;
 use crate::render::wall_size;
 use crate::report::{write_json, Adapter, Machine, RendererInfo};
 use crate::scene::VolumeArgs;
-use crate::Failure;
+use crate::{triple, Failure};
 
 #[derive(Args)]
 pub struct CaveStereoArgs {
@@ -47,9 +47,16 @@ pub struct CaveStereoArgs {
     /// Frames, evenly spaced from the path's first pose to its last.
     #[arg(long, default_value_t = 60)]
     frames: u32,
-    /// The volume (default: cthead), placed where the rig's `[scene]` says.
+    /// The volume (default: cthead), placed where the rig's `[scene]` says
+    /// unless --scene-centre or --scene-size say otherwise.
     #[command(flatten)]
     volume: VolumeArgs,
+    /// Centre of the volume X,Y,Z, in the rig's units.
+    #[arg(long, value_parser = triple)]
+    scene_centre: Option<glam::DVec3>,
+    /// Longest side of the volume, in the rig's units.
+    #[arg(long)]
+    scene_size: Option<f64>,
     /// none, shadows, ao, shadows+ao or directional:N.
     #[arg(long, default_value = "none", value_parser = shading)]
     shading: Shading,
@@ -77,6 +84,8 @@ struct CaveStereoReport {
     frames: u32,
     scale: f64,
     volume: String,
+    scene_centre: [f64; 3],
+    scene_size: f64,
     shading: String,
     layer_format: String,
     wall_frames: usize,
@@ -195,7 +204,14 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
         .next()
         .unwrap_or_else(|| "cthead".into());
     let loaded = args.volume.with_volume(&name).load()?;
-    let scene = loaded.placed(rig.scene.centre.as_vec3(), rig.scene.size as f32)?;
+    let centre = args.scene_centre.unwrap_or(rig.scene.centre);
+    let extent = args.scene_size.unwrap_or(rig.scene.size);
+    if !(centre.is_finite() && extent.is_finite() && extent > 0.0) {
+        return Err(Failure::Usage(format!(
+            "--scene-centre must be finite and --scene-size finite and > 0, got {centre} and {extent}"
+        )));
+    }
+    let scene = loaded.placed(centre.as_vec3(), extent as f32)?;
     let mut gpu = GpuRenderer::new().map_err(|e| {
         Failure::Runtime(format!("{e} (re-projection runs on the GPU renderer only)"))
     })?;
@@ -508,6 +524,8 @@ fn summarise(
         frames: args.frames,
         scale: args.scale,
         volume: volume.to_string(),
+        scene_centre: args.scene_centre.unwrap_or(rig.scene.centre).to_array(),
+        scene_size: args.scene_size.unwrap_or(rig.scene.size),
         shading: args.shading.to_string(),
         layer_format: args.layer_format.to_string(),
         wall_frames: all.len(),
