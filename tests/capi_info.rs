@@ -121,6 +121,20 @@ fn extensions_carry_the_anari_prefix_and_name_what_is_implemented() {
             "{expected} missing from {names:?}"
         );
     }
+    // Every extension name caveray.h gives hosts is one the device reports.
+    for header in [
+        CAVERAY_EXTENSION_CAMERA_MATRIX_VSNRAY.as_slice(),
+        CAVERAY_EXTENSION_CAMERA_MATRIX,
+        CAVERAY_EXTENSION_CAMERA_OFF_AXIS,
+        CAVERAY_EXTENSION_RENDERER_SHADING,
+        CAVERAY_EXTENSION_FRAME_STEREO_PAIR,
+    ] {
+        let name = CStr::from_bytes_with_nul(header).unwrap().to_str().unwrap();
+        assert!(
+            names.iter().any(|n| n == name),
+            "{name} missing from {names:?}"
+        );
+    }
     let property: Option<usize> = s.property(s.dev.cast(), "extension", ANARI_STRING_LIST);
     let listed = unsafe { strings(property.unwrap() as *const *const c_char) };
     assert_eq!(listed, names);

@@ -103,28 +103,3 @@ same_codes! {
 
 // The loader's object layout (see handles.rs) assumes 64-bit pointers.
 const _: () = assert!(std::mem::size_of::<usize>() == 8);
-
-#[cfg(test)]
-mod tests {
-    use super::sys;
-    use crate::device::info::EXTENSIONS;
-
-    /// Every extension name the header gives hosts is one the device
-    /// reports.
-    #[test]
-    fn the_headers_extensions_are_reported() {
-        for name in [
-            sys::CAVERAY_EXTENSION_CAMERA_MATRIX_VSNRAY.as_slice(),
-            sys::CAVERAY_EXTENSION_CAMERA_MATRIX,
-            sys::CAVERAY_EXTENSION_CAMERA_OFF_AXIS,
-            sys::CAVERAY_EXTENSION_RENDERER_SHADING,
-            sys::CAVERAY_EXTENSION_FRAME_STEREO_PAIR,
-        ] {
-            let name = std::ffi::CStr::from_bytes_with_nul(name)
-                .unwrap()
-                .to_str()
-                .unwrap();
-            assert!(EXTENSIONS.contains(&name), "{name}");
-        }
-    }
-}
