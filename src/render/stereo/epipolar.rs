@@ -78,11 +78,6 @@ impl ViewPlan {
         self.epipole.z * p - glam::DVec2::new(self.epipole.x, self.epipole.y)
     }
 
-    /// Where the right eye sees what left pixel `p` sees at `lambda`.
-    pub fn right_of(&self, p: DVec2, lambda: f64) -> DVec2 {
-        p + lambda * self.g(p)
-    }
-
     /// The family a right pixel reads: its line's major axis.
     pub fn axis_at(&self, q: DVec2) -> Axis {
         let g = self.g(q);
