@@ -29,6 +29,10 @@
 @group(0) @binding(12) var volume5: texture_3d<f32>;
 @group(0) @binding(13) var volume6: texture_3d<f32>;
 @group(0) @binding(14) var volume7: texture_3d<f32>;
+// Per brick of each volume, the chessboard distance (in bricks) to the
+// nearest brick its table could make visible; volume v's from
+// params.volumes[v].brick_offset on (src/render/empty_space.rs).
+@group(0) @binding(15) var<storage, read> bricks: array<u32>;
 
 // What lies behind pixel `pixel` of the frame: the flat colour, or the
 // background image stretched over the frame, sampled bilinearly at the
@@ -226,6 +230,63 @@ fn safe_inverse(x: f32) -> f32 {
     return 1.0 / x;
 }
 
+// The stretch of volume v's grid around grid point g whose state the
+// bricks know, as EmptySpace::region: x 1 where clear (0: could show), y
+// how far (in t) a ray with grid direction gd stays in it.
+fn brick_region(v: u32, g: vec3f, gd: vec3f) -> vec2f {
+    let m = params.volumes[v];
+    let hi = vec3i(m.dims) - vec3i(1);
+    // Truncation is floor for the clamped, non-negative g.
+    let cell = min(vec3i(clamp(g, vec3f(0.0), vec3f(hi))), max(hi - vec3i(1), vec3i(0)));
+    let b = cell / i32(BRICK);
+    let n = vec3i(m.bricks);
+    let d = i32(bricks[m.brick_offset + u32(b.x + n.x * (b.y + n.y * b.z))]);
+    let r = max(d - 1, 0);
+    let lo = vec3f((b - vec3i(r)) * i32(BRICK));
+    let up = vec3f((b + vec3i(r + 1)) * i32(BRICK));
+    var length = bitcast<f32>(0x7f800000u);
+    for (var k = 0; k < 3; k++) {
+        var room: f32;
+        if gd[k] > 0.0 {
+            room = (up[k] - g[k]) / gd[k];
+        } else if gd[k] < 0.0 {
+            room = (g[k] - lo[k]) / -gd[k];
+        } else {
+            continue;
+        }
+        length = min(length, room - LEAP_MARGIN / abs(gd[k]));
+    }
+    return vec2f(select(0.0, 1.0, d > 0), max(length, 0.0));
+}
+
+// What the primary ray o + t d meets from its sample at p (t along it), as
+// Field::region: x 1 where every volume is clear (leap), 0 where one could
+// show (sample), y for how long.
+fn region(spans: ptr<function, array<vec2f, MAX_VOLUMES>>, p: vec3f, d: vec3f, t: f32) -> vec2f {
+    var clear = bitcast<f32>(0x7f800000u);
+    var busy = clear;
+    for (var v = 0u; v < params.volume_count; v++) {
+        let span = (*spans)[v];
+        if span.y <= span.x || t > span.y {
+            continue;
+        }
+        if t < span.x {
+            clear = min(clear, span.x - t);
+            continue;
+        }
+        let r = brick_region(v, grid_of(v, p), grid_direction(v, d));
+        if r.x > 0.0 {
+            clear = min(clear, r.y);
+        } else {
+            busy = min(busy, r.y);
+        }
+    }
+    if busy < bitcast<f32>(0x7f800000u) {
+        return vec2f(0.0, busy);
+    }
+    return vec2f(1.0, clear);
+}
+
 // The ray of pixel (fx, fy); columns outside the image are allowed.
 struct Marched {
     // Premultiplied colour and opacity accumulated front to back.
@@ -283,11 +344,26 @@ fn march(fx: f32, fy: f32) -> Marched {
         let len = t1 - t0;
         // f32 to u32 saturates; the cap holds where t has lost its precision.
         let n = min(u32(ceil(len / step)), params.max_steps);
-        for (var k = 0u; k < n; k++) {
+        // Up to here, the last look at the bricks said some could show.
+        var busy_until = -bitcast<f32>(0x7f800000u);
+        var k = 0u;
+        while k < n {
             let start = f32(k) * step;
+            k++;
             let seg = max(min(step, len - start), 0.0);
             let t = t0 + start + 0.5 * seg;
             let p = o + d * t;
+            if params.skipping != 0u && t >= busy_until {
+                let r = region(&spans, p, d, t);
+                if r.x > 0.0 {
+                    // Samples up to t + r.y are clear: go on from the last
+                    // one at or before it (an endless leap ends the ray).
+                    let last_clear = min(floor((t + r.y - t0) / step - 0.5), f32(n));
+                    k = max(k, u32(last_clear));
+                    continue;
+                }
+                busy_until = t + r.y;
+            }
             var m = Mixture(vec3f(0.0), 0.0, 0.0);
             for (var v = 0u; v < params.volume_count; v++) {
                 let span = spans[v];

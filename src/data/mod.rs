@@ -12,7 +12,7 @@ mod raw;
 pub use manifest::{Manifest, ManifestEntry};
 pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};
-pub use procedural::{marschner_lobb, shepp_logan, solid_box};
+pub use procedural::{concentric_shells, marschner_lobb, shepp_logan, solid_box};
 pub use raw::{load_raw, parse_raw, raw_size, VoxelType};
 
 use thiserror::Error;

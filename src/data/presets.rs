@@ -5,7 +5,14 @@ use crate::scene::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 
 /// Built-in transfer functions over the normalised value range [0, 1]
 /// (callers usually stretch them over the data's range).
-pub const PRESETS: [&str; 5] = ["phantom", "ct-skin-bone", "ct-bone", "mri", "grey"];
+pub const PRESETS: [&str; 6] = [
+    "phantom",
+    "ct-skin-bone",
+    "ct-bone",
+    "mri",
+    "grey",
+    "shells",
+];
 
 /// Control points (value, r, g, b, opacity), linearly interpolated.
 type Points = &'static [(f32, f32, f32, f32, f32)];
@@ -44,6 +51,14 @@ const MRI: Points = &[
     (0.6, 1.0, 0.85, 0.7, 0.35),
     (1.0, 1.0, 1.0, 1.0, 0.8),
 ];
+// Translucent, so that every ray crosses all four shells: blue inner,
+// amber outer, air (below 0.1) clear.
+const SHELLS: Points = &[
+    (0.0, 0.2, 0.4, 1.0, 0.0),
+    (0.1, 0.2, 0.4, 1.0, 0.0),
+    (0.5, 0.5, 0.8, 0.6, 0.04),
+    (1.0, 1.0, 0.7, 0.2, 0.12),
+];
 const GREY: Points = &[(0.0, 0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0, 1.0)];
 
 /// A built-in transfer function by name (see [`PRESETS`]).
@@ -54,6 +69,7 @@ pub fn preset(name: &str) -> Result<TransferFunction, DataError> {
         "ct-bone" => CT_BONE,
         "mri" => MRI,
         "grey" | "gray" => GREY,
+        "shells" => SHELLS,
         other => {
             return Err(DataError::UnknownPreset {
                 name: other.to_string(),

@@ -77,3 +77,20 @@ pub fn marschner_lobb(n: u32) -> StructuredVolume {
 pub fn solid_box(n: u32) -> StructuredVolume {
     sampled(n, |_| 1.0)
 }
+
+/// Radii of the concentric shells' centre surfaces, and their half-width.
+const SHELL_RADII: [f32; 4] = [0.3, 0.5, 0.7, 0.9];
+const SHELL_HALF_WIDTH: f32 = 0.05;
+
+/// Four concentric spherical shells, each a tent of values peaking at 1.0
+/// on its centre surface, with air (0.0) between them and around them:
+/// the empty-space benchmark, where most of every ray crosses nothing.
+pub fn concentric_shells(n: u32) -> StructuredVolume {
+    sampled(n, |p| {
+        let r = p.length();
+        SHELL_RADII
+            .iter()
+            .map(|&c| (1.0 - (r - c).abs() / SHELL_HALF_WIDTH).max(0.0))
+            .fold(0.0, f32::max)
+    })
+}

@@ -69,6 +69,19 @@ impl<'a> Read<'a> {
         self.floats::<16>(name).map(|m| Mat4::from_cols_array(&m))
     }
 
+    /// The host's BOOL, else the table's default.
+    pub fn bool(&self, name: &str) -> Result<bool, String> {
+        if let Some(b) = self.set(name).and_then(Value::bool) {
+            return Ok(b);
+        }
+        match self.info(name).map(|p| &p.default) {
+            Some(Default::Bool(b)) => Ok(*b),
+            _ => Err(format!(
+                "'{name}' has no BOOL default in this subtype's table"
+            )),
+        }
+    }
+
     /// The host's string, else the table's default.
     pub fn string(&self, name: &str) -> Option<&'a str> {
         match self.set(name).and_then(|v| v.string()) {

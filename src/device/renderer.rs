@@ -93,6 +93,13 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "up to 8 planes (n, d), ARRAY1D of FLOAT32_VEC4: rays keep the points p with dot(n, p) < d",
         )
         .elements(&[T::FLOAT32_VEC4]),
+        p(
+            "emptySpaceSkipping",
+            &[T::BOOL],
+            false,
+            Default::Bool(true),
+            "leap over bricks of the volume its transfer function leaves clear; the image does not change (false: march every step, for comparison)",
+        ),
     ],
     commit: Some(commit),
 };
@@ -119,6 +126,7 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         depth_threshold: r.f32("depthThreshold")?,
         clip_planes: clip_planes(r)?,
         background_image: background_image(r)?,
+        skipping: r.bool("emptySpaceSkipping")?,
         // Not a renderer parameter: a world's directional light sets it
         // when a frame renders.
         ..RenderSettings::default()

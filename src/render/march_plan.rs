@@ -40,6 +40,8 @@ pub(crate) struct MarchPlan {
     pub shading: Shading,
     /// AO sphere points, or the random directions of `directional:N`.
     pub directions: Vec<Vec3>,
+    /// Whether primary rays leap over clear bricks.
+    pub skipping: bool,
 }
 
 /// How one volume is sampled: where a world point falls in its grid, and
@@ -141,6 +143,7 @@ impl MarchPlan {
             has_background_image: settings.background_image.is_some(),
             shading: settings.shading,
             directions,
+            skipping: settings.skipping,
         })
     }
 }

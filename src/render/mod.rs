@@ -3,6 +3,7 @@
 
 mod compare;
 pub mod cpu;
+pub mod empty_space;
 mod frame;
 pub mod gpu;
 mod march_plan;

@@ -194,6 +194,9 @@ pub struct RenderSettings {
     /// Colour times strength of the light, multiplying every shaded sample
     /// (a host's directional light; 1 without one).
     pub light_color: Vec3,
+    /// Leap over bricks the transfer function leaves clear
+    /// (render::empty_space). Exact: the image does not change.
+    pub skipping: bool,
 }
 
 impl Default for RenderSettings {
@@ -208,6 +211,7 @@ impl Default for RenderSettings {
             depth_threshold: 0.5,
             clip_planes: ClipPlanes::default(),
             light_color: Vec3::ONE,
+            skipping: true,
         }
     }
 }

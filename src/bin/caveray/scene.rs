@@ -3,7 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use anari_library_caveray::data::{
-    load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box, Manifest, VoxelType,
+    concentric_shells, load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box,
+    Manifest, VoxelType,
 };
 use anari_library_caveray::scene::{Scene, StructuredVolume, TransferFunction, Voxels};
 use clap::Args;
@@ -18,7 +19,7 @@ const SHARED_MANIFEST: &str = "../shared/data/volumes/volumes.toml";
 
 #[derive(Args, Clone)]
 pub struct VolumeArgs {
-    /// phantom[:N], marschner-lobb[:N], box[:N], a name from volumes.toml,
+    /// phantom[:N], shells[:N], marschner-lobb[:N], box[:N], a name from volumes.toml,
     /// or a raw file (then --dims is required). Default: the phantom.
     #[arg(long)]
     volume: Option<String>,
@@ -36,7 +37,7 @@ pub struct VolumeArgs {
     #[arg(long)]
     manifest: Option<PathBuf>,
     /// Transfer function: a preset (phantom, ct-skin-bone, ct-bone, mri,
-    /// grey) or a ParaView colour map exported as JSON.
+    /// grey, shells) or a ParaView colour map exported as JSON.
     #[arg(long)]
     tf: Option<String>,
 }
@@ -86,7 +87,12 @@ impl VolumeArgs {
         let usage = |e: &dyn std::fmt::Display| Failure::Usage(e.to_string());
         let spec = self.volume.as_deref().unwrap_or("phantom");
         let (name, volume, default_tf) = if let Some((name, volume)) = procedural(spec)? {
-            (name, volume, "phantom")
+            let tf = if name.starts_with("shells") {
+                "shells"
+            } else {
+                "phantom"
+            };
+            (name, volume, tf)
         } else if self.dims.is_some() || Path::new(spec).is_file() {
             let dims = self.dims.ok_or_else(|| {
                 Failure::Usage(format!(
@@ -161,7 +167,7 @@ impl Loaded {
     }
 }
 
-/// `phantom[:N]`, `marschner-lobb[:N]` or `box[:N]`.
+/// `phantom[:N]`, `shells[:N]`, `marschner-lobb[:N]` or `box[:N]`.
 fn procedural(spec: &str) -> Result<Option<(String, StructuredVolume)>, Failure> {
     let (kind, size) = match spec.split_once(':') {
         Some((k, n)) => {
@@ -182,6 +188,7 @@ fn procedural(spec: &str) -> Result<Option<(String, StructuredVolume)>, Failure>
         "phantom" | "shepp-logan" => shepp_logan,
         "marschner-lobb" => marschner_lobb,
         "box" => solid_box,
+        "shells" => concentric_shells,
         _ => return Ok(None),
     };
     Ok(Some((format!("{kind}:{size}"), make(size))))

@@ -317,6 +317,12 @@ impl Device {
                     // A render is whole or not started: no partial progress.
                     "renderProgress" => Some(Property::Float32(if s.busy { 0.0 } else { 1.0 })),
                     "numSamples" => Some(Property::Int32(s.samples as i32)),
+                    // Volume samples the last image took, primary and
+                    // shading: what benchmark hosts divide time by.
+                    "caveray.volumeSamples" => match &s.result {
+                        Some(Ok(frame)) => Some(Property::UInt64(frame.samples)),
+                        _ => None,
+                    },
                     _ => None,
                 }
             }

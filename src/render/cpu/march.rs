@@ -40,13 +40,29 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
         let len = t1 - t0;
         // `as` saturates; the cap holds where t has lost its precision.
         let n = ((len / plan.step).ceil() as u32).min(plan.max_steps);
-        for k in 0..n {
+        let mut k = 0;
+        // Up to here, the last look at the bricks said some could show.
+        let mut busy_until = f32::NEG_INFINITY;
+        while k < n {
             // Every segment is a full step but the last; each is sampled
             // at its midpoint and its opacity corrected for its length.
             let start = k as f32 * plan.step;
+            k += 1;
             let seg = plan.step.min(len - start).max(0.0);
             let t = t0 + start + 0.5 * seg;
             let p = origin + dir * t;
+            if plan.skipping && t >= busy_until {
+                let region = field.region(&spans, p, dir, t);
+                if region.clear {
+                    // Samples up to t + length are clear: go on from the
+                    // last one at or before it (`as` saturates an endless
+                    // leap).
+                    let last_clear = ((t + region.length - t0) / plan.step - 0.5).floor();
+                    k = k.max(last_clear as u32);
+                    continue;
+                }
+                busy_until = t + region.length;
+            }
             let mut mixture = Mixture::default();
             for (grid, span) in field.grids.iter().zip(&spans) {
                 let Some((a, b)) = *span else { continue };

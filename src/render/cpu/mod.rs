@@ -15,6 +15,7 @@ use super::frame::{filled, linear_to_srgb, to_unorm8, ColorData, ColorFormat, Fr
 use super::march_plan::MarchPlan;
 use super::{RenderError, RenderSettings};
 use crate::geometry::RayGen;
+use crate::render::empty_space::SpaceCache;
 use crate::scene::{Scene, StructuredVolume, TransferFunction};
 use sample::Converted;
 
@@ -29,6 +30,7 @@ pub struct CpuRenderer {
 struct Prepared {
     values: Vec<(Arc<StructuredVolume>, Arc<Vec<f32>>)>,
     tables: Vec<(Arc<TransferFunction>, Arc<Vec<Vec4>>)>,
+    spaces: SpaceCache,
 }
 
 impl CpuRenderer {
@@ -36,16 +38,32 @@ impl CpuRenderer {
         Self::default()
     }
 
-    /// Each volume's values and table, converted only when new.
-    fn prepare(&self, scene: &Scene) -> Result<Vec<Converted>, RenderError> {
+    /// Each volume's values, table and (if the plan skips) clear bricks,
+    /// made only when new.
+    fn prepare(&self, scene: &Scene, plan: &MarchPlan) -> Result<Vec<Converted>, RenderError> {
         // A poisoned lock only means a panic elsewhere; the cache is rebuilt.
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
-        let mut next = Prepared::default();
-        for placed in scene.volumes() {
-            let values = match reuse(&cache.values, &placed.volume) {
+        let spaces = if plan.skipping {
+            cache
+                .spaces
+                .update(scene, plan)?
+                .into_iter()
+                .map(Some)
+                .collect()
+        } else {
+            vec![None; scene.volumes().len()]
+        };
+        let mut next = Prepared {
+            spaces: std::mem::take(&mut cache.spaces),
+            ..Prepared::default()
+        };
+        let mut converted = Vec::new();
+        for (placed, space) in scene.volumes().iter().zip(spaces) {
+            let volume = &placed.volume;
+            let values = match reuse(&cache.values, volume) {
                 Some(v) => v,
                 None => {
-                    let voxels = placed.volume.voxels();
+                    let voxels = volume.voxels();
                     let mut values = filled(voxels.len(), 0.0f32, "the volume as f32")?;
                     for (i, v) in values.iter_mut().enumerate() {
                         *v = voxels.value(i);
@@ -55,15 +73,14 @@ impl CpuRenderer {
             };
             let tf = &placed.transfer_function;
             let table = reuse(&cache.tables, tf).unwrap_or_else(|| Arc::new(tf.table()));
-            next.values.push((Arc::clone(&placed.volume), values));
-            next.tables.push((Arc::clone(tf), table));
+            next.values.push((Arc::clone(volume), Arc::clone(&values)));
+            next.tables.push((Arc::clone(tf), Arc::clone(&table)));
+            converted.push(Converted {
+                values,
+                table,
+                space,
+            });
         }
-        let converted = next
-            .values
-            .iter()
-            .zip(&next.tables)
-            .map(|((_, v), (_, t))| (Arc::clone(v), Arc::clone(t)))
-            .collect();
         *cache = next;
         Ok(converted)
     }
@@ -90,7 +107,7 @@ impl CpuRenderer {
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
-        let data = self.prepare(scene)?;
+        let data = self.prepare(scene, &plan)?;
         let field = sample::Field::new(&plan, &data);
         let w = desc.size.x as usize;
         let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's colour")?;

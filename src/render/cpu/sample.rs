@@ -2,6 +2,7 @@ use std::sync::Arc;
 
 use glam::{IVec3, Vec3, Vec4};
 
+use crate::render::empty_space::{EmptySpace, Region};
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::scene::{Filter, TABLE_SIZE};
 
@@ -11,6 +12,8 @@ pub(super) struct Grid<'a> {
     pub plan: &'a VolumePlan,
     values: &'a [f32],
     table: &'a [Vec4],
+    /// Where the plan skips: the clear bricks under this table.
+    pub space: Option<&'a EmptySpace>,
 }
 
 impl Grid<'_> {
@@ -29,18 +32,29 @@ impl Grid<'_> {
     pub fn sample(&self, g: Vec3) -> f32 {
         let hi = self.plan.dims.as_ivec3() - IVec3::ONE;
         let g = g.clamp(Vec3::ZERO, hi.as_vec3());
+        // g >= 0 here, so truncation (`as`) is floor, without a libm call.
         if self.plan.filter == Filter::Nearest {
             // floor(g + 0.5), not round(): the shader's rounding, halves up.
-            return self.voxel((g + Vec3::splat(0.5)).floor().as_ivec3().min(hi));
+            return self.voxel((g + Vec3::splat(0.5)).as_ivec3().min(hi));
         }
-        let i0 = g.floor().as_ivec3().min((hi - IVec3::ONE).max(IVec3::ZERO));
+        let i0 = g.as_ivec3().min((hi - IVec3::ONE).max(IVec3::ZERO));
         let f = g - i0.as_vec3();
-        let i1 = (i0 + IVec3::ONE).min(hi);
-        let at = |x: i32, y: i32, z: i32| self.voxel(IVec3::new(x, y, z));
-        let x00 = mix(at(i0.x, i0.y, i0.z), at(i1.x, i0.y, i0.z), f.x);
-        let x10 = mix(at(i0.x, i1.y, i0.z), at(i1.x, i1.y, i0.z), f.x);
-        let x01 = mix(at(i0.x, i0.y, i1.z), at(i1.x, i0.y, i1.z), f.x);
-        let x11 = mix(at(i0.x, i1.y, i1.z), at(i1.x, i1.y, i1.z), f.x);
+        // The eight corners as one base index and three strides (0 on an
+        // axis one vertex thick, where i1 = i0); one slice check for all.
+        let d = self.plan.dims.as_ivec3();
+        let base = (i0.x + d.x * (i0.y + d.y * i0.z)) as usize;
+        let sx = usize::from(i0.x < hi.x);
+        let sy = if i0.y < hi.y { d.x as usize } else { 0 };
+        let sz = if i0.z < hi.z {
+            d.x as usize * d.y as usize
+        } else {
+            0
+        };
+        let c = &self.values[base..=base + sx + sy + sz];
+        let x00 = mix(c[0], c[sx], f.x);
+        let x10 = mix(c[sy], c[sy + sx], f.x);
+        let x01 = mix(c[sz], c[sz + sx], f.x);
+        let x11 = mix(c[sz + sy], c[sz + sy + sx], f.x);
         mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z)
     }
 
@@ -55,9 +69,13 @@ impl Grid<'_> {
     }
 }
 
-/// One volume's values as f32 and its table, shared with the renderer's
-/// cache.
-pub(super) type Converted = (Arc<Vec<f32>>, Arc<Vec<Vec4>>);
+/// One volume's values as f32, its table and its clear bricks, shared
+/// with the renderer's cache.
+pub(super) struct Converted {
+    pub values: Arc<Vec<f32>>,
+    pub table: Arc<Vec<Vec4>>,
+    pub space: Option<Arc<EmptySpace>>,
+}
 
 /// Every volume of the scene, and the plan they are marched by.
 pub(super) struct Field<'a> {
@@ -73,12 +91,13 @@ impl<'a> Field<'a> {
             .volumes
             .iter()
             .zip(data)
-            .map(|(plan, (values, table))| {
-                debug_assert_eq!(table.len(), TABLE_SIZE);
+            .map(|(plan, c)| {
+                debug_assert_eq!(c.table.len(), TABLE_SIZE);
                 Grid {
                     plan,
-                    values,
-                    table,
+                    values: &c.values,
+                    table: &c.table,
+                    space: c.space.as_deref(),
                 }
             })
             .collect();
@@ -88,6 +107,48 @@ impl<'a> Field<'a> {
     /// Whether world point `p` lies in any volume.
     pub fn inside(&self, p: Vec3) -> bool {
         self.grids.iter().any(|g| g.contains(g.plan.grid(p)))
+    }
+
+    /// What the primary ray (unit direction `dir`) meets from its sample
+    /// at `p`, `t` along it, given each volume's span of t: a stretch
+    /// where every volume is clear (to leap over), or where some volume
+    /// could show (to sample), and how long it is.
+    pub fn region(&self, spans: &[Option<(f32, f32)>], p: Vec3, dir: Vec3, t: f32) -> Region {
+        let (mut clear, mut busy) = (f32::INFINITY, f32::INFINITY);
+        for (grid, span) in self.grids.iter().zip(spans) {
+            let Some((a, b)) = *span else { continue };
+            if t < a {
+                clear = clear.min(a - t);
+                continue;
+            } else if t > b {
+                continue;
+            }
+            let Some(space) = grid.space else {
+                return Region {
+                    clear: false,
+                    length: 0.0,
+                };
+            };
+            let hi = grid.plan.dims.as_ivec3() - IVec3::ONE;
+            let g = grid.plan.grid(p);
+            let r = space.region(g, grid.plan.grid_direction(dir), hi);
+            if r.clear {
+                clear = clear.min(r.length);
+            } else {
+                busy = busy.min(r.length);
+            }
+        }
+        if busy < f32::INFINITY {
+            Region {
+                clear: false,
+                length: busy,
+            }
+        } else {
+            Region {
+                clear: true,
+                length: clear,
+            }
+        }
     }
 
     /// Opacity at `p` of every volume there, mixed: each volume's table

@@ -18,7 +18,8 @@ pub use self::context::PassClock;
 
 use self::context::{Context, Pass, BAND_STRIDE};
 use self::resources::OutputBuffers;
-use self::uniforms::{Params, WORKGROUP};
+use self::uniforms::{BrickSlot, Params, WORKGROUP};
+use super::empty_space::{EmptySpace, SpaceCache};
 use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::settings::MAX_DIRECTIONS;
@@ -61,6 +62,12 @@ pub struct GpuRenderer {
     uploads: Uploads,
     stereo: Option<layers::StereoGpu>,
     last_pass_ms: f64,
+    /// Each placed volume's clear bricks under its table, as the bricks
+    /// buffer holds them.
+    space_cache: SpaceCache,
+    spaces: Vec<Arc<EmptySpace>>,
+    bricks: wgpu::Buffer,
+    brick_slots: Vec<BrickSlot>,
 }
 
 impl GpuRenderer {
@@ -92,6 +99,7 @@ impl GpuRenderer {
                 layout_entry(12, texture(wgpu::TextureViewDimension::D3)),
                 layout_entry(13, texture(wgpu::TextureViewDimension::D3)),
                 layout_entry(14, texture(wgpu::TextureViewDimension::D3)),
+                layout_entry(15, storage(true)),
             ],
         });
         let band_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -151,6 +159,7 @@ impl GpuRenderer {
         });
         let table = resources::table_texture(&ctx);
         let table_view = table.create_view(&Default::default());
+        let (bricks, _) = resources::bricks_buffer(&ctx, &[]);
         ctx.check()?;
         Ok(Self {
             ctx,
@@ -172,6 +181,10 @@ impl GpuRenderer {
             uploads: Uploads::default(),
             stereo: None,
             last_pass_ms: 0.0,
+            space_cache: SpaceCache::default(),
+            spaces: Vec::new(),
+            bricks,
+            brick_slots: Vec::new(),
         })
     }
 
@@ -303,6 +316,9 @@ impl GpuRenderer {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
         self.check_limits(scene, desc)?;
+        if plan.skipping {
+            self.find_clear_bricks(scene, &plan)?;
+        }
         self.prepare(
             scene,
             desc.size,
@@ -310,7 +326,12 @@ impl GpuRenderer {
             settings.background_image.as_ref(),
         );
         let queue = &self.ctx.queue;
-        let params = Params::new(rays, &plan, desc.size, desc.color);
+        let bricks: &[BrickSlot] = if plan.skipping {
+            &self.brick_slots
+        } else {
+            &[]
+        };
+        let params = Params::new(rays, &plan, bricks, desc.size, desc.color);
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         queue.write_buffer(
             &self.directions,
@@ -404,6 +425,25 @@ impl GpuRenderer {
         changed
     }
 
+    /// Makes the clear-brick distances of the scene's volumes under their
+    /// tables, where they are new, and the buffer that holds them; a new
+    /// buffer means a new bind group.
+    fn find_clear_bricks(&mut self, scene: &Scene, plan: &MarchPlan) -> Result<(), RenderError> {
+        let spaces = self.space_cache.update(scene, plan)?;
+        let same = spaces.len() == self.spaces.len()
+            && spaces
+                .iter()
+                .zip(&self.spaces)
+                .all(|(a, b)| Arc::ptr_eq(a, b));
+        if !same || self.brick_slots.len() != spaces.len() {
+            let list: Vec<&EmptySpace> = spaces.iter().map(Arc::as_ref).collect();
+            (self.bricks, self.brick_slots) = resources::bricks_buffer(&self.ctx, &list);
+            self.bind_group = None;
+        }
+        self.spaces = spaces;
+        Ok(())
+    }
+
     /// Uploads what changed and rebuilds the bind group if anything did.
     fn prepare(
         &mut self,
@@ -463,6 +503,7 @@ impl GpuRenderer {
                 volume(5),
                 volume(6),
                 volume(7),
+                buffer(&self.bricks),
             ];
             let group = bind_group(&self.ctx.device, "raycast", &self.layout, resources);
             self.bind_group = Some(group);

@@ -1,6 +1,10 @@
 use glam::{UVec2, UVec3};
 
+use wgpu::util::DeviceExt;
+
 use super::context::Context;
+use super::uniforms::BrickSlot;
+use crate::render::empty_space::EmptySpace;
 use crate::render::frame::ColorFormat;
 use crate::render::BackgroundImage;
 use crate::scene::{StructuredVolume, TransferFunction, MAX_VOLUMES, TABLE_SIZE};
@@ -67,6 +71,34 @@ fn volume_texture(ctx: &Context, dims: UVec3, value: impl Fn(usize) -> f32) -> w
         z += n;
     }
     texture.create_view(&Default::default())
+}
+
+/// Every volume's clear-brick distances, one u32 per brick, one volume
+/// after the other; and where each volume's start.
+pub(super) fn bricks_buffer(
+    ctx: &Context,
+    spaces: &[&EmptySpace],
+) -> (wgpu::Buffer, Vec<BrickSlot>) {
+    let mut words: Vec<u32> = Vec::new();
+    let mut slots = Vec::with_capacity(spaces.len());
+    for space in spaces {
+        slots.push(BrickSlot {
+            offset: words.len() as u32,
+            bricks: space.bricks.to_array(),
+        });
+        words.extend(space.distance.iter().map(|&d| u32::from(d)));
+    }
+    if words.is_empty() {
+        words.push(0); // storage bindings cannot be empty
+    }
+    let buffer = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("clear bricks"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    (buffer, slots)
 }
 
 /// A background image as an RGBA32Float texture; a 1 x 1 black one stands

@@ -7,6 +7,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{UVec2, Vec3};
 
 use crate::geometry::RayGen;
+use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::ColorFormat;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
@@ -88,6 +89,10 @@ uniform! {
         /// 1 / (value hi - value lo).
         value_scale: f32,
         inv_unit_distance: f32,
+        /// Where this volume's bricks start in `bricks`.
+        brick_offset: u32,
+        /// Bricks per axis (render::empty_space).
+        bricks: [u32; 3],
         _pad: u32,
     }
 }
@@ -139,6 +144,9 @@ uniform! {
         light_color: [f32; 3],
         /// The most steps a primary ray takes.
         max_steps: u32,
+        /// 1: primary rays leap over clear bricks.
+        skipping: u32,
+        _pad: [u32; 3],
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
@@ -184,7 +192,7 @@ uniform! {
 }
 
 impl VolumeSlot {
-    fn new(plan: &VolumePlan) -> Self {
+    fn new(plan: &VolumePlan, bricks: BrickSlot) -> Self {
         let [x, y, z] = plan.world_to_grid.map(|r| r.to_array());
         Self {
             world_to_grid_x: x,
@@ -195,22 +203,40 @@ impl VolumeSlot {
             value_lo: plan.value_lo,
             value_scale: plan.value_scale,
             inv_unit_distance: plan.inv_unit_distance,
+            brick_offset: bricks.offset,
+            bricks: bricks.bricks,
             _pad: 0,
         }
     }
 }
 
+/// Where one volume's clear-brick distances lie in the bricks buffer.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct BrickSlot {
+    pub offset: u32,
+    pub bricks: [u32; 3],
+}
+
 impl Params {
-    pub fn new(rays: &RayGen, plan: &MarchPlan, size: UVec2, format: ColorFormat) -> Self {
+    /// `bricks`: each volume's place in the bricks buffer, when `plan`
+    /// skips.
+    pub fn new(
+        rays: &RayGen,
+        plan: &MarchPlan,
+        bricks: &[BrickSlot],
+        size: UVec2,
+        format: ColorFormat,
+    ) -> Self {
         let v = |v: Vec3| v.to_array();
         let mut clip = [[0.0; 4]; MAX_CLIP_PLANES];
         for (slot, plane) in clip.iter_mut().zip(&plan.clip_planes) {
             *slot = plane.to_array();
         }
         let mut volumes = [VolumeSlot::default(); MAX_VOLUMES];
-        for (slot, volume) in volumes.iter_mut().zip(&plan.volumes) {
-            *slot = VolumeSlot::new(volume);
+        for (i, (slot, volume)) in volumes.iter_mut().zip(&plan.volumes).enumerate() {
+            *slot = VolumeSlot::new(volume, bricks.get(i).copied().unwrap_or_default());
         }
+        let skipping = plan.skipping && bricks.len() == plan.volumes.len();
         Self {
             ray_origin: v(rays.origin),
             step: plan.step,
@@ -239,6 +265,8 @@ impl Params {
             has_background_image: u32::from(plan.has_background_image),
             light_color: plan.light_color.to_array(),
             max_steps: plan.max_steps,
+            skipping: u32::from(skipping),
+            _pad: [0; 3],
             clip,
             volumes,
         }
@@ -306,6 +334,7 @@ pub(super) fn declarations() -> String {
         ("FORMAT_RGBA32F", ColorFormat::Rgba32F.code()),
         ("FILTER_LINEAR", Filter::Linear.code()),
         ("FILTER_NEAREST", Filter::Nearest.code()),
+        ("BRICK", BRICK),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {
@@ -313,6 +342,7 @@ pub(super) fn declarations() -> String {
     }
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
+    out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
     out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl()
 }
 
