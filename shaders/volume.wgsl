@@ -244,7 +244,10 @@ fn brick_region(v: u32, g: vec3f, gd: vec3f) -> vec2f {
     let r = max(d - 1, 0);
     let lo = vec3f((b - vec3i(r)) * i32(BRICK));
     let up = vec3f((b + vec3i(r + 1)) * i32(BRICK));
-    var length = bitcast<f32>(0x7f800000u);
+    // Margins shorten a leap and lengthen a stretch to sample, as
+    // EmptySpace::region explains.
+    var clear = bitcast<f32>(0x7f800000u);
+    var busy = clear;
     for (var k = 0; k < 3; k++) {
         var room: f32;
         if gd[k] > 0.0 {
@@ -254,9 +257,14 @@ fn brick_region(v: u32, g: vec3f, gd: vec3f) -> vec2f {
         } else {
             continue;
         }
-        length = min(length, room - LEAP_MARGIN / abs(gd[k]));
+        let margin = LEAP_MARGIN / abs(gd[k]);
+        clear = min(clear, room - margin);
+        busy = min(busy, room + margin);
     }
-    return vec2f(select(0.0, 1.0, d > 0), max(length, 0.0));
+    if d > 0 {
+        return vec2f(1.0, max(clear, 0.0));
+    }
+    return vec2f(0.0, busy);
 }
 
 // What the primary ray o + t d meets from its sample at p (t along it), as

@@ -198,6 +198,66 @@ fn cave_wall_example_renders_both_eyes() {
     assert_ne!(left, right, "the two eyes see the wall from the same place");
 }
 
+/// The benchmark host of examples/c/ runs small, writes its JSON with the
+/// samples the device counted, and skipping changes the samples, not the
+/// picture.
+#[test]
+fn the_shells_benchmark_host_reports_what_it_measured() {
+    let dir = scratch("c_bench_shells");
+    let program = dir.join("bench_shells");
+    compile(&["examples/c/bench_shells.c"], &program, false, true);
+    let mut runs = Vec::new();
+    for skipping in ["1", "0"] {
+        let json = dir.join(format!("skipping_{skipping}.json"));
+        let ppm = dir.join(format!("skipping_{skipping}.ppm"));
+        let output = common::c::host_command(&program)
+            .args([
+                "--backend",
+                "cpu",
+                "--size",
+                "48",
+                "--voxels",
+                "32",
+                "--frames",
+                "2",
+            ])
+            .args(["--skipping", skipping, "--json"])
+            .arg(&json)
+            .arg("--ppm")
+            .arg(&ppm)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "bench_shells: {}",
+            describe(&output)
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(report["benchmark"], "capi-shells");
+        assert_eq!(report["ms"].as_array().unwrap().len(), 2);
+        assert!(report["machine"]["cpu"]
+            .as_str()
+            .is_some_and(|c| !c.is_empty()));
+        assert_eq!(report["skipping"], skipping == "1");
+        runs.push((
+            report["last_frame_samples"].as_u64().unwrap(),
+            std::fs::read(&ppm).unwrap(),
+        ));
+    }
+    let ((on, on_image), (off, off_image)) = (&runs[0], &runs[1]);
+    assert!(
+        *on > 0 && on < off,
+        "samples with skipping {on}, without {off}"
+    );
+    assert_eq!(on_image, off_image, "skipping changed the picture");
+    let usage = common::c::host_command(&program)
+        .args(["--frames", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(usage.status.code(), Some(2), "{}", describe(&usage));
+}
+
 /// The SDK test scenes' pattern: arrays on host memory are released, and
 /// the memory overwritten and freed, before the objects using them are
 /// committed. The device must have copied them at release; the image must

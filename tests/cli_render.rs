@@ -6,6 +6,7 @@ use common::caveray;
 
 use std::path::{Path, PathBuf};
 
+use anari_library_caveray::render::GpuRenderer;
 use serde_json::Value;
 
 fn scratch(test: &str) -> PathBuf {
@@ -72,7 +73,12 @@ fn every_wall_and_eye_of_the_cologne_cave_is_rendered() {
         assert_eq!(image.dimensions(), (32, 32));
         assert!(v["ms"].as_f64().unwrap() > 0.0);
         assert!(v["rays_per_s"].as_f64().unwrap() > 0.0);
-        assert!(v["samples_per_s"].as_f64().unwrap() > 0.0);
+        // A wall that sees only air takes no sample: its bricks are clear.
+        let samples = v["samples_per_s"].as_f64().unwrap();
+        assert!(samples >= 0.0);
+        if file == "front_left.png" {
+            assert!(samples > 0.0, "the front wall sampled nothing");
+        }
     }
     // The volume floats in front of the viewer: the front wall shows it.
     let front = png(&out.join("front_left.png"));
@@ -87,8 +93,14 @@ fn every_wall_and_eye_of_the_cologne_cave_is_rendered() {
         // Unfolded cube of 5 walls: 3 x 3 cells of 32 px plus 4 px gaps.
         assert_eq!(sheet.dimensions(), (3 * 32 + 4 * 4, 3 * 32 + 4 * 4));
     }
-    assert_eq!(report["renderer"]["backend"], "gpu");
-    assert_eq!(report["renderer"]["api"], "Vulkan");
+    // `auto` takes a hardware GPU, and the CPU over a software adapter.
+    let adapter = GpuRenderer::probe().unwrap();
+    if adapter.device_type == wgpu::DeviceType::Cpu {
+        assert_eq!(report["renderer"]["backend"], "cpu");
+    } else {
+        assert_eq!(report["renderer"]["backend"], "gpu");
+        assert_eq!(report["renderer"]["api"], "Vulkan");
+    }
     assert_eq!(report["strategy"], "offaxis");
     assert_eq!(report["volume"]["dims"], serde_json::json!([48, 48, 48]));
     std::fs::remove_dir_all(&out).unwrap();

@@ -116,9 +116,9 @@ int main(int argc, char **argv)
 
   /* caveray's `shells` preset: clear below 0.1, translucent above. */
   float colors[4 * 3] = {0.2f, 0.4f, 1.0f, 0.2f, 0.4f, 1.0f, 0.5f, 0.8f, 0.6f, 1.0f, 0.7f, 0.2f};
-  float opacities[11] = {0, 0, 0.01f, 0.02f, 0.03f, 0.04f, 0.056f, 0.072f, 0.088f, 0.104f, 0.12f};
+  float opacities[11] = {0, 0, 0.0375f, 0.075f, 0.1125f, 0.15f, 0.22f, 0.29f, 0.36f, 0.43f, 0.5f};
   float origin[3] = {-1, -1, -1}, spacing[3] = {2.0f / (n - 1), 2.0f / (n - 1), 2.0f / (n - 1)};
-  float unit = 0.05f, fovy = 40.0f * 3.14159265f / 180.0f, up[3] = {0, 1, 0};
+  float unit = 0.2f, fovy = 40.0f * 3.14159265f / 180.0f, up[3] = {0, 1, 0};
   unsigned fsize[2] = {size, size};
   ANARIDataType color = ANARI_UFIXED8_RGBA_SRGB;
   int ok = 1;

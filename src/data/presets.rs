@@ -51,13 +51,13 @@ const MRI: Points = &[
     (0.6, 1.0, 0.85, 0.7, 0.35),
     (1.0, 1.0, 1.0, 1.0, 0.8),
 ];
-// Translucent, so that every ray crosses all four shells: blue inner,
-// amber outer, air (below 0.1) clear.
+// Translucent at the scale of a shell's thickness, so that rays cross all
+// four shells: blue inner, amber outer, air (below 0.1) clear.
 const SHELLS: Points = &[
     (0.0, 0.2, 0.4, 1.0, 0.0),
     (0.1, 0.2, 0.4, 1.0, 0.0),
-    (0.5, 0.5, 0.8, 0.6, 0.04),
-    (1.0, 1.0, 0.7, 0.2, 0.12),
+    (0.5, 0.5, 0.8, 0.6, 0.15),
+    (1.0, 1.0, 0.7, 0.2, 0.5),
 ];
 const GREY: Points = &[(0.0, 0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0, 1.0)];
 

@@ -11,7 +11,7 @@ use super::camera::stereo::EyeView;
 use super::frame::slot::{FrameSlot, Kept};
 use super::types::{DataType, Severity, Status, StatusCode};
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection, StereoFrames};
-use crate::render::{Backend, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
+use crate::render::{AutoChoice, Backend, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
 use crate::scene::Scene;
 
 /// Where a device's status messages go; called from any thread.
@@ -196,12 +196,18 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
         if renderer.as_ref().map(|r| r.0) != Some(job.backend) {
             *renderer = None;
             let (made, why) = Renderer::choose(job.backend).map_err(|e| e.to_string())?;
-            if let Some(why) = why {
-                report(status(
-                    Severity::Warning,
-                    StatusCode::NoError,
-                    format!("no GPU ({why}); rendering with the CPU reference"),
-                ));
+            match why {
+                // A missing GPU is worth a warning; a software adapter
+                // passed over is the right choice, said for the record.
+                Some(why @ AutoChoice::NoGpu(_)) => {
+                    report(status(
+                        Severity::Warning,
+                        StatusCode::NoError,
+                        why.to_string(),
+                    ));
+                }
+                Some(why) => report(status(Severity::Info, StatusCode::NoError, why.to_string())),
+                None => {}
             }
             report(status(
                 Severity::Info,

@@ -16,8 +16,9 @@ use super::RenderError;
 use crate::render::frame::filled;
 use crate::scene::{Scene, StructuredVolume, TransferFunction, TABLE_SIZE};
 
-/// Cells per brick edge.
+/// Cells per brick edge; a power of two (the CPU's packets shift by it).
 pub const BRICK: u32 = 8;
+const _: () = assert!(BRICK.is_power_of_two());
 /// The largest distance kept: rays leap at most this many bricks at a
 /// time, then look again.
 pub const MAX_DISTANCE: u8 = 255;
@@ -162,7 +163,8 @@ fn owners(v: usize, b: usize, n: usize) -> std::ops::Range<usize> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmptySpace {
     pub bricks: UVec3,
-    pub distance: Vec<u8>,
+    /// u32, as the shader and the CPU's gathers read it.
+    pub distance: Vec<u32>,
 }
 
 impl EmptySpace {
@@ -201,9 +203,13 @@ impl EmptySpace {
             }
         }
         chessboard(&mut distance, ranges.bricks);
+        let mut wide = filled(count, 0u32, "the empty-space distances")?;
+        for (w, &d) in wide.iter_mut().zip(&distance) {
+            *w = u32::from(d);
+        }
         Ok(Self {
             bricks: ranges.bricks,
-            distance,
+            distance: wide,
         })
     }
 
@@ -213,34 +219,72 @@ impl EmptySpace {
     }
 
     /// The region around grid point `g` (inside the grid, whose largest
-    /// vertex is `hi`) whose state is known, and how far along grid
-    /// direction `gd` (grid units per unit t) a ray stays in it: the cube
-    /// of clear bricks around a clear brick (less a margin, so that
-    /// rounding never carries a ray past a sample that could show), or
-    /// the brick itself where it could show.
-    pub fn region(&self, g: Vec3, gd: Vec3, hi: IVec3) -> Region {
+    /// vertex is `hi`) whose state is known, and how far a ray going
+    /// `along` stays in it: the cube
+    /// of clear bricks around a clear brick, or of bricks that could show
+    /// around one that could.
+    #[inline]
+    pub fn region(&self, g: Vec3, along: &Along, hi: IVec3) -> Region {
         let b = cell_of(g, hi) / BRICK as i32;
-        let n = self.bricks.as_ivec3();
-        let d = i32::from(self.distance[(b.x + n.x * (b.y + n.y * b.z)) as usize]);
-        // Bricks b - r ..= b + r: grid points from BRICK * (b - r) up to
-        // (not including) BRICK * (b + r + 1).
+        let d = self.distance[self.index(b)] as i32;
+        // Bricks b - r ..= b + r, all clear or this one alone: grid points
+        // from BRICK * (b - r) up to (not including) BRICK * (b + r + 1).
         let r = (d - 1).max(0);
         let lo = ((b - IVec3::splat(r)) * BRICK as i32).as_vec3();
         let up = ((b + IVec3::splat(r + 1)) * BRICK as i32).as_vec3();
-        let mut length = f32::INFINITY;
+        // Rounding must never end a leap past a brick that could show, nor
+        // end sampling before the brick is left (its next look would find
+        // it again): a margin shortens the one and lengthens the other,
+        // per axis, in grid units.
+        let (mut clear, mut busy) = (f32::INFINITY, f32::INFINITY);
         for k in 0..3 {
-            let room = if gd[k] > 0.0 {
-                (up[k] - g[k]) / gd[k]
-            } else if gd[k] < 0.0 {
-                (g[k] - lo[k]) / -gd[k]
+            let room = if along.gd[k] > 0.0 {
+                (up[k] - g[k]) * along.inv[k]
+            } else if along.gd[k] < 0.0 {
+                (lo[k] - g[k]) * along.inv[k]
             } else {
                 continue;
             };
-            length = length.min(room - LEAP_MARGIN / gd[k].abs());
+            clear = clear.min(room - along.margin[k]);
+            busy = busy.min(room + along.margin[k]);
         }
-        Region {
-            clear: d > 0,
-            length: length.max(0.0),
+        if d > 0 {
+            Region {
+                clear: true,
+                length: clear.max(0.0),
+            }
+        } else {
+            Region {
+                clear: false,
+                length: busy,
+            }
+        }
+    }
+
+    fn index(&self, b: IVec3) -> usize {
+        let n = self.bricks.as_ivec3();
+        (b.x + n.x * (b.y + n.y * b.z)) as usize
+    }
+}
+
+/// A ray's direction in a grid, with what every look at the bricks
+/// divides by worked out once.
+#[derive(Clone, Copy, Debug)]
+pub struct Along {
+    /// Grid units per unit t.
+    gd: Vec3,
+    inv: Vec3,
+    /// LEAP_MARGIN grid units, in t, per axis.
+    margin: Vec3,
+}
+
+impl Along {
+    pub fn new(gd: Vec3) -> Self {
+        let inv = gd.recip();
+        Self {
+            gd,
+            inv,
+            margin: LEAP_MARGIN * inv.abs(),
         }
     }
 }
@@ -255,6 +299,7 @@ pub struct Region {
 
 /// The cell a sample at grid point `g` interpolates in, as both
 /// renderers choose it.
+#[inline]
 pub fn cell_of(g: Vec3, hi: IVec3) -> IVec3 {
     // Truncation is floor for the clamped, non-negative g.
     let g = g.clamp(Vec3::ZERO, hi.as_vec3());
@@ -392,9 +437,12 @@ mod tests {
         table[128].w = 0.3;
         let space = EmptySpace::new(&ranges, &table, 0.0, 1.0).unwrap();
         assert_eq!(space.occupied(), 4);
-        // A value range that maps brick 0's values past the table's end.
-        let space = EmptySpace::new(&ranges, &table, -1.0, 0.5).unwrap();
+        // Values below the table's range clamp to its clear first entry...
+        let space = EmptySpace::new(&ranges, &table, 2.0, 1.0).unwrap();
         assert_eq!(space.occupied(), 0);
+        // ... and above it to its visible last one.
+        let space = EmptySpace::new(&ranges, &table, -2.0, 1.0).unwrap();
+        assert_eq!(space.occupied(), 8);
     }
 
     #[test]
@@ -408,18 +456,18 @@ mod tests {
         assert_eq!(space.distance, vec![3, 2, 1, 0, 0]);
         let hi = dims.as_ivec3() - IVec3::ONE;
         let leap = |x: f32, gd: Vec3| {
-            let r = space.region(Vec3::new(x, 4.0, 4.0), gd, hi);
+            let r = space.region(Vec3::new(x, 4.0, 4.0), &Along::new(gd), hi);
             assert!(r.clear, "x = {x}");
             r.length
         };
         let t = leap(1.5, Vec3::new(2.0, 0.0, 0.0));
         // Clear up to x = 24 (bricks 0..=2), at 2 grid units per t.
         assert!((t - (24.0 - 1.5 - LEAP_MARGIN) / 2.0).abs() < 1e-5, "{t}");
-        // Brick 3 could show: sampled up to its far face.
-        let r = space.region(Vec3::new(25.0, 4.0, 4.0), Vec3::X, hi);
+        // Brick 3 could show: sampled up to just past its far face.
+        let r = space.region(Vec3::new(25.0, 4.0, 4.0), &Along::new(Vec3::X), hi);
         assert!(!r.clear);
         assert!(
-            (r.length - (32.0 - 25.0 - LEAP_MARGIN)).abs() < 1e-5,
+            (r.length - (32.0 - 25.0 + LEAP_MARGIN)).abs() < 1e-5,
             "{r:?}"
         );
         // Going away from the visible part: brick 2 alone is known clear

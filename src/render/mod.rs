@@ -76,7 +76,7 @@ pub fn march_warning(scene: &Scene, settings: &RenderSettings) -> Option<String>
 /// device's `backend` parameter and `$CAVERAY_BACKEND` choose from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Backend {
-    /// The GPU where an adapter opens, else the CPU reference.
+    /// The GPU where a hardware adapter opens, else the CPU.
     #[default]
     Auto,
     Gpu,
@@ -107,7 +107,28 @@ impl std::str::FromStr for Backend {
     }
 }
 
-/// The GPU renderer where an adapter exists, else the CPU reference.
+/// Why `Backend::Auto` rendered on the CPU.
+#[derive(Debug)]
+pub enum AutoChoice {
+    /// No Vulkan adapter opened.
+    NoGpu(RenderError),
+    /// The best adapter is this software one, slower than the CPU path.
+    SoftwareAdapter(String),
+}
+
+impl std::fmt::Display for AutoChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AutoChoice::NoGpu(e) => write!(f, "no GPU ({e}); rendering on the CPU"),
+            AutoChoice::SoftwareAdapter(name) => write!(
+                f,
+                "the only Vulkan adapter is {name}, which runs on the CPU: the CPU renderer is faster here, so it renders (backend 'gpu' takes the adapter anyway)"
+            ),
+        }
+    }
+}
+
+/// The GPU renderer where a hardware adapter exists, else the CPU's.
 pub enum Renderer {
     Gpu(Box<GpuRenderer>),
     Cpu(CpuRenderer),
@@ -115,20 +136,34 @@ pub enum Renderer {
 
 impl Renderer {
     /// The renderer `backend` names; `Backend::Gpu` fails if no adapter
-    /// can be opened. See [`Renderer::choose`] for why `Auto` fell back.
+    /// can be opened. See [`Renderer::choose`] for what `Auto` picks.
     pub fn new(backend: Backend) -> Result<Self, RenderError> {
         Self::choose(backend).map(|(r, _)| r)
     }
 
-    /// The renderer `backend` names and, where `Auto` fell back to the CPU
-    /// reference, the reason there is no GPU.
-    pub fn choose(backend: Backend) -> Result<(Self, Option<RenderError>), RenderError> {
+    /// The renderer `backend` names and, where `Auto` chose the CPU, why:
+    /// no Vulkan adapter opens, or the best one is software (llvmpipe),
+    /// where the CPU renderer is the faster of the two (README, Measured).
+    pub fn choose(backend: Backend) -> Result<(Self, Option<AutoChoice>), RenderError> {
         Ok(match backend {
             Backend::Gpu => (Renderer::Gpu(Box::new(GpuRenderer::new()?)), None),
             Backend::Cpu => (Renderer::Cpu(CpuRenderer::new()), None),
-            Backend::Auto => match GpuRenderer::new() {
-                Ok(gpu) => (Renderer::Gpu(Box::new(gpu)), None),
-                Err(e) => (Renderer::Cpu(CpuRenderer::new()), Some(e)),
+            Backend::Auto => match GpuRenderer::probe() {
+                Ok(info) if info.device_type == wgpu::DeviceType::Cpu => (
+                    Renderer::Cpu(CpuRenderer::new()),
+                    Some(AutoChoice::SoftwareAdapter(info.name)),
+                ),
+                Ok(_) => match GpuRenderer::new() {
+                    Ok(gpu) => (Renderer::Gpu(Box::new(gpu)), None),
+                    Err(e) => (
+                        Renderer::Cpu(CpuRenderer::new()),
+                        Some(AutoChoice::NoGpu(e)),
+                    ),
+                },
+                Err(e) => (
+                    Renderer::Cpu(CpuRenderer::new()),
+                    Some(AutoChoice::NoGpu(e)),
+                ),
             },
         })
     }
@@ -148,7 +183,15 @@ impl Renderer {
                 let info = g.adapter();
                 format!("GPU: {} ({:?}, {})", info.name, info.backend, info.driver)
             }
-            Renderer::Cpu(_) => format!("CPU reference ({} threads)", rayon::current_num_threads()),
+            Renderer::Cpu(c) => format!(
+                "CPU ({} threads{})",
+                rayon::current_num_threads(),
+                if c.uses_packets() {
+                    ", AVX2 packets"
+                } else {
+                    ", scalar"
+                }
+            ),
         }
     }
 

@@ -64,8 +64,8 @@ impl RenderOptions {
                 Backend::Gpu => Failure::Runtime(format!("{e} (try --backend cpu)")),
                 _ => Failure::Runtime(e.to_string()),
             })?;
-        if let Some(e) = missing {
-            eprintln!("caveray: {e}; falling back to the CPU reference renderer");
+        if let Some(why) = missing {
+            eprintln!("caveray: {why}");
         }
         eprintln!("caveray: rendering on {}", renderer.describe());
         Ok(renderer)

@@ -1,7 +1,10 @@
-use glam::{Vec3, Vec4};
+use glam::{IVec3, Vec3, Vec4};
 
+use super::packet::LANES;
 use super::sample::{correct, Field, Mixture};
 use crate::geometry::RayGen;
+use crate::render::empty_space::Along;
+use crate::render::march_plan::MarchPlan;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
 use crate::scene::MAX_VOLUMES;
 
@@ -20,8 +23,10 @@ pub(super) struct RayResult {
 pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: Vec4) -> RayResult {
     let mut samples = 0;
     let plan = field.plan;
-    let mut acc = Vec4::ZERO;
-    let mut depth = f32::INFINITY;
+    let mut acc = Accumulator {
+        color: Vec4::ZERO,
+        depth: f32::INFINITY,
+    };
     let clip = (rays.t_near, rays.t_far);
     // Each volume's span along the ray, found in its grid, where the
     // affine map keeps the ray's parameter t.
@@ -36,6 +41,24 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
         Some((lo, hi)) => Some((a.min(lo), b.max(hi))),
     });
     let range = union.and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
+    // The packet path's view of the ray: its grid origin and direction.
+    let packet = field.packet.as_ref().map(|p| {
+        let g = &field.grids[0].plan;
+        (p, g.grid(origin), g.grid_direction(dir))
+    });
+    // What the bricks say from t on; one volume needs no span checks, and
+    // its grid point follows from the ray's.
+    let single = packet.zip(field.grids.first().and_then(|g| g.space));
+    let along = packet.map(|(_, _, gd)| Along::new(gd));
+    let hi = field
+        .grids
+        .first()
+        .map(|g| g.plan.dims.as_ivec3() - IVec3::ONE);
+    let look = |t: f32| match (single, &along, hi) {
+        (Some(((_, go, gd), space)), Some(along), Some(hi)) => space.region(go + gd * t, along, hi),
+        _ => field.region(&spans, origin + dir * t, dir, t),
+    };
+    let unlit = matches!(plan.shading, Shading::None | Shading::Directional(0));
     if let Some((t0, t1)) = range {
         let len = t1 - t0;
         // `as` saturates; the cap holds where t has lost its precision.
@@ -43,26 +66,75 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
         let mut k = 0;
         // Up to here, the last look at the bricks said some could show.
         let mut busy_until = f32::NEG_INFINITY;
-        while k < n {
+        'ray: while k < n {
             // Every segment is a full step but the last; each is sampled
             // at its midpoint and its opacity corrected for its length.
             let start = k as f32 * plan.step;
-            k += 1;
             let seg = plan.step.min(len - start).max(0.0);
             let t = t0 + start + 0.5 * seg;
             let p = origin + dir * t;
             if plan.skipping && t >= busy_until {
-                let region = field.region(&spans, p, dir, t);
+                let region = look(t);
                 if region.clear {
                     // Samples up to t + length are clear: go on from the
                     // last one at or before it (`as` saturates an endless
                     // leap).
                     let last_clear = ((t + region.length - t0) / plan.step - 0.5).floor();
-                    k = k.max(last_clear as u32);
+                    k = (k + 1).max(last_clear as u32);
                     continue;
                 }
-                busy_until = t + region.length;
+                // Packets find clear bricks themselves (below); only one
+                // that is all clear brings the next look.
+                busy_until = if packet.is_some() {
+                    f32::INFINITY
+                } else {
+                    t + region.length
+                };
             }
+            // Full steps up to the bricks' next look, LANES at a time.
+            if let Some((grid, go, gd)) = packet.filter(|_| k + (LANES as u32) < n) {
+                let mut ts = [t; LANES];
+                for (m, t) in ts.iter_mut().enumerate().skip(1) {
+                    *t = t0 + (k + m as u32) as f32 * plan.step + 0.5 * plan.step;
+                }
+                let exponent = plan.step * field.grids[0].plan.inv_unit_distance;
+                let classified = grid.classify(go, gd, &ts, exponent);
+                if !classified.any {
+                    // Nothing showed: perhaps the ray is in clear bricks
+                    // again, where a leap could start.
+                    busy_until = f32::NEG_INFINITY;
+                    k += LANES as u32;
+                    samples += LANES as u32;
+                    continue;
+                }
+                let lanes = ts.iter().zip(classified.rgb.iter().zip(classified.alpha));
+                if unlit {
+                    // Without shading a clear lane adds nothing: blending
+                    // it costs less than the branch that would skip it.
+                    for (&t, (&rgb, a)) in lanes {
+                        k += 1;
+                        samples += 1;
+                        let p = || origin + dir * t;
+                        if acc.add(plan, rays, p, t, rgb * plan.light_color, a) {
+                            break 'ray;
+                        }
+                    }
+                    continue;
+                }
+                for (&t, (&rgb, a)) in lanes {
+                    k += 1;
+                    samples += 1;
+                    if a > 0.0 {
+                        let p = origin + dir * t;
+                        let s = shade(field, p, &mut samples);
+                        if acc.add(plan, rays, || p, t, rgb * s * plan.light_color, a) {
+                            break 'ray;
+                        }
+                    }
+                }
+                continue;
+            }
+            k += 1;
             let mut mixture = Mixture::default();
             for (grid, span) in field.grids.iter().zip(&spans) {
                 let Some((a, b)) = *span else { continue };
@@ -80,25 +152,60 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
                 continue;
             }
             let s = shade(field, p, &mut samples);
-            let weight = (1.0 - acc.w) * mixture.alpha;
-            acc = (acc.truncate() + mixture.color() * s * plan.light_color * weight)
-                .extend(acc.w + weight);
-            if depth == f32::INFINITY && acc.w >= plan.depth_threshold {
-                depth = match rays.eye {
-                    Some(eye) => (p - eye).length(),
-                    None => t,
-                };
-            }
-            if acc.w >= plan.termination {
+            let lit = mixture.color() * s * plan.light_color;
+            if acc.add(plan, rays, || p, t, lit, mixture.alpha) {
                 break;
             }
         }
     }
-    let rgb = acc.truncate() + (1.0 - acc.w) * bg.truncate();
+    let Accumulator { color, depth } = acc;
+    let rgb = color.truncate() + (1.0 - color.w) * bg.truncate();
     RayResult {
-        color: rgb.extend(acc.w + (1.0 - acc.w) * bg.w),
+        color: rgb.extend(color.w + (1.0 - color.w) * bg.w),
         depth,
         samples,
+    }
+}
+
+/// Front-to-back compositing of one ray, and where it became opaque
+/// enough for its depth.
+struct Accumulator {
+    /// Premultiplied.
+    color: Vec4,
+    depth: f32,
+}
+
+impl Accumulator {
+    /// Blends a sample of colour `lit` and opacity `a` behind what is
+    /// there; the opacity now.
+    #[inline]
+    fn blend(&mut self, lit: Vec3, a: f32) -> f32 {
+        let acc = self.color;
+        let weight = (1.0 - acc.w) * a;
+        self.color = (acc.truncate() + lit * weight).extend(acc.w + weight);
+        self.color.w
+    }
+
+    /// Adds a sample at `p` (`t` along the ray) of shaded colour `lit` and
+    /// opacity `a`; true once the ray is opaque enough to stop.
+    /// (`p` makes the sample's position, needed once per ray.)
+    fn add(
+        &mut self,
+        plan: &MarchPlan,
+        rays: &RayGen,
+        p: impl Fn() -> Vec3,
+        t: f32,
+        lit: Vec3,
+        a: f32,
+    ) -> bool {
+        self.blend(lit, a);
+        if self.depth == f32::INFINITY && self.color.w >= plan.depth_threshold {
+            self.depth = match rays.eye {
+                Some(eye) => (p() - eye).length(),
+                None => t,
+            };
+        }
+        self.color.w >= plan.termination
     }
 }
 

@@ -3,6 +3,7 @@
 //! the tool falls back to it where no adapter exists.
 
 mod march;
+mod packet;
 mod sample;
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -17,10 +18,17 @@ use super::{RenderError, RenderSettings};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
 use crate::scene::{Scene, StructuredVolume, TransferFunction};
+use packet::Channels;
 use sample::Converted;
+
+/// Pixels per tile edge.
+const TILE: usize = 16;
 
 #[derive(Debug, Default)]
 pub struct CpuRenderer {
+    /// Whether one trilinear volume's primary samples go eight at a time
+    /// through AVX2 lanes where the CPU has them (packet.rs).
+    packets: bool,
     /// The last scene's voxels as f32 and its tables, kept while scenes
     /// bring the same `Arc`s, as the GPU keeps its uploads.
     cache: Mutex<Prepared>,
@@ -34,8 +42,24 @@ struct Prepared {
 }
 
 impl CpuRenderer {
+    /// The CPU renderer, with AVX2 packets where the CPU has them.
     pub fn new() -> Self {
+        Self {
+            packets: true,
+            ..Self::default()
+        }
+    }
+
+    /// The reference: every sample by the scalar path of docs/ray_casting.md,
+    /// which the packet path and the GPU are held to.
+    pub fn reference() -> Self {
         Self::default()
+    }
+
+    /// Whether frames of one trilinear volume take the AVX2 packet path
+    /// on this CPU.
+    pub fn uses_packets(&self) -> bool {
+        self.packets && packet::available()
     }
 
     /// Each volume's values, table and (if the plan skips) clear bricks,
@@ -108,34 +132,57 @@ impl CpuRenderer {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
         let data = self.prepare(scene, &plan)?;
-        let field = sample::Field::new(&plan, &data);
-        let w = desc.size.x as usize;
+        let channels = match &data[..] {
+            [one] if self.packets && packet::available() => Some(Channels::new(&one.table)),
+            _ => None,
+        };
+        let field = sample::Field::new(&plan, &data, channels.as_deref());
+        let (w, h) = (desc.size.x as usize, desc.size.y as usize);
         let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's colour")?;
         let mut depth = filled(desc.pixels(), 0.0f32, "the frame's depth")?;
-        let samples: u64 = color
-            .par_chunks_mut(4 * w)
-            .zip(depth.par_chunks_mut(w))
-            .enumerate()
-            .map(|(y, (crow, drow))| {
+        // Square tiles, not rows: neighbouring rays in both directions read
+        // the same voxels while they are in cache, and a tile is small
+        // enough that two threads stay busy to the frame's end.
+        let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let tiles: Vec<(usize, Vec<f32>, Vec<f32>, u64)> = (0..tx * ty)
+            .into_par_iter()
+            .map(|tile| {
+                let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
+                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let mut c = Vec::with_capacity(4 * TILE * TILE);
+                let mut d = Vec::with_capacity(TILE * TILE);
                 let mut samples = 0u64;
-                for x in 0..w {
-                    // Per pixel: one slow row must not hold up a stop.
-                    if stop.load(Ordering::Relaxed) {
-                        return samples;
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        // Per pixel: one slow tile must not hold up a stop.
+                        if stop.load(Ordering::Relaxed) {
+                            return (tile, c, d, samples);
+                        }
+                        let (o, dir) = rays.pixel_ray(x as u32, y as u32);
+                        let bg = match &settings.background_image {
+                            Some(image) => image.at(x as u32, y as u32, desc.size),
+                            None => plan.background,
+                        };
+                        let ray = march::march(&field, rays, o, dir, bg);
+                        c.extend_from_slice(&ray.color.to_array());
+                        d.push(ray.depth);
+                        samples += u64::from(ray.samples);
                     }
-                    let (o, d) = rays.pixel_ray(x as u32, y as u32);
-                    let bg = match &settings.background_image {
-                        Some(image) => image.at(x as u32, y as u32, desc.size),
-                        None => plan.background,
-                    };
-                    let ray = march::march(&field, rays, o, d, bg);
-                    crow[4 * x..4 * x + 4].copy_from_slice(&ray.color.to_array());
-                    drow[x] = ray.depth;
-                    samples += u64::from(ray.samples);
                 }
-                samples
+                (tile, c, d, samples)
             })
-            .sum();
+            .collect();
+        let mut samples = 0;
+        for (tile, c, d, n) in tiles {
+            samples += n;
+            let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
+            let tw = (x0 + TILE).min(w) - x0;
+            for (row, (cr, dr)) in c.chunks(4 * tw).zip(d.chunks(tw)).enumerate() {
+                let at = (y0 + row) * w + x0;
+                color[4 * at..4 * at + cr.len()].copy_from_slice(cr);
+                depth[at..at + dr.len()].copy_from_slice(dr);
+            }
+        }
         if stop.load(Ordering::Relaxed) {
             return Err(RenderError::Stopped);
         }

@@ -2,7 +2,8 @@ use std::sync::Arc;
 
 use glam::{IVec3, Vec3, Vec4};
 
-use crate::render::empty_space::{EmptySpace, Region};
+use super::packet::{Channels, PacketGrid};
+use crate::render::empty_space::{Along, EmptySpace, Region};
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::scene::{Filter, TABLE_SIZE};
 
@@ -81,11 +82,15 @@ pub(super) struct Converted {
 pub(super) struct Field<'a> {
     pub plan: &'a MarchPlan,
     pub grids: Vec<Grid<'a>>,
+    /// Where the scene is one trilinear volume and the CPU has AVX2: its
+    /// primary samples, eight at a time (packet.rs).
+    pub packet: Option<PacketGrid<'a>>,
 }
 
 impl<'a> Field<'a> {
-    /// `data` holds each volume's values and table, in the plan's order.
-    pub fn new(plan: &'a MarchPlan, data: &'a [Converted]) -> Self {
+    /// `data` holds each volume's values and table, in the plan's order;
+    /// `channels`, the first table split for the packet path, if it runs.
+    pub fn new(plan: &'a MarchPlan, data: &'a [Converted], channels: Option<&'a Channels>) -> Self {
         debug_assert_eq!(plan.volumes.len(), data.len());
         let grids = plan
             .volumes
@@ -101,7 +106,24 @@ impl<'a> Field<'a> {
                 }
             })
             .collect();
-        Self { plan, grids }
+        let packet = match (channels, &plan.volumes[..], data) {
+            // x-neighbour pairs are single loads there: two vertices along x.
+            (Some(channels), [one], [c]) if one.filter == Filter::Linear && one.dims.x >= 2 => {
+                Some(PacketGrid {
+                    values: &c.values,
+                    dims: one.dims.as_ivec3().to_array(),
+                    channels,
+                    value_lo: one.value_lo,
+                    value_scale: one.value_scale,
+                })
+            }
+            _ => None,
+        };
+        Self {
+            plan,
+            grids,
+            packet,
+        }
     }
 
     /// Whether world point `p` lies in any volume.
@@ -131,7 +153,7 @@ impl<'a> Field<'a> {
             };
             let hi = grid.plan.dims.as_ivec3() - IVec3::ONE;
             let g = grid.plan.grid(p);
-            let r = space.region(g, grid.plan.grid_direction(dir), hi);
+            let r = space.region(g, &Along::new(grid.plan.grid_direction(dir)), hi);
             if r.clear {
                 clear = clear.min(r.length);
             } else {

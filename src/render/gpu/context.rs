@@ -60,7 +60,12 @@ pub(super) struct Context {
 }
 
 impl Context {
-    pub fn new() -> Result<Self, RenderError> {
+    /// The adapter `new` would open, without a device: what it is.
+    pub fn probe() -> Result<wgpu::AdapterInfo, RenderError> {
+        Ok(Self::adapter()?.get_info())
+    }
+
+    fn adapter() -> Result<wgpu::Adapter, RenderError> {
         // Vulkan only: GL's 1D textures and array layers are unreliable,
         // and CI runs lavapipe, which is Vulkan.
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
@@ -68,11 +73,15 @@ impl Context {
             flags: wgpu::InstanceFlags::empty().with_env(),
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             ..Default::default()
         }))
-        .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+        .map_err(|e| RenderError::NoAdapter(e.to_string()))
+    }
+
+    pub fn new() -> Result<Self, RenderError> {
+        let adapter = Self::adapter()?;
         let info = adapter.get_info();
         let limits = adapter.limits();
         // Software Vulkan (lavapipe) offers timestamps, but writes the end

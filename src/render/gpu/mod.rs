@@ -188,6 +188,11 @@ impl GpuRenderer {
         })
     }
 
+    /// The adapter `new` would open, without opening it.
+    pub fn probe() -> Result<wgpu::AdapterInfo, RenderError> {
+        Context::probe()
+    }
+
     /// GPU time of the last frame's ray casting pass (no upload or
     /// read-back), in milliseconds, by [`GpuRenderer::pass_clock`].
     pub fn last_pass_ms(&self) -> f64 {

@@ -86,7 +86,7 @@ pub(super) fn bricks_buffer(
             offset: words.len() as u32,
             bricks: space.bricks.to_array(),
         });
-        words.extend(space.distance.iter().map(|&d| u32::from(d)));
+        words.extend_from_slice(&space.distance);
     }
     if words.is_empty() {
         words.push(0); // storage bindings cannot be empty

@@ -1,14 +1,18 @@
 //! `caveray bench raycast`: the paper's ray-casting setup (its protocol
 //! constants and focal length come from the stereo planner) on the GPU and
-//! the CPU reference. Timings are wall-clock per frame, read-back
-//! included, after a warm-up frame; the GPU's pass times come beside them.
+//! the CPU, over volumes, shading modes and empty-space skipping on and
+//! off, optionally beside the scalar CPU reference marching every step.
+//! Timings are wall-clock per frame, read-back included, after a warm-up
+//! frame; the GPU's pass times come beside them.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::stereo::{paper, HmdStereo};
-use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
+use anari_library_caveray::render::{
+    Backend, CpuRenderer, FrameDesc, RenderSettings, Renderer, Shading,
+};
 use anari_library_caveray::scene::Scene;
 use clap::Args;
 use glam::{DVec3, UVec2, Vec3};
@@ -39,35 +43,61 @@ pub struct RaycastArgs {
     /// ratio compares the same views. 0 skips the CPU.
     #[arg(long, default_value_t = 5)]
     cpu_steps: u32,
-    /// Skip the GPU (e.g. to time the CPU reference alone).
+    /// Skip the GPU (e.g. to time the CPU alone).
     #[arg(long)]
     no_gpu: bool,
+    /// Empty-space skipping, comma-separated: on, off or both; with both,
+    /// the speed-up and the samples skipped are reported.
+    #[arg(long, default_value = "on", value_delimiter = ',', value_parser = on_off)]
+    skipping: Vec<bool>,
+    /// Also time the scalar CPU reference marching every step (the CPU
+    /// renderer before packets and skipping) on the CPU's views.
+    #[arg(long)]
+    cpu_reference: bool,
     /// Where to write the results.
     #[arg(long)]
     json: PathBuf,
+}
+
+fn on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("expected on or off, got '{s}'")),
+    }
 }
 
 #[derive(Serialize)]
 struct RaycastReport {
     benchmark: &'static str,
     machine: Machine,
-    volume: VolumeInfo,
     image: [u32; 2],
     fov_degrees: f64,
     focal_length_m: f64,
     bounding_radius_m: f64,
     steps: u32,
     cpu_views: Vec<usize>,
+    volumes: Vec<VolumeRuns>,
+}
+
+#[derive(Serialize)]
+struct VolumeRuns {
+    volume: VolumeInfo,
     runs: Vec<RaycastRun>,
+    /// Per shading mode and backend, where skipping ran both ways.
+    skipping: Vec<SkippingGain>,
 }
 
 #[derive(Serialize)]
 struct RaycastRun {
     shading: String,
+    skipping: bool,
     extra_samples_per_sample: u32,
     results: Results,
     /// Mean CPU time over mean GPU time on the views both rendered.
     cpu_over_gpu_same_views: Option<f64>,
+    /// Mean reference time over mean CPU time, same views.
+    cpu_speedup_over_reference: Option<f64>,
 }
 
 #[derive(Default, Serialize)]
@@ -76,6 +106,21 @@ struct Results {
     gpu: Option<Timings>,
     #[serde(skip_serializing_if = "Option::is_none")]
     cpu: Option<Timings>,
+    /// The scalar reference, every step marched (skipping off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    cpu_reference: Option<Timings>,
+}
+
+#[derive(Serialize)]
+struct SkippingGain {
+    shading: String,
+    backend: &'static str,
+    /// Mean time with skipping off over with it on.
+    speedup: f64,
+    samples_on: u64,
+    samples_off: u64,
+    /// Share of the samples skipping left out.
+    skipped: f64,
 }
 
 #[derive(Serialize)]
@@ -90,6 +135,8 @@ struct Timings {
     pass_ms: Option<Vec<f64>>,
     rays_per_s: f64,
     samples_per_s: f64,
+    /// Volume samples taken over all views.
+    samples: u64,
 }
 
 /// One timed view: index, wall-clock ms, GPU pass ms, samples.
@@ -107,100 +154,179 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
             args.size, args.steps, args.cpu_steps
         )));
     }
-    let loaded = args.volume.load()?;
     FrameDesc::new(glam::UVec2::splat(args.size))
         .validate()
         .map_err(|e| Failure::Usage(format!("--size {}: {e}", args.size)))?;
+    let names = args.volume.volume_list("phantom");
     let setup = HmdStereo::protocol(args.size, paper::SPAN_PX);
     let radius = setup.radius.unwrap_or(paper::RADIUS_M);
-    // Longest side such that the bounding sphere has the protocol's radius.
-    let (lo, hi) = loaded.volume.bounds();
-    let extent = hi - lo;
-    let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
-    let scene = loaded.placed(Vec3::ZERO, size)?;
     let image = UVec2::splat(args.size);
     let cameras = (0..args.steps)
         .map(|i| camera(i, args.steps, &setup, radius, image))
         .collect::<Result<Vec<_>, _>>()?;
 
-    let mut renderers = Vec::new();
+    let mut renderers: Vec<(Kind, Renderer)> = Vec::new();
     if !args.no_gpu {
-        let gpu = Renderer::new(Backend::Gpu).map_err(|e| {
-            Failure::Runtime(format!(
-                "{e} (use --no-gpu to time the CPU reference alone)"
-            ))
-        })?;
-        renderers.push(gpu);
+        let gpu = Renderer::new(Backend::Gpu)
+            .map_err(|e| Failure::Runtime(format!("{e} (use --no-gpu to time the CPU alone)")))?;
+        renderers.push((Kind::Gpu, gpu));
     }
     if args.cpu_steps > 0 {
-        renderers.push(Renderer::new(Backend::Cpu).map_err(|e| Failure::Runtime(e.to_string()))?);
+        renderers.push((Kind::Cpu, Renderer::Cpu(CpuRenderer::new())));
+        if args.cpu_reference {
+            renderers.push((Kind::Reference, Renderer::Cpu(CpuRenderer::reference())));
+        }
     }
     let cpu_views: Vec<usize> = (0..args.cpu_steps)
         .map(|i| (i * args.steps / args.cpu_steps.max(1)) as usize)
         .collect();
-    let views_of = |r: &Renderer| match r.backend() {
-        Backend::Cpu => cpu_views.clone(),
-        _ => (0..cameras.len()).collect::<Vec<_>>(),
+    let views_of = |kind: Kind| match kind {
+        Kind::Gpu => (0..cameras.len()).collect::<Vec<_>>(),
+        _ => cpu_views.clone(),
     };
-    let total: usize = renderers
+    // The reference runs once per volume and mode, whatever the skipping.
+    let per_setting: usize = renderers
         .iter()
-        .map(|r| views_of(r).len() + usize::from(r.backend() == Backend::Gpu))
-        .sum::<usize>()
-        * args.shading.len();
+        .filter(|(k, _)| *k != Kind::Reference)
+        .map(|(k, _)| views_of(*k).len() + usize::from(*k == Kind::Gpu))
+        .sum();
+    let reference = if args.cpu_reference {
+        cpu_views.len()
+    } else {
+        0
+    };
+    let total = names.len() * args.shading.len() * (per_setting * args.skipping.len() + reference);
     let mut progress = Progress::new(total);
 
-    let mut runs = Vec::new();
-    for shading in &args.shading {
-        let settings = RenderSettings {
-            shading: *shading,
-            ..Default::default()
-        };
-        let mut results = Results::default();
-        for renderer in &mut renderers {
-            let backend = renderer.backend();
-            let name = backend.name();
-            if backend == Backend::Gpu {
-                renderer
-                    .upload(&scene)
-                    .map_err(|e| Failure::Runtime(e.to_string()))?;
-                time_view(renderer, 0, &scene, &cameras[0], &settings, image)?;
-                progress.step(&format!("{name} {shading} warm-up"));
-            }
-            let mut timed = Vec::new();
-            for i in views_of(renderer) {
-                let t = time_view(renderer, i, &scene, &cameras[i], &settings, image)?;
-                progress.step(&format!("{name} {shading} view {i} {:.1} ms", t.ms));
-                timed.push(t);
-            }
-            let timings = Some(summary(renderer, &timed, image));
-            match backend {
-                Backend::Cpu => results.cpu = timings,
-                _ => results.gpu = timings,
+    let mut volumes = Vec::new();
+    for name in &names {
+        let loaded = args.volume.with_volume(name).load()?;
+        // Longest side such that the bounding sphere has the protocol's radius.
+        let (lo, hi) = loaded.volume.bounds();
+        let extent = hi - lo;
+        let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
+        let scene = loaded.placed(Vec3::ZERO, size)?;
+        let mut runs = Vec::new();
+        for shading in &args.shading {
+            for (n, &skipping) in args.skipping.iter().enumerate() {
+                let settings = RenderSettings {
+                    shading: *shading,
+                    skipping,
+                    ..Default::default()
+                };
+                let mut results = Results::default();
+                for (kind, renderer) in &mut renderers {
+                    if *kind == Kind::Reference && n > 0 {
+                        continue;
+                    }
+                    let settings = RenderSettings {
+                        skipping: skipping && *kind != Kind::Reference,
+                        ..settings.clone()
+                    };
+                    let label = format!(
+                        "{} {} {shading} skipping {}",
+                        loaded.name,
+                        kind.name(),
+                        if settings.skipping { "on" } else { "off" }
+                    );
+                    if *kind == Kind::Gpu {
+                        renderer
+                            .upload(&scene)
+                            .map_err(|e| Failure::Runtime(e.to_string()))?;
+                        time_view(renderer, 0, &scene, &cameras[0], &settings, image)?;
+                        progress.step(&format!("{label} warm-up"));
+                    }
+                    let mut timed = Vec::new();
+                    for i in views_of(*kind) {
+                        let t = time_view(renderer, i, &scene, &cameras[i], &settings, image)?;
+                        progress.step(&format!("{label} view {i} {:.1} ms", t.ms));
+                        timed.push(t);
+                    }
+                    let timings = Some(summary(renderer, &timed, image));
+                    match kind {
+                        Kind::Gpu => results.gpu = timings,
+                        Kind::Cpu => results.cpu = timings,
+                        Kind::Reference => results.cpu_reference = timings,
+                    }
+                }
+                runs.push(RaycastRun {
+                    shading: shading.to_string(),
+                    skipping,
+                    extra_samples_per_sample: shading.extra_samples(),
+                    cpu_over_gpu_same_views: speedup(&results, &cpu_views),
+                    cpu_speedup_over_reference: results
+                        .cpu
+                        .as_ref()
+                        .zip(results.cpu_reference.as_ref())
+                        .map(|(c, r)| r.mean_ms / c.mean_ms),
+                    results,
+                });
             }
         }
-        runs.push(RaycastRun {
-            shading: shading.to_string(),
-            extra_samples_per_sample: shading.extra_samples(),
-            cpu_over_gpu_same_views: speedup(&results, &cpu_views),
-            results,
+        volumes.push(VolumeRuns {
+            volume: VolumeInfo::of(&loaded.name, &scene),
+            skipping: skipping_gains(&runs),
+            runs,
         });
     }
 
     let report = RaycastReport {
         benchmark: "raycast",
         machine: Machine::this(),
-        volume: VolumeInfo::of(&loaded.name, &scene),
         image: [args.size, args.size],
         fov_degrees: setup.fov.to_degrees(),
         focal_length_m: setup.focal,
         bounding_radius_m: radius,
         steps: args.steps,
         cpu_views,
-        runs,
+        volumes,
     };
     write_json(&report, &args.json)?;
     print_report(&report);
     Ok(())
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Gpu,
+    Cpu,
+    Reference,
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Gpu => "gpu",
+            Kind::Cpu => "cpu",
+            Kind::Reference => "cpu-reference",
+        }
+    }
+}
+
+/// Skipping on against off, per mode and backend, where both ran.
+fn skipping_gains(runs: &[RaycastRun]) -> Vec<SkippingGain> {
+    let mut gains = Vec::new();
+    for on in runs.iter().filter(|r| r.skipping) {
+        let Some(off) = runs.iter().find(|r| !r.skipping && r.shading == on.shading) else {
+            continue;
+        };
+        let pairs = [
+            ("gpu", &on.results.gpu, &off.results.gpu),
+            ("cpu", &on.results.cpu, &off.results.cpu),
+        ];
+        for (backend, a, b) in pairs {
+            let (Some(a), Some(b)) = (a, b) else { continue };
+            gains.push(SkippingGain {
+                shading: on.shading.clone(),
+                backend,
+                speedup: b.mean_ms / a.mean_ms,
+                samples_on: a.samples,
+                samples_off: b.samples,
+                skipped: 1.0 - a.samples as f64 / b.samples.max(1) as f64,
+            });
+        }
+    }
+    gains
 }
 
 /// View `i` of `n` around the y axis: the eye at distance h + r from the
@@ -257,6 +383,7 @@ fn summary(renderer: &Renderer, timed: &[Timed], size: UVec2) -> Timings {
         pass_ms: timed.iter().map(|t| t.pass_ms).collect(),
         rays_per_s: f64::from(size.x * size.y) * timed.len() as f64 / total_s,
         samples_per_s: samples as f64 / total_s,
+        samples,
         ms,
     }
 }
@@ -269,8 +396,7 @@ fn speedup(results: &Results, cpu_views: &[usize]) -> Option<f64> {
 
 fn print_report(report: &RaycastReport) {
     println!(
-        "raycast {} at {}x{}, {} views about y ({} on the CPU), machine: {}",
-        report.volume.name,
+        "raycast at {}x{}, {} views about y ({} on the CPU), machine: {}",
         report.image[0],
         report.image[1],
         report.steps,
@@ -278,36 +404,71 @@ fn print_report(report: &RaycastReport) {
         report.machine.cpu
     );
     println!(
-        "{:<15} {:<8} {:>10} {:>10} {:>10} {:>12} {:>10}",
-        "shading", "backend", "mean ms", "min ms", "pass ms", "Msamples/s", "CPU/GPU"
+        "{:<16} {:<15} {:<4} {:<13} {:>10} {:>10} {:>10} {:>11} {:>8}",
+        "volume",
+        "shading",
+        "skip",
+        "backend",
+        "mean ms",
+        "pass ms",
+        "Msamples",
+        "Msamples/s",
+        "CPU/GPU"
     );
-    for run in &report.runs {
-        for (name, r) in [("gpu", &run.results.gpu), ("cpu", &run.results.cpu)] {
-            let Some(r) = r else { continue };
-            let ratio = match (name, run.cpu_over_gpu_same_views) {
-                ("cpu", Some(x)) => format!("{x:.2}"),
-                _ => String::new(),
-            };
-            let pass = r
-                .pass_ms
-                .as_ref()
-                .map_or(String::new(), |p| format!("{:.1}", mean(p.iter().copied())));
+    for v in &report.volumes {
+        for run in &v.runs {
+            let rows = [
+                ("gpu", &run.results.gpu),
+                ("cpu", &run.results.cpu),
+                ("cpu-reference", &run.results.cpu_reference),
+            ];
+            for (name, r) in rows {
+                let Some(r) = r else { continue };
+                let ratio = match (name, run.cpu_over_gpu_same_views) {
+                    ("cpu", Some(x)) => format!("{x:.2}"),
+                    _ => String::new(),
+                };
+                let pass = r
+                    .pass_ms
+                    .as_ref()
+                    .map_or(String::new(), |p| format!("{:.1}", mean(p.iter().copied())));
+                println!(
+                    "{:<16} {:<15} {:<4} {:<13} {:>10.1} {:>10} {:>10.1} {:>11.1} {:>8}",
+                    v.volume.name,
+                    run.shading,
+                    if run.skipping { "on" } else { "off" },
+                    name,
+                    r.mean_ms,
+                    pass,
+                    r.samples as f64 / 1e6,
+                    r.samples_per_s / 1e6,
+                    ratio
+                );
+            }
+            if let Some(x) = run.cpu_speedup_over_reference {
+                println!(
+                    "{:<16} CPU over the scalar reference: {x:.2}x",
+                    v.volume.name
+                );
+            }
+        }
+        for g in &v.skipping {
             println!(
-                "{:<15} {:<8} {:>10.1} {:>10.1} {:>10} {:>12.1} {:>10}",
-                run.shading,
-                name,
-                r.mean_ms,
-                r.min_ms,
-                pass,
-                r.samples_per_s / 1e6,
-                ratio
+                "{:<16} {} {}: skipping {:.2}x faster, {:.1}% of {:.1} M samples skipped",
+                v.volume.name,
+                g.shading,
+                g.backend,
+                g.speedup,
+                100.0 * g.skipped,
+                g.samples_off as f64 / 1e6
             );
         }
     }
     let adapter = report
-        .runs
-        .first()
-        .and_then(|run| run.results.gpu.as_ref())
+        .volumes
+        .iter()
+        .flat_map(|v| &v.runs)
+        .find_map(|run| run.results.gpu.as_ref())
         .and_then(|g| g.renderer.adapter());
     if let Some(a) = adapter {
         println!(
