@@ -20,9 +20,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tf = preset("phantom")?.with_unit_distance(size / 2.0)?;
     let scene = Scene::new(volume, tf);
 
-    let (mut renderer, no_gpu) = Renderer::choose(Backend::Auto)?;
-    if let Some(reason) = no_gpu {
-        eprintln!("{reason}; using the CPU reference");
+    let (mut renderer, cpu_because) = Renderer::choose(Backend::Auto)?;
+    if let Some(reason) = cpu_because {
+        eprintln!("{reason}");
     }
     let settings = RenderSettings {
         shading: Shading::Shadows,

@@ -55,9 +55,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Scene::placed(volumes)
     };
 
-    let (mut renderer, no_gpu) = Renderer::choose(backend)?;
-    if let Some(reason) = no_gpu {
-        eprintln!("{reason}; using the CPU reference");
+    let (mut renderer, cpu_because) = Renderer::choose(backend)?;
+    if let Some(reason) = cpu_because {
+        eprintln!("{reason}");
     }
     let wall = rig.wall("front").ok_or("no front wall")?;
     let view = rig.view(wall, Eye::Left, &rig.head_pose(None, None))?;

@@ -261,6 +261,12 @@ impl EmptySpace {
         }
     }
 
+    /// Whether the brick a sample at grid point `g` reads is clear.
+    #[inline]
+    pub fn clear_at(&self, g: Vec3, hi: IVec3) -> bool {
+        self.distance[self.index(cell_of(g, hi) / BRICK as i32)] > 0
+    }
+
     fn index(&self, b: IVec3) -> usize {
         let n = self.bricks.as_ivec3();
         (b.x + n.x * (b.y + n.y * b.z)) as usize

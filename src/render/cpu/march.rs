@@ -100,34 +100,54 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
                 let exponent = plan.step * field.grids[0].plan.inv_unit_distance;
                 let classified = grid.classify(go, gd, &ts, exponent);
                 if !classified.any {
-                    // Nothing showed: perhaps the ray is in clear bricks
-                    // again, where a leap could start.
-                    busy_until = f32::NEG_INFINITY;
+                    // Nothing showed: if the next sample's brick is clear,
+                    // look for a leap there.
+                    let next = ts[LANES - 1] + plan.step;
+                    if let (Some(((_, go, gd), space)), Some(hi)) = (single, hi) {
+                        if space.clear_at(go + gd * next, hi) {
+                            busy_until = f32::NEG_INFINITY;
+                        }
+                    }
                     k += LANES as u32;
                     samples += LANES as u32;
                     continue;
                 }
-                let lanes = ts.iter().zip(classified.rgb.iter().zip(classified.alpha));
                 if unlit {
-                    // Without shading a clear lane adds nothing: blending
-                    // it costs less than the branch that would skip it.
-                    for (&t, (&rgb, a)) in lanes {
-                        k += 1;
-                        samples += 1;
-                        let p = || origin + dir * t;
-                        if acc.add(plan, rays, p, t, rgb * plan.light_color, a) {
-                            break 'ray;
-                        }
+                    // Without shading the lanes composite at once.
+                    let depth_at = if acc.depth == f32::INFINITY {
+                        plan.depth_threshold
+                    } else {
+                        f32::INFINITY
+                    };
+                    let c = classified.composite(
+                        acc.color,
+                        plan.light_color,
+                        plan.termination,
+                        depth_at,
+                    );
+                    acc.color = c.acc;
+                    if let Some(l) = c.depth_lane {
+                        acc.depth = match rays.eye {
+                            Some(eye) => (origin + dir * ts[l] - eye).length(),
+                            None => ts[l],
+                        };
+                    }
+                    k += c.used as u32;
+                    samples += c.used as u32;
+                    if c.used < LANES || acc.color.w >= plan.termination {
+                        break 'ray;
                     }
                     continue;
                 }
-                for (&t, (&rgb, a)) in lanes {
+                let lanes = ts.iter().zip(classified.alpha).enumerate();
+                for (l, (&t, a)) in lanes {
                     k += 1;
                     samples += 1;
                     if a > 0.0 {
                         let p = origin + dir * t;
                         let s = shade(field, p, &mut samples);
-                        if acc.add(plan, rays, || p, t, rgb * s * plan.light_color, a) {
+                        let lit = classified.colour(l) * s * plan.light_color;
+                        if acc.add(plan, rays, || p, t, lit, a) {
                             break 'ray;
                         }
                     }

@@ -48,7 +48,8 @@ pub(super) struct PacketGrid<'a> {
 /// Eight samples' straight colour and corrected opacity (0: nothing).
 #[derive(Clone, Copy, Default)]
 pub(super) struct Packet {
-    pub rgb: [Vec3; LANES],
+    /// Straight colour, a channel at a time.
+    pub rgb: [[f32; LANES]; 3],
     pub alpha: [f32; LANES],
     /// Some sample shows.
     pub any: bool,
@@ -64,6 +65,40 @@ pub(super) fn available() -> bool {
     {
         false
     }
+}
+
+impl Packet {
+    pub fn colour(&self, lane: usize) -> Vec3 {
+        Vec3::new(self.rgb[0][lane], self.rgb[1][lane], self.rgb[2][lane])
+    }
+
+    /// Front-to-back compositing of the lanes, each lit by `light`, behind
+    /// `acc` (premultiplied): all eight, or up to and including the first
+    /// after which the opacity reaches `stop`. Prefix products of the
+    /// transmittances in the lanes (three shifts), so no lane waits for the
+    /// one before it. Call only where [`available`] said so.
+    pub fn composite(&self, acc: Vec4, light: Vec3, stop: f32, depth_at: f32) -> Composited {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: as in `classify`: AVX2 and FMA are there.
+            unsafe { avx2::composite(self, acc, light, stop, depth_at) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (acc, light, stop, depth_at);
+            unreachable!("the packet path runs on x86_64 only")
+        }
+    }
+}
+
+/// What compositing a packet did.
+pub(super) struct Composited {
+    /// Premultiplied colour and opacity behind the lanes used.
+    pub acc: Vec4,
+    /// Lanes composited: 8, or fewer where the opacity reached `stop`.
+    pub used: usize,
+    /// The first lane after which the opacity reached `depth_at`.
+    pub depth_lane: Option<usize>,
 }
 
 impl PacketGrid<'_> {
@@ -97,7 +132,9 @@ mod avx2 {
 
     use glam::Vec3;
 
-    use super::{Packet, PacketGrid, LANES};
+    use glam::Vec4;
+
+    use super::{Composited, Packet, PacketGrid, LANES};
     use crate::scene::TABLE_SIZE;
 
     #[target_feature(enable = "avx2,fma")]
@@ -177,6 +214,84 @@ mod avx2 {
             _mm256_castpd_ps(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(v)))
         };
         (order(a), order(b))
+    }
+
+    /// Lane j takes lane j - `shift` (the first `shift` lanes take 1).
+    #[target_feature(enable = "avx2,fma")]
+    fn shifted<const SHIFT: i32>(v: __m256) -> __m256 {
+        let index = _mm256_setr_epi32(
+            0,
+            (1 - SHIFT).max(0),
+            (2 - SHIFT).max(0),
+            (3 - SHIFT).max(0),
+            (4 - SHIFT).max(0),
+            (5 - SHIFT).max(0),
+            (6 - SHIFT).max(0),
+            (7 - SHIFT).max(0),
+        );
+        let moved = _mm256_permutevar8x32_ps(v, index);
+        let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        let first = _mm256_cmpgt_epi32(_mm256_set1_epi32(SHIFT), lanes);
+        _mm256_blendv_ps(moved, _mm256_set1_ps(1.0), _mm256_castsi256_ps(first))
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    fn sum(v: __m256) -> f32 {
+        let half = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+        let pair = _mm_add_ps(half, _mm_movehl_ps(half, half));
+        _mm_cvtss_f32(_mm_add_ss(pair, _mm_movehdup_ps(pair)))
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn composite(
+        packet: &Packet,
+        acc: Vec4,
+        light: glam::Vec3,
+        stop: f32,
+        depth_at: f32,
+    ) -> Composited {
+        let one = _mm256_set1_ps(1.0);
+        let load = |v: &[f32; LANES]| unsafe { _mm256_loadu_ps(v.as_ptr()) };
+        let a = load(&packet.alpha);
+        // Inclusive prefix product of the lanes' transmittances.
+        let mut kept = _mm256_sub_ps(one, a);
+        kept = _mm256_mul_ps(kept, shifted::<1>(kept));
+        kept = _mm256_mul_ps(kept, shifted::<2>(kept));
+        kept = _mm256_mul_ps(kept, shifted::<4>(kept));
+        let before = _mm256_set1_ps(1.0 - acc.w);
+        // Opacity after each lane, and each lane's share of what is seen.
+        let opacity = _mm256_sub_ps(one, _mm256_mul_ps(before, kept));
+        let weight = _mm256_mul_ps(_mm256_mul_ps(before, shifted::<1>(kept)), a);
+        let reached = |x: f32| {
+            let m = _mm256_cmp_ps(opacity, _mm256_set1_ps(x), _CMP_GE_OQ);
+            _mm256_movemask_ps(m) as u32
+        };
+        let stops = reached(stop);
+        let used = if stops == 0 {
+            LANES
+        } else {
+            stops.trailing_zeros() as usize + 1
+        };
+        let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        let used_mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(used as i32), lanes);
+        let weight = _mm256_and_ps(weight, _mm256_castsi256_ps(used_mask));
+        let mut opacities = [0.0f32; LANES];
+        unsafe { _mm256_storeu_ps(opacities.as_mut_ptr(), opacity) };
+        // As the scalar path, depth is taken at a sample that shows (which
+        // matters for a threshold of 0).
+        let shows = _mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_GT_OQ)) as u32;
+        let depth = reached(depth_at) & shows & ((1u32 << used) - 1);
+        let channel = |c: usize| sum(_mm256_mul_ps(weight, load(&packet.rgb[c])));
+        Composited {
+            acc: Vec4::new(
+                acc.x + channel(0) * light.x,
+                acc.y + channel(1) * light.y,
+                acc.z + channel(2) * light.z,
+                opacities[used - 1],
+            ),
+            used,
+            depth_lane: (depth != 0).then(|| depth.trailing_zeros() as usize),
+        }
     }
 
     #[target_feature(enable = "avx2,fma")]
@@ -281,7 +396,7 @@ mod avx2 {
             _mm256_storeu_ps(lanes[3].as_mut_ptr(), corrected);
         }
         let [r, g, b, a] = lanes;
-        out.rgb = std::array::from_fn(|l| Vec3::new(r[l], g[l], b[l]));
+        out.rgb = [r, g, b];
         out.alpha = a;
         out
     }
@@ -330,8 +445,62 @@ mod tests {
                     "a {a} exponent {exponent}: {} vs {want}",
                     p.alpha[0]
                 );
-                assert!((p.rgb[3] - Vec3::new(0.2, 0.4, 0.6)).length() < 1e-6);
+                assert!((p.colour(3) - Vec3::new(0.2, 0.4, 0.6)).length() < 1e-6);
             }
+        }
+    }
+
+    #[test]
+    fn lanes_composite_as_one_after_the_other() {
+        if !available() {
+            return; // the first test insists on AVX2 where it matters
+        }
+        let mut state = 7u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for case in 0..500 {
+            let mut packet = Packet::default();
+            for l in 0..LANES {
+                // Zeros, small and large opacities, in any order.
+                packet.alpha[l] = match case % 3 {
+                    0 if l < 3 => 0.0,
+                    1 => 0.9 * next(),
+                    _ => 0.2 * next(),
+                };
+                for c in 0..3 {
+                    packet.rgb[c][l] = next();
+                }
+            }
+            let start = Vec4::new(0.1, 0.2, 0.1, 0.5 * next());
+            let light = Vec3::new(1.0, 0.8, 0.6);
+            let (stop, depth_at) = (0.9, if case % 2 == 0 { 0.0 } else { 0.6 });
+            let got = packet.composite(start, light, stop, depth_at);
+            // The scalar path: sample by sample, stopping after the lane
+            // that reaches `stop`.
+            let (mut acc, mut used, mut depth) = (start, LANES, None);
+            for l in 0..LANES {
+                let a = packet.alpha[l];
+                if a > 0.0 {
+                    let w = (1.0 - acc.w) * a;
+                    acc = (acc.truncate() + packet.colour(l) * light * w).extend(acc.w + w);
+                    if depth.is_none() && acc.w >= depth_at {
+                        depth = Some(l);
+                    }
+                    if acc.w >= stop {
+                        used = l + 1;
+                        break;
+                    }
+                }
+            }
+            assert_eq!(got.used, used, "case {case}");
+            assert_eq!(got.depth_lane, depth, "case {case}");
+            assert!(
+                (got.acc - acc).abs().max_element() < 1e-5,
+                "case {case}: {} vs {acc}",
+                got.acc
+            );
         }
     }
 }
