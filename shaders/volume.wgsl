@@ -33,6 +33,26 @@
 // nearest brick its table could make visible; volume v's from
 // params.volumes[v].brick_offset on (src/render/empty_space.rs).
 @group(0) @binding(15) var<storage, read> bricks: array<u32>;
+// Linear where the adapter filters 32-bit floats (filtered sampling).
+@group(0) @binding(16) var linear: sampler;
+
+// Filtered sampling (RenderSettings::sampling): one hardware-filtered fetch
+// per volume sample, and for primary samples one filtered fetch of the
+// table row whose opacities are already corrected for a full step
+// (table rows MAX_VOLUMES + v). A second pipeline sets it; the stereo
+// passes keep the exact path.
+override FILTERED: bool = false;
+// Set where the scene has one volume: every loop over the volumes runs
+// once and every switch over them takes volume 0, which the compiler can
+// then see (software Vulkan runs the general form several times slower).
+override ONE_VOLUME: bool = false;
+
+fn volume_count() -> u32 {
+    if ONE_VOLUME {
+        return 1u;
+    }
+    return params.volume_count;
+}
 
 // What lies behind pixel `pixel` of the frame: the flat colour, or the
 // background image stretched over the frame, sampled bilinearly at the
@@ -57,6 +77,9 @@ fn background_at(pixel: vec2u) -> vec4f {
 var<private> samples: u32;
 
 fn voxel(v: u32, i: vec3i) -> f32 {
+    if ONE_VOLUME {
+        return textureLoad(volume0, i, 0).r;
+    }
     switch v {
         case 0u: { return textureLoad(volume0, i, 0).r; }
         case 1u: { return textureLoad(volume1, i, 0).r; }
@@ -89,11 +112,34 @@ fn contains(v: u32, g: vec3f) -> bool {
     return all(g >= vec3f(0.0)) && all(g <= last_vertex(v));
 }
 
+// Volume v at grid point g by the texture unit: vertex i is texel centre i.
+fn filtered_value(v: u32, grid: vec3f) -> f32 {
+    let n = vec3f(params.volumes[v].dims);
+    let c = (clamp(grid, vec3f(0.0), n - 1.0) + 0.5) / n;
+    if ONE_VOLUME {
+        return textureSampleLevel(volume0, linear, c, 0.0).r;
+    }
+    switch v {
+        case 0u: { return textureSampleLevel(volume0, linear, c, 0.0).r; }
+        case 1u: { return textureSampleLevel(volume1, linear, c, 0.0).r; }
+        case 2u: { return textureSampleLevel(volume2, linear, c, 0.0).r; }
+        case 3u: { return textureSampleLevel(volume3, linear, c, 0.0).r; }
+        case 4u: { return textureSampleLevel(volume4, linear, c, 0.0).r; }
+        case 5u: { return textureSampleLevel(volume5, linear, c, 0.0).r; }
+        case 6u: { return textureSampleLevel(volume6, linear, c, 0.0).r; }
+        default: { return textureSampleLevel(volume7, linear, c, 0.0).r; }
+    }
+}
+
 // Trilinear interpolation of the vertex-centred grid, by hand: R32Float
-// is not filterable everywhere, and the reference does the same. Or the
-// nearest vertex, halves rounded up as the reference rounds them.
+// is not filterable everywhere, and the reference does the same (filtered
+// sampling leaves it to the texture unit). Or the nearest vertex, halves
+// rounded up as the reference rounds them.
 fn sample_volume(v: u32, grid: vec3f) -> f32 {
     samples += 1u;
+    if FILTERED && params.volumes[v].sampling != FILTER_NEAREST {
+        return filtered_value(v, grid);
+    }
     let hi = vec3i(params.volumes[v].dims) - vec3i(1);
     let g = clamp(grid, vec3f(0.0), vec3f(hi));
     if params.volumes[v].sampling == FILTER_NEAREST {
@@ -120,6 +166,32 @@ fn classify(v: u32, value: f32) -> vec4f {
     return a * (1.0 - f) + b * f;
 }
 
+// A primary sample's colour and opacity: under filtered sampling from the
+// stepped table by the texture unit, its opacity already a full step's.
+fn classify_step(v: u32, value: f32) -> vec4f {
+    if !FILTERED {
+        return classify(v, value);
+    }
+    let m = params.volumes[v];
+    let t = clamp((value - m.value_lo) * m.value_scale, 0.0, 1.0);
+    let x = (t * f32(TABLE_SIZE - 1u) + 0.5) / f32(TABLE_SIZE);
+    let y = (f32(MAX_VOLUMES + v) + 0.5) / f32(2u * MAX_VOLUMES);
+    return textureSampleLevel(table, linear, vec2f(x, y), 0.0);
+}
+
+// The opacity of a primary segment `seg` long: the table's, corrected;
+// under filtered sampling, already a full step's (re-corrected only for
+// the last, shorter segment).
+fn segment_opacity(v: u32, a: f32, seg: f32) -> f32 {
+    if FILTERED {
+        if seg == params.step {
+            return a;
+        }
+        return correct(a, seg / params.step);
+    }
+    return correct(a, seg * params.volumes[v].inv_unit_distance);
+}
+
 // Overlapping volumes at one sample as one medium, as the reference's
 // Mixture: opacities combine as independent absorbers, colours in
 // proportion to opacity, whatever the volumes' order.
@@ -136,7 +208,7 @@ fn mixture_add(m: ptr<function, Mixture>, rgb: vec3f, a: f32) {
 }
 
 fn inside(p: vec3f) -> bool {
-    for (var v = 0u; v < params.volume_count; v++) {
+    for (var v = 0u; v < volume_count(); v++) {
         if contains(v, grid_of(v, p)) {
             return true;
         }
@@ -148,7 +220,7 @@ fn inside(p: vec3f) -> bool {
 // long, or as the table gives it where `per_unit`.
 fn opacity_at(p: vec3f, length: f32, per_unit: bool) -> f32 {
     var m = Mixture(vec3f(0.0), 0.0, 0.0);
-    for (var v = 0u; v < params.volume_count; v++) {
+    for (var v = 0u; v < volume_count(); v++) {
         let g = grid_of(v, p);
         if !contains(v, g) {
             continue;
@@ -273,7 +345,7 @@ fn brick_region(v: u32, g: vec3f, gd: vec3f) -> vec2f {
 fn region(spans: ptr<function, array<vec2f, MAX_VOLUMES>>, p: vec3f, d: vec3f, t: f32) -> vec2f {
     var clear = bitcast<f32>(0x7f800000u);
     var busy = clear;
-    for (var v = 0u; v < params.volume_count; v++) {
+    for (var v = 0u; v < volume_count(); v++) {
         let span = (*spans)[v];
         if span.y <= span.x || t > span.y {
             continue;
@@ -328,7 +400,7 @@ fn march(fx: f32, fy: f32) -> Marched {
     var spans: array<vec2f, MAX_VOLUMES>;
     var t0 = bitcast<f32>(0x7f800000u);
     var t1 = -t0;
-    for (var v = 0u; v < params.volume_count; v++) {
+    for (var v = 0u; v < volume_count(); v++) {
         spans[v] = enter_exit(grid_of(v, o), grid_direction(v, d), vec3f(0.0), last_vertex(v));
         if spans[v].y > spans[v].x {
             t0 = min(t0, spans[v].x);
@@ -373,14 +445,14 @@ fn march(fx: f32, fy: f32) -> Marched {
                 busy_until = t + r.y;
             }
             var m = Mixture(vec3f(0.0), 0.0, 0.0);
-            for (var v = 0u; v < params.volume_count; v++) {
+            for (var v = 0u; v < volume_count(); v++) {
                 let span = spans[v];
                 if span.y <= span.x || t < span.x || t > span.y {
                     continue;
                 }
-                let c = classify(v, sample_volume(v, grid_of(v, p)));
+                let c = classify_step(v, sample_volume(v, grid_of(v, p)));
                 if c.a > 0.0 {
-                    mixture_add(&m, c.rgb, correct(c.a, seg * params.volumes[v].inv_unit_distance));
+                    mixture_add(&m, c.rgb, segment_opacity(v, c.a, seg));
                 }
             }
             if m.weight <= 0.0 {

@@ -13,7 +13,8 @@ use glam::Vec4;
 use std::sync::Arc;
 
 use crate::render::{
-    BackgroundImage, ClipPlanes, RenderSettings, Shading, MAX_CLIP_PLANES, STEP_FACTOR_RANGE,
+    BackgroundImage, ClipPlanes, RenderSettings, Sampling, Shading, MAX_CLIP_PLANES,
+    STEP_FACTOR_RANGE,
 };
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
@@ -100,6 +101,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             Default::Bool(true),
             "leap over bricks of the volume its transfer function leaves clear; the image does not change (false: march every step, for comparison)",
         ),
+        p(
+            "gpuSampling",
+            &[T::STRING],
+            false,
+            Default::Text("exact"),
+            "exact | filtered: on the GPU, the shader's trilinear interpolation (the reference's arithmetic), or one hardware-filtered fetch per sample and a table with the step's opacity correction baked in (faster; not with stereo re-projection)",
+        )
+        .names(&Sampling::NAMES),
     ],
     commit: Some(commit),
 };
@@ -127,6 +136,11 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         clip_planes: clip_planes(r)?,
         background_image: background_image(r)?,
         skipping: r.bool("emptySpaceSkipping")?,
+        sampling: r
+            .string("gpuSampling")
+            .unwrap_or_default()
+            .parse::<Sampling>()
+            .map_err(|e| e.to_string())?,
         // Not a renderer parameter: a world's directional light sets it
         // when a frame renders.
         ..RenderSettings::default()

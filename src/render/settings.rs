@@ -131,6 +131,47 @@ impl FromStr for Shading {
     }
 }
 
+/// How the GPU reads a sample (the CPU always reads it exactly).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sampling {
+    /// Eight texel loads and a trilinear interpolation in the shader, the
+    /// table interpolated by hand and the opacity corrected per sample:
+    /// the reference's arithmetic, which the GPU-vs-CPU tests hold.
+    #[default]
+    Exact,
+    /// One hardware-filtered volume fetch and one filtered fetch of a
+    /// table whose opacities are already corrected for the primary step:
+    /// what GPUs are built for (docs/empty_space.md, "Filtered sampling").
+    Filtered,
+}
+
+impl Sampling {
+    pub const NAMES: [&'static str; 2] = ["exact", "filtered"];
+}
+
+impl fmt::Display for Sampling {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Sampling::Exact => "exact",
+            Sampling::Filtered => "filtered",
+        })
+    }
+}
+
+impl FromStr for Sampling {
+    type Err = RenderError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "exact" => Ok(Sampling::Exact),
+            "filtered" => Ok(Sampling::Filtered),
+            _ => Err(RenderError::Settings(format!(
+                "unknown GPU sampling \"{s}\": expected exact or filtered"
+            ))),
+        }
+    }
+}
+
 /// An image behind the volume, stretched over the frame and sampled
 /// bilinearly at each pixel's centre (a 1 x N image is a vertical
 /// gradient, bottom row first, as ANARI's images are).
@@ -197,6 +238,8 @@ pub struct RenderSettings {
     /// Leap over bricks the transfer function leaves clear
     /// (render::empty_space). Exact: the image does not change.
     pub skipping: bool,
+    /// How the GPU reads samples.
+    pub sampling: Sampling,
 }
 
 impl Default for RenderSettings {
@@ -212,6 +255,7 @@ impl Default for RenderSettings {
             clip_planes: ClipPlanes::default(),
             light_color: Vec3::ONE,
             skipping: true,
+            sampling: Sampling::Exact,
         }
     }
 }

@@ -4,7 +4,7 @@
 use anari_library_caveray::cave::View;
 use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::{
-    Backend, RenderSettings, Renderer, Shading, STEP_FACTOR_RANGE,
+    Backend, RenderSettings, Renderer, Sampling, Shading, STEP_FACTOR_RANGE,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
@@ -40,12 +40,16 @@ pub struct RenderOptions {
     /// none, shadows, ao, shadows+ao or directional:N.
     #[arg(long, default_value = "none", value_parser = shading)]
     pub shading: Shading,
-    /// gpu, cpu, or auto (the GPU where there is one, else the CPU reference).
+    /// gpu, cpu, or auto (a hardware GPU where there is one, else the CPU).
     #[arg(long, default_value = "auto", value_parser = backend())]
     pub backend: Backend,
     /// Step length in units of half the smallest voxel (1/64 to 64).
     #[arg(long, default_value_t = 1.0, value_parser = step_factor)]
     pub step_factor: f32,
+    /// How the GPU reads samples: exact (the reference's arithmetic) or
+    /// filtered (hardware trilinear and a stepped table).
+    #[arg(long, default_value = "exact", value_parser = PossibleValuesParser::new(Sampling::NAMES).try_map(|s| s.parse::<Sampling>()))]
+    pub gpu_sampling: Sampling,
 }
 
 impl RenderOptions {
@@ -53,6 +57,7 @@ impl RenderOptions {
         RenderSettings {
             shading: self.shading,
             step_factor: self.step_factor,
+            sampling: self.gpu_sampling,
             ..Default::default()
         }
     }

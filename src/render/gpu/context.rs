@@ -55,6 +55,8 @@ pub(super) struct Context {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
+    /// Whether 32-bit float textures can be filtered (filtered sampling).
+    pub filterable: bool,
     errors: Arc<Mutex<Vec<String>>>,
     timestamps: Option<Timestamps>,
 }
@@ -87,10 +89,13 @@ impl Context {
         // Software Vulkan (lavapipe) offers timestamps, but writes the end
         // of a compute pass before its threads finish: a 10 ms ray cast
         // reads as 0.0 ms there. Its passes are timed by the host's clock.
-        let features = match info.device_type {
+        let timing = match info.device_type {
             wgpu::DeviceType::Cpu => wgpu::Features::empty(),
             _ => adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
         };
+        // Filtered sampling reads R32Float volumes and RGBA32Float tables
+        // through a linear sampler.
+        let features = timing | (adapter.features() & wgpu::Features::FLOAT32_FILTERABLE);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("caveray"),
             required_limits: limits.clone(),
@@ -131,6 +136,7 @@ impl Context {
             queue,
             info,
             limits,
+            filterable: features.contains(wgpu::Features::FLOAT32_FILTERABLE),
             errors,
             timestamps,
         })

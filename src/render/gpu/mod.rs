@@ -23,7 +23,7 @@ use super::empty_space::{EmptySpace, SpaceCache};
 use super::frame::{ColorData, ColorFormat, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::settings::MAX_DIRECTIONS;
-use super::{BackgroundImage, RenderError, RenderSettings};
+use super::{BackgroundImage, RenderError, RenderSettings, Sampling};
 use crate::geometry::RayGen;
 use crate::scene::{Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
 
@@ -37,7 +37,13 @@ pub struct Uploads {
 
 pub struct GpuRenderer {
     ctx: Context,
-    pipeline: wgpu::ComputePipeline,
+    pipeline: Variants,
+    /// The same march with hardware-filtered samples, where the adapter
+    /// filters 32-bit floats.
+    filtered: Option<Variants>,
+    sampler: wgpu::Sampler,
+    /// Which table and step exponent each stepped table row holds.
+    stepped: [Option<(Arc<TransferFunction>, f32)>; MAX_VOLUMES],
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     directions: wgpu::Buffer,
@@ -75,10 +81,18 @@ impl GpuRenderer {
     pub fn new() -> Result<Self, RenderError> {
         let ctx = Context::new()?;
         let device = &ctx.device;
+        // Filterable where the adapter filters 32-bit floats: then the
+        // filtered pipeline reads the same textures through a sampler.
+        let filterable = ctx.filterable;
         let texture = |dim| wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            sample_type: wgpu::TextureSampleType::Float { filterable },
             view_dimension: dim,
             multisampled: false,
+        };
+        let sampler_type = if filterable {
+            wgpu::SamplerBindingType::Filtering
+        } else {
+            wgpu::SamplerBindingType::NonFiltering
         };
         let storage = |read_only| buffer_type(wgpu::BufferBindingType::Storage { read_only });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -100,6 +114,7 @@ impl GpuRenderer {
                 layout_entry(13, texture(wgpu::TextureViewDimension::D3)),
                 layout_entry(14, texture(wgpu::TextureViewDimension::D3)),
                 layout_entry(15, storage(true)),
+                layout_entry(16, wgpu::BindingType::Sampler(sampler_type)),
             ],
         });
         let band_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -113,13 +128,39 @@ impl GpuRenderer {
                 },
             )],
         });
-        let pipeline = compute_pipeline(
-            device,
-            "raycast",
-            &shaders::raycast(),
-            &[&layout, &band_layout],
-            "main",
-        );
+        let source = shaders::raycast();
+        let layouts = [&layout, &band_layout];
+        // One pipeline per sampling mode, each for one volume or several.
+        let variant = |filtered: bool, one: bool| {
+            let flag = |b: bool| if b { 1.0 } else { 0.0 };
+            compute_pipeline_with(
+                device,
+                "raycast",
+                &source,
+                &layouts,
+                "main",
+                &[("FILTERED", flag(filtered)), ("ONE_VOLUME", flag(one))],
+            )
+        };
+        let pipeline = Variants {
+            one: variant(false, true),
+            several: variant(false, false),
+        };
+        let filtered = filterable.then(|| Variants {
+            one: variant(true, true),
+            several: variant(true, false),
+        });
+        let filter = if filterable {
+            wgpu::FilterMode::Linear
+        } else {
+            wgpu::FilterMode::Nearest
+        };
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("volumes and tables"),
+            mag_filter: filter,
+            min_filter: filter,
+            ..Default::default()
+        });
         let uniform = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -164,6 +205,9 @@ impl GpuRenderer {
         Ok(Self {
             ctx,
             pipeline,
+            filtered,
+            sampler,
+            stepped: Default::default(),
             layout,
             params,
             directions,
@@ -300,8 +344,17 @@ impl GpuRenderer {
             })
             .collect();
         let bind_group = self.bind_group.as_ref().ok_or_else(unprepared)?;
+        let variants = match settings.sampling {
+            Sampling::Exact => &self.pipeline,
+            Sampling::Filtered => self.filtered.as_ref().ok_or_else(|| self.no_filtering())?,
+        };
+        let pipeline = if scene.volumes().len() == 1 {
+            &variants.one
+        } else {
+            &variants.several
+        };
         let pass = Pass {
-            pipeline: &self.pipeline,
+            pipeline,
             groups: &[bind_group],
             band: Some(&self.band_group),
         };
@@ -330,6 +383,12 @@ impl GpuRenderer {
             desc.color,
             settings.background_image.as_ref(),
         );
+        if settings.sampling == Sampling::Filtered {
+            if self.filtered.is_none() {
+                return Err(self.no_filtering());
+            }
+            self.write_stepped_tables(scene, &plan);
+        }
         let queue = &self.ctx.queue;
         let bricks: &[BrickSlot] = if plan.skipping {
             &self.brick_slots
@@ -430,6 +489,33 @@ impl GpuRenderer {
         changed
     }
 
+    /// Whether this adapter runs filtered sampling.
+    pub fn filters(&self) -> bool {
+        self.filtered.is_some()
+    }
+
+    fn no_filtering(&self) -> RenderError {
+        RenderError::Settings(format!(
+            "filtered GPU sampling needs 32-bit float textures to filter, which {} does not offer; use exact sampling",
+            self.ctx.info.name
+        ))
+    }
+
+    /// The tables with opacities corrected for this plan's primary step,
+    /// rewritten where the table or the step changed.
+    fn write_stepped_tables(&mut self, scene: &Scene, plan: &MarchPlan) {
+        for (row, (placed, vplan)) in scene.volumes().iter().zip(&plan.volumes).enumerate() {
+            let tf = &placed.transfer_function;
+            let exponent = plan.step * vplan.inv_unit_distance;
+            let current =
+                matches!(&self.stepped[row], Some((t, e)) if Arc::ptr_eq(t, tf) && *e == exponent);
+            if !current {
+                resources::write_stepped_table(&self.ctx, &self.table, row as u32, tf, exponent);
+                self.stepped[row] = Some((Arc::clone(tf), exponent));
+            }
+        }
+    }
+
     /// Makes the clear-brick distances of the scene's volumes under their
     /// tables, where they are new, and the buffer that holds them; a new
     /// buffer means a new bind group.
@@ -509,11 +595,18 @@ impl GpuRenderer {
                 volume(6),
                 volume(7),
                 buffer(&self.bricks),
+                wgpu::BindingResource::Sampler(&self.sampler),
             ];
             let group = bind_group(&self.ctx.device, "raycast", &self.layout, resources);
             self.bind_group = Some(group);
         }
     }
+}
+
+/// A ray casting pipeline for scenes of one volume and of several.
+struct Variants {
+    one: wgpu::ComputePipeline,
+    several: wgpu::ComputePipeline,
 }
 
 /// Pixels per band of a frame cast in bands: 1920 x 1080 is 8 bands.
@@ -537,6 +630,18 @@ fn compute_pipeline(
     layouts: &[&wgpu::BindGroupLayout],
     entry: &str,
 ) -> wgpu::ComputePipeline {
+    compute_pipeline_with(device, label, source, layouts, entry, &[])
+}
+
+/// `compute_pipeline` with values for the shader's override constants.
+fn compute_pipeline_with(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -552,7 +657,10 @@ fn compute_pipeline(
         layout: Some(&pipeline_layout),
         module: &module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
         cache: None,
     })
 }

@@ -119,14 +119,42 @@ pub(super) fn upload_background(
     rgba_texture(ctx, "background", size, Some(&bytes)).create_view(&Default::default())
 }
 
-/// The tables: TABLE_SIZE x MAX_VOLUMES RGBA32Float, row v for volume v.
+/// The tables: TABLE_SIZE x 2 MAX_VOLUMES RGBA32Float; row v for volume
+/// v, row MAX_VOLUMES + v the same with its opacities corrected for the
+/// primary step (filtered sampling).
 pub(super) fn table_texture(ctx: &Context) -> wgpu::Texture {
     rgba_texture(
         ctx,
         "transfer functions",
-        UVec2::new(TABLE_SIZE as u32, MAX_VOLUMES as u32),
+        UVec2::new(TABLE_SIZE as u32, 2 * MAX_VOLUMES as u32),
         None,
     )
+}
+
+/// Writes `tf`'s table into row MAX_VOLUMES + `row`, each opacity `a`
+/// turned into a step's: `1 - (1 - a)^exponent`.
+pub(super) fn write_stepped_table(
+    ctx: &Context,
+    tables: &wgpu::Texture,
+    row: u32,
+    tf: &TransferFunction,
+    exponent: f32,
+) {
+    let bytes: Vec<u8> = tf
+        .table()
+        .iter()
+        .map(|c| {
+            let a = if c.w >= 1.0 {
+                1.0
+            } else {
+                1.0 - (1.0 - c.w).powf(exponent)
+            };
+            [c.x, c.y, c.z, a]
+        })
+        .flat_map(|c| c.into_iter().flat_map(f32::to_le_bytes))
+        .collect();
+    let first = MAX_VOLUMES as u32 + row;
+    write_rows(ctx, tables, first, UVec2::new(TABLE_SIZE as u32, 1), &bytes);
 }
 
 /// Writes `tf`'s table into row `row` of the tables.

@@ -11,7 +11,7 @@ use std::time::Instant;
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::stereo::{paper, HmdStereo};
 use anari_library_caveray::render::{
-    Backend, CpuRenderer, FrameDesc, RenderSettings, Renderer, Shading,
+    ssim, Backend, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Sampling, Shading,
 };
 use anari_library_caveray::scene::Scene;
 use clap::Args;
@@ -54,9 +54,18 @@ pub struct RaycastArgs {
     /// renderer before packets and skipping) on the CPU's views.
     #[arg(long)]
     cpu_reference: bool,
+    /// GPU sampling modes, comma-separated: exact, filtered; with both,
+    /// the filtered images are compared with the exact ones (SSIM).
+    #[arg(long, default_value = "exact", value_delimiter = ',', value_parser = gpu_sampling)]
+    gpu_sampling: Vec<Sampling>,
     /// Where to write the results.
     #[arg(long)]
     json: PathBuf,
+}
+
+fn gpu_sampling(s: &str) -> Result<Sampling, String> {
+    s.parse()
+        .map_err(|e: anari_library_caveray::render::RenderError| e.to_string())
 }
 
 fn on_off(s: &str) -> Result<bool, String> {
@@ -98,12 +107,21 @@ struct RaycastRun {
     cpu_over_gpu_same_views: Option<f64>,
     /// Mean reference time over mean CPU time, same views.
     cpu_speedup_over_reference: Option<f64>,
+    /// Filtered GPU sampling against exact: mean time ratio, and the SSIM
+    /// of the first view's two images.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    filtered_speedup: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    filtered_ssim: Option<f64>,
 }
 
 #[derive(Default, Serialize)]
 struct Results {
     #[serde(skip_serializing_if = "Option::is_none")]
     gpu: Option<Timings>,
+    /// The GPU with filtered sampling.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gpu_filtered: Option<Timings>,
     #[serde(skip_serializing_if = "Option::is_none")]
     cpu: Option<Timings>,
     /// The scalar reference, every step marched (skipping off).
@@ -139,12 +157,13 @@ struct Timings {
     samples: u64,
 }
 
-/// One timed view: index, wall-clock ms, GPU pass ms, samples.
+/// One timed view: index, wall-clock ms, GPU pass ms, samples, image.
 struct Timed {
     view: usize,
     ms: f64,
     pass_ms: Option<f64>,
     samples: u64,
+    frame: Frame,
 }
 
 pub fn run(args: RaycastArgs) -> Result<(), Failure> {
@@ -167,9 +186,16 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
 
     let mut renderers: Vec<(Kind, Renderer)> = Vec::new();
     if !args.no_gpu {
-        let gpu = Renderer::new(Backend::Gpu)
-            .map_err(|e| Failure::Runtime(format!("{e} (use --no-gpu to time the CPU alone)")))?;
-        renderers.push((Kind::Gpu, gpu));
+        for &sampling in &args.gpu_sampling {
+            let gpu = Renderer::new(Backend::Gpu).map_err(|e| {
+                Failure::Runtime(format!("{e} (use --no-gpu to time the CPU alone)"))
+            })?;
+            let kind = match sampling {
+                Sampling::Exact => Kind::Gpu,
+                Sampling::Filtered => Kind::GpuFiltered,
+            };
+            renderers.push((kind, gpu));
+        }
     }
     if args.cpu_steps > 0 {
         renderers.push((Kind::Cpu, Renderer::Cpu(CpuRenderer::new())));
@@ -181,14 +207,14 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
         .map(|i| (i * args.steps / args.cpu_steps.max(1)) as usize)
         .collect();
     let views_of = |kind: Kind| match kind {
-        Kind::Gpu => (0..cameras.len()).collect::<Vec<_>>(),
+        Kind::Gpu | Kind::GpuFiltered => (0..cameras.len()).collect::<Vec<_>>(),
         _ => cpu_views.clone(),
     };
     // The reference runs once per volume and mode, whatever the skipping.
     let per_setting: usize = renderers
         .iter()
         .filter(|(k, _)| *k != Kind::Reference)
-        .map(|(k, _)| views_of(*k).len() + usize::from(*k == Kind::Gpu))
+        .map(|(k, _)| views_of(*k).len() + usize::from(k.is_gpu()))
         .sum();
     let reference = if args.cpu_reference {
         cpu_views.len()
@@ -215,12 +241,18 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                     ..Default::default()
                 };
                 let mut results = Results::default();
+                let mut first_images = Vec::new();
                 for (kind, renderer) in &mut renderers {
                     if *kind == Kind::Reference && n > 0 {
                         continue;
                     }
                     let settings = RenderSettings {
                         skipping: skipping && *kind != Kind::Reference,
+                        sampling: if *kind == Kind::GpuFiltered {
+                            Sampling::Filtered
+                        } else {
+                            Sampling::Exact
+                        },
                         ..settings.clone()
                     };
                     let label = format!(
@@ -229,7 +261,7 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                         kind.name(),
                         if settings.skipping { "on" } else { "off" }
                     );
-                    if *kind == Kind::Gpu {
+                    if kind.is_gpu() {
                         renderer
                             .upload(&scene)
                             .map_err(|e| Failure::Runtime(e.to_string()))?;
@@ -243,13 +275,27 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                         timed.push(t);
                     }
                     let timings = Some(summary(renderer, &timed, image));
+                    if let Some(first) = timed.into_iter().next() {
+                        first_images.push((*kind, first.frame));
+                    }
                     match kind {
                         Kind::Gpu => results.gpu = timings,
+                        Kind::GpuFiltered => results.gpu_filtered = timings,
                         Kind::Cpu => results.cpu = timings,
                         Kind::Reference => results.cpu_reference = timings,
                     }
                 }
+                let image_of = |k: Kind| first_images.iter().find(|(x, _)| *x == k).map(|(_, f)| f);
+                let filtered_ssim = image_of(Kind::Gpu)
+                    .zip(image_of(Kind::GpuFiltered))
+                    .and_then(|(a, b)| ssim(a, b).ok());
                 runs.push(RaycastRun {
+                    filtered_speedup: results
+                        .gpu
+                        .as_ref()
+                        .zip(results.gpu_filtered.as_ref())
+                        .map(|(e, f)| e.mean_ms / f.mean_ms),
+                    filtered_ssim,
                     shading: shading.to_string(),
                     skipping,
                     extra_samples_per_sample: shading.extra_samples(),
@@ -289,6 +335,7 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Kind {
     Gpu,
+    GpuFiltered,
     Cpu,
     Reference,
 }
@@ -297,9 +344,14 @@ impl Kind {
     fn name(self) -> &'static str {
         match self {
             Kind::Gpu => "gpu",
+            Kind::GpuFiltered => "gpu-filtered",
             Kind::Cpu => "cpu",
             Kind::Reference => "cpu-reference",
         }
+    }
+
+    fn is_gpu(self) -> bool {
+        matches!(self, Kind::Gpu | Kind::GpuFiltered)
     }
 }
 
@@ -312,6 +364,11 @@ fn skipping_gains(runs: &[RaycastRun]) -> Vec<SkippingGain> {
         };
         let pairs = [
             ("gpu", &on.results.gpu, &off.results.gpu),
+            (
+                "gpu-filtered",
+                &on.results.gpu_filtered,
+                &off.results.gpu_filtered,
+            ),
             ("cpu", &on.results.cpu, &off.results.cpu),
         ];
         for (backend, a, b) in pairs {
@@ -368,6 +425,7 @@ fn time_view(
         ms,
         pass_ms,
         samples: frame.samples,
+        frame,
     })
 }
 
@@ -419,6 +477,7 @@ fn print_report(report: &RaycastReport) {
         for run in &v.runs {
             let rows = [
                 ("gpu", &run.results.gpu),
+                ("gpu-filtered", &run.results.gpu_filtered),
                 ("cpu", &run.results.cpu),
                 ("cpu-reference", &run.results.cpu_reference),
             ];
@@ -448,6 +507,12 @@ fn print_report(report: &RaycastReport) {
             if let Some(x) = run.cpu_speedup_over_reference {
                 println!(
                     "{:<16} CPU over the scalar reference: {x:.2}x",
+                    v.volume.name
+                );
+            }
+            if let (Some(x), Some(s)) = (run.filtered_speedup, run.filtered_ssim) {
+                println!(
+                    "{:<16} filtered GPU sampling {x:.2}x the exact path's speed, SSIM {s:.5}",
                     v.volume.name
                 );
             }
