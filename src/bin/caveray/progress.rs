@@ -25,7 +25,8 @@ impl Progress {
     /// Marks one step done, with a note about it.
     pub fn step(&mut self, note: &str) {
         self.done += 1;
-        let filled = WIDTH * self.done / self.total.max(1);
+        // A miscounted total must not bring the tool down.
+        let filled = (WIDTH * self.done / self.total.max(1)).min(WIDTH);
         let elapsed = self.start.elapsed().as_secs_f64();
         let line = format!(
             "[{}{}] {}/{} {:.1} s  {note}",

@@ -139,6 +139,8 @@ struct SkippingGain {
     samples_off: u64,
     /// Share of the samples skipping left out.
     skipped: f64,
+    /// SSIM of the first view rendered with skipping and without.
+    ssim: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -214,10 +216,10 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
     let per_setting: usize = renderers
         .iter()
         .filter(|(k, _)| *k != Kind::Reference)
-        .map(|(k, _)| views_of(*k).len() + usize::from(k.is_gpu()))
+        .map(|(k, _)| views_of(*k).len() + 1)
         .sum();
     let reference = if args.cpu_reference {
-        cpu_views.len()
+        cpu_views.len() + 1
     } else {
         0
     };
@@ -233,6 +235,8 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
         let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
         let scene = loaded.placed(Vec3::ZERO, size)?;
         let mut runs = Vec::new();
+        // The first view of each (mode, renderer, skipping), to compare.
+        let mut first_images: Vec<((String, Kind, bool), Frame)> = Vec::new();
         for shading in &args.shading {
             for (n, &skipping) in args.skipping.iter().enumerate() {
                 let settings = RenderSettings {
@@ -241,7 +245,6 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                     ..Default::default()
                 };
                 let mut results = Results::default();
-                let mut first_images = Vec::new();
                 for (kind, renderer) in &mut renderers {
                     if *kind == Kind::Reference && n > 0 {
                         continue;
@@ -261,13 +264,13 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                         kind.name(),
                         if settings.skipping { "on" } else { "off" }
                     );
-                    if kind.is_gpu() {
-                        renderer
-                            .upload(&scene)
-                            .map_err(|e| Failure::Runtime(e.to_string()))?;
-                        time_view(renderer, 0, &scene, &cameras[0], &settings, image)?;
-                        progress.step(&format!("{label} warm-up"));
-                    }
+                    // One untimed frame first: uploads and pipelines on the
+                    // GPU, the f32 copy and the clear bricks on the CPU.
+                    renderer
+                        .upload(&scene)
+                        .map_err(|e| Failure::Runtime(e.to_string()))?;
+                    time_view(renderer, 0, &scene, &cameras[0], &settings, image)?;
+                    progress.step(&format!("{label} warm-up"));
                     let mut timed = Vec::new();
                     for i in views_of(*kind) {
                         let t = time_view(renderer, i, &scene, &cameras[i], &settings, image)?;
@@ -276,7 +279,8 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                     }
                     let timings = Some(summary(renderer, &timed, image));
                     if let Some(first) = timed.into_iter().next() {
-                        first_images.push((*kind, first.frame));
+                        let key = (shading.to_string(), *kind, skipping);
+                        first_images.push((key, first.frame));
                     }
                     match kind {
                         Kind::Gpu => results.gpu = timings,
@@ -285,7 +289,8 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                         Kind::Reference => results.cpu_reference = timings,
                     }
                 }
-                let image_of = |k: Kind| first_images.iter().find(|(x, _)| *x == k).map(|(_, f)| f);
+                let image_of =
+                    |k: Kind| first_image(&first_images, &shading.to_string(), k, skipping);
                 let filtered_ssim = image_of(Kind::Gpu)
                     .zip(image_of(Kind::GpuFiltered))
                     .and_then(|(a, b)| ssim(a, b).ok());
@@ -311,7 +316,7 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
         }
         volumes.push(VolumeRuns {
             volume: VolumeInfo::of(&loaded.name, &scene),
-            skipping: skipping_gains(&runs),
+            skipping: skipping_gains(&runs, &first_images),
             runs,
         });
     }
@@ -349,33 +354,50 @@ impl Kind {
             Kind::Reference => "cpu-reference",
         }
     }
-
-    fn is_gpu(self) -> bool {
-        matches!(self, Kind::Gpu | Kind::GpuFiltered)
-    }
 }
 
 /// Skipping on against off, per mode and backend, where both ran.
-fn skipping_gains(runs: &[RaycastRun]) -> Vec<SkippingGain> {
+/// The first view's image of `kind` in mode `shading`, with or without
+/// skipping.
+fn first_image<'a>(
+    images: &'a [((String, Kind, bool), Frame)],
+    shading: &str,
+    kind: Kind,
+    skipping: bool,
+) -> Option<&'a Frame> {
+    images
+        .iter()
+        .find(|((m, k, s), _)| m == shading && *k == kind && *s == skipping)
+        .map(|(_, f)| f)
+}
+
+fn skipping_gains(
+    runs: &[RaycastRun],
+    images: &[((String, Kind, bool), Frame)],
+) -> Vec<SkippingGain> {
     let mut gains = Vec::new();
     for on in runs.iter().filter(|r| r.skipping) {
         let Some(off) = runs.iter().find(|r| !r.skipping && r.shading == on.shading) else {
             continue;
         };
         let pairs = [
-            ("gpu", &on.results.gpu, &off.results.gpu),
+            (Kind::Gpu, &on.results.gpu, &off.results.gpu),
             (
-                "gpu-filtered",
+                Kind::GpuFiltered,
                 &on.results.gpu_filtered,
                 &off.results.gpu_filtered,
             ),
-            ("cpu", &on.results.cpu, &off.results.cpu),
+            (Kind::Cpu, &on.results.cpu, &off.results.cpu),
         ];
-        for (backend, a, b) in pairs {
+        for (kind, a, b) in pairs {
             let (Some(a), Some(b)) = (a, b) else { continue };
+            let ssim = first_image(images, &on.shading, kind, true)
+                .zip(first_image(images, &on.shading, kind, false))
+                .and_then(|(x, y)| ssim(x, y).ok());
             gains.push(SkippingGain {
+                ssim,
                 shading: on.shading.clone(),
-                backend,
+                backend: kind.name(),
                 speedup: b.mean_ms / a.mean_ms,
                 samples_on: a.samples,
                 samples_off: b.samples,
@@ -519,13 +541,14 @@ fn print_report(report: &RaycastReport) {
         }
         for g in &v.skipping {
             println!(
-                "{:<16} {} {}: skipping {:.2}x faster, {:.1}% of {:.1} M samples skipped",
+                "{:<16} {} {}: skipping {:.2}x faster, {:.1}% of {:.1} M samples skipped, SSIM {}",
                 v.volume.name,
                 g.shading,
                 g.backend,
                 g.speedup,
                 100.0 * g.skipped,
-                g.samples_off as f64 / 1e6
+                g.samples_off as f64 / 1e6,
+                g.ssim.map_or("-".into(), |s| format!("{s:.5}"))
             );
         }
     }
