@@ -10,8 +10,8 @@ use glam::UVec2;
 use super::context::Context;
 use super::uniforms::{Stereo, WORKGROUP};
 use super::{
-    bind_group, buffer_type, color_data, compute_pipeline, floats, layout_entry, unprepared,
-    GpuRenderer,
+    bind_group, buffer_type, color_data, compute_pipeline, compute_pipeline_with, floats,
+    layout_entry, unprepared, GpuRenderer, Variants,
 };
 use crate::geometry::RayGen;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
@@ -22,7 +22,8 @@ use crate::scene::Scene;
 /// Pipelines for one layer format, and the resources of the last shape.
 pub(super) struct StereoGpu {
     format: LayerFormat,
-    reproject: wgpu::ComputePipeline,
+    /// The left eye's march, for one volume and for several.
+    reproject: Variants,
     clear: wgpu::ComputePipeline,
     composite: wgpu::ComputePipeline,
     writer_layout: wgpu::BindGroupLayout,
@@ -158,7 +159,17 @@ impl StereoGpu {
         let writer = [volume_layout, &writer_layout];
         Self {
             format,
-            reproject: compute_pipeline(device, "re-projection", &source, &writer, "main"),
+            reproject: Variants {
+                one: compute_pipeline_with(
+                    device,
+                    "re-projection",
+                    &source,
+                    &writer,
+                    "main",
+                    &[("ONE_VOLUME", 1.0)],
+                ),
+                several: compute_pipeline(device, "re-projection", &source, &writer, "main"),
+            },
             clear: compute_pipeline(device, "layer clear", &source, &writer, "clear"),
             composite: compute_pipeline(
                 device,
@@ -436,8 +447,13 @@ impl GpuRenderer {
         ctx.queue
             .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = self.bind_group.as_ref().ok_or_else(unprepared)?;
+        let reproject = if scene.volumes().len() == 1 {
+            &stereo.reproject.one
+        } else {
+            &stereo.reproject.several
+        };
         let left_ms = ctx.dispatch(
-            &stereo.reproject,
+            reproject,
             &[volume, &target.writer],
             [cast.x.div_ceil(WORKGROUP), cast.y.div_ceil(WORKGROUP), 1],
         )?;
