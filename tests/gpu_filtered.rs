@@ -1,7 +1,7 @@
 //! Filtered GPU sampling (one hardware-filtered volume fetch and one
 //! stepped-table fetch per sample) against the exact path: close to it,
-//! the same samples taken, the last short segment still corrected, and
-//! refused in words where the adapter cannot filter 32-bit floats.
+//! the same samples taken, the last short segment still corrected; and
+//! level of detail on top of it, fewer samples for a measured likeness.
 
 mod common;
 
@@ -112,4 +112,75 @@ fn off_axis(
 ) -> anari_library_caveray::geometry::RayGen {
     use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays};
     OffAxisCamera::new(*screen, eye).unwrap().ray_gen(size)
+}
+
+#[test]
+fn level_of_detail_trades_samples_for_a_measured_likeness() {
+    let mut gpu = gpu();
+    let scene = Scene::shared(
+        Arc::new(concentric_shells(96)),
+        Arc::new(preset("shells").unwrap().with_unit_distance(0.2).unwrap()),
+    );
+    // Far enough that a pixel covers several voxels at the volume.
+    let (screen, eye) = axis_camera(12.0, 2.0);
+    let size = UVec2::new(64, 64);
+    let rays = off_axis(&screen, eye, size);
+    let desc = FrameDesc::new(size);
+    let with = |lod: f32| RenderSettings {
+        level_of_detail: lod,
+        ..settings(Sampling::Filtered, Shading::None)
+    };
+    let exact = gpu
+        .render(
+            &scene,
+            &rays,
+            &settings(Sampling::Exact, Shading::None),
+            &desc,
+        )
+        .unwrap();
+    let full = gpu.render(&scene, &rays, &with(0.0), &desc).unwrap();
+    let mut last = (1.0, 1.0);
+    for lod in [0.5f32, 1.0, 2.0] {
+        let coarse = gpu.render(&scene, &rays, &with(lod), &desc).unwrap();
+        let s = ssim(&coarse, &exact).unwrap();
+        let share = coarse.samples as f64 / full.samples as f64;
+        println!("level of detail {lod}: SSIM {s:.4} to full detail, {share:.3} of the samples");
+        // Coarser, cheaper, and never a different picture altogether.
+        assert!(share < last.0 && s <= last.1 + 1e-3, "{lod}: {share} {s}");
+        assert!(s >= 0.8, "level of detail {lod}: SSIM {s}");
+        last = (share, s);
+    }
+    let half = gpu.render(&scene, &rays, &with(0.5), &desc).unwrap();
+    let s = ssim(&half, &exact).unwrap();
+    assert!(s >= 0.97, "level of detail 0.5: SSIM {s}");
+    assert!(
+        half.samples * 10 < full.samples * 7,
+        "0.5 took {} of {}",
+        half.samples,
+        full.samples
+    );
+    // The CPU renders full detail whatever the setting.
+    let cpu = anari_library_caveray::render::CpuRenderer::new();
+    let a = cpu.render(&scene, &rays, &with(4.0), &desc).unwrap();
+    let b = cpu.render(&scene, &rays, &with(0.0), &desc).unwrap();
+    assert_eq!(a, b);
+    // Off, it is the filtered path itself.
+    let filtered = gpu
+        .render(
+            &scene,
+            &rays,
+            &settings(Sampling::Filtered, Shading::None),
+            &desc,
+        )
+        .unwrap();
+    assert_eq!(full, filtered);
+    // Out of range is refused with the range.
+    for bad in [-1.0, f32::NAN, 17.0] {
+        let err = gpu.render(&scene, &rays, &with(bad), &desc).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("level of detail must be in [0, 16]"),
+            "{err}"
+        );
+    }
 }

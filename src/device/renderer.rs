@@ -109,6 +109,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "exact | filtered: on the GPU, the shader's trilinear interpolation (the reference's arithmetic), or one hardware-filtered fetch per sample and a table with the step's opacity correction baked in (faster; not with stereo re-projection)",
         )
         .names(&Sampling::NAMES),
+        p(
+            "levelOfDetail",
+            F32,
+            false,
+            Default::Floats(&[0.0]),
+            "0: full detail; F > 0, with gpuSampling filtered: the volume's mip level log2(F x pixel footprint / voxel) and a step 2^level longer where a pixel covers more than 1/F voxels (GPU only)",
+        )
+        .range(0.0, 16.0),
     ],
     commit: Some(commit),
 };
@@ -136,6 +144,7 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         clip_planes: clip_planes(r)?,
         background_image: background_image(r)?,
         skipping: r.bool("emptySpaceSkipping")?,
+        level_of_detail: r.f32("levelOfDetail")?,
         sampling: r
             .string("gpuSampling")
             .unwrap_or_default()

@@ -146,6 +146,25 @@ impl RayGen {
             && !self.t_far.is_nan()
     }
 
+    /// How wide a pixel is where its ray starts, at the image's centre
+    /// (world units; 0 for a pinhole, whose rays share one origin).
+    pub fn pixel_width(&self) -> f32 {
+        self.origin_dx.length().max(self.origin_dy.length())
+    }
+
+    /// How much wider a pixel grows per unit distance along its (unit)
+    /// ray, at the image's centre: the angle it subtends.
+    pub fn pixel_spread(&self, size: glam::UVec2) -> f32 {
+        let c = size.as_vec2() * 0.5;
+        let d = self.direction + c.x * self.direction_dx + c.y * self.direction_dy;
+        let len = d.length();
+        if len > 0.0 {
+            self.direction_dx.length().max(self.direction_dy.length()) / len
+        } else {
+            0.0
+        }
+    }
+
     /// Origin and unit direction of pixel (x, y), in single precision.
     pub fn pixel_ray(&self, x: u32, y: u32) -> (Vec3, Vec3) {
         let (fx, fy) = (x as f32, y as f32);

@@ -42,6 +42,8 @@ pub(crate) struct MarchPlan {
     pub directions: Vec<Vec3>,
     /// Whether primary rays leap over clear bricks.
     pub skipping: bool,
+    /// Level of detail (0: full detail); the GPU's filtered path reads it.
+    pub level_of_detail: f32,
 }
 
 /// How one volume is sampled: where a world point falls in its grid, and
@@ -144,6 +146,7 @@ impl MarchPlan {
             shading: settings.shading,
             directions,
             skipping: settings.skipping,
+            level_of_detail: settings.level_of_detail,
         })
     }
 }

@@ -131,6 +131,9 @@ impl FromStr for Shading {
     }
 }
 
+/// The largest level-of-detail factor (pixels' footprints scaled by it).
+pub const LOD_MAX: f32 = 16.0;
+
 /// How the GPU reads a sample (the CPU always reads it exactly).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Sampling {
@@ -240,6 +243,11 @@ pub struct RenderSettings {
     pub skipping: bool,
     /// How the GPU reads samples.
     pub sampling: Sampling,
+    /// Level of detail under filtered GPU sampling: 0 is full detail;
+    /// F > 0 reads the volume's mip level log2(F · footprint / voxel) and
+    /// lengthens the step by 2^level, where a pixel's footprint along the
+    /// ray exceeds a voxel (1/F voxels).
+    pub level_of_detail: f32,
 }
 
 impl Default for RenderSettings {
@@ -256,6 +264,7 @@ impl Default for RenderSettings {
             light_color: Vec3::ONE,
             skipping: true,
             sampling: Sampling::Exact,
+            level_of_detail: 0.0,
         }
     }
 }
@@ -293,6 +302,12 @@ impl RenderSettings {
             return Err(RenderError::Settings(format!(
                 "depth threshold must be in [0, 1], got {}",
                 self.depth_threshold
+            )));
+        }
+        if !(self.level_of_detail.is_finite() && (0.0..=LOD_MAX).contains(&self.level_of_detail)) {
+            return Err(RenderError::Settings(format!(
+                "level of detail must be in [0, {LOD_MAX}], got {}",
+                self.level_of_detail
             )));
         }
         if !self.light_color.is_finite() || self.light_color.min_element() < 0.0 {

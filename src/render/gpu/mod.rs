@@ -5,7 +5,7 @@
 
 mod context;
 mod layers;
-mod resources;
+pub(crate) mod resources;
 mod shaders;
 mod uniforms;
 
@@ -155,10 +155,17 @@ impl GpuRenderer {
         } else {
             wgpu::FilterMode::Nearest
         };
+        // Between mip levels too, so that level of detail coarsens smoothly.
+        let mipmap_filter = if filterable {
+            wgpu::MipmapFilterMode::Linear
+        } else {
+            wgpu::MipmapFilterMode::Nearest
+        };
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("volumes and tables"),
             mag_filter: filter,
             min_filter: filter,
+            mipmap_filter,
             ..Default::default()
         });
         let uniform = |label, size, usage| {

@@ -23,18 +23,25 @@ pub(super) fn stand_in_volume(ctx: &Context) -> wgpu::TextureView {
     volume_texture(ctx, UVec3::ONE, |_| 0.0)
 }
 
+/// Mip levels of a volume texture at most (level of detail): full
+/// resolution and three halvings.
+pub(crate) const LOD_LEVELS: u32 = 4;
+
 /// An R32Float 3D texture of `dims` holding `value(i)` at voxel i (x
-/// fastest), written a bounded slab at a time.
+/// fastest), written a bounded slab at a time, with its mip chain (each
+/// level the mean of the 2 x 2 x 2 texels below it, as the texture unit
+/// expects).
 fn volume_texture(ctx: &Context, dims: UVec3, value: impl Fn(usize) -> f32) -> wgpu::TextureView {
     let size = wgpu::Extent3d {
         width: dims.x,
         height: dims.y,
         depth_or_array_layers: dims.z,
     };
+    let levels = LOD_LEVELS.min(32 - dims.max_element().leading_zeros());
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("volume"),
         size,
-        mip_level_count: 1,
+        mip_level_count: levels,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D3,
         format: wgpu::TextureFormat::R32Float,
@@ -70,7 +77,59 @@ fn volume_texture(ctx: &Context, dims: UVec3, value: impl Fn(usize) -> f32) -> w
         );
         z += n;
     }
+    let mut below: Option<(UVec3, Vec<f32>)> = None;
+    for level in 1..levels {
+        let (from, values) = match &below {
+            Some((d, v)) => (*d, halve(*d, |i| v[i])),
+            None => (dims, halve(dims, &value)),
+        };
+        let to = (from / 2).max(UVec3::ONE);
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: level,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            &bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * to.x),
+                rows_per_image: Some(to.y),
+            },
+            wgpu::Extent3d {
+                width: to.x,
+                height: to.y,
+                depth_or_array_layers: to.z,
+            },
+        );
+        below = Some((to, values));
+    }
     texture.create_view(&Default::default())
+}
+
+/// The next mip level of a grid of `dims`: dims / 2 (at least 1) texels,
+/// each the mean of the 2 x 2 x 2 below it (edges clamped).
+fn halve(dims: UVec3, value: impl Fn(usize) -> f32) -> Vec<f32> {
+    let to = (dims / 2).max(UVec3::ONE);
+    let at = |x: u32, y: u32, z: u32| {
+        let (x, y, z) = (x.min(dims.x - 1), y.min(dims.y - 1), z.min(dims.z - 1));
+        value(x as usize + dims.x as usize * (y as usize + dims.y as usize * z as usize))
+    };
+    let mut out = Vec::with_capacity((to.x * to.y * to.z) as usize);
+    for z in 0..to.z {
+        for y in 0..to.y {
+            for x in 0..to.x {
+                let mut sum = 0.0;
+                for (dx, dy, dz) in (0..8).map(|k| (k & 1, (k >> 1) & 1, k >> 2)) {
+                    sum += at(2 * x + dx, 2 * y + dy, 2 * z + dz);
+                }
+                out.push(sum / 8.0);
+            }
+        }
+    }
+    out
 }
 
 /// Every volume's clear-brick distances, one u32 per brick, one volume
@@ -268,5 +327,33 @@ impl OutputBuffers {
     /// Size of the depth and of the sample-count buffers.
     pub fn scalar_bytes(&self) -> u64 {
         self.depth.size()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mip_level_is_the_mean_of_the_texels_below_it() {
+        let dims = UVec3::new(4, 2, 3);
+        let value = |i: usize| i as f32;
+        let half = halve(dims, value);
+        // 2 x 1 x 1 texels; the odd z layer is clamped into the last pair.
+        assert_eq!(half.len(), 2);
+        let mean = |xs: [usize; 8]| xs.iter().map(|&i| i as f32).sum::<f32>() / 8.0;
+        let at = |x: usize, y: usize, z: usize| x + 4 * (y + 2 * z);
+        let first = [
+            at(0, 0, 0),
+            at(1, 0, 0),
+            at(0, 1, 0),
+            at(1, 1, 0),
+            at(0, 0, 1),
+            at(1, 0, 1),
+            at(0, 1, 1),
+            at(1, 1, 1),
+        ];
+        assert_eq!(half[0], mean(first));
+        assert_eq!(halve(UVec3::ONE, |_| 7.0), vec![7.0]);
     }
 }

@@ -9,6 +9,7 @@ use glam::{UVec2, Vec3};
 use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::ColorFormat;
+use crate::render::gpu::resources::LOD_LEVELS;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
@@ -146,7 +147,12 @@ uniform! {
         max_steps: u32,
         /// 1: primary rays leap over clear bricks.
         skipping: u32,
-        _pad: [u32; 3],
+        /// Level of detail under filtered sampling (0: full detail).
+        lod: f32,
+        /// A pixel's footprint along a ray at t: ray_width + t ray_spread
+        /// (world units), at the image's centre.
+        ray_width: f32,
+        ray_spread: f32,
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
@@ -266,7 +272,9 @@ impl Params {
             light_color: plan.light_color.to_array(),
             max_steps: plan.max_steps,
             skipping: u32::from(skipping),
-            _pad: [0; 3],
+            lod: plan.level_of_detail,
+            ray_width: rays.pixel_width(),
+            ray_spread: rays.pixel_spread(size),
             clip,
             volumes,
         }
@@ -335,6 +343,7 @@ pub(super) fn declarations() -> String {
         ("FILTER_LINEAR", Filter::Linear.code()),
         ("FILTER_NEAREST", Filter::Nearest.code()),
         ("BRICK", BRICK),
+        ("LOD_LEVELS", LOD_LEVELS),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {

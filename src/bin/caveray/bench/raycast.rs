@@ -12,6 +12,7 @@ use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, R
 use anari_library_caveray::render::stereo::{paper, HmdStereo};
 use anari_library_caveray::render::{
     ssim, Backend, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Sampling, Shading,
+    LOD_MAX,
 };
 use anari_library_caveray::scene::Scene;
 use clap::Args;
@@ -58,9 +59,21 @@ pub struct RaycastArgs {
     /// the filtered images are compared with the exact ones (SSIM).
     #[arg(long, default_value = "exact", value_delimiter = ',', value_parser = gpu_sampling)]
     gpu_sampling: Vec<Sampling>,
+    /// Level of detail for filtered GPU sampling (0: full detail; see the
+    /// renderer's levelOfDetail); its SSIM against the exact path is the
+    /// quality it costs.
+    #[arg(long, default_value_t = 0.0, value_parser = lod)]
+    lod: f32,
     /// Where to write the results.
     #[arg(long)]
     json: PathBuf,
+}
+
+fn lod(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if (0.0..=LOD_MAX).contains(&x) => Ok(x),
+        _ => Err(format!("expected a number from 0 to {LOD_MAX}, got '{s}'")),
+    }
 }
 
 fn gpu_sampling(s: &str) -> Result<Sampling, String> {
@@ -255,6 +268,11 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                             Sampling::Filtered
                         } else {
                             Sampling::Exact
+                        },
+                        level_of_detail: if *kind == Kind::GpuFiltered {
+                            args.lod
+                        } else {
+                            0.0
                         },
                         ..settings.clone()
                     };
