@@ -35,6 +35,8 @@
 @group(0) @binding(15) var<storage, read> bricks: array<u32>;
 // Linear where the adapter filters 32-bit floats (filtered sampling).
 @group(0) @binding(16) var linear: sampler;
+// The same, blending between mip levels (level of detail).
+@group(0) @binding(17) var linear_mips: sampler;
 
 // Filtered sampling (RenderSettings::sampling): one hardware-filtered fetch
 // per volume sample, and for primary samples one filtered fetch of the
@@ -117,18 +119,33 @@ fn contains(v: u32, g: vec3f) -> bool {
 fn filtered_value(v: u32, grid: vec3f, level: f32) -> f32 {
     let n = vec3f(params.volumes[v].dims);
     let c = (clamp(grid, vec3f(0.0), n - 1.0) + 0.5) / n;
+    if level <= 0.0 {
+        if ONE_VOLUME {
+            return textureSampleLevel(volume0, linear, c, 0.0).r;
+        }
+        switch v {
+            case 0u: { return textureSampleLevel(volume0, linear, c, 0.0).r; }
+            case 1u: { return textureSampleLevel(volume1, linear, c, 0.0).r; }
+            case 2u: { return textureSampleLevel(volume2, linear, c, 0.0).r; }
+            case 3u: { return textureSampleLevel(volume3, linear, c, 0.0).r; }
+            case 4u: { return textureSampleLevel(volume4, linear, c, 0.0).r; }
+            case 5u: { return textureSampleLevel(volume5, linear, c, 0.0).r; }
+            case 6u: { return textureSampleLevel(volume6, linear, c, 0.0).r; }
+            default: { return textureSampleLevel(volume7, linear, c, 0.0).r; }
+        }
+    }
     if ONE_VOLUME {
-        return textureSampleLevel(volume0, linear, c, level).r;
+        return textureSampleLevel(volume0, linear_mips, c, level).r;
     }
     switch v {
-        case 0u: { return textureSampleLevel(volume0, linear, c, level).r; }
-        case 1u: { return textureSampleLevel(volume1, linear, c, level).r; }
-        case 2u: { return textureSampleLevel(volume2, linear, c, level).r; }
-        case 3u: { return textureSampleLevel(volume3, linear, c, level).r; }
-        case 4u: { return textureSampleLevel(volume4, linear, c, level).r; }
-        case 5u: { return textureSampleLevel(volume5, linear, c, level).r; }
-        case 6u: { return textureSampleLevel(volume6, linear, c, level).r; }
-        default: { return textureSampleLevel(volume7, linear, c, level).r; }
+        case 0u: { return textureSampleLevel(volume0, linear_mips, c, level).r; }
+        case 1u: { return textureSampleLevel(volume1, linear_mips, c, level).r; }
+        case 2u: { return textureSampleLevel(volume2, linear_mips, c, level).r; }
+        case 3u: { return textureSampleLevel(volume3, linear_mips, c, level).r; }
+        case 4u: { return textureSampleLevel(volume4, linear_mips, c, level).r; }
+        case 5u: { return textureSampleLevel(volume5, linear_mips, c, level).r; }
+        case 6u: { return textureSampleLevel(volume6, linear_mips, c, level).r; }
+        default: { return textureSampleLevel(volume7, linear_mips, c, level).r; }
     }
 }
 

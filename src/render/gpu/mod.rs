@@ -42,6 +42,11 @@ pub struct GpuRenderer {
     /// filters 32-bit floats.
     filtered: Option<Variants>,
     sampler: wgpu::Sampler,
+    mip_sampler: wgpu::Sampler,
+    /// Whether the volume textures carry mip chains: from the first frame
+    /// with level of detail on (software Vulkan samples textures without
+    /// them faster, so full detail does not pay for them before).
+    mips: bool,
     /// Which table and step exponent each stepped table row holds.
     stepped: [Option<(Arc<TransferFunction>, f32)>; MAX_VOLUMES],
     layout: wgpu::BindGroupLayout,
@@ -115,6 +120,7 @@ impl GpuRenderer {
                 layout_entry(14, texture(wgpu::TextureViewDimension::D3)),
                 layout_entry(15, storage(true)),
                 layout_entry(16, wgpu::BindingType::Sampler(sampler_type)),
+                layout_entry(17, wgpu::BindingType::Sampler(sampler_type)),
             ],
         });
         let band_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -155,14 +161,22 @@ impl GpuRenderer {
         } else {
             wgpu::FilterMode::Nearest
         };
-        // Between mip levels too, so that level of detail coarsens smoothly.
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("volumes and tables"),
+            mag_filter: filter,
+            min_filter: filter,
+            ..Default::default()
+        });
+        // Level of detail's: between mip levels too, so that it coarsens
+        // smoothly. Full detail keeps the other, which software Vulkan
+        // samples faster.
         let mipmap_filter = if filterable {
             wgpu::MipmapFilterMode::Linear
         } else {
             wgpu::MipmapFilterMode::Nearest
         };
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("volumes and tables"),
+        let mip_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("volume mip levels"),
             mag_filter: filter,
             min_filter: filter,
             mipmap_filter,
@@ -214,6 +228,8 @@ impl GpuRenderer {
             pipeline,
             filtered,
             sampler,
+            mip_sampler,
+            mips: false,
             stepped: Default::default(),
             layout,
             params,
@@ -384,16 +400,23 @@ impl GpuRenderer {
         if plan.skipping {
             self.find_clear_bricks(scene, &plan)?;
         }
+        let filtered = settings.sampling == Sampling::Filtered;
+        if filtered && self.filtered.is_none() {
+            return Err(self.no_filtering());
+        }
+        if filtered && settings.level_of_detail > 0.0 && !self.mips {
+            // Upload the volumes again, with their mip chains.
+            self.mips = true;
+            self.volumes.clear();
+            self.bind_group = None;
+        }
         self.prepare(
             scene,
             desc.size,
             desc.color,
             settings.background_image.as_ref(),
         );
-        if settings.sampling == Sampling::Filtered {
-            if self.filtered.is_none() {
-                return Err(self.no_filtering());
-            }
+        if filtered {
             self.write_stepped_tables(scene, &plan);
         }
         let queue = &self.ctx.queue;
@@ -472,7 +495,7 @@ impl GpuRenderer {
                 .map(|(_, view)| view.clone());
             let view = kept.unwrap_or_else(|| {
                 self.uploads.volumes += 1;
-                resources::upload_volume(&self.ctx, &placed.volume)
+                resources::upload_volume(&self.ctx, &placed.volume, self.mips)
             });
             volumes.push((Arc::clone(&placed.volume), view));
         }
@@ -603,6 +626,7 @@ impl GpuRenderer {
                 volume(7),
                 buffer(&self.bricks),
                 wgpu::BindingResource::Sampler(&self.sampler),
+                wgpu::BindingResource::Sampler(&self.mip_sampler),
             ];
             let group = bind_group(&self.ctx.device, "raycast", &self.layout, resources);
             self.bind_group = Some(group);

@@ -13,14 +13,20 @@ use crate::scene::{StructuredVolume, TransferFunction, MAX_VOLUMES, TABLE_SIZE};
 /// bounded (about 64 MiB) however large the volume is.
 const UPLOAD_BYTES: u64 = 64 << 20;
 
-/// The volume as an R32Float 3D texture holding normalised values.
-pub(super) fn upload_volume(ctx: &Context, volume: &StructuredVolume) -> wgpu::TextureView {
-    volume_texture(ctx, volume.dims(), |i| volume.voxels().value(i))
+/// The volume as an R32Float 3D texture holding normalised values, with
+/// its mip chain where `mips` (level of detail).
+pub(super) fn upload_volume(
+    ctx: &Context,
+    volume: &StructuredVolume,
+    mips: bool,
+) -> wgpu::TextureView {
+    let levels = if mips { LOD_LEVELS } else { 1 };
+    volume_texture(ctx, volume.dims(), levels, |i| volume.voxels().value(i))
 }
 
 /// A 1 x 1 x 1 volume bound in the slots a scene leaves empty.
 pub(super) fn stand_in_volume(ctx: &Context) -> wgpu::TextureView {
-    volume_texture(ctx, UVec3::ONE, |_| 0.0)
+    volume_texture(ctx, UVec3::ONE, 1, |_| 0.0)
 }
 
 /// Mip levels of a volume texture at most (level of detail): full
@@ -31,13 +37,18 @@ pub(crate) const LOD_LEVELS: u32 = 4;
 /// fastest), written a bounded slab at a time, with its mip chain (each
 /// level the mean of the 2 x 2 x 2 texels below it, as the texture unit
 /// expects).
-fn volume_texture(ctx: &Context, dims: UVec3, value: impl Fn(usize) -> f32) -> wgpu::TextureView {
+fn volume_texture(
+    ctx: &Context,
+    dims: UVec3,
+    levels: u32,
+    value: impl Fn(usize) -> f32,
+) -> wgpu::TextureView {
     let size = wgpu::Extent3d {
         width: dims.x,
         height: dims.y,
         depth_or_array_layers: dims.z,
     };
-    let levels = LOD_LEVELS.min(32 - dims.max_element().leading_zeros());
+    let levels = levels.min(32 - dims.max_element().leading_zeros());
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("volume"),
         size,
