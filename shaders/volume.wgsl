@@ -120,32 +120,25 @@ fn filtered_value(v: u32, grid: vec3f, level: f32) -> f32 {
     let n = vec3f(params.volumes[v].dims);
     let c = (clamp(grid, vec3f(0.0), n - 1.0) + 0.5) / n;
     if level <= 0.0 {
-        if ONE_VOLUME {
-            return textureSampleLevel(volume0, linear, c, 0.0).r;
-        }
-        switch v {
-            case 0u: { return textureSampleLevel(volume0, linear, c, 0.0).r; }
-            case 1u: { return textureSampleLevel(volume1, linear, c, 0.0).r; }
-            case 2u: { return textureSampleLevel(volume2, linear, c, 0.0).r; }
-            case 3u: { return textureSampleLevel(volume3, linear, c, 0.0).r; }
-            case 4u: { return textureSampleLevel(volume4, linear, c, 0.0).r; }
-            case 5u: { return textureSampleLevel(volume5, linear, c, 0.0).r; }
-            case 6u: { return textureSampleLevel(volume6, linear, c, 0.0).r; }
-            default: { return textureSampleLevel(volume7, linear, c, 0.0).r; }
-        }
+        return texture_value(v, linear, c, 0.0);
     }
+    return texture_value(v, linear_mips, c, level);
+}
+
+// Volume v's texture at normalised coordinates c through sampler s.
+fn texture_value(v: u32, s: sampler, c: vec3f, level: f32) -> f32 {
     if ONE_VOLUME {
-        return textureSampleLevel(volume0, linear_mips, c, level).r;
+        return textureSampleLevel(volume0, s, c, level).r;
     }
     switch v {
-        case 0u: { return textureSampleLevel(volume0, linear_mips, c, level).r; }
-        case 1u: { return textureSampleLevel(volume1, linear_mips, c, level).r; }
-        case 2u: { return textureSampleLevel(volume2, linear_mips, c, level).r; }
-        case 3u: { return textureSampleLevel(volume3, linear_mips, c, level).r; }
-        case 4u: { return textureSampleLevel(volume4, linear_mips, c, level).r; }
-        case 5u: { return textureSampleLevel(volume5, linear_mips, c, level).r; }
-        case 6u: { return textureSampleLevel(volume6, linear_mips, c, level).r; }
-        default: { return textureSampleLevel(volume7, linear_mips, c, level).r; }
+        case 0u: { return textureSampleLevel(volume0, s, c, level).r; }
+        case 1u: { return textureSampleLevel(volume1, s, c, level).r; }
+        case 2u: { return textureSampleLevel(volume2, s, c, level).r; }
+        case 3u: { return textureSampleLevel(volume3, s, c, level).r; }
+        case 4u: { return textureSampleLevel(volume4, s, c, level).r; }
+        case 5u: { return textureSampleLevel(volume5, s, c, level).r; }
+        case 6u: { return textureSampleLevel(volume6, s, c, level).r; }
+        default: { return textureSampleLevel(volume7, s, c, level).r; }
     }
 }
 
@@ -420,7 +413,6 @@ fn march(fx: f32, fy: f32) -> Marched {
     let step = params.step;
     var acc = vec4f(0.0);
     var depth = bitcast<f32>(0x7f800000u);
-    var hit = false;
 
     // Each volume's span along the ray, found in its grid (the affine map
     // keeps t), and their union, which the march covers.
@@ -488,24 +480,30 @@ fn march(fx: f32, fy: f32) -> Marched {
             if m.weight <= 0.0 {
                 continue;
             }
-            let lit = m.emitted / m.weight * shade(p) * params.light_color;
-            let a = m.alpha;
-            on_sample(p, lit, a);
-            let weight = (1.0 - acc.a) * a;
-            acc = vec4f(acc.rgb + lit * weight, acc.a + weight);
-            if !hit && acc.a >= params.depth_threshold {
-                depth = t;
-                if params.has_eye != 0u {
-                    depth = length(p - params.eye);
-                }
-                hit = true;
-            }
-            if acc.a >= params.termination {
+            if composite(&acc, &depth, m, p, t) {
                 break;
             }
         }
     }
     return Marched(acc, depth);
+}
+
+// Shades the mixture m sampled at p, t along the ray, and composites it
+// behind `acc` front to back, taking the depth where the opacity first
+// reaches the depth threshold; true once the ray may stop.
+fn composite(acc: ptr<function, vec4f>, depth: ptr<function, f32>, m: Mixture, p: vec3f, t: f32) -> bool {
+    let lit = m.emitted / m.weight * shade(p) * params.light_color;
+    let a = m.alpha;
+    on_sample(p, lit, a);
+    let weight = (1.0 - (*acc).a) * a;
+    *acc = vec4f((*acc).rgb + lit * weight, (*acc).a + weight);
+    if *depth == bitcast<f32>(0x7f800000u) && (*acc).a >= params.depth_threshold {
+        *depth = t;
+        if params.has_eye != 0u {
+            *depth = length(p - params.eye);
+        }
+    }
+    return (*acc).a >= params.termination;
 }
 
 // The march under level of detail (filtered sampling only): segment
@@ -523,7 +521,6 @@ fn march_lod(
 ) -> Marched {
     var acc = vec4f(0.0);
     var depth = bitcast<f32>(0x7f800000u);
-    var hit = false;
     var busy_until = -bitcast<f32>(0x7f800000u);
     var t = t0;
     for (var k = 0u; k < params.max_steps && t < t1; k++) {
@@ -562,19 +559,7 @@ fn march_lod(
         if m.weight <= 0.0 {
             continue;
         }
-        let lit = m.emitted / m.weight * shade(p) * params.light_color;
-        let a = m.alpha;
-        on_sample(p, lit, a);
-        let weight = (1.0 - acc.a) * a;
-        acc = vec4f(acc.rgb + lit * weight, acc.a + weight);
-        if !hit && acc.a >= params.depth_threshold {
-            depth = tm;
-            if params.has_eye != 0u {
-                depth = length(p - params.eye);
-            }
-            hit = true;
-        }
-        if acc.a >= params.termination {
+        if composite(&acc, &depth, m, p, tm) {
             break;
         }
     }

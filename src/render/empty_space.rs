@@ -4,8 +4,8 @@
 //! whose range the table can make visible. A ray at an invisible brick
 //! leaps to the edge of the cube of bricks that distance says is clear,
 //! so it takes the same samples as a full march wherever anything shows
-//! (docs/empty_space.md). Both renderers use these numbers; the shader
-//! repeats `EmptySpace::region` operation for operation.
+//! (docs/empty_space.md). Both renderers use these numbers; the shader's
+//! `brick_region` finds the same regions as `EmptySpace::region`.
 
 use std::sync::Arc;
 
@@ -16,9 +16,8 @@ use super::RenderError;
 use crate::render::frame::filled;
 use crate::scene::{Scene, StructuredVolume, TransferFunction, TABLE_SIZE};
 
-/// Cells per brick edge; a power of two (the CPU's packets shift by it).
+/// Cells per brick edge.
 pub const BRICK: u32 = 8;
-const _: () = assert!(BRICK.is_power_of_two());
 /// The largest distance kept: rays leap at most this many bricks at a
 /// time, then look again.
 pub const MAX_DISTANCE: u8 = 255;
@@ -41,12 +40,13 @@ pub(crate) struct SpaceCache {
 
 impl SpaceCache {
     /// The clear bricks of each of the scene's volumes, in its order,
-    /// made only where the grid or the table is new; keeps no others.
+    /// made only where the grid or the table is new (keeping no others),
+    /// and whether they differ from the last call's.
     pub fn update(
         &mut self,
         scene: &Scene,
         plan: &MarchPlan,
-    ) -> Result<Vec<Arc<EmptySpace>>, RenderError> {
+    ) -> Result<(Vec<Arc<EmptySpace>>, bool), RenderError> {
         let mut next = Self::default();
         for (placed, vplan) in scene.volumes().iter().zip(&plan.volumes) {
             let (volume, tf) = (&placed.volume, &placed.transfer_function);
@@ -82,8 +82,15 @@ impl SpaceCache {
             next.spaces
                 .push((Arc::clone(volume), Arc::clone(tf), Arc::clone(&space)));
         }
+        let changed = next.spaces.len() != self.spaces.len()
+            || next
+                .spaces
+                .iter()
+                .zip(&self.spaces)
+                .any(|((.., a), (.., b))| !Arc::ptr_eq(a, b));
         *self = next;
-        Ok(self.spaces.iter().map(|(.., s)| Arc::clone(s)).collect())
+        let spaces = self.spaces.iter().map(|(.., s)| Arc::clone(s)).collect();
+        Ok((spaces, changed))
     }
 }
 
@@ -145,7 +152,7 @@ impl BrickRanges {
 }
 
 /// Bricks per axis of a grid of `dims` vertices (dims - 1 cells).
-pub fn bricks_of(dims: UVec3) -> UVec3 {
+fn bricks_of(dims: UVec3) -> UVec3 {
     (dims.max(UVec3::splat(2)) - UVec3::ONE).map(|c| c.div_ceil(BRICK))
 }
 
@@ -213,16 +220,10 @@ impl EmptySpace {
         })
     }
 
-    /// Bricks any sample could be visible in.
-    pub fn occupied(&self) -> usize {
-        self.distance.iter().filter(|&&d| d == 0).count()
-    }
-
     /// The region around grid point `g` (inside the grid, whose largest
     /// vertex is `hi`) whose state is known, and how far a ray going
-    /// `along` stays in it: the cube
-    /// of clear bricks around a clear brick, or of bricks that could show
-    /// around one that could.
+    /// `along` stays in it: the cube of clear bricks around a clear brick,
+    /// or the brick itself where it could show.
     #[inline]
     pub fn region(&self, g: Vec3, along: &Along, hi: IVec3) -> Region {
         let b = cell_of(g, hi) / BRICK as i32;
@@ -359,6 +360,11 @@ fn chessboard(distance: &mut [u8], n: UVec3) {
 mod tests {
     use super::*;
 
+    /// Bricks any sample could be visible in.
+    fn occupied(space: &EmptySpace) -> usize {
+        space.distance.iter().filter(|&&d| d == 0).count()
+    }
+
     fn brute_force(occupied: &[bool], n: UVec3) -> Vec<u8> {
         let n = n.as_ivec3();
         let mut out = Vec::new();
@@ -442,13 +448,13 @@ mod tests {
         table[127].w = 0.0;
         table[128].w = 0.3;
         let space = EmptySpace::new(&ranges, &table, 0.0, 1.0).unwrap();
-        assert_eq!(space.occupied(), 4);
+        assert_eq!(occupied(&space), 4);
         // Values below the table's range clamp to its clear first entry...
         let space = EmptySpace::new(&ranges, &table, 2.0, 1.0).unwrap();
-        assert_eq!(space.occupied(), 0);
+        assert_eq!(occupied(&space), 0);
         // ... and above it to its visible last one.
         let space = EmptySpace::new(&ranges, &table, -2.0, 1.0).unwrap();
-        assert_eq!(space.occupied(), 8);
+        assert_eq!(occupied(&space), 8);
     }
 
     #[test]

@@ -1,9 +1,9 @@
 use glam::{IVec3, Vec3, Vec4};
 
-use super::packet::LANES;
+use super::packet::{PacketGrid, LANES};
 use super::sample::{correct, Field, Mixture};
 use crate::geometry::RayGen;
-use crate::render::empty_space::Along;
+use crate::render::empty_space::{Along, EmptySpace};
 use crate::render::march_plan::MarchPlan;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
 use crate::scene::MAX_VOLUMES;
@@ -41,22 +41,25 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
         Some((lo, hi)) => Some((a.min(lo), b.max(hi))),
     });
     let range = union.and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
-    // The packet path's view of the ray: its grid origin and direction.
-    let packet = field.packet.as_ref().map(|p| {
-        let g = &field.grids[0].plan;
-        (p, g.grid(origin), g.grid_direction(dir))
+    // On the packet path (one trilinear volume) the ray's grid point is
+    // go + gd t, and its bricks need no span checks.
+    let one = field.packet.as_ref().map(|grid| {
+        let g = &field.grids[0];
+        let gd = g.plan.grid_direction(dir);
+        OneVolume {
+            grid,
+            go: g.plan.grid(origin),
+            gd,
+            along: Along::new(gd),
+            hi: g.plan.dims.as_ivec3() - IVec3::ONE,
+            space: g.space,
+            exponent: plan.step * g.plan.inv_unit_distance,
+        }
     });
-    // What the bricks say from t on; one volume needs no span checks, and
-    // its grid point follows from the ray's.
-    let single = packet.zip(field.grids.first().and_then(|g| g.space));
-    let along = packet.map(|(_, _, gd)| Along::new(gd));
-    let hi = field
-        .grids
-        .first()
-        .map(|g| g.plan.dims.as_ivec3() - IVec3::ONE);
-    let look = |t: f32| match (single, &along, hi) {
-        (Some(((_, go, gd), space)), Some(along), Some(hi)) => space.region(go + gd * t, along, hi),
-        _ => field.region(&spans, origin + dir * t, dir, t),
+    // What the bricks say from t on.
+    let look = |t: f32| match one.as_ref().and_then(|o| Some((o, o.space?))) {
+        Some((o, space)) => space.region(o.go + o.gd * t, &o.along, o.hi),
+        None => field.region(&spans, origin + dir * t, dir, t),
     };
     let unlit = matches!(plan.shading, Shading::None | Shading::Directional(0));
     if let Some((t0, t1)) = range {
@@ -83,30 +86,30 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
                     k = (k + 1).max(last_clear as u32);
                     continue;
                 }
-                // Packets find clear bricks themselves (below); only one
-                // that is all clear brings the next look.
-                busy_until = if packet.is_some() {
+                // Packets find clear space themselves (below): only one in
+                // which nothing showed, before a clear brick, brings the
+                // next look.
+                busy_until = if one.is_some() {
                     f32::INFINITY
                 } else {
                     t + region.length
                 };
             }
-            // Full steps up to the bricks' next look, LANES at a time.
-            if let Some((grid, go, gd)) = packet.filter(|_| k + (LANES as u32) < n) {
+            // Full steps, LANES at a time.
+            if let Some(o) = one.as_ref().filter(|_| k + (LANES as u32) < n) {
                 let mut ts = [t; LANES];
                 for (m, t) in ts.iter_mut().enumerate().skip(1) {
                     *t = t0 + (k + m as u32) as f32 * plan.step + 0.5 * plan.step;
                 }
-                let exponent = plan.step * field.grids[0].plan.inv_unit_distance;
-                let classified = grid.classify(go, gd, &ts, exponent);
+                let classified = o.grid.classify(o.go, o.gd, &ts, o.exponent);
                 if !classified.any {
                     // Nothing showed: if the next sample's brick is clear,
                     // look for a leap there.
                     let next = ts[LANES - 1] + plan.step;
-                    if let (Some(((_, go, gd), space)), Some(hi)) = (single, hi) {
-                        if space.clear_at(go + gd * next, hi) {
-                            busy_until = f32::NEG_INFINITY;
-                        }
+                    if o.space
+                        .is_some_and(|s| s.clear_at(o.go + o.gd * next, o.hi))
+                    {
+                        busy_until = f32::NEG_INFINITY;
                     }
                     k += LANES as u32;
                     samples += LANES as u32;
@@ -127,10 +130,7 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
                     );
                     acc.color = c.acc;
                     if let Some(l) = c.depth_lane {
-                        acc.depth = match rays.eye {
-                            Some(eye) => (origin + dir * ts[l] - eye).length(),
-                            None => ts[l],
-                        };
+                        acc.depth = depth_of(rays, origin + dir * ts[l], ts[l]);
                     }
                     k += c.used as u32;
                     samples += c.used as u32;
@@ -147,7 +147,7 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
                         let p = origin + dir * t;
                         let s = shade(field, p, &mut samples);
                         let lit = classified.colour(l) * s * plan.light_color;
-                        if acc.add(plan, rays, || p, t, lit, a) {
+                        if acc.add(plan, rays, p, t, lit, a) {
                             break 'ray;
                         }
                     }
@@ -173,7 +173,7 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
             }
             let s = shade(field, p, &mut samples);
             let lit = mixture.color() * s * plan.light_color;
-            if acc.add(plan, rays, || p, t, lit, mixture.alpha) {
+            if acc.add(plan, rays, p, t, lit, mixture.alpha) {
                 break;
             }
         }
@@ -196,37 +196,39 @@ struct Accumulator {
 }
 
 impl Accumulator {
-    /// Blends a sample of colour `lit` and opacity `a` behind what is
-    /// there; the opacity now.
-    #[inline]
-    fn blend(&mut self, lit: Vec3, a: f32) -> f32 {
+    /// Adds a sample at `p` (`t` along the ray) of shaded colour `lit` and
+    /// opacity `a`; true once the ray is opaque enough to stop.
+    fn add(&mut self, plan: &MarchPlan, rays: &RayGen, p: Vec3, t: f32, lit: Vec3, a: f32) -> bool {
         let acc = self.color;
         let weight = (1.0 - acc.w) * a;
         self.color = (acc.truncate() + lit * weight).extend(acc.w + weight);
-        self.color.w
-    }
-
-    /// Adds a sample at `p` (`t` along the ray) of shaded colour `lit` and
-    /// opacity `a`; true once the ray is opaque enough to stop.
-    /// (`p` makes the sample's position, needed once per ray.)
-    fn add(
-        &mut self,
-        plan: &MarchPlan,
-        rays: &RayGen,
-        p: impl Fn() -> Vec3,
-        t: f32,
-        lit: Vec3,
-        a: f32,
-    ) -> bool {
-        self.blend(lit, a);
         if self.depth == f32::INFINITY && self.color.w >= plan.depth_threshold {
-            self.depth = match rays.eye {
-                Some(eye) => (p() - eye).length(),
-                None => t,
-            };
+            self.depth = depth_of(rays, p, t);
         }
         self.color.w >= plan.termination
     }
+}
+
+/// The depth of a sample at `p`, `t` along its ray: from the camera's eye
+/// where it has one, else along the ray.
+fn depth_of(rays: &RayGen, p: Vec3, t: f32) -> f32 {
+    match rays.eye {
+        Some(eye) => (p - eye).length(),
+        None => t,
+    }
+}
+
+/// The one trilinear volume of the packet path, seen from one ray.
+struct OneVolume<'a> {
+    grid: &'a PacketGrid<'a>,
+    /// The ray's grid point at t = 0 and its change per unit t.
+    go: Vec3,
+    gd: Vec3,
+    along: Along,
+    hi: IVec3,
+    space: Option<&'a EmptySpace>,
+    /// Unit distances in a full step (the opacity correction's exponent).
+    exponent: f32,
 }
 
 /// Where a ray enters and leaves the box, clipped to the camera's

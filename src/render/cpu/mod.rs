@@ -71,6 +71,7 @@ impl CpuRenderer {
             cache
                 .spaces
                 .update(scene, plan)?
+                .0
                 .into_iter()
                 .map(Some)
                 .collect()

@@ -73,10 +73,9 @@ pub struct GpuRenderer {
     uploads: Uploads,
     stereo: Option<layers::StereoGpu>,
     last_pass_ms: f64,
-    /// Each placed volume's clear bricks under its table, as the bricks
-    /// buffer holds them.
+    /// Each placed volume's clear bricks under its table, which the bricks
+    /// buffer holds.
     space_cache: SpaceCache,
-    spaces: Vec<Arc<EmptySpace>>,
     bricks: wgpu::Buffer,
     brick_slots: Vec<BrickSlot>,
 }
@@ -156,32 +155,30 @@ impl GpuRenderer {
             one: variant(true, true),
             several: variant(true, false),
         });
-        let filter = if filterable {
-            wgpu::FilterMode::Linear
-        } else {
-            wgpu::FilterMode::Nearest
+        // Linear where the adapter filters 32-bit floats. Level of detail's
+        // sampler blends mip levels too, so that it coarsens smoothly; full
+        // detail keeps the other, which software Vulkan samples faster.
+        let sampler = |label, mips: bool| {
+            let (filter, mipmap_filter) = if filterable {
+                let mipmap = if mips {
+                    wgpu::MipmapFilterMode::Linear
+                } else {
+                    wgpu::MipmapFilterMode::Nearest
+                };
+                (wgpu::FilterMode::Linear, mipmap)
+            } else {
+                (wgpu::FilterMode::Nearest, wgpu::MipmapFilterMode::Nearest)
+            };
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                mag_filter: filter,
+                min_filter: filter,
+                mipmap_filter,
+                ..Default::default()
+            })
         };
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("volumes and tables"),
-            mag_filter: filter,
-            min_filter: filter,
-            ..Default::default()
-        });
-        // Level of detail's: between mip levels too, so that it coarsens
-        // smoothly. Full detail keeps the other, which software Vulkan
-        // samples faster.
-        let mipmap_filter = if filterable {
-            wgpu::MipmapFilterMode::Linear
-        } else {
-            wgpu::MipmapFilterMode::Nearest
-        };
-        let mip_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("volume mip levels"),
-            mag_filter: filter,
-            min_filter: filter,
-            mipmap_filter,
-            ..Default::default()
-        });
+        let mip_sampler = sampler("volume mip levels", true);
+        let sampler = sampler("volumes and tables", false);
         let uniform = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -249,7 +246,6 @@ impl GpuRenderer {
             stereo: None,
             last_pass_ms: 0.0,
             space_cache: SpaceCache::default(),
-            spaces: Vec::new(),
             bricks,
             brick_slots: Vec::new(),
         })
@@ -550,18 +546,12 @@ impl GpuRenderer {
     /// tables, where they are new, and the buffer that holds them; a new
     /// buffer means a new bind group.
     fn find_clear_bricks(&mut self, scene: &Scene, plan: &MarchPlan) -> Result<(), RenderError> {
-        let spaces = self.space_cache.update(scene, plan)?;
-        let same = spaces.len() == self.spaces.len()
-            && spaces
-                .iter()
-                .zip(&self.spaces)
-                .all(|(a, b)| Arc::ptr_eq(a, b));
-        if !same || self.brick_slots.len() != spaces.len() {
+        let (spaces, changed) = self.space_cache.update(scene, plan)?;
+        if changed {
             let list: Vec<&EmptySpace> = spaces.iter().map(Arc::as_ref).collect();
             (self.bricks, self.brick_slots) = resources::bricks_buffer(&self.ctx, &list);
             self.bind_group = None;
         }
-        self.spaces = spaces;
         Ok(())
     }
 

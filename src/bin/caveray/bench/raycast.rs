@@ -313,21 +313,13 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
                     .zip(image_of(Kind::GpuFiltered))
                     .and_then(|(a, b)| ssim(a, b).ok());
                 runs.push(RaycastRun {
-                    filtered_speedup: results
-                        .gpu
-                        .as_ref()
-                        .zip(results.gpu_filtered.as_ref())
-                        .map(|(e, f)| e.mean_ms / f.mean_ms),
+                    filtered_speedup: time_ratio(&results.gpu, &results.gpu_filtered),
                     filtered_ssim,
                     shading: shading.to_string(),
                     skipping,
                     extra_samples_per_sample: shading.extra_samples(),
                     cpu_over_gpu_same_views: speedup(&results, &cpu_views),
-                    cpu_speedup_over_reference: results
-                        .cpu
-                        .as_ref()
-                        .zip(results.cpu_reference.as_ref())
-                        .map(|(c, r)| r.mean_ms / c.mean_ms),
+                    cpu_speedup_over_reference: time_ratio(&results.cpu_reference, &results.cpu),
                     results,
                 });
             }
@@ -484,6 +476,11 @@ fn summary(renderer: &Renderer, timed: &[Timed], size: UVec2) -> Timings {
         samples,
         ms,
     }
+}
+
+/// How many times `slow`'s mean time `fast`'s is, where both ran.
+fn time_ratio(slow: &Option<Timings>, fast: &Option<Timings>) -> Option<f64> {
+    Some(slow.as_ref()?.mean_ms / fast.as_ref()?.mean_ms)
 }
 
 fn speedup(results: &Results, cpu_views: &[usize]) -> Option<f64> {
