@@ -17,8 +17,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         p("statusCallbackUserData", &[T::VOID_POINTER], false, Default::None,
           "passed back as the status callback's first argument"),
         p("backend", &[T::STRING], false, Default::None,
-          "auto | gpu | cpu: the Vulkan ray caster, the CPU reference, or the GPU when one opens \
-           (default auto, or $CAVERAY_BACKEND)")
+          "auto | gpu | cpu: the Vulkan ray caster, the CPU renderer, or a hardware GPU when one opens \
+           and the CPU otherwise (default auto, or $CAVERAY_BACKEND)")
         .names(&Backend::NAMES),
         p("pairStereoFrames", &[T::BOOL], false, Default::Bool(true),
           "render two frames that show the eyes of one wall in one re-projection pass when the first \

@@ -1,5 +1,5 @@
-//! Volume ray casting: the wgpu renderer, the CPU reference it is checked
-//! against, and what both share (settings, frame formats, the march plan).
+//! Volume ray casting: the wgpu renderer, the CPU renderer (with the
+//! scalar reference both are checked against), and what they share (settings, frame formats, the march plan).
 
 mod compare;
 pub mod cpu;

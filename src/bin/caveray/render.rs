@@ -470,10 +470,7 @@ fn print_summary(report: &RenderReport) {
     println!(
         "{} on {}",
         report.rig,
-        report
-            .renderer
-            .adapter()
-            .map_or("the CPU reference", |a| &a.name)
+        report.renderer.adapter().map_or("the CPU", |a| &a.name)
     );
     println!(
         "{:<10} {:<6} {:>11} {:>10} {:>10} {:>12}  path",

@@ -40,7 +40,7 @@ pub struct RaycastArgs {
     /// Views in the 360 degree rotation.
     #[arg(long, default_value_t = paper::VIEWS)]
     steps: u32,
-    /// Of those, how many (evenly spread) the CPU reference renders; the
+    /// Of those, how many (evenly spread) the CPU renders; the
     /// ratio compares the same views. 0 skips the CPU.
     #[arg(long, default_value_t = 5)]
     cpu_steps: u32,
