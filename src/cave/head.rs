@@ -33,6 +33,12 @@ impl HeadFrame {
     }
 }
 
+/// Where the midpoint between the eyes sits relative to the neck's pivot,
+/// in metres as (right, up, forward) in the head frame: the neck model of
+/// head-mounted display runtimes (the Oculus SDK's defaults), with which a
+/// turning head moves its eyes as a real one does.
+pub const NECK_TO_EYES_M: DVec3 = DVec3::new(0.0, 0.075, 0.0805);
+
 /// A tracked head: position in rig units and orientation relative to the
 /// rig's [`HeadFrame`] at rest.
 #[derive(Clone, Copy, Debug, PartialEq)]

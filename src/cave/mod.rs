@@ -8,5 +8,5 @@ mod rig;
 mod source_map;
 
 pub use config::ConfigError;
-pub use head::{pose_along, HeadFrame, HeadPose, PathKey};
+pub use head::{pose_along, HeadFrame, HeadPose, PathKey, NECK_TO_EYES_M};
 pub use rig::{Eye, Rig, ScenePlacement, Units, View, Viewer, Wall};

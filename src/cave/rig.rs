@@ -5,7 +5,7 @@ use glam::{DVec3, UVec2};
 use serde::{Deserialize, Serialize};
 
 use super::config::{self, ConfigError};
-use super::head::{pose_along, HeadFrame, HeadPose, PathKey};
+use super::head::{pose_along, HeadFrame, HeadPose, PathKey, NECK_TO_EYES_M};
 use crate::geometry::{
     pinhole_from_matrices, MatrixCamera, OffAxisCamera, OffAxisProjection, PinholeCamera,
     RecoveredPinhole, Result, Screen,
@@ -207,6 +207,14 @@ impl Rig {
         file: &str,
     ) -> std::result::Result<Vec<PathKey>, ConfigError> {
         config::parse_head_path(text, file, self)
+    }
+
+    /// This rig with its tracked head point at the neck's pivot: the eyes
+    /// [`NECK_TO_EYES_M`] from it.
+    pub fn with_neck_model(&self) -> Self {
+        let mut rig = self.clone();
+        rig.viewer.eye_offset = NECK_TO_EYES_M / self.units.metres_per_unit();
+        rig
     }
 
     /// The head pose `time` seconds along the rig's path, or the default

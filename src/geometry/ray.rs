@@ -165,6 +165,34 @@ impl RayGen {
         }
     }
 
+    /// The depth of a point `p`, `t` along its unit ray: from the eye
+    /// where the camera has one, else along the ray.
+    pub fn depth_at(&self, p: Vec3, t: f32) -> f32 {
+        match self.eye {
+            Some(eye) => (p - eye).length(),
+            None => t,
+        }
+    }
+
+    /// The point of pixel (x, y)'s ray at `depth` (as [`RayGen::depth_at`]
+    /// measures it).
+    pub fn point_at_depth(&self, x: u32, y: u32, depth: f32) -> Vec3 {
+        let (o, d) = self.pixel_ray(x, y);
+        match self.eye {
+            Some(eye) => eye + d * depth,
+            None => o + d * depth,
+        }
+    }
+
+    /// The same rays for the part of the image whose lower-left pixel is
+    /// `offset`: a cell of a frame rendered on its own.
+    pub fn shifted(mut self, offset: glam::UVec2) -> Self {
+        let (x, y) = (offset.x as f32, offset.y as f32);
+        self.origin += x * self.origin_dx + y * self.origin_dy;
+        self.direction += x * self.direction_dx + y * self.direction_dy;
+        self
+    }
+
     /// Origin and unit direction of pixel (x, y), in single precision.
     pub fn pixel_ray(&self, x: u32, y: u32) -> (Vec3, Vec3) {
         let (fx, fy) = (x as f32, y as f32);

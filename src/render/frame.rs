@@ -205,6 +205,34 @@ impl Frame {
         })
     }
 
+    /// A frame of `desc`'s format from linear RGBA floats (4 per pixel,
+    /// lower-left first) and an optional depth channel.
+    pub fn from_linear(
+        desc: &FrameDesc,
+        color: Vec<f32>,
+        depth: Option<Vec<f32>>,
+    ) -> Result<Frame, RenderError> {
+        let encode = |srgb: bool| -> Result<Vec<u8>, RenderError> {
+            let mut out = filled(color.len(), 0u8, "the frame's 8-bit colour")?;
+            for (o, c) in out.chunks_exact_mut(4).zip(color.chunks_exact(4)) {
+                let rgb = |x: f32| if srgb { linear_to_srgb(x) } else { x };
+                o.copy_from_slice(&[rgb(c[0]), rgb(c[1]), rgb(c[2]), c[3]].map(to_unorm8));
+            }
+            Ok(out)
+        };
+        let color = match desc.color {
+            ColorFormat::Rgba8 => ColorData::Rgba8(encode(false)?),
+            ColorFormat::Srgba8 => ColorData::Srgba8(encode(true)?),
+            ColorFormat::Rgba32F => ColorData::Rgba32F(color),
+        };
+        Ok(Frame {
+            size: desc.size,
+            color,
+            depth,
+            samples: 0,
+        })
+    }
+
     /// Pixel (x, y) (y = 0 is the bottom row) as linear RGBA floats.
     pub fn pixel(&self, x: u32, y: u32) -> Vec4 {
         let i = (y * self.size.x + x) as usize;

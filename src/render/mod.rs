@@ -1,6 +1,7 @@
 //! Volume ray casting: the wgpu renderer, the CPU renderer (with the
 //! scalar reference both are checked against), and what they share (settings, frame formats, the march plan).
 
+pub mod cells;
 mod compare;
 pub mod cpu;
 pub mod empty_space;
@@ -9,6 +10,7 @@ pub mod gpu;
 mod march_plan;
 mod settings;
 pub mod stereo;
+pub mod warp;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

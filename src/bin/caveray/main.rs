@@ -5,6 +5,7 @@ mod inspect;
 mod options;
 mod progress;
 mod render;
+mod replay;
 mod report;
 mod scene;
 
@@ -34,6 +35,10 @@ enum Command {
     /// Measure rendering speed (writes JSON, prints a summary).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Asynchronous rendering with image warping on a head path: DSSIM of
+    /// every displayed frame against the ideal one, per warp mode (writes
+    /// JSON, SVG traces and strips of frames).
+    Replay(replay::ReplayArgs),
 }
 
 /// The tracked head, as the rig states it unless overridden.
@@ -104,6 +109,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::Bench(command) => bench::run(command),
+        Command::Replay(args) => replay::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,6 +6,7 @@ use crate::geometry::RayGen;
 use crate::render::empty_space::{Along, EmptySpace};
 use crate::render::march_plan::MarchPlan;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
+use crate::render::warp::LayerBuilder;
 use crate::scene::MAX_VOLUMES;
 
 /// What one primary ray produced.
@@ -19,8 +20,17 @@ pub(super) struct RayResult {
 
 /// Marches one primary ray of `rays` with unit direction `dir` through
 /// every volume at once: one step sequence over the union of their spans,
-/// each sample mixing the volumes whose span holds it.
-pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: Vec4) -> RayResult {
+/// each sample mixing the volumes whose span holds it. With `layers`, every
+/// contributing sample is also recorded there (the scalar path only: a
+/// field without packets).
+pub(super) fn march(
+    field: &Field,
+    rays: &RayGen,
+    origin: Vec3,
+    dir: Vec3,
+    bg: Vec4,
+    mut layers: Option<&mut LayerBuilder>,
+) -> RayResult {
     let mut samples = 0;
     let plan = field.plan;
     let mut acc = Accumulator {
@@ -130,7 +140,7 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
                     );
                     acc.color = c.acc;
                     if let Some(l) = c.depth_lane {
-                        acc.depth = depth_of(rays, origin + dir * ts[l], ts[l]);
+                        acc.depth = rays.depth_at(origin + dir * ts[l], ts[l]);
                     }
                     k += c.used as u32;
                     samples += c.used as u32;
@@ -173,7 +183,11 @@ pub(super) fn march(field: &Field, rays: &RayGen, origin: Vec3, dir: Vec3, bg: V
             }
             let s = shade(field, p, &mut samples);
             let lit = mixture.color() * s * plan.light_color;
-            if acc.add(plan, rays, p, t, lit, mixture.alpha) {
+            let opaque = acc.add(plan, rays, p, t, lit, mixture.alpha);
+            if let Some(layers) = layers.as_deref_mut() {
+                layers.add(t, seg, lit, mixture.alpha, acc.color.w);
+            }
+            if opaque {
                 break;
             }
         }
@@ -203,18 +217,9 @@ impl Accumulator {
         let weight = (1.0 - acc.w) * a;
         self.color = (acc.truncate() + lit * weight).extend(acc.w + weight);
         if self.depth == f32::INFINITY && self.color.w >= plan.depth_threshold {
-            self.depth = depth_of(rays, p, t);
+            self.depth = rays.depth_at(p, t);
         }
         self.color.w >= plan.termination
-    }
-}
-
-/// The depth of a sample at `p`, `t` along its ray: from the camera's eye
-/// where it has one, else along the ray.
-fn depth_of(rays: &RayGen, p: Vec3, t: f32) -> f32 {
-    match rays.eye {
-        Some(eye) => (p - eye).length(),
-        None => t,
     }
 }
 

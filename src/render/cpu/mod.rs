@@ -2,6 +2,7 @@
 //! plainly, one rayon task per image row. Tests hold the GPU to it, and
 //! the tool falls back to it where no adapter exists.
 
+mod capture;
 mod march;
 mod packet;
 mod sample;
@@ -12,7 +13,7 @@ use std::sync::{Arc, Mutex};
 use glam::Vec4;
 use rayon::prelude::*;
 
-use super::frame::{filled, linear_to_srgb, to_unorm8, ColorData, ColorFormat, Frame, FrameDesc};
+use super::frame::{filled, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::{RenderError, RenderSettings};
 use crate::geometry::RayGen;
@@ -164,7 +165,7 @@ impl CpuRenderer {
                             Some(image) => image.at(x as u32, y as u32, desc.size),
                             None => plan.background,
                         };
-                        let ray = march::march(&field, rays, o, dir, bg);
+                        let ray = march::march(&field, rays, o, dir, bg, None);
                         c.extend_from_slice(&ray.color.to_array());
                         d.push(ray.depth);
                         samples += u64::from(ray.samples);
@@ -187,25 +188,9 @@ impl CpuRenderer {
         if stop.load(Ordering::Relaxed) {
             return Err(RenderError::Stopped);
         }
-        let encode = |srgb: bool| -> Result<Vec<u8>, RenderError> {
-            let mut out = filled(color.len(), 0u8, "the frame's 8-bit colour")?;
-            for (o, c) in out.chunks_exact_mut(4).zip(color.chunks_exact(4)) {
-                let rgb = |x: f32| if srgb { linear_to_srgb(x) } else { x };
-                o.copy_from_slice(&[rgb(c[0]), rgb(c[1]), rgb(c[2]), c[3]].map(to_unorm8));
-            }
-            Ok(out)
-        };
-        let color = match desc.color {
-            ColorFormat::Rgba8 => ColorData::Rgba8(encode(false)?),
-            ColorFormat::Srgba8 => ColorData::Srgba8(encode(true)?),
-            ColorFormat::Rgba32F => ColorData::Rgba32F(color),
-        };
-        Ok(Frame {
-            size: desc.size,
-            color,
-            depth: desc.depth.then_some(depth),
-            samples,
-        })
+        let mut frame = Frame::from_linear(desc, color, desc.depth.then_some(depth))?;
+        frame.samples = samples;
+        Ok(frame)
     }
 }
 

@@ -1,0 +1,86 @@
+//! A view as image warping needs it: colour over nothing, first-hit depth
+//! and the emission-absorption layers, cast by the scalar path (layers
+//! are recorded per sample, which the packet path does not visit).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::{UVec2, Vec4};
+use rayon::prelude::*;
+
+use super::{march, sample, CpuRenderer};
+use crate::geometry::RayGen;
+use crate::render::frame::filled;
+use crate::render::march_plan::MarchPlan;
+use crate::render::warp::{Layer, LayerBuilder, Source, MAX_LAYERS};
+use crate::render::{FrameDesc, RenderError, RenderSettings};
+use crate::scene::Scene;
+
+impl CpuRenderer {
+    /// `rays` cast for an image of `size`, keeping `layers` layers per
+    /// pixel (0: none, 1..=MAX_LAYERS). The background is left out: warps
+    /// composite over it after they have moved the image.
+    pub fn capture(
+        &self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        size: UVec2,
+        layers: usize,
+        stop: &AtomicBool,
+    ) -> Result<Source, RenderError> {
+        FrameDesc::new(size).validate()?;
+        if layers > MAX_LAYERS {
+            return Err(RenderError::Settings(format!(
+                "a warp source keeps at most {MAX_LAYERS} layers per pixel, not {layers}"
+            )));
+        }
+        let plan = MarchPlan::new(scene, rays, settings)?;
+        let data = self.prepare(scene, &plan)?;
+        let field = sample::Field::new(&plan, &data, None);
+        let (w, n) = (size.x as usize, size.x as usize * size.y as usize);
+        let mut color = filled(n, Vec4::ZERO, "the warp source's colour")?;
+        let mut depth = filled(n, f32::INFINITY, "the warp source's depth")?;
+        // One layer a pixel at least, so that every row has its chunk.
+        let per = layers.max(1);
+        let mut kept = filled(n * per, Layer::default(), "the warp source's layers")?;
+        let samples: u64 = color
+            .par_chunks_mut(w)
+            .zip(depth.par_chunks_mut(w))
+            .zip(kept.par_chunks_mut(w * per))
+            .enumerate()
+            .map(|(y, ((c, d), l))| {
+                let mut samples = 0u64;
+                for x in 0..w {
+                    if stop.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let (o, dir) = rays.pixel_ray(x as u32, y as u32);
+                    let mut builder = LayerBuilder::new(per);
+                    let ray = march::march(&field, rays, o, dir, Vec4::ZERO, Some(&mut builder));
+                    c[x] = ray.color;
+                    d[x] = ray.depth;
+                    if layers > 0 {
+                        l[x * layers..(x + 1) * layers].copy_from_slice(builder.layers());
+                    }
+                    samples += u64::from(ray.samples);
+                }
+                samples
+            })
+            .sum();
+        if stop.load(Ordering::Relaxed) {
+            return Err(RenderError::Stopped);
+        }
+        if layers == 0 {
+            kept = Vec::new();
+        }
+        Ok(Source {
+            size,
+            rays: *rays,
+            color,
+            depth,
+            layers: kept,
+            k: layers,
+            samples,
+        })
+    }
+}

@@ -1,0 +1,145 @@
+//! The emission-absorption layer representation (Lochmann et al., as
+//! Buchacher's thesis adapts it for warping): each pixel's ray cut into
+//! at most k segments where its accumulated opacity crosses j/k, each
+//! segment one constant absorption and emission over its depth range, and
+//! the re-march that shows them from another eye.
+
+use glam::{UVec2, Vec3, Vec4};
+
+use super::project::Projector;
+use super::{Source, WarpSettings};
+use crate::geometry::RayGen;
+
+/// The most layers a pixel may keep.
+pub const MAX_LAYERS: usize = 8;
+
+/// One segment of a source ray: where it starts and ends (distances along
+/// the unit ray from its origin) and what it shows on its own
+/// (premultiplied colour, opacity).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Layer {
+    pub start: f32,
+    pub end: f32,
+    pub color: Vec4,
+}
+
+impl Layer {
+    /// Absorption per unit length and emitted colour per unit opacity: the
+    /// constants that, integrated from `start` to `end`, give `color`.
+    fn coefficients(&self) -> (f32, Vec3) {
+        let len = self.end - self.start;
+        let a = self.color.w.min(0.999_999);
+        if a <= 0.0 || len <= 0.0 {
+            return (0.0, Vec3::ZERO);
+        }
+        (-(1.0 - a).ln() / len, self.color.truncate() / a)
+    }
+}
+
+/// Collects one ray's contributing samples into layers while it marches.
+#[derive(Clone, Copy, Debug)]
+pub struct LayerBuilder {
+    k: usize,
+    current: usize,
+    layers: [Layer; MAX_LAYERS],
+}
+
+impl LayerBuilder {
+    /// A builder for `k` layers (1..=MAX_LAYERS).
+    pub fn new(k: usize) -> Self {
+        Self {
+            k: k.clamp(1, MAX_LAYERS),
+            current: 0,
+            layers: [Layer::default(); MAX_LAYERS],
+        }
+    }
+
+    /// A sample at `t` covering `seg` along the ray, shaded colour `lit`
+    /// and opacity `a`, after which the ray's opacity is `total`.
+    pub fn add(&mut self, t: f32, seg: f32, lit: Vec3, a: f32, total: f32) {
+        let layer = &mut self.layers[self.current];
+        if layer.color.w == 0.0 {
+            layer.start = t - 0.5 * seg;
+        }
+        layer.end = t + 0.5 * seg;
+        let weight = (1.0 - layer.color.w) * a;
+        layer.color += (lit * weight).extend(weight);
+        let threshold = (self.current + 1) as f32 / self.k as f32;
+        if total >= threshold && self.current + 1 < self.k {
+            self.current += 1;
+        }
+    }
+
+    /// The `k` layers, unused ones empty.
+    pub fn layers(&self) -> &[Layer] {
+        &self.layers[..self.k]
+    }
+}
+
+/// Re-marches target pixel (x, y)'s ray through the source's layers in
+/// the settings' steps between where it enters and leaves the scene: every step
+/// midpoint is projected into the source, and the layer of the source ray
+/// there that holds it absorbs and emits over the step. Returns
+/// premultiplied colour and the depth where the opacity first reached
+/// the settings' depth threshold.
+pub(super) fn march(
+    source: &Source,
+    from: &Projector,
+    rays: &RayGen,
+    x: u32,
+    y: u32,
+    settings: &WarpSettings,
+) -> (Vec4, f32) {
+    let (o, d) = rays.pixel_ray(x, y);
+    let Some((t0, t1)) = enter_exit(o, d, settings.bounds, (rays.t_near, rays.t_far)) else {
+        return (Vec4::ZERO, f32::INFINITY);
+    };
+    let steps = settings.layer_steps;
+    let step = (t1 - t0) / steps as f32;
+    let mut acc = Vec4::ZERO;
+    let mut depth = f32::INFINITY;
+    for i in 0..steps {
+        let t = t0 + (i as f32 + 0.5) * step;
+        let p = o + d * t;
+        let Some((at, along)) = from.locate(p) else {
+            continue;
+        };
+        let Some(layers) = nearest(at, source.size).and_then(|px| source.layers_at(px)) else {
+            continue;
+        };
+        let Some(layer) = layers.iter().find(|l| l.start <= along && along < l.end) else {
+            continue;
+        };
+        let (sigma, emitted) = layer.coefficients();
+        let a = 1.0 - (-sigma * step).exp();
+        let weight = (1.0 - acc.w) * a;
+        acc += (emitted * weight).extend(weight);
+        if depth == f32::INFINITY && acc.w >= settings.depth_threshold {
+            depth = rays.depth_at(p, t);
+        }
+        if acc.w >= 0.99 {
+            break;
+        }
+    }
+    (acc, depth)
+}
+
+/// Where the ray `o + t d` enters and leaves the box, within `clip`.
+pub(super) fn enter_exit(
+    o: Vec3,
+    d: Vec3,
+    (lo, hi): (Vec3, Vec3),
+    (near, far): (f32, f32),
+) -> Option<(f32, f32)> {
+    let inv = d.recip();
+    let (ta, tb) = ((lo - o) * inv, (hi - o) * inv);
+    let t0 = ta.min(tb).max_element().max(near);
+    let t1 = ta.max(tb).min_element().min(far);
+    (t1 > t0 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+}
+
+/// The pixel of a source image of `size` nearest image position `s`.
+pub(super) fn nearest(s: glam::Vec2, size: UVec2) -> Option<UVec2> {
+    let p = s.floor();
+    (p.cmpge(glam::Vec2::ZERO).all() && p.cmplt(size.as_vec2()).all()).then(|| p.as_uvec2())
+}
