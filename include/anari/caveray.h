@@ -41,6 +41,17 @@ extern "C" {
  * frame parameter "stereoPartner" (ANARI_FRAME), device parameter
  * "pairStereoFrames" (ANARI_BOOL, default true). */
 #define CAVERAY_EXTENSION_FRAME_STEREO_PAIR "ANARI_CAVERAY_FRAME_STEREO_PAIR"
+/* Frames that never keep a tracked display waiting: with frame parameter
+ * "caveray.deadline" (ANARI_FLOAT32, milliseconds, 0 = off) set,
+ * anariRenderFrame + anariFrameReady(ANARI_WAIT) return by the deadline with
+ * the newest complete image warped to this render's camera, while the full
+ * render goes on in the background. "caveray.warp" (ANARI_STRING: none,
+ * quad, grid or layers; default quad) chooses the warp. Frame properties:
+ * "caveray.imageAge" (ANARI_FLOAT32, ms from the call whose camera the shown
+ * image was rendered for to this one; -1 before any image exists) and
+ * "caveray.warp" (ANARI_STRING, the warp applied: none for the image of
+ * this very camera). */
+#define CAVERAY_EXTENSION_FRAME_DEADLINE "ANARI_CAVERAY_FRAME_DEADLINE"
 
 /* The parameters of ANARI's "perspective" camera that show one wall from
  * one eye: a symmetric frustum widened to contain the wall, cropped back to

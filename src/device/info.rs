@@ -116,6 +116,10 @@ pub const EXT_ORTHOGRAPHIC: &str = "ANARI_KHR_CAMERA_ORTHOGRAPHIC";
 /// Per-eye frames rendered in one re-projection pass (frame
 /// `stereoPartner`, device `pairStereoFrames`).
 pub const EXT_FRAME_PAIR: &str = "ANARI_CAVERAY_FRAME_STEREO_PAIR";
+/// Frames that are ready by a deadline, showing the newest complete image
+/// warped to their camera (frame `caveray.deadline`, `caveray.warp`;
+/// properties `caveray.imageAge`, `caveray.warp`).
+pub const EXT_FRAME_DEADLINE: &str = "ANARI_CAVERAY_FRAME_DEADLINE";
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
@@ -135,6 +139,7 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_OFF_AXIS,
     EXT_SHADING,
     EXT_FRAME_PAIR,
+    EXT_FRAME_DEADLINE,
 ];
 
 /// Frame channels (`anariGetObjectInfo(FRAME, "channel")`).

@@ -8,10 +8,15 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use super::camera::stereo::EyeView;
+use super::frame::deadline::{Background, Shot};
 use super::frame::slot::{FrameSlot, Kept};
 use super::types::{DataType, Severity, Status, StatusCode};
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection, StereoFrames};
-use crate::render::{AutoChoice, Backend, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
+use crate::render::warp::{Source, WarpMode};
+use crate::render::{
+    AutoChoice, Backend, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderError, RenderSettings,
+    Renderer,
+};
 use crate::scene::Scene;
 
 /// Where a device's status messages go; called from any thread.
@@ -59,7 +64,21 @@ pub struct RenderJob {
     pub unchanged: bool,
     /// Another frame's eye to render with this one in one pass.
     pub partner: Option<Partner>,
+    /// A deadline frame's background render: its image goes there, not
+    /// into `slot` (which only tracks the render).
+    pub background: Option<BackgroundRender>,
 }
+
+/// Where a deadline frame's full render goes, and what it must keep.
+pub struct BackgroundRender {
+    pub target: Arc<Background>,
+    pub warp: WarpMode,
+    /// When the camera it renders was taken.
+    pub taken: Instant,
+}
+
+/// Layers a background render keeps for the `layers` warp.
+const DEVICE_LAYERS: usize = 4;
 
 /// The other eye of a stereo pair, shown by another frame of the device:
 /// rendered with the job in one re-projection pass and kept for that
@@ -103,6 +122,11 @@ impl Worker {
         }
     }
 
+    /// Where the render thread's messages go.
+    pub fn reporter(&self) -> Reporter {
+        Arc::clone(&self.report)
+    }
+
     pub fn submit(&mut self, job: RenderJob) {
         if self.sender.is_none() {
             let (tx, rx) = channel::<RenderJob>();
@@ -111,8 +135,13 @@ impl Worker {
                 .name("caveray-render".into())
                 .spawn(move || {
                     let mut renderer = None;
+                    // Layers are recorded by the CPU path whatever renders.
+                    let cpu = CpuRenderer::new();
                     for job in rx {
-                        run(job, &mut renderer, &report);
+                        match job.background {
+                            Some(_) => run_background(job, &mut renderer, &cpu, &report),
+                            None => run(job, &mut renderer, &report),
+                        }
                     }
                 });
             match spawned {
@@ -156,6 +185,117 @@ impl Drop for Worker {
     }
 }
 
+/// The renderer for `backend`, made (and said so) when it changes.
+fn renderer_for<'a>(
+    renderer: &'a mut Option<(Backend, Renderer)>,
+    backend: Backend,
+    say: &dyn Fn(Severity, String),
+) -> Result<&'a mut Renderer, String> {
+    if renderer.as_ref().map(|r| r.0) != Some(backend) {
+        *renderer = None;
+        let (made, why) = Renderer::choose(backend).map_err(|e| e.to_string())?;
+        match why {
+            // A missing GPU is worth a warning; a software adapter passed
+            // over is the right choice, said for the record.
+            Some(why @ AutoChoice::NoGpu(_)) => say(Severity::Warning, why.to_string()),
+            Some(why) => say(Severity::Info, why.to_string()),
+            None => {}
+        }
+        say(
+            Severity::Info,
+            format!("rendering with {}", made.describe()),
+        );
+        *renderer = Some((backend, made));
+    }
+    match renderer.as_mut() {
+        Some((_, r)) => Ok(r),
+        None => Err("no renderer could be made".into()),
+    }
+}
+
+/// A deadline frame's full render: what warps need of its one view, kept
+/// as the frame's newest image.
+fn run_background(
+    job: RenderJob,
+    renderer: &mut Option<(Backend, Renderer)>,
+    cpu: &CpuRenderer,
+    report: &Reporter,
+) {
+    let started = Instant::now();
+    let Some(back) = &job.background else { return };
+    let say = |severity, message: String| {
+        report(Status {
+            severity,
+            code: StatusCode::NoError,
+            source: job.frame,
+            source_kind: DataType::FRAME,
+            message,
+        })
+    };
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Source, String> {
+        let (Some(scene), [view]) = (&job.scene, job.views.as_slice()) else {
+            return Err("internal: a background render needs a scene and one view".into());
+        };
+        let r = renderer_for(renderer, job.backend, &say)?;
+        let layers = if back.warp == WarpMode::Layers {
+            DEVICE_LAYERS
+        } else {
+            0
+        };
+        let stop = &job.slot.stop;
+        match r {
+            Renderer::Gpu(g) if layers == 0 => {
+                let settings = RenderSettings {
+                    background: glam::Vec4::ZERO,
+                    background_image: None,
+                    ..job.settings.clone()
+                };
+                let desc = FrameDesc::new(view.size)
+                    .with_color(ColorFormat::Rgba32F)
+                    .with_depth();
+                g.render_until(scene, &view.rays, &settings, &desc, stop)
+                    .and_then(|frame| Source::from_frame(&frame, view.rays))
+            }
+            Renderer::Cpu(c) => {
+                c.capture(scene, &view.rays, &job.settings, view.size, layers, stop)
+            }
+            Renderer::Gpu(_) => {
+                cpu.capture(scene, &view.rays, &job.settings, view.size, layers, stop)
+            }
+        }
+        .map_err(|e| e.to_string())
+    }))
+    .unwrap_or_else(|panic| {
+        *renderer = None;
+        Err(format!("render panicked: {}", panic_message(&panic)))
+    });
+    let stopped = job.slot.stop.load(std::sync::atomic::Ordering::Relaxed);
+    match result {
+        Ok(source) => back.target.finish(Some(Shot {
+            source,
+            inputs: job.inputs(),
+            taken: back.taken,
+        })),
+        Err(e) => {
+            if !stopped {
+                report(Status {
+                    severity: Severity::Error,
+                    code: StatusCode::UnknownError,
+                    source: job.frame,
+                    source_kind: DataType::FRAME,
+                    message: format!(
+                        "the background render of frame {:#x} failed: {e}",
+                        job.frame
+                    ),
+                });
+            }
+            back.target.finish(None);
+        }
+    }
+    job.slot
+        .finish(Err("background render".into()), started.elapsed());
+}
+
 fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Reporter) {
     let started = Instant::now();
     let status = |severity, code, message: String| Status {
@@ -193,32 +333,9 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
         let Some(scene) = &job.scene else {
             return Ok(Frame::cleared(&job.desc, job.settings.background));
         };
-        if renderer.as_ref().map(|r| r.0) != Some(job.backend) {
-            *renderer = None;
-            let (made, why) = Renderer::choose(job.backend).map_err(|e| e.to_string())?;
-            match why {
-                // A missing GPU is worth a warning; a software adapter
-                // passed over is the right choice, said for the record.
-                Some(why @ AutoChoice::NoGpu(_)) => {
-                    report(status(
-                        Severity::Warning,
-                        StatusCode::NoError,
-                        why.to_string(),
-                    ));
-                }
-                Some(why) => report(status(Severity::Info, StatusCode::NoError, why.to_string())),
-                None => {}
-            }
-            report(status(
-                Severity::Info,
-                StatusCode::NoError,
-                format!("rendering with {}", made.describe()),
-            ));
-            *renderer = Some((job.backend, made));
-        }
-        let Some((_, r)) = renderer.as_mut() else {
-            return Err("no renderer could be made".into());
-        };
+        let r = renderer_for(renderer, job.backend, &|severity, message| {
+            report(status(severity, StatusCode::NoError, message))
+        })?;
         if let Some(why) = crate::render::march_warning(scene, &job.settings) {
             report(status(Severity::Warning, StatusCode::NoError, why));
         }

@@ -1,16 +1,21 @@
 //! Frame operations: gather the committed scene, hand it to the render
 //! thread, wait, map and unmap.
 
-use glam::{Mat4, UVec2};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glam::{Mat4, UVec2, Vec3};
 
 use super::Device;
-use crate::device::frame::slot::Channel;
+use crate::device::frame::deadline::{present as present_frame, Present, Shot};
+use crate::device::frame::slot::{Channel, FrameSlot};
 use crate::device::frame::{self, color_format};
 use crate::device::object::{Derived, ObjectRef, State};
-use crate::device::types::{kind_name, DataType, StatusCode};
-use crate::device::worker::{Partner, RenderJob};
+use crate::device::types::{kind_name, DataType, Severity, Status, StatusCode};
+use crate::device::worker::{BackgroundRender, Partner, RenderJob};
 use crate::geometry::PrimaryRays;
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection};
+use crate::render::warp::{Source, WarpMode};
 use crate::render::{Backend, ColorData, FrameDesc};
 use crate::scene::{PlacedVolume, Scene};
 
@@ -69,7 +74,30 @@ impl Device {
         // One render per frame at a time: the previous one finishes first.
         drop(slot.wait());
         match self.prepare(&frame) {
-            Ok((mut job, color_type)) => {
+            Ok((job, color_type, Some((deadline, warp)))) => {
+                match self.present_by(&frame, job, deadline, warp) {
+                    Ok(present) => {
+                        if let State::Frame(f) = &mut frame.lock().state {
+                            f.color_type = color_type;
+                            f.last = None;
+                        }
+                        slot.start();
+                        self.spawn_presenter(frame.handle, present, slot, on_done);
+                    }
+                    Err(why) => {
+                        self.error(
+                            StatusCode::InvalidOperation,
+                            Some(&frame),
+                            format!("anariRenderFrame: {}: {why}", frame.describe()),
+                        );
+                        slot.finish(Err(why), Default::default());
+                        if let Some(done) = on_done {
+                            done();
+                        }
+                    }
+                }
+            }
+            Ok((mut job, color_type, None)) => {
                 // Hosts render unchanged frames again (OpenCOVER up to 64
                 // times, to accumulate): the last image stands.
                 let inputs = job.inputs();
@@ -99,9 +127,114 @@ impl Device {
         }
     }
 
+    /// A deadline frame's render: starts the full render in the background
+    /// unless one is running or the newest image is of these inputs, and
+    /// says what the presenter needs.
+    fn present_by(
+        &mut self,
+        frame: &ObjectRef,
+        job: RenderJob,
+        deadline: Duration,
+        warp: WarpMode,
+    ) -> Result<Present, String> {
+        let called = Instant::now();
+        let [view] = job.views.as_slice() else {
+            return Err("a frame with caveray.deadline shows one view: set the camera's stereoMode to none (each eye its own frame)".into());
+        };
+        if job.settings.background_image.is_some() {
+            self.warn(
+                Some(frame),
+                format!(
+                    "anariRenderFrame: {} has a deadline: it shows the renderer's background colour, not its background image",
+                    frame.describe()
+                ),
+            );
+        }
+        let background = match &frame.lock().state {
+            State::Frame(f) => Arc::clone(&f.background),
+            _ => return Err("not a frame".into()),
+        };
+        let inputs = job.inputs();
+        let bounds = job
+            .scene
+            .as_ref()
+            .map_or((Vec3::ZERO, Vec3::ZERO), |s| s.bounds());
+        let present = Present {
+            background: Arc::clone(&background),
+            slot: Arc::clone(&job.slot),
+            inputs: inputs.clone(),
+            rays: view.rays,
+            desc: job.desc,
+            colour: job.settings.background,
+            bounds,
+            warp,
+            called,
+            deadline,
+        };
+        if job.scene.is_some() {
+            if let Some(slot) = background.claim(&inputs) {
+                self.worker.submit(RenderJob {
+                    slot,
+                    background: Some(BackgroundRender {
+                        target: background,
+                        warp,
+                        taken: called,
+                    }),
+                    ..job
+                });
+            }
+        } else {
+            // An empty world: its image is the background, at once.
+            background.finish(Some(Shot {
+                source: Source::empty(job.desc.size, view.rays, 0).map_err(|e| e.to_string())?,
+                inputs,
+                taken: called,
+            }));
+        }
+        Ok(present)
+    }
+
+    /// Runs the frame's presenter on its own thread: the frame is ready by
+    /// its deadline whatever the background render does.
+    fn spawn_presenter(
+        &mut self,
+        handle: u64,
+        present: Present,
+        slot: Arc<FrameSlot>,
+        on_done: Option<Box<dyn FnOnce() + Send>>,
+    ) {
+        let report = self.worker.reporter();
+        let spawned = std::thread::Builder::new()
+            .name("caveray-present".into())
+            .spawn(move || {
+                if let Some(note) = present_frame(present) {
+                    report(Status {
+                        severity: Severity::Info,
+                        code: StatusCode::NoError,
+                        source: handle,
+                        source_kind: DataType::FRAME,
+                        message: format!("frame {handle:#x}: {note}"),
+                    });
+                }
+                if let Some(done) = on_done {
+                    done();
+                }
+            });
+        if let Err(e) = spawned {
+            slot.finish(
+                Err(format!("cannot start the frame's presenter: {e}")),
+                Default::default(),
+            );
+        }
+    }
+
     /// Everything the render thread needs, copied out of the committed
     /// objects so the host may change them while the frame renders.
-    fn prepare(&mut self, frame: &ObjectRef) -> Result<(RenderJob, Option<DataType>), String> {
+    #[allow(clippy::type_complexity)]
+    fn prepare(
+        &mut self,
+        frame: &ObjectRef,
+    ) -> Result<(RenderJob, Option<DataType>, Option<(Duration, WarpMode)>), String> {
         let params = frame
             .lock()
             .committed
@@ -111,6 +244,7 @@ impl Device {
             size,
             color_type,
             depth,
+            deadline,
         } = frame::setup(&params)?;
         let needed = |name: &str, kind: DataType| -> Result<ObjectRef, String> {
             let o = params.object(name).ok_or_else(|| {
@@ -211,8 +345,9 @@ impl Device {
             on_done: None,
             unchanged: false,
             partner: None,
+            background: None,
         };
-        Ok((job, color_type))
+        Ok((job, color_type, deadline))
     }
 
     /// The other eye of a stereo pair for `frame`'s job: the frame its
@@ -274,7 +409,7 @@ impl Device {
         let own = view.matrix.ok_or_else(|| {
             unsuited("is paired with a frame whose camera is not a perspective one")
         })?;
-        let (theirs, _) = self
+        let (theirs, ..) = self
             .prepare(candidate)
             .map_err(|e| Unpaired::Unsuited(format!("cannot render: {e}")))?;
         if !theirs.scene.as_ref().is_some_and(|s| s.same(scene)) {
@@ -444,6 +579,7 @@ impl Device {
         };
         if let State::Frame(f) = &mut frame.lock().state {
             f.slot.cancel();
+            f.background.cancel();
             // What was kept no longer stands for the frame's next render.
             f.last = None;
         };

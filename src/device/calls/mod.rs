@@ -323,10 +323,24 @@ impl Device {
                         Some(Ok(frame)) => Some(Property::UInt64(frame.samples)),
                         _ => None,
                     },
+                    // What a deadline frame showed (absent for a whole render).
+                    "caveray.imageAge" => s.shown.map(|v| Property::Float32(v.age_ms)),
+                    "caveray.warp" => s.shown.map(|v| Property::Text(warp_name(v.warp))),
                     _ => None,
                 }
             }
         }
+    }
+}
+
+/// A warp's name as the C string `caveray.warp` answers with.
+fn warp_name(mode: crate::render::warp::WarpMode) -> &'static std::ffi::CStr {
+    use crate::render::warp::WarpMode;
+    match mode {
+        WarpMode::None => c"none",
+        WarpMode::Quad => c"quad",
+        WarpMode::Grid => c"grid",
+        WarpMode::Layers => c"layers",
     }
 }
 

@@ -133,16 +133,14 @@ impl Placement {
     /// `near`, else a millimetre-scale 1e-3 units; the far plane its `far`,
     /// else 1e9 times the near.
     fn matrix_camera(&self, fovy: f64, aspect: f64) -> Option<MatrixCamera> {
-        let near = self
-            .clip
-            .map(|(n, _)| f64::from(n))
-            .filter(|n| *n > 0.0)
-            .unwrap_or(1e-3);
-        let far = self
-            .clip
-            .map(|(_, f)| f64::from(f))
-            .filter(|f| f.is_finite())
-            .unwrap_or(near * 1e9);
+        // One match, so no comparison is made on an absent value's bytes
+        // (valgrind flags the speculative compare an Option chain compiles to).
+        let (near, far) = match self.clip {
+            Some((n, f)) => (f64::from(n), f64::from(f)),
+            None => (0.0, f64::INFINITY),
+        };
+        let near = if near > 0.0 { near } else { 1e-3 };
+        let far = if far.is_finite() { far } else { near * 1e9 };
         let top = near * (0.5 * fovy).tan();
         let half = DVec2::new(top * aspect, top);
         let (lo, hi) = (

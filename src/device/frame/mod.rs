@@ -4,22 +4,32 @@
 //! colour channel caveray cannot fill. A render whose inputs equal the
 //! last one's keeps its image (calls/frames.rs).
 
+pub mod deadline;
 pub mod slot;
 
 use glam::UVec2;
 
-use super::info::{p, Default, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION, EXT_FRAME_PAIR};
+use super::info::{
+    p, Default, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR,
+    F32,
+};
 use super::object::State;
 use super::read::Read;
 use super::types::DataType as T;
 use super::value::Params;
+use crate::render::warp::WarpMode;
 use crate::render::ColorFormat;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::FRAME,
     subtype: "",
     description: "render target: colour and depth, lower-left pixel first",
-    extensions: &[EXT_COMPLETION, EXT_ACCUMULATION, EXT_FRAME_PAIR],
+    extensions: &[
+        EXT_COMPLETION,
+        EXT_ACCUMULATION,
+        EXT_FRAME_PAIR,
+        EXT_FRAME_DEADLINE,
+    ],
     params: &[
         p(
             "size",
@@ -75,13 +85,50 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             Default::None,
             "the frame showing the other eye of this wall: rendered with this one in one re-projection pass, its image kept for its next render if its inputs are unchanged",
         ),
+        p(
+            "caveray.deadline",
+            F32,
+            false,
+            Default::Floats(&[0.0]),
+            "milliseconds after anariRenderFrame by which the frame is ready: the newest complete image warped to this render's camera, while the full render goes on in the background (0: no deadline, every render whole)",
+        )
+        .range(0.0, MAX_DEADLINE_MS),
+        p(
+            "caveray.warp",
+            &[T::STRING],
+            false,
+            Default::Text("quad"),
+            "how a deadline frame brings the newest complete image to its camera: none, quad (the image as a plane through the scene's centre), grid (a mesh on the first-hit depth) or layers (emission-absorption layers re-marched)",
+        )
+        .names(WARP_NAMES),
     ],
     commit: Some(commit),
 };
 
+/// The longest deadline a frame may set (ms).
+pub const MAX_DEADLINE_MS: f32 = 10_000.0;
+const WARP_NAMES: &[&str] = &["none", "quad", "grid", "layers"];
+
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     color_type(r.params())?;
+    deadline(r.params())?;
     Ok(None)
+}
+
+/// The deadline (if any) and warp a frame asks for.
+pub fn deadline(p: &Params) -> Result<Option<(std::time::Duration, WarpMode)>, String> {
+    let r = Read::new(p, INFO.params);
+    let ms = r.f32("caveray.deadline")?;
+    if !(ms.is_finite() && (0.0..=MAX_DEADLINE_MS).contains(&ms)) {
+        return Err(format!(
+            "caveray.deadline must be 0 (none) to {MAX_DEADLINE_MS} ms, got {ms}"
+        ));
+    }
+    let warp = r.string("caveray.warp").unwrap_or("quad");
+    let warp = warp
+        .parse::<WarpMode>()
+        .map_err(|e| format!("caveray.warp: {e}"))?;
+    Ok((ms > 0.0).then(|| (std::time::Duration::from_secs_f32(ms / 1e3), warp)))
 }
 
 /// The renderer's pixel format for a `channel.color` type.
@@ -113,6 +160,7 @@ pub struct Setup {
     pub size: UVec2,
     pub color_type: Option<T>,
     pub depth: bool,
+    pub deadline: Option<(std::time::Duration, WarpMode)>,
 }
 
 pub fn setup(p: &Params) -> Result<Setup, String> {
@@ -131,5 +179,6 @@ pub fn setup(p: &Params) -> Result<Setup, String> {
         size,
         color_type,
         depth,
+        deadline: deadline(p)?,
     })
 }

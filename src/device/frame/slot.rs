@@ -4,6 +4,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
+use super::deadline::ShownImage;
 use crate::device::worker::RenderInputs;
 use crate::render::Frame;
 
@@ -35,6 +36,8 @@ pub struct FrameState {
     pub color_type: Option<crate::device::types::DataType>,
     /// What the last render was made from, while its image is good.
     pub last: Option<RenderInputs>,
+    /// The background renders of a frame with a deadline.
+    pub background: Arc<super::deadline::Background>,
 }
 
 impl Drop for FrameState {
@@ -42,6 +45,7 @@ impl Drop for FrameState {
     /// for it stops, so nobody waits on an image nobody can map.
     fn drop(&mut self) {
         self.slot.cancel();
+        self.background.cancel();
     }
 }
 
@@ -77,6 +81,8 @@ pub struct SlotState {
     /// Renders the image stands for: 1 after a render, one more for each
     /// render of unchanged inputs (what an accumulating host counts).
     pub samples: u32,
+    /// What a deadline frame showed; `None` for a whole render.
+    pub shown: Option<ShownImage>,
 }
 
 impl FrameSlot {
@@ -106,10 +112,30 @@ impl FrameSlot {
     }
 
     pub fn finish(&self, result: Result<Frame, String>, duration: Duration) {
+        self.finish_as(result, duration, None);
+    }
+
+    /// Ends a deadline frame's presentation, saying what it showed.
+    pub fn finish_shown(
+        &self,
+        result: Result<Frame, String>,
+        duration: Duration,
+        shown: ShownImage,
+    ) {
+        self.finish_as(result, duration, Some(shown));
+    }
+
+    fn finish_as(
+        &self,
+        result: Result<Frame, String>,
+        duration: Duration,
+        shown: Option<ShownImage>,
+    ) {
         let mut s = self.lock();
         s.samples = u32::from(result.is_ok());
         s.result = Some(result);
         s.duration = duration;
+        s.shown = shown;
         s.busy = false;
         self.done.notify_all();
     }

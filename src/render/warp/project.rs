@@ -45,6 +45,21 @@ impl Projector {
         Ok(Self { rays: *rays, kind })
     }
 
+    /// The inverse matrix's columns and the centre, w = 0 for rays
+    /// through the centre and 1 for parallel ones (what the GPU warp reads).
+    pub fn packed(&self) -> [[f32; 4]; 4] {
+        let (inverse, centre, kind) = match self.kind {
+            Kind::Central { centre, inverse } => (inverse, centre, 0.0),
+            Kind::Parallel { inverse } => (inverse, self.rays.origin, 1.0),
+        };
+        [
+            inverse.x_axis.extend(0.0).to_array(),
+            inverse.y_axis.extend(0.0).to_array(),
+            inverse.z_axis.extend(0.0).to_array(),
+            centre.extend(kind).to_array(),
+        ]
+    }
+
     pub fn rays(&self) -> &RayGen {
         &self.rays
     }
