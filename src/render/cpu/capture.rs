@@ -73,14 +73,8 @@ impl CpuRenderer {
         if layers == 0 {
             kept = Vec::new();
         }
-        Ok(Source {
-            size,
-            rays: *rays,
-            color,
-            depth,
-            layers: kept,
-            k: layers,
-            samples,
-        })
+        Ok(Source::new(
+            size, *rays, color, depth, kept, layers, samples,
+        ))
     }
 }

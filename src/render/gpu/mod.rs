@@ -8,6 +8,7 @@ mod layers;
 pub(crate) mod resources;
 mod shaders;
 mod uniforms;
+mod warp;
 
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -78,6 +79,8 @@ pub struct GpuRenderer {
     space_cache: SpaceCache,
     bricks: wgpu::Buffer,
     brick_slots: Vec<BrickSlot>,
+    /// The warp passes, made on the first warp.
+    warper: Option<warp::GpuWarp>,
 }
 
 impl GpuRenderer {
@@ -248,6 +251,7 @@ impl GpuRenderer {
             space_cache: SpaceCache::default(),
             bricks,
             brick_slots: Vec::new(),
+            warper: None,
         })
     }
 
@@ -258,6 +262,23 @@ impl GpuRenderer {
 
     /// GPU time of the last frame's ray casting pass (no upload or
     /// read-back), in milliseconds, by [`GpuRenderer::pass_clock`].
+    /// `source` shown from `target` (an image of `size`) by the GPU warp
+    /// passes, which the CPU's [`crate::render::warp::warp`] is the
+    /// reference for; with the passes' milliseconds.
+    pub fn warp(
+        &mut self,
+        source: &crate::render::warp::Source,
+        target: &RayGen,
+        size: UVec2,
+        settings: &crate::render::warp::WarpSettings,
+    ) -> Result<(crate::render::warp::Warped, f64), RenderError> {
+        let ctx = &self.ctx;
+        let warper = self.warper.get_or_insert_with(|| warp::GpuWarp::new(ctx));
+        let result = warper.warp(ctx, source, target, size, settings);
+        ctx.check()?;
+        result
+    }
+
     pub fn last_pass_ms(&self) -> f64 {
         self.last_pass_ms
     }

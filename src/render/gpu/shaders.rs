@@ -12,6 +12,7 @@ const STEREO: &str = include_str!("../../../shaders/stereo.wgsl");
 const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
 const REPROJECT: &str = include_str!("../../../shaders/reproject.wgsl");
 const COMPOSITE: &str = include_str!("../../../shaders/composite.wgsl");
+const WARP: &str = include_str!("../../../shaders/warp.wgsl");
 
 pub(super) fn raycast() -> String {
     [declarations().as_str(), VOLUME, COLOUR, RAYCAST].join("\n")
@@ -27,4 +28,8 @@ pub(super) fn reproject(format: LayerFormat) -> String {
 
 pub(super) fn composite() -> String {
     [declarations().as_str(), COLOUR, STEREO, COMPOSITE].join("\n")
+}
+
+pub(super) fn warp() -> String {
+    [declarations().as_str(), WARP].join("\n")
 }

@@ -197,6 +197,55 @@ uniform! {
     }
 }
 
+uniform! {
+    /// `Warp` in shaders/warp.wgsl: a source view, a target view and how
+    /// one is shown from the other.
+    Warp {
+        /// The target's rays (xyz; w unused), as `Params` holds them.
+        to_origin: [f32; 4],
+        to_origin_dx: [f32; 4],
+        to_origin_dy: [f32; 4],
+        to_direction: [f32; 4],
+        to_direction_dx: [f32; 4],
+        to_direction_dy: [f32; 4],
+        /// xyz: where depth is measured from; w: 1 if the view has an eye.
+        to_eye: [f32; 4],
+        from_origin: [f32; 4],
+        from_origin_dx: [f32; 4],
+        from_origin_dy: [f32; 4],
+        from_direction: [f32; 4],
+        from_direction_dx: [f32; 4],
+        from_direction_dy: [f32; 4],
+        from_eye: [f32; 4],
+        /// Each view's projector: inverse matrix columns, and the centre
+        /// (xyz) with w = 0 for rays through it, 1 for parallel rays.
+        from_inverse_x: [f32; 4],
+        from_inverse_y: [f32; 4],
+        from_inverse_z: [f32; 4],
+        from_centre: [f32; 4],
+        to_inverse_x: [f32; 4],
+        to_inverse_y: [f32; 4],
+        to_inverse_z: [f32; 4],
+        to_centre: [f32; 4],
+        /// The quad's plane: the source's image normal and the scene's centre.
+        normal: [f32; 4],
+        focus: [f32; 4],
+        /// The scene's bounds.
+        lo: [f32; 4],
+        hi: [f32; 4],
+        from_size: [u32; 2],
+        to_size: [u32; 2],
+        nodes: [u32; 2],
+        spacing: u32,
+        layers: u32,
+        steps: u32,
+        depth_threshold: f32,
+        /// The target's clip distances.
+        near: f32,
+        far: f32,
+    }
+}
+
 impl VolumeSlot {
     fn new(plan: &VolumePlan, bricks: BrickSlot) -> Self {
         let [x, y, z] = plan.world_to_grid.map(|r| r.to_array());
@@ -352,7 +401,7 @@ pub(super) fn declarations() -> String {
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
-    out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl()
+    out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl() + &Warp::wgsl()
 }
 
 #[cfg(test)]
@@ -414,6 +463,7 @@ mod tests {
             &shaders::composite(),
             "Stereo",
         );
+        same_layout(Warp::FIELDS, size_of::<Warp>(), &shaders::warp(), "Warp");
     }
 
     #[test]

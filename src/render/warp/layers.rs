@@ -131,7 +131,15 @@ pub(super) fn enter_exit(
     (lo, hi): (Vec3, Vec3),
     (near, far): (f32, f32),
 ) -> Option<(f32, f32)> {
-    let inv = d.recip();
+    // As the shader: a zero component becomes a tiny one of its sign.
+    let safe = |x: f32| {
+        if x.abs() < 1e-20 {
+            1e-20_f32.copysign(x)
+        } else {
+            x
+        }
+    };
+    let inv = Vec3::new(safe(d.x), safe(d.y), safe(d.z)).recip();
     let (ta, tb) = ((lo - o) * inv, (hi - o) * inv);
     let t0 = ta.min(tb).max_element().max(near);
     let t1 = ta.max(tb).min_element().min(far);

@@ -66,6 +66,8 @@ impl std::str::FromStr for WarpMode {
 }
 
 /// What a render kept of its view for warping, lower-left pixel first.
+/// Its pixels are read, not changed in place: a new image is a new source
+/// (or a [`Source::paste`]), which is how the GPU knows to upload it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Source {
     pub size: UVec2,
@@ -79,9 +81,45 @@ pub struct Source {
     pub k: usize,
     /// Volume samples the render took.
     pub samples: u64,
+    /// Which image this is (new for each source and each paste).
+    generation: u64,
+}
+
+/// Source generations, unique in the process.
+static GENERATION: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+fn next_generation() -> u64 {
+    GENERATION.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 impl Source {
+    /// A source from its parts: `k` layers a pixel (or none).
+    pub fn new(
+        size: UVec2,
+        rays: RayGen,
+        color: Vec<Vec4>,
+        depth: Vec<f32>,
+        layers: Vec<Layer>,
+        k: usize,
+        samples: u64,
+    ) -> Self {
+        Self {
+            size,
+            rays,
+            color,
+            depth,
+            layers,
+            k,
+            samples,
+            generation: next_generation(),
+        }
+    }
+
+    /// Which image this is: a new number for every source and paste.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
     fn index(&self, p: UVec2) -> usize {
         p.y as usize * self.size.x as usize + p.x as usize
     }
@@ -94,15 +132,15 @@ impl Source {
                 "internal: a warp source is made from float colour and depth".into(),
             ));
         };
-        Ok(Self {
-            size: frame.size,
+        Ok(Self::new(
+            frame.size,
             rays,
-            color: c.chunks_exact(4).map(Vec4::from_slice).collect(),
-            depth: depth.clone(),
-            layers: Vec::new(),
-            k: 0,
-            samples: frame.samples,
-        })
+            c.chunks_exact(4).map(Vec4::from_slice).collect(),
+            depth.clone(),
+            Vec::new(),
+            0,
+            frame.samples,
+        ))
     }
 
     /// A source of `size` seen through `rays` with nothing in it yet,
@@ -110,15 +148,15 @@ impl Source {
     pub fn empty(size: UVec2, rays: RayGen, k: usize) -> Result<Self, RenderError> {
         FrameDesc::new(size).validate()?;
         let n = size.x as usize * size.y as usize;
-        Ok(Self {
+        Ok(Self::new(
             size,
             rays,
-            color: filled(n, Vec4::ZERO, "the warp source's colour")?,
-            depth: filled(n, f32::INFINITY, "the warp source's depth")?,
-            layers: filled(n * k, Layer::default(), "the warp source's layers")?,
+            filled(n, Vec4::ZERO, "the warp source's colour")?,
+            filled(n, f32::INFINITY, "the warp source's depth")?,
+            filled(n * k, Layer::default(), "the warp source's layers")?,
             k,
-            samples: 0,
-        })
+            0,
+        ))
     }
 
     /// Puts `cell`, rendered through this source's rays shifted to
@@ -141,6 +179,7 @@ impl Source {
                 .copy_from_slice(&cell.layers[row * k..(row + cw) * k]);
         }
         self.samples += cell.samples;
+        self.generation = next_generation();
         Ok(())
     }
 
@@ -210,11 +249,11 @@ impl WarpSettings {
     }
 
     /// The proxy plane's point: the scene's centre.
-    fn focus(&self) -> Vec3 {
+    pub(crate) fn focus(&self) -> Vec3 {
         0.5 * (self.bounds.0 + self.bounds.1)
     }
 
-    fn validate(&self) -> Result<(), RenderError> {
+    pub(crate) fn validate(&self) -> Result<(), RenderError> {
         let bad = |m: String| Err(RenderError::Settings(m));
         if !(1..=256).contains(&self.grid_spacing) {
             return bad(format!(

@@ -1,0 +1,367 @@
+// Image warping (src/render/warp/): the quad, grid and layers warps, each
+// the port of its CPU reference, which the tests hold it to (after the
+// declarations generated from src/render/gpu/uniforms.rs).
+
+@group(0) @binding(0) var<uniform> w: Warp;
+// The source: premultiplied colour, first-hit depth, and `w.layers` layers
+// a pixel as two vec4s each (colour; start, end).
+@group(0) @binding(1) var<storage, read> colour: array<vec4f>;
+@group(0) @binding(2) var<storage, read> depth: array<f32>;
+@group(0) @binding(3) var<storage, read> layers: array<vec4f>;
+@group(0) @binding(4) var<storage, read_write> out_colour: array<vec4f>;
+@group(0) @binding(5) var<storage, read_write> out_depth: array<f32>;
+// The grid: the nearest surface's distance a target pixel (bits inverted,
+// so that atomicMax keeps the nearest; 0: none), each mesh vertex where it
+// landed in the target (x, y, distance, 1 if it landed), and each target
+// pixel's source position.
+@group(0) @binding(6) var<storage, read_write> nearest: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> mesh: array<vec4f>;
+@group(0) @binding(8) var<storage, read_write> from_at: array<vec2f>;
+
+fn infinity() -> f32 {
+    return bitcast<f32>(0x7f800000u);
+}
+
+// A view's rays and its projector (src/render/warp/project.rs).
+struct View {
+    origin: vec3f,
+    origin_dx: vec3f,
+    origin_dy: vec3f,
+    direction: vec3f,
+    direction_dx: vec3f,
+    direction_dy: vec3f,
+    eye: vec4f,
+    inverse: mat3x3f,
+    centre: vec4f,
+}
+
+fn source_view() -> View {
+    return View(w.from_origin.xyz, w.from_origin_dx.xyz, w.from_origin_dy.xyz,
+        w.from_direction.xyz, w.from_direction_dx.xyz, w.from_direction_dy.xyz, w.from_eye,
+        mat3x3f(w.from_inverse_x.xyz, w.from_inverse_y.xyz, w.from_inverse_z.xyz), w.from_centre);
+}
+
+fn target_view() -> View {
+    return View(w.to_origin.xyz, w.to_origin_dx.xyz, w.to_origin_dy.xyz,
+        w.to_direction.xyz, w.to_direction_dx.xyz, w.to_direction_dy.xyz, w.to_eye,
+        mat3x3f(w.to_inverse_x.xyz, w.to_inverse_y.xyz, w.to_inverse_z.xyz), w.to_centre);
+}
+
+struct Ray {
+    o: vec3f,
+    d: vec3f,
+}
+
+fn pixel_ray(v: View, x: f32, y: f32) -> Ray {
+    let o = v.origin + x * v.origin_dx + y * v.origin_dy;
+    let d = normalize(v.direction + x * v.direction_dx + y * v.direction_dy);
+    return Ray(o, d);
+}
+
+fn depth_at(v: View, p: vec3f, t: f32) -> f32 {
+    if v.eye.w != 0.0 {
+        return length(p - v.eye.xyz);
+    }
+    return t;
+}
+
+struct Located {
+    at: vec2f,
+    along: f32,
+    ok: bool,
+}
+
+// Where `p` appears in the view's image (pixels) and how far along that
+// position's unit ray; not ok behind a pinhole's eye.
+fn locate(v: View, p: vec3f) -> Located {
+    let q = v.inverse * (p - v.centre.xyz);
+    var px = q.x;
+    var py = q.y;
+    if v.centre.w == 0.0 {
+        if q.x <= 0.0 {
+            return Located(vec2f(0.0), 0.0, false);
+        }
+        px = q.y / q.x;
+        py = q.z / q.x;
+    }
+    let r = pixel_ray(v, px, py);
+    let at = vec2f(px + 0.5, py + 0.5);
+    let finite = all(abs(at) < vec2f(1e30));
+    return Located(at, dot(p - r.o, r.d), finite);
+}
+
+fn texel(x: i32, y: i32) -> vec4f {
+    let size = vec2i(w.from_size);
+    if x < 0 || y < 0 || x >= size.x || y >= size.y {
+        return vec4f(0.0);
+    }
+    return colour[u32(y) * w.from_size.x + u32(x)];
+}
+
+// Source colour at image position `s`, bilinear between pixel centres,
+// transparent outside the image.
+fn colour_at(s: vec2f) -> vec4f {
+    if !(all(s >= vec2f(0.0)) && all(s <= vec2f(w.from_size))) {
+        return vec4f(0.0);
+    }
+    let q = s - vec2f(0.5);
+    let base = floor(q);
+    let f = q - base;
+    let b = vec2i(base);
+    let bottom = mix(texel(b.x, b.y), texel(b.x + 1, b.y), f.x);
+    let top = mix(texel(b.x, b.y + 1), texel(b.x + 1, b.y + 1), f.x);
+    return mix(bottom, top, f.y);
+}
+
+fn target_index(id: vec3u) -> i32 {
+    if id.x >= w.to_size.x || id.y >= w.to_size.y {
+        return -1;
+    }
+    return i32(id.y * w.to_size.x + id.x);
+}
+
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn quad(@builtin(global_invocation_id) id: vec3u) {
+    let i = target_index(id);
+    if i < 0 {
+        return;
+    }
+    out_colour[i] = vec4f(0.0);
+    out_depth[i] = infinity();
+    let seen_to = target_view();
+    let r = pixel_ray(seen_to, f32(id.x), f32(id.y));
+    let n = w.normal.xyz;
+    let facing = dot(r.d, n);
+    if abs(facing) < 1e-12 {
+        return;
+    }
+    let t = dot(w.focus.xyz - r.o, n) / facing;
+    if !(t > w.near && t < w.far) {
+        return;
+    }
+    let p = r.o + r.d * t;
+    let l = locate(source_view(), p);
+    if !l.ok {
+        return;
+    }
+    let c = colour_at(l.at);
+    out_colour[i] = c;
+    if c.a >= w.depth_threshold {
+        out_depth[i] = depth_at(seen_to, p, t);
+    }
+}
+
+fn safe(x: f32) -> f32 {
+    if abs(x) < 1e-20 {
+        return select(-1e-20, 1e-20, x >= 0.0);
+    }
+    return x;
+}
+
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn layer_march(@builtin(global_invocation_id) id: vec3u) {
+    let i = target_index(id);
+    if i < 0 {
+        return;
+    }
+    out_colour[i] = vec4f(0.0);
+    out_depth[i] = infinity();
+    let seen_to = target_view();
+    let seen_from = source_view();
+    let r = pixel_ray(seen_to, f32(id.x), f32(id.y));
+    let inv = 1.0 / vec3f(safe(r.d.x), safe(r.d.y), safe(r.d.z));
+    let ta = (w.lo.xyz - r.o) * inv;
+    let tb = (w.hi.xyz - r.o) * inv;
+    let lo = min(ta, tb);
+    let hi = max(ta, tb);
+    let t0 = max(max(max(lo.x, lo.y), lo.z), w.near);
+    let t1 = min(min(min(hi.x, hi.y), hi.z), w.far);
+    if !(t1 > t0) {
+        return;
+    }
+    let step = (t1 - t0) / f32(w.steps);
+    var acc = vec4f(0.0);
+    var first = infinity();
+    for (var s = 0u; s < w.steps; s++) {
+        let t = t0 + (f32(s) + 0.5) * step;
+        let p = r.o + r.d * t;
+        let l = locate(seen_from, p);
+        if !l.ok {
+            continue;
+        }
+        let px = floor(l.at);
+        if any(px < vec2f(0.0)) || any(px >= vec2f(w.from_size)) {
+            continue;
+        }
+        let base = (u32(px.y) * w.from_size.x + u32(px.x)) * w.layers;
+        var found = false;
+        var c = vec4f(0.0);
+        var span = vec4f(0.0);
+        for (var k = 0u; k < w.layers; k++) {
+            span = layers[2u * (base + k) + 1u];
+            if span.x <= l.along && l.along < span.y {
+                c = layers[2u * (base + k)];
+                found = true;
+                break;
+            }
+        }
+        if !found {
+            continue;
+        }
+        // The layer's constant absorption and emission.
+        let len = span.y - span.x;
+        let a = min(c.a, 0.999999);
+        if a <= 0.0 || len <= 0.0 {
+            continue;
+        }
+        let sigma = -log(1.0 - a) / len;
+        let emitted = c.rgb / a;
+        let alpha = 1.0 - exp(-sigma * step);
+        let weight = (1.0 - acc.a) * alpha;
+        acc = vec4f(acc.rgb + emitted * weight, acc.a + weight);
+        if first == infinity() && acc.a >= w.depth_threshold {
+            first = depth_at(seen_to, p, t);
+        }
+        if acc.a >= 0.99 {
+            break;
+        }
+    }
+    out_colour[i] = acc;
+    out_depth[i] = first;
+}
+
+// One mesh vertex a node: the source pixel every `spacing` pixels (the
+// last row and column clamped), raised to its first-hit depth or, where
+// nothing was hit, to the quad's plane, and projected into the target.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn grid_nodes(@builtin(global_invocation_id) id: vec3u) {
+    if id.x >= w.nodes.x || id.y >= w.nodes.y {
+        return;
+    }
+    let k = id.y * w.nodes.x + id.x;
+    mesh[k] = vec4f(0.0);
+    let x = min(id.x * w.spacing, w.from_size.x - 1u);
+    let y = min(id.y * w.spacing, w.from_size.y - 1u);
+    let seen_from = source_view();
+    let r = pixel_ray(seen_from, f32(x), f32(y));
+    let d = depth[y * w.from_size.x + x];
+    var p: vec3f;
+    if d < infinity() {
+        p = select(r.o, seen_from.eye.xyz, seen_from.eye.w != 0.0) + r.d * d;
+    } else {
+        let n = w.normal.xyz;
+        let facing = dot(r.d, n);
+        if abs(facing) <= 1.1920929e-7 {
+            return;
+        }
+        let t = dot(w.focus.xyz - r.o, n) / facing;
+        if !(t > 0.0) {
+            return;
+        }
+        p = r.o + r.d * t;
+    }
+    let l = locate(target_view(), p);
+    if l.ok {
+        mesh[k] = vec4f(l.at, l.along, 1.0);
+    }
+}
+
+fn node_from(i: u32, j: u32) -> vec2f {
+    let x = min(i * w.spacing, w.from_size.x - 1u);
+    let y = min(j * w.spacing, w.from_size.y - 1u);
+    return vec2f(f32(x) + 0.5, f32(y) + 0.5);
+}
+
+fn edge(a: vec2f, b: vec2f, p: vec2f) -> f32 {
+    let e = b - a;
+    let q = p - a;
+    return e.x * q.y - e.y * q.x;
+}
+
+// Triangle `tri` of the mesh (two a grid cell), rasterised at the target's
+// pixel centres: the depth pass keeps each pixel's nearest distance, the
+// pick pass gives the pixel the source position of the triangle that won.
+fn raster(tri: u32, pick: bool) {
+    let cols = w.nodes.x - 1u;
+    if tri >= 2u * cols * (w.nodes.y - 1u) {
+        return;
+    }
+    let q = tri / 2u;
+    let i = q % cols;
+    let j = q / cols;
+    var idx = array<vec2u, 3>(vec2u(i, j), vec2u(i + 1u, j), vec2u(i + 1u, j + 1u));
+    if tri % 2u == 1u {
+        idx = array<vec2u, 3>(vec2u(i, j), vec2u(i + 1u, j + 1u), vec2u(i, j + 1u));
+    }
+    var v: array<vec4f, 3>;
+    for (var k = 0u; k < 3u; k++) {
+        v[k] = mesh[idx[k].y * w.nodes.x + idx[k].x];
+        if v[k].w == 0.0 {
+            return;
+        }
+    }
+    let area = edge(v[0].xy, v[1].xy, v[2].xy);
+    if abs(area) < 1e-12 || !(abs(area) < 1e30) {
+        return;
+    }
+    let lo = min(min(v[0].xy, v[1].xy), v[2].xy);
+    let hi = max(max(v[0].xy, v[1].xy), v[2].xy);
+    let first = max(ceil(lo - vec2f(0.5)), vec2f(0.0));
+    let last = min(floor(hi - vec2f(0.5)), vec2f(w.to_size) - vec2f(1.0));
+    if first.x > last.x || first.y > last.y {
+        return;
+    }
+    for (var y = u32(first.y); y <= u32(last.y); y++) {
+        for (var x = u32(first.x); x <= u32(last.x); x++) {
+            let p = vec2f(f32(x) + 0.5, f32(y) + 0.5);
+            let b = vec3f(edge(v[1].xy, v[2].xy, p), edge(v[2].xy, v[0].xy, p), edge(v[0].xy, v[1].xy, p)) / area;
+            if min(min(b.x, b.y), b.z) < -1e-6 {
+                continue;
+            }
+            let z = b.x * v[0].z + b.y * v[1].z + b.z * v[2].z;
+            if !(z > 0.0) {
+                continue;
+            }
+            let k = y * w.to_size.x + x;
+            let key = ~bitcast<u32>(z);
+            if !pick {
+                atomicMax(&nearest[k], key);
+            } else if atomicLoad(&nearest[k]) == key {
+                from_at[k] = b.x * node_from(idx[0].x, idx[0].y) + b.y * node_from(idx[1].x, idx[1].y)
+                    + b.z * node_from(idx[2].x, idx[2].y);
+            }
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn grid_depth(@builtin(global_invocation_id) id: vec3u) {
+    raster(id.x, false);
+}
+
+@compute @workgroup_size(64)
+fn grid_pick(@builtin(global_invocation_id) id: vec3u) {
+    raster(id.x, true);
+}
+
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn grid_colour(@builtin(global_invocation_id) id: vec3u) {
+    let i = target_index(id);
+    if i < 0 {
+        return;
+    }
+    out_colour[i] = vec4f(0.0);
+    out_depth[i] = infinity();
+    let key = atomicLoad(&nearest[i]);
+    if key == 0u {
+        return;
+    }
+    let c = colour_at(from_at[i]);
+    out_colour[i] = c;
+    if c.a >= w.depth_threshold {
+        let z = bitcast<f32>(~key);
+        let seen_to = target_view();
+        let r = pixel_ray(seen_to, f32(id.x), f32(id.y));
+        out_depth[i] = depth_at(seen_to, r.o + r.d * z, z);
+    }
+}
