@@ -9,9 +9,9 @@ mod common;
 use std::sync::atomic::AtomicBool;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
-use anari_library_caveray::render::warp::{warp, Source, WarpMode, WarpSettings, Warped};
+use anari_library_caveray::render::warp::{warp, Source, Timeline, WarpMode, WarpSettings, Warped};
 use anari_library_caveray::render::{
-    ssim, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings,
+    ssim, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer,
 };
 use anari_library_caveray::scene::Scene;
 use common::render::{four_cameras, gpu, off_axis_wall, phantom};
@@ -149,4 +149,112 @@ fn a_new_source_is_uploaded_and_bad_input_fails_as_on_the_cpu() {
     assert!(e.to_string().contains("at least 1x1"), "{e}");
     // Still usable.
     g.warp(&near, &target, SIZE, &settings).unwrap();
+}
+
+#[test]
+fn the_gpu_captures_the_cpus_colour_depth_and_layers() {
+    let mut g = gpu();
+    let scene = phantom(32);
+    let from = pinhole(DVec3::new(0.2, 0.1, 3.5), DVec3::ZERO);
+    let settings = RenderSettings::default();
+    let cpu = capture(&scene, &from);
+    let (on_gpu, ms) = g
+        .capture(&scene, &from, &settings, SIZE, 4, &AtomicBool::new(false))
+        .unwrap();
+    assert!(ms >= 0.0);
+    assert_eq!(
+        (on_gpu.size, on_gpu.k, on_gpu.layers.len()),
+        (SIZE, 4, cpu.layers.len())
+    );
+    let as_warped = |s: &Source| Warped {
+        size: s.size,
+        color: s.color.clone(),
+        depth: s.depth.clone(),
+    };
+    compare("captured colour", &as_warped(&cpu), &as_warped(&on_gpu));
+    let depths = cpu.depth.iter().zip(&on_gpu.depth);
+    let same_depth = depths
+        .filter(|(a, b)| (a.is_infinite() && b.is_infinite()) || (*a - *b).abs() < 1e-3)
+        .count();
+    assert!(
+        same_depth as f64 >= 0.97 * cpu.depth.len() as f64,
+        "depths differ"
+    );
+    // Layers agree to within a step of their extents (the GPU takes every
+    // segment as a full step), and what they warp to is the CPU's.
+    let step = 2.0 / 31.0 / 2.0;
+    let close = cpu.layers.iter().zip(&on_gpu.layers).filter(|(a, b)| {
+        (a.start - b.start).abs() <= step + 1e-3
+            && (a.end - b.end).abs() <= step + 1e-3
+            && (a.color - b.color).abs().max_element() < 2e-3
+    });
+    assert!(
+        close.count() as f64 >= 0.97 * cpu.layers.len() as f64,
+        "layers differ"
+    );
+    let target = pinhole(DVec3::new(0.5, 0.1, 3.5), DVec3::new(0.3, 0.0, 0.0));
+    let layers = WarpSettings::new(WarpMode::Layers, scene.bounds());
+    compare(
+        "layers from the GPU's capture",
+        &warp(&cpu, &target, SIZE, &layers).unwrap(),
+        &g.warp(&on_gpu, &target, SIZE, &layers).unwrap().0,
+    );
+    let e = g
+        .capture(&scene, &from, &settings, SIZE, 9, &AtomicBool::new(false))
+        .unwrap_err();
+    assert!(e.to_string().contains("at most 8 layers"), "{e}");
+}
+
+#[test]
+fn the_timeline_runs_on_the_gpu_as_on_the_cpu() {
+    let scene = phantom(24);
+    let still = pinhole(DVec3::new(0.0, 0.0, 3.5), DVec3::ZERO);
+    let moving = |t: f64| {
+        Ok(pinhole(
+            DVec3::new(1.5 * t, 0.0, 3.5),
+            DVec3::new(1.5 * t, 0.0, 0.0),
+        ))
+    };
+    let timeline = Timeline {
+        hz: 60.0,
+        duration: 0.1,
+        size: SIZE,
+        cells: UVec2::new(3, 3),
+        bias: 1.2,
+        layers: 4,
+        render_ms: Some(30.0),
+        warp_ms: 1.0,
+        modes: WarpMode::ALL.to_vec(),
+        warp: WarpSettings::new(WarpMode::None, scene.bounds()),
+    };
+    let settings = RenderSettings::default();
+    let run = |r: &mut Renderer, view: &dyn Fn(f64) -> Result<RayGen, String>| {
+        timeline
+            .run(r, &scene, &settings, view, &mut |_| {})
+            .unwrap()
+    };
+    let mut on_gpu = Renderer::Gpu(Box::new(gpu()));
+    let mut on_cpu = Renderer::Cpu(CpuRenderer::new());
+    for r in run(&mut on_gpu, &|_| Ok(still)) {
+        assert!(
+            r.dssim.iter().all(|&d| d < 3e-3),
+            "still head on the GPU: {r:?}"
+        );
+    }
+    let (g, c) = (run(&mut on_gpu, &moving), run(&mut on_cpu, &moving));
+    assert_eq!(g.len(), c.len());
+    for (a, b) in g.iter().zip(&c) {
+        assert_eq!(
+            a.age_ms, b.age_ms,
+            "simulated times do not depend on the renderer"
+        );
+        for (x, y) in a.dssim.iter().zip(&b.dssim) {
+            assert!(
+                (x - y).abs() < 0.01,
+                "GPU {:?} vs CPU {:?}",
+                a.dssim,
+                b.dssim
+            );
+        }
+    }
 }

@@ -20,7 +20,7 @@ use anari_library_caveray::render::warp::{
     warp, Projector, Source, Timeline, WarpMode, WarpSettings,
 };
 use anari_library_caveray::render::{
-    dssim, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderError, RenderSettings,
+    dssim, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderError, RenderSettings, Renderer,
 };
 use anari_library_caveray::scene::Scene;
 use common::render::{four_cameras, off_axis_wall, phantom};
@@ -321,11 +321,11 @@ fn the_timeline_shows_a_still_head_exactly_and_ages_a_moving_one() {
         modes: WarpMode::ALL.to_vec(),
         warp: WarpSettings::new(WarpMode::None, scene.bounds()),
     };
-    let renderer = CpuRenderer::new();
+    let mut renderer = Renderer::Cpu(CpuRenderer::new());
     let settings = RenderSettings::default();
     let mut seen = 0;
     let out = timeline
-        .run(&renderer, &scene, &settings, &|_| Ok(still), &mut |r| {
+        .run(&mut renderer, &scene, &settings, &|_| Ok(still), &mut |r| {
             seen += 1;
             assert_eq!(r.shown.len(), 4);
         })
@@ -350,7 +350,7 @@ fn the_timeline_shows_a_still_head_exactly_and_ages_a_moving_one() {
         ))
     };
     let out = timeline
-        .run(&renderer, &scene, &settings, &moving, &mut |_| {})
+        .run(&mut renderer, &scene, &settings, &moving, &mut |_| {})
         .unwrap();
     let mean = |i: usize| out.iter().map(|r| r.dssim[i]).sum::<f64>() / out.len() as f64;
     assert!(mean(3) < mean(0), "layers {} vs none {}", mean(3), mean(0));
@@ -418,7 +418,7 @@ fn bad_warp_and_timeline_settings_fail_with_their_reasons() {
     let fails = |t: Timeline, want: &str| {
         let e = t
             .run(
-                &CpuRenderer::new(),
+                &mut Renderer::Cpu(CpuRenderer::new()),
                 &scene,
                 &RenderSettings::default(),
                 &|_| Ok(rays),
@@ -466,7 +466,7 @@ fn bad_warp_and_timeline_settings_fail_with_their_reasons() {
     let behind = |_: f64| Err("the eye is behind the wall".to_string());
     let e = base
         .run(
-            &CpuRenderer::new(),
+            &mut Renderer::Cpu(CpuRenderer::new()),
             &scene,
             &RenderSettings::default(),
             &behind,

@@ -13,10 +13,7 @@ use super::frame::slot::{FrameSlot, Kept};
 use super::types::{DataType, Severity, Status, StatusCode};
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection, StereoFrames};
 use crate::render::warp::{Source, WarpMode};
-use crate::render::{
-    AutoChoice, Backend, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderError, RenderSettings,
-    Renderer,
-};
+use crate::render::{AutoChoice, Backend, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
 use crate::scene::Scene;
 
 /// Where a device's status messages go; called from any thread.
@@ -135,11 +132,9 @@ impl Worker {
                 .name("caveray-render".into())
                 .spawn(move || {
                     let mut renderer = None;
-                    // Layers are recorded by the CPU path whatever renders.
-                    let cpu = CpuRenderer::new();
                     for job in rx {
                         match job.background {
-                            Some(_) => run_background(job, &mut renderer, &cpu, &report),
+                            Some(_) => run_background(job, &mut renderer, &report),
                             None => run(job, &mut renderer, &report),
                         }
                     }
@@ -215,12 +210,7 @@ fn renderer_for<'a>(
 
 /// A deadline frame's full render: what warps need of its one view, kept
 /// as the frame's newest image.
-fn run_background(
-    job: RenderJob,
-    renderer: &mut Option<(Backend, Renderer)>,
-    cpu: &CpuRenderer,
-    report: &Reporter,
-) {
+fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Reporter) {
     let started = Instant::now();
     let Some(back) = &job.background else { return };
     let say = |severity, message: String| {
@@ -242,27 +232,15 @@ fn run_background(
         } else {
             0
         };
-        let stop = &job.slot.stop;
-        match r {
-            Renderer::Gpu(g) if layers == 0 => {
-                let settings = RenderSettings {
-                    background: glam::Vec4::ZERO,
-                    background_image: None,
-                    ..job.settings.clone()
-                };
-                let desc = FrameDesc::new(view.size)
-                    .with_color(ColorFormat::Rgba32F)
-                    .with_depth();
-                g.render_until(scene, &view.rays, &settings, &desc, stop)
-                    .and_then(|frame| Source::from_frame(&frame, view.rays))
-            }
-            Renderer::Cpu(c) => {
-                c.capture(scene, &view.rays, &job.settings, view.size, layers, stop)
-            }
-            Renderer::Gpu(_) => {
-                cpu.capture(scene, &view.rays, &job.settings, view.size, layers, stop)
-            }
-        }
+        r.capture(
+            scene,
+            &view.rays,
+            &job.settings,
+            view.size,
+            layers,
+            &job.slot.stop,
+        )
+        .map(|(source, _)| source)
         .map_err(|e| e.to_string())
     }))
     .unwrap_or_else(|panic| {

@@ -216,6 +216,47 @@ impl Renderer {
         self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
     }
 
+    /// What warps need of a view (colour over nothing, first-hit depth and
+    /// `layers` layers a pixel), and the milliseconds it took: the GPU's
+    /// pass clock, or the CPU's wall clock.
+    pub fn capture(
+        &mut self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        size: glam::UVec2,
+        layers: usize,
+        stop: &AtomicBool,
+    ) -> Result<(warp::Source, f64), RenderError> {
+        match self {
+            Renderer::Gpu(g) => g.capture(scene, rays, settings, size, layers, stop),
+            Renderer::Cpu(c) => {
+                let clock = std::time::Instant::now();
+                let source = c.capture(scene, rays, settings, size, layers, stop)?;
+                Ok((source, clock.elapsed().as_secs_f64() * 1e3))
+            }
+        }
+    }
+
+    /// `source` shown from `target` by `settings.mode`, on this renderer's
+    /// hardware, and the milliseconds it took.
+    pub fn warp(
+        &mut self,
+        source: &warp::Source,
+        target: &RayGen,
+        size: glam::UVec2,
+        settings: &warp::WarpSettings,
+    ) -> Result<(warp::Warped, f64), RenderError> {
+        match self {
+            Renderer::Gpu(g) => g.warp(source, target, size, settings),
+            Renderer::Cpu(_) => {
+                let clock = std::time::Instant::now();
+                let warped = warp::warp(source, target, size, settings)?;
+                Ok((warped, clock.elapsed().as_secs_f64() * 1e3))
+            }
+        }
+    }
+
     /// `render`, giving up with `RenderError::Stopped` once `stop` is set:
     /// the CPU reference checks it between pixels, the GPU between bands of
     /// rows (about 2^18 pixels each).

@@ -14,7 +14,7 @@ use anari_library_caveray::output::{frame_to_rgba, write_rgba_png, Chart, Series
 use anari_library_caveray::render::warp::{
     Refresh, RefreshSummary, Timeline, WarpMode, WarpSettings,
 };
-use anari_library_caveray::render::CpuRenderer;
+use anari_library_caveray::render::{Backend, RenderSettings, Renderer, Shading};
 use clap::Args;
 use glam::UVec2;
 use serde::Serialize;
@@ -84,6 +84,13 @@ pub struct ReplayArgs {
     /// Longest side of the volume in rig units (default: the rig's).
     #[arg(long)]
     size: Option<f64>,
+    /// gpu, cpu, or auto (a hardware GPU where there is one, else the CPU):
+    /// what renders the cells, the ideal frames and the warps.
+    #[arg(long, default_value = "auto", value_parser = crate::options::backend())]
+    backend: Backend,
+    /// none, shadows, ao, shadows+ao or directional:N.
+    #[arg(long, default_value = "none", value_parser = crate::options::shading)]
+    shading: Shading,
     /// Where the JSON report goes.
     #[arg(long, default_value = "bench_results/replay.json")]
     json: PathBuf,
@@ -99,6 +106,7 @@ struct Report {
     hz: f64,
     render_ms: Option<f64>,
     renderer: String,
+    shading: String,
     cells: u32,
     bias: f64,
     layers: usize,
@@ -190,8 +198,16 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
         )));
     }
     let scene = loaded.placed(centre.as_vec3(), side as f32)?;
-    let settings = anari_library_caveray::render::RenderSettings::default();
-    let renderer = CpuRenderer::new();
+    let settings = RenderSettings {
+        shading: args.shading,
+        ..RenderSettings::default()
+    };
+    let (mut renderer, why) = Renderer::choose(args.backend).map_err(|e| runtime(&e))?;
+    if let Some(why) = why {
+        eprintln!("caveray: {why}");
+    }
+    let renderer_name = renderer.describe();
+    eprintln!("caveray: rendering on {renderer_name}");
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", args.out.display())))?;
     let hmd_resolution = rig
@@ -250,7 +266,7 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
                 ));
             };
             let refreshes = timeline
-                .run(&renderer, &scene, &settings, &view_at, &mut each)
+                .run(&mut renderer, &scene, &settings, &view_at, &mut each)
                 .map_err(|e| runtime(&format!("{path_name}, {view_name}: {e}")))?;
             let name = format!("{path_name}_{view_name}");
             write_trace(
@@ -269,7 +285,8 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
         volume: loaded.name.clone(),
         hz: args.hz,
         render_ms: args.render_ms,
-        renderer: format!("CPU ({} threads)", rayon::current_num_threads()),
+        renderer: renderer_name,
+        shading: args.shading.to_string(),
         cells: args.cells,
         bias: args.bias,
         layers: args.layers,

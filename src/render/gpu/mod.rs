@@ -3,6 +3,7 @@
 //! buffers are made once; the volume and the table are uploaded when a
 //! scene brings new ones and kept otherwise.
 
+mod capture;
 mod context;
 mod layers;
 pub(crate) mod resources;
@@ -57,6 +58,7 @@ pub struct GpuRenderer {
     /// binds one of them.
     bands: wgpu::Buffer,
     band_group: wgpu::BindGroup,
+    band_layout: wgpu::BindGroupLayout,
     /// The scene's volumes on the GPU, in its order.
     volumes: Vec<(Arc<StructuredVolume>, wgpu::TextureView)>,
     /// Bound where a scene has fewer than MAX_VOLUMES volumes.
@@ -81,6 +83,8 @@ pub struct GpuRenderer {
     brick_slots: Vec<BrickSlot>,
     /// The warp passes, made on the first warp.
     warper: Option<warp::GpuWarp>,
+    /// The capture pipelines and layer buffers, made on the first capture.
+    capture: Option<capture::CaptureGpu>,
 }
 
 impl GpuRenderer {
@@ -236,6 +240,7 @@ impl GpuRenderer {
             directions,
             bands,
             band_group,
+            band_layout,
             volumes: Vec::new(),
             no_volume,
             table,
@@ -252,6 +257,7 @@ impl GpuRenderer {
             bricks,
             brick_slots: Vec::new(),
             warper: None,
+            capture: None,
         })
     }
 
@@ -363,36 +369,9 @@ impl GpuRenderer {
         stop: &AtomicBool,
     ) -> Result<Frame, RenderError> {
         self.begin(scene, rays, settings, desc)?;
-        let rows = band_rows(desc.size);
-        let first_rows: Vec<u32> = (0..desc.size.y).step_by(rows as usize).collect();
-        let mut words = vec![0u32; first_rows.len() * (BAND_STRIDE / 4) as usize];
-        for (band, first) in first_rows.iter().enumerate() {
-            words[band * (BAND_STRIDE / 4) as usize] = *first;
-        }
-        self.ctx
-            .queue
-            .write_buffer(&self.bands, 0, bytemuck::cast_slice(&words));
-        let bands: Vec<[u32; 3]> = first_rows
-            .iter()
-            .map(|first| {
-                let height = rows.min(desc.size.y - first);
-                [
-                    desc.size.x.div_ceil(WORKGROUP),
-                    height.div_ceil(WORKGROUP),
-                    1,
-                ]
-            })
-            .collect();
+        let bands = self.write_bands(desc.size);
         let bind_group = self.bind_group.as_ref().ok_or_else(unprepared)?;
-        let variants = match settings.sampling {
-            Sampling::Exact => &self.pipeline,
-            Sampling::Filtered => self.filtered.as_ref().ok_or_else(|| self.no_filtering())?,
-        };
-        let pipeline = if scene.volumes().len() == 1 {
-            &variants.one
-        } else {
-            &variants.several
-        };
+        let pipeline = self.variant(&self.pipeline, &self.filtered, scene, settings)?;
         let pass = Pass {
             pipeline,
             groups: &[bind_group],
@@ -400,6 +379,48 @@ impl GpuRenderer {
         };
         self.last_pass_ms = self.ctx.dispatch_bands(&pass, &bands, stop)?;
         self.read_frame(desc)
+    }
+
+    /// The bands a frame of `size` is cast in: each one's first row written
+    /// to the bands buffer, and its workgroups.
+    fn write_bands(&self, size: UVec2) -> Vec<[u32; 3]> {
+        let rows = band_rows(size);
+        let first_rows: Vec<u32> = (0..size.y).step_by(rows as usize).collect();
+        let mut words = vec![0u32; first_rows.len() * (BAND_STRIDE / 4) as usize];
+        for (band, first) in first_rows.iter().enumerate() {
+            words[band * (BAND_STRIDE / 4) as usize] = *first;
+        }
+        self.ctx
+            .queue
+            .write_buffer(&self.bands, 0, bytemuck::cast_slice(&words));
+        first_rows
+            .iter()
+            .map(|first| {
+                let height = rows.min(size.y - first);
+                [size.x.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP), 1]
+            })
+            .collect()
+    }
+
+    /// Of a shader's pipelines (`exact`, and `filtered` where the adapter
+    /// filters), the one for the settings' sampling and the scene's count
+    /// of volumes.
+    fn variant<'a>(
+        &self,
+        exact: &'a Variants,
+        filtered: &'a Option<Variants>,
+        scene: &Scene,
+        settings: &RenderSettings,
+    ) -> Result<&'a wgpu::ComputePipeline, RenderError> {
+        let variants = match settings.sampling {
+            Sampling::Exact => exact,
+            Sampling::Filtered => filtered.as_ref().ok_or_else(|| self.no_filtering())?,
+        };
+        Ok(if scene.volumes().len() == 1 {
+            &variants.one
+        } else {
+            &variants.several
+        })
     }
 
     /// Checks the frame against the adapter, uploads what changed and

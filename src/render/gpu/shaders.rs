@@ -13,9 +13,15 @@ const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
 const REPROJECT: &str = include_str!("../../../shaders/reproject.wgsl");
 const COMPOSITE: &str = include_str!("../../../shaders/composite.wgsl");
 const WARP: &str = include_str!("../../../shaders/warp.wgsl");
+const CAPTURE: &str = include_str!("../../../shaders/capture.wgsl");
 
 pub(super) fn raycast() -> String {
     [declarations().as_str(), VOLUME, COLOUR, RAYCAST].join("\n")
+}
+
+/// One eye with its warp layers recorded (src/render/warp/layers.rs).
+pub(super) fn capture() -> String {
+    [declarations().as_str(), VOLUME, COLOUR, CAPTURE].join("\n")
 }
 
 /// The left eye with re-projection; the storage texture's format is part

@@ -19,7 +19,7 @@ pub use project::Projector;
 pub use timeline::{Refresh, RefreshSummary, Shown, Timeline};
 
 use super::frame::filled;
-use super::{ColorData, Frame, FrameDesc, RenderError};
+use super::{Frame, FrameDesc, RenderError};
 use crate::geometry::RayGen;
 
 /// How the last image is brought to the new eye.
@@ -122,25 +122,6 @@ impl Source {
 
     fn index(&self, p: UVec2) -> usize {
         p.y as usize * self.size.x as usize + p.x as usize
-    }
-
-    /// A rendered frame of `rays` (FLOAT32 colour over a transparent
-    /// background, with depth) as a source without layers.
-    pub fn from_frame(frame: &Frame, rays: RayGen) -> Result<Self, RenderError> {
-        let (ColorData::Rgba32F(c), Some(depth)) = (&frame.color, &frame.depth) else {
-            return Err(RenderError::Settings(
-                "internal: a warp source is made from float colour and depth".into(),
-            ));
-        };
-        Ok(Self::new(
-            frame.size,
-            rays,
-            c.chunks_exact(4).map(Vec4::from_slice).collect(),
-            depth.clone(),
-            Vec::new(),
-            0,
-            frame.samples,
-        ))
     }
 
     /// A source of `size` seen through `rays` with nothing in it yet,

@@ -5,16 +5,13 @@
 //! renderer without latency would show.
 
 use std::sync::atomic::AtomicBool;
-use std::time::Instant;
 
 use glam::UVec2;
 
-use super::{warp, Source, WarpMode, WarpSettings};
+use super::{Source, WarpMode, WarpSettings};
 use crate::geometry::RayGen;
 use crate::render::cells::{CellGrid, CellRun};
-use crate::render::{
-    dssim, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderError, RenderSettings,
-};
+use crate::render::{dssim, ColorFormat, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
 use crate::scene::Scene;
 
 /// A simulated display and renderer.
@@ -32,7 +29,8 @@ pub struct Timeline {
     pub layers: usize,
     /// A full image takes this long (ms), each cell its share: a tenth
     /// spread evenly over the cells, the rest by the cell's share of the
-    /// samples. `None`: cells take the time they really take here.
+    /// samples. `None`: cells take the time they really take here (the
+    /// GPU's pass clock, or the CPU's wall clock).
     pub render_ms: Option<f64>,
     /// Milliseconds kept free before each refresh for the warp itself.
     pub warp_ms: f64,
@@ -113,7 +111,7 @@ impl Timeline {
     /// (seconds); `each` sees every refresh's frames as they are made.
     pub fn run(
         &self,
-        renderer: &CpuRenderer,
+        renderer: &mut Renderer,
         scene: &Scene,
         settings: &RenderSettings,
         view_at: &dyn Fn(f64) -> Result<RayGen, String>,
@@ -127,14 +125,14 @@ impl Timeline {
         let mut run = CellRun::new(grid, self.bias);
         // The samples of the last complete image, for simulated times.
         let mut image_samples = 0u64;
-        let cell = |run: &mut CellRun,
+        let cell = |renderer: &mut Renderer,
+                    run: &mut CellRun,
                     flight: &mut InFlight,
                     image_samples: u64|
          -> Result<f64, RenderError> {
             let i = run.next_cell(f64::INFINITY, true).unwrap_or_default();
             let (offset, size) = grid.rect(i);
-            let clock = Instant::now();
-            let part = renderer.capture(
+            let (part, real) = renderer.capture(
                 scene,
                 &flight.source.rays.shifted(offset),
                 settings,
@@ -142,7 +140,6 @@ impl Timeline {
                 self.layers,
                 &never,
             )?;
-            let real = clock.elapsed().as_secs_f64() * 1e3;
             flight.source.paste(offset, &part)?;
             let ms = match self.render_ms {
                 None => real,
@@ -159,10 +156,11 @@ impl Timeline {
             source: Source::empty(self.size, view(0.0)?, self.layers)?,
             started_ms: 0.0,
         };
-        let full = renderer.capture(scene, &flight.source.rays, settings, self.size, 0, &never)?;
+        let (full, _) =
+            renderer.capture(scene, &flight.source.rays, settings, self.size, 0, &never)?;
         image_samples = image_samples.max(full.samples);
         while !run.complete() {
-            cell(&mut run, &mut flight, image_samples)?;
+            cell(renderer, &mut run, &mut flight, image_samples)?;
         }
         let mut newest = flight;
         let mut flight = InFlight {
@@ -182,7 +180,7 @@ impl Timeline {
             let mut first = true;
             let mut cells = 0;
             while run.next_cell(left, first && left > 0.0).is_some() {
-                left -= cell(&mut run, &mut flight, image_samples)?;
+                left -= cell(renderer, &mut run, &mut flight, image_samples)?;
                 first = false;
                 cells += 1;
                 if run.complete() {
@@ -203,7 +201,7 @@ impl Timeline {
             let ideal = renderer.render(scene, &target, settings, &ideal_desc)?;
             let mut shown = Vec::with_capacity(self.modes.len());
             for &mode in &self.modes {
-                let warped = warp(
+                let (warped, _) = renderer.warp(
                     &newest.source,
                     &target,
                     self.size,

@@ -1,0 +1,69 @@
+// A view as image warping needs it (after volume.wgsl and colour.wgsl):
+// colour over nothing, first-hit depth, and the emission-absorption layers
+// of src/render/warp/layers.rs, recorded sample by sample as the CPU's
+// LayerBuilder does.
+
+// Two vec4s a layer (colour; start, end), `capture.x` layers a pixel.
+@group(1) @binding(0) var<storage, read_write> layer_out: array<vec4f>;
+@group(1) @binding(1) var<uniform> capture: vec4u;
+// x: the first row of this band.
+@group(2) @binding(0) var<uniform> band: vec4u;
+
+const MAX_KEPT: u32 = 8u;
+
+var<private> ray_o: vec3f;
+var<private> ray_d: vec3f;
+var<private> current: u32;
+var<private> total: f32;
+var<private> kept: array<vec4f, 16>;
+
+fn on_sample(p: vec3f, lit: vec3f, a: f32) {
+    let k = min(capture.x, MAX_KEPT);
+    if k == 0u {
+        return;
+    }
+    // Every segment is taken as a full step (the last one of a ray is
+    // shorter on the CPU).
+    let t = dot(p - ray_o, ray_d);
+    let seg = params.step;
+    var c = kept[2u * current];
+    var span = kept[2u * current + 1u];
+    if c.a == 0.0 {
+        span.x = t - 0.5 * seg;
+    }
+    span.y = t + 0.5 * seg;
+    let weight = (1.0 - c.a) * a;
+    kept[2u * current] = vec4f(c.rgb + lit * weight, c.a + weight);
+    kept[2u * current + 1u] = span;
+    total = total + (1.0 - total) * a;
+    if total >= f32(current + 1u) / f32(k) && current + 1u < k {
+        current += 1u;
+    }
+}
+
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3u) {
+    let size = vec2u(params.width, params.height);
+    let pixel = vec2u(id.x, id.y + band.x);
+    if pixel.x >= size.x || pixel.y >= size.y {
+        return;
+    }
+    let fx = f32(pixel.x);
+    let fy = f32(pixel.y);
+    ray_o = params.ray_origin + fx * params.ray_origin_dx + fy * params.ray_origin_dy;
+    ray_d = normalize(params.ray_dir + fx * params.ray_dir_dx + fy * params.ray_dir_dy);
+    current = 0u;
+    total = 0.0;
+    for (var k = 0u; k < 2u * MAX_KEPT; k++) {
+        kept[k] = vec4f(0.0);
+    }
+    let m = march(fx, fy);
+    let i = pixel.y * size.x + pixel.x;
+    depth_out[i] = m.depth;
+    samples_out[i] = samples;
+    store_color(i, m.color, FORMAT_RGBA32F);
+    let k = min(capture.x, MAX_KEPT);
+    for (var l = 0u; l < 2u * k; l++) {
+        layer_out[2u * i * k + l] = kept[l];
+    }
+}
