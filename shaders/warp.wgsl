@@ -68,6 +68,7 @@ fn depth_at(v: View, p: vec3f, t: f32) -> f32 {
 struct Located {
     at: vec2f,
     along: f32,
+    direction: vec3f,
     ok: bool,
 }
 
@@ -79,7 +80,7 @@ fn locate(v: View, p: vec3f) -> Located {
     var py = q.y;
     if v.centre.w == 0.0 {
         if q.x <= 0.0 {
-            return Located(vec2f(0.0), 0.0, false);
+            return Located(vec2f(0.0), 0.0, vec3f(0.0), false);
         }
         px = q.y / q.x;
         py = q.z / q.x;
@@ -87,7 +88,7 @@ fn locate(v: View, p: vec3f) -> Located {
     let r = pixel_ray(v, px, py);
     let at = vec2f(px + 0.5, py + 0.5);
     let finite = all(abs(at) < vec2f(1e30));
-    return Located(at, dot(p - r.o, r.d), finite);
+    return Located(at, dot(p - r.o, r.d), r.d, finite);
 }
 
 fn texel(x: i32, y: i32) -> vec4f {
@@ -158,6 +159,35 @@ fn safe(x: f32) -> f32 {
     return x;
 }
 
+// Premultiplied colour and opacity of the stretch [lo, hi] of source
+// pixel `px`'s ray, for a target step `c` times longer: each overlapping
+// layer absorbs and emits over its share, front to back, exactly.
+fn through(px: vec2f, lo: f32, hi: f32, c: f32) -> vec4f {
+    if any(px < vec2f(0.0)) || any(px >= vec2f(w.from_size)) {
+        return vec4f(0.0);
+    }
+    let base = (u32(px.y) * w.from_size.x + u32(px.x)) * w.layers;
+    var s = vec4f(0.0);
+    for (var k = 0u; k < w.layers; k++) {
+        let span = layers[2u * (base + k) + 1u];
+        let overlap = (min(span.y, hi) - max(span.x, lo)) / c;
+        if !(overlap > 0.0) {
+            continue;
+        }
+        let col = layers[2u * (base + k)];
+        let len = span.y - span.x;
+        let a = min(col.a, 0.999999);
+        if a <= 0.0 || len <= 0.0 {
+            continue;
+        }
+        let sigma = -log(1.0 - a) / len;
+        let alpha = 1.0 - exp(-sigma * overlap);
+        let weight = (1.0 - s.a) * alpha;
+        s = vec4f(s.rgb + col.rgb / a * weight, s.a + weight);
+    }
+    return s;
+}
+
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn layer_march(@builtin(global_invocation_id) id: vec3u) {
     let i = target_index(id);
@@ -189,36 +219,21 @@ fn layer_march(@builtin(global_invocation_id) id: vec3u) {
         if !l.ok {
             continue;
         }
-        let px = floor(l.at);
-        if any(px < vec2f(0.0)) || any(px >= vec2f(w.from_size)) {
+        // The stretch of the source ray this step covers, through the four
+        // source pixels around the point, blended bilinearly.
+        let c = max(abs(dot(r.d, l.direction)), 1e-3);
+        let lo_along = l.along - 0.5 * step * c;
+        let hi_along = l.along + 0.5 * step * c;
+        let q = l.at - vec2f(0.5);
+        let base = floor(q);
+        let f = q - base;
+        let bottom = mix(through(base, lo_along, hi_along, c), through(base + vec2f(1.0, 0.0), lo_along, hi_along, c), f.x);
+        let top = mix(through(base + vec2f(0.0, 1.0), lo_along, hi_along, c), through(base + vec2f(1.0, 1.0), lo_along, hi_along, c), f.x);
+        let st = mix(bottom, top, f.y);
+        if st.a <= 0.0 {
             continue;
         }
-        let base = (u32(px.y) * w.from_size.x + u32(px.x)) * w.layers;
-        var found = false;
-        var c = vec4f(0.0);
-        var span = vec4f(0.0);
-        for (var k = 0u; k < w.layers; k++) {
-            span = layers[2u * (base + k) + 1u];
-            if span.x <= l.along && l.along < span.y {
-                c = layers[2u * (base + k)];
-                found = true;
-                break;
-            }
-        }
-        if !found {
-            continue;
-        }
-        // The layer's constant absorption and emission.
-        let len = span.y - span.x;
-        let a = min(c.a, 0.999999);
-        if a <= 0.0 || len <= 0.0 {
-            continue;
-        }
-        let sigma = -log(1.0 - a) / len;
-        let emitted = c.rgb / a;
-        let alpha = 1.0 - exp(-sigma * step);
-        let weight = (1.0 - acc.a) * alpha;
-        acc = vec4f(acc.rgb + emitted * weight, acc.a + weight);
+        acc = acc + (1.0 - acc.a) * st;
         if first == infinity() && acc.a >= w.depth_threshold {
             first = depth_at(seen_to, p, t);
         }

@@ -112,7 +112,8 @@ fn every_camera_run_backwards_lands_on_its_own_pixel() {
         for (x, y) in [(0, 0), (47, 0), (13, 29), (47, 39)] {
             let (o, d) = rays.pixel_ray(x, y);
             for t in [0.5f32, 3.0, 7.0] {
-                let (at, along) = projector.locate(o + d * t).unwrap();
+                let seen = projector.locate(o + d * t).unwrap();
+                let (at, along) = (seen.at, seen.along);
                 let want = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                 assert!(
                     (at - want).length() < 2e-3,

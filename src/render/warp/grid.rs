@@ -51,10 +51,10 @@ pub(super) fn warp(
                     .map(|h| h.as_vec3())
             };
             mesh.push(p.and_then(|p| {
-                let (at, z) = to.locate(p)?;
+                let seen = to.locate(p)?;
                 Some(Vertex {
-                    at,
-                    z,
+                    at: seen.at,
+                    z: seen.along,
                     from: Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
                 })
             }));

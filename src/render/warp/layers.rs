@@ -4,7 +4,7 @@
 //! segment one constant absorption and emission over its depth range, and
 //! the re-march that shows them from another eye.
 
-use glam::{UVec2, Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::project::Projector;
 use super::{Source, WarpSettings};
@@ -101,19 +101,33 @@ pub(super) fn march(
     for i in 0..steps {
         let t = t0 + (i as f32 + 0.5) * step;
         let p = o + d * t;
-        let Some((at, along)) = from.locate(p) else {
+        let Some(seen) = from.locate(p) else {
             continue;
         };
-        let Some(layers) = nearest(at, source.size).and_then(|px| source.layers_at(px)) else {
-            continue;
+        // The step covers this stretch of the source ray (its length
+        // scaled by the rays' cosine).
+        let c = d.dot(seen.direction).abs().max(1e-3);
+        let (lo, hi) = (seen.along - 0.5 * step * c, seen.along + 0.5 * step * c);
+        // The step through the four source pixels around the point,
+        // blended bilinearly as the quad warp blends colours.
+        let q = seen.at - Vec2::splat(0.5);
+        let base = q.floor();
+        let f = q - base;
+        let through = |dx: f32, dy: f32| {
+            let px = base + Vec2::new(dx, dy);
+            let inside = px.cmpge(Vec2::ZERO).all() && px.cmplt(source.size.as_vec2()).all();
+            match inside.then(|| source.layers_at(px.as_uvec2())).flatten() {
+                Some(layers) => through_layers(layers, lo, hi, c),
+                None => Vec4::ZERO,
+            }
         };
-        let Some(layer) = layers.iter().find(|l| l.start <= along && along < l.end) else {
+        let bottom = through(0.0, 0.0).lerp(through(1.0, 0.0), f.x);
+        let top = through(0.0, 1.0).lerp(through(1.0, 1.0), f.x);
+        let s = bottom.lerp(top, f.y);
+        if s.w <= 0.0 {
             continue;
-        };
-        let (sigma, emitted) = layer.coefficients();
-        let a = 1.0 - (-sigma * step).exp();
-        let weight = (1.0 - acc.w) * a;
-        acc += (emitted * weight).extend(weight);
+        }
+        acc += (1.0 - acc.w) * s;
         if depth == f32::INFINITY && acc.w >= settings.depth_threshold {
             depth = rays.depth_at(p, t);
         }
@@ -122,6 +136,25 @@ pub(super) fn march(
         }
     }
     (acc, depth)
+}
+
+/// Premultiplied colour and opacity of the stretch [lo, hi] of a source
+/// ray with `layers`, for a target step `c` times longer than it:
+/// each overlapping layer absorbs and emits over its share, front to back,
+/// integrated exactly.
+fn through_layers(layers: &[Layer], lo: f32, hi: f32, c: f32) -> Vec4 {
+    let mut s = Vec4::ZERO;
+    for layer in layers {
+        let overlap = (layer.end.min(hi) - layer.start.max(lo)) / c;
+        if overlap <= 0.0 {
+            continue;
+        }
+        let (sigma, emitted) = layer.coefficients();
+        let a = 1.0 - (-sigma * overlap).exp();
+        let weight = (1.0 - s.w) * a;
+        s += (emitted * weight).extend(weight);
+    }
+    s
 }
 
 /// Where the ray `o + t d` enters and leaves the box, within `clip`.
@@ -144,10 +177,4 @@ pub(super) fn enter_exit(
     let t0 = ta.min(tb).max_element().max(near);
     let t1 = ta.max(tb).min_element().min(far);
     (t1 > t0 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
-}
-
-/// The pixel of a source image of `size` nearest image position `s`.
-pub(super) fn nearest(s: glam::Vec2, size: UVec2) -> Option<UVec2> {
-    let p = s.floor();
-    (p.cmpge(glam::Vec2::ZERO).all() && p.cmplt(size.as_vec2()).all()).then(|| p.as_uvec2())
 }

@@ -15,6 +15,17 @@ pub struct Projector {
     kind: Kind,
 }
 
+/// A point as a view sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Seen {
+    /// Image position, pixels.
+    pub at: Vec2,
+    /// Distance along the ray there, from its origin.
+    pub along: f32,
+    /// That ray's unit direction.
+    pub direction: Vec3,
+}
+
 #[derive(Clone, Copy, Debug)]
 enum Kind {
     /// Columns direction, direction_dx, direction_dy, inverted.
@@ -65,9 +76,9 @@ impl Projector {
     }
 
     /// Where `p` appears in the image, in pixels (pixel (x, y) spans
-    /// [x, x + 1) x [y, y + 1)), and its distance along that position's
-    /// unit ray from the ray's origin; `None` for a point behind the eye.
-    pub fn locate(&self, p: Vec3) -> Option<(Vec2, f32)> {
+    /// [x, x + 1) x [y, y + 1)), and how far along that position's unit
+    /// ray from its origin; `None` for a point behind the eye.
+    pub fn locate(&self, p: Vec3) -> Option<Seen> {
         let r = &self.rays;
         let (px, py) = match self.kind {
             Kind::Central { centre, inverse } => {
@@ -85,7 +96,11 @@ impl Projector {
         let origin = r.origin + px * r.origin_dx + py * r.origin_dy;
         let dir = (r.direction + px * r.direction_dx + py * r.direction_dy).normalize();
         let at = Vec2::new(px + 0.5, py + 0.5);
-        at.is_finite().then_some((at, (p - origin).dot(dir)))
+        at.is_finite().then_some(Seen {
+            at,
+            along: (p - origin).dot(dir),
+            direction: dir,
+        })
     }
 
     /// The unit normal of the image plane: the plane the pixel steps span

@@ -29,10 +29,10 @@ pub(super) fn pixel(
         return (Vec4::ZERO, f32::INFINITY);
     }
     let p = o + d * t;
-    let Some((s, _)) = from.locate(p) else {
+    let Some(seen) = from.locate(p) else {
         return (Vec4::ZERO, f32::INFINITY);
     };
-    let c = source.color_at(s);
+    let c = source.color_at(seen.at);
     let depth = if c.w >= settings.depth_threshold {
         target.depth_at(p, t)
     } else {
