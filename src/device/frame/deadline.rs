@@ -37,9 +37,14 @@ struct BackState {
     /// The slot of the render in flight (its stop flag stops it).
     running: Option<Arc<FrameSlot>>,
     newest: Option<Arc<Shot>>,
-    /// The last warp's time: the presenter starts that long (and a
-    /// margin) before the deadline.
-    warp_cost: Duration,
+    /// Each warp mode's time, a running mean in ms (by `WarpMode as
+    /// usize`; 0: not measured yet): the presenter starts that long (and a
+    /// margin) before the deadline, and passes over a mode that would miss
+    /// it. A passed-over mode's mean decays, so it is tried again now and
+    /// then (about once a second at 90 Hz for one 4x too slow).
+    costs: [f64; 4],
+    /// Whether the host has heard that its warp was passed over.
+    told: bool,
 }
 
 /// What a deadline frame showed (properties `caveray.imageAge` and
@@ -91,11 +96,6 @@ impl Background {
         }
     }
 
-    /// Forgets the newest image (discard: it stands for nothing now).
-    pub fn forget(&self) {
-        self.lock().newest = None;
-    }
-
     /// Waits until the image of `inputs` is complete or `until`; returns
     /// the newest image then.
     fn newest_by(&self, inputs: &RenderInputs, until: Instant) -> Option<Arc<Shot>> {
@@ -145,13 +145,40 @@ pub struct Present {
 /// Fills `p.slot` by the deadline; returns a note for the host when the
 /// frame could not show what it asked for.
 pub fn present(p: Present) -> Option<String> {
-    let cost = p.background.lock().warp_cost;
     // Time for the warp itself, and a margin for waking up.
-    let reserve = cost.mul_f32(1.25) + Duration::from_micros(500);
-    let until = p.called + p.deadline.saturating_sub(reserve);
+    let reserve = |ms: f64| Duration::from_secs_f64((1.25 * ms + 0.5) / 1e3);
+    // The warp asked for, unless it took too long last time: then quad,
+    // then none, whichever fits (`caveray.warp` says which was shown).
+    let (chosen, mut note) = {
+        let mut s = p.background.lock();
+        // Unmeasured: tried, to learn its time.
+        let fits = |m: WarpMode| {
+            let cost = s.costs[m as usize];
+            cost == 0.0 || reserve(cost) < p.deadline
+        };
+        let chosen = [p.warp, WarpMode::Quad, WarpMode::None]
+            .into_iter()
+            .find(|&m| fits(m))
+            .unwrap_or(WarpMode::None);
+        let note = (chosen != p.warp && !s.told).then(|| {
+            s.told = true;
+            format!(
+                "warp '{}' takes {:.1} ms, too long for the {:.1} ms deadline: '{}' is shown while it would miss it (caveray.warp says which)",
+                p.warp.name(),
+                s.costs[p.warp as usize],
+                p.deadline.as_secs_f64() * 1e3,
+                chosen.name()
+            )
+        });
+        if chosen != p.warp {
+            s.costs[p.warp as usize] *= 0.97;
+        }
+        (chosen, note)
+    };
+    let cost = p.background.lock().costs[chosen as usize];
+    let until = p.called + p.deadline.saturating_sub(reserve(cost));
     let newest = p.background.newest_by(&p.inputs, until);
     let clock = Instant::now();
-    let mut note = None;
     let (frame, shown) = match newest {
         None => {
             note = Some("no image has been rendered yet: the frame shows its background".into());
@@ -168,7 +195,7 @@ pub fn present(p: Present) -> Option<String> {
             let mode = if shot.inputs == p.inputs {
                 WarpMode::None
             } else {
-                p.warp
+                chosen
             };
             let settings = WarpSettings::new(mode, p.bounds);
             let run = || {
@@ -208,7 +235,15 @@ pub fn present(p: Present) -> Option<String> {
             }
         }
     };
-    p.background.lock().warp_cost = clock.elapsed();
+    if shown.age_ms >= 0.0 {
+        let ms = clock.elapsed().as_secs_f64() * 1e3;
+        let cost = &mut p.background.lock().costs[shown.warp as usize];
+        *cost = if *cost == 0.0 {
+            ms
+        } else {
+            0.75 * *cost + 0.25 * ms
+        };
+    }
     p.slot.finish_shown(frame, p.called.elapsed(), shown);
     note
 }
