@@ -163,6 +163,24 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
             args.layers
         )));
     }
+    let probe = Timeline {
+        hz: args.hz,
+        duration: 1.0,
+        size: UVec2::ONE,
+        cells: UVec2::splat(args.cells.max(1)),
+        bias: args.bias,
+        layers: args.layers,
+        render_ms: args.render_ms,
+        warp_ms: args.warp_ms,
+        modes: modes.clone(),
+        warp: WarpSettings {
+            grid_spacing: args.grid_spacing,
+            layer_steps: args.layer_steps,
+            ..WarpSettings::new(WarpMode::None, (glam::Vec3::ZERO, glam::Vec3::ONE))
+        },
+    };
+    probe.validate().map_err(|e| usage(e.to_string()))?;
+    probe.warp.validate().map_err(|e| usage(e.to_string()))?;
     let rig = Rig::load(&args.config)
         .map_err(|e| usage(e.to_string()))?
         .with_neck_model();

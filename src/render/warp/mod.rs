@@ -234,7 +234,8 @@ impl WarpSettings {
         0.5 * (self.bounds.0 + self.bounds.1)
     }
 
-    pub(crate) fn validate(&self) -> Result<(), RenderError> {
+    /// Why these settings cannot warp, if they cannot.
+    pub fn validate(&self) -> Result<(), RenderError> {
         let bad = |m: String| Err(RenderError::Settings(m));
         if !(1..=256).contains(&self.grid_spacing) {
             return bad(format!(

@@ -73,7 +73,8 @@ struct InFlight {
 }
 
 impl Timeline {
-    fn validate(&self) -> Result<(), RenderError> {
+    /// Why these settings cannot run, if they cannot.
+    pub fn validate(&self) -> Result<(), RenderError> {
         let bad = |m: String| Err(RenderError::Settings(m));
         if !(self.hz.is_finite() && (1.0..=1000.0).contains(&self.hz)) {
             return bad(format!(
