@@ -99,10 +99,19 @@ fn a_deadline_frame_shows_the_background_then_its_own_image_then_a_warp() {
     let f = field(&mut h);
     let v = h.volume(f);
     let (frame, camera) = h.frame(v, 3.0);
-    // So short that no render can be done by it.
     deadline(&mut h, frame, 0.001, "layers");
+    // A large whole render first keeps the render thread busy: the deadline
+    // frame's own render waits behind it, so by its deadline there is no
+    // image at all.
+    let (slow, slow_camera) = h.frame(v, 3.0);
+    h.set(slow, "size", DataType::UINT32_VEC2, bytes(&[4096u32, 4096]));
+    h.d.commit(Subject::Object(slow));
+    h.d.render_frame(slow, None);
     h.pixels(frame);
     assert_eq!(shown(&mut h, frame), Some((-1.0, "none".into())));
+    h.d.discard_frame(slow);
+    h.d.release(slow);
+    h.d.release(slow_camera);
     let infos = heard.lock().unwrap().join("\n");
     assert!(infos.contains("no image has been rendered yet"), "{infos}");
 
@@ -173,5 +182,57 @@ fn a_stereo_camera_cannot_have_a_deadline() {
     h.d.commit(Subject::Object(camera));
     h.pixels(frame);
     assert!(shown(&mut h, frame).is_some());
+    assert!(h.messages(Severity::Error).is_empty());
+}
+
+#[test]
+fn on_the_gpu_backend_deadline_frames_warp_with_a_gpu_of_their_own() {
+    let heard = Arc::new(Mutex::new(Vec::<String>::new()));
+    let sink = Arc::clone(&heard);
+    let mut h = Host::reporting_to(Arc::new(move |s: Status| {
+        sink.lock().unwrap().push(s.message);
+    }));
+    h.d.set_param(Subject::Device, "backend", Input::String("gpu".into()));
+    h.d.commit(Subject::Device);
+    let f = field(&mut h);
+    let v = h.volume(f);
+    let (frame, camera) = h.frame(v, 3.0);
+    deadline(&mut h, frame, 5.0, "grid");
+    // Move the camera a little each frame until warps have run on the
+    // presenter's own GPU.
+    let start = Instant::now();
+    let mut x = 0.0f32;
+    let mut on_gpu = 0;
+    while on_gpu < 3 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no GPU warps: {:?}",
+            heard.lock().unwrap()
+        );
+        x += 0.01;
+        h.set(
+            camera,
+            "position",
+            DataType::FLOAT32_VEC3,
+            bytes(&[x, 0.0, 3.0]),
+        );
+        h.d.commit(Subject::Object(camera));
+        let pixels = h.pixels(frame);
+        let opened = heard
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|m| m.contains("deadline frames warp with GPU"));
+        if let Some((age, warp)) = shown(&mut h, frame) {
+            if opened && age > 0.0 && warp == "grid" {
+                assert!(
+                    pixels.iter().any(|&p| p > 0),
+                    "a GPU-warped frame shows the volume"
+                );
+                on_gpu += 1;
+            }
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
     assert!(h.messages(Severity::Error).is_empty());
 }

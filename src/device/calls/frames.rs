@@ -8,10 +8,10 @@ use glam::{Mat4, UVec2, Vec3};
 
 use super::Device;
 use crate::device::frame::deadline::{present as present_frame, Present, Shot};
-use crate::device::frame::slot::{Channel, FrameSlot};
+use crate::device::frame::slot::Channel;
 use crate::device::frame::{self, color_format};
 use crate::device::object::{Derived, ObjectRef, State};
-use crate::device::types::{kind_name, DataType, Severity, Status, StatusCode};
+use crate::device::types::{kind_name, DataType, StatusCode};
 use crate::device::worker::{BackgroundRender, Partner, RenderJob};
 use crate::geometry::PrimaryRays;
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection};
@@ -82,7 +82,7 @@ impl Device {
                             f.last = None;
                         }
                         slot.start();
-                        self.spawn_presenter(frame.handle, present, slot, on_done);
+                        Self::spawn_presenter(present, on_done);
                     }
                     Err(why) => {
                         self.error(
@@ -170,6 +170,10 @@ impl Device {
             warp,
             called,
             deadline,
+            warper: Arc::clone(&self.warper),
+            backend: self.backend(),
+            report: self.worker.reporter(),
+            frame: frame.handle,
         };
         if job.scene.is_some() {
             if let Some(slot) = background.claim(&inputs) {
@@ -196,26 +200,12 @@ impl Device {
 
     /// Runs the frame's presenter on its own thread: the frame is ready by
     /// its deadline whatever the background render does.
-    fn spawn_presenter(
-        &mut self,
-        handle: u64,
-        present: Present,
-        slot: Arc<FrameSlot>,
-        on_done: Option<Box<dyn FnOnce() + Send>>,
-    ) {
-        let report = self.worker.reporter();
+    fn spawn_presenter(present: Present, on_done: Option<Box<dyn FnOnce() + Send>>) {
+        let slot = Arc::clone(&present.slot);
         let spawned = std::thread::Builder::new()
             .name("caveray-present".into())
             .spawn(move || {
-                if let Some(note) = present_frame(present) {
-                    report(Status {
-                        severity: Severity::Info,
-                        code: StatusCode::NoError,
-                        source: handle,
-                        source_kind: DataType::FRAME,
-                        message: format!("frame {handle:#x}: {note}"),
-                    });
-                }
+                present_frame(present);
                 if let Some(done) = on_done {
                     done();
                 }

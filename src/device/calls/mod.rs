@@ -86,6 +86,8 @@ pub struct Device {
     pairing: bool,
     statuses: Vec<Status>,
     pub(super) worker: Worker,
+    /// What deadline frames warp with.
+    warper: std::sync::Arc<crate::device::frame::deadline::Warper>,
 }
 
 impl Device {
@@ -108,6 +110,7 @@ impl Device {
             pairing: true,
             statuses: Vec::new(),
             worker: Worker::new(report),
+            warper: Default::default(),
         }
     }
 

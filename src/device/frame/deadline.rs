@@ -11,10 +11,11 @@ use std::time::{Duration, Instant};
 use glam::Vec4;
 
 use super::slot::FrameSlot;
-use crate::device::worker::RenderInputs;
+use crate::device::types::{DataType, Severity, Status, StatusCode};
+use crate::device::worker::{RenderInputs, Reporter};
 use crate::geometry::RayGen;
-use crate::render::warp::{warp, Source, WarpMode, WarpSettings};
-use crate::render::{Frame, FrameDesc};
+use crate::render::warp::{warp, Source, WarpMode, WarpSettings, Warped};
+use crate::render::{Backend, Frame, FrameDesc, RenderError, Renderer};
 
 /// A complete background render, with the inputs it was made for and
 /// when its camera was taken.
@@ -128,6 +129,90 @@ fn warp_pool() -> Option<&'static rayon::ThreadPool> {
     .as_ref()
 }
 
+/// What deadline frames warp with, one a device: the CPU, or the
+/// renderer of the device's backend (a GPU of its own, so that warps need
+/// not wait for the render thread's). Opening a GPU takes longer than a
+/// deadline, so it opens on a thread of its own the first time it is
+/// wanted, and the CPU warps until it is ready.
+#[derive(Default)]
+pub struct Warper {
+    state: Mutex<Opened>,
+}
+
+#[derive(Default)]
+enum Opened {
+    #[default]
+    Nothing,
+    Opening(Backend),
+    Ready(Backend, Box<Renderer>),
+    /// It could not be opened (the CPU warps).
+    Failed(Backend),
+}
+
+impl Warper {
+    /// `source` shown from `rays` by `settings`, on `backend`'s renderer if
+    /// it is open, else on the CPU; `say` hears when a renderer opens.
+    fn warp(
+        self: &Arc<Self>,
+        backend: Backend,
+        source: &Source,
+        rays: &RayGen,
+        size: glam::UVec2,
+        settings: &WarpSettings,
+        say: Option<Reporter>,
+    ) -> Result<Warped, RenderError> {
+        if backend != Backend::Cpu {
+            let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+            match &mut *s {
+                Opened::Ready(b, r) if *b == backend => {
+                    return r.warp(source, rays, size, settings).map(|(w, _)| w);
+                }
+                Opened::Opening(b) | Opened::Failed(b) if *b == backend => {}
+                _ => {
+                    *s = Opened::Opening(backend);
+                    let me = Arc::clone(self);
+                    let _ = std::thread::Builder::new()
+                        .name("caveray-warp-open".into())
+                        .spawn(move || me.open(backend, say));
+                }
+            }
+        }
+        let run = || warp(source, rays, size, settings);
+        match warp_pool() {
+            Some(pool) => pool.install(run),
+            None => run(),
+        }
+    }
+
+    fn open(&self, backend: Backend, say: Option<Reporter>) {
+        let made = Renderer::choose(backend);
+        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        if !matches!(&*s, Opened::Opening(b) if *b == backend) {
+            return;
+        }
+        let message = match made {
+            Ok((r, _)) => {
+                let m = format!("deadline frames warp with {}", r.describe());
+                *s = Opened::Ready(backend, Box::new(r));
+                m
+            }
+            Err(e) => {
+                *s = Opened::Failed(backend);
+                format!("deadline frames warp on the CPU: {e}")
+            }
+        };
+        if let Some(say) = say {
+            say(Status {
+                severity: Severity::Info,
+                code: StatusCode::NoError,
+                source: 0,
+                source_kind: DataType::DEVICE,
+                message,
+            });
+        }
+    }
+}
+
 /// What the presenter of one render needs.
 pub struct Present {
     pub background: Arc<Background>,
@@ -140,11 +225,16 @@ pub struct Present {
     pub warp: WarpMode,
     pub called: Instant,
     pub deadline: Duration,
+    pub warper: Arc<Warper>,
+    pub backend: Backend,
+    pub report: Reporter,
+    /// The frame's handle, which the host's messages name.
+    pub frame: u64,
 }
 
-/// Fills `p.slot` by the deadline; returns a note for the host when the
+/// Fills `p.slot` by the deadline, telling the host first (INFO) when the
 /// frame could not show what it asked for.
-pub fn present(p: Present) -> Option<String> {
+pub fn present(p: Present) {
     // Time for the warp itself, and a margin for waking up.
     let reserve = |ms: f64| Duration::from_secs_f64((1.25 * ms + 0.5) / 1e3);
     // The warp asked for, unless it took too long last time: then quad,
@@ -198,15 +288,18 @@ pub fn present(p: Present) -> Option<String> {
                 chosen
             };
             let settings = WarpSettings::new(mode, p.bounds);
-            let run = || {
-                warp(&shot.source, &p.rays, p.desc.size, &settings)
-                    .and_then(|w| w.frame(&p.desc, p.colour))
-                    .map_err(|e| e.to_string())
-            };
-            let warped = match warp_pool() {
-                Some(pool) => pool.install(run),
-                None => run(),
-            };
+            let warped = p
+                .warper
+                .warp(
+                    p.backend,
+                    &shot.source,
+                    &p.rays,
+                    p.desc.size,
+                    &settings,
+                    Some(Arc::clone(&p.report)),
+                )
+                .and_then(|w| w.frame(&p.desc, p.colour))
+                .map_err(|e| e.to_string());
             match warped {
                 Ok(frame) => (Ok(frame), ShownImage { age_ms, warp: mode }),
                 Err(e) => {
@@ -244,6 +337,14 @@ pub fn present(p: Present) -> Option<String> {
             0.75 * *cost + 0.25 * ms
         };
     }
+    if let Some(note) = note {
+        (p.report)(Status {
+            severity: Severity::Info,
+            code: StatusCode::NoError,
+            source: p.frame,
+            source_kind: DataType::FRAME,
+            message: format!("frame {:#x}: {note}", p.frame),
+        });
+    }
     p.slot.finish_shown(frame, p.called.elapsed(), shown);
-    note
 }
