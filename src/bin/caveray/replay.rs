@@ -163,6 +163,7 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
             args.layers
         )));
     }
+    // The settings every run shares, checked before anything is loaded.
     let probe = Timeline {
         hz: args.hz,
         duration: 1.0,
@@ -180,7 +181,6 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
         },
     };
     probe.validate().map_err(|e| usage(e.to_string()))?;
-    probe.warp.validate().map_err(|e| usage(e.to_string()))?;
     let rig = Rig::load(&args.config)
         .map_err(|e| usage(e.to_string()))?
         .with_neck_model();
@@ -247,20 +247,13 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
             };
             let size = wall_size(resolution, args.scale);
             let timeline = Timeline {
-                hz: args.hz,
                 duration: duration(keys),
                 size,
-                cells: UVec2::splat(args.cells.max(1)),
-                bias: args.bias,
-                layers: args.layers,
-                render_ms: args.render_ms,
-                warp_ms: args.warp_ms,
-                modes: modes.clone(),
                 warp: WarpSettings {
-                    grid_spacing: args.grid_spacing,
-                    layer_steps: args.layer_steps,
-                    ..WarpSettings::new(WarpMode::None, scene.bounds())
+                    bounds: scene.bounds(),
+                    ..probe.warp
                 },
+                ..probe.clone()
             };
             let view_at = |time: f64| -> Result<RayGen, String> {
                 let head = pose_along(keys, time).unwrap_or(rig.viewer.head);

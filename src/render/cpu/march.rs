@@ -238,7 +238,7 @@ struct OneVolume<'a> {
 
 /// Where a ray enters and leaves the box, clipped to the camera's
 /// `(near, far)` (`near` >= 0).
-pub(super) fn enter_exit(
+pub(crate) fn enter_exit(
     o: Vec3,
     d: Vec3,
     lo: Vec3,

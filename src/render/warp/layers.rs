@@ -9,6 +9,7 @@ use glam::{Vec2, Vec3, Vec4};
 use super::project::Projector;
 use super::{Source, WarpSettings};
 use crate::geometry::RayGen;
+use crate::render::cpu::enter_exit;
 
 /// The most layers a pixel may keep.
 pub const MAX_LAYERS: usize = 8;
@@ -91,7 +92,8 @@ pub(super) fn march(
     settings: &WarpSettings,
 ) -> (Vec4, f32) {
     let (o, d) = rays.pixel_ray(x, y);
-    let Some((t0, t1)) = enter_exit(o, d, settings.bounds, (rays.t_near, rays.t_far)) else {
+    let (lo, hi) = settings.bounds;
+    let Some((t0, t1)) = enter_exit(o, d, lo, hi, (rays.t_near, rays.t_far)) else {
         return (Vec4::ZERO, f32::INFINITY);
     };
     let steps = settings.layer_steps;
@@ -155,26 +157,4 @@ fn through_layers(layers: &[Layer], lo: f32, hi: f32, c: f32) -> Vec4 {
         s += (emitted * weight).extend(weight);
     }
     s
-}
-
-/// Where the ray `o + t d` enters and leaves the box, within `clip`.
-pub(super) fn enter_exit(
-    o: Vec3,
-    d: Vec3,
-    (lo, hi): (Vec3, Vec3),
-    (near, far): (f32, f32),
-) -> Option<(f32, f32)> {
-    // As the shader: a zero component becomes a tiny one of its sign.
-    let safe = |x: f32| {
-        if x.abs() < 1e-20 {
-            1e-20_f32.copysign(x)
-        } else {
-            x
-        }
-    };
-    let inv = Vec3::new(safe(d.x), safe(d.y), safe(d.z)).recip();
-    let (ta, tb) = ((lo - o) * inv, (hi - o) * inv);
-    let t0 = ta.min(tb).max_element().max(near);
-    let t1 = ta.max(tb).min_element().min(far);
-    (t1 > t0 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
 }

@@ -105,7 +105,7 @@ impl Timeline {
         if self.layers == 0 && self.modes.contains(&WarpMode::Layers) {
             return bad("the layers warp needs at least one layer".into());
         }
-        Ok(())
+        self.warp.validate()
     }
 
     /// Runs the timeline for the view `view_at` gives at each time
