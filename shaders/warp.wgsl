@@ -114,21 +114,24 @@ fn colour_at(s: vec2f) -> vec4f {
     return mix(bottom, top, f.y);
 }
 
-fn target_index(id: vec3u) -> i32 {
+// Target pixel `id`'s index, its outputs cleared (transparent, infinitely
+// far); -1 outside the image.
+fn begin_pixel(id: vec3u) -> i32 {
     if id.x >= w.to_size.x || id.y >= w.to_size.y {
         return -1;
     }
-    return i32(id.y * w.to_size.x + id.x);
+    let i = id.y * w.to_size.x + id.x;
+    out_colour[i] = vec4f(0.0);
+    out_depth[i] = infinity();
+    return i32(i);
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn quad(@builtin(global_invocation_id) id: vec3u) {
-    let i = target_index(id);
+    let i = begin_pixel(id);
     if i < 0 {
         return;
     }
-    out_colour[i] = vec4f(0.0);
-    out_depth[i] = infinity();
     let seen_to = target_view();
     let r = pixel_ray(seen_to, f32(id.x), f32(id.y));
     let n = w.normal.xyz;
@@ -190,12 +193,10 @@ fn through(px: vec2f, lo: f32, hi: f32, c: f32) -> vec4f {
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn layer_march(@builtin(global_invocation_id) id: vec3u) {
-    let i = target_index(id);
+    let i = begin_pixel(id);
     if i < 0 {
         return;
     }
-    out_colour[i] = vec4f(0.0);
-    out_depth[i] = infinity();
     let seen_to = target_view();
     let seen_from = source_view();
     let r = pixel_ray(seen_to, f32(id.x), f32(id.y));
@@ -361,12 +362,10 @@ fn grid_pick(@builtin(global_invocation_id) id: vec3u) {
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn grid_colour(@builtin(global_invocation_id) id: vec3u) {
-    let i = target_index(id);
+    let i = begin_pixel(id);
     if i < 0 {
         return;
     }
-    out_colour[i] = vec4f(0.0);
-    out_depth[i] = infinity();
     let key = atomicLoad(&nearest[i]);
     if key == 0u {
         return;

@@ -19,6 +19,13 @@ use crate::render::warp::{Source, WarpMode};
 use crate::render::{Backend, ColorData, FrameDesc};
 use crate::scene::{PlacedVolume, Scene};
 
+/// What a render call does: a whole render on the render thread, or a
+/// deadline frame's presentation.
+enum Next {
+    Render(Box<RenderJob>),
+    Present(Box<Present>),
+}
+
 /// Why a frame is not a job's partner.
 enum Unpaired {
     /// It cannot be: the host should hear why if it named it.
@@ -73,31 +80,27 @@ impl Device {
         };
         // One render per frame at a time: the previous one finishes first.
         drop(slot.wait());
-        match self.prepare(&frame) {
-            Ok((job, color_type, Some((deadline, warp)))) => {
-                match self.present_by(&frame, job, deadline, warp) {
-                    Ok(present) => {
-                        if let State::Frame(f) = &mut frame.lock().state {
-                            f.color_type = color_type;
-                            f.last = None;
-                        }
-                        slot.start();
-                        Self::spawn_presenter(present, on_done);
+        let next = self
+            .prepare(&frame)
+            .and_then(|(job, color_type, deadline)| {
+                let next = match deadline {
+                    Some((deadline, warp)) => {
+                        Next::Present(Box::new(self.present_by(&frame, job, deadline, warp)?))
                     }
-                    Err(why) => {
-                        self.error(
-                            StatusCode::InvalidOperation,
-                            Some(&frame),
-                            format!("anariRenderFrame: {}: {why}", frame.describe()),
-                        );
-                        slot.finish(Err(why), Default::default());
-                        if let Some(done) = on_done {
-                            done();
-                        }
-                    }
+                    None => Next::Render(Box::new(job)),
+                };
+                Ok((next, color_type))
+            });
+        match next {
+            Ok((Next::Present(present), color_type)) => {
+                if let State::Frame(f) = &mut frame.lock().state {
+                    f.color_type = color_type;
+                    f.last = None;
                 }
+                slot.start();
+                Self::spawn_presenter(*present, on_done);
             }
-            Ok((mut job, color_type, None)) => {
+            Ok((Next::Render(mut job), color_type)) => {
                 // Hosts render unchanged frames again (OpenCOVER up to 64
                 // times, to accumulate): the last image stands.
                 let inputs = job.inputs();
@@ -111,7 +114,7 @@ impl Device {
                 }
                 slot.start();
                 job.on_done = on_done;
-                self.worker.submit(job);
+                self.worker.submit(*job);
             }
             Err(e) => {
                 self.error(

@@ -11,7 +11,7 @@ use super::{march, sample, CpuRenderer};
 use crate::geometry::RayGen;
 use crate::render::frame::filled;
 use crate::render::march_plan::MarchPlan;
-use crate::render::warp::{Layer, LayerBuilder, Source, MAX_LAYERS};
+use crate::render::warp::{check_layers, Layer, LayerBuilder, Source};
 use crate::render::{FrameDesc, RenderError, RenderSettings};
 use crate::scene::Scene;
 
@@ -29,11 +29,7 @@ impl CpuRenderer {
         stop: &AtomicBool,
     ) -> Result<Source, RenderError> {
         FrameDesc::new(size).validate()?;
-        if layers > MAX_LAYERS {
-            return Err(RenderError::Settings(format!(
-                "a warp source keeps at most {MAX_LAYERS} layers per pixel, not {layers}"
-            )));
-        }
+        check_layers(layers)?;
         let plan = MarchPlan::new(scene, rays, settings)?;
         let data = self.prepare(scene, &plan)?;
         let field = sample::Field::new(&plan, &data, None);

@@ -13,7 +13,7 @@ use super::{
 };
 use crate::geometry::RayGen;
 use crate::render::frame::ColorData;
-use crate::render::warp::{Layer, Source, MAX_LAYERS};
+use crate::render::warp::{check_layers, Layer, Source};
 use crate::render::{ColorFormat, FrameDesc, RenderError, RenderSettings};
 use crate::scene::Scene;
 
@@ -42,11 +42,7 @@ impl GpuRenderer {
         layers: usize,
         stop: &AtomicBool,
     ) -> Result<(Source, f64), RenderError> {
-        if layers > MAX_LAYERS {
-            return Err(RenderError::Settings(format!(
-                "a warp source keeps at most {MAX_LAYERS} layers per pixel, not {layers}"
-            )));
-        }
+        check_layers(layers)?;
         let desc = FrameDesc::new(size)
             .with_color(ColorFormat::Rgba32F)
             .with_depth();

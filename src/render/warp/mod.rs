@@ -65,6 +65,16 @@ impl std::str::FromStr for WarpMode {
     }
 }
 
+/// Why a source cannot keep `layers` layers a pixel, if it cannot.
+pub(crate) fn check_layers(layers: usize) -> Result<(), RenderError> {
+    if layers > MAX_LAYERS {
+        return Err(RenderError::Settings(format!(
+            "a warp source keeps at most {MAX_LAYERS} layers per pixel, not {layers}"
+        )));
+    }
+    Ok(())
+}
+
 /// What a render kept of its view for warping, lower-left pixel first.
 /// Its pixels are read, not changed in place: a new image is a new source
 /// (or a [`Source::paste`]), which is how the GPU knows to upload it.
