@@ -236,3 +236,30 @@ fn on_the_gpu_backend_deadline_frames_warp_with_a_gpu_of_their_own() {
     }
     assert!(h.messages(Severity::Error).is_empty());
 }
+
+#[test]
+fn a_device_released_while_its_frames_present_waits_for_them() {
+    // The host may unload the library right after the release: the
+    // presenters (and the background render) must be done by then. The
+    // completion callback of each presented frame has run when the
+    // release returns.
+    let done = Arc::new(Mutex::new(0));
+    let mut h = Host::new();
+    let f = field(&mut h);
+    let v = h.volume(f);
+    let (frame, camera) = h.frame(v, 3.0);
+    deadline(&mut h, frame, 200.0, "quad");
+    for x in [0.0f32, 0.1, 0.2] {
+        h.set(
+            camera,
+            "position",
+            DataType::FLOAT32_VEC3,
+            bytes(&[x, 0.0, 3.0]),
+        );
+        h.d.commit(Subject::Object(camera));
+        let count = Arc::clone(&done);
+        h.d.render_frame(frame, Some(Box::new(move || *count.lock().unwrap() += 1)));
+    }
+    drop(h);
+    assert_eq!(*done.lock().unwrap(), 3, "every presented frame completed");
+}

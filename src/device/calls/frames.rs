@@ -98,7 +98,7 @@ impl Device {
                     f.last = None;
                 }
                 slot.start();
-                Self::spawn_presenter(*present, on_done);
+                self.spawn_presenter(*present, on_done);
             }
             Ok((Next::Render(mut job), color_type)) => {
                 // Hosts render unchanged frames again (OpenCOVER up to 64
@@ -203,7 +203,8 @@ impl Device {
 
     /// Runs the frame's presenter on its own thread: the frame is ready by
     /// its deadline whatever the background render does.
-    fn spawn_presenter(present: Present, on_done: Option<Box<dyn FnOnce() + Send>>) {
+    fn spawn_presenter(&mut self, present: Present, on_done: Option<Box<dyn FnOnce() + Send>>) {
+        self.presenters.retain(|p| !p.is_finished());
         let slot = Arc::clone(&present.slot);
         let spawned = std::thread::Builder::new()
             .name("caveray-present".into())
@@ -213,11 +214,12 @@ impl Device {
                     done();
                 }
             });
-        if let Err(e) = spawned {
-            slot.finish(
+        match spawned {
+            Ok(thread) => self.presenters.push(thread),
+            Err(e) => slot.finish(
                 Err(format!("cannot start the frame's presenter: {e}")),
                 Default::default(),
-            );
+            ),
         }
     }
 

@@ -88,6 +88,8 @@ pub struct Device {
     pub(super) worker: Worker,
     /// What deadline frames warp with.
     warper: std::sync::Arc<crate::device::frame::deadline::Warper>,
+    /// Deadline frames' presenter threads, joined when the device goes.
+    presenters: Vec<std::thread::JoinHandle<()>>,
 }
 
 impl Device {
@@ -111,6 +113,7 @@ impl Device {
             statuses: Vec::new(),
             worker: Worker::new(report),
             warper: Default::default(),
+            presenters: Vec::new(),
         }
     }
 
@@ -412,6 +415,13 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
 impl Drop for Device {
     fn drop(&mut self) {
         self.forget_partners();
+        // No thread of ours may outlive the device: the host may unload
+        // the library right after releasing it. A presenter ends by its
+        // frame's deadline; the warper's GPU opens in about a second.
+        for presenter in self.presenters.drain(..) {
+            let _ = presenter.join();
+        }
+        self.warper.join();
     }
 }
 

@@ -137,6 +137,8 @@ fn warp_pool() -> Option<&'static rayon::ThreadPool> {
 #[derive(Default)]
 pub struct Warper {
     state: Mutex<Opened>,
+    /// The thread opening a renderer, if one was started.
+    opener: Mutex<Option<std::thread::JoinHandle<()>>>,
 }
 
 #[derive(Default)]
@@ -171,9 +173,19 @@ impl Warper {
                 _ => {
                     *s = Opened::Opening(backend);
                     let me = Arc::clone(self);
-                    let _ = std::thread::Builder::new()
+                    let spawned = std::thread::Builder::new()
                         .name("caveray-warp-open".into())
                         .spawn(move || me.open(backend, say));
+                    match spawned {
+                        Ok(thread) => {
+                            let mut opener = self.opener.lock().unwrap_or_else(|e| e.into_inner());
+                            if let Some(old) = opener.replace(thread) {
+                                drop(s);
+                                let _ = old.join();
+                            }
+                        }
+                        Err(_) => *s = Opened::Failed(backend),
+                    }
                 }
             }
         }
@@ -181,6 +193,14 @@ impl Warper {
         match warp_pool() {
             Some(pool) => pool.install(run),
             None => run(),
+        }
+    }
+
+    /// Waits for the thread opening a renderer, if one runs.
+    pub fn join(&self) {
+        let opener = self.opener.lock().unwrap_or_else(|e| e.into_inner()).take();
+        if let Some(thread) = opener {
+            let _ = thread.join();
         }
     }
 
@@ -284,6 +304,9 @@ pub fn present(p: Present) {
             let age_ms = p.called.saturating_duration_since(shot.taken).as_secs_f32() * 1e3;
             let mode = if shot.inputs == p.inputs {
                 WarpMode::None
+            } else if chosen == WarpMode::None && shot.source.size != p.desc.size {
+                // A resized frame cannot show the old image as it is.
+                WarpMode::Quad
             } else {
                 chosen
             };
