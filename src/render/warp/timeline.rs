@@ -186,7 +186,9 @@ impl Timeline {
                 cells += 1;
                 if run.complete() {
                     image_samples = flight.source.samples.max(1);
-                    let now = begin + (budget - debt - left).min(budget);
+                    // The renderer began this refresh `debt` late and has
+                    // used what is not left since.
+                    let now = (begin + budget - left).min(begin + period);
                     let next = InFlight {
                         source: Source::empty(self.size, view(now / 1e3)?, self.layers)?,
                         started_ms: now,
