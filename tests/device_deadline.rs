@@ -103,15 +103,13 @@ fn a_deadline_frame_shows_the_background_then_its_own_image_then_a_warp() {
     // A large whole render first keeps the render thread busy: the deadline
     // frame's own render waits behind it, so by its deadline there is no
     // image at all.
-    let (slow, slow_camera) = h.frame(v, 3.0);
+    let (slow, _slow_camera) = h.frame(v, 3.0);
     h.set(slow, "size", DataType::UINT32_VEC2, bytes(&[4096u32, 4096]));
     h.d.commit(Subject::Object(slow));
     h.d.render_frame(slow, None);
     h.pixels(frame);
     assert_eq!(shown(&mut h, frame), Some((-1.0, "none".into())));
     h.d.discard_frame(slow);
-    h.d.release(slow);
-    h.d.release(slow_camera);
     let infos = heard.lock().unwrap().join("\n");
     assert!(infos.contains("no image has been rendered yet"), "{infos}");
 
@@ -135,7 +133,8 @@ fn a_deadline_frame_shows_the_background_then_its_own_image_then_a_warp() {
     };
     assert!(age >= 0.0 && warp == "none");
 
-    // A moved camera: the newest image, warped, while its own renders.
+    // A moved camera: the newest image, warped, while its own render
+    // waits behind the slow one again.
     h.set(
         camera,
         "position",
@@ -143,7 +142,9 @@ fn a_deadline_frame_shows_the_background_then_its_own_image_then_a_warp() {
         bytes(&[0.3f32, 0.0, 3.0]),
     );
     h.d.commit(Subject::Object(camera));
+    h.d.render_frame(slow, None);
     h.pixels(frame);
+    h.d.discard_frame(slow);
     let (age, warp) = shown(&mut h, frame).unwrap();
     assert_eq!(warp, "layers");
     assert!(
