@@ -14,8 +14,8 @@ use super::slot::FrameSlot;
 use crate::device::types::{DataType, Severity, Status, StatusCode};
 use crate::device::worker::{RenderInputs, Reporter};
 use crate::geometry::RayGen;
-use crate::render::warp::{warp, Source, WarpMode, WarpSettings, Warped};
-use crate::render::{Backend, Frame, FrameDesc, RenderError, Renderer};
+use crate::render::warp::{warp_by, Source, WarpMode, WarpSettings, Warped};
+use crate::render::{Backend, Frame, FrameDesc, GpuRenderer, RenderError, Renderer};
 
 /// A complete background render, with the inputs it was made for and
 /// when its camera was taken.
@@ -146,28 +146,27 @@ enum Opened {
     #[default]
     Nothing,
     Opening(Backend),
-    Ready(Backend, Box<Renderer>),
-    /// It could not be opened (the CPU warps).
+    Ready(Backend, Box<GpuRenderer>),
+    /// No GPU for it: none opened, or `auto` chose the CPU (the CPU warps).
     Failed(Backend),
 }
 
 impl Warper {
-    /// `source` shown from `rays` by `settings`, on `backend`'s renderer if
-    /// it is open, else on the CPU; `say` hears when a renderer opens.
+    /// `source` shown from the frame's camera by `settings`, on the
+    /// backend's renderer if it is open, else on the CPU, which gives up at
+    /// the deadline.
     fn warp(
         self: &Arc<Self>,
-        backend: Backend,
+        p: &Present,
         source: &Source,
-        rays: &RayGen,
-        size: glam::UVec2,
         settings: &WarpSettings,
-        say: Option<Reporter>,
     ) -> Result<Warped, RenderError> {
+        let (backend, rays, size) = (p.backend, &p.rays, p.desc.size);
         if backend != Backend::Cpu {
             let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
             match &mut *s {
-                Opened::Ready(b, r) if *b == backend => {
-                    return r.warp(source, rays, size, settings).map(|(w, _)| w);
+                Opened::Ready(b, g) if *b == backend => {
+                    return g.warp(source, rays, size, settings).map(|(w, _)| w);
                 }
                 Opened::Opening(b) | Opened::Failed(b) if *b == backend => {}
                 _ => {
@@ -175,7 +174,10 @@ impl Warper {
                     let me = Arc::clone(self);
                     let spawned = std::thread::Builder::new()
                         .name("caveray-warp-open".into())
-                        .spawn(move || me.open(backend, say));
+                        .spawn({
+                            let say = Arc::clone(&p.report);
+                            move || me.open(backend, say)
+                        });
                     match spawned {
                         Ok(thread) => {
                             let mut opener = self.opener.lock().unwrap_or_else(|e| e.into_inner());
@@ -189,7 +191,8 @@ impl Warper {
                 }
             }
         }
-        let run = || warp(source, rays, size, settings);
+        let give_up = p.called + p.deadline;
+        let run = || warp_by(source, rays, size, settings, Some(give_up));
         match warp_pool() {
             Some(pool) => pool.install(run),
             None => run(),
@@ -204,32 +207,42 @@ impl Warper {
         }
     }
 
-    fn open(&self, backend: Backend, say: Option<Reporter>) {
+    fn open(&self, backend: Backend, say: Reporter) {
         let made = Renderer::choose(backend);
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         if !matches!(&*s, Opened::Opening(b) if *b == backend) {
             return;
         }
         let message = match made {
-            Ok((r, _)) => {
-                let m = format!("deadline frames warp with {}", r.describe());
-                *s = Opened::Ready(backend, Box::new(r));
+            Ok((Renderer::Gpu(g), _)) => {
+                let info = g.adapter();
+                let m = format!(
+                    "deadline frames warp with GPU: {} ({:?}, {})",
+                    info.name, info.backend, info.driver
+                );
+                *s = Opened::Ready(backend, g);
                 m
+            }
+            // `auto` without a hardware GPU: the CPU warps, on its pool.
+            Ok((Renderer::Cpu(_), why)) => {
+                *s = Opened::Failed(backend);
+                match why {
+                    Some(why) => format!("deadline frames warp on the CPU: {why}"),
+                    None => "deadline frames warp on the CPU".into(),
+                }
             }
             Err(e) => {
                 *s = Opened::Failed(backend);
                 format!("deadline frames warp on the CPU: {e}")
             }
         };
-        if let Some(say) = say {
-            say(Status {
-                severity: Severity::Info,
-                code: StatusCode::NoError,
-                source: 0,
-                source_kind: DataType::DEVICE,
-                message,
-            });
-        }
+        say(Status {
+            severity: Severity::Info,
+            code: StatusCode::NoError,
+            source: 0,
+            source_kind: DataType::DEVICE,
+            message,
+        });
     }
 }
 
@@ -313,23 +326,28 @@ pub fn present(p: Present) {
             let settings = WarpSettings::new(mode, p.bounds);
             let warped = p
                 .warper
-                .warp(
-                    p.backend,
-                    &shot.source,
-                    &p.rays,
-                    p.desc.size,
-                    &settings,
-                    Some(Arc::clone(&p.report)),
-                )
-                .and_then(|w| w.frame(&p.desc, p.colour))
-                .map_err(|e| e.to_string());
+                .warp(&p, &shot.source, &settings)
+                .and_then(|w| w.frame(&p.desc, p.colour));
             match warped {
                 Ok(frame) => (Ok(frame), ShownImage { age_ms, warp: mode }),
                 Err(e) => {
-                    note = Some(format!(
-                        "warp '{}' failed ({e}); the frame shows the newest image as it is",
-                        mode.name()
-                    ));
+                    if e == RenderError::Stopped {
+                        // Its time so far is a floor for its mean: the
+                        // next frames pass it over.
+                        let ms = clock.elapsed().as_secs_f64() * 1e3;
+                        let cost = &mut p.background.lock().costs[mode as usize];
+                        *cost = cost.max(ms).max(p.deadline.as_secs_f64() * 1e3);
+                    }
+                    note = Some(match e {
+                        RenderError::Stopped => format!(
+                            "warp '{}' ran past the deadline; the frame shows the newest image as it is",
+                            mode.name()
+                        ),
+                        e => format!(
+                            "warp '{}' failed ({e}); the frame shows the newest image as it is",
+                            mode.name()
+                        ),
+                    });
                     let fallback = if shot.source.size == p.desc.size {
                         shot.source
                             .frame(&p.desc, p.colour)

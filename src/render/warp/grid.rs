@@ -27,6 +27,7 @@ pub(super) fn warp(
     to: &Projector,
     size: UVec2,
     settings: &WarpSettings,
+    late: &dyn Fn() -> bool,
 ) -> Result<Warped, RenderError> {
     let g = settings.grid_spacing;
     let (sw, sh) = (source.size.x, source.size.y);
@@ -65,6 +66,9 @@ pub(super) fn warp(
     let mut uv = filled(n, Vec2::NAN, "the grid warp's source positions")?;
     let node = |i: u32, j: u32| mesh[(j * nodes.x + i) as usize];
     for j in 0..nodes.y - 1 {
+        if late() {
+            return Err(RenderError::Stopped);
+        }
         for i in 0..nodes.x - 1 {
             let (a, b, c, d) = (
                 node(i, j),

@@ -11,6 +11,9 @@ mod project;
 mod quad;
 mod timeline;
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
 use glam::{UVec2, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -301,6 +304,19 @@ pub fn warp(
     size: UVec2,
     settings: &WarpSettings,
 ) -> Result<Warped, RenderError> {
+    warp_by(source, target, size, settings, None)
+}
+
+/// `warp`, giving up with `RenderError::Stopped` once `give_up` has
+/// passed (checked between rows): a display's deadline bounds it.
+pub fn warp_by(
+    source: &Source,
+    target: &RayGen,
+    size: UVec2,
+    settings: &WarpSettings,
+    give_up: Option<Instant>,
+) -> Result<Warped, RenderError> {
+    let late = || give_up.is_some_and(|t| Instant::now() >= t);
     FrameDesc::new(size).validate()?;
     settings.validate()?;
     let bad = |m: String| RenderError::Settings(m);
@@ -321,7 +337,7 @@ pub fn warp(
     let from = Projector::new(&source.rays).map_err(bad)?;
     if settings.mode == WarpMode::Grid {
         let to = Projector::new(target).map_err(bad)?;
-        return grid::warp(source, &from, &to, size, settings);
+        return grid::warp(source, &from, &to, size, settings, &late);
     }
     if settings.mode == WarpMode::Layers && source.k == 0 {
         return Err(bad(
@@ -331,11 +347,16 @@ pub fn warp(
     let mut color = filled(n, Vec4::ZERO, "the warped colour")?;
     let mut depth = filled(n, f32::INFINITY, "the warped depth")?;
     let w = size.x as usize;
+    let stopped = AtomicBool::new(false);
     color
         .par_chunks_mut(w)
         .zip(depth.par_chunks_mut(w))
         .enumerate()
         .for_each(|(y, (c, d))| {
+            if stopped.load(Ordering::Relaxed) || late() {
+                stopped.store(true, Ordering::Relaxed);
+                return;
+            }
             for x in 0..w {
                 let (px, py) = (x as u32, y as u32);
                 (c[x], d[x]) = match settings.mode {
@@ -344,5 +365,8 @@ pub fn warp(
                 };
             }
         });
+    if stopped.load(Ordering::Relaxed) {
+        return Err(RenderError::Stopped);
+    }
     Ok(Warped { size, color, depth })
 }
