@@ -332,11 +332,11 @@ pub fn present(p: Present) {
                 Ok(frame) => (Ok(frame), ShownImage { age_ms, warp: mode }),
                 Err(e) => {
                     if e == RenderError::Stopped {
-                        // Its time so far is a floor for its mean: the
-                        // next frames pass it over.
+                        // Its time so far is a floor for its mean, so the
+                        // next frames start it earlier or pass it over.
                         let ms = clock.elapsed().as_secs_f64() * 1e3;
                         let cost = &mut p.background.lock().costs[mode as usize];
-                        *cost = cost.max(ms).max(p.deadline.as_secs_f64() * 1e3);
+                        *cost = cost.max(ms);
                     }
                     note = Some(match e {
                         RenderError::Stopped => format!(
