@@ -134,7 +134,8 @@ fn a_deadline_frame_shows_the_background_then_its_own_image_then_a_warp() {
     assert!(age >= 0.0 && warp == "none");
 
     // A moved camera: the newest image, warped, while its own render
-    // waits behind the slow one again.
+    // waits behind the slow one again (a deadline the warp can meet).
+    deadline(&mut h, frame, 200.0, "layers");
     h.set(
         camera,
         "position",

@@ -299,7 +299,13 @@ pub fn present(p: Present) {
         (chosen, note)
     };
     let cost = p.background.lock().costs[chosen as usize];
-    let until = p.called + p.deadline.saturating_sub(reserve(cost));
+    // A warp not timed yet gets half the deadline to show what it takes.
+    let lead = if cost == 0.0 {
+        p.deadline / 2
+    } else {
+        reserve(cost)
+    };
+    let until = p.called + p.deadline.saturating_sub(lead);
     let newest = p.background.newest_by(&p.inputs, until);
     let clock = Instant::now();
     let (frame, shown) = match newest {
