@@ -57,7 +57,7 @@ impl ConfigError {
 
 /// Read as a list, so that a wrong number of components is an error
 /// naming the field rather than something serde may pass over.
-type Vec3 = Spanned<Vec<f64>>;
+pub(super) type Vec3 = Spanned<Vec<f64>>;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -134,7 +134,7 @@ pub(crate) fn load(path: &Path) -> Result<Rig, ConfigError> {
 }
 
 /// A TOML file's text and its name for messages.
-fn read(path: &Path, what: &'static str) -> Result<(String, String), ConfigError> {
+pub(super) fn read(path: &Path, what: &'static str) -> Result<(String, String), ConfigError> {
     let file = path.display().to_string();
     match crate::data::files::read_text(path, crate::data::files::TEXT_LIMIT) {
         Ok(text) => Ok((text, file)),
@@ -142,8 +142,26 @@ fn read(path: &Path, what: &'static str) -> Result<(String, String), ConfigError
     }
 }
 
+/// The one key that tells a display's file from a rig's.
+#[derive(Deserialize)]
+struct Probe {
+    views: Option<Spanned<toml::Value>>,
+}
+
 pub(crate) fn parse(text: &str, file: &str) -> Result<Rig, ConfigError> {
     let ctx = Ctx { text, file };
+    // A multi-view display's file is not a rig: say so rather than
+    // reporting its fields as unknown.
+    if let Ok(Probe { views: Some(views) }) = toml::from_str::<Probe>(text) {
+        return Err(ctx.at(
+            &views,
+            "views".into(),
+            format!(
+                "this is a multi-view display (views = {}), not a rig: load it as a display",
+                views.get_ref()
+            ),
+        ));
+    }
     let raw: RawRig = toml::from_str(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         ctx.error(span, None, e.message().to_string())
@@ -179,15 +197,20 @@ pub(crate) fn load_head_path(path: &Path, rig: &Rig) -> Result<Vec<PathKey>, Con
     parse_head_path(&text, &file, rig)
 }
 
-struct Ctx<'a> {
-    text: &'a str,
-    file: &'a str,
+pub(super) struct Ctx<'a> {
+    pub text: &'a str,
+    pub file: &'a str,
 }
 
 impl Ctx<'_> {
     /// An error at `span`; `field` overrides the path found from the text
     /// (which at a table header only names the table).
-    fn error(&self, span: Range<usize>, field: Option<String>, message: String) -> ConfigError {
+    pub(super) fn error(
+        &self,
+        span: Range<usize>,
+        field: Option<String>,
+        message: String,
+    ) -> ConfigError {
         let loc = locate(self.text, span.start);
         let mut path = loc.path;
         if field.is_none() {
@@ -204,11 +227,11 @@ impl Ctx<'_> {
         }
     }
 
-    fn at<T>(&self, value: &Spanned<T>, field: String, message: String) -> ConfigError {
+    pub(super) fn at<T>(&self, value: &Spanned<T>, field: String, message: String) -> ConfigError {
         self.error(value.span(), Some(field), message)
     }
 
-    fn vec3(&self, v: &Vec3, field: impl Fn() -> String) -> Result<DVec3, ConfigError> {
+    pub(super) fn vec3(&self, v: &Vec3, field: impl Fn() -> String) -> Result<DVec3, ConfigError> {
         let [x, y, z] = v.get_ref()[..] else {
             let n = v.get_ref().len();
             return Err(self.at(v, field(), format!("expected 3 numbers, got {n}")));
@@ -221,7 +244,7 @@ impl Ctx<'_> {
         }
     }
 
-    fn positive(
+    pub(super) fn positive(
         &self,
         v: &Spanned<f64>,
         field: &str,

@@ -1,12 +1,17 @@
 //! CAVE rigs: walls, viewer and tracked head, loaded from TOML, turned into
-//! one off-axis view per wall and eye for any head pose.
+//! one off-axis view per wall and eye for any head pose; and multi-view
+//! autostereoscopic displays, whose every subpixel has its own eye.
 
 mod config;
+mod display;
+mod display_config;
 mod head;
 pub mod inspect;
 mod rig;
 mod source_map;
 
 pub use config::ConfigError;
+pub use display::{MultiViewDisplay, ViewPattern};
+pub use display_config::MAX_VIEWS;
 pub use head::{pose_along, HeadFrame, HeadPose, PathKey, NECK_TO_EYES_M};
 pub use rig::{Eye, Rig, ScenePlacement, Units, View, Viewer, Wall};

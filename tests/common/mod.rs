@@ -51,12 +51,20 @@ pub fn config_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs")
 }
 
-/// Every shipped rig, by file stem.
+/// Whether the TOML file at `path` is a multi-view display (a top-level
+/// `views`), not a rig.
+pub fn is_display(path: &Path) -> bool {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    text.parse::<toml::Table>()
+        .is_ok_and(|t| t.contains_key("views"))
+}
+
+/// Every shipped rig, by file stem (displays left out).
 pub fn shipped_rigs() -> Vec<(String, Rig)> {
     let mut rigs: Vec<(String, Rig)> = std::fs::read_dir(config_dir())
         .expect("cave_configs exists")
         .map(|e| e.expect("readable entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .filter(|p| p.extension().is_some_and(|e| e == "toml") && !is_display(p))
         .map(|p| {
             let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
             let rig = Rig::load(&p).unwrap_or_else(|e| panic!("{e}"));
