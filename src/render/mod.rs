@@ -7,6 +7,7 @@ pub mod cpu;
 pub mod empty_space;
 mod frame;
 pub mod gpu;
+pub mod iso;
 mod march_plan;
 mod settings;
 pub mod stereo;

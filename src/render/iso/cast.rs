@@ -1,0 +1,165 @@
+//! The isosurface caster's march: fixed steps through the grid until the
+//! field crosses the iso-value, then secant steps within that bracket.
+
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::field::{curvatures, IsoField};
+use super::{curvature_colour, Colouring, IsoSettings};
+use crate::geometry::RayGen;
+use crate::render::cpu::enter_exit;
+use crate::render::frame::filled;
+use crate::render::{Frame, FrameDesc, RenderError};
+use crate::scene::PlacedVolume;
+
+/// Where a ray meets the isosurface, and the surface there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IsoHit {
+    /// Along the unit ray from its origin.
+    pub t: f32,
+    pub position: Vec3,
+    /// Unit normal, facing the ray's origin.
+    pub normal: Vec3,
+    /// Principal curvatures, larger first, as the ray's origin sees the
+    /// surface: positive where it bulges towards the eye.
+    pub curvatures: (f32, f32),
+}
+
+/// Casts `rays` (an image of `desc.size`) at `placed`'s isosurface: the
+/// shaded frame, and each pixel's hit (lower-left first).
+pub fn cast(
+    placed: &PlacedVolume,
+    rays: &RayGen,
+    desc: &FrameDesc,
+    settings: &IsoSettings,
+) -> Result<(Frame, Vec<Option<IsoHit>>), RenderError> {
+    desc.validate()?;
+    settings.validate()?;
+    let voxels = placed.volume.voxels();
+    let mut values = filled(voxels.len(), 0.0f32, "the volume as f32")?;
+    for (i, v) in values.iter_mut().enumerate() {
+        *v = voxels.value(i);
+    }
+    let field = IsoField::new(placed, &values, settings.filter);
+    let step = placed.smallest_cell() / settings.steps_per_cell;
+    let (w, n) = (desc.size.x as usize, desc.pixels());
+    let mut hits = filled(n, None, "the hits")?;
+    hits.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, hit) in row.iter_mut().enumerate() {
+            let (o, d) = rays.pixel_ray(x as u32, y as u32);
+            *hit = first_hit(&field, o, d, (rays.t_near, rays.t_far), step, settings);
+        }
+    });
+    let mut color = filled(4 * n, 0.0f32, "the frame's colour")?;
+    let mut depth = filled(n, f32::INFINITY, "the frame's depth")?;
+    for (i, hit) in hits.iter().enumerate() {
+        let (x, y) = ((i % w) as u32, (i / w) as u32);
+        let (_, d) = rays.pixel_ray(x, y);
+        let c = match hit {
+            Some(h) => {
+                depth[i] = rays.depth_at(h.position, h.t);
+                shade(h, d, settings)
+            }
+            None => settings.background,
+        };
+        color[4 * i..4 * i + 4].copy_from_slice(&c.to_array());
+    }
+    let frame = Frame::from_linear(desc, color, desc.depth.then_some(depth))?;
+    Ok((frame, hits))
+}
+
+/// The first crossing of the iso-value along `o + t d` within the grid.
+fn first_hit(
+    field: &IsoField,
+    o: Vec3,
+    d: Vec3,
+    clip: (f32, f32),
+    step: f32,
+    s: &IsoSettings,
+) -> Option<IsoHit> {
+    let (go, gd) = field.grid_ray(o, d);
+    let (t0, t1) = enter_exit(go, gd, Vec3::ZERO, field.last_vertex(), clip)?;
+    let at = |t: f32| field.value(go + gd * t) - s.isovalue;
+    let mut ta = t0;
+    let mut fa = at(ta);
+    let steps = ((t1 - t0) / step).ceil().min(1e6) as u32;
+    for k in 1..=steps {
+        let tb = (t0 + k as f32 * step).min(t1);
+        let fb = at(tb);
+        if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
+            let t = refine(&at, (ta, fa), (tb, fb), s.secant_steps);
+            let p = o + d * t;
+            let sample = field.sample(go + gd * t);
+            let g = sample.gradient;
+            let (k1, k2) = curvatures(g, sample.hessian);
+            let mut normal = -g.normalize_or_zero();
+            // Seen from the other side, a bulge is a hollow.
+            let mut curvatures = (k1, k2);
+            if normal.dot(d) > 0.0 {
+                normal = -normal;
+                curvatures = (-k2, -k1);
+            }
+            return Some(IsoHit {
+                t,
+                position: p,
+                normal,
+                curvatures,
+            });
+        }
+        (ta, fa) = (tb, fb);
+    }
+    None
+}
+
+/// Secant (regula falsi) steps within a bracket whose ends differ in sign.
+fn refine(
+    at: &dyn Fn(f32) -> f32,
+    (mut ta, mut fa): (f32, f32),
+    (mut tb, mut fb): (f32, f32),
+    steps: u32,
+) -> f32 {
+    if fa == 0.0 {
+        return ta;
+    }
+    if steps == 0 {
+        // The march alone: the first sample past the crossing.
+        return tb;
+    }
+    for _ in 0..steps {
+        let t = if fb != fa {
+            ta - fa * (tb - ta) / (fb - fa)
+        } else {
+            0.5 * (ta + tb)
+        };
+        let ft = at(t);
+        if ft == 0.0 {
+            return t;
+        }
+        if (ft < 0.0) == (fa < 0.0) {
+            (ta, fa) = (t, ft);
+        } else {
+            (tb, fb) = (t, ft);
+        }
+    }
+    if fb != fa {
+        ta - fa * (tb - ta) / (fb - fa)
+    } else {
+        0.5 * (ta + tb)
+    }
+}
+
+/// Blinn-Phong shading of a hit seen along `d`.
+fn shade(h: &IsoHit, d: Vec3, s: &IsoSettings) -> Vec4 {
+    let base = match s.colouring {
+        Colouring::Flat(c) => c,
+        Colouring::Curvature { radius } => {
+            curvature_colour(0.5 * (h.curvatures.0 + h.curvatures.1), radius)
+        }
+    };
+    let l = s.light.map_or(-d, |l| l.normalize());
+    let half = (l - d).normalize_or_zero();
+    let diffuse = h.normal.dot(l).max(0.0);
+    let specular = h.normal.dot(half).max(0.0).powf(s.shininess);
+    let rgb = base * (s.ambient + s.diffuse * diffuse) + Vec3::splat(s.specular * specular);
+    rgb.min(Vec3::ONE).extend(1.0)
+}
