@@ -12,7 +12,7 @@ use glam::{DVec3, UVec2};
 use super::config::ConfigError;
 use super::display_config;
 use super::rig::Units;
-use crate::geometry::{OffAxisCamera, Result, Screen};
+use crate::geometry::{OffAxisCamera, PrimaryRays, RayGen, Result, Screen};
 
 /// How the panel's subpixels are assigned to views.
 #[derive(Clone, Debug, PartialEq)]
@@ -110,6 +110,13 @@ impl MultiViewDisplay {
     /// The eye that sees subpixel `channel` of pixel (x, y).
     pub fn subpixel_eye(&self, x: u32, y: u32, channel: usize) -> DVec3 {
         self.eye(self.view_of(x, y, channel))
+    }
+
+    /// Every view's rays over the panel's pixels, view 0 first.
+    pub fn view_rays(&self) -> Result<Vec<RayGen>> {
+        (0..self.views)
+            .map(|v| self.view_camera(v).map(|c| c.ray_gen(self.resolution)))
+            .collect()
     }
 
     /// The camera of `view`: the panel seen off-axis from that view's eye.

@@ -25,8 +25,120 @@ pub struct IsoHit {
     pub curvatures: (f32, f32),
 }
 
+/// A volume's field ready for casting, with the march's step.
+pub struct Caster<'a> {
+    pub field: IsoField<'a>,
+    pub step: f32,
+    pub settings: &'a IsoSettings,
+}
+
+/// The volume's values as f32, which a [`Caster`] reads.
+pub fn values(placed: &PlacedVolume) -> Result<Vec<f32>, RenderError> {
+    let voxels = placed.volume.voxels();
+    let mut values = filled(voxels.len(), 0.0f32, "the volume as f32")?;
+    for (i, v) in values.iter_mut().enumerate() {
+        *v = voxels.value(i);
+    }
+    Ok(values)
+}
+
+impl<'a> Caster<'a> {
+    pub fn new(placed: &PlacedVolume, values: &'a [f32], settings: &'a IsoSettings) -> Self {
+        Self {
+            field: IsoField::new(placed, values, settings.filter),
+            step: placed.smallest_cell() / settings.steps_per_cell,
+            settings,
+        }
+    }
+
+    /// The first crossing along `o + t d` within the grid and `clip`,
+    /// counting field evaluations into `samples`.
+    pub fn first_hit(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        clip: (f32, f32),
+        samples: &mut u64,
+    ) -> Option<IsoHit> {
+        let (go, gd) = self.field.grid_ray(o, d);
+        let (t0, t1) = enter_exit(go, gd, Vec3::ZERO, self.field.last_vertex(), clip)?;
+        self.march(o, d, t0, t1, samples)
+    }
+
+    /// The first crossing after `from` along `o + t d`, if the ray is on
+    /// the same side of the iso-value there as where it enters the grid;
+    /// `None` if it is not (a crossing lies before `from`).
+    pub fn hit_after(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        clip: (f32, f32),
+        from: f32,
+        samples: &mut u64,
+    ) -> Option<Option<IsoHit>> {
+        let (go, gd) = self.field.grid_ray(o, d);
+        let Some((t0, t1)) = enter_exit(go, gd, Vec3::ZERO, self.field.last_vertex(), clip) else {
+            return Some(None);
+        };
+        let start = from.clamp(t0, t1);
+        let iso = self.settings.isovalue;
+        *samples += 2;
+        let entry = self.field.value(go + gd * t0) - iso;
+        let there = self.field.value(go + gd * start) - iso;
+        if (entry < 0.0) != (there < 0.0) {
+            return None;
+        }
+        Some(self.march(o, d, start, t1, samples))
+    }
+
+    fn march(&self, o: Vec3, d: Vec3, t0: f32, t1: f32, samples: &mut u64) -> Option<IsoHit> {
+        let (go, gd) = self.field.grid_ray(o, d);
+        let s = self.settings;
+        let at = |t: f32| self.field.value(go + gd * t) - s.isovalue;
+        let mut ta = t0;
+        let mut fa = at(ta);
+        *samples += 1;
+        let steps = ((t1 - t0) / self.step).ceil().min(1e6) as u32;
+        for k in 1..=steps {
+            let tb = (t0 + k as f32 * self.step).min(t1);
+            let fb = at(tb);
+            *samples += 1;
+            if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
+                *samples += u64::from(s.secant_steps) + 1;
+                let t = refine(&at, (ta, fa), (tb, fb), s.secant_steps);
+                let sample = self.field.sample(go + gd * t);
+                let g = sample.gradient;
+                let (k1, k2) = curvatures(g, sample.hessian);
+                let mut normal = -g.normalize_or_zero();
+                // Seen from the other side, a bulge is a hollow.
+                let mut curvatures = (k1, k2);
+                if normal.dot(d) > 0.0 {
+                    normal = -normal;
+                    curvatures = (-k2, -k1);
+                }
+                return Some(IsoHit {
+                    t,
+                    position: o + d * t,
+                    normal,
+                    curvatures,
+                });
+            }
+            (ta, fa) = (tb, fb);
+        }
+        None
+    }
+
+    /// The colour of `hit` seen along `d`, or the background.
+    pub fn colour(&self, hit: Option<&IsoHit>, d: Vec3) -> Vec4 {
+        match hit {
+            Some(h) => shade(h, d, self.settings),
+            None => self.settings.background,
+        }
+    }
+}
+
 /// Casts `rays` (an image of `desc.size`) at `placed`'s isosurface: the
-/// shaded frame, and each pixel's hit (lower-left first).
+/// shaded frame and each pixel's hit (lower-left first).
 pub fn cast(
     placed: &PlacedVolume,
     rays: &RayGen,
@@ -35,19 +147,15 @@ pub fn cast(
 ) -> Result<(Frame, Vec<Option<IsoHit>>), RenderError> {
     desc.validate()?;
     settings.validate()?;
-    let voxels = placed.volume.voxels();
-    let mut values = filled(voxels.len(), 0.0f32, "the volume as f32")?;
-    for (i, v) in values.iter_mut().enumerate() {
-        *v = voxels.value(i);
-    }
-    let field = IsoField::new(placed, &values, settings.filter);
-    let step = placed.smallest_cell() / settings.steps_per_cell;
+    let values = values(placed)?;
+    let caster = Caster::new(placed, &values, settings);
     let (w, n) = (desc.size.x as usize, desc.pixels());
     let mut hits = filled(n, None, "the hits")?;
     hits.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let mut samples = 0;
         for (x, hit) in row.iter_mut().enumerate() {
             let (o, d) = rays.pixel_ray(x as u32, y as u32);
-            *hit = first_hit(&field, o, d, (rays.t_near, rays.t_far), step, settings);
+            *hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut samples);
         }
     });
     let mut color = filled(4 * n, 0.0f32, "the frame's colour")?;
@@ -55,60 +163,13 @@ pub fn cast(
     for (i, hit) in hits.iter().enumerate() {
         let (x, y) = ((i % w) as u32, (i / w) as u32);
         let (_, d) = rays.pixel_ray(x, y);
-        let c = match hit {
-            Some(h) => {
-                depth[i] = rays.depth_at(h.position, h.t);
-                shade(h, d, settings)
-            }
-            None => settings.background,
-        };
-        color[4 * i..4 * i + 4].copy_from_slice(&c.to_array());
+        if let Some(h) = hit {
+            depth[i] = rays.depth_at(h.position, h.t);
+        }
+        color[4 * i..4 * i + 4].copy_from_slice(&caster.colour(hit.as_ref(), d).to_array());
     }
     let frame = Frame::from_linear(desc, color, desc.depth.then_some(depth))?;
     Ok((frame, hits))
-}
-
-/// The first crossing of the iso-value along `o + t d` within the grid.
-fn first_hit(
-    field: &IsoField,
-    o: Vec3,
-    d: Vec3,
-    clip: (f32, f32),
-    step: f32,
-    s: &IsoSettings,
-) -> Option<IsoHit> {
-    let (go, gd) = field.grid_ray(o, d);
-    let (t0, t1) = enter_exit(go, gd, Vec3::ZERO, field.last_vertex(), clip)?;
-    let at = |t: f32| field.value(go + gd * t) - s.isovalue;
-    let mut ta = t0;
-    let mut fa = at(ta);
-    let steps = ((t1 - t0) / step).ceil().min(1e6) as u32;
-    for k in 1..=steps {
-        let tb = (t0 + k as f32 * step).min(t1);
-        let fb = at(tb);
-        if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
-            let t = refine(&at, (ta, fa), (tb, fb), s.secant_steps);
-            let p = o + d * t;
-            let sample = field.sample(go + gd * t);
-            let g = sample.gradient;
-            let (k1, k2) = curvatures(g, sample.hessian);
-            let mut normal = -g.normalize_or_zero();
-            // Seen from the other side, a bulge is a hollow.
-            let mut curvatures = (k1, k2);
-            if normal.dot(d) > 0.0 {
-                normal = -normal;
-                curvatures = (-k2, -k1);
-            }
-            return Some(IsoHit {
-                t,
-                position: p,
-                normal,
-                curvatures,
-            });
-        }
-        (ta, fa) = (tb, fb);
-    }
-    None
 }
 
 /// Secant (regula falsi) steps within a bracket whose ends differ in sign.

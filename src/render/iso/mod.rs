@@ -6,11 +6,13 @@
 
 mod cast;
 mod field;
+mod multiview;
 
 use glam::{Vec3, Vec4};
 
-pub use cast::{cast, IsoHit};
+pub use cast::{cast, values, Caster, IsoHit};
 pub use field::{curvatures, IsoField, IsoFilter, Sample};
+pub use multiview::{render_display, subpixels_differing, MultiViewMethod, Panel};
 
 use super::RenderError;
 

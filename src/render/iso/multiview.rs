@@ -1,0 +1,226 @@
+//! The display image of a multi-view display, every subpixel from its own
+//! eye (issue 17): the naive way (every view rendered, then interleaved),
+//! the per-subpixel way (one ray per subpixel, from its eye: the same
+//! image, whatever the number of views), and a geometric pass plus a
+//! spectral pass, which casts one channel's ray in full and finds the
+//! other channels' hits near it, casting them in full only where their
+//! eyes may see another surface.
+
+use glam::UVec2;
+use rayon::prelude::*;
+
+use super::cast::{values, Caster, IsoHit};
+use super::IsoSettings;
+use crate::geometry::RayGen;
+use crate::render::frame::filled;
+use crate::render::{Frame, FrameDesc, RenderError};
+use crate::scene::PlacedVolume;
+
+/// How the display image is made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MultiViewMethod {
+    /// Every view's whole image, then each subpixel from its view's.
+    Naive,
+    /// One ray a subpixel, from that subpixel's eye.
+    PerSubpixel,
+    /// The green channel's ray cast in full; red's and blue's searched from
+    /// a little before green's hit, and cast in full only where a crossing
+    /// may lie before that, or near an edge of the surface.
+    GeometricSpectral,
+}
+
+impl MultiViewMethod {
+    pub fn name(self) -> &'static str {
+        match self {
+            MultiViewMethod::Naive => "naive",
+            MultiViewMethod::PerSubpixel => "per-subpixel",
+            MultiViewMethod::GeometricSpectral => "geometric+spectral",
+        }
+    }
+}
+
+/// Steps before the geometric hit at which a spectral search starts.
+const SEARCH_MARGIN_STEPS: f32 = 2.0;
+
+/// The panel as the renderer sees it: each view's rays over the panel's
+/// pixels, and which view each subpixel (x, y, channel) belongs to.
+pub struct Panel<'a> {
+    pub size: UVec2,
+    pub views: Vec<RayGen>,
+    pub view_of: &'a (dyn Fn(u32, u32, usize) -> u32 + Sync),
+}
+
+impl Panel<'_> {
+    fn view_of(&self, x: u32, y: u32, c: usize) -> u32 {
+        (self.view_of)(x, y, c).min(self.views.len() as u32 - 1)
+    }
+}
+
+/// The display image (RGBA, each of R, G and B from its subpixel's view;
+/// lower-left first) and the field evaluations it took.
+pub fn render_display(
+    placed: &PlacedVolume,
+    display: &Panel,
+    settings: &IsoSettings,
+    method: MultiViewMethod,
+) -> Result<(Frame, u64), RenderError> {
+    settings.validate()?;
+    let size = display.size;
+    let desc = FrameDesc::new(size);
+    desc.validate()?;
+    if display.views.is_empty() {
+        return Err(RenderError::Settings(
+            "a display needs at least one view".into(),
+        ));
+    }
+    let rays = &display.views;
+    let values = values(placed)?;
+    let caster = Caster::new(placed, &values, settings);
+    let w = size.x as usize;
+    let mut rgb = filled(desc.pixels(), [0.0f32; 3], "the display image")?;
+    let samples = match method {
+        MultiViewMethod::Naive => {
+            let mut total = 0;
+            let mut views = Vec::with_capacity(rays.len());
+            for r in rays {
+                let (colours, n) = view_image(&caster, r, size)?;
+                total += n;
+                views.push(colours);
+            }
+            for (i, px) in rgb.iter_mut().enumerate() {
+                let (x, y) = ((i % w) as u32, (i / w) as u32);
+                for (c, out) in px.iter_mut().enumerate() {
+                    *out = views[display.view_of(x, y, c) as usize][i][c];
+                }
+            }
+            total
+        }
+        MultiViewMethod::PerSubpixel => rgb
+            .par_chunks_mut(w)
+            .enumerate()
+            .map(|(y, row)| {
+                let mut n = 0;
+                for (x, px) in row.iter_mut().enumerate() {
+                    for (c, out) in px.iter_mut().enumerate() {
+                        let r = &rays[display.view_of(x as u32, y as u32, c) as usize];
+                        let (o, d) = r.pixel_ray(x as u32, y as u32);
+                        let hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
+                        *out = caster.colour(hit.as_ref(), d)[c];
+                    }
+                }
+                n
+            })
+            .sum(),
+        MultiViewMethod::GeometricSpectral => {
+            geometric_spectral(&caster, display, rays, size, &mut rgb)?
+        }
+    };
+    // A panel shows no alpha.
+    let mut color = filled(4 * desc.pixels(), 0.0f32, "the display image")?;
+    for (o, px) in color.chunks_exact_mut(4).zip(&rgb) {
+        o.copy_from_slice(&[px[0], px[1], px[2], 1.0]);
+    }
+    Ok((Frame::from_linear(&desc, color, None)?, samples))
+}
+
+/// One view's whole image as linear RGB, and its field evaluations.
+fn view_image(
+    caster: &Caster,
+    rays: &RayGen,
+    size: UVec2,
+) -> Result<(Vec<[f32; 3]>, u64), RenderError> {
+    let w = size.x as usize;
+    let mut out = filled(w * size.y as usize, [0.0f32; 3], "a view's image")?;
+    let n = out
+        .par_chunks_mut(w)
+        .enumerate()
+        .map(|(y, row)| {
+            let mut n = 0;
+            for (x, px) in row.iter_mut().enumerate() {
+                let (o, d) = rays.pixel_ray(x as u32, y as u32);
+                let hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut n);
+                let c = caster.colour(hit.as_ref(), d);
+                *px = [c.x, c.y, c.z];
+            }
+            n
+        })
+        .sum();
+    Ok((out, n))
+}
+
+/// The geometric pass (green, in full) and the spectral pass (red and
+/// blue, from near green's hit).
+fn geometric_spectral(
+    caster: &Caster,
+    display: &Panel,
+    rays: &[RayGen],
+    size: UVec2,
+    rgb: &mut [[f32; 3]],
+) -> Result<u64, RenderError> {
+    let w = size.x as usize;
+    let mut geometric: Vec<Option<IsoHit>> = filled(rgb.len(), None, "the geometric pass")?;
+    let n_geometric: u64 = geometric
+        .par_chunks_mut(w)
+        .enumerate()
+        .map(|(y, row)| {
+            let mut n = 0;
+            for (x, hit) in row.iter_mut().enumerate() {
+                let r = &rays[display.view_of(x as u32, y as u32, 1) as usize];
+                let (o, d) = r.pixel_ray(x as u32, y as u32);
+                *hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
+            }
+            n
+        })
+        .sum();
+    let h = size.y as usize;
+    let margin = SEARCH_MARGIN_STEPS * caster.step;
+    let n_spectral: u64 = rgb
+        .par_chunks_mut(w)
+        .enumerate()
+        .map(|(y, row)| {
+            let mut n = 0;
+            for (x, px) in row.iter_mut().enumerate() {
+                let i = y * w + x;
+                // Near a silhouette a neighbouring eye may see the surface
+                // where this one does not, or the other way round.
+                let edge = (y.saturating_sub(1)..(y + 2).min(h))
+                    .flat_map(|yy| (x.saturating_sub(1)..(x + 2).min(w)).map(move |xx| yy * w + xx))
+                    .any(|j| geometric[j].is_some() != geometric[i].is_some());
+                for (c, out) in px.iter_mut().enumerate() {
+                    let view = display.view_of(x as u32, y as u32, c);
+                    let r = &rays[view as usize];
+                    let (o, d) = r.pixel_ray(x as u32, y as u32);
+                    let clip = (r.t_near, r.t_far);
+                    let hit = if c == 1 || view == display.view_of(x as u32, y as u32, 1) {
+                        // The geometric pass's very ray.
+                        geometric[i]
+                    } else {
+                        match (&geometric[i], edge) {
+                            (None, false) => None,
+                            (Some(g), false) => caster
+                                .hit_after(o, d, clip, g.t - margin, &mut n)
+                                .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n)),
+                            (_, true) => caster.first_hit(o, d, clip, &mut n),
+                        }
+                    };
+                    *out = caster.colour(hit.as_ref(), d)[c];
+                }
+            }
+            n
+        })
+        .sum();
+    Ok(n_geometric + n_spectral)
+}
+
+/// The channel-by-channel difference of two display images, as the share
+/// of subpixels that differ by more than `tolerance` (8-bit steps).
+pub fn subpixels_differing(a: &Frame, b: &Frame, tolerance: u8) -> f64 {
+    let (ra, rb) = (a.to_srgb8_top_down(), b.to_srgb8_top_down());
+    let differ = ra
+        .chunks_exact(4)
+        .zip(rb.chunks_exact(4))
+        .flat_map(|(p, q)| (0..3).map(move |c| p[c].abs_diff(q[c]) > tolerance))
+        .filter(|&d| d)
+        .count();
+    differ as f64 / (3 * ra.len() / 4).max(1) as f64
+}
