@@ -4,7 +4,7 @@
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::field::{curvatures, IsoField};
+use super::field::{curvatures, IsoField, IsoFilter};
 use super::{curvature_colour, Colouring, IsoSettings};
 use crate::geometry::RayGen;
 use crate::render::cpu::enter_exit;
@@ -21,7 +21,8 @@ pub struct IsoHit {
     /// Unit normal, facing the ray's origin.
     pub normal: Vec3,
     /// Principal curvatures, larger first, as the ray's origin sees the
-    /// surface: positive where it bulges towards the eye.
+    /// surface: positive where it bulges towards the eye. (0, 0) under
+    /// trilinear filtering unless curvature colours the surface.
     pub curvatures: (f32, f32),
 }
 
@@ -65,15 +66,15 @@ impl<'a> Caster<'a> {
         self.march(o, d, t0, t1, samples)
     }
 
-    /// The first crossing after `from` along `o + t d`, if the ray is on
-    /// the same side of the iso-value there as where it enters the grid;
-    /// `None` if it is not (a crossing lies before `from`).
-    pub fn hit_after(
+    /// The first crossing in `from..until` along `o + t d`, if the ray is
+    /// on the same side of the iso-value at `from` as where it enters the
+    /// grid; `None` if it is not (a crossing lies before `from`).
+    pub fn hit_between(
         &self,
         o: Vec3,
         d: Vec3,
         clip: (f32, f32),
-        from: f32,
+        (from, until): (f32, f32),
         samples: &mut u64,
     ) -> Option<Option<IsoHit>> {
         let (go, gd) = self.field.grid_ray(o, d);
@@ -88,7 +89,7 @@ impl<'a> Caster<'a> {
         if (entry < 0.0) != (there < 0.0) {
             return None;
         }
-        Some(self.march(o, d, start, t1, samples))
+        Some(self.march(o, d, start, until.clamp(start, t1), samples))
     }
 
     fn march(&self, o: Vec3, d: Vec3, t0: f32, t1: f32, samples: &mut u64) -> Option<IsoHit> {
@@ -106,9 +107,18 @@ impl<'a> Caster<'a> {
             if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
                 *samples += u64::from(s.secant_steps) + 1;
                 let t = refine(&at, (ta, fa), (tb, fb), s.secant_steps);
-                let sample = self.field.sample(go + gd * t);
+                // The B-spline's Hessian comes with its gradient; the
+                // trilinear one costs six gradients more, so only where
+                // curvature colours the surface.
+                let hessian = s.filter == IsoFilter::TricubicBSpline
+                    || matches!(s.colouring, Colouring::Curvature { .. });
+                let sample = self.field.sample_with(go + gd * t, hessian);
                 let g = sample.gradient;
-                let (k1, k2) = curvatures(g, sample.hessian);
+                let (k1, k2) = if hessian {
+                    curvatures(g, sample.hessian)
+                } else {
+                    (0.0, 0.0)
+                };
                 let mut normal = -g.normalize_or_zero();
                 // Seen from the other side, a bulge is a hollow.
                 let mut curvatures = (k1, k2);

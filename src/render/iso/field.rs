@@ -120,8 +120,22 @@ impl<'a> IsoField<'a> {
 
     /// Value, gradient and Hessian at grid point `g`, in world space.
     pub fn sample(&self, g: Vec3) -> Sample {
+        self.sample_with(g, true)
+    }
+
+    /// `sample`, with the Hessian (zero otherwise) only if `hessian`: the
+    /// trilinear Hessian takes six gradients more.
+    pub fn sample_with(&self, g: Vec3, hessian: bool) -> Sample {
         let (value, grad, hess) = match self.filter {
             IsoFilter::TricubicBSpline => self.bspline(g, true),
+            IsoFilter::Trilinear if !hessian => {
+                let grad = Vec3::new(
+                    self.trilinear(g + Vec3::X) - self.trilinear(g - Vec3::X),
+                    self.trilinear(g + Vec3::Y) - self.trilinear(g - Vec3::Y),
+                    self.trilinear(g + Vec3::Z) - self.trilinear(g - Vec3::Z),
+                ) * 0.5;
+                (self.trilinear(g), grad, Mat3::ZERO)
+            }
             IsoFilter::Trilinear => {
                 // Central differences of the trilinear field, a voxel apart
                 // for the gradient and again for the Hessian.

@@ -183,9 +183,12 @@ fn geometric_spectral(
                 let i = y * w + x;
                 // Near a silhouette a neighbouring eye may see the surface
                 // where this one does not, or the other way round.
-                let edge = (y.saturating_sub(1)..(y + 2).min(h))
+                // Where green missed, the nearest hit around it: next to a
+                // silhouette a neighbouring eye may see the surface there.
+                let nearest_around = (y.saturating_sub(1)..(y + 2).min(h))
                     .flat_map(|yy| (x.saturating_sub(1)..(x + 2).min(w)).map(move |xx| yy * w + xx))
-                    .any(|j| geometric[j].is_some() != geometric[i].is_some());
+                    .filter_map(|j| geometric[j].map(|g| g.t))
+                    .reduce(f32::min);
                 for (c, out) in px.iter_mut().enumerate() {
                     let view = display.view_of(x as u32, y as u32, c);
                     let r = &rays[view as usize];
@@ -195,13 +198,20 @@ fn geometric_spectral(
                         // The geometric pass's very ray.
                         geometric[i]
                     } else {
-                        match (&geometric[i], edge) {
-                            (None, false) => None,
-                            (Some(g), false) => caster
-                                .hit_after(o, d, clip, g.t - margin, &mut n)
-                                .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n)),
-                            (_, true) => caster.first_hit(o, d, clip, &mut n),
-                        }
+                        // Search from a little before the surface green saw
+                        // to the end of the ray, or, where green missed, a
+                        // few steps around the surface a neighbour saw; cast
+                        // in full if the ray has crossed before that.
+                        let window = match (geometric[i], nearest_around) {
+                            (Some(g), _) => Some((g.t - margin, f32::INFINITY)),
+                            (None, Some(t)) => Some((t - margin, t + 3.0 * margin)),
+                            (None, None) => None,
+                        };
+                        window.and_then(|window| {
+                            caster
+                                .hit_between(o, d, clip, window, &mut n)
+                                .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n))
+                        })
                     };
                     *out = caster.colour(hit.as_ref(), d)[c];
                 }

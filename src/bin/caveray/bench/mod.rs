@@ -2,6 +2,7 @@
 //! reports, which the printed tables and the charts read too) and print a
 //! summary. Compare timings only as ratios taken in one run.
 
+mod autostereo;
 mod cave_stereo;
 mod raycast;
 mod stereo;
@@ -22,6 +23,10 @@ pub enum BenchCommand {
     /// share of wall-frames re-projected, V and DSSIM per wall (writes
     /// JSON, plots over time and the worst wall-frame's heat map).
     CaveStereo(cave_stereo::CaveStereoArgs),
+    /// A multi-view display's image, every subpixel from its own eye:
+    /// naive (every view, then interleaved) against per subpixel, for
+    /// several view counts (writes JSON, prints a table).
+    Autostereo(autostereo::AutostereoArgs),
 }
 
 pub fn run(command: BenchCommand) -> Result<(), Failure> {
@@ -29,6 +34,7 @@ pub fn run(command: BenchCommand) -> Result<(), Failure> {
         BenchCommand::Raycast(args) => raycast::run(args),
         BenchCommand::Stereo(args) => stereo::run(args),
         BenchCommand::CaveStereo(args) => cave_stereo::run(args),
+        BenchCommand::Autostereo(args) => autostereo::run(args),
     }
 }
 

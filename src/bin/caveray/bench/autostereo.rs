@@ -1,0 +1,212 @@
+//! `caveray bench autostereo`: a multi-view display's image, each subpixel
+//! from its own eye, made naively (every view rendered, then interleaved)
+//! and per subpixel (one ray a subpixel, and the geometric + spectral
+//! passes), for several view counts and volumes' isosurfaces. Writes one
+//! JSON row per volume and view count; CPU timings (the isosurface caster
+//! has no GPU path yet).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anari_library_caveray::cave::{MultiViewDisplay, ViewPattern};
+use anari_library_caveray::render::iso::{
+    render_display, subpixels_differing, IsoFilter, IsoSettings, MultiViewMethod, Panel,
+};
+use clap::Args;
+use glam::{UVec2, Vec3};
+use serde::Serialize;
+
+use super::runtime;
+use crate::report::{write_json, Machine};
+use crate::scene::VolumeArgs;
+use crate::Failure;
+
+#[derive(Args)]
+pub struct AutostereoArgs {
+    /// The display file (`views = N` at its top).
+    #[arg(long, default_value = "cave_configs/lenticular_8view.toml")]
+    config: PathBuf,
+    /// Volumes, comma-separated (names from volumes.toml, phantom[:N], ...).
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// View counts, comma-separated; the lens is rescaled so that each view
+    /// keeps its share of a lens.
+    #[arg(long, default_value = "1,8,24", value_delimiter = ',')]
+    views: Vec<u32>,
+    /// The panel's resolution times this.
+    #[arg(long, default_value_t = 0.1)]
+    scale: f64,
+    /// The iso-value as a fraction of each volume's value range.
+    #[arg(long, default_value_t = 0.4)]
+    iso: f32,
+    /// trilinear or tricubic.
+    #[arg(long, default_value = "trilinear")]
+    filter: IsoFilter,
+    #[arg(long)]
+    json: PathBuf,
+}
+
+#[derive(Serialize)]
+struct Report {
+    benchmark: &'static str,
+    machine: Machine,
+    display: String,
+    resolution: [u32; 2],
+    filter: &'static str,
+    rows: Vec<Row>,
+}
+
+#[derive(Serialize)]
+struct Row {
+    volume: String,
+    views: u32,
+    naive_ms: f64,
+    per_pixel_ms: f64,
+    geometric_spectral_ms: f64,
+    /// Field evaluations, in units of one view's image.
+    naive_views: f64,
+    per_pixel_views: f64,
+    geometric_spectral_views: f64,
+    /// Share of subpixels the geometric + spectral image has off the naive
+    /// one by more than 2 of 255.
+    geometric_spectral_differing: f64,
+}
+
+pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
+    let usage = |m: String| Failure::Usage(m);
+    let base = MultiViewDisplay::load(&args.config).map_err(|e| usage(e.to_string()))?;
+    if !(args.scale.is_finite() && args.scale > 0.0 && args.scale <= 1.0) {
+        return Err(usage(format!(
+            "--scale must be in (0, 1], got {}",
+            args.scale
+        )));
+    }
+    if !(args.iso.is_finite() && (0.0..=1.0).contains(&args.iso)) {
+        return Err(usage(format!(
+            "--iso must be a fraction from 0 to 1, got {}",
+            args.iso
+        )));
+    }
+    let resolution = (base.resolution.as_dvec2() * args.scale)
+        .round()
+        .max(glam::DVec2::ONE)
+        .as_uvec2();
+    let displays: Vec<MultiViewDisplay> = args
+        .views
+        .iter()
+        .map(|&v| with_views(&base, v, resolution))
+        .collect::<Result<_, _>>()
+        .map_err(usage)?;
+    let mut rows = Vec::new();
+    println!(
+        "{:<12} {:>5} {:>10} {:>10} {:>10}  {:>8} {:>8} {:>8}  {:>8}",
+        "volume", "views", "naive ms", "per-px ms", "g+s ms", "naive", "per-px", "g+s", "differ"
+    );
+    for spec in args.volume.volume_list("cthead,engine") {
+        let loaded = args.volume.with_volume(&spec).load()?;
+        // Behind the panel, a third of its width across.
+        let panel = &base.screen;
+        let size = (panel.width() / 3.0) as f32;
+        let centre = panel.centre() - panel.normal() * panel.width() / 3.0;
+        let scene = loaded.placed(centre.as_vec3(), size)?;
+        let placed = &scene.volumes()[0];
+        let (lo, hi) = placed.volume.value_range();
+        let settings = IsoSettings {
+            filter: args.filter,
+            light: Some(Vec3::new(0.3, 0.5, 1.0)),
+            ..IsoSettings::new(lo + args.iso * (hi - lo))
+        };
+        for d in &displays {
+            let view_of = |x, y, c| d.view_of(x, y, c);
+            let panel = Panel {
+                size: d.resolution,
+                views: d.view_rays().map_err(runtime)?,
+                view_of: &view_of,
+            };
+            let time = |method| -> Result<_, Failure> {
+                let start = Instant::now();
+                let (frame, evals) =
+                    render_display(placed, &panel, &settings, method).map_err(runtime)?;
+                Ok((frame, evals, start.elapsed().as_secs_f64() * 1e3))
+            };
+            let (naive, naive_evals, naive_ms) = time(MultiViewMethod::Naive)?;
+            let (_, per_evals, per_ms) = time(MultiViewMethod::PerSubpixel)?;
+            let (gs, gs_evals, gs_ms) = time(MultiViewMethod::GeometricSpectral)?;
+            let one = naive_evals as f64 / f64::from(d.views);
+            let row = Row {
+                volume: loaded.name.clone(),
+                views: d.views,
+                naive_ms,
+                per_pixel_ms: per_ms,
+                geometric_spectral_ms: gs_ms,
+                naive_views: naive_evals as f64 / one,
+                per_pixel_views: per_evals as f64 / one,
+                geometric_spectral_views: gs_evals as f64 / one,
+                geometric_spectral_differing: subpixels_differing(&gs, &naive, 2),
+            };
+            println!(
+                "{:<12} {:>5} {:>10.1} {:>10.1} {:>10.1}  {:>8.2} {:>8.2} {:>8.2}  {:>7.3}%",
+                row.volume,
+                row.views,
+                row.naive_ms,
+                row.per_pixel_ms,
+                row.geometric_spectral_ms,
+                row.naive_views,
+                row.per_pixel_views,
+                row.geometric_spectral_views,
+                100.0 * row.geometric_spectral_differing
+            );
+            rows.push(row);
+        }
+    }
+    let report = Report {
+        benchmark: "autostereo",
+        machine: Machine::this(),
+        display: base.name.clone(),
+        resolution: resolution.to_array(),
+        filter: args.filter.name(),
+        rows,
+    };
+    write_json(&report, &args.json)?;
+    println!("wrote {}", args.json.display());
+    Ok(())
+}
+
+/// `base` with `views` views over `resolution` pixels; the lens is
+/// rescaled so that every view keeps the same share of a lens.
+fn with_views(
+    base: &MultiViewDisplay,
+    views: u32,
+    resolution: UVec2,
+) -> Result<MultiViewDisplay, String> {
+    if !(1..=anari_library_caveray::cave::MAX_VIEWS).contains(&views) {
+        return Err(format!(
+            "--views must be 1 to {}, got {views}",
+            anari_library_caveray::cave::MAX_VIEWS
+        ));
+    }
+    let pattern = match &base.pattern {
+        ViewPattern::Lens {
+            pitch,
+            slant,
+            offset,
+        } => ViewPattern::Lens {
+            pitch: pitch * f64::from(views) / f64::from(base.views),
+            slant: *slant,
+            offset: *offset,
+        },
+        ViewPattern::Table { .. } if views == base.views => base.pattern.clone(),
+        ViewPattern::Table { .. } => {
+            return Err(format!(
+                "{} gives its views as a table of {}: other view counts need a [lens] display",
+                base.name, base.views
+            ))
+        }
+    };
+    Ok(MultiViewDisplay {
+        views,
+        resolution,
+        pattern,
+        ..base.clone()
+    })
+}
