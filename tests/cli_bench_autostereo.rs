@@ -77,3 +77,34 @@ fn bad_autostereo_arguments_are_usage_errors() {
         assert!(stderr.contains(want), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn render_makes_a_displays_interleaved_image_and_its_views() {
+    let dir = std::env::temp_dir().join(format!("caveray-display-{}", std::process::id()));
+    let result = caveray(&[
+        "render",
+        "--config",
+        "cave_configs/lenticular_8view.toml",
+        "--volume",
+        "phantom:24",
+        "--scale",
+        "0.03",
+        "--iso",
+        "0.2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    assert!(
+        result.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    assert!(stdout.contains("8 views, 58x36 pixels"), "{stdout}");
+    let interleaved = image::open(dir.join("display_interleaved.png")).unwrap();
+    assert_eq!((interleaved.width(), interleaved.height()), (58, 36));
+    let views = image::open(dir.join("display_views.png")).unwrap();
+    // Four views a row, two rows, 4-pixel gaps.
+    assert_eq!((views.width(), views.height()), (4 * 62 + 4, 2 * 40 + 4));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -5,6 +5,7 @@ mod inspect;
 mod options;
 mod progress;
 mod render;
+mod render_display;
 mod replay;
 mod report;
 mod scene;
@@ -28,7 +29,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render every wall and eye of a rig to PNGs, contact sheets and timings.
+    /// Render every wall and eye of a rig to PNGs, contact sheets and
+    /// timings; or a multi-view display's interleaved image and its views.
     Render(render::RenderArgs),
     /// Show every wall's and eye's camera under the three off-axis strategies.
     Inspect(inspect::InspectArgs),

@@ -40,6 +40,13 @@ pub struct RenderArgs {
     /// Folder for the images and timings.json (created if missing).
     #[arg(long)]
     out: PathBuf,
+    /// For a multi-view display: the isosurface's value as a fraction of
+    /// the volume's value range.
+    #[arg(long, default_value_t = 0.4)]
+    iso: f32,
+    /// For a multi-view display: trilinear or tricubic.
+    #[arg(long, default_value = "trilinear")]
+    iso_filter: anari_library_caveray::render::iso::IsoFilter,
 }
 
 /// How the two eyes of a wall are rendered.
@@ -181,6 +188,16 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             "--scale must be in (0, 4], got {}",
             args.scale
         )));
+    }
+    if crate::render_display::is_display(&args.config) {
+        return crate::render_display::run(
+            &args.config,
+            &args.volume,
+            args.scale,
+            args.iso,
+            args.iso_filter,
+            &args.out,
+        );
     }
     if args.stereo.layers == Some(0) {
         return Err(Failure::Usage(
