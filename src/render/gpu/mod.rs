@@ -5,6 +5,7 @@
 
 mod capture;
 mod context;
+mod iso;
 mod layers;
 pub(crate) mod resources;
 mod shaders;
@@ -85,6 +86,8 @@ pub struct GpuRenderer {
     warper: Option<warp::GpuWarp>,
     /// The capture pipelines and layer buffers, made on the first capture.
     capture: Option<capture::CaptureGpu>,
+    /// The isosurface pipeline, made on the first cast.
+    iso: Option<iso::IsoGpu>,
 }
 
 impl GpuRenderer {
@@ -258,6 +261,7 @@ impl GpuRenderer {
             brick_slots: Vec::new(),
             warper: None,
             capture: None,
+            iso: None,
         })
     }
 

@@ -14,6 +14,7 @@ const REPROJECT: &str = include_str!("../../../shaders/reproject.wgsl");
 const COMPOSITE: &str = include_str!("../../../shaders/composite.wgsl");
 const WARP: &str = include_str!("../../../shaders/warp.wgsl");
 const CAPTURE: &str = include_str!("../../../shaders/capture.wgsl");
+const ISO: &str = include_str!("../../../shaders/iso.wgsl");
 
 pub(super) fn raycast() -> String {
     [declarations().as_str(), VOLUME, COLOUR, RAYCAST].join("\n")
@@ -38,4 +39,9 @@ pub(super) fn composite() -> String {
 
 pub(super) fn warp() -> String {
     [declarations().as_str(), WARP].join("\n")
+}
+
+/// Isosurface ray casting (src/render/iso/ is its reference).
+pub(super) fn iso() -> String {
+    [declarations().as_str(), COLOUR, ISO].join("\n")
 }

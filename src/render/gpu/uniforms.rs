@@ -38,6 +38,7 @@ const _: () = assert!(MAX_CLIP_PLANES == 8 && MAX_VOLUMES == 8);
 wgsl_types! {
     f32 => "f32", u32 => "u32", i32 => "i32",
     [f32; 3] => "vec3f", [f32; 4] => "vec4f", [u32; 2] => "vec2u", [u32; 3] => "vec3u",
+    [u32; 4] => "vec4u",
     [i32; 2] => "vec2i",
     [[f32; 4]; MAX_CLIP_PLANES] => "array<vec4f, 8>",
     [VolumeSlot; MAX_VOLUMES] => "array<VolumeSlot, 8>",
@@ -246,6 +247,50 @@ uniform! {
     }
 }
 
+uniform! {
+    /// `Iso` in shaders/iso.wgsl: one view's rays at one volume's
+    /// isosurface, and how it is shaded (src/render/iso/).
+    Iso {
+        /// The ray of pixel (0, 0) and its change per pixel (xyz).
+        ray_origin: [f32; 4],
+        ray_origin_dx: [f32; 4],
+        ray_origin_dy: [f32; 4],
+        ray_dir: [f32; 4],
+        ray_dir_dx: [f32; 4],
+        ray_dir_dy: [f32; 4],
+        /// xyz: where depth is measured from; w: 1 if the view has an eye.
+        eye: [f32; 4],
+        /// Rows of the world-to-grid affine map, applied to (p, 1).
+        to_grid_x: [f32; 4],
+        to_grid_y: [f32; 4],
+        to_grid_z: [f32; 4],
+        /// The flat colour (rgb).
+        colour: [f32; 4],
+        /// Towards the light (xyz); w: 1 if given, else a headlight.
+        light: [f32; 4],
+        /// Ambient, diffuse, specular, shininess.
+        shading: [f32; 4],
+        background: [f32; 4],
+        /// The grid's vertices per axis (xyz).
+        dims: [u32; 4],
+        isovalue: f32,
+        /// The march's step, world units.
+        step: f32,
+        near: f32,
+        far: f32,
+        width: u32,
+        height: u32,
+        secant_steps: u32,
+        /// 0 trilinear, 1 tricubic B-spline.
+        filtering: u32,
+        /// 1: colour by mean curvature.
+        curvature: u32,
+        radius: f32,
+        color_format: u32,
+        _pad: u32,
+    }
+}
+
 impl VolumeSlot {
     fn new(plan: &VolumePlan, bricks: BrickSlot) -> Self {
         let [x, y, z] = plan.world_to_grid.map(|r| r.to_array());
@@ -401,7 +446,7 @@ pub(super) fn declarations() -> String {
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
-    out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl() + &Warp::wgsl()
+    out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl() + &Warp::wgsl() + &Iso::wgsl()
 }
 
 #[cfg(test)]
@@ -464,6 +509,7 @@ mod tests {
             "Stereo",
         );
         same_layout(Warp::FIELDS, size_of::<Warp>(), &shaders::warp(), "Warp");
+        same_layout(Iso::FIELDS, size_of::<Iso>(), &shaders::iso(), "Iso");
     }
 
     #[test]

@@ -1,0 +1,171 @@
+//! Isosurface ray casting on the GPU (shaders/iso.wgsl), held to the CPU
+//! reference in src/render/iso/: the pipeline is made on the first cast,
+//! the volume shares the renderer's uploaded textures.
+
+use bytemuck::Zeroable;
+
+use super::resources::OutputBuffers;
+use super::uniforms::{Iso, WORKGROUP};
+use super::{
+    bind_group, buffer_type, color_data, compute_pipeline, floats, layout_entry, shaders,
+    unprepared, GpuRenderer,
+};
+use crate::geometry::RayGen;
+use crate::render::iso::{Colouring, IsoFilter, IsoSettings};
+use crate::render::{Frame, FrameDesc, RenderError};
+use crate::scene::{PlacedVolume, Scene};
+
+pub(super) struct IsoGpu {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    uniform: wgpu::Buffer,
+    target: Option<OutputBuffers>,
+}
+
+impl GpuRenderer {
+    /// `placed`'s isosurface seen through `rays`, as
+    /// [`crate::render::iso::cast`] renders it, on the GPU.
+    pub fn cast_iso(
+        &mut self,
+        placed: &PlacedVolume,
+        rays: &RayGen,
+        desc: &FrameDesc,
+        settings: &IsoSettings,
+    ) -> Result<Frame, RenderError> {
+        desc.validate()?;
+        settings.validate()?;
+        let scene = Scene::placed(vec![placed.clone()])
+            .map_err(|e| RenderError::Settings(e.to_string()))?;
+        self.check_limits(&scene, desc)?;
+        self.upload_scene(&scene);
+        if self.iso.is_none() {
+            self.iso = Some(IsoGpu::new(self));
+        }
+        let ctx = &self.ctx;
+        let view = self
+            .volumes
+            .first()
+            .map(|(_, v)| v)
+            .ok_or_else(unprepared)?;
+        let iso = self.iso.as_mut().ok_or_else(unprepared)?;
+        if !matches!(&iso.target, Some(t) if t.size == desc.size && t.format == desc.color) {
+            iso.target = Some(OutputBuffers::new(ctx, desc.size, desc.color));
+        }
+        let target = iso.target.as_ref().ok_or_else(unprepared)?;
+        let uniform = uniform(placed, rays, desc, settings);
+        ctx.queue
+            .write_buffer(&iso.uniform, 0, bytemuck::bytes_of(&uniform));
+        let group = bind_group(
+            &ctx.device,
+            "iso",
+            &iso.layout,
+            [
+                iso.uniform.as_entire_binding(),
+                wgpu::BindingResource::TextureView(view),
+                target.color.as_entire_binding(),
+                target.depth.as_entire_binding(),
+            ],
+        );
+        let workgroups = [
+            desc.size.x.div_ceil(WORKGROUP),
+            desc.size.y.div_ceil(WORKGROUP),
+            1,
+        ];
+        self.last_pass_ms = ctx.dispatch(&iso.pipeline, &[&group], workgroups)?;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&target.color, 0, &target.color_read, 0, None);
+        encoder.copy_buffer_to_buffer(&target.depth, 0, &target.depth_read, 0, None);
+        ctx.queue.submit([encoder.finish()]);
+        let color = ctx.read(&target.color_read, target.color_bytes())?;
+        let depth = desc
+            .depth
+            .then(|| {
+                ctx.read(&target.depth_read, target.scalar_bytes())
+                    .map(|b| floats(&b))
+            })
+            .transpose()?;
+        ctx.check()?;
+        Ok(Frame {
+            size: desc.size,
+            color: color_data(desc.color, color),
+            depth,
+            samples: 0,
+        })
+    }
+}
+
+impl IsoGpu {
+    fn new(gpu: &GpuRenderer) -> Self {
+        let device = &gpu.ctx.device;
+        let storage = buffer_type(wgpu::BufferBindingType::Storage { read_only: false });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso"),
+            entries: &[
+                layout_entry(0, buffer_type(wgpu::BufferBindingType::Uniform)),
+                layout_entry(
+                    1,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float {
+                            filterable: gpu.ctx.filterable,
+                        },
+                        view_dimension: wgpu::TextureViewDimension::D3,
+                        multisampled: false,
+                    },
+                ),
+                layout_entry(2, storage),
+                layout_entry(3, storage),
+            ],
+        });
+        let pipeline = compute_pipeline(device, "iso", &shaders::iso(), &[&layout], "main");
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("iso"),
+            size: size_of::<Iso>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            layout,
+            pipeline,
+            uniform,
+            target: None,
+        }
+    }
+}
+
+fn uniform(placed: &PlacedVolume, rays: &RayGen, desc: &FrameDesc, s: &IsoSettings) -> Iso {
+    let v = |x: glam::Vec3| x.extend(0.0).to_array();
+    let m = placed.world_to_grid().as_mat4();
+    let (colour, curvature, radius) = match s.colouring {
+        Colouring::Flat(c) => (c, 0, 1.0),
+        Colouring::Curvature { radius } => (glam::Vec3::ONE, 1, radius),
+    };
+    Iso {
+        ray_origin: v(rays.origin),
+        ray_origin_dx: v(rays.origin_dx),
+        ray_origin_dy: v(rays.origin_dy),
+        ray_dir: v(rays.direction),
+        ray_dir_dx: v(rays.direction_dx),
+        ray_dir_dy: v(rays.direction_dy),
+        eye: rays.eye.map_or([0.0; 4], |e| e.extend(1.0).to_array()),
+        to_grid_x: m.row(0).to_array(),
+        to_grid_y: m.row(1).to_array(),
+        to_grid_z: m.row(2).to_array(),
+        colour: v(colour),
+        light: s.light.map_or([0.0; 4], |l| l.extend(1.0).to_array()),
+        shading: [s.ambient, s.diffuse, s.specular, s.shininess],
+        background: s.background.to_array(),
+        dims: placed.volume.dims().extend(0).to_array(),
+        isovalue: s.isovalue,
+        step: placed.smallest_cell() / s.steps_per_cell,
+        near: rays.t_near,
+        far: rays.t_far,
+        width: desc.size.x,
+        height: desc.size.y,
+        secant_steps: s.secant_steps,
+        filtering: u32::from(s.filter == IsoFilter::TricubicBSpline),
+        curvature,
+        radius,
+        color_format: desc.color.code(),
+        ..Iso::zeroed()
+    }
+}
