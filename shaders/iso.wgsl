@@ -168,6 +168,116 @@ fn curvature_colour(mean: f32) -> vec3f {
     return mix(white, vec3f(0.15, 0.35, 1.0), -s);
 }
 
+struct Cast {
+    colour: vec4f,
+    depth: f32,
+}
+
+// One ray at the isosurface: its shaded colour (or the background) and
+// depth from `eye` (w: 1 if it has one, else along the ray).
+fn cast_ray(o: vec3f, d: vec3f, eye: vec4f) -> Cast {
+    let mt = mat3x3f(iso.to_grid_x.xyz, iso.to_grid_y.xyz, iso.to_grid_z.xyz);
+    let m = transpose(mt);
+    let go = m * o + vec3f(iso.to_grid_x.w, iso.to_grid_y.w, iso.to_grid_z.w);
+    let gd = m * d;
+    var out = Cast(iso.background, bitcast<f32>(0x7f800000u));
+    let inv = 1.0 / vec3f(safe(gd.x), safe(gd.y), safe(gd.z));
+    let ta = (vec3f(0.0) - go) * inv;
+    let tb = (last_vertex() - go) * inv;
+    let t0 = max(max(max(min(ta.x, tb.x), min(ta.y, tb.y)), min(ta.z, tb.z)), iso.near);
+    let t1 = min(min(min(max(ta.x, tb.x), max(ta.y, tb.y)), max(ta.z, tb.z)), iso.far);
+    if !(t1 > t0) {
+        return out;
+    }
+    var a = t0;
+    var fa = value(go + gd * a) - iso.isovalue;
+    let steps = u32(min(ceil((t1 - t0) / iso.step), 1e6));
+    for (var k = 1u; k <= steps; k++) {
+        let b = min(t0 + f32(k) * iso.step, t1);
+        let fb = value(go + gd * b) - iso.isovalue;
+        if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
+            let t = refine(go, gd, a, fa, b, fb);
+            out.colour = shade_hit(go + gd * t, d, mt);
+            let p = o + d * t;
+            out.depth = select(t, length(p - eye.xyz), eye.w != 0.0);
+            return out;
+        }
+        a = b;
+        fa = fb;
+    }
+    return out;
+}
+
+// Secant (regula falsi) steps within [a, b], whose ends differ in sign.
+fn refine(go: vec3f, gd: vec3f, a: f32, fa: f32, b: f32, fb: f32) -> f32 {
+    if fa == 0.0 {
+        return a;
+    }
+    if iso.secant_steps == 0u {
+        return b;
+    }
+    var ta = a;
+    var va = fa;
+    var tb = b;
+    var vb = fb;
+    for (var s = 0u; s < iso.secant_steps; s++) {
+        var ts = 0.5 * (ta + tb);
+        if vb != va {
+            ts = ta - va * (tb - ta) / (vb - va);
+        }
+        let vs = value(go + gd * ts) - iso.isovalue;
+        if vs == 0.0 {
+            return ts;
+        }
+        if (vs < 0.0) == (va < 0.0) {
+            ta = ts;
+            va = vs;
+        } else {
+            tb = ts;
+            vb = vs;
+        }
+    }
+    if vb != va {
+        return ta - va * (tb - ta) / (vb - va);
+    }
+    return 0.5 * (ta + tb);
+}
+
+// Blinn-Phong at grid point `g` seen along `d`; `mt` is the transpose of
+// the world-to-grid map's linear part.
+fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
+    let hessian = iso.filtering == 1u || iso.curvature == 1u;
+    let dv = derivatives(g, hessian);
+    let grad = mt * dv.gradient;
+    let hess = mt * dv.hessian * transpose(mt);
+    var k = vec2f(0.0);
+    if hessian {
+        k = curvatures(grad, hess);
+    }
+    var n = -grad / max(length(grad), 1.17549435e-38);
+    if dot(n, d) > 0.0 {
+        n = -n;
+        k = vec2f(-k.y, -k.x);
+    }
+    var base = iso.colour.rgb;
+    if iso.curvature == 1u {
+        base = curvature_colour(0.5 * (k.x + k.y));
+    }
+    var l = -d;
+    if iso.light.w != 0.0 {
+        l = normalize(iso.light.xyz);
+    }
+    let half = l - d;
+    var h = vec3f(0.0);
+    if length(half) > 0.0 {
+        h = normalize(half);
+    }
+    let diffuse = max(dot(n, l), 0.0);
+    let specular = pow(max(dot(n, h), 0.0), iso.shading.w);
+    let rgb = base * (iso.shading.x + iso.shading.y * diffuse) + vec3f(iso.shading.z * specular);
+    return vec4f(min(rgb, vec3f(1.0)), 1.0);
+}
+
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     if id.x >= iso.width || id.y >= iso.height {
@@ -178,100 +288,38 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let fy = f32(id.y);
     let o = iso.ray_origin.xyz + fx * iso.ray_origin_dx.xyz + fy * iso.ray_origin_dy.xyz;
     let d = normalize(iso.ray_dir.xyz + fx * iso.ray_dir_dx.xyz + fy * iso.ray_dir_dy.xyz);
-    let mt = mat3x3f(iso.to_grid_x.xyz, iso.to_grid_y.xyz, iso.to_grid_z.xyz);
-    let m = transpose(mt);
-    let go = m * o + vec3f(iso.to_grid_x.w, iso.to_grid_y.w, iso.to_grid_z.w);
-    let gd = m * d;
-    depth_out[i] = bitcast<f32>(0x7f800000u);
-    var colour = iso.background;
-    let inv = 1.0 / vec3f(safe(gd.x), safe(gd.y), safe(gd.z));
-    let ta = (vec3f(0.0) - go) * inv;
-    let tb = (last_vertex() - go) * inv;
-    let t0 = max(max(max(min(ta.x, tb.x), min(ta.y, tb.y)), min(ta.z, tb.z)), iso.near);
-    let t1 = min(min(min(max(ta.x, tb.x), max(ta.y, tb.y)), max(ta.z, tb.z)), iso.far);
-    if t1 > t0 {
-        var a = t0;
-        var fa = value(go + gd * a) - iso.isovalue;
-        let steps = u32(min(ceil((t1 - t0) / iso.step), 1e6));
-        for (var k = 1u; k <= steps; k++) {
-            let b = min(t0 + f32(k) * iso.step, t1);
-            let fb = value(go + gd * b) - iso.isovalue;
-            if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
-                // Secant (regula falsi) steps within [a, b].
-                var ta2 = a;
-                var fa2 = fa;
-                var tb2 = b;
-                var fb2 = fb;
-                var t = a;
-                if fa == 0.0 {
-                    t = a;
-                } else if iso.secant_steps == 0u {
-                    t = b;
-                } else {
-                    var done = false;
-                    for (var s = 0u; s < iso.secant_steps; s++) {
-                        var ts = 0.5 * (ta2 + tb2);
-                        if fb2 != fa2 {
-                            ts = ta2 - fa2 * (tb2 - ta2) / (fb2 - fa2);
-                        }
-                        let fs = value(go + gd * ts) - iso.isovalue;
-                        if fs == 0.0 {
-                            t = ts;
-                            done = true;
-                            break;
-                        }
-                        if (fs < 0.0) == (fa2 < 0.0) {
-                            ta2 = ts;
-                            fa2 = fs;
-                        } else {
-                            tb2 = ts;
-                            fb2 = fs;
-                        }
-                    }
-                    if !done {
-                        t = 0.5 * (ta2 + tb2);
-                        if fb2 != fa2 {
-                            t = ta2 - fa2 * (tb2 - ta2) / (fb2 - fa2);
-                        }
-                    }
-                }
-                let hessian = iso.filtering == 1u || iso.curvature == 1u;
-                let dv = derivatives(go + gd * t, hessian);
-                let grad = mt * dv.gradient;
-                let hess = mt * dv.hessian * transpose(mt);
-                var k = vec2f(0.0);
-                if hessian {
-                    k = curvatures(grad, hess);
-                }
-                var n = -grad / max(length(grad), 1.17549435e-38);
-                if dot(n, d) > 0.0 {
-                    n = -n;
-                    k = vec2f(-k.y, -k.x);
-                }
-                var base = iso.colour.rgb;
-                if iso.curvature == 1u {
-                    base = curvature_colour(0.5 * (k.x + k.y));
-                }
-                var l = -d;
-                if iso.light.w != 0.0 {
-                    l = normalize(iso.light.xyz);
-                }
-                let half = l - d;
-                var h = vec3f(0.0);
-                if length(half) > 0.0 {
-                    h = normalize(half);
-                }
-                let diffuse = max(dot(n, l), 0.0);
-                let specular = pow(max(dot(n, h), 0.0), iso.shading.w);
-                let rgb = base * (iso.shading.x + iso.shading.y * diffuse) + vec3f(iso.shading.z * specular);
-                colour = vec4f(min(rgb, vec3f(1.0)), 1.0);
-                let p = o + d * t;
-                depth_out[i] = select(t, length(p - iso.eye.xyz), iso.eye.w != 0.0);
-                break;
-            }
-            a = b;
-            fa = fb;
+    let c = cast_ray(o, d, iso.eye);
+    depth_out[i] = c.depth;
+    store_color(i, c.colour, iso.color_format);
+}
+
+// A multi-view panel: each view's rays (seven vec4s: origin, its steps,
+// direction, its steps, eye), and each pixel's red, green and blue views
+// (a byte each).
+@group(1) @binding(0) var<storage, read> view_rays: array<vec4f>;
+@group(1) @binding(1) var<storage, read> pixel_views: array<u32>;
+
+// One ray a subpixel, from that subpixel's view; depth is green's.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn per_subpixel(@builtin(global_invocation_id) id: vec3u) {
+    if id.x >= iso.width || id.y >= iso.height {
+        return;
+    }
+    let i = id.y * iso.width + id.x;
+    let fx = f32(id.x);
+    let fy = f32(id.y);
+    let packed = pixel_views[i];
+    var rgb = vec3f(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        let v = (packed >> (8u * c)) & 0xffu;
+        let r = 7u * v;
+        let o = view_rays[r].xyz + fx * view_rays[r + 1u].xyz + fy * view_rays[r + 2u].xyz;
+        let d = normalize(view_rays[r + 3u].xyz + fx * view_rays[r + 4u].xyz + fy * view_rays[r + 5u].xyz);
+        let hit = cast_ray(o, d, view_rays[r + 6u]);
+        rgb[c] = hit.colour[c];
+        if c == 1u {
+            depth_out[i] = hit.depth;
         }
     }
-    store_color(i, colour, iso.color_format);
+    store_color(i, vec4f(rgb, 1.0), iso.color_format);
 }

@@ -99,3 +99,36 @@ fn the_gpu_casts_the_cpus_isosurface() {
     g.cast_iso(&placed, &rays, &desc, &IsoSettings::new(0.5))
         .unwrap();
 }
+
+#[test]
+fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
+    use anari_library_caveray::cave::MultiViewDisplay;
+    use anari_library_caveray::render::iso::{
+        render_display, subpixels_differing, MultiViewMethod, Panel,
+    };
+    let mut g = gpu();
+    let mut placed = balls();
+    placed.transform = Mat4::from_translation(Vec3::new(0.0, 0.0, -1.2)) * placed.transform;
+    let text = "units = \"m\"\nviews = 8\nresolution = [48, 32]\n\
+                ll = [-1.2, -0.8, 0.0]\nlr = [1.2, -0.8, 0.0]\nur = [1.2, 0.8, 0.0]\n\
+                viewing_distance = 3.0\nview_spacing = 0.03\n\
+                [lens]\npitch = 3.75\nslant = 0.15625\n";
+    let d = MultiViewDisplay::from_toml(text, "test display").unwrap();
+    let view_of = |x, y, c| d.view_of(x, y, c);
+    let panel = Panel {
+        size: d.resolution,
+        views: d.view_rays().unwrap(),
+        view_of: &view_of,
+    };
+    let settings = IsoSettings::new(0.5);
+    let (cpu, _) =
+        render_display(&placed, &panel, &settings, MultiViewMethod::PerSubpixel).unwrap();
+    let on_gpu = g.cast_display(&placed, &panel, &settings).unwrap();
+    let differ = subpixels_differing(&cpu, &on_gpu, 2);
+    println!(
+        "per subpixel, GPU against CPU: {:.3}% of subpixels differ",
+        100.0 * differ
+    );
+    assert!(differ <= 0.005, "{differ} of subpixels differ");
+    assert!(ssim(&cpu, &on_gpu).unwrap() >= 0.99);
+}

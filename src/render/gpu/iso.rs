@@ -11,13 +11,17 @@ use super::{
     unprepared, GpuRenderer,
 };
 use crate::geometry::RayGen;
-use crate::render::iso::{Colouring, IsoFilter, IsoSettings};
+use crate::render::frame::filled;
+use crate::render::iso::{Colouring, IsoFilter, IsoSettings, Panel};
 use crate::render::{Frame, FrameDesc, RenderError};
 use crate::scene::{PlacedVolume, Scene};
 
 pub(super) struct IsoGpu {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
+    /// A multi-view panel's rays and per-pixel views (group 1).
+    panel_layout: wgpu::BindGroupLayout,
+    per_subpixel: wgpu::ComputePipeline,
     uniform: wgpu::Buffer,
     target: Option<OutputBuffers>,
 }
@@ -31,6 +35,80 @@ impl GpuRenderer {
         rays: &RayGen,
         desc: &FrameDesc,
         settings: &IsoSettings,
+    ) -> Result<Frame, RenderError> {
+        self.run_iso(placed, rays, desc, settings, None)
+    }
+
+    /// A multi-view panel's image, one ray a subpixel from that subpixel's
+    /// view, as [`crate::render::iso::render_display`] makes it with
+    /// `MultiViewMethod::PerSubpixel`.
+    pub fn cast_display(
+        &mut self,
+        placed: &PlacedVolume,
+        panel: &Panel,
+        settings: &IsoSettings,
+    ) -> Result<Frame, RenderError> {
+        let views = panel.views.len();
+        if views == 0 || views > 256 {
+            return Err(RenderError::Settings(format!(
+                "a panel on the GPU has 1 to 256 views, not {views}"
+            )));
+        }
+        let desc = FrameDesc::new(panel.size);
+        desc.validate()?;
+        let v = |x: glam::Vec3| x.extend(0.0).to_array();
+        let rays: Vec<[f32; 4]> = panel
+            .views
+            .iter()
+            .flat_map(|r| {
+                [
+                    v(r.origin),
+                    v(r.origin_dx),
+                    v(r.origin_dy),
+                    v(r.direction),
+                    v(r.direction_dx),
+                    v(r.direction_dy),
+                    r.eye.map_or([0.0; 4], |e| e.extend(1.0).to_array()),
+                ]
+            })
+            .collect();
+        let (w, h) = (panel.size.x, panel.size.y);
+        let mut packed = filled((w * h) as usize, 0u32, "the panel's views")?;
+        for (i, p) in packed.iter_mut().enumerate() {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            *p = (0..3).fold(0, |acc, c| acc | (panel.view(x, y, c) << (8 * c)));
+        }
+        let device = &self.ctx.device;
+        let buffer = |label, bytes: &[u8]| {
+            let b = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.len().max(16) as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            self.ctx.queue.write_buffer(&b, 0, bytes);
+            b
+        };
+        let rays = buffer("iso panel rays", bytemuck::cast_slice(&rays));
+        let views = buffer("iso panel views", bytemuck::cast_slice(&packed));
+        self.run_iso(
+            placed,
+            &panel.views[0],
+            &desc,
+            settings,
+            Some((&rays, &views)),
+        )
+    }
+
+    /// One dispatch of the iso shader: `main` over `rays`, or
+    /// `per_subpixel` over a panel's rays and views.
+    fn run_iso(
+        &mut self,
+        placed: &PlacedVolume,
+        rays: &RayGen,
+        desc: &FrameDesc,
+        settings: &IsoSettings,
+        panel: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         settings.validate()?;
@@ -71,7 +149,18 @@ impl GpuRenderer {
             desc.size.y.div_ceil(WORKGROUP),
             1,
         ];
-        self.last_pass_ms = ctx.dispatch(&iso.pipeline, &[&group], workgroups)?;
+        self.last_pass_ms = match panel {
+            None => ctx.dispatch(&iso.pipeline, &[&group], workgroups)?,
+            Some((rays, views)) => {
+                let panel_group = bind_group(
+                    &ctx.device,
+                    "iso panel",
+                    &iso.panel_layout,
+                    [rays.as_entire_binding(), views.as_entire_binding()],
+                );
+                ctx.dispatch(&iso.per_subpixel, &[&group, &panel_group], workgroups)?
+            }
+        };
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&target.color, 0, &target.color_read, 0, None);
         encoder.copy_buffer_to_buffer(&target.depth, 0, &target.depth_read, 0, None);
@@ -116,7 +205,20 @@ impl IsoGpu {
                 layout_entry(3, storage),
             ],
         });
-        let pipeline = compute_pipeline(device, "iso", &shaders::iso(), &[&layout], "main");
+        let source = shaders::iso();
+        let pipeline = compute_pipeline(device, "iso", &source, &[&layout], "main");
+        let read = buffer_type(wgpu::BufferBindingType::Storage { read_only: true });
+        let panel_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso panel"),
+            entries: &[layout_entry(0, read), layout_entry(1, read)],
+        });
+        let per_subpixel = compute_pipeline(
+            device,
+            "iso per subpixel",
+            &source,
+            &[&layout, &panel_layout],
+            "per_subpixel",
+        );
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("iso"),
             size: size_of::<Iso>() as u64,
@@ -126,6 +228,8 @@ impl IsoGpu {
         Self {
             layout,
             pipeline,
+            panel_layout,
+            per_subpixel,
             uniform,
             target: None,
         }

@@ -51,8 +51,9 @@ pub struct Panel<'a> {
 }
 
 impl Panel<'_> {
-    fn view_of(&self, x: u32, y: u32, c: usize) -> u32 {
-        (self.view_of)(x, y, c).min(self.views.len() as u32 - 1)
+    /// The view of subpixel `c` of pixel (x, y), within the views given.
+    pub fn view(&self, x: u32, y: u32, c: usize) -> u32 {
+        (self.view_of)(x, y, c).min(self.views.len().saturating_sub(1) as u32)
     }
 }
 
@@ -90,7 +91,7 @@ pub fn render_display(
             for (i, px) in rgb.iter_mut().enumerate() {
                 let (x, y) = ((i % w) as u32, (i / w) as u32);
                 for (c, out) in px.iter_mut().enumerate() {
-                    *out = views[display.view_of(x, y, c) as usize][i][c];
+                    *out = views[display.view(x, y, c) as usize][i][c];
                 }
             }
             total
@@ -102,7 +103,7 @@ pub fn render_display(
                 let mut n = 0;
                 for (x, px) in row.iter_mut().enumerate() {
                     for (c, out) in px.iter_mut().enumerate() {
-                        let r = &rays[display.view_of(x as u32, y as u32, c) as usize];
+                        let r = &rays[display.view(x as u32, y as u32, c) as usize];
                         let (o, d) = r.pixel_ray(x as u32, y as u32);
                         let hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
                         *out = caster.colour(hit.as_ref(), d)[c];
@@ -165,7 +166,7 @@ fn geometric_spectral(
         .map(|(y, row)| {
             let mut n = 0;
             for (x, hit) in row.iter_mut().enumerate() {
-                let r = &rays[display.view_of(x as u32, y as u32, 1) as usize];
+                let r = &rays[display.view(x as u32, y as u32, 1) as usize];
                 let (o, d) = r.pixel_ray(x as u32, y as u32);
                 *hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
             }
@@ -190,11 +191,11 @@ fn geometric_spectral(
                     .filter_map(|j| geometric[j].map(|g| g.t))
                     .reduce(f32::min);
                 for (c, out) in px.iter_mut().enumerate() {
-                    let view = display.view_of(x as u32, y as u32, c);
+                    let view = display.view(x as u32, y as u32, c);
                     let r = &rays[view as usize];
                     let (o, d) = r.pixel_ray(x as u32, y as u32);
                     let clip = (r.t_near, r.t_far);
-                    let hit = if c == 1 || view == display.view_of(x as u32, y as u32, 1) {
+                    let hit = if c == 1 || view == display.view(x as u32, y as u32, 1) {
                         // The geometric pass's very ray.
                         geometric[i]
                     } else {
