@@ -171,41 +171,87 @@ fn curvature_colour(mean: f32) -> vec3f {
 struct Cast {
     colour: vec4f,
     depth: f32,
+    // Along the unit ray; negative where nothing was hit.
+    t: f32,
 }
 
-// One ray at the isosurface: its shaded colour (or the background) and
-// depth from `eye` (w: 1 if it has one, else along the ray).
-fn cast_ray(o: vec3f, d: vec3f, eye: vec4f) -> Cast {
-    let mt = mat3x3f(iso.to_grid_x.xyz, iso.to_grid_y.xyz, iso.to_grid_z.xyz);
-    let m = transpose(mt);
+// A ray in grid space and its span through the grid.
+struct Span {
+    go: vec3f,
+    gd: vec3f,
+    t0: f32,
+    t1: f32,
+}
+
+fn grid_to_world() -> mat3x3f {
+    return mat3x3f(iso.to_grid_x.xyz, iso.to_grid_y.xyz, iso.to_grid_z.xyz);
+}
+
+fn span(o: vec3f, d: vec3f) -> Span {
+    let m = transpose(grid_to_world());
     let go = m * o + vec3f(iso.to_grid_x.w, iso.to_grid_y.w, iso.to_grid_z.w);
     let gd = m * d;
-    var out = Cast(iso.background, bitcast<f32>(0x7f800000u));
     let inv = 1.0 / vec3f(safe(gd.x), safe(gd.y), safe(gd.z));
     let ta = (vec3f(0.0) - go) * inv;
     let tb = (last_vertex() - go) * inv;
     let t0 = max(max(max(min(ta.x, tb.x), min(ta.y, tb.y)), min(ta.z, tb.z)), iso.near);
     let t1 = min(min(min(max(ta.x, tb.x), max(ta.y, tb.y)), max(ta.z, tb.z)), iso.far);
-    if !(t1 > t0) {
-        return out;
-    }
-    var a = t0;
-    var fa = value(go + gd * a) - iso.isovalue;
-    let steps = u32(min(ceil((t1 - t0) / iso.step), 1e6));
+    return Span(go, gd, t0, t1);
+}
+
+fn missed() -> Cast {
+    return Cast(iso.background, bitcast<f32>(0x7f800000u), -1.0);
+}
+
+// The surface at `t` along the ray, shaded.
+fn hit_at(o: vec3f, d: vec3f, eye: vec4f, sp: Span, t: f32) -> Cast {
+    let p = o + d * t;
+    let depth = select(t, length(p - eye.xyz), eye.w != 0.0);
+    return Cast(shade_hit(sp.go + sp.gd * t, d, grid_to_world()), depth, t);
+}
+
+// The first crossing in [start_t, until] of the ray's span.
+fn march_span(o: vec3f, d: vec3f, eye: vec4f, sp: Span, start_t: f32, until: f32) -> Cast {
+    var a = start_t;
+    var fa = value(sp.go + sp.gd * a) - iso.isovalue;
+    let steps = u32(min(ceil((until - start_t) / iso.step), 1e6));
     for (var k = 1u; k <= steps; k++) {
-        let b = min(t0 + f32(k) * iso.step, t1);
-        let fb = value(go + gd * b) - iso.isovalue;
+        let b = min(start_t + f32(k) * iso.step, until);
+        let fb = value(sp.go + sp.gd * b) - iso.isovalue;
         if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
-            let t = refine(go, gd, a, fa, b, fb);
-            out.colour = shade_hit(go + gd * t, d, mt);
-            let p = o + d * t;
-            out.depth = select(t, length(p - eye.xyz), eye.w != 0.0);
-            return out;
+            return hit_at(o, d, eye, sp, refine(sp.go, sp.gd, a, fa, b, fb));
         }
         a = b;
         fa = fb;
     }
-    return out;
+    return missed();
+}
+
+// One ray at the isosurface: its shaded colour (or the background), depth
+// from `eye` (w: 1 if it has one, else along the ray) and t.
+fn cast_ray(o: vec3f, d: vec3f, eye: vec4f) -> Cast {
+    let sp = span(o, d);
+    if !(sp.t1 > sp.t0) {
+        return missed();
+    }
+    return march_span(o, d, eye, sp, sp.t0, sp.t1);
+}
+
+// The first crossing in [start_t, until], if the ray is on the same side of
+// the iso-value at `start_t` as where it enters the grid; else the whole
+// ray (a crossing lies before `start_t`).
+fn cast_window(o: vec3f, d: vec3f, eye: vec4f, start_t: f32, until: f32) -> Cast {
+    let sp = span(o, d);
+    if !(sp.t1 > sp.t0) {
+        return missed();
+    }
+    let start = clamp(start_t, sp.t0, sp.t1);
+    let entry = value(sp.go + sp.gd * sp.t0) - iso.isovalue;
+    let there = value(sp.go + sp.gd * start) - iso.isovalue;
+    if (entry < 0.0) != (there < 0.0) {
+        return march_span(o, d, eye, sp, sp.t0, sp.t1);
+    }
+    return march_span(o, d, eye, sp, start, clamp(until, start, sp.t1));
 }
 
 // Secant (regula falsi) steps within [a, b], whose ends differ in sign.
@@ -298,8 +344,90 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
 // (a byte each).
 @group(1) @binding(0) var<storage, read> view_rays: array<vec4f>;
 @group(1) @binding(1) var<storage, read> pixel_views: array<u32>;
+// The geometric pass's green t per pixel (negative: missed).
+@group(1) @binding(2) var<storage, read_write> green_t: array<f32>;
 
-// One ray a subpixel, from that subpixel's view; depth is green's.
+fn view_ray(v: u32, fx: f32, fy: f32) -> Ray {
+    let r = 7u * v;
+    let o = view_rays[r].xyz + fx * view_rays[r + 1u].xyz + fy * view_rays[r + 2u].xyz;
+    let d = normalize(view_rays[r + 3u].xyz + fx * view_rays[r + 4u].xyz + fy * view_rays[r + 5u].xyz);
+    return Ray(o, d, view_rays[r + 6u]);
+}
+
+struct Ray {
+    o: vec3f,
+    d: vec3f,
+    eye: vec4f,
+}
+
+fn view_of(packed: u32, c: u32) -> u32 {
+    return (packed >> (8u * c)) & 0xffu;
+}
+
+// The geometric pass: each pixel's green ray in full.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn geometric(@builtin(global_invocation_id) id: vec3u) {
+    if id.x >= iso.width || id.y >= iso.height {
+        return;
+    }
+    let i = id.y * iso.width + id.x;
+    let r = view_ray(view_of(pixel_views[i], 1u), f32(id.x), f32(id.y));
+    green_t[i] = cast_ray(r.o, r.d, r.eye).t;
+}
+
+// Steps before green's surface at which a search starts.
+const SEARCH_MARGIN_STEPS: f32 = 2.0;
+
+// The spectral pass (src/render/iso/multiview.rs): green start_t its t, red
+// and blue searched near green's surface, or near a neighbour's where
+// green missed.
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn spectral(@builtin(global_invocation_id) id: vec3u) {
+    if id.x >= iso.width || id.y >= iso.height {
+        return;
+    }
+    let i = id.y * iso.width + id.x;
+    let fx = f32(id.x);
+    let fy = f32(id.y);
+    let packed = pixel_views[i];
+    let tg = green_t[i];
+    var nearest = bitcast<f32>(0x7f800000u);
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let x = i32(id.x) + dx;
+            let y = i32(id.y) + dy;
+            if x >= 0 && y >= 0 && x < i32(iso.width) && y < i32(iso.height) {
+                let t = green_t[u32(y) * iso.width + u32(x)];
+                if t >= 0.0 {
+                    nearest = min(nearest, t);
+                }
+            }
+        }
+    }
+    let margin = SEARCH_MARGIN_STEPS * iso.step;
+    var rgb = vec3f(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        let v = view_of(packed, c);
+        let r = view_ray(v, fx, fy);
+        var hit = missed();
+        if v == view_of(packed, 1u) {
+            if tg >= 0.0 {
+                hit = hit_at(r.o, r.d, r.eye, span(r.o, r.d), tg);
+            }
+        } else if tg >= 0.0 {
+            hit = cast_window(r.o, r.d, r.eye, tg - margin, bitcast<f32>(0x7f800000u));
+        } else if nearest < bitcast<f32>(0x7f800000u) {
+            hit = cast_window(r.o, r.d, r.eye, nearest - margin, nearest + 3.0 * margin);
+        }
+        rgb[c] = hit.colour[c];
+        if c == 1u {
+            depth_out[i] = hit.depth;
+        }
+    }
+    store_color(i, vec4f(rgb, 1.0), iso.color_format);
+}
+
+// One ray a subpixel, start_t that subpixel's view; depth is green's.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn per_subpixel(@builtin(global_invocation_id) id: vec3u) {
     if id.x >= iso.width || id.y >= iso.height {
@@ -311,11 +439,8 @@ fn per_subpixel(@builtin(global_invocation_id) id: vec3u) {
     let packed = pixel_views[i];
     var rgb = vec3f(0.0);
     for (var c = 0u; c < 3u; c++) {
-        let v = (packed >> (8u * c)) & 0xffu;
-        let r = 7u * v;
-        let o = view_rays[r].xyz + fx * view_rays[r + 1u].xyz + fy * view_rays[r + 2u].xyz;
-        let d = normalize(view_rays[r + 3u].xyz + fx * view_rays[r + 4u].xyz + fy * view_rays[r + 5u].xyz);
-        let hit = cast_ray(o, d, view_rays[r + 6u]);
+        let r = view_ray(view_of(packed, c), fx, fy);
+        let hit = cast_ray(r.o, r.d, r.eye);
         rgb[c] = hit.colour[c];
         if c == 1u {
             depth_out[i] = hit.depth;

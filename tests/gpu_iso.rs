@@ -121,14 +121,27 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
         view_of: &view_of,
     };
     let settings = IsoSettings::new(0.5);
-    let (cpu, _) =
-        render_display(&placed, &panel, &settings, MultiViewMethod::PerSubpixel).unwrap();
-    let on_gpu = g.cast_display(&placed, &panel, &settings).unwrap();
-    let differ = subpixels_differing(&cpu, &on_gpu, 2);
-    println!(
-        "per subpixel, GPU against CPU: {:.3}% of subpixels differ",
-        100.0 * differ
-    );
-    assert!(differ <= 0.005, "{differ} of subpixels differ");
-    assert!(ssim(&cpu, &on_gpu).unwrap() >= 0.99);
+    for method in [
+        MultiViewMethod::PerSubpixel,
+        MultiViewMethod::GeometricSpectral,
+    ] {
+        let (cpu, _) = render_display(&placed, &panel, &settings, method).unwrap();
+        let on_gpu = g.cast_display(&placed, &panel, &settings, method).unwrap();
+        let differ = subpixels_differing(&cpu, &on_gpu, 2);
+        println!(
+            "{}, GPU against CPU: {:.3}% of subpixels differ",
+            method.name(),
+            100.0 * differ
+        );
+        assert!(
+            differ <= 0.005,
+            "{}: {differ} of subpixels differ",
+            method.name()
+        );
+        assert!(ssim(&cpu, &on_gpu).unwrap() >= 0.99);
+    }
+    let e = g
+        .cast_display(&placed, &panel, &settings, MultiViewMethod::Naive)
+        .unwrap_err();
+    assert!(e.to_string().contains("naive is cast_iso per view"), "{e}");
 }

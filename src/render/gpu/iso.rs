@@ -12,9 +12,18 @@ use super::{
 };
 use crate::geometry::RayGen;
 use crate::render::frame::filled;
-use crate::render::iso::{Colouring, IsoFilter, IsoSettings, Panel};
+use crate::render::iso::{Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
 use crate::render::{Frame, FrameDesc, RenderError};
 use crate::scene::{PlacedVolume, Scene};
+
+/// A panel's buffers for one display image, and how it is made.
+struct PanelBuffers<'a> {
+    rays: &'a wgpu::Buffer,
+    views: &'a wgpu::Buffer,
+    /// The geometric pass's green t per pixel.
+    green: &'a wgpu::Buffer,
+    method: MultiViewMethod,
+}
 
 pub(super) struct IsoGpu {
     layout: wgpu::BindGroupLayout,
@@ -22,6 +31,8 @@ pub(super) struct IsoGpu {
     /// A multi-view panel's rays and per-pixel views (group 1).
     panel_layout: wgpu::BindGroupLayout,
     per_subpixel: wgpu::ComputePipeline,
+    geometric: wgpu::ComputePipeline,
+    spectral: wgpu::ComputePipeline,
     uniform: wgpu::Buffer,
     target: Option<OutputBuffers>,
 }
@@ -39,15 +50,22 @@ impl GpuRenderer {
         self.run_iso(placed, rays, desc, settings, None)
     }
 
-    /// A multi-view panel's image, one ray a subpixel from that subpixel's
-    /// view, as [`crate::render::iso::render_display`] makes it with
-    /// `MultiViewMethod::PerSubpixel`.
+    /// A multi-view panel's image, every subpixel from its own view, as
+    /// [`crate::render::iso::render_display`] makes it: one ray a subpixel
+    /// (`PerSubpixel`) or the geometric and spectral passes. The naive way
+    /// is the CPU's (or `cast_iso` per view).
     pub fn cast_display(
         &mut self,
         placed: &PlacedVolume,
         panel: &Panel,
         settings: &IsoSettings,
+        method: MultiViewMethod,
     ) -> Result<Frame, RenderError> {
+        if method == MultiViewMethod::Naive {
+            return Err(RenderError::Settings(
+                "the GPU makes a panel's image per subpixel or by passes; naive is cast_iso per view".into(),
+            ));
+        }
         let views = panel.views.len();
         if views == 0 || views > 256 {
             return Err(RenderError::Settings(format!(
@@ -91,24 +109,25 @@ impl GpuRenderer {
         };
         let rays = buffer("iso panel rays", bytemuck::cast_slice(&rays));
         let views = buffer("iso panel views", bytemuck::cast_slice(&packed));
-        self.run_iso(
-            placed,
-            &panel.views[0],
-            &desc,
-            settings,
-            Some((&rays, &views)),
-        )
+        let green = buffer("iso green t", &vec![0u8; 4 * packed.len()]);
+        let buffers = PanelBuffers {
+            rays: &rays,
+            views: &views,
+            green: &green,
+            method,
+        };
+        self.run_iso(placed, &panel.views[0], &desc, settings, Some(buffers))
     }
 
-    /// One dispatch of the iso shader: `main` over `rays`, or
-    /// `per_subpixel` over a panel's rays and views.
+    /// The iso shader over `rays` (`main`), or over a panel: `per_subpixel`,
+    /// or `geometric` then `spectral`.
     fn run_iso(
         &mut self,
         placed: &PlacedVolume,
         rays: &RayGen,
         desc: &FrameDesc,
         settings: &IsoSettings,
-        panel: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
+        panel: Option<PanelBuffers>,
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         settings.validate()?;
@@ -151,14 +170,25 @@ impl GpuRenderer {
         ];
         self.last_pass_ms = match panel {
             None => ctx.dispatch(&iso.pipeline, &[&group], workgroups)?,
-            Some((rays, views)) => {
+            Some(p) => {
                 let panel_group = bind_group(
                     &ctx.device,
                     "iso panel",
                     &iso.panel_layout,
-                    [rays.as_entire_binding(), views.as_entire_binding()],
+                    [
+                        p.rays.as_entire_binding(),
+                        p.views.as_entire_binding(),
+                        p.green.as_entire_binding(),
+                    ],
                 );
-                ctx.dispatch(&iso.per_subpixel, &[&group, &panel_group], workgroups)?
+                let groups = [&group, &panel_group];
+                match p.method {
+                    MultiViewMethod::GeometricSpectral => {
+                        ctx.dispatch(&iso.geometric, &groups, workgroups)?
+                            + ctx.dispatch(&iso.spectral, &groups, workgroups)?
+                    }
+                    _ => ctx.dispatch(&iso.per_subpixel, &groups, workgroups)?,
+                }
             }
         };
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -210,15 +240,24 @@ impl IsoGpu {
         let read = buffer_type(wgpu::BufferBindingType::Storage { read_only: true });
         let panel_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("iso panel"),
-            entries: &[layout_entry(0, read), layout_entry(1, read)],
+            entries: &[
+                layout_entry(0, read),
+                layout_entry(1, read),
+                layout_entry(2, storage),
+            ],
         });
-        let per_subpixel = compute_pipeline(
-            device,
-            "iso per subpixel",
-            &source,
-            &[&layout, &panel_layout],
-            "per_subpixel",
-        );
+        let panel_pipeline = |entry: &str| {
+            compute_pipeline(
+                device,
+                "iso panel",
+                &source,
+                &[&layout, &panel_layout],
+                entry,
+            )
+        };
+        let per_subpixel = panel_pipeline("per_subpixel");
+        let geometric = panel_pipeline("geometric");
+        let spectral = panel_pipeline("spectral");
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("iso"),
             size: size_of::<Iso>() as u64,
@@ -230,6 +269,8 @@ impl IsoGpu {
             pipeline,
             panel_layout,
             per_subpixel,
+            geometric,
+            spectral,
             uniform,
             target: None,
         }
