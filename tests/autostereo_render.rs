@@ -5,44 +5,18 @@
 //! little more than one view's field evaluations, while the naive cost
 //! grows with the number of views (counted, not timed).
 
-use std::sync::Arc;
+mod common;
 
 use anari_library_caveray::cave::MultiViewDisplay;
-use anari_library_caveray::data::preset;
 use anari_library_caveray::render::iso::{
     render_display, subpixels_differing, IsoSettings, MultiViewMethod, Panel,
 };
-use anari_library_caveray::scene::{PlacedVolume, StructuredVolume, Voxels};
-use glam::{Mat4, UVec3, Vec3};
+use anari_library_caveray::scene::PlacedVolume;
+use glam::{Mat4, Vec3};
 
-/// A ball of radius 0.5 with a smaller one stuck to it (so that views see
-/// different surfaces near the seam), half a metre behind the panel.
+/// The two balls, 1.2 m behind the panel.
 fn scene() -> PlacedVolume {
-    let n = 40u32;
-    let h = 2.0 / (n - 1) as f32;
-    let mut v = Vec::with_capacity((n * n * n) as usize);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let p = Vec3::new(x as f32, y as f32, z as f32) * h - Vec3::ONE;
-                let big = 1.0 - p.length();
-                let small = 1.0 - 2.0 * (p - Vec3::new(0.45, 0.3, 0.4)).length();
-                v.push(big.max(small));
-            }
-        }
-    }
-    let volume = StructuredVolume::new(
-        UVec3::splat(n),
-        Voxels::F32(v),
-        Vec3::splat(-1.0),
-        Vec3::splat(h),
-    )
-    .unwrap();
-    PlacedVolume {
-        volume: Arc::new(volume),
-        transfer_function: Arc::new(preset("grey").unwrap()),
-        transform: Mat4::from_translation(Vec3::new(0.0, 0.0, -1.2)),
-    }
+    common::iso::two_balls(40, Mat4::from_translation(Vec3::new(0.0, 0.0, -1.2)))
 }
 
 /// A small panel of `views` views (metres), the shipped lens pattern.

@@ -6,46 +6,22 @@
 
 mod common;
 
-use std::sync::Arc;
-
-use anari_library_caveray::data::preset;
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::render::iso::{cast, Colouring, IsoFilter, IsoSettings};
 use anari_library_caveray::render::{ssim, ColorFormat, FrameDesc};
-use anari_library_caveray::scene::{PlacedVolume, StructuredVolume, Voxels};
+use anari_library_caveray::scene::PlacedVolume;
 use common::render::{gpu, off_axis_wall};
-use glam::{Mat4, Quat, UVec2, UVec3, Vec3};
+use glam::{Mat4, Quat, UVec2, Vec3};
 
 fn balls() -> PlacedVolume {
-    let n = 32u32;
-    let h = 2.0 / (n - 1) as f32;
-    let mut v = Vec::with_capacity((n * n * n) as usize);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let p = Vec3::new(x as f32, y as f32, z as f32) * h - Vec3::ONE;
-                let big = 1.0 - p.length();
-                let small = 1.0 - 2.0 * (p - Vec3::new(0.45, 0.3, 0.4)).length();
-                v.push(big.max(small));
-            }
-        }
-    }
-    let volume = StructuredVolume::new(
-        UVec3::splat(n),
-        Voxels::F32(v),
-        Vec3::splat(-1.0),
-        Vec3::splat(h),
-    )
-    .unwrap();
-    PlacedVolume {
-        volume: Arc::new(volume),
-        transfer_function: Arc::new(preset("grey").unwrap()),
-        transform: Mat4::from_scale_rotation_translation(
+    common::iso::two_balls(
+        32,
+        Mat4::from_scale_rotation_translation(
             Vec3::splat(1.6),
             Quat::from_rotation_y(0.6),
             Vec3::new(0.1, -0.05, 0.0),
         ),
-    }
+    )
 }
 
 #[test]

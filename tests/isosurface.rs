@@ -5,43 +5,22 @@
 //! march's step, the B-spline reproduces linear fields, curvature colouring
 //! tells a convex view from a concave one, and bad settings fail.
 
-use std::sync::Arc;
+mod common;
 
-use anari_library_caveray::data::preset;
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::iso::{
     cast, curvature_colour, Colouring, IsoField, IsoFilter, IsoSettings,
 };
 use anari_library_caveray::render::{ColorFormat, FrameDesc};
-use anari_library_caveray::scene::{PlacedVolume, StructuredVolume, Voxels};
-use glam::{DVec3, Mat4, UVec2, UVec3, Vec3};
+use anari_library_caveray::scene::{PlacedVolume, Voxels};
+use glam::{DVec3, Mat4, UVec2, Vec3};
 
 const N: u32 = 48;
 const SIZE: UVec2 = UVec2::new(40, 40);
 
-/// A field on [-1, 1]^3 of `n`^3 voxels.
+/// A field on [-1, 1]^3 of N^3 voxels, unplaced.
 fn field(f: impl Fn(Vec3) -> f32) -> PlacedVolume {
-    let h = 2.0 / (N - 1) as f32;
-    let mut v = Vec::with_capacity((N * N * N) as usize);
-    for z in 0..N {
-        for y in 0..N {
-            for x in 0..N {
-                v.push(f(Vec3::new(x as f32, y as f32, z as f32) * h - Vec3::ONE));
-            }
-        }
-    }
-    let volume = StructuredVolume::new(
-        UVec3::splat(N),
-        Voxels::F32(v),
-        Vec3::splat(-1.0),
-        Vec3::splat(h),
-    )
-    .unwrap();
-    PlacedVolume {
-        volume: Arc::new(volume),
-        transfer_function: Arc::new(preset("grey").unwrap()),
-        transform: Mat4::IDENTITY,
-    }
+    common::iso::field(N, Mat4::IDENTITY, f)
 }
 
 /// A ball of radius 0.5 where the field is 0.5 (high inside).

@@ -3,6 +3,7 @@
 
 pub mod c;
 pub mod device;
+pub mod iso;
 pub mod render;
 
 use std::path::{Path, PathBuf};
