@@ -108,3 +108,43 @@ fn render_makes_a_displays_interleaved_image_and_its_views() {
     assert_eq!((views.width(), views.height()), (4 * 62 + 4, 2 * 40 + 4));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_gpu_backend_times_the_gpu_passes() {
+    let dir = std::env::temp_dir().join(format!("caveray-autostereo-gpu-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("auto.json");
+    let result = caveray(&[
+        "bench",
+        "autostereo",
+        "--backend",
+        "gpu",
+        "--volume",
+        "phantom:16",
+        "--views",
+        "1,8",
+        "--scale",
+        "0.02",
+        "--iso",
+        "0.2",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let report: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(
+        report["timed_on"].as_str().unwrap().starts_with("GPU "),
+        "{}",
+        report["timed_on"]
+    );
+    for row in report["rows"].as_array().unwrap() {
+        assert!(row["naive_views"].is_null(), "evaluations are the CPU's");
+        assert!(row["per_pixel_ms"].as_f64().unwrap() >= 0.0);
+        assert!(row["geometric_spectral_differing"].as_f64().unwrap() < 0.05);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

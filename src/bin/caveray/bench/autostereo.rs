@@ -2,8 +2,8 @@
 //! from its own eye, made naively (every view rendered, then interleaved)
 //! and per subpixel (one ray a subpixel, and the geometric + spectral
 //! passes), for several view counts and volumes' isosurfaces. Writes one
-//! JSON row per volume and view count; CPU timings (the isosurface caster
-//! has no GPU path yet).
+//! JSON row per volume and view count: CPU wall clock with the field
+//! evaluations counted, or with `--backend gpu` the GPU's pass clock.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -12,6 +12,7 @@ use anari_library_caveray::cave::{MultiViewDisplay, ViewPattern};
 use anari_library_caveray::render::iso::{
     render_display, subpixels_differing, IsoFilter, IsoSettings, MultiViewMethod, Panel,
 };
+use anari_library_caveray::render::{ColorData, Frame, FrameDesc, GpuRenderer};
 use clap::Args;
 use glam::{UVec2, Vec3};
 use serde::Serialize;
@@ -42,6 +43,10 @@ pub struct AutostereoArgs {
     /// trilinear or tricubic.
     #[arg(long, default_value = "trilinear")]
     filter: IsoFilter,
+    /// cpu (wall clock, field evaluations counted) or gpu (the GPU's pass
+    /// clock; the naive image is one cast a view, interleaved).
+    #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
+    backend: String,
     #[arg(long)]
     json: PathBuf,
 }
@@ -53,6 +58,8 @@ struct Report {
     display: String,
     resolution: [u32; 2],
     filter: &'static str,
+    /// "cpu" (wall clock) or the GPU's adapter and pass clock.
+    timed_on: String,
     rows: Vec<Row>,
 }
 
@@ -63,10 +70,10 @@ struct Row {
     naive_ms: f64,
     per_pixel_ms: f64,
     geometric_spectral_ms: f64,
-    /// Field evaluations, in units of one view's image.
-    naive_views: f64,
-    per_pixel_views: f64,
-    geometric_spectral_views: f64,
+    /// Field evaluations, in units of one view's image (CPU only).
+    naive_views: Option<f64>,
+    per_pixel_views: Option<f64>,
+    geometric_spectral_views: Option<f64>,
     /// Share of subpixels the geometric + spectral image has off the naive
     /// one by more than 2 of 255.
     geometric_spectral_differing: f64,
@@ -97,6 +104,16 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         .map(|&v| with_views(&base, v, resolution))
         .collect::<Result<_, _>>()
         .map_err(usage)?;
+    let mut gpu = match args.backend.as_str() {
+        "gpu" => Some(
+            GpuRenderer::new().map_err(|e| Failure::Runtime(format!("{e} (try --backend cpu)")))?,
+        ),
+        _ => None,
+    };
+    let timed_on = match &gpu {
+        Some(g) => format!("GPU {} ({})", g.adapter().name, g.pass_clock().name()),
+        None => "cpu".to_string(),
+    };
     let mut rows = Vec::new();
     println!(
         "{:<12} {:>5} {:>10} {:>10} {:>10}  {:>8} {:>8} {:>8}  {:>8}",
@@ -123,37 +140,76 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                 views: d.view_rays().map_err(runtime)?,
                 view_of: &view_of,
             };
-            let time = |method| -> Result<_, Failure> {
-                let start = Instant::now();
-                let (frame, evals) =
-                    render_display(placed, &panel, &settings, method).map_err(runtime)?;
-                Ok((frame, evals, start.elapsed().as_secs_f64() * 1e3))
+            let row = match gpu.as_mut() {
+                None => {
+                    let time = |method| -> Result<_, Failure> {
+                        let start = Instant::now();
+                        let (frame, evals) =
+                            render_display(placed, &panel, &settings, method).map_err(runtime)?;
+                        Ok((frame, evals, start.elapsed().as_secs_f64() * 1e3))
+                    };
+                    let (naive, naive_evals, naive_ms) = time(MultiViewMethod::Naive)?;
+                    let (_, per_evals, per_ms) = time(MultiViewMethod::PerSubpixel)?;
+                    let (gs, gs_evals, gs_ms) = time(MultiViewMethod::GeometricSpectral)?;
+                    let one = naive_evals as f64 / f64::from(d.views);
+                    Row {
+                        volume: loaded.name.clone(),
+                        views: d.views,
+                        naive_ms,
+                        per_pixel_ms: per_ms,
+                        geometric_spectral_ms: gs_ms,
+                        naive_views: Some(naive_evals as f64 / one),
+                        per_pixel_views: Some(per_evals as f64 / one),
+                        geometric_spectral_views: Some(gs_evals as f64 / one),
+                        geometric_spectral_differing: subpixels_differing(&gs, &naive, 2),
+                    }
+                }
+                Some(g) => {
+                    // Naive: one cast a view, then each subpixel from its
+                    // view's image.
+                    let desc = FrameDesc::new(d.resolution);
+                    let mut naive_ms = 0.0;
+                    let mut views = Vec::with_capacity(panel.views.len());
+                    for rays in &panel.views {
+                        views.push(
+                            g.cast_iso(placed, rays, &desc, &settings)
+                                .map_err(runtime)?,
+                        );
+                        naive_ms += g.last_pass_ms();
+                    }
+                    let naive = interleave(&views, &panel);
+                    let method = |g: &mut GpuRenderer, m| -> Result<_, Failure> {
+                        let frame = g
+                            .cast_display(placed, &panel, &settings, m)
+                            .map_err(runtime)?;
+                        Ok((frame, g.last_pass_ms()))
+                    };
+                    let (_, per_ms) = method(g, MultiViewMethod::PerSubpixel)?;
+                    let (gs, gs_ms) = method(g, MultiViewMethod::GeometricSpectral)?;
+                    Row {
+                        volume: loaded.name.clone(),
+                        views: d.views,
+                        naive_ms,
+                        per_pixel_ms: per_ms,
+                        geometric_spectral_ms: gs_ms,
+                        naive_views: None,
+                        per_pixel_views: None,
+                        geometric_spectral_views: None,
+                        geometric_spectral_differing: subpixels_differing(&gs, &naive, 2),
+                    }
+                }
             };
-            let (naive, naive_evals, naive_ms) = time(MultiViewMethod::Naive)?;
-            let (_, per_evals, per_ms) = time(MultiViewMethod::PerSubpixel)?;
-            let (gs, gs_evals, gs_ms) = time(MultiViewMethod::GeometricSpectral)?;
-            let one = naive_evals as f64 / f64::from(d.views);
-            let row = Row {
-                volume: loaded.name.clone(),
-                views: d.views,
-                naive_ms,
-                per_pixel_ms: per_ms,
-                geometric_spectral_ms: gs_ms,
-                naive_views: naive_evals as f64 / one,
-                per_pixel_views: per_evals as f64 / one,
-                geometric_spectral_views: gs_evals as f64 / one,
-                geometric_spectral_differing: subpixels_differing(&gs, &naive, 2),
-            };
+            let evals = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.2}"));
             println!(
-                "{:<12} {:>5} {:>10.1} {:>10.1} {:>10.1}  {:>8.2} {:>8.2} {:>8.2}  {:>7.3}%",
+                "{:<12} {:>5} {:>10.1} {:>10.1} {:>10.1}  {:>8} {:>8} {:>8}  {:>7.3}%",
                 row.volume,
                 row.views,
                 row.naive_ms,
                 row.per_pixel_ms,
                 row.geometric_spectral_ms,
-                row.naive_views,
-                row.per_pixel_views,
-                row.geometric_spectral_views,
+                evals(row.naive_views),
+                evals(row.per_pixel_views),
+                evals(row.geometric_spectral_views),
                 100.0 * row.geometric_spectral_differing
             );
             rows.push(row);
@@ -165,6 +221,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         display: base.name.clone(),
         resolution: resolution.to_array(),
         filter: args.filter.name(),
+        timed_on,
         rows,
     };
     write_json(&report, &args.json)?;
@@ -209,4 +266,27 @@ fn with_views(
         pattern,
         ..base.clone()
     })
+}
+
+/// Each subpixel from its view's image (8-bit RGBA, lower-left first).
+fn interleave(views: &[Frame], panel: &Panel) -> Frame {
+    let (w, h) = (panel.size.x, panel.size.y);
+    let mut bytes = vec![255u8; (4 * w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            for c in 0..3 {
+                let v = panel.view(x, y, c) as usize;
+                if let ColorData::Rgba8(b) = &views[v].color {
+                    bytes[4 * i + c] = b[4 * i + c];
+                }
+            }
+        }
+    }
+    Frame {
+        size: panel.size,
+        color: ColorData::Rgba8(bytes),
+        depth: None,
+        samples: 0,
+    }
 }
