@@ -375,10 +375,7 @@ fn geometric(@builtin(global_invocation_id) id: vec3u) {
     green_t[i] = cast_ray(r.o, r.d, r.eye).t;
 }
 
-// Steps before green's surface at which a search starts.
-const SEARCH_MARGIN_STEPS: f32 = 2.0;
-
-// The spectral pass (src/render/iso/multiview.rs): green start_t its t, red
+// The spectral pass (src/render/iso/multiview.rs): green from its t, red
 // and blue searched near green's surface, or near a neighbour's where
 // green missed.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
@@ -427,7 +424,7 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
     store_color(i, vec4f(rgb, 1.0), iso.color_format);
 }
 
-// One ray a subpixel, start_t that subpixel's view; depth is green's.
+// One ray a subpixel, from that subpixel's view; depth is green's.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn per_subpixel(@builtin(global_invocation_id) id: vec3u) {
     if id.x >= iso.width || id.y >= iso.height {

@@ -10,6 +10,7 @@ use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::ColorFormat;
 use crate::render::gpu::resources::LOD_LEVELS;
+use crate::render::iso::SEARCH_MARGIN_STEPS;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
@@ -446,6 +447,8 @@ pub(super) fn declarations() -> String {
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
+    // Steps before green's surface at which the spectral pass searches.
+    out += &format!("const SEARCH_MARGIN_STEPS: f32 = {SEARCH_MARGIN_STEPS:?}f;\n");
     out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl() + &Warp::wgsl() + &Iso::wgsl()
 }
 

@@ -12,6 +12,7 @@ use glam::{Vec3, Vec4};
 
 pub use cast::{cast, values, Caster, IsoHit};
 pub use field::{curvatures, IsoField, IsoFilter, Sample};
+pub(crate) use multiview::SEARCH_MARGIN_STEPS;
 pub use multiview::{render_display, subpixels_differing, MultiViewMethod, Panel};
 
 use super::RenderError;

@@ -40,7 +40,7 @@ impl MultiViewMethod {
 }
 
 /// Steps before the geometric hit at which a spectral search starts.
-const SEARCH_MARGIN_STEPS: f32 = 2.0;
+pub(crate) const SEARCH_MARGIN_STEPS: f32 = 2.0;
 
 /// The panel as the renderer sees it: each view's rays over the panel's
 /// pixels, and which view each subpixel (x, y, channel) belongs to.
