@@ -37,6 +37,7 @@ fn render(views: u32, method: MultiViewMethod) -> (anari_library_caveray::render
     let d = display(views);
     let view_of = |x, y, c| d.view_of(x, y, c);
     let panel = Panel {
+        color: Default::default(),
         size: d.resolution,
         views: d.view_rays().unwrap(),
         view_of: &view_of,

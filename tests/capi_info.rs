@@ -312,7 +312,20 @@ fn device_and_world_properties() {
         .unwrap();
     assert_eq!(
         unsafe { strings(cameras as *const *const c_char) },
-        ["perspective", "orthographic", "matrix", "offAxis"]
+        [
+            "perspective",
+            "orthographic",
+            "matrix",
+            "offAxis",
+            "multiView"
+        ]
+    );
+    let geometries: usize = s
+        .property(dev, "subtypes.geometry", ANARI_STRING_LIST)
+        .unwrap();
+    assert_eq!(
+        unsafe { strings(geometries as *const *const c_char) },
+        ["isosurface"]
     );
     let minor: i32 = s.property(dev, "version.minor", ANARI_INT32).unwrap();
     assert_eq!(

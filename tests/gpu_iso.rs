@@ -92,6 +92,7 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
     let d = MultiViewDisplay::from_toml(text, "test display").unwrap();
     let view_of = |x, y, c| d.view_of(x, y, c);
     let panel = Panel {
+        color: Default::default(),
         size: d.resolution,
         views: d.view_rays().unwrap(),
         view_of: &view_of,

@@ -1,7 +1,8 @@
-//! The group: volumes an instance places in the world together.
+//! The group: volumes and surfaces an instance places in the world
+//! together.
 
 use super::info::{p, Default, SubtypeInfo};
-use super::object::{Derived, State};
+use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
 use super::world::objects;
@@ -9,23 +10,39 @@ use super::world::objects;
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::GROUP,
     subtype: "",
-    description: "volumes placed together by an instance",
+    description: "volumes and surfaces placed together by an instance",
     extensions: &[],
-    params: &[p(
-        "volume",
-        &[T::ARRAY1D],
-        false,
-        Default::None,
-        "ARRAY1D of ANARI_VOLUME",
-    )
-    .elements(&[T::VOLUME])],
+    params: &[
+        p(
+            "volume",
+            &[T::ARRAY1D],
+            false,
+            Default::None,
+            "ARRAY1D of ANARI_VOLUME",
+        )
+        .elements(&[T::VOLUME]),
+        p(
+            "surface",
+            &[T::ARRAY1D],
+            false,
+            Default::None,
+            "ARRAY1D of ANARI_SURFACE",
+        )
+        .elements(&[T::SURFACE]),
+    ],
     commit: Some(commit),
 };
 
+/// A group after commit.
+#[derive(Clone, Default)]
+pub struct GroupModel {
+    pub volumes: Vec<ObjectRef>,
+    pub surfaces: Vec<ObjectRef>,
+}
+
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    Ok(Some(State::Group(Derived::Ready(objects(
-        r,
-        "volume",
-        T::VOLUME,
-    )?))))
+    Ok(Some(State::Group(Derived::Ready(GroupModel {
+        volumes: objects(r, "volume", T::VOLUME)?,
+        surfaces: objects(r, "surface", T::SURFACE)?,
+    }))))
 }

@@ -8,7 +8,8 @@ use super::object::State;
 use super::read::Read;
 use super::types::DataType as T;
 use super::{
-    camera, device_object, frame, group, instance, light, renderer, spatial_field, volume, world,
+    camera, device_object, frame, geometry, group, instance, light, material, renderer,
+    spatial_field, surface, volume, world,
 };
 
 pub struct ParamInfo {
@@ -120,6 +121,13 @@ pub const EXT_FRAME_PAIR: &str = "ANARI_CAVERAY_FRAME_STEREO_PAIR";
 /// warped to their camera (frame `caveray.deadline`, `caveray.warp`;
 /// properties `caveray.imageAge`, `caveray.warp`).
 pub const EXT_FRAME_DEADLINE: &str = "ANARI_CAVERAY_FRAME_DEADLINE";
+pub const EXT_ISOSURFACE: &str = "ANARI_KHR_GEOMETRY_ISOSURFACE";
+pub const EXT_MATTE: &str = "ANARI_KHR_MATERIAL_MATTE";
+/// Surfaces coloured by curvature (material `curvature`).
+pub const EXT_CURVATURE: &str = "ANARI_CAVERAY_MATERIAL_CURVATURE";
+/// Multi-view autostereoscopic panels, each subpixel from its own eye
+/// (camera `multiView`).
+pub const EXT_MULTI_VIEW: &str = "ANARI_CAVERAY_CAMERA_MULTI_VIEW";
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
@@ -140,6 +148,10 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_SHADING,
     EXT_FRAME_PAIR,
     EXT_FRAME_DEADLINE,
+    EXT_ISOSURFACE,
+    EXT_MATTE,
+    EXT_CURVATURE,
+    EXT_MULTI_VIEW,
 ];
 
 /// Frame channels (`anariGetObjectInfo(FRAME, "channel")`).
@@ -162,9 +174,14 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &camera::orthographic::INFO,
     &camera::matrix::INFO,
     &camera::off_axis::INFO,
+    &camera::multi_view::INFO,
     &spatial_field::structured_regular::INFO,
     &volume::transfer_function_1d::INFO,
     &light::directional::INFO,
+    &geometry::isosurface::INFO,
+    &material::matte::INFO,
+    &material::curvature::INFO,
+    &surface::INFO,
     &group::INFO,
     &instance::transform::INFO,
     &world::INFO,
@@ -283,9 +300,16 @@ mod tests {
         assert!(subtype(T::CAMERA, "fisheye").is_none());
         assert_eq!(
             subtypes(T::CAMERA),
-            ["perspective", "orthographic", "matrix", "offAxis"]
+            [
+                "perspective",
+                "orthographic",
+                "matrix",
+                "offAxis",
+                "multiView"
+            ]
         );
-        assert!(subtypes(T::GEOMETRY).is_empty());
+        assert_eq!(subtypes(T::GEOMETRY), ["isosurface"]);
+        assert_eq!(subtypes(T::MATERIAL), ["matte", "curvature"]);
     }
 
     #[test]

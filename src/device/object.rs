@@ -7,9 +7,13 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use super::array::Array;
 use super::camera::CameraModel;
 use super::frame::slot::FrameState;
+use super::geometry::IsoGeometry;
+use super::group::GroupModel;
 use super::info::SubtypeInfo;
 use super::instance::InstanceModel;
 use super::light::DirectionalLight;
+use super::material::Colouring;
+use super::surface::SurfaceModel;
 use super::types::{kind_name, DataType};
 use super::value::Params;
 use super::volume::VolumeModel;
@@ -110,7 +114,10 @@ pub enum State {
     Field(Derived<Arc<StructuredVolume>>),
     Volume(Derived<VolumeModel>),
     World(Derived<WorldModel>),
-    Group(Derived<Vec<ObjectRef>>),
+    Group(Derived<GroupModel>),
+    Geometry(Derived<IsoGeometry>),
+    Material(Derived<Colouring>),
+    Surface(Derived<SurfaceModel>),
     Instance(Derived<InstanceModel>),
     Light(Derived<DirectionalLight>),
     Camera(Derived<CameraModel>),
@@ -130,6 +137,9 @@ impl State {
             DataType::VOLUME => State::Volume(Derived::Uncommitted),
             DataType::WORLD => State::World(Derived::Uncommitted),
             DataType::GROUP => State::Group(Derived::Uncommitted),
+            DataType::GEOMETRY => State::Geometry(Derived::Uncommitted),
+            DataType::MATERIAL => State::Material(Derived::Uncommitted),
+            DataType::SURFACE => State::Surface(Derived::Uncommitted),
             DataType::INSTANCE => State::Instance(Derived::Uncommitted),
             DataType::LIGHT => State::Light(Derived::Uncommitted),
             DataType::CAMERA => State::Camera(Derived::Uncommitted),

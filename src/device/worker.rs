@@ -11,9 +11,13 @@ use super::camera::stereo::EyeView;
 use super::frame::deadline::{Background, Shot};
 use super::frame::slot::{FrameSlot, Kept};
 use super::types::{DataType, Severity, Status, StatusCode};
+use crate::cave::MultiViewDisplay;
+use crate::render::iso::{interleave, IsoSurface, MultiViewMethod, Panel};
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection, StereoFrames};
 use crate::render::warp::{Source, WarpMode};
-use crate::render::{AutoChoice, Backend, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
+use crate::render::{
+    AutoChoice, Backend, ColorFormat, Frame, FrameDesc, RenderError, RenderSettings, Renderer,
+};
 use crate::scene::Scene;
 
 /// Where a device's status messages go; called from any thread.
@@ -25,6 +29,8 @@ pub type Reporter = Arc<dyn Fn(Status) + Send + Sync>;
 #[derive(Clone)]
 pub struct RenderInputs {
     scene: Option<Scene>,
+    surfaces: Vec<IsoSurface>,
+    panel: Option<PanelJob>,
     views: Vec<EyeView>,
     settings: RenderSettings,
     desc: FrameDesc,
@@ -39,6 +45,13 @@ impl PartialEq for RenderInputs {
             _ => false,
         };
         same_scene
+            && self.surfaces.len() == other.surfaces.len()
+            && self
+                .surfaces
+                .iter()
+                .zip(&other.surfaces)
+                .all(|(a, b)| a.same(b))
+            && self.panel == other.panel
             && self.views == other.views
             && self.settings == other.settings
             && self.desc == other.desc
@@ -46,10 +59,20 @@ impl PartialEq for RenderInputs {
     }
 }
 
+/// A multi-view camera's panel image: which view each subpixel shows,
+/// and how the image is made.
+pub type PanelJob = (Arc<MultiViewDisplay>, MultiViewMethod);
+
 pub struct RenderJob {
     pub frame: u64,
-    /// `None` renders the background only (an empty world).
+    /// The world's volumes; `None` with no `surfaces` renders the
+    /// background only (an empty world).
     pub scene: Option<Scene>,
+    /// The world's isosurfaces (a world holds volumes or surfaces).
+    pub surfaces: Vec<IsoSurface>,
+    /// `Some`: `views` are a multi-view panel's, interleaved subpixel by
+    /// subpixel into one image.
+    pub panel: Option<PanelJob>,
     /// One view of the whole frame, or the two eyes of a stereo camera.
     pub views: Vec<EyeView>,
     pub settings: RenderSettings,
@@ -101,6 +124,8 @@ impl RenderJob {
     pub fn inputs(&self) -> RenderInputs {
         RenderInputs {
             scene: self.scene.clone(),
+            surfaces: self.surfaces.clone(),
+            panel: self.panel.clone(),
             views: self.views.clone(),
             settings: self.settings.clone(),
             desc: self.desc,
@@ -308,16 +333,25 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
     let mut handed = Duration::ZERO;
     // A panic must neither kill the thread nor leave the host waiting.
     let result = catch_unwind(AssertUnwindSafe(|| -> Result<Frame, String> {
-        let Some(scene) = &job.scene else {
+        if job.scene.is_none() && job.surfaces.is_empty() {
             return Ok(Frame::cleared(&job.desc, job.settings.background));
-        };
+        }
         let r = renderer_for(renderer, job.backend, &|severity, message| {
             report(status(severity, StatusCode::NoError, message))
         })?;
-        if let Some(why) = crate::render::march_warning(scene, &job.settings) {
+        if let Some(why) = job
+            .scene
+            .as_ref()
+            .and_then(|scene| crate::render::march_warning(scene, &job.settings))
+        {
             report(status(Severity::Warning, StatusCode::NoError, why));
         }
-        render_views(r, scene, &job, report, &mut handed).map_err(|e| e.to_string())
+        match (&job.panel, &job.scene) {
+            (Some(panel), _) => render_panel(r, &job, panel),
+            (None, Some(scene)) => render_views(r, scene, &job, report, &mut handed),
+            (None, None) => render_surface_views(r, &job),
+        }
+        .map_err(|e| e.to_string())
     }))
     .unwrap_or_else(|panic| {
         *renderer = None;
@@ -422,6 +456,59 @@ fn render_views(
             }
             Frame::stitched(&job.desc, &parts)
         }
+    }
+}
+
+/// A multi-view panel's image: of an isosurface by the camera's method;
+/// of volumes the naive way (every view rendered, then interleaved), as
+/// the per-pixel-eye passes are the isosurface caster's.
+fn render_panel(
+    r: &mut Renderer,
+    job: &RenderJob,
+    (display, method): &PanelJob,
+) -> Result<Frame, RenderError> {
+    let view_of = |x, y, c| display.view_of(x, y, c);
+    let panel = Panel {
+        size: job.desc.size,
+        color: job.desc.color,
+        views: job.views.iter().map(|v| v.rays).collect(),
+        view_of: &view_of,
+    };
+    match (&job.scene, job.surfaces.as_slice()) {
+        (Some(scene), _) => {
+            // Views in floats: an 8-bit panel is quantised once.
+            let desc = FrameDesc::new(panel.size).with_color(ColorFormat::Rgba32F);
+            let mut views = Vec::with_capacity(job.views.len());
+            for v in &job.views {
+                views.push(r.render_until(scene, &v.rays, &job.settings, &desc, &job.slot.stop)?);
+            }
+            interleave(&views, &panel)
+        }
+        (None, [surface]) => r.cast_display(surface, &panel, *method),
+        (None, surfaces) => Err(RenderError::Settings(format!(
+            "a multi-view panel image shows one isosurface, not {}",
+            surfaces.len()
+        ))),
+    }
+}
+
+/// The job's views of its isosurfaces, each into its rectangle of the
+/// frame.
+fn render_surface_views(r: &mut Renderer, job: &RenderJob) -> Result<Frame, RenderError> {
+    let mut parts = Vec::with_capacity(job.views.len());
+    for view in job.views.iter().filter(|v| v.size.min_element() > 0) {
+        let desc = FrameDesc {
+            size: view.size,
+            ..job.desc
+        };
+        parts.push((
+            view.offset,
+            r.cast_surfaces(&job.surfaces, &view.rays, &desc)?,
+        ));
+    }
+    match parts.as_slice() {
+        [(_, one)] if one.size == job.desc.size => Ok(parts.remove(0).1),
+        _ => Frame::stitched(&job.desc, &parts),
     }
 }
 

@@ -1,5 +1,6 @@
-//! The world: the scene a frame renders, its volumes (directly, or in
-//! groups placed by instances, as VTK builds worlds) and its lights.
+//! The world: the scene a frame renders, its volumes and surfaces
+//! (directly, or in groups placed by instances, as VTK builds worlds) and
+//! its lights.
 
 use glam::Mat4;
 
@@ -12,7 +13,7 @@ use crate::scene::MAX_VOLUMES;
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::WORLD,
     subtype: "",
-    description: "the scene: up to 8 volumes, composited sample by sample where they overlap, lit by the first directional light",
+    description: "the scene: up to 8 volumes, composited sample by sample where they overlap, or isosurfaces, the nearest showing; lit by the first directional light",
     extensions: &[],
     params: &[
         p(
@@ -23,6 +24,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "ARRAY1D of ANARI_VOLUME",
         )
         .elements(&[T::VOLUME]),
+        p(
+            "surface",
+            &[T::ARRAY1D],
+            false,
+            Default::None,
+            "ARRAY1D of ANARI_SURFACE (isosurfaces)",
+        )
+        .elements(&[T::SURFACE]),
         p(
             "light",
             &[T::ARRAY1D],
@@ -36,27 +45,32 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::ARRAY1D],
             false,
             Default::None,
-            "ARRAY1D of ANARI_INSTANCE: groups of volumes, each placed by its transform",
+            "ARRAY1D of ANARI_INSTANCE: groups of volumes and surfaces, each placed by its transform",
         )
         .elements(&[T::INSTANCE]),
     ],
     commit: Some(commit),
 };
 
-/// A world after commit: the objects its arrays name, each volume with
-/// the transform of the instance that placed it (`None`: in the world
-/// directly).
+/// A world after commit: the objects its arrays name, each volume and
+/// surface with the transform of the instance that placed it (`None`: in
+/// the world directly).
 #[derive(Clone, Default)]
 pub struct WorldModel {
     pub volumes: Vec<(ObjectRef, Option<Mat4>)>,
+    pub surfaces: Vec<(ObjectRef, Option<Mat4>)>,
     pub lights: Vec<ObjectRef>,
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    let mut volumes: Vec<(ObjectRef, Option<Mat4>)> = objects(r, "volume", T::VOLUME)?
-        .into_iter()
-        .map(|v| (v, None))
-        .collect();
+    let direct = |name, kind| -> Result<Vec<(ObjectRef, Option<Mat4>)>, String> {
+        Ok(objects(r, name, kind)?
+            .into_iter()
+            .map(|o| (o, None))
+            .collect())
+    };
+    let mut volumes = direct("volume", T::VOLUME)?;
+    let mut surfaces = direct("surface", T::SURFACE)?;
     for instance in objects(r, "instance", T::INSTANCE)? {
         let model = match &instance.lock().state {
             State::Instance(i) => i.ready(&instance.describe())?.clone(),
@@ -67,7 +81,9 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
             State::Group(g) => g.ready(&group.describe())?.clone(),
             _ => continue,
         };
-        volumes.extend(members.into_iter().map(|v| (v, Some(model.transform))));
+        let placed = |o: &ObjectRef| (o.clone(), Some(model.transform));
+        volumes.extend(members.volumes.iter().map(placed));
+        surfaces.extend(members.surfaces.iter().map(placed));
     }
     if volumes.len() > MAX_VOLUMES {
         return Err(format!(
@@ -77,6 +93,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     }
     Ok(Some(State::World(Derived::Ready(WorldModel {
         volumes,
+        surfaces,
         lights: objects(r, "light", T::LIGHT)?,
     }))))
 }

@@ -258,6 +258,56 @@ impl Renderer {
         }
     }
 
+    /// `surfaces` seen through `rays`, the nearest per pixel: the CPU
+    /// reference's caster or the GPU's.
+    pub fn cast_surfaces(
+        &mut self,
+        surfaces: &[iso::IsoSurface],
+        rays: &RayGen,
+        desc: &FrameDesc,
+    ) -> Result<Frame, RenderError> {
+        let one = FrameDesc {
+            depth: desc.depth || surfaces.len() > 1,
+            ..*desc
+        };
+        let mut frames = Vec::with_capacity(surfaces.len());
+        for s in surfaces {
+            frames.push(match self {
+                Renderer::Gpu(g) => g.cast_iso(&s.placed, rays, &one, &s.settings)?,
+                Renderer::Cpu(_) => iso::cast(&s.placed, rays, &one, &s.settings)?.0,
+            });
+        }
+        match frames.len() {
+            0 => Err(RenderError::Settings("no surface to cast".into())),
+            1 => Ok(frames.remove(0)),
+            _ => iso::nearest(frames, desc),
+        }
+    }
+
+    /// A multi-view panel's image of `surface` by `method`. The GPU's naive
+    /// way is a cast per view, interleaved.
+    pub fn cast_display(
+        &mut self,
+        surface: &iso::IsoSurface,
+        panel: &iso::Panel,
+        method: iso::MultiViewMethod,
+    ) -> Result<Frame, RenderError> {
+        let (placed, settings) = (&surface.placed, &surface.settings);
+        match self {
+            Renderer::Gpu(g) if method == iso::MultiViewMethod::Naive => {
+                // Views in floats: an 8-bit panel is quantised once.
+                let desc = FrameDesc::new(panel.size).with_color(ColorFormat::Rgba32F);
+                let mut views = Vec::with_capacity(panel.views.len());
+                for rays in &panel.views {
+                    views.push(g.cast_iso(placed, rays, &desc, settings)?);
+                }
+                iso::interleave(&views, panel)
+            }
+            Renderer::Gpu(g) => g.cast_display(placed, panel, settings, method),
+            Renderer::Cpu(_) => Ok(iso::render_display(placed, panel, settings, method)?.0),
+        }
+    }
+
     /// `render`, giving up with `RenderError::Stopped` once `stop` is set:
     /// the CPU reference checks it between pixels, the GPU between bands of
     /// rows (about 2^18 pixels each).

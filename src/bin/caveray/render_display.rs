@@ -71,6 +71,7 @@ pub fn run(
     let rays = display.view_rays().map_err(|e| runtime(&e))?;
     let view_of = |x, y, c| display.view_of(x, y, c);
     let panel = Panel {
+        color: Default::default(),
         size: resolution,
         views: rays.clone(),
         view_of: &view_of,

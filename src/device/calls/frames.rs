@@ -141,6 +141,12 @@ impl Device {
         warp: WarpMode,
     ) -> Result<Present, String> {
         let called = Instant::now();
+        if job.panel.is_some() {
+            return Err("a frame with caveray.deadline shows one view: set the multi-view camera's 'view', or render the panel image without a deadline".into());
+        }
+        if !job.surfaces.is_empty() {
+            return Err("a frame with caveray.deadline warps volume images; this world holds isosurfaces (render it without a deadline)".into());
+        }
         let [view] = job.views.as_slice() else {
             return Err("a frame with caveray.deadline shows one view: set the camera's stereoMode to none (each eye its own frame)".into());
         };
@@ -322,6 +328,29 @@ impl Device {
         } else {
             Some(Scene::placed(placed).map_err(|e| format!("{}: {e}", world.describe()))?)
         };
+        let surfaces = super::surfaces::iso_surfaces(&world_model.surfaces, &settings, light)?;
+        if scene.is_some() && !surfaces.is_empty() {
+            return Err(format!(
+                "{} holds volumes and surfaces; caveray draws one or the other in a frame (a volume composited with isosurfaces is not implemented)",
+                world.describe()
+            ));
+        }
+        let panel = match &camera.lock().state {
+            State::Camera(Derived::Ready(c)) => c.panel(size),
+            _ => None,
+        };
+        if panel.is_some() {
+            if depth {
+                return Err("a multi-view panel image has no depth channel (each subpixel has its own eye): unset 'channel.depth', or set the camera's 'view'".into());
+            }
+            if surfaces.len() > 1 {
+                return Err(format!(
+                    "{} has {} isosurfaces (surfaces times iso-values); a multi-view panel image shows one",
+                    world.describe(),
+                    surfaces.len()
+                ));
+            }
+        }
         let mut desc =
             FrameDesc::new(size).with_color(color_type.and_then(color_format).unwrap_or_default());
         desc.depth = depth;
@@ -332,6 +361,8 @@ impl Device {
         let job = RenderJob {
             frame: frame.handle,
             scene,
+            surfaces,
+            panel,
             views,
             settings,
             desc,
@@ -398,6 +429,9 @@ impl Device {
         job: &RenderJob,
     ) -> Result<(f64, Partner), Unpaired> {
         let unsuited = |why: &str| Unpaired::Unsuited(why.to_owned());
+        if job.panel.is_some() {
+            return Err(Unpaired::Pointless);
+        }
         let ([view], Some(scene)) = (job.views.as_slice(), &job.scene) else {
             return Err(Unpaired::Pointless);
         };
@@ -415,6 +449,9 @@ impl Device {
         }
         if theirs.desc != job.desc {
             return Err(unsuited("differs in size or channels"));
+        }
+        if theirs.panel.is_some() {
+            return Err(unsuited("renders a multi-view panel"));
         }
         let [other] = theirs.views.as_slice() else {
             return Err(unsuited("renders both eyes itself (stereoMode)"));

@@ -7,6 +7,7 @@
 mod arrays;
 mod frames;
 mod params;
+mod surfaces;
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -388,13 +389,25 @@ impl Device {
     }
 }
 
-/// The box around a world's volumes, if any is ready.
+/// The box around a world's volumes and surfaces, if any is ready.
 fn world_bounds(world: &WorldModel) -> Option<Property> {
-    let mut boxes = world.volumes.iter().filter_map(|(v, transform)| {
-        let field = match &v.lock().state {
-            State::Volume(m) => m.ready("").ok()?.field.clone(),
-            _ => return None,
-        };
+    let field_of = |o: &ObjectRef| -> Option<ObjectRef> {
+        match &o.lock().state {
+            State::Volume(m) => Some(m.ready("").ok()?.field.clone()),
+            State::Surface(s) => {
+                let geometry = s.ready("").ok()?.geometry.clone();
+                let field = match &geometry.lock().state {
+                    State::Geometry(g) => g.ready("").ok()?.field.clone(),
+                    _ => return None,
+                };
+                Some(field)
+            }
+            _ => None,
+        }
+    };
+    let placed = world.volumes.iter().chain(&world.surfaces);
+    let mut boxes = placed.filter_map(|(v, transform)| {
+        let field = field_of(v)?;
         let grid = match &field.lock().state {
             State::Field(f) => f.ready("").ok()?.bounds(),
             _ => return None,

@@ -4,6 +4,7 @@
 //! clip range) is read here once.
 
 pub mod matrix;
+pub mod multi_view;
 pub mod off_axis;
 pub mod orthographic;
 pub mod perspective;
@@ -11,6 +12,7 @@ pub mod stereo;
 
 use glam::{DVec2, DVec3, UVec2};
 
+use self::multi_view::MultiViewCamera;
 use self::stereo::{EyeView, Stereo, StereoMode};
 use super::info::{p, Default, ParamInfo, F32, VEC3};
 use super::object::{Derived, State};
@@ -204,6 +206,8 @@ pub enum CameraModel {
         stereo: Stereo,
         axis: DVec3,
     },
+    /// caveray's autostereoscopic panel.
+    MultiView(Box<MultiViewCamera>),
 }
 
 impl CameraModel {
@@ -219,6 +223,12 @@ impl CameraModel {
             }),
             CameraModel::Matrix(c) => Ok(c.ray_gen(size)),
             CameraModel::OffAxis { camera, .. } => Ok(camera.ray_gen(size)),
+            // The view asked for, else the one nearest the middle.
+            CameraModel::MultiView(m) => m
+                .display
+                .view_camera(m.view.unwrap_or(m.display.views / 2))
+                .map(|c| c.ray_gen(size))
+                .map_err(|e| e.to_string()),
         }
     }
 
@@ -231,6 +241,10 @@ impl CameraModel {
             } => placement.matrix_camera(*fovy, placement.aspect(size)),
             CameraModel::OffAxis { camera, .. } => off_axis_matrices(camera.screen(), camera.eye()),
             CameraModel::Matrix(c) => c.eye().is_some().then_some(**c),
+            CameraModel::MultiView(m) => {
+                let view = m.view?;
+                off_axis_matrices(&m.display.screen, m.display.eye(view))
+            }
             CameraModel::Orthographic { .. } => None,
         }
     }
@@ -249,6 +263,20 @@ impl CameraModel {
         let stereo = match self {
             CameraModel::Perspective { stereo, .. } | CameraModel::OffAxis { stereo, .. } => {
                 *stereo
+            }
+            // The panel image: every view over the whole frame, which the
+            // frame interleaves (see `panel`).
+            CameraModel::MultiView(m) if m.view.is_none() => {
+                let rays = m.panel(size).view_rays().map_err(|e| e.to_string())?;
+                return Ok(rays
+                    .into_iter()
+                    .map(|rays| EyeView {
+                        rays,
+                        offset: UVec2::ZERO,
+                        size,
+                        matrix: None,
+                    })
+                    .collect());
             }
             _ => return whole(),
         };
@@ -302,6 +330,21 @@ impl CameraModel {
                 })
             })
             .collect()
+    }
+
+    /// The panel whose subpixels interleave this camera's views, for a
+    /// multi-view camera asked for the panel image.
+    pub fn panel(
+        &self,
+        size: UVec2,
+    ) -> Option<(
+        std::sync::Arc<crate::cave::MultiViewDisplay>,
+        crate::render::iso::MultiViewMethod,
+    )> {
+        match self {
+            CameraModel::MultiView(m) if m.view.is_none() => Some((m.panel(size), m.method)),
+            _ => None,
+        }
     }
 
     /// The committed state, once the camera makes rays. A perspective

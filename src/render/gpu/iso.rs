@@ -72,7 +72,7 @@ impl GpuRenderer {
                 "a panel on the GPU has 1 to 256 views, not {views}"
             )));
         }
-        let desc = FrameDesc::new(panel.size);
+        let desc = FrameDesc::new(panel.size).with_color(panel.color);
         desc.validate()?;
         let v = |x: glam::Vec3| x.extend(0.0).to_array();
         let rays: Vec<[f32; 4]> = panel

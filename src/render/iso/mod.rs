@@ -7,6 +7,7 @@
 mod cast;
 mod field;
 mod multiview;
+mod surfaces;
 
 use glam::{Vec3, Vec4};
 
@@ -14,6 +15,7 @@ pub use cast::{cast, values, Caster, IsoHit};
 pub use field::{curvatures, IsoField, IsoFilter, Sample};
 pub(crate) use multiview::SEARCH_MARGIN_STEPS;
 pub use multiview::{render_display, subpixels_differing, MultiViewMethod, Panel};
+pub use surfaces::{interleave, nearest, IsoSurface};
 
 use super::RenderError;
 

@@ -13,7 +13,7 @@ use super::cast::{values, Caster, IsoHit};
 use super::IsoSettings;
 use crate::geometry::RayGen;
 use crate::render::frame::filled;
-use crate::render::{Frame, FrameDesc, RenderError};
+use crate::render::{ColorFormat, Frame, FrameDesc, RenderError};
 use crate::scene::PlacedVolume;
 
 /// How the display image is made.
@@ -46,6 +46,8 @@ pub(crate) const SEARCH_MARGIN_STEPS: f32 = 2.0;
 /// pixels, and which view each subpixel (x, y, channel) belongs to.
 pub struct Panel<'a> {
     pub size: UVec2,
+    /// The display image's pixel format.
+    pub color: ColorFormat,
     pub views: Vec<RayGen>,
     pub view_of: &'a (dyn Fn(u32, u32, usize) -> u32 + Sync),
 }
@@ -67,7 +69,7 @@ pub fn render_display(
 ) -> Result<(Frame, u64), RenderError> {
     settings.validate()?;
     let size = display.size;
-    let desc = FrameDesc::new(size);
+    let desc = FrameDesc::new(size).with_color(display.color);
     desc.validate()?;
     if display.views.is_empty() {
         return Err(RenderError::Settings(

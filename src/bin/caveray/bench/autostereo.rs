@@ -136,6 +136,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         for d in &displays {
             let view_of = |x, y, c| d.view_of(x, y, c);
             let panel = Panel {
+                color: Default::default(),
                 size: d.resolution,
                 views: d.view_rays().map_err(runtime)?,
                 view_of: &view_of,

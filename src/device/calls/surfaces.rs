@@ -1,0 +1,72 @@
+//! A world's surfaces as a frame renders them: each surface's geometry,
+//! field and material resolved, one `IsoSurface` per iso-value, shaded by
+//! the renderer's settings and the world's light (its direction: the
+//! isosurface shading's light is white).
+
+use glam::Mat4;
+
+use crate::device::light::DirectionalLight;
+use crate::device::object::{ObjectRef, State};
+use crate::render::iso::{IsoSettings, IsoSurface};
+use crate::render::RenderSettings;
+use crate::scene::{PlacedVolume, TransferFunction};
+
+/// The isosurfaces of `surfaces` (each with the transform of the instance
+/// that placed it), or why one cannot be drawn.
+pub(super) fn iso_surfaces(
+    surfaces: &[(ObjectRef, Option<Mat4>)],
+    renderer: &RenderSettings,
+    light: Option<DirectionalLight>,
+) -> Result<Vec<IsoSurface>, String> {
+    let mut out = Vec::new();
+    for (surface, transform) in surfaces {
+        let not_ours = |o: &ObjectRef| format!("{} is not implemented by caveray", o.describe());
+        let model = match &surface.lock().state {
+            State::Surface(s) => s.ready(&surface.describe())?.clone(),
+            _ => return Err(not_ours(surface)),
+        };
+        let (geometry, material) = (&model.geometry, &model.material);
+        let geometry_model = match &geometry.lock().state {
+            State::Geometry(g) => g.ready(&geometry.describe())?.clone(),
+            _ => return Err(not_ours(geometry)),
+        };
+        let colouring = match &material.lock().state {
+            State::Material(m) => *m.ready(&material.describe())?,
+            _ => return Err(not_ours(material)),
+        };
+        let field = &geometry_model.field;
+        let volume = match &field.lock().state {
+            State::Field(f) => f.ready(&field.describe())?.clone(),
+            _ => return Err(not_ours(field)),
+        };
+        let transform = transform.unwrap_or(Mat4::IDENTITY);
+        // The caster reads the field alone; the placed volume's transfer
+        // function is never evaluated.
+        let unclassified = TransferFunction::new(vec![glam::Vec4::ONE], vec![1.0], (0.0, 1.0), 1.0)
+            .map_err(|e| e.to_string())?;
+        let placed = PlacedVolume {
+            volume,
+            transfer_function: std::sync::Arc::new(unclassified),
+            transform,
+        };
+        for &isovalue in &geometry_model.isovalues {
+            let settings = IsoSettings {
+                filter: geometry_model.filter,
+                // The renderer's step is in half cells.
+                steps_per_cell: (2.0 / renderer.step_factor).clamp(0.25, 64.0),
+                colouring,
+                light: light.map(|l| l.towards),
+                background: renderer.background,
+                ..IsoSettings::new(isovalue)
+            };
+            settings
+                .validate()
+                .map_err(|e| format!("{}: {e}", surface.describe()))?;
+            out.push(IsoSurface {
+                placed: placed.clone(),
+                settings,
+            });
+        }
+    }
+    Ok(out)
+}

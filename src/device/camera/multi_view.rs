@@ -1,0 +1,230 @@
+//! caveray's `multiView` camera: a lenticular or parallax-barrier panel
+//! whose every subpixel is seen from its own eye, the ANARI face of the
+//! display model in `crate::cave::display` (the TOML's fields, renamed to
+//! ANARI's camelCase). The frame is the panel: its size is the panel's
+//! pixels. docs/autostereo.md has the formulas.
+
+use std::sync::Arc;
+
+use glam::UVec2;
+
+use super::CameraModel;
+use crate::cave::{MultiViewDisplay, Units, ViewPattern, MAX_VIEWS};
+use crate::device::array::Array;
+use crate::device::info::{p, Default, SubtypeInfo, EXT_MULTI_VIEW, F32, VEC3};
+use crate::device::object::State;
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
+use crate::geometry::Screen;
+use crate::render::iso::MultiViewMethod;
+
+/// The largest view table period, in pixels each way.
+const MAX_PERIOD: u64 = 1024;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::CAMERA,
+    subtype: "multiView",
+    description: "an autostereoscopic panel: each subpixel seen from the eye of its view, views spread along a line in front of the panel",
+    extensions: &[EXT_MULTI_VIEW],
+    params: &[
+        p("lowerLeft", VEC3, true, Default::None, "panel's lower-left corner"),
+        p("lowerRight", VEC3, true, Default::None, "panel's lower-right corner"),
+        p("upperRight", VEC3, true, Default::None, "panel's upper-right corner"),
+        p("views", &[T::INT32, T::UINT32], true, Default::None, "number of views, 1 to 64")
+            .range(1.0, 64.0),
+        p("viewingDistance", F32, true, Default::None,
+          "from the panel to the line of eyes, along its normal (world units)"),
+        p("viewSpacing", F32, true, Default::None,
+          "between neighbouring views' eyes on that line; view 0 at the right end"),
+        p("lens.pitch", F32, false, Default::None,
+          "lens width across the panel, in subpixels (a lens sheet; or give viewTable)"),
+        p("lens.slant", F32, false, Default::Floats(&[0.0]),
+          "subpixels the lens moves right per subpixel height upward (tan of its slant)"),
+        p("lens.offset", F32, false, Default::Floats(&[0.0]),
+          "where the first lens starts, in subpixels"),
+        p("viewTable", &[T::ARRAY2D], false, Default::None,
+          "one period of the pattern, period.x by period.y pixels from the lower left, each pixel's red, green and blue view (instead of lens.*)")
+            .elements(&[T::UINT8_VEC3, T::UINT32_VEC3]),
+        p("view", &[T::INT32], false, Default::None,
+          "one view's image alone (0 to views - 1); unset or -1: the interleaved panel image"),
+        p("method", &[T::STRING], false, Default::Text("passes"),
+          "passes (geometric + spectral: one view's cost), perSubpixel (one ray a subpixel) or naive (every view, then interleaved)")
+            .names(&["passes", "perSubpixel", "naive"]),
+    ],
+    commit: Some(commit),
+};
+
+/// A multi-view camera after commit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MultiViewCamera {
+    /// The panel; its resolution is each frame's size.
+    pub display: MultiViewDisplay,
+    /// `Some`: that view's image alone.
+    pub view: Option<u32>,
+    pub method: MultiViewMethod,
+}
+
+impl MultiViewCamera {
+    /// The panel of a frame of `size`.
+    pub fn panel(&self, size: UVec2) -> Arc<MultiViewDisplay> {
+        Arc::new(MultiViewDisplay {
+            resolution: size,
+            ..self.display.clone()
+        })
+    }
+}
+
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let point = |name| r.vec3(name).map(|v| v.as_dvec3());
+    let screen = Screen::new(
+        point("lowerLeft")?,
+        point("lowerRight")?,
+        point("upperRight")?,
+    )
+    .map_err(|e| format!("the panel's corners: {e}"))?;
+    let views = whole(r, "views")?.unwrap_or(0);
+    if !(1..=i64::from(MAX_VIEWS)).contains(&views) {
+        return Err(format!("views must be 1 to {MAX_VIEWS}, got {views}"));
+    }
+    let views = views as u32;
+    let positive = |name| {
+        let x = r.f32(name)?;
+        if x.is_finite() && x > 0.0 {
+            Ok(f64::from(x))
+        } else {
+            Err(format!("{name} must be positive and finite, got {x}"))
+        }
+    };
+    let viewing_distance = positive("viewingDistance")?;
+    let view_spacing = positive("viewSpacing")?;
+    let pattern = match (r.set("lens.pitch"), r.object("viewTable")) {
+        (Some(_), Some(_)) => {
+            return Err(
+                "give either lens.pitch (with lens.slant, lens.offset) or viewTable, not both"
+                    .into(),
+            )
+        }
+        (None, None) => {
+            return Err(
+                "a multi-view camera needs lens.pitch (a lens sheet) or viewTable (a pattern)"
+                    .into(),
+            )
+        }
+        (None, Some(_)) => r
+            .array("viewTable", |a| table(a, views))?
+            .ok_or("viewTable is not set")?,
+        (Some(_), None) => {
+            let finite = |name| {
+                let x = r.f32(name)?;
+                if x.is_finite() {
+                    Ok(f64::from(x))
+                } else {
+                    Err(format!("{name} must be finite, got {x}"))
+                }
+            };
+            ViewPattern::Lens {
+                pitch: positive("lens.pitch")?,
+                slant: finite("lens.slant")?,
+                offset: finite("lens.offset")?,
+            }
+        }
+    };
+    let view = match whole(r, "view")? {
+        None | Some(-1) => None,
+        Some(v) if (0..i64::from(views)).contains(&v) => Some(v as u32),
+        Some(v) => {
+            return Err(format!(
+                "view {v} is not one of the {views} views (0 to {}) or -1 (the panel image)",
+                views - 1
+            ))
+        }
+    };
+    let method = match r.string("method") {
+        Some("perSubpixel") => MultiViewMethod::PerSubpixel,
+        Some("naive") => MultiViewMethod::Naive,
+        Some("passes") | None => MultiViewMethod::GeometricSpectral,
+        Some(other) => {
+            warn(format!(
+                "method '{other}' is not one of passes, perSubpixel, naive; rendering by passes"
+            ));
+            MultiViewMethod::GeometricSpectral
+        }
+    };
+    let display = MultiViewDisplay {
+        name: "multiView camera".into(),
+        units: Units::Metres,
+        screen,
+        resolution: UVec2::ONE,
+        views,
+        pattern,
+        viewing_distance,
+        view_spacing,
+    };
+    // Every view's eye must see the panel's front.
+    for v in [0, views - 1] {
+        display
+            .view_camera(v)
+            .map_err(|e| format!("view {v}'s eye: {e}"))?;
+    }
+    CameraModel::MultiView(Box::new(MultiViewCamera {
+        display,
+        view,
+        method,
+    }))
+    .committed()
+}
+
+/// An INT32 or UINT32 parameter, if set.
+fn whole(r: &Read<'_>, name: &str) -> Result<Option<i64>, String> {
+    let Some(v) = r.set(name) else {
+        return Ok(None);
+    };
+    match (v.i32(), v.u32s().as_deref()) {
+        (Some(i), _) => Ok(Some(i64::from(i))),
+        (None, Some([u])) => Ok(Some(i64::from(*u))),
+        _ => Err(format!("'{name}' must be an INT32 or UINT32")),
+    }
+}
+
+/// A view table array: its dimensions are the period.
+fn table(a: &Array, views: u32) -> Result<ViewPattern, String> {
+    let [px, py, _] = a.dims();
+    if px > MAX_PERIOD || py > MAX_PERIOD || a.is_empty() {
+        return Err(format!(
+            "viewTable is {px}x{py}; a period is 1 to {MAX_PERIOD} pixels each way"
+        ));
+    }
+    let bytes = a.bytes();
+    let entries: Vec<[u32; 3]> = match a.element() {
+        T::UINT8_VEC3 => bytes
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]].map(u32::from))
+            .collect(),
+        T::UINT32_VEC3 => bytes
+            .chunks_exact(12)
+            .map(|c| {
+                let word = |i: usize| u32::from_ne_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]);
+                [word(0), word(4), word(8)]
+            })
+            .collect(),
+        other => {
+            return Err(format!(
+                "viewTable holds {other}; expected UINT8_VEC3 or UINT32_VEC3"
+            ))
+        }
+    };
+    if let Some((i, e)) = entries
+        .iter()
+        .enumerate()
+        .find(|(_, e)| e.iter().any(|&v| v >= views))
+    {
+        return Err(format!(
+            "viewTable[{i}] is {e:?}; views are 0 to {}",
+            views - 1
+        ));
+    }
+    Ok(ViewPattern::Table {
+        period: UVec2::new(px as u32, py as u32),
+        views: entries,
+    })
+}

@@ -1,0 +1,54 @@
+//! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one colour.
+//! Surfaces are opaque here; an opacity below 1 is drawn opaque, said so.
+
+use crate::device::info::{p, Default, SubtypeInfo, EXT_MATTE, F32};
+use crate::device::object::{Derived, State};
+use crate::device::read::Read;
+use crate::device::types::DataType as T;
+use crate::render::iso::Colouring;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::MATERIAL,
+    subtype: "matte",
+    description: "one colour (linear RGB), lit by the renderer's shading",
+    extensions: &[EXT_MATTE],
+    params: &[
+        p(
+            "color",
+            &[T::FLOAT32_VEC3, T::FLOAT32_VEC4],
+            false,
+            Default::Floats(&[0.8, 0.8, 0.8]),
+            "the surface's colour, linear RGB in [0, 1] (a fourth component is ignored)",
+        ),
+        p(
+            "opacity",
+            F32,
+            false,
+            Default::Floats(&[1.0]),
+            "surfaces are drawn opaque; below 1 is warned about",
+        )
+        .range(0.0, 1.0),
+    ],
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let color = match r.set("color").and_then(|v| v.f32s()) {
+        Some(f) if f.len() == 4 => glam::Vec3::from_slice(&f),
+        _ => r.vec3("color")?,
+    };
+    if !color.is_finite() {
+        return Err(format!("color {color} must be finite"));
+    }
+    let clamped = color.clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
+    if clamped != color {
+        warn(format!("color {color} lies outside [0, 1]; clamped"));
+    }
+    let opacity = r.f32("opacity")?;
+    if opacity < 1.0 {
+        warn(format!("opacity {opacity}: caveray draws surfaces opaque"));
+    }
+    Ok(Some(State::Material(Derived::Ready(Colouring::Flat(
+        clamped,
+    )))))
+}

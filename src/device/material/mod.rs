@@ -1,0 +1,7 @@
+//! Materials: one module per subtype, each giving a surface its colouring
+//! before the renderer's Blinn-Phong shading.
+
+pub mod curvature;
+pub mod matte;
+
+pub use crate::render::iso::Colouring;

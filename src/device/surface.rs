@@ -1,0 +1,51 @@
+//! The surface: a geometry drawn in a material, as worlds and groups
+//! hold them.
+
+use super::info::{p, Default, SubtypeInfo};
+use super::object::{Derived, ObjectRef, State};
+use super::read::Read;
+use super::types::DataType as T;
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::SURFACE,
+    subtype: "",
+    description: "a geometry (isosurface) drawn in a material (matte, curvature)",
+    extensions: &[],
+    params: &[
+        p(
+            "geometry",
+            &[T::GEOMETRY],
+            true,
+            Default::None,
+            "what is drawn",
+        ),
+        p(
+            "material",
+            &[T::MATERIAL],
+            true,
+            Default::None,
+            "how it is coloured",
+        ),
+    ],
+    commit: Some(commit),
+};
+
+/// A surface after commit: its objects, resolved when a frame renders.
+#[derive(Clone)]
+pub struct SurfaceModel {
+    pub geometry: ObjectRef,
+    pub material: ObjectRef,
+}
+
+fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    // Setting the parameters checked their kinds.
+    let object = |name: &str, kind: T| -> Result<ObjectRef, String> {
+        r.object(name)
+            .cloned()
+            .ok_or_else(|| format!("parameter '{name}' ({kind}) is required"))
+    };
+    Ok(Some(State::Surface(Derived::Ready(SurfaceModel {
+        geometry: object("geometry", T::GEOMETRY)?,
+        material: object("material", T::MATERIAL)?,
+    }))))
+}
