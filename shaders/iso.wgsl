@@ -192,8 +192,8 @@ fn span(o: vec3f, d: vec3f) -> Span {
     let go = m * o + vec3f(iso.to_grid_x.w, iso.to_grid_y.w, iso.to_grid_z.w);
     let gd = m * d;
     let inv = 1.0 / vec3f(safe(gd.x), safe(gd.y), safe(gd.z));
-    let ta = (vec3f(0.0) - go) * inv;
-    let tb = (last_vertex() - go) * inv;
+    let ta = (iso.box_lo.xyz - go) * inv;
+    let tb = (iso.box_hi.xyz - go) * inv;
     let t0 = max(max(max(min(ta.x, tb.x), min(ta.y, tb.y)), min(ta.z, tb.z)), iso.near);
     let t1 = min(min(min(max(ta.x, tb.x), max(ta.y, tb.y)), max(ta.z, tb.z)), iso.far);
     return Span(go, gd, t0, t1);
@@ -210,13 +210,16 @@ fn hit_at(o: vec3f, d: vec3f, eye: vec4f, sp: Span, t: f32) -> Cast {
     return Cast(shade_hit(sp.go + sp.gd * t, d, grid_to_world()), depth, t);
 }
 
-// The first crossing in [start_t, until] of the ray's span.
-fn march_span(o: vec3f, d: vec3f, eye: vec4f, sp: Span, start_t: f32, until: f32) -> Cast {
-    var a = start_t;
-    var fa = value(sp.go + sp.gd * a) - iso.isovalue;
-    let steps = u32(min(ceil((until - start_t) / iso.step), 1e6));
-    for (var k = 1u; k <= steps; k++) {
-        let b = min(start_t + f32(k) * iso.step, until);
+// The first crossing along the ray's span from its march step `k0`, where
+// the field minus the iso-value is `f0`, to its step `last` at most. Every
+// march takes its steps from the span's start, so a search that starts
+// later finds the whole march's crossing, to the bit.
+fn march_span(o: vec3f, d: vec3f, eye: vec4f, sp: Span, k0: u32, f0: f32, last: u32) -> Cast {
+    var a = sp.t0 + f32(k0) * iso.step;
+    var fa = f0;
+    let steps = min(u32(min(ceil((sp.t1 - sp.t0) / iso.step), 1e6)), last);
+    for (var k = k0 + 1u; k <= steps; k++) {
+        let b = min(sp.t0 + f32(k) * iso.step, sp.t1);
         let fb = value(sp.go + sp.gd * b) - iso.isovalue;
         if fa == 0.0 || (fa < 0.0) != (fb < 0.0) {
             return hit_at(o, d, eye, sp, refine(sp.go, sp.gd, a, fa, b, fb));
@@ -227,6 +230,11 @@ fn march_span(o: vec3f, d: vec3f, eye: vec4f, sp: Span, start_t: f32, until: f32
     return missed();
 }
 
+// Whole march steps from the span's start that fit in `length`.
+fn steps_before(sp: Span, length: f32) -> u32 {
+    return u32(clamp(floor(min(length, sp.t1 - sp.t0) / iso.step), 0.0, 1e6));
+}
+
 // One ray at the isosurface: its shaded colour (or the background), depth
 // from `eye` (w: 1 if it has one, else along the ray) and t.
 fn cast_ray(o: vec3f, d: vec3f, eye: vec4f) -> Cast {
@@ -234,24 +242,28 @@ fn cast_ray(o: vec3f, d: vec3f, eye: vec4f) -> Cast {
     if !(sp.t1 > sp.t0) {
         return missed();
     }
-    return march_span(o, d, eye, sp, sp.t0, sp.t1);
+    let entry = value(sp.go + sp.gd * sp.t0) - iso.isovalue;
+    return march_span(o, d, eye, sp, 0u, entry, 0xffffffffu);
 }
 
-// The first crossing in [start_t, until], if the ray is on the same side of
-// the iso-value at `start_t` as where it enters the grid; else the whole
-// ray (a crossing lies before `start_t`).
+// The first crossing in [start_t, until] (from the last march step at or
+// before `start_t`), if the ray is on the same side of the iso-value there
+// as where it enters the grid; else the whole ray (a crossing lies before).
 fn cast_window(o: vec3f, d: vec3f, eye: vec4f, start_t: f32, until: f32) -> Cast {
     let sp = span(o, d);
     if !(sp.t1 > sp.t0) {
         return missed();
     }
-    let start = clamp(start_t, sp.t0, sp.t1);
+    let k0 = steps_before(sp, start_t - sp.t0);
     let entry = value(sp.go + sp.gd * sp.t0) - iso.isovalue;
-    let there = value(sp.go + sp.gd * start) - iso.isovalue;
-    if (entry < 0.0) != (there < 0.0) {
-        return march_span(o, d, eye, sp, sp.t0, sp.t1);
+    var there = entry;
+    if k0 > 0u {
+        there = value(sp.go + sp.gd * (sp.t0 + f32(k0) * iso.step)) - iso.isovalue;
     }
-    return march_span(o, d, eye, sp, start, clamp(until, start, sp.t1));
+    if (entry < 0.0) != (there < 0.0) {
+        return march_span(o, d, eye, sp, 0u, entry, 0xffffffffu);
+    }
+    return march_span(o, d, eye, sp, k0, there, steps_before(sp, until - sp.t0) + 1u);
 }
 
 // Secant (regula falsi) steps within [a, b], whose ends differ in sign.

@@ -3,13 +3,14 @@
 //! radial, the principal curvatures are 1/radius from the tricubic
 //! B-spline's Hessian, the secant steps put the hit far closer than the
 //! march's step, the B-spline reproduces linear fields, curvature colouring
-//! tells a convex view from a concave one, and bad settings fail.
+//! tells a convex view from a concave one, rays march only inside the box
+//! where the field can cross the iso-value, and bad settings fail.
 
 mod common;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::iso::{
-    cast, curvature_colour, Colouring, IsoField, IsoFilter, IsoSettings,
+    cast, crossing_box, curvature_colour, Colouring, IsoField, IsoFilter, IsoSettings,
 };
 use anari_library_caveray::render::{ColorFormat, FrameDesc};
 use anari_library_caveray::scene::{PlacedVolume, Voxels};
@@ -200,4 +201,40 @@ fn rays_that_miss_show_the_background_and_bad_settings_fail() {
         let e = cast(&ball, &rays, &desc, &settings).unwrap_err();
         assert!(e.to_string().contains(want), "{e}");
     }
+}
+
+#[test]
+fn the_crossing_box_holds_the_surface_and_nothing_far_from_it() {
+    let placed = ball();
+    let v = &placed.volume;
+    let value = |i| v.voxels().value(i);
+    // The ball of radius 0.5 is 0.5 * 47 / 2 = 11.75 cells around the
+    // grid's centre, 23.5: from 11.75 to 35.25 on each axis.
+    for (filter, reach) in [
+        (IsoFilter::Trilinear, 1.0),
+        (IsoFilter::TricubicBSpline, 2.0),
+    ] {
+        let (lo, hi) = crossing_box(v.dims(), value, 0.5, filter);
+        for axis in 0..3 {
+            assert!(
+                lo[axis] <= 11.75 && hi[axis] >= 35.25,
+                "{filter:?}: {lo} {hi}"
+            );
+            assert!(
+                lo[axis] >= 11.0 - reach && hi[axis] <= 36.0 + reach,
+                "{filter:?}: {lo} {hi} is wider than the ball and the filter's reach"
+            );
+        }
+    }
+    // A value the field never takes: no box, and every ray misses.
+    let (lo, hi) = crossing_box(v.dims(), value, 2.0, IsoFilter::Trilinear);
+    assert!(lo.cmpgt(hi).any(), "{lo} {hi}");
+    let (_, hits) = cast(
+        &placed,
+        &camera(DVec3::new(0.0, 0.0, 3.0)),
+        &FrameDesc::new(SIZE),
+        &IsoSettings::new(2.0),
+    )
+    .unwrap();
+    assert!(hits.iter().all(Option::is_none));
 }

@@ -3,6 +3,7 @@
 //! the volume shares the renderer's uploaded textures.
 
 use bytemuck::Zeroable;
+use glam::Vec3;
 
 use super::resources::OutputBuffers;
 use super::uniforms::{Iso, WORKGROUP};
@@ -12,7 +13,7 @@ use super::{
 };
 use crate::geometry::RayGen;
 use crate::render::frame::filled;
-use crate::render::iso::{Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
+use crate::render::iso::{crossing_box, Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
 use crate::render::{Frame, FrameDesc, RenderError};
 use crate::scene::{PlacedVolume, Scene};
 
@@ -35,6 +36,24 @@ pub(super) struct IsoGpu {
     spectral: wgpu::ComputePipeline,
     uniform: wgpu::Buffer,
     target: Option<OutputBuffers>,
+    /// The last crossing box, and the volume, iso-value and filter it is
+    /// of: a pass over every voxel, kept while they stay.
+    crossing: Option<(Crossing, (Vec3, Vec3))>,
+}
+
+/// What a crossing box depends on.
+struct Crossing {
+    volume: std::sync::Arc<crate::scene::StructuredVolume>,
+    isovalue: f32,
+    filter: IsoFilter,
+}
+
+impl Crossing {
+    fn matches(&self, placed: &PlacedVolume, s: &IsoSettings) -> bool {
+        std::sync::Arc::ptr_eq(&self.volume, &placed.volume)
+            && self.isovalue.to_bits() == s.isovalue.to_bits()
+            && self.filter == s.filter
+    }
 }
 
 impl GpuRenderer {
@@ -148,8 +167,27 @@ impl GpuRenderer {
         if !matches!(&iso.target, Some(t) if t.size == desc.size && t.format == desc.color) {
             iso.target = Some(OutputBuffers::new(ctx, desc.size, desc.color));
         }
+        let bounds = match &iso.crossing {
+            Some((key, bounds)) if key.matches(placed, settings) => *bounds,
+            _ => {
+                let v = &placed.volume;
+                let bounds = crossing_box(
+                    v.dims(),
+                    |i| v.voxels().value(i),
+                    settings.isovalue,
+                    settings.filter,
+                );
+                let key = Crossing {
+                    volume: std::sync::Arc::clone(v),
+                    isovalue: settings.isovalue,
+                    filter: settings.filter,
+                };
+                iso.crossing = Some((key, bounds));
+                bounds
+            }
+        };
         let target = iso.target.as_ref().ok_or_else(unprepared)?;
-        let uniform = uniform(placed, rays, desc, settings);
+        let uniform = uniform(placed, rays, desc, settings, bounds);
         ctx.queue
             .write_buffer(&iso.uniform, 0, bytemuck::bytes_of(&uniform));
         let group = bind_group(
@@ -273,11 +311,18 @@ impl IsoGpu {
             spectral,
             uniform,
             target: None,
+            crossing: None,
         }
     }
 }
 
-fn uniform(placed: &PlacedVolume, rays: &RayGen, desc: &FrameDesc, s: &IsoSettings) -> Iso {
+fn uniform(
+    placed: &PlacedVolume,
+    rays: &RayGen,
+    desc: &FrameDesc,
+    s: &IsoSettings,
+    (lo, hi): (Vec3, Vec3),
+) -> Iso {
     let v = |x: glam::Vec3| x.extend(0.0).to_array();
     let m = placed.world_to_grid().as_mat4();
     let (colour, curvature, radius) = match s.colouring {
@@ -300,6 +345,8 @@ fn uniform(placed: &PlacedVolume, rays: &RayGen, desc: &FrameDesc, s: &IsoSettin
         shading: [s.ambient, s.diffuse, s.specular, s.shininess],
         background: s.background.to_array(),
         dims: placed.volume.dims().extend(0).to_array(),
+        box_lo: v(lo),
+        box_hi: v(hi),
         isovalue: s.isovalue,
         step: placed.smallest_cell() / s.steps_per_cell,
         near: rays.t_near,

@@ -274,6 +274,10 @@ uniform! {
         background: [f32; 4],
         /// The grid's vertices per axis (xyz).
         dims: [u32; 4],
+        /// The grid-space box outside which the field cannot cross the
+        /// iso-value (xyz; render::iso::crossing_box).
+        box_lo: [f32; 4],
+        box_hi: [f32; 4],
         isovalue: f32,
         /// The march's step, world units.
         step: f32,

@@ -4,7 +4,7 @@
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::field::{curvatures, IsoField, IsoFilter};
+use super::field::{crossing_box, curvatures, IsoField, IsoFilter};
 use super::{curvature_colour, Colouring, IsoSettings};
 use crate::geometry::RayGen;
 use crate::render::cpu::enter_exit;
@@ -31,6 +31,9 @@ pub struct Caster<'a> {
     pub field: IsoField<'a>,
     pub step: f32,
     pub settings: &'a IsoSettings,
+    /// The grid-space box outside which the field cannot cross the
+    /// iso-value: rays march inside it only.
+    pub bounds: (Vec3, Vec3),
 }
 
 /// The volume's values as f32, which a [`Caster`] reads.
@@ -45,8 +48,11 @@ pub fn values(placed: &PlacedVolume) -> Result<Vec<f32>, RenderError> {
 
 impl<'a> Caster<'a> {
     pub fn new(placed: &PlacedVolume, values: &'a [f32], settings: &'a IsoSettings) -> Self {
+        let field = IsoField::new(placed, values, settings.filter);
+        let dims = placed.volume.dims();
         Self {
-            field: IsoField::new(placed, values, settings.filter),
+            bounds: crossing_box(dims, |i| values[i], settings.isovalue, settings.filter),
+            field,
             step: placed.smallest_cell() / settings.steps_per_cell,
             settings,
         }
@@ -62,13 +68,17 @@ impl<'a> Caster<'a> {
         samples: &mut u64,
     ) -> Option<IsoHit> {
         let (go, gd) = self.field.grid_ray(o, d);
-        let (t0, t1) = enter_exit(go, gd, Vec3::ZERO, self.field.last_vertex(), clip)?;
-        self.march(o, d, t0, t1, samples)
+        let (t0, t1) = enter_exit(go, gd, self.bounds.0, self.bounds.1, clip)?;
+        *samples += 1;
+        let entry = self.field.value(go + gd * t0) - self.settings.isovalue;
+        self.march(o, d, (t0, t1), (0, entry), u32::MAX, samples)
     }
 
     /// The first crossing in `from..until` along `o + t d`, if the ray is
     /// on the same side of the iso-value at `from` as where it enters the
-    /// grid; `None` if it is not (a crossing lies before `from`).
+    /// grid; `None` if it is not (a crossing lies before `from`). The
+    /// search starts at the last of `first_hit`'s steps at or before
+    /// `from`, so a crossing it finds is `first_hit`'s, to the bit.
     pub fn hit_between(
         &self,
         o: Vec3,
@@ -78,29 +88,49 @@ impl<'a> Caster<'a> {
         samples: &mut u64,
     ) -> Option<Option<IsoHit>> {
         let (go, gd) = self.field.grid_ray(o, d);
-        let Some((t0, t1)) = enter_exit(go, gd, Vec3::ZERO, self.field.last_vertex(), clip) else {
+        let Some((t0, t1)) = enter_exit(go, gd, self.bounds.0, self.bounds.1, clip) else {
             return Some(None);
         };
-        let start = from.clamp(t0, t1);
         let iso = self.settings.isovalue;
-        *samples += 2;
+        let k0 = self.steps_before(from - t0, t1 - t0);
+        let start = t0 + k0 as f32 * self.step;
+        *samples += 1;
         let entry = self.field.value(go + gd * t0) - iso;
-        let there = self.field.value(go + gd * start) - iso;
+        let there = if k0 == 0 {
+            entry
+        } else {
+            *samples += 1;
+            self.field.value(go + gd * start) - iso
+        };
         if (entry < 0.0) != (there < 0.0) {
             return None;
         }
-        Some(self.march(o, d, start, until.clamp(start, t1), samples))
+        let last = self.steps_before(until - t0, t1 - t0).saturating_add(1);
+        Some(self.march(o, d, (t0, t1), (k0, there), last, samples))
     }
 
-    fn march(&self, o: Vec3, d: Vec3, t0: f32, t1: f32, samples: &mut u64) -> Option<IsoHit> {
+    /// Whole steps from the grid entry that fit in `length`, within `span`.
+    fn steps_before(&self, length: f32, span: f32) -> u32 {
+        (length.min(span) / self.step).floor().clamp(0.0, 1e6) as u32
+    }
+
+    /// The march over the span (`t0`, `t1`) from its step `k0`, where the
+    /// field minus the iso-value is `fa`, to its step `last` at most.
+    fn march(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        (t0, t1): (f32, f32),
+        (k0, mut fa): (u32, f32),
+        last: u32,
+        samples: &mut u64,
+    ) -> Option<IsoHit> {
         let (go, gd) = self.field.grid_ray(o, d);
         let s = self.settings;
         let at = |t: f32| self.field.value(go + gd * t) - s.isovalue;
-        let mut ta = t0;
-        let mut fa = at(ta);
-        *samples += 1;
+        let mut ta = t0 + k0 as f32 * self.step;
         let steps = ((t1 - t0) / self.step).ceil().min(1e6) as u32;
-        for k in 1..=steps {
+        for k in k0 + 1..=steps.min(last) {
             let tb = (t0 + k as f32 * self.step).min(t1);
             let fb = at(tb);
             *samples += 1;

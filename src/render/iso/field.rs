@@ -3,6 +3,7 @@
 //! Hessian, carried back to world space.
 
 use glam::{DMat3, Mat3, UVec3, Vec3};
+use rayon::prelude::*;
 
 use crate::scene::PlacedVolume;
 
@@ -47,6 +48,49 @@ pub struct Sample {
     pub value: f32,
     pub gradient: Vec3,
     pub hessian: Mat3,
+}
+
+/// The grid-space box outside which a field filtered by `filter` cannot
+/// cross `iso` (empty, lo > hi, where it crosses nowhere): a crossing
+/// point lies within the filter's reach of a vertex at or above the
+/// iso-value and of one below it. `value(i)` is vertex i, x fastest.
+pub fn crossing_box(
+    dims: UVec3,
+    value: impl Fn(usize) -> f32 + Sync,
+    iso: f32,
+    filter: IsoFilter,
+) -> (Vec3, Vec3) {
+    let (nx, slice) = (dims.x as usize, dims.x as usize * dims.y as usize);
+    let empty = (UVec3::MAX, UVec3::ZERO);
+    let grow = |b: (UVec3, UVec3), p: UVec3| (b.0.min(p), b.1.max(p));
+    let join = |a: (UVec3, UVec3), b: (UVec3, UVec3)| (a.0.min(b.0), a.1.max(b.1));
+    let (above, below) = (0..dims.z as usize)
+        .into_par_iter()
+        .map(|z| {
+            let (mut above, mut below) = (empty, empty);
+            for i in 0..slice {
+                let p = UVec3::new((i % nx) as u32, (i / nx) as u32, z as u32);
+                if value(z * slice + i) >= iso {
+                    above = grow(above, p);
+                } else {
+                    below = grow(below, p);
+                }
+            }
+            (above, below)
+        })
+        .reduce(|| (empty, empty), |a, b| (join(a.0, b.0), join(a.1, b.1)));
+    if above.0.x > above.1.x || below.0.x > below.1.x {
+        return (Vec3::ONE, Vec3::ZERO);
+    }
+    let reach = match filter {
+        IsoFilter::Trilinear => 1.0,
+        // The B-spline at a point weighs the vertices up to 2 away.
+        IsoFilter::TricubicBSpline => 2.0,
+    };
+    let last = (dims - UVec3::ONE).as_vec3();
+    let lo = (above.0.max(below.0).as_vec3() - reach).max(Vec3::ZERO);
+    let hi = (above.1.min(below.1).as_vec3() + reach).min(last);
+    (lo, hi)
 }
 
 /// One placed volume's values, and the maps between world and grid.

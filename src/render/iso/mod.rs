@@ -12,7 +12,7 @@ mod surfaces;
 use glam::{Vec3, Vec4};
 
 pub use cast::{cast, values, Caster, IsoHit};
-pub use field::{curvatures, IsoField, IsoFilter, Sample};
+pub use field::{crossing_box, curvatures, IsoField, IsoFilter, Sample};
 pub(crate) use multiview::SEARCH_MARGIN_STEPS;
 pub use multiview::{render_display, subpixels_differing, MultiViewMethod, Panel};
 pub use surfaces::{interleave, nearest, IsoSurface};

@@ -80,6 +80,7 @@ pub fn render_display(
     let values = values(placed)?;
     let caster = Caster::new(placed, &values, settings);
     let w = size.x as usize;
+    let table = view_table(display)?;
     let mut rgb = filled(desc.pixels(), [0.0f32; 3], "the display image")?;
     let samples = match method {
         MultiViewMethod::Naive => {
@@ -91,9 +92,8 @@ pub fn render_display(
                 views.push(colours);
             }
             for (i, px) in rgb.iter_mut().enumerate() {
-                let (x, y) = ((i % w) as u32, (i / w) as u32);
                 for (c, out) in px.iter_mut().enumerate() {
-                    *out = views[display.view(x, y, c) as usize][i][c];
+                    *out = views[table[i][c] as usize][i][c];
                 }
             }
             total
@@ -105,7 +105,7 @@ pub fn render_display(
                 let mut n = 0;
                 for (x, px) in row.iter_mut().enumerate() {
                     for (c, out) in px.iter_mut().enumerate() {
-                        let r = &rays[display.view(x as u32, y as u32, c) as usize];
+                        let r = &rays[table[y * w + x][c] as usize];
                         let (o, d) = r.pixel_ray(x as u32, y as u32);
                         let hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
                         *out = caster.colour(hit.as_ref(), d)[c];
@@ -115,7 +115,7 @@ pub fn render_display(
             })
             .sum(),
         MultiViewMethod::GeometricSpectral => {
-            geometric_spectral(&caster, display, rays, size, &mut rgb)?
+            geometric_spectral(&caster, &table, rays, size, &mut rgb)?
         }
     };
     // A panel shows no alpha.
@@ -124,6 +124,19 @@ pub fn render_display(
         o.copy_from_slice(&[px[0], px[1], px[2], 1.0]);
     }
     Ok((Frame::from_linear(&desc, color, None)?, samples))
+}
+
+/// Every subpixel's view, row by row from the lower left: the pattern's
+/// function called once a subpixel, not once a use.
+fn view_table(display: &Panel) -> Result<Vec<[u32; 3]>, RenderError> {
+    let w = display.size.x as usize;
+    let mut table = filled(w * display.size.y as usize, [0u32; 3], "the panel's views")?;
+    table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, views) in row.iter_mut().enumerate() {
+            *views = [0, 1, 2].map(|c| display.view(x as u32, y as u32, c));
+        }
+    });
+    Ok(table)
 }
 
 /// One view's whole image as linear RGB, and its field evaluations.
@@ -155,7 +168,7 @@ fn view_image(
 /// blue, from near green's hit).
 fn geometric_spectral(
     caster: &Caster,
-    display: &Panel,
+    table: &[[u32; 3]],
     rays: &[RayGen],
     size: UVec2,
     rgb: &mut [[f32; 3]],
@@ -168,7 +181,7 @@ fn geometric_spectral(
         .map(|(y, row)| {
             let mut n = 0;
             for (x, hit) in row.iter_mut().enumerate() {
-                let r = &rays[display.view(x as u32, y as u32, 1) as usize];
+                let r = &rays[table[y * w + x][1] as usize];
                 let (o, d) = r.pixel_ray(x as u32, y as u32);
                 *hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
             }
@@ -177,6 +190,14 @@ fn geometric_spectral(
         .sum();
     let h = size.y as usize;
     let margin = SEARCH_MARGIN_STEPS * caster.step;
+    // Where green missed, the nearest hit around it: next to a silhouette
+    // a neighbouring eye may see the surface there.
+    let nearest_around = |x: usize, y: usize| {
+        (y.saturating_sub(1)..(y + 2).min(h))
+            .flat_map(|yy| (x.saturating_sub(1)..(x + 2).min(w)).map(move |xx| yy * w + xx))
+            .filter_map(|j| geometric[j].map(|g| g.t))
+            .reduce(f32::min)
+    };
     let n_spectral: u64 = rgb
         .par_chunks_mut(w)
         .enumerate()
@@ -184,32 +205,23 @@ fn geometric_spectral(
             let mut n = 0;
             for (x, px) in row.iter_mut().enumerate() {
                 let i = y * w + x;
-                // Near a silhouette a neighbouring eye may see the surface
-                // where this one does not, or the other way round.
-                // Where green missed, the nearest hit around it: next to a
-                // silhouette a neighbouring eye may see the surface there.
-                let nearest_around = (y.saturating_sub(1)..(y + 2).min(h))
-                    .flat_map(|yy| (x.saturating_sub(1)..(x + 2).min(w)).map(move |xx| yy * w + xx))
-                    .filter_map(|j| geometric[j].map(|g| g.t))
-                    .reduce(f32::min);
+                let views = table[i];
+                // Search from a little before the surface green saw to the
+                // end of the ray, or, where green missed, a few steps
+                // around the surface a neighbour saw; cast in full if the
+                // ray has crossed before that.
+                let window = match geometric[i] {
+                    Some(g) => Some((g.t - margin, f32::INFINITY)),
+                    None => nearest_around(x, y).map(|t| (t - margin, t + 3.0 * margin)),
+                };
                 for (c, out) in px.iter_mut().enumerate() {
-                    let view = display.view(x as u32, y as u32, c);
-                    let r = &rays[view as usize];
+                    let r = &rays[views[c] as usize];
                     let (o, d) = r.pixel_ray(x as u32, y as u32);
                     let clip = (r.t_near, r.t_far);
-                    let hit = if c == 1 || view == display.view(x as u32, y as u32, 1) {
+                    let hit = if c == 1 || views[c] == views[1] {
                         // The geometric pass's very ray.
                         geometric[i]
                     } else {
-                        // Search from a little before the surface green saw
-                        // to the end of the ray, or, where green missed, a
-                        // few steps around the surface a neighbour saw; cast
-                        // in full if the ray has crossed before that.
-                        let window = match (geometric[i], nearest_around) {
-                            (Some(g), _) => Some((g.t - margin, f32::INFINITY)),
-                            (None, Some(t)) => Some((t - margin, t + 3.0 * margin)),
-                            (None, None) => None,
-                        };
                         window.and_then(|window| {
                             caster
                                 .hit_between(o, d, clip, window, &mut n)
