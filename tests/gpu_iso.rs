@@ -85,11 +85,56 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
     let mut g = gpu();
     let mut placed = balls();
     placed.transform = Mat4::from_translation(Vec3::new(0.0, 0.0, -1.2)) * placed.transform;
-    let text = "units = \"m\"\nviews = 8\nresolution = [48, 32]\n\
-                ll = [-1.2, -0.8, 0.0]\nlr = [1.2, -0.8, 0.0]\nur = [1.2, 0.8, 0.0]\n\
-                viewing_distance = 3.0\nview_spacing = 0.03\n\
-                [lens]\npitch = 3.75\nslant = 0.15625\n";
-    let d = MultiViewDisplay::from_toml(text, "test display").unwrap();
+    let display = |offset: f64| {
+        let text = format!(
+            "units = \"m\"\nviews = 8\nresolution = [48, 32]\n\
+             ll = [-1.2, -0.8, 0.0]\nlr = [1.2, -0.8, 0.0]\nur = [1.2, 0.8, 0.0]\n\
+             viewing_distance = 3.0\nview_spacing = 0.03\n\
+             [lens]\npitch = 3.75\nslant = 0.15625\noffset = {offset:?}\n"
+        );
+        MultiViewDisplay::from_toml(&text, "test display").unwrap()
+    };
+    let settings = IsoSettings::new(0.5);
+    // A second lens offset, then the first again: the GPU keeps a panel's
+    // buffers between casts and must notice the pattern change.
+    let mut first = None;
+    for offset in [0.0, 1.5, 0.0] {
+        let d = display(offset);
+        let view_of = |x, y, c| d.view_of(x, y, c);
+        let panel = Panel {
+            color: Default::default(),
+            size: d.resolution,
+            views: d.view_rays().unwrap(),
+            view_of: &view_of,
+        };
+        for method in [
+            MultiViewMethod::PerSubpixel,
+            MultiViewMethod::GeometricSpectral,
+        ] {
+            let (cpu, _) = render_display(&placed, &panel, &settings, method).unwrap();
+            let on_gpu = g.cast_display(&placed, &panel, &settings, method).unwrap();
+            let differ = subpixels_differing(&cpu, &on_gpu, 2);
+            println!(
+                "lens offset {offset}, {}, GPU against CPU: {:.3}% of subpixels differ",
+                method.name(),
+                100.0 * differ
+            );
+            assert!(
+                differ <= 0.005,
+                "{}: {differ} of subpixels differ",
+                method.name()
+            );
+            assert!(ssim(&cpu, &on_gpu).unwrap() >= 0.99);
+            if method == MultiViewMethod::PerSubpixel {
+                match &first {
+                    None => first = Some(on_gpu),
+                    Some(f) if offset == 0.0 => assert_eq!(f.color, on_gpu.color),
+                    Some(f) => assert_ne!(f.color, on_gpu.color, "the pattern moved"),
+                }
+            }
+        }
+    }
+    let d = display(0.0);
     let view_of = |x, y, c| d.view_of(x, y, c);
     let panel = Panel {
         color: Default::default(),
@@ -97,26 +142,6 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
         views: d.view_rays().unwrap(),
         view_of: &view_of,
     };
-    let settings = IsoSettings::new(0.5);
-    for method in [
-        MultiViewMethod::PerSubpixel,
-        MultiViewMethod::GeometricSpectral,
-    ] {
-        let (cpu, _) = render_display(&placed, &panel, &settings, method).unwrap();
-        let on_gpu = g.cast_display(&placed, &panel, &settings, method).unwrap();
-        let differ = subpixels_differing(&cpu, &on_gpu, 2);
-        println!(
-            "{}, GPU against CPU: {:.3}% of subpixels differ",
-            method.name(),
-            100.0 * differ
-        );
-        assert!(
-            differ <= 0.005,
-            "{}: {differ} of subpixels differ",
-            method.name()
-        );
-        assert!(ssim(&cpu, &on_gpu).unwrap() >= 0.99);
-    }
     let e = g
         .cast_display(&placed, &panel, &settings, MultiViewMethod::Naive)
         .unwrap_err();

@@ -36,9 +36,20 @@ pub(super) struct IsoGpu {
     spectral: wgpu::ComputePipeline,
     uniform: wgpu::Buffer,
     target: Option<OutputBuffers>,
+    /// The last panel's buffers (put back after each cast).
+    panel: Option<PanelCache>,
     /// The last crossing box, and the volume, iso-value and filter it is
     /// of: a pass over every voxel, kept while they stay.
     crossing: Option<(Crossing, (Vec3, Vec3))>,
+}
+
+/// A panel's buffers and what was last written to them.
+struct PanelCache {
+    ray_data: Vec<[f32; 4]>,
+    packed: Vec<u32>,
+    rays: wgpu::Buffer,
+    views: wgpu::Buffer,
+    green: wgpu::Buffer,
 }
 
 /// What a crossing box depends on.
@@ -115,27 +126,60 @@ impl GpuRenderer {
             let (x, y) = (i as u32 % w, i as u32 / w);
             *p = (0..3).fold(0, |acc, c| acc | (panel.view(x, y, c) << (8 * c)));
         }
-        let device = &self.ctx.device;
-        let buffer = |label, bytes: &[u8]| {
-            let b = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.len().max(16) as u64,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            self.ctx.queue.write_buffer(&b, 0, bytes);
-            b
+        // A display's rays and pattern stay from frame to frame: its
+        // buffers are kept, and written again only when they change.
+        let mut kept = self.iso.as_mut().and_then(|iso| iso.panel.take());
+        let fits = kept
+            .as_ref()
+            .is_some_and(|k| k.ray_data.len() == rays.len() && k.packed.len() == packed.len());
+        let cache = match kept.take() {
+            Some(mut k) if fits => {
+                if k.ray_data != rays {
+                    self.ctx
+                        .queue
+                        .write_buffer(&k.rays, 0, bytemuck::cast_slice(&rays));
+                    k.ray_data = rays;
+                }
+                if k.packed != packed {
+                    self.ctx
+                        .queue
+                        .write_buffer(&k.views, 0, bytemuck::cast_slice(&packed));
+                    k.packed = packed;
+                }
+                k
+            }
+            _ => {
+                let device = &self.ctx.device;
+                let buffer = |label, bytes: &[u8]| {
+                    let b = device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size: bytes.len().max(16) as u64,
+                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    self.ctx.queue.write_buffer(&b, 0, bytes);
+                    b
+                };
+                PanelCache {
+                    rays: buffer("iso panel rays", bytemuck::cast_slice(&rays)),
+                    views: buffer("iso panel views", bytemuck::cast_slice(&packed)),
+                    green: buffer("iso green t", &vec![0u8; 4 * packed.len()]),
+                    ray_data: rays,
+                    packed,
+                }
+            }
         };
-        let rays = buffer("iso panel rays", bytemuck::cast_slice(&rays));
-        let views = buffer("iso panel views", bytemuck::cast_slice(&packed));
-        let green = buffer("iso green t", &vec![0u8; 4 * packed.len()]);
         let buffers = PanelBuffers {
-            rays: &rays,
-            views: &views,
-            green: &green,
+            rays: &cache.rays,
+            views: &cache.views,
+            green: &cache.green,
             method,
         };
-        self.run_iso(placed, &panel.views[0], &desc, settings, Some(buffers))
+        let frame = self.run_iso(placed, &panel.views[0], &desc, settings, Some(buffers));
+        if let Some(iso) = self.iso.as_mut() {
+            iso.panel = Some(cache);
+        }
+        frame
     }
 
     /// The iso shader over `rays` (`main`), or over a panel: `per_subpixel`,
@@ -311,6 +355,7 @@ impl IsoGpu {
             spectral,
             uniform,
             target: None,
+            panel: None,
             crossing: None,
         }
     }
