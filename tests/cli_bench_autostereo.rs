@@ -24,6 +24,8 @@ fn rows_for_each_view_count_and_the_naive_cost_grows_with_them() {
         "0.03",
         "--iso",
         "0.2",
+        "--repeat",
+        "1",
         "--json",
         json.to_str().unwrap(),
     ]);
@@ -61,6 +63,7 @@ fn bad_autostereo_arguments_are_usage_errors() {
         (vec!["--views", "0"], "--views must be 1 to 64"),
         (vec!["--scale", "2"], "--scale must be in (0, 1]"),
         (vec!["--iso", "3"], "--iso must be a fraction"),
+        (vec!["--repeat", "0"], "--repeat must be 1 to 100"),
         (
             vec!["--config", "cave_configs/cologne_5wall.toml"],
             "unknown field",

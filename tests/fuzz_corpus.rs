@@ -11,8 +11,9 @@ use std::path::Path;
 
 type Target = fn(&[u8]);
 
-const TARGETS: [(&str, Target); 4] = [
+const TARGETS: [(&str, Target); 5] = [
     ("rig", harness::rig),
+    ("display", harness::display),
     ("paraview", harness::paraview),
     ("raw_manifest", harness::raw_manifest),
     ("capi", harness::capi),

@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 
 use anari_library_caveray::capi::entry_points::*;
 use anari_library_caveray::capi::sys;
-use anari_library_caveray::cave::Rig;
+use anari_library_caveray::cave::{MultiViewDisplay, Rig};
 use anari_library_caveray::data::{parse_paraview, parse_raw, Manifest, VoxelType};
 use anari_library_caveray::device::info::SUBTYPES;
 use anari_library_caveray::device::DataType;
@@ -22,6 +22,23 @@ pub fn rig(data: &[u8]) {
         if let Ok(rig) = Rig::from_toml(text, "fuzz.toml") {
             // What the tool does next with a rig: views of every wall.
             let _ = rig.views(&rig.viewer.head);
+        }
+    }
+}
+
+/// A multi-view display file: any text.
+pub fn display(data: &[u8]) {
+    if let Ok(text) = std::str::from_utf8(data) {
+        if let Ok(display) = MultiViewDisplay::from_toml(text, "fuzz.toml") {
+            // What the tool does next with a display: every view's rays,
+            // and the view and eye of subpixels across the panel.
+            let _ = display.view_rays();
+            let r = display.resolution;
+            for (x, y) in [(0, 0), (r.x - 1, r.y - 1), (r.x / 2, r.y / 3)] {
+                for c in 0..3 {
+                    let _ = display.subpixel_eye(x, y, c);
+                }
+            }
         }
     }
 }

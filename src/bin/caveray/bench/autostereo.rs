@@ -47,6 +47,10 @@ pub struct AutostereoArgs {
     /// clock; the naive image is one cast a view, interleaved).
     #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
     backend: String,
+    /// Times each image this many times and keeps the median (the machine
+    /// is shared and noisy).
+    #[arg(long, default_value_t = 3)]
+    repeat: u32,
     #[arg(long)]
     json: PathBuf,
 }
@@ -60,6 +64,8 @@ struct Report {
     filter: &'static str,
     /// "cpu" (wall clock) or the GPU's adapter and pass clock.
     timed_on: String,
+    /// Each time is the median of this many.
+    repeat: u32,
     rows: Vec<Row>,
 }
 
@@ -79,8 +85,20 @@ struct Row {
     geometric_spectral_differing: f64,
 }
 
+/// The middle of `times` (the upper middle of an even count).
+fn median(mut times: Vec<f64>) -> f64 {
+    times.sort_by(f64::total_cmp);
+    times.get(times.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
 pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
     let usage = |m: String| Failure::Usage(m);
+    if !(1..=100).contains(&args.repeat) {
+        return Err(usage(format!(
+            "--repeat must be 1 to 100, got {}",
+            args.repeat
+        )));
+    }
     let base = MultiViewDisplay::load(&args.config).map_err(|e| usage(e.to_string()))?;
     if !(args.scale.is_finite() && args.scale > 0.0 && args.scale <= 1.0) {
         return Err(usage(format!(
@@ -144,10 +162,17 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
             let row = match gpu.as_mut() {
                 None => {
                     let time = |method| -> Result<_, Failure> {
-                        let start = Instant::now();
-                        let (frame, evals) =
-                            render_display(placed, &panel, &settings, method).map_err(runtime)?;
-                        Ok((frame, evals, start.elapsed().as_secs_f64() * 1e3))
+                        let mut times = Vec::new();
+                        let mut last = None;
+                        for _ in 0..args.repeat {
+                            let start = Instant::now();
+                            let made = render_display(placed, &panel, &settings, method)
+                                .map_err(runtime)?;
+                            times.push(start.elapsed().as_secs_f64() * 1e3);
+                            last = Some(made);
+                        }
+                        let (frame, evals) = last.ok_or_else(|| runtime("no repeat"))?;
+                        Ok((frame, evals, median(times)))
                     };
                     let (naive, naive_evals, naive_ms) = time(MultiViewMethod::Naive)?;
                     let (_, per_evals, per_ms) = time(MultiViewMethod::PerSubpixel)?;
@@ -169,21 +194,34 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                     // Naive: one cast a view, then each subpixel from its
                     // view's image.
                     let desc = FrameDesc::new(d.resolution);
-                    let mut naive_ms = 0.0;
-                    let mut views = Vec::with_capacity(panel.views.len());
-                    for rays in &panel.views {
-                        views.push(
-                            g.cast_iso(placed, rays, &desc, &settings)
-                                .map_err(runtime)?,
-                        );
-                        naive_ms += g.last_pass_ms();
+                    let mut naive_times = Vec::new();
+                    let mut views = Vec::new();
+                    for _ in 0..args.repeat {
+                        let mut naive_ms = 0.0;
+                        views.clear();
+                        for rays in &panel.views {
+                            views.push(
+                                g.cast_iso(placed, rays, &desc, &settings)
+                                    .map_err(runtime)?,
+                            );
+                            naive_ms += g.last_pass_ms();
+                        }
+                        naive_times.push(naive_ms);
                     }
+                    let naive_ms = median(naive_times);
                     let naive = interleave(&views, &panel);
                     let method = |g: &mut GpuRenderer, m| -> Result<_, Failure> {
-                        let frame = g
-                            .cast_display(placed, &panel, &settings, m)
-                            .map_err(runtime)?;
-                        Ok((frame, g.last_pass_ms()))
+                        let mut times = Vec::new();
+                        let mut frame = None;
+                        for _ in 0..args.repeat {
+                            frame = Some(
+                                g.cast_display(placed, &panel, &settings, m)
+                                    .map_err(runtime)?,
+                            );
+                            times.push(g.last_pass_ms());
+                        }
+                        let frame = frame.ok_or_else(|| runtime("no repeat"))?;
+                        Ok((frame, median(times)))
                     };
                     let (_, per_ms) = method(g, MultiViewMethod::PerSubpixel)?;
                     let (gs, gs_ms) = method(g, MultiViewMethod::GeometricSpectral)?;
@@ -223,6 +261,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         resolution: resolution.to_array(),
         filter: args.filter.name(),
         timed_on,
+        repeat: args.repeat,
         rows,
     };
     write_json(&report, &args.json)?;
