@@ -400,20 +400,8 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
     let fy = f32(id.y);
     let packed = pixel_views[i];
     let tg = green_t[i];
-    var nearest = bitcast<f32>(0x7f800000u);
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            let x = i32(id.x) + dx;
-            let y = i32(id.y) + dy;
-            if x >= 0 && y >= 0 && x < i32(iso.width) && y < i32(iso.height) {
-                let t = green_t[u32(y) * iso.width + u32(x)];
-                if t >= 0.0 {
-                    nearest = min(nearest, t);
-                }
-            }
-        }
-    }
     let margin = SEARCH_MARGIN_STEPS * iso.step;
+    let reach = arrayLength(&view_rays) / 7u + SAME_VIEW_SLACK;
     var rgb = vec3f(0.0);
     for (var c = 0u; c < 3u; c++) {
         let v = view_of(packed, c);
@@ -423,10 +411,11 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
             if tg >= 0.0 {
                 hit = hit_at(r.o, r.d, r.eye, span(r.o, r.d), tg);
             }
-        } else if tg >= 0.0 {
-            hit = cast_window(r.o, r.d, r.eye, tg - margin, bitcast<f32>(0x7f800000u));
-        } else if nearest < bitcast<f32>(0x7f800000u) {
-            hit = cast_window(r.o, r.d, r.eye, nearest - margin, nearest + 3.0 * margin);
+        } else {
+            let w = search_window(id.x, id.y, v, reach, tg, margin);
+            if w.y >= w.x {
+                hit = cast_window(r.o, r.d, r.eye, w.x, w.y);
+            }
         }
         rgb[c] = hit.colour[c];
         if c == 1u {
@@ -434,6 +423,105 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
         }
     }
     store_color(i, vec4f(rgb, 1.0), iso.color_format);
+}
+
+// What the geometric pass saw of view `v` near pixel (x, y): green's t at
+// the nearest pixels left and right, in rows y - 1 to y + 1, whose green
+// has view v (SameView in src/render/iso/multiview.rs).
+struct SameView {
+    seen: bool,
+    // The nearer of the two hits either side in row y; negative: none.
+    bracket: f32,
+    // The nearest and farthest hit of all; negative: none.
+    lo: f32,
+    hi: f32,
+}
+
+fn same_view(x: u32, y: u32, v: u32, reach: u32) -> SameView {
+    var near = SameView(false, -1.0, -1.0, -1.0);
+    let y0 = select(0u, y - 1u, y > 0u);
+    let y1 = min(y + 1u, iso.height - 1u);
+    for (var yy = y0; yy <= y1; yy++) {
+        // -2: no pixel of view v within reach; -1: one, which missed.
+        var side = array<f32, 2>(-2.0, -2.0);
+        let x0 = select(0u, x - reach, x > reach);
+        for (var xx = x; xx > x0; xx--) {
+            let j = yy * iso.width + xx - 1u;
+            if view_of(pixel_views[j], 1u) == v {
+                side[0] = max(green_t[j], -1.0);
+                break;
+            }
+        }
+        let x1 = min(x + 1u + reach, iso.width);
+        for (var xx = x + 1u; xx < x1; xx++) {
+            let j = yy * iso.width + xx;
+            if view_of(pixel_views[j], 1u) == v {
+                side[1] = max(green_t[j], -1.0);
+                break;
+            }
+        }
+        if yy == y && side[0] >= 0.0 && side[1] >= 0.0 {
+            near.bracket = min(side[0], side[1]);
+        }
+        for (var k = 0u; k < 2u; k++) {
+            let t = side[k];
+            if t > -2.0 {
+                near.seen = true;
+            }
+            if t >= 0.0 {
+                if near.lo < 0.0 {
+                    near.lo = t;
+                    near.hi = t;
+                } else {
+                    near.lo = min(near.lo, t);
+                    near.hi = max(near.hi, t);
+                }
+            }
+        }
+    }
+    return near;
+}
+
+// Where a channel of view `v` searches its ray at pixel (x, y) (x: from,
+// y: until; from > until: nowhere), as SameView::window and
+// fallback_window choose on the CPU. `tg`: green's t there (negative:
+// missed).
+fn search_window(x: u32, y: u32, v: u32, reach: u32, tg: f32, margin: f32) -> vec2f {
+    let inf = bitcast<f32>(0x7f800000u);
+    let nowhere = vec2f(1.0, 0.0);
+    let near = same_view(x, y, v, reach);
+    if near.seen {
+        if near.lo >= 0.0 {
+            if tg >= 0.0 {
+                return vec2f(select(near.lo, near.bracket, near.bracket >= 0.0) - margin, inf);
+            }
+            return vec2f(near.lo - margin, near.hi + 3.0 * margin);
+        }
+        if tg >= 0.0 {
+            return vec2f(tg - margin, tg + 3.0 * margin);
+        }
+        return nowhere;
+    }
+    if tg >= 0.0 {
+        return vec2f(tg - margin, inf);
+    }
+    var nearest = inf;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let xx = i32(x) + dx;
+            let yy = i32(y) + dy;
+            if xx >= 0 && yy >= 0 && xx < i32(iso.width) && yy < i32(iso.height) {
+                let t = green_t[u32(yy) * iso.width + u32(xx)];
+                if t >= 0.0 {
+                    nearest = min(nearest, t);
+                }
+            }
+        }
+    }
+    if nearest < inf {
+        return vec2f(nearest - margin, nearest + 3.0 * margin);
+    }
+    return nowhere;
 }
 
 // One ray a subpixel, from that subpixel's view; depth is green's.

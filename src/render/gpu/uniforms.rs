@@ -10,7 +10,7 @@ use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::ColorFormat;
 use crate::render::gpu::resources::LOD_LEVELS;
-use crate::render::iso::SEARCH_MARGIN_STEPS;
+use crate::render::iso::{SAME_VIEW_SLACK, SEARCH_MARGIN_STEPS};
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
@@ -453,6 +453,7 @@ pub(super) fn declarations() -> String {
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
     // Steps before green's surface at which the spectral pass searches.
     out += &format!("const SEARCH_MARGIN_STEPS: f32 = {SEARCH_MARGIN_STEPS:?}f;\n");
+    out += &format!("const SAME_VIEW_SLACK: u32 = {SAME_VIEW_SLACK}u;\n");
     out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl() + &Warp::wgsl() + &Iso::wgsl()
 }
 

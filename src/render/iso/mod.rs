@@ -13,8 +13,8 @@ use glam::{Vec3, Vec4};
 
 pub use cast::{cast, values, Caster, IsoHit};
 pub use field::{crossing_box, curvatures, IsoField, IsoFilter, Sample};
-pub(crate) use multiview::SEARCH_MARGIN_STEPS;
 pub use multiview::{render_display, subpixels_differing, MultiViewMethod, Panel};
+pub(crate) use multiview::{SAME_VIEW_SLACK, SEARCH_MARGIN_STEPS};
 pub use surfaces::{interleave, nearest, IsoSurface};
 
 use super::RenderError;

@@ -190,14 +190,7 @@ fn geometric_spectral(
         .sum();
     let h = size.y as usize;
     let margin = SEARCH_MARGIN_STEPS * caster.step;
-    // Where green missed, the nearest hit around it: next to a silhouette
-    // a neighbouring eye may see the surface there.
-    let nearest_around = |x: usize, y: usize| {
-        (y.saturating_sub(1)..(y + 2).min(h))
-            .flat_map(|yy| (x.saturating_sub(1)..(x + 2).min(w)).map(move |xx| yy * w + xx))
-            .filter_map(|j| geometric[j].map(|g| g.t))
-            .reduce(f32::min)
-    };
+    let reach = rays.len() + SAME_VIEW_SLACK;
     let n_spectral: u64 = rgb
         .par_chunks_mut(w)
         .enumerate()
@@ -206,14 +199,6 @@ fn geometric_spectral(
             for (x, px) in row.iter_mut().enumerate() {
                 let i = y * w + x;
                 let views = table[i];
-                // Search from a little before the surface green saw to the
-                // end of the ray, or, where green missed, a few steps
-                // around the surface a neighbour saw; cast in full if the
-                // ray has crossed before that.
-                let window = match geometric[i] {
-                    Some(g) => Some((g.t - margin, f32::INFINITY)),
-                    None => nearest_around(x, y).map(|t| (t - margin, t + 3.0 * margin)),
-                };
                 for (c, out) in px.iter_mut().enumerate() {
                     let r = &rays[views[c] as usize];
                     let (o, d) = r.pixel_ray(x as u32, y as u32);
@@ -222,11 +207,16 @@ fn geometric_spectral(
                         // The geometric pass's very ray.
                         geometric[i]
                     } else {
-                        window.and_then(|window| {
-                            caster
-                                .hit_between(o, d, clip, window, &mut n)
-                                .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n))
-                        })
+                        let near =
+                            SameView::around(&geometric, table, (w, h), (x, y), views[c], reach);
+                        near.window(geometric[i].map(|g| g.t), margin)
+                            .or_else(|| fallback_window(&geometric, (w, h), (x, y), margin))
+                            .flatten()
+                            .and_then(|window| {
+                                caster
+                                    .hit_between(o, d, clip, window, &mut n)
+                                    .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n))
+                            })
                     };
                     *out = caster.colour(hit.as_ref(), d)[c];
                 }
@@ -235,6 +225,98 @@ fn geometric_spectral(
         })
         .sum();
     Ok(n_geometric + n_spectral)
+}
+
+/// Pixels beyond the number of views that the search for a view's own
+/// samples reaches along a row.
+pub(crate) const SAME_VIEW_SLACK: usize = 2;
+
+/// What the geometric pass saw of one view near a pixel: green's hits at
+/// the nearest pixels left and right, in the pixel's row and the rows
+/// above and below, whose green subpixel has that view. These are samples
+/// of that view's own image, so they say where (and whether) the view's
+/// ray through the pixel meets the surface.
+struct SameView {
+    /// Whether any such pixel lies within reach.
+    seen: bool,
+    /// The nearer of the two hits either side in the pixel's own row.
+    bracket: Option<f32>,
+    /// The nearest and farthest hit of all.
+    range: Option<(f32, f32)>,
+}
+
+impl SameView {
+    fn around(
+        geometric: &[Option<IsoHit>],
+        table: &[[u32; 3]],
+        (w, h): (usize, usize),
+        (x, y): (usize, usize),
+        view: u32,
+        reach: usize,
+    ) -> Self {
+        let mut near = SameView {
+            seen: false,
+            bracket: None,
+            range: None,
+        };
+        for yy in y.saturating_sub(1)..(y + 2).min(h) {
+            let t = |xx: usize| geometric[yy * w + xx].map(|g| g.t);
+            let found = |xx: &usize| table[yy * w + xx][1] == view;
+            let left = (x.saturating_sub(reach)..x).rev().find(found).map(t);
+            let right = (x + 1..(x + 1 + reach).min(w)).find(found).map(t);
+            if let (true, Some(Some(a)), Some(Some(b))) = (yy == y, left, right) {
+                near.bracket = Some(a.min(b));
+            }
+            for t in [left, right].into_iter().flatten() {
+                near.seen = true;
+                if let Some(t) = t {
+                    let (lo, hi) = near.range.unwrap_or((t, t));
+                    near.range = Some((lo.min(t), hi.max(t)));
+                }
+            }
+        }
+        near
+    }
+
+    /// Where to search the view's ray (`Some(None)`: nowhere, it sees
+    /// nothing), given green's hit at the pixel; `None` if no sample of the
+    /// view lies within reach.
+    fn window(&self, green: Option<f32>, margin: f32) -> Option<Option<(f32, f32)>> {
+        if !self.seen {
+            return None;
+        }
+        Some(match (self.range, green) {
+            // From a little before the nearer of its neighbours' surfaces
+            // (the two either side bracket it on a smooth surface), on.
+            (Some((lo, _)), Some(_)) => Some((self.bracket.unwrap_or(lo) - margin, f32::INFINITY)),
+            // Green missed, the view's neighbours did not: around their
+            // surfaces.
+            (Some((lo, hi)), None) => Some((lo - margin, hi + 3.0 * margin)),
+            // The view's neighbours all missed: at most a surface near
+            // green's.
+            (None, Some(g)) => Some((g - margin, g + 3.0 * margin)),
+            (None, None) => None,
+        })
+    }
+}
+
+/// Where to search without samples of the view (a panel narrower than a
+/// pattern period): from before green's surface on, or where green
+/// missed, around the nearest surface a neighbouring green saw.
+fn fallback_window(
+    geometric: &[Option<IsoHit>],
+    (w, h): (usize, usize),
+    (x, y): (usize, usize),
+    margin: f32,
+) -> Option<Option<(f32, f32)>> {
+    if let Some(g) = geometric[y * w + x] {
+        return Some(Some((g.t - margin, f32::INFINITY)));
+    }
+    let nearest = (y.saturating_sub(1)..(y + 2).min(h))
+        .flat_map(|yy| (x.saturating_sub(1)..(x + 2).min(w)).map(move |xx| yy * w + xx))
+        .filter_map(|j| geometric[j].map(|g| g.t))
+        .reduce(f32::min);
+    Some(nearest.map(|t| (t - margin, t + 3.0 * margin)))
 }
 
 /// The channel-by-channel difference of two display images, as the share
