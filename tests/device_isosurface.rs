@@ -641,3 +641,28 @@ fn bad_multi_view_cameras_are_reported_by_name() {
         "{e:?}"
     );
 }
+
+#[test]
+fn a_matte_colour_by_attribute_name_is_drawn_in_the_default_colour_with_a_warning() {
+    // The conformance tests' matte materials name the `color` attribute;
+    // an isosurface has none.
+    let mut h = Host::new();
+    let f = field(&mut h);
+    let m = h.d.new_object(DataType::MATERIAL, "matte");
+    h.d.set_param(Subject::Object(m), "color", Input::String("color".into()));
+    h.d.commit(Subject::Object(m));
+    let w = h.messages(Severity::Warning);
+    assert!(
+        w.iter().any(|m| m.contains("names the attribute 'color'")),
+        "{w:?}"
+    );
+    let (s, _) = surface(&mut h, f, &[0.25, 0.5, 0.75], m);
+    let world = world_of(&mut h, DataType::SURFACE, "surface", &[s]);
+    let camera = off_axis(&mut h, [0.0, 0.0, 2.0]);
+    let fr = frame(&mut h, world, camera, false);
+    let image = h.pixels_sized(fr, W, H);
+    assert!(h.messages(Severity::Error).is_empty());
+    // The default matte colour is grey: the lit surface has r = g = b.
+    let [r, g, b] = at(&image, W / 2, H / 2);
+    assert!(r > 50 && r == g && g == b, "{r} {g} {b}");
+}

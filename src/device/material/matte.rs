@@ -15,10 +15,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     params: &[
         p(
             "color",
-            &[T::FLOAT32_VEC3, T::FLOAT32_VEC4],
+            &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING],
             false,
             Default::Floats(&[0.8, 0.8, 0.8]),
-            "the surface's colour, linear RGB in [0, 1] (a fourth component is ignored)",
+            "the surface's colour, linear RGB in [0, 1] (a fourth component is ignored); an attribute name is drawn in the default colour, as an isosurface has no attributes",
         ),
         p(
             "opacity",
@@ -33,6 +33,11 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    if let Some(name) = r.set("color").and_then(|v| v.string()) {
+        warn(format!(
+            "color names the attribute '{name}'; isosurfaces have no attributes, so the surface is drawn in the default colour"
+        ));
+    }
     let color = match r.set("color").and_then(|v| v.f32s()) {
         Some(f) if f.len() == 4 => glam::Vec3::from_slice(&f),
         _ => r.vec3("color")?,
