@@ -130,9 +130,9 @@ fn world_of(h: &mut Host, kind: DataType, name: &str, objects: &[u64]) -> u64 {
     world
 }
 
-/// An off-axis camera through the panel from `eye`.
-fn off_axis(h: &mut Host, eye: [f32; 3]) -> u64 {
-    let c = h.d.new_object(DataType::CAMERA, "offAxis");
+/// The panel's corners as a camera's `lowerLeft`, `lowerRight`,
+/// `upperRight`.
+fn set_corners(h: &mut Host, camera: u64) {
     let s = screen();
     for (name, p) in [
         ("lowerLeft", s.ll()),
@@ -140,12 +140,18 @@ fn off_axis(h: &mut Host, eye: [f32; 3]) -> u64 {
         ("upperRight", s.ur()),
     ] {
         h.set(
-            c,
+            camera,
             name,
             DataType::FLOAT32_VEC3,
             bytes(&p.as_vec3().to_array()),
         );
     }
+}
+
+/// An off-axis camera through the panel from `eye`.
+fn off_axis(h: &mut Host, eye: [f32; 3]) -> u64 {
+    let c = h.d.new_object(DataType::CAMERA, "offAxis");
+    set_corners(h, c);
     h.set(c, "eye", DataType::FLOAT32_VEC3, bytes(&eye));
     h.d.commit(Subject::Object(c));
     c
@@ -437,19 +443,7 @@ fn display(size: UVec2) -> MultiViewDisplay {
 /// A multi-view camera of `display()`; `view` -1 for the panel image.
 fn multi_view(h: &mut Host, view: i32, method: &str) -> u64 {
     let c = h.d.new_object(DataType::CAMERA, "multiView");
-    let s = screen();
-    for (name, p) in [
-        ("lowerLeft", s.ll()),
-        ("lowerRight", s.lr()),
-        ("upperRight", s.ur()),
-    ] {
-        h.set(
-            c,
-            name,
-            DataType::FLOAT32_VEC3,
-            bytes(&p.as_vec3().to_array()),
-        );
-    }
+    set_corners(h, c);
     h.set(c, "views", DataType::INT32, bytes(&[8i32]));
     h.set(c, "viewingDistance", DataType::FLOAT32, bytes(&[2.0f32]));
     h.set(c, "viewSpacing", DataType::FLOAT32, bytes(&[0.05f32]));

@@ -1,11 +1,11 @@
 //! The group: volumes and surfaces an instance places in the world
 //! together.
 
-use super::info::{p, Default, SubtypeInfo};
+use super::info::SubtypeInfo;
 use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
-use super::world::objects;
+use super::world::{object_list, objects};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::GROUP,
@@ -13,22 +13,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "volumes and surfaces placed together by an instance",
     extensions: &[],
     params: &[
-        p(
-            "volume",
-            &[T::ARRAY1D],
-            false,
-            Default::None,
-            "ARRAY1D of ANARI_VOLUME",
-        )
-        .elements(&[T::VOLUME]),
-        p(
-            "surface",
-            &[T::ARRAY1D],
-            false,
-            Default::None,
-            "ARRAY1D of ANARI_SURFACE",
-        )
-        .elements(&[T::SURFACE]),
+        object_list("volume", &[T::VOLUME], "ARRAY1D of ANARI_VOLUME"),
+        object_list("surface", &[T::SURFACE], "ARRAY1D of ANARI_SURFACE"),
     ],
     commit: Some(commit),
 };

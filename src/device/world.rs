@@ -4,7 +4,7 @@
 
 use glam::Mat4;
 
-use super::info::{p, Default, SubtypeInfo};
+use super::info::{p, Default, ParamInfo, SubtypeInfo};
 use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
@@ -16,38 +16,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "the scene: up to 8 volumes, composited sample by sample where they overlap, or isosurfaces, the nearest showing; lit by the first directional light",
     extensions: &[],
     params: &[
-        p(
-            "volume",
-            &[T::ARRAY1D],
-            false,
-            Default::None,
-            "ARRAY1D of ANARI_VOLUME",
-        )
-        .elements(&[T::VOLUME]),
-        p(
-            "surface",
-            &[T::ARRAY1D],
-            false,
-            Default::None,
-            "ARRAY1D of ANARI_SURFACE (isosurfaces)",
-        )
-        .elements(&[T::SURFACE]),
-        p(
-            "light",
-            &[T::ARRAY1D],
-            false,
-            Default::None,
-            "ARRAY1D of ANARI_LIGHT; the first directional light sets the shading's light",
-        )
-        .elements(&[T::LIGHT]),
-        p(
-            "instance",
-            &[T::ARRAY1D],
-            false,
-            Default::None,
-            "ARRAY1D of ANARI_INSTANCE: groups of volumes and surfaces, each placed by its transform",
-        )
-        .elements(&[T::INSTANCE]),
+        object_list("volume", &[T::VOLUME], "ARRAY1D of ANARI_VOLUME"),
+        object_list("surface", &[T::SURFACE], "ARRAY1D of ANARI_SURFACE (isosurfaces)"),
+        object_list("light", &[T::LIGHT], "ARRAY1D of ANARI_LIGHT; the first directional light sets the shading's light"),
+        object_list("instance", &[T::INSTANCE], "ARRAY1D of ANARI_INSTANCE: groups of volumes and surfaces, each placed by its transform"),
     ],
     commit: Some(commit),
 };
@@ -96,6 +68,15 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         surfaces,
         lights: objects(r, "light", T::LIGHT)?,
     }))))
+}
+
+/// An optional ARRAY1D parameter of objects of one kind.
+pub(super) const fn object_list(
+    name: &'static str,
+    element: &'static [T],
+    description: &'static str,
+) -> ParamInfo {
+    p(name, &[T::ARRAY1D], false, Default::None, description).elements(element)
 }
 
 /// The objects of array parameter `name`, which must hold `element`s.
