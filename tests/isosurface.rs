@@ -238,3 +238,29 @@ fn the_crossing_box_holds_the_surface_and_nothing_far_from_it() {
     .unwrap();
     assert!(hits.iter().all(Option::is_none));
 }
+
+#[test]
+fn the_cpu_renderer_keeps_a_fields_values_and_boxes_and_draws_as_the_caster() {
+    use anari_library_caveray::render::iso::IsoSurface;
+    use anari_library_caveray::render::{Backend, Renderer};
+    let mut r = Renderer::new(Backend::Cpu).unwrap();
+    let rays = camera(DVec3::new(0.3, 0.2, 3.0));
+    let desc = FrameDesc::new(SIZE).with_depth();
+    let (ball, other) = (
+        ball(),
+        field(|p| 1.0 - (p - Vec3::new(0.2, 0.0, 0.0)).length()),
+    );
+    // Iso-values and volumes change and come back: each frame is the
+    // caster's own, not a kept box or field of another.
+    for (placed, isovalue) in [(&ball, 0.5), (&ball, 0.3), (&other, 0.5), (&ball, 0.5)] {
+        let settings = IsoSettings::new(isovalue);
+        let surface = IsoSurface {
+            placed: placed.clone(),
+            settings,
+        };
+        let kept = r.cast_surfaces(&[surface], &rays, &desc).unwrap();
+        let (fresh, _) = cast(placed, &rays, &desc, &settings).unwrap();
+        assert_eq!(kept.color, fresh.color, "iso-value {isovalue}");
+        assert_eq!(kept.depth, fresh.depth, "iso-value {isovalue}");
+    }
+}

@@ -274,7 +274,12 @@ impl Renderer {
         for s in surfaces {
             frames.push(match self {
                 Renderer::Gpu(g) => g.cast_iso(&s.placed, rays, &one, &s.settings)?,
-                Renderer::Cpu(_) => iso::cast(&s.placed, rays, &one, &s.settings)?.0,
+                Renderer::Cpu(c) => {
+                    s.settings.validate()?;
+                    let (values, bounds) = c.iso_field(&s.placed, &s.settings)?;
+                    let caster = iso::Caster::with_bounds(&s.placed, &values, &s.settings, bounds);
+                    iso::cast_by(&caster, rays, &one)?.0
+                }
             });
         }
         match frames.len() {
@@ -304,7 +309,12 @@ impl Renderer {
                 iso::interleave(&views, panel)
             }
             Renderer::Gpu(g) => g.cast_display(placed, panel, settings, method),
-            Renderer::Cpu(_) => Ok(iso::render_display(placed, panel, settings, method)?.0),
+            Renderer::Cpu(c) => {
+                settings.validate()?;
+                let (values, bounds) = c.iso_field(placed, settings)?;
+                let caster = iso::Caster::with_bounds(placed, &values, settings, bounds);
+                Ok(iso::render_display_by(&caster, panel, method)?.0)
+            }
         }
     }
 

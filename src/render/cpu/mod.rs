@@ -12,20 +12,24 @@ pub(crate) use march::enter_exit;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::frame::{filled, Frame, FrameDesc};
+use super::iso::{self, IsoFilter, IsoSettings};
 use super::march_plan::MarchPlan;
 use super::{RenderError, RenderSettings};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
-use crate::scene::{Scene, StructuredVolume, TransferFunction};
+use crate::scene::{PlacedVolume, Scene, StructuredVolume, TransferFunction};
 use packet::Channels;
 use sample::Converted;
 
 /// Pixels per tile edge.
 const TILE: usize = 16;
+
+/// Isosurface fields, and crossing boxes per field, the CPU renderer keeps.
+const ISO_KEPT: usize = 16;
 
 #[derive(Debug, Default)]
 pub struct CpuRenderer {
@@ -42,7 +46,20 @@ struct Prepared {
     values: Vec<(Arc<StructuredVolume>, Arc<Vec<f32>>)>,
     tables: Vec<(Arc<TransferFunction>, Arc<Vec<Vec4>>)>,
     spaces: SpaceCache,
+    /// The isosurfaces' fields as f32, and their crossing boxes by
+    /// iso-value and filter, kept while frames bring the same volumes.
+    iso: Vec<IsoPrepared>,
 }
+
+#[derive(Debug)]
+struct IsoPrepared {
+    volume: Arc<StructuredVolume>,
+    values: Arc<Vec<f32>>,
+    boxes: Vec<((u32, IsoFilter), CrossingBox)>,
+}
+
+/// A crossing box's grid-space corners (render::iso::crossing_box).
+type CrossingBox = (Vec3, Vec3);
 
 impl CpuRenderer {
     /// The CPU renderer, with AVX2 packets where the CPU has them.
@@ -65,6 +82,58 @@ impl CpuRenderer {
         self.packets && packet::available()
     }
 
+    /// `placed`'s values as f32 and its crossing box for `settings`, made
+    /// only when new: a frame of isosurfaces would otherwise convert and
+    /// scan every voxel each time.
+    pub fn iso_field(
+        &self,
+        placed: &PlacedVolume,
+        settings: &IsoSettings,
+    ) -> Result<(Arc<Vec<f32>>, CrossingBox), RenderError> {
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        let volume = &placed.volume;
+        let index = match cache
+            .iso
+            .iter()
+            .position(|p| Arc::ptr_eq(&p.volume, volume))
+        {
+            Some(i) => i,
+            None => {
+                let values = iso::values(placed)?;
+                // Few volumes at a time: the oldest goes.
+                if cache.iso.len() >= ISO_KEPT {
+                    cache.iso.remove(0);
+                }
+                cache.iso.push(IsoPrepared {
+                    volume: Arc::clone(volume),
+                    values: Arc::new(values),
+                    boxes: Vec::new(),
+                });
+                cache.iso.len() - 1
+            }
+        };
+        let entry = &mut cache.iso[index];
+        let key = (settings.isovalue.to_bits(), settings.filter);
+        let bounds = match entry.boxes.iter().find(|(k, _)| *k == key) {
+            Some((_, b)) => *b,
+            None => {
+                let values = &entry.values;
+                let b = iso::crossing_box(
+                    volume.dims(),
+                    |i| values[i],
+                    settings.isovalue,
+                    settings.filter,
+                );
+                if entry.boxes.len() >= ISO_KEPT {
+                    entry.boxes.remove(0);
+                }
+                entry.boxes.push((key, b));
+                b
+            }
+        };
+        Ok((Arc::clone(&entry.values), bounds))
+    }
+
     /// Each volume's values, table and (if the plan skips) clear bricks,
     /// made only when new.
     fn prepare(&self, scene: &Scene, plan: &MarchPlan) -> Result<Vec<Converted>, RenderError> {
@@ -83,6 +152,7 @@ impl CpuRenderer {
         };
         let mut next = Prepared {
             spaces: std::mem::take(&mut cache.spaces),
+            iso: std::mem::take(&mut cache.iso),
             ..Prepared::default()
         };
         let mut converted = Vec::new();

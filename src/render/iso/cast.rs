@@ -48,13 +48,24 @@ pub fn values(placed: &PlacedVolume) -> Result<Vec<f32>, RenderError> {
 
 impl<'a> Caster<'a> {
     pub fn new(placed: &PlacedVolume, values: &'a [f32], settings: &'a IsoSettings) -> Self {
-        let field = IsoField::new(placed, values, settings.filter);
         let dims = placed.volume.dims();
+        let bounds = crossing_box(dims, |i| values[i], settings.isovalue, settings.filter);
+        Self::with_bounds(placed, values, settings, bounds)
+    }
+
+    /// A caster whose crossing box (of these values, iso-value and
+    /// filter) was found before.
+    pub fn with_bounds(
+        placed: &PlacedVolume,
+        values: &'a [f32],
+        settings: &'a IsoSettings,
+        bounds: (Vec3, Vec3),
+    ) -> Self {
         Self {
-            bounds: crossing_box(dims, |i| values[i], settings.isovalue, settings.filter),
-            field,
+            field: IsoField::new(placed, values, settings.filter),
             step: placed.smallest_cell() / settings.steps_per_cell,
             settings,
+            bounds,
         }
     }
 
@@ -185,10 +196,18 @@ pub fn cast(
     desc: &FrameDesc,
     settings: &IsoSettings,
 ) -> Result<(Frame, Vec<Option<IsoHit>>), RenderError> {
-    desc.validate()?;
     settings.validate()?;
     let values = values(placed)?;
-    let caster = Caster::new(placed, &values, settings);
+    cast_by(&Caster::new(placed, &values, settings), rays, desc)
+}
+
+/// `cast` with a caster made beforehand (its settings checked).
+pub fn cast_by(
+    caster: &Caster,
+    rays: &RayGen,
+    desc: &FrameDesc,
+) -> Result<(Frame, Vec<Option<IsoHit>>), RenderError> {
+    desc.validate()?;
     let (w, n) = (desc.size.x as usize, desc.pixels());
     let mut hits = filled(n, None, "the hits")?;
     hits.par_chunks_mut(w).enumerate().for_each(|(y, row)| {

@@ -11,9 +11,11 @@ mod surfaces;
 
 use glam::{Vec3, Vec4};
 
-pub use cast::{cast, values, Caster, IsoHit};
+pub use cast::{cast, cast_by, values, Caster, IsoHit};
 pub use field::{crossing_box, curvatures, IsoField, IsoFilter, Sample};
-pub use multiview::{render_display, subpixels_differing, MultiViewMethod, Panel};
+pub use multiview::{
+    render_display, render_display_by, subpixels_differing, MultiViewMethod, Panel,
+};
 pub(crate) use multiview::{SAME_VIEW_SLACK, SEARCH_MARGIN_STEPS};
 pub use surfaces::{interleave, nearest, IsoSurface};
 

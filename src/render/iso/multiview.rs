@@ -68,6 +68,16 @@ pub fn render_display(
     method: MultiViewMethod,
 ) -> Result<(Frame, u64), RenderError> {
     settings.validate()?;
+    let values = values(placed)?;
+    render_display_by(&Caster::new(placed, &values, settings), display, method)
+}
+
+/// `render_display` with a caster made beforehand (its settings checked).
+pub fn render_display_by(
+    caster: &Caster,
+    display: &Panel,
+    method: MultiViewMethod,
+) -> Result<(Frame, u64), RenderError> {
     let size = display.size;
     let desc = FrameDesc::new(size).with_color(display.color);
     desc.validate()?;
@@ -77,8 +87,6 @@ pub fn render_display(
         ));
     }
     let rays = &display.views;
-    let values = values(placed)?;
-    let caster = Caster::new(placed, &values, settings);
     let w = size.x as usize;
     let table = view_table(display)?;
     let mut rgb = filled(desc.pixels(), [0.0f32; 3], "the display image")?;
@@ -87,7 +95,7 @@ pub fn render_display(
             let mut total = 0;
             let mut views = Vec::with_capacity(rays.len());
             for r in rays {
-                let (colours, n) = view_image(&caster, r, size)?;
+                let (colours, n) = view_image(caster, r, size)?;
                 total += n;
                 views.push(colours);
             }
@@ -115,7 +123,7 @@ pub fn render_display(
             })
             .sum(),
         MultiViewMethod::GeometricSpectral => {
-            geometric_spectral(&caster, &table, rays, size, &mut rgb)?
+            geometric_spectral(caster, &table, rays, size, &mut rgb)?
         }
     };
     // A panel shows no alpha.
