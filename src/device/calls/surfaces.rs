@@ -3,6 +3,8 @@
 //! the renderer's settings and the world's light (its direction: the
 //! isosurface shading's light is white).
 
+use std::sync::{Arc, OnceLock};
+
 use glam::Mat4;
 
 use crate::device::light::DirectionalLight;
@@ -10,6 +12,20 @@ use crate::device::object::{ObjectRef, State};
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
 use crate::scene::{PlacedVolume, TransferFunction};
+
+/// The transfer function a surface's field is placed with: the caster
+/// reads the field alone and never evaluates it. One for all, so the GPU
+/// renderer, which keeps tables by identity, writes it once.
+fn unclassified() -> Result<Arc<TransferFunction>, String> {
+    static ONE: OnceLock<Option<Arc<TransferFunction>>> = OnceLock::new();
+    ONE.get_or_init(|| {
+        TransferFunction::new(vec![glam::Vec4::ONE], vec![1.0], (0.0, 1.0), 1.0)
+            .ok()
+            .map(Arc::new)
+    })
+    .clone()
+    .ok_or_else(|| "internal: no transfer function for an isosurface's field".to_string())
+}
 
 /// The isosurfaces of `surfaces` (each with the transform of the instance
 /// that placed it), or why one cannot be drawn.
@@ -39,15 +55,10 @@ pub(super) fn iso_surfaces(
             State::Field(f) => f.ready(&field.describe())?.clone(),
             _ => return Err(not_ours(field)),
         };
-        let transform = transform.unwrap_or(Mat4::IDENTITY);
-        // The caster reads the field alone; the placed volume's transfer
-        // function is never evaluated.
-        let unclassified = TransferFunction::new(vec![glam::Vec4::ONE], vec![1.0], (0.0, 1.0), 1.0)
-            .map_err(|e| e.to_string())?;
         let placed = PlacedVolume {
             volume,
-            transfer_function: std::sync::Arc::new(unclassified),
-            transform,
+            transfer_function: unclassified()?,
+            transform: transform.unwrap_or(Mat4::IDENTITY),
         };
         for &isovalue in &geometry_model.isovalues {
             let settings = IsoSettings {
