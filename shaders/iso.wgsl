@@ -388,8 +388,8 @@ fn geometric(@builtin(global_invocation_id) id: vec3u) {
 }
 
 // The spectral pass (src/render/iso/multiview.rs): green from its t, red
-// and blue searched near green's surface, or near a neighbour's where
-// green missed.
+// and blue searched from where their own views' samples in the geometric
+// pass met the surface (search_window).
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn spectral(@builtin(global_invocation_id) id: vec3u) {
     if id.x >= iso.width || id.y >= iso.height {

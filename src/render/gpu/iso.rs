@@ -12,8 +12,9 @@ use super::{
     unprepared, GpuRenderer,
 };
 use crate::geometry::RayGen;
-use crate::render::frame::filled;
-use crate::render::iso::{crossing_box, Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
+use crate::render::iso::{
+    crossing_box, view_table, Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel,
+};
 use crate::render::{Frame, FrameDesc, RenderError};
 use crate::scene::{PlacedVolume, Scene};
 
@@ -120,12 +121,11 @@ impl GpuRenderer {
                 ]
             })
             .collect();
-        let (w, h) = (panel.size.x, panel.size.y);
-        let mut packed = filled((w * h) as usize, 0u32, "the panel's views")?;
-        for (i, p) in packed.iter_mut().enumerate() {
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            *p = (0..3).fold(0, |acc, c| acc | (panel.view(x, y, c) << (8 * c)));
-        }
+        // Each pixel's three views, a byte each (at most 256 views).
+        let packed: Vec<u32> = view_table(panel)?
+            .iter()
+            .map(|v| v[0] | v[1] << 8 | v[2] << 16)
+            .collect();
         // A display's rays and pattern stay from frame to frame: its
         // buffers are kept, and written again only when they change.
         let mut kept = self.iso.as_mut().and_then(|iso| iso.panel.take());

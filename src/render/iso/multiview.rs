@@ -136,7 +136,7 @@ pub fn render_display_by(
 
 /// Every subpixel's view, row by row from the lower left: the pattern's
 /// function called once a subpixel, not once a use.
-fn view_table(display: &Panel) -> Result<Vec<[u32; 3]>, RenderError> {
+pub(crate) fn view_table(display: &Panel) -> Result<Vec<[u32; 3]>, RenderError> {
     let w = display.size.x as usize;
     let mut table = filled(w * display.size.y as usize, [0u32; 3], "the panel's views")?;
     table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -173,7 +173,7 @@ fn view_image(
 }
 
 /// The geometric pass (green, in full) and the spectral pass (red and
-/// blue, from near green's hit).
+/// blue, searched from where their own views' samples met the surface).
 fn geometric_spectral(
     caster: &Caster,
     table: &[[u32; 3]],
