@@ -139,16 +139,32 @@ impl<'a> IsoField<'a> {
         self.values[(x + d.x * (y + d.y * z)) as usize]
     }
 
+    /// The march's innermost work: the cell's eight values are fetched
+    /// once each, from one index and three strides (zero at the grid's
+    /// last vertex, where the clamped point's cell has no far side).
+    #[inline]
     fn trilinear(&self, g: Vec3) -> f32 {
         let g = g.clamp(Vec3::ZERO, self.last_vertex());
-        let i = g.floor();
-        let f = g - i;
-        let (x, y, z) = (i.x as i32, i.y as i32, i.z as i32);
-        let c = |dx, dy, dz| self.voxel(x + dx, y + dy, z + dz);
-        let x00 = c(0, 0, 0) + (c(1, 0, 0) - c(0, 0, 0)) * f.x;
-        let x10 = c(0, 1, 0) + (c(1, 1, 0) - c(0, 1, 0)) * f.x;
-        let x01 = c(0, 0, 1) + (c(1, 0, 1) - c(0, 0, 1)) * f.x;
-        let x11 = c(0, 1, 1) + (c(1, 1, 1) - c(0, 1, 1)) * f.x;
+        // Not negative, so truncation is the floor.
+        let (x, y, z) = (g.x as usize, g.y as usize, g.z as usize);
+        let f = g - Vec3::new(x as f32, y as f32, z as f32);
+        let (nx, ny, nz) = (
+            self.dims.x as usize,
+            self.dims.y as usize,
+            self.dims.z as usize,
+        );
+        let sx = usize::from(x + 1 < nx);
+        let sy = if y + 1 < ny { nx } else { 0 };
+        let sz = if z + 1 < nz { nx * ny } else { 0 };
+        let v = self.values;
+        let i = x + nx * (y + ny * z);
+        let (c000, c100, c010, c110) = (v[i], v[i + sx], v[i + sy], v[i + sx + sy]);
+        let j = i + sz;
+        let (c001, c101, c011, c111) = (v[j], v[j + sx], v[j + sy], v[j + sx + sy]);
+        let x00 = c000 + (c100 - c000) * f.x;
+        let x10 = c010 + (c110 - c010) * f.x;
+        let x01 = c001 + (c101 - c001) * f.x;
+        let x11 = c011 + (c111 - c011) * f.x;
         let y0 = x00 + (x10 - x00) * f.y;
         let y1 = x01 + (x11 - x01) * f.y;
         y0 + (y1 - y0) * f.z
