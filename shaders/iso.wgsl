@@ -401,7 +401,6 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
     let packed = pixel_views[i];
     let tg = green_t[i];
     let margin = SEARCH_MARGIN_STEPS * iso.step;
-    let reach = arrayLength(&view_rays) / 7u + SAME_VIEW_SLACK;
     var rgb = vec3f(0.0);
     for (var c = 0u; c < 3u; c++) {
         let v = view_of(packed, c);
@@ -412,7 +411,7 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
                 hit = hit_at(r.o, r.d, r.eye, span(r.o, r.d), tg);
             }
         } else {
-            let w = search_window(id.x, id.y, v, reach, tg, margin);
+            let w = search_window(id.x, id.y, v, tg, margin);
             if w.y >= w.x {
                 hit = cast_window(r.o, r.d, r.eye, w.x, w.y);
             }
@@ -426,56 +425,37 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
 }
 
 // What the geometric pass saw of view `v` near pixel (x, y): green's t at
-// the nearest pixels left and right, in rows y - 1 to y + 1, whose green
-// has view v (SameView in src/render/iso/multiview.rs).
+// the SAME_VIEW_SAMPLES nearest pixels whose green has view v, looked for
+// in SAME_VIEW_OFFSETS' order (SameView in src/render/iso/multiview.rs).
 struct SameView {
     seen: bool,
-    // The nearer of the two hits either side in row y; negative: none.
-    bracket: f32,
-    // The nearest and farthest hit of all; negative: none.
+    // The nearest and farthest hit among them; negative: none.
     lo: f32,
     hi: f32,
 }
 
-fn same_view(x: u32, y: u32, v: u32, reach: u32) -> SameView {
-    var near = SameView(false, -1.0, -1.0, -1.0);
-    let y0 = select(0u, y - 1u, y > 0u);
-    let y1 = min(y + 1u, iso.height - 1u);
-    for (var yy = y0; yy <= y1; yy++) {
-        // -2: no pixel of view v within reach; -1: one, which missed.
-        var side = array<f32, 2>(-2.0, -2.0);
-        let x0 = select(0u, x - reach, x > reach);
-        for (var xx = x; xx > x0; xx--) {
-            let j = yy * iso.width + xx - 1u;
-            if view_of(pixel_views[j], 1u) == v {
-                side[0] = max(green_t[j], -1.0);
-                break;
-            }
+fn same_view(x: u32, y: u32, v: u32) -> SameView {
+    var near = SameView(false, -1.0, -1.0);
+    var found = 0u;
+    for (var k = 0u; k < SAME_VIEW_OFFSET_COUNT && found < SAME_VIEW_SAMPLES; k++) {
+        let p = vec2i(i32(x), i32(y)) + SAME_VIEW_OFFSETS[k];
+        if p.x < 0 || p.y < 0 || p.x >= i32(iso.width) || p.y >= i32(iso.height) {
+            continue;
         }
-        let x1 = min(x + 1u + reach, iso.width);
-        for (var xx = x + 1u; xx < x1; xx++) {
-            let j = yy * iso.width + xx;
-            if view_of(pixel_views[j], 1u) == v {
-                side[1] = max(green_t[j], -1.0);
-                break;
-            }
+        let j = u32(p.y) * iso.width + u32(p.x);
+        if view_of(pixel_views[j], 1u) != v {
+            continue;
         }
-        if yy == y && side[0] >= 0.0 && side[1] >= 0.0 {
-            near.bracket = min(side[0], side[1]);
-        }
-        for (var k = 0u; k < 2u; k++) {
-            let t = side[k];
-            if t > -2.0 {
-                near.seen = true;
-            }
-            if t >= 0.0 {
-                if near.lo < 0.0 {
-                    near.lo = t;
-                    near.hi = t;
-                } else {
-                    near.lo = min(near.lo, t);
-                    near.hi = max(near.hi, t);
-                }
+        near.seen = true;
+        found++;
+        let t = green_t[j];
+        if t >= 0.0 {
+            if near.lo < 0.0 {
+                near.lo = t;
+                near.hi = t;
+            } else {
+                near.lo = min(near.lo, t);
+                near.hi = max(near.hi, t);
             }
         }
     }
@@ -486,14 +466,14 @@ fn same_view(x: u32, y: u32, v: u32, reach: u32) -> SameView {
 // y: until; from > until: nowhere), as SameView::window and
 // fallback_window choose on the CPU. `tg`: green's t there (negative:
 // missed).
-fn search_window(x: u32, y: u32, v: u32, reach: u32, tg: f32, margin: f32) -> vec2f {
+fn search_window(x: u32, y: u32, v: u32, tg: f32, margin: f32) -> vec2f {
     let inf = bitcast<f32>(0x7f800000u);
     let nowhere = vec2f(1.0, 0.0);
-    let near = same_view(x, y, v, reach);
+    let near = same_view(x, y, v);
     if near.seen {
         if near.lo >= 0.0 {
             if tg >= 0.0 {
-                return vec2f(select(near.lo, near.bracket, near.bracket >= 0.0) - margin, inf);
+                return vec2f(near.lo - margin, inf);
             }
             return vec2f(near.lo - margin, near.hi + 3.0 * margin);
         }

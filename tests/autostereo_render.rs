@@ -35,13 +35,13 @@ fn display(views: u32) -> MultiViewDisplay {
 
 fn render(views: u32, method: MultiViewMethod) -> (anari_library_caveray::render::Frame, u64) {
     let d = display(views);
-    let view_of = |x, y, c| d.view_of(x, y, c);
-    let panel = Panel {
-        color: Default::default(),
-        size: d.resolution,
-        views: d.view_rays().unwrap(),
-        view_of: &view_of,
-    };
+    let panel = Panel::new(
+        d.resolution,
+        Default::default(),
+        d.view_rays().unwrap(),
+        |x, y, c| d.view_of(x, y, c),
+    )
+    .unwrap();
     render_display(&scene(), &panel, &IsoSettings::new(0.5), method).unwrap()
 }
 

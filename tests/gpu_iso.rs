@@ -100,13 +100,13 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
     let mut first = None;
     for offset in [0.0, 1.5, 0.0] {
         let d = display(offset);
-        let view_of = |x, y, c| d.view_of(x, y, c);
-        let panel = Panel {
-            color: Default::default(),
-            size: d.resolution,
-            views: d.view_rays().unwrap(),
-            view_of: &view_of,
-        };
+        let panel = Panel::new(
+            d.resolution,
+            Default::default(),
+            d.view_rays().unwrap(),
+            |x, y, c| d.view_of(x, y, c),
+        )
+        .unwrap();
         for method in [
             MultiViewMethod::PerSubpixel,
             MultiViewMethod::GeometricSpectral,
@@ -135,13 +135,13 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
         }
     }
     let d = display(0.0);
-    let view_of = |x, y, c| d.view_of(x, y, c);
-    let panel = Panel {
-        color: Default::default(),
-        size: d.resolution,
-        views: d.view_rays().unwrap(),
-        view_of: &view_of,
-    };
+    let panel = Panel::new(
+        d.resolution,
+        Default::default(),
+        d.view_rays().unwrap(),
+        |x, y, c| d.view_of(x, y, c),
+    )
+    .unwrap();
     let e = g
         .cast_display(&placed, &panel, &settings, MultiViewMethod::Naive)
         .unwrap_err();

@@ -157,10 +157,11 @@ impl Worker {
                 .name("caveray-render".into())
                 .spawn(move || {
                     let mut renderer = None;
+                    let mut kept = KeptPanel::default();
                     for job in rx {
                         match job.background {
                             Some(_) => run_background(job, &mut renderer, &report),
-                            None => run(job, &mut renderer, &report),
+                            None => run(job, &mut renderer, &mut kept, &report),
                         }
                     }
                 });
@@ -299,7 +300,41 @@ fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, re
         .finish(Err("background render".into()), started.elapsed());
 }
 
-fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Reporter) {
+/// The last panel's views of each subpixel: a display's pattern stays
+/// from frame to frame, and looking every subpixel up costs a frame of a
+/// full-size panel tens of milliseconds.
+#[derive(Default)]
+struct KeptPanel(Option<(Arc<MultiViewDisplay>, ViewTable)>);
+
+/// Each subpixel's view, row by row from the lower left.
+type ViewTable = Arc<[[u32; 3]]>;
+
+impl KeptPanel {
+    fn panel(
+        &mut self,
+        job: &RenderJob,
+        display: &Arc<MultiViewDisplay>,
+    ) -> Result<Panel, RenderError> {
+        let views = job.views.iter().map(|v| v.rays).collect();
+        let (size, color) = (job.desc.size, job.desc.color);
+        if let Some((kept, table)) = &self.0 {
+            if kept == display && display.resolution == size {
+                return Panel::with_table(size, color, views, table.clone());
+            }
+        }
+        self.0 = None;
+        let panel = Panel::new(size, color, views, |x, y, c| display.view_of(x, y, c))?;
+        self.0 = Some((display.clone(), panel.table().clone()));
+        Ok(panel)
+    }
+}
+
+fn run(
+    job: RenderJob,
+    renderer: &mut Option<(Backend, Renderer)>,
+    kept: &mut KeptPanel,
+    report: &Reporter,
+) {
     let started = Instant::now();
     let status = |severity, code, message: String| Status {
         severity,
@@ -347,7 +382,7 @@ fn run(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Repo
             report(status(Severity::Warning, StatusCode::NoError, why));
         }
         match (&job.panel, &job.scene) {
-            (Some(panel), _) => render_panel(r, &job, panel),
+            (Some(panel), _) => render_panel(r, &job, panel, kept),
             (None, Some(scene)) => render_views(r, scene, &job, report, &mut handed),
             (None, None) => render_surface_views(r, &job),
         }
@@ -466,14 +501,9 @@ fn render_panel(
     r: &mut Renderer,
     job: &RenderJob,
     (display, method): &PanelJob,
+    kept: &mut KeptPanel,
 ) -> Result<Frame, RenderError> {
-    let view_of = |x, y, c| display.view_of(x, y, c);
-    let panel = Panel {
-        size: job.desc.size,
-        color: job.desc.color,
-        views: job.views.iter().map(|v| v.rays).collect(),
-        view_of: &view_of,
-    };
+    let panel = kept.panel(job, display)?;
     match (&job.scene, job.surfaces.as_slice()) {
         (Some(scene), _) => {
             // Views in floats: an 8-bit panel is quantised once.

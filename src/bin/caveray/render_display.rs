@@ -69,13 +69,10 @@ pub fn run(
     std::fs::create_dir_all(out)
         .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", out.display())))?;
     let rays = display.view_rays().map_err(|e| runtime(&e))?;
-    let view_of = |x, y, c| display.view_of(x, y, c);
-    let panel = Panel {
-        color: Default::default(),
-        size: resolution,
-        views: rays.clone(),
-        view_of: &view_of,
-    };
+    let panel = Panel::new(resolution, Default::default(), rays.clone(), |x, y, c| {
+        display.view_of(x, y, c)
+    })
+    .map_err(|e| runtime(&e))?;
     let start = Instant::now();
     let (interleaved, _) = render_display(placed, &panel, &settings, MultiViewMethod::PerSubpixel)
         .map_err(|e| runtime(&e))?;

@@ -12,9 +12,7 @@ use super::{
     unprepared, GpuRenderer,
 };
 use crate::geometry::RayGen;
-use crate::render::iso::{
-    crossing_box, view_table, Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel,
-};
+use crate::render::iso::{crossing_box, Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
 use crate::render::{Frame, FrameDesc, RenderError};
 use crate::scene::{PlacedVolume, Scene};
 
@@ -122,7 +120,8 @@ impl GpuRenderer {
             })
             .collect();
         // Each pixel's three views, a byte each (at most 256 views).
-        let packed: Vec<u32> = view_table(panel)?
+        let packed: Vec<u32> = panel
+            .checked_table()?
             .iter()
             .map(|v| v[0] | v[1] << 8 | v[2] << 16)
             .collect();

@@ -10,7 +10,7 @@ use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::ColorFormat;
 use crate::render::gpu::resources::LOD_LEVELS;
-use crate::render::iso::{SAME_VIEW_SLACK, SEARCH_MARGIN_STEPS};
+use crate::render::iso::{same_view_offsets, SAME_VIEW_SAMPLES, SEARCH_MARGIN_STEPS};
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
@@ -451,9 +451,22 @@ pub(super) fn declarations() -> String {
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
-    // Steps before green's surface at which the spectral pass searches.
+    // The spectral pass: steps before its samples' surfaces at which it
+    // searches, how many samples, and where it looks for them.
     out += &format!("const SEARCH_MARGIN_STEPS: f32 = {SEARCH_MARGIN_STEPS:?}f;\n");
-    out += &format!("const SAME_VIEW_SLACK: u32 = {SAME_VIEW_SLACK}u;\n");
+    out += &format!("const SAME_VIEW_SAMPLES: u32 = {SAME_VIEW_SAMPLES}u;\n");
+    let offsets = same_view_offsets();
+    let listed: Vec<String> = offsets
+        .iter()
+        .map(|(dx, dy)| format!("vec2i({dx}, {dy})"))
+        .collect();
+    out += &format!("const SAME_VIEW_OFFSET_COUNT: u32 = {}u;\n", offsets.len());
+    out += &format!(
+        "var<private> SAME_VIEW_OFFSETS: array<vec2i, {}> = array<vec2i, {}>({});\n",
+        offsets.len(),
+        offsets.len(),
+        listed.join(", ")
+    );
     out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl() + &Warp::wgsl() + &Iso::wgsl()
 }
 

@@ -16,7 +16,7 @@ pub use field::{crossing_box, curvatures, IsoField, IsoFilter, Sample};
 pub use multiview::{
     render_display, render_display_by, subpixels_differing, MultiViewMethod, Panel,
 };
-pub(crate) use multiview::{view_table, SAME_VIEW_SLACK, SEARCH_MARGIN_STEPS};
+pub(crate) use multiview::{same_view_offsets, SAME_VIEW_SAMPLES, SEARCH_MARGIN_STEPS};
 pub use surfaces::{interleave, nearest, IsoSurface};
 
 use super::RenderError;

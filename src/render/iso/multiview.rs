@@ -6,6 +6,8 @@
 //! other channels' hits near it, casting them in full only where their
 //! eyes may see another surface.
 
+use std::sync::Arc;
+
 use glam::UVec2;
 use rayon::prelude::*;
 
@@ -43,19 +45,94 @@ impl MultiViewMethod {
 pub(crate) const SEARCH_MARGIN_STEPS: f32 = 2.0;
 
 /// The panel as the renderer sees it: each view's rays over the panel's
-/// pixels, and which view each subpixel (x, y, channel) belongs to.
-pub struct Panel<'a> {
+/// pixels, and which view each subpixel (x, y, channel) belongs to. The
+/// views are looked up once, when the panel is made, not every frame.
+pub struct Panel {
     pub size: UVec2,
     /// The display image's pixel format.
     pub color: ColorFormat,
     pub views: Vec<RayGen>,
-    pub view_of: &'a (dyn Fn(u32, u32, usize) -> u32 + Sync),
+    /// Every subpixel's view, row by row from the lower left.
+    table: Arc<[[u32; 3]]>,
 }
 
-impl Panel<'_> {
-    /// The view of subpixel `c` of pixel (x, y), within the views given.
+impl Panel {
+    /// `view_of(x, y, channel)` gives each subpixel's view; views past the
+    /// last are taken as the last.
+    pub fn new(
+        size: UVec2,
+        color: ColorFormat,
+        views: Vec<RayGen>,
+        view_of: impl Fn(u32, u32, usize) -> u32 + Sync,
+    ) -> Result<Self, RenderError> {
+        let w = size.x.max(1) as usize;
+        let pixels = FrameDesc::new(size).pixels();
+        let mut table = filled(pixels, [0u32; 3], "the panel's views")?;
+        let last = views.len().saturating_sub(1) as u32;
+        table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, px) in row.iter_mut().enumerate() {
+                *px = [0, 1, 2].map(|c| view_of(x as u32, y as u32, c).min(last));
+            }
+        });
+        Ok(Self {
+            size,
+            color,
+            views,
+            table: table.into(),
+        })
+    }
+
+    /// A panel with another's views of each subpixel (a display's pattern
+    /// stays from frame to frame), if they cover `size`.
+    pub fn with_table(
+        size: UVec2,
+        color: ColorFormat,
+        views: Vec<RayGen>,
+        table: Arc<[[u32; 3]]>,
+    ) -> Result<Self, RenderError> {
+        let panel = Self {
+            size,
+            color,
+            views,
+            table,
+        };
+        panel.checked_table()?;
+        if let Some(v) = panel
+            .table
+            .iter()
+            .flatten()
+            .find(|&&v| v as usize >= panel.views.len())
+        {
+            return Err(RenderError::Settings(format!(
+                "a subpixel shows view {v} of a panel of {} views",
+                panel.views.len()
+            )));
+        }
+        Ok(panel)
+    }
+
+    /// The view of subpixel `c` of pixel (x, y).
     pub fn view(&self, x: u32, y: u32, c: usize) -> u32 {
-        (self.view_of)(x, y, c).min(self.views.len().saturating_sub(1) as u32)
+        self.table[(y * self.size.x + x) as usize][c.min(2)]
+    }
+
+    /// Every subpixel's view, row by row from the lower left.
+    pub fn table(&self) -> &Arc<[[u32; 3]]> {
+        &self.table
+    }
+
+    /// The table, if it covers the panel's size (which is public).
+    pub fn checked_table(&self) -> Result<&[[u32; 3]], RenderError> {
+        let pixels = FrameDesc::new(self.size).pixels();
+        if self.table.len() != pixels {
+            return Err(RenderError::Settings(format!(
+                "the panel's views cover {} pixels, not its {}x{}",
+                self.table.len(),
+                self.size.x,
+                self.size.y
+            )));
+        }
+        Ok(&self.table)
     }
 }
 
@@ -88,7 +165,7 @@ pub fn render_display_by(
     }
     let rays = &display.views;
     let w = size.x as usize;
-    let table = view_table(display)?;
+    let table = display.checked_table()?;
     let mut rgb = filled(desc.pixels(), [0.0f32; 3], "the display image")?;
     let samples = match method {
         MultiViewMethod::Naive => {
@@ -123,7 +200,7 @@ pub fn render_display_by(
             })
             .sum(),
         MultiViewMethod::GeometricSpectral => {
-            geometric_spectral(caster, &table, rays, size, &mut rgb)?
+            geometric_spectral(caster, table, rays, size, &mut rgb)?
         }
     };
     // A panel shows no alpha.
@@ -132,19 +209,6 @@ pub fn render_display_by(
         o.copy_from_slice(&[px[0], px[1], px[2], 1.0]);
     }
     Ok((Frame::from_linear(&desc, color, None)?, samples))
-}
-
-/// Every subpixel's view, row by row from the lower left: the pattern's
-/// function called once a subpixel, not once a use.
-pub(crate) fn view_table(display: &Panel) -> Result<Vec<[u32; 3]>, RenderError> {
-    let w = display.size.x as usize;
-    let mut table = filled(w * display.size.y as usize, [0u32; 3], "the panel's views")?;
-    table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, views) in row.iter_mut().enumerate() {
-            *views = [0, 1, 2].map(|c| display.view(x as u32, y as u32, c));
-        }
-    });
-    Ok(table)
 }
 
 /// One view's whole image as linear RGB, and its field evaluations.
@@ -198,7 +262,13 @@ fn geometric_spectral(
         .sum();
     let h = size.y as usize;
     let margin = SEARCH_MARGIN_STEPS * caster.step;
-    let reach = rays.len() + SAME_VIEW_SLACK;
+    let offsets = same_view_offsets();
+    // Only where a channel's view is not green's is anything searched.
+    let searched = table.iter().any(|v| v[0] != v[1] || v[2] != v[1]);
+    let near = match searched {
+        true => near_surface(&geometric, (w, h), SAME_VIEW_RADIUS as usize)?,
+        false => Vec::new(),
+    };
     let n_spectral: u64 = rgb
         .par_chunks_mut(w)
         .enumerate()
@@ -207,17 +277,27 @@ fn geometric_spectral(
             for (x, px) in row.iter_mut().enumerate() {
                 let i = y * w + x;
                 let views = table[i];
+                let (_, green_d) = rays[views[1] as usize].pixel_ray(x as u32, y as u32);
+                // Green's ray, and any channel of green's view, shade the
+                // geometric pass's very hit, seen the same way.
+                let green = caster.colour(geometric[i].as_ref(), green_d);
                 for (c, out) in px.iter_mut().enumerate() {
+                    if views[c] == views[1] {
+                        *out = green[c];
+                        continue;
+                    }
                     let r = &rays[views[c] as usize];
                     let (o, d) = r.pixel_ray(x as u32, y as u32);
                     let clip = (r.t_near, r.t_far);
-                    let hit = if c == 1 || views[c] == views[1] {
-                        // The geometric pass's very ray.
-                        geometric[i]
+                    let hit = if !near[i] {
+                        // No green hit within the samples' reach: every
+                        // window below would be empty.
+                        None
                     } else {
-                        let near =
-                            SameView::around(&geometric, table, (w, h), (x, y), views[c], reach);
-                        near.window(geometric[i].map(|g| g.t), margin)
+                        let samples =
+                            SameView::around(&geometric, table, (w, h), (x, y), views[c], &offsets);
+                        samples
+                            .window(geometric[i].map(|g| g.t), margin)
                             .or_else(|| fallback_window(&geometric, (w, h), (x, y), margin))
                             .flatten()
                             .and_then(|window| {
@@ -235,21 +315,88 @@ fn geometric_spectral(
     Ok(n_geometric + n_spectral)
 }
 
-/// Pixels beyond the number of views that the search for a view's own
-/// samples reaches along a row.
-pub(crate) const SAME_VIEW_SLACK: usize = 2;
+/// How many of a view's samples, nearest first, bound a search of its ray.
+pub(crate) const SAME_VIEW_SAMPLES: usize = 4;
+
+/// How far (in pixels) from a subpixel its view's samples are looked for:
+/// a slanted lens puts a view's pixels a few rows and columns apart.
+pub(crate) const SAME_VIEW_RADIUS: i32 = 4;
+
+/// The pixel offsets (dx, dy) within [`SAME_VIEW_RADIUS`] of a pixel,
+/// itself left out, nearest first; ties by row, then column, so that the
+/// GPU, which gets this list, looks in the same order.
+pub(crate) fn same_view_offsets() -> Vec<(i32, i32)> {
+    let r = SAME_VIEW_RADIUS;
+    let mut offsets: Vec<(i32, i32)> = (-r..=r)
+        .flat_map(|dy| (-r..=r).map(move |dx| (dx, dy)))
+        .filter(|&(dx, dy)| (dx, dy) != (0, 0) && dx * dx + dy * dy <= r * r)
+        .collect();
+    offsets.sort_by_key(|&(dx, dy)| (dx * dx + dy * dy, dy, dx));
+    offsets
+}
+
+/// Per pixel, whether the geometric pass hit anything within `r` pixels
+/// across and up (a square, which holds every offset searched).
+fn near_surface(
+    geometric: &[Option<IsoHit>],
+    (w, h): (usize, usize),
+    r: usize,
+) -> Result<Vec<bool>, RenderError> {
+    // Along rows: pixels since the last hit to the left and until the next
+    // to the right; then the same down columns.
+    let mut rows = filled(w * h, false, "the surface's reach")?;
+    for (hits, out) in geometric.chunks_exact(w).zip(rows.chunks_exact_mut(w)) {
+        let mut since = usize::MAX;
+        for (x, hit) in hits.iter().enumerate() {
+            since = if hit.is_some() {
+                0
+            } else {
+                since.saturating_add(1)
+            };
+            out[x] = since <= r;
+        }
+        since = usize::MAX;
+        for (x, hit) in hits.iter().enumerate().rev() {
+            since = if hit.is_some() {
+                0
+            } else {
+                since.saturating_add(1)
+            };
+            out[x] |= since <= r;
+        }
+    }
+    let mut near = filled(w * h, false, "the surface's reach")?;
+    for x in 0..w {
+        let mut since = usize::MAX;
+        for y in 0..h {
+            since = if rows[y * w + x] {
+                0
+            } else {
+                since.saturating_add(1)
+            };
+            near[y * w + x] = since <= r;
+        }
+        since = usize::MAX;
+        for y in (0..h).rev() {
+            since = if rows[y * w + x] {
+                0
+            } else {
+                since.saturating_add(1)
+            };
+            near[y * w + x] |= since <= r;
+        }
+    }
+    Ok(near)
+}
 
 /// What the geometric pass saw of one view near a pixel: green's hits at
-/// the nearest pixels left and right, in the pixel's row and the rows
-/// above and below, whose green subpixel has that view. These are samples
-/// of that view's own image, so they say where (and whether) the view's
-/// ray through the pixel meets the surface.
+/// the [`SAME_VIEW_SAMPLES`] nearest pixels whose green subpixel has that
+/// view. These are samples of that view's own image, so they say where
+/// (and whether) the view's ray through the pixel meets the surface.
 struct SameView {
     /// Whether any such pixel lies within reach.
     seen: bool,
-    /// The nearer of the two hits either side in the pixel's own row.
-    bracket: Option<f32>,
-    /// The nearest and farthest hit of all.
+    /// The nearest and farthest hit among them.
     range: Option<(f32, f32)>,
 }
 
@@ -260,27 +407,30 @@ impl SameView {
         (w, h): (usize, usize),
         (x, y): (usize, usize),
         view: u32,
-        reach: usize,
+        offsets: &[(i32, i32)],
     ) -> Self {
         let mut near = SameView {
             seen: false,
-            bracket: None,
             range: None,
         };
-        for yy in y.saturating_sub(1)..(y + 2).min(h) {
-            let t = |xx: usize| geometric[yy * w + xx].map(|g| g.t);
-            let found = |xx: &usize| table[yy * w + xx][1] == view;
-            let left = (x.saturating_sub(reach)..x).rev().find(found).map(t);
-            let right = (x + 1..(x + 1 + reach).min(w)).find(found).map(t);
-            if let (true, Some(Some(a)), Some(Some(b))) = (yy == y, left, right) {
-                near.bracket = Some(a.min(b));
+        let mut found = 0;
+        for &(dx, dy) in offsets {
+            let (xx, yy) = (x as i64 + i64::from(dx), y as i64 + i64::from(dy));
+            if xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
+                continue;
             }
-            for t in [left, right].into_iter().flatten() {
-                near.seen = true;
-                if let Some(t) = t {
-                    let (lo, hi) = near.range.unwrap_or((t, t));
-                    near.range = Some((lo.min(t), hi.max(t)));
-                }
+            let j = yy as usize * w + xx as usize;
+            if table[j][1] != view {
+                continue;
+            }
+            near.seen = true;
+            if let Some(g) = geometric[j] {
+                let (lo, hi) = near.range.unwrap_or((g.t, g.t));
+                near.range = Some((lo.min(g.t), hi.max(g.t)));
+            }
+            found += 1;
+            if found == SAME_VIEW_SAMPLES {
+                break;
             }
         }
         near
@@ -294,13 +444,12 @@ impl SameView {
             return None;
         }
         Some(match (self.range, green) {
-            // From a little before the nearer of its neighbours' surfaces
-            // (the two either side bracket it on a smooth surface), on.
-            (Some((lo, _)), Some(_)) => Some((self.bracket.unwrap_or(lo) - margin, f32::INFINITY)),
-            // Green missed, the view's neighbours did not: around their
+            // From a little before the nearest of its samples' surfaces on.
+            (Some((lo, _)), Some(_)) => Some((lo - margin, f32::INFINITY)),
+            // Green missed, the view's samples did not: around their
             // surfaces.
             (Some((lo, hi)), None) => Some((lo - margin, hi + 3.0 * margin)),
-            // The view's neighbours all missed: at most a surface near
+            // The view's samples all missed: at most a surface near
             // green's.
             (None, Some(g)) => Some((g - margin, g + 3.0 * margin)),
             (None, None) => None,
@@ -308,9 +457,10 @@ impl SameView {
     }
 }
 
-/// Where to search without samples of the view (a panel narrower than a
-/// pattern period): from before green's surface on, or where green
-/// missed, around the nearest surface a neighbouring green saw.
+/// Where to search without samples of the view within reach (views too
+/// many for the radius, or a panel's edge): from before green's surface
+/// on, or where green missed, around the nearest surface a neighbouring
+/// green saw.
 fn fallback_window(
     geometric: &[Option<IsoHit>],
     (w, h): (usize, usize),
@@ -338,4 +488,79 @@ pub fn subpixels_differing(a: &Frame, b: &Frame, tolerance: u8) -> f64 {
         .filter(|&d| d)
         .count();
     differ as f64 / (3 * ra.len() / 4).max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offsets_are_nearest_first_within_the_radius() {
+        let offsets = same_view_offsets();
+        let r2 = SAME_VIEW_RADIUS * SAME_VIEW_RADIUS;
+        let d2 = |&(dx, dy): &(i32, i32)| dx * dx + dy * dy;
+        assert!(offsets.windows(2).all(|w| d2(&w[0]) <= d2(&w[1])));
+        assert!(offsets.iter().all(|o| (1..=r2).contains(&d2(o))));
+        // Every pixel of the disc but the centre, once.
+        let disc = (-SAME_VIEW_RADIUS..=SAME_VIEW_RADIUS)
+            .flat_map(|dy| (-SAME_VIEW_RADIUS..=SAME_VIEW_RADIUS).map(move |dx| (dx, dy)))
+            .filter(|o| d2(o) <= r2)
+            .count();
+        assert_eq!(offsets.len(), disc - 1);
+        assert_eq!(offsets[..4], [(0, -1), (-1, 0), (1, 0), (0, 1)]);
+    }
+
+    #[test]
+    fn near_surface_is_any_hit_in_the_square_around() {
+        let (w, h, r) = (23usize, 17usize, 2usize);
+        let hit = IsoHit {
+            t: 1.0,
+            position: glam::Vec3::ZERO,
+            normal: glam::Vec3::Z,
+            curvatures: (0.0, 0.0),
+        };
+        // A scatter of hits, deterministic.
+        let geometric: Vec<Option<IsoHit>> = (0..w * h)
+            .map(|i| ((i * 7919) % 61 == 0).then_some(hit))
+            .collect();
+        let near = near_surface(&geometric, (w, h), r).unwrap();
+        for y in 0..h {
+            for x in 0..w {
+                let brute = (y.saturating_sub(r)..(y + r + 1).min(h)).any(|yy| {
+                    (x.saturating_sub(r)..(x + r + 1).min(w))
+                        .any(|xx| geometric[yy * w + xx].is_some())
+                });
+                assert_eq!(near[y * w + x], brute, "({x}, {y})");
+            }
+        }
+        assert!(near.iter().any(|&n| n) && near.iter().any(|&n| !n));
+    }
+
+    #[test]
+    fn a_panel_takes_only_a_table_that_fits_it() {
+        let rays = vec![RayGen::default(); 2];
+        let size = UVec2::new(3, 2);
+        let panel = Panel::new(size, ColorFormat::default(), rays.clone(), |x, _, c| {
+            x + c as u32
+        })
+        .unwrap();
+        // Views past the last are the last.
+        assert_eq!(panel.view(2, 1, 2), 1);
+        assert_eq!(panel.view(0, 0, 0), 0);
+        let short: Arc<[[u32; 3]]> = vec![[0, 1, 1]; 5].into();
+        let e = Panel::with_table(size, ColorFormat::default(), rays.clone(), short)
+            .err()
+            .unwrap();
+        assert!(e.to_string().contains("cover 5 pixels, not its 3x2"), "{e}");
+        let beyond: Arc<[[u32; 3]]> = vec![[0, 2, 1]; 6].into();
+        let e = Panel::with_table(size, ColorFormat::default(), rays.clone(), beyond)
+            .err()
+            .unwrap();
+        assert!(
+            e.to_string().contains("view 2 of a panel of 2 views"),
+            "{e}"
+        );
+        let kept = Panel::with_table(size, ColorFormat::default(), rays, panel.table().clone());
+        assert_eq!(kept.unwrap().table()[..], panel.table()[..]);
+    }
 }

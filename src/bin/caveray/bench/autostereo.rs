@@ -3,14 +3,18 @@
 //! and per subpixel (one ray a subpixel, and the geometric + spectral
 //! passes), for several view counts and volumes' isosurfaces. Writes one
 //! JSON row per volume and view count: CPU wall clock with the field
-//! evaluations counted, or with `--backend gpu` the GPU's pass clock.
+//! evaluations counted, or with `--backend gpu` the GPU's pass clock. The
+//! times are frame times: the field's f32 copy and crossing box, and each
+//! panel's views of its subpixels, are made before the clock starts, as a
+//! device makes them once.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anari_library_caveray::cave::{MultiViewDisplay, ViewPattern};
 use anari_library_caveray::render::iso::{
-    render_display, subpixels_differing, IsoFilter, IsoSettings, MultiViewMethod, Panel,
+    render_display_by, subpixels_differing, values, Caster, IsoFilter, IsoSettings,
+    MultiViewMethod, Panel,
 };
 use anari_library_caveray::render::{ColorData, Frame, FrameDesc, GpuRenderer};
 use clap::Args;
@@ -151,14 +155,20 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
             light: Some(Vec3::new(0.3, 0.5, 1.0)),
             ..IsoSettings::new(lo + args.iso * (hi - lo))
         };
+        // What a device keeps from frame to frame (the field as f32, where
+        // it can cross the iso-value; each panel's views of its
+        // subpixels) is made here, outside the times.
+        settings.validate().map_err(runtime)?;
+        let field = values(placed).map_err(runtime)?;
+        let caster = Caster::new(placed, &field, &settings);
         for d in &displays {
-            let view_of = |x, y, c| d.view_of(x, y, c);
-            let panel = Panel {
-                color: Default::default(),
-                size: d.resolution,
-                views: d.view_rays().map_err(runtime)?,
-                view_of: &view_of,
-            };
+            let panel = Panel::new(
+                d.resolution,
+                Default::default(),
+                d.view_rays().map_err(runtime)?,
+                |x, y, c| d.view_of(x, y, c),
+            )
+            .map_err(runtime)?;
             let row = match gpu.as_mut() {
                 None => {
                     let time = |method| -> Result<_, Failure> {
@@ -166,8 +176,8 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                         let mut last = None;
                         for _ in 0..args.repeat {
                             let start = Instant::now();
-                            let made = render_display(placed, &panel, &settings, method)
-                                .map_err(runtime)?;
+                            let made =
+                                render_display_by(&caster, &panel, method).map_err(runtime)?;
                             times.push(start.elapsed().as_secs_f64() * 1e3);
                             last = Some(made);
                         }
