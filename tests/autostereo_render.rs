@@ -9,7 +9,7 @@ mod common;
 
 use anari_library_caveray::cave::MultiViewDisplay;
 use anari_library_caveray::render::iso::{
-    render_display, subpixels_differing, IsoSettings, MultiViewMethod, Panel,
+    render_display, subpixels_differing, IsoSettings, MultiViewMethod,
 };
 use anari_library_caveray::scene::PlacedVolume;
 use glam::{Mat4, Vec3};
@@ -35,13 +35,7 @@ fn display(views: u32) -> MultiViewDisplay {
 
 fn render(views: u32, method: MultiViewMethod) -> (anari_library_caveray::render::Frame, u64) {
     let d = display(views);
-    let panel = Panel::new(
-        d.resolution,
-        Default::default(),
-        d.view_rays().unwrap(),
-        |x, y, c| d.view_of(x, y, c),
-    )
-    .unwrap();
+    let panel = common::iso::panel(&d);
     render_display(&scene(), &panel, &IsoSettings::new(0.5), method).unwrap()
 }
 

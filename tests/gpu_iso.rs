@@ -80,7 +80,7 @@ fn the_gpu_casts_the_cpus_isosurface() {
 fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
     use anari_library_caveray::cave::MultiViewDisplay;
     use anari_library_caveray::render::iso::{
-        render_display, subpixels_differing, MultiViewMethod, Panel,
+        render_display, subpixels_differing, MultiViewMethod,
     };
     let mut g = gpu();
     let mut placed = balls();
@@ -100,13 +100,7 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
     let mut first = None;
     for offset in [0.0, 1.5, 0.0] {
         let d = display(offset);
-        let panel = Panel::new(
-            d.resolution,
-            Default::default(),
-            d.view_rays().unwrap(),
-            |x, y, c| d.view_of(x, y, c),
-        )
-        .unwrap();
+        let panel = common::iso::panel(&d);
         for method in [
             MultiViewMethod::PerSubpixel,
             MultiViewMethod::GeometricSpectral,
@@ -135,13 +129,7 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
         }
     }
     let d = display(0.0);
-    let panel = Panel::new(
-        d.resolution,
-        Default::default(),
-        d.view_rays().unwrap(),
-        |x, y, c| d.view_of(x, y, c),
-    )
-    .unwrap();
+    let panel = common::iso::panel(&d);
     let e = g
         .cast_display(&placed, &panel, &settings, MultiViewMethod::Naive)
         .unwrap_err();

@@ -42,3 +42,17 @@ pub fn two_balls(n: u32, transform: Mat4) -> PlacedVolume {
         big.max(small)
     })
 }
+
+/// The display's panel as the renderer takes it: each view's rays over
+/// its pixels and each subpixel's view.
+pub fn panel(
+    d: &anari_library_caveray::cave::MultiViewDisplay,
+) -> anari_library_caveray::render::iso::Panel {
+    anari_library_caveray::render::iso::Panel::new(
+        d.resolution,
+        Default::default(),
+        d.view_rays().unwrap(),
+        |x, y, c| d.view_of(x, y, c),
+    )
+    .unwrap()
+}
