@@ -65,8 +65,10 @@ impl Panel {
         views: Vec<RayGen>,
         view_of: impl Fn(u32, u32, usize) -> u32 + Sync,
     ) -> Result<Self, RenderError> {
-        let w = size.x.max(1) as usize;
-        let pixels = FrameDesc::new(size).pixels();
+        // Sizes a frame could not have are refused before allocating.
+        let desc = FrameDesc::new(size);
+        desc.validate()?;
+        let (w, pixels) = (size.x as usize, desc.pixels());
         let mut table = filled(pixels, [0u32; 3], "the panel's views")?;
         let last = views.len().saturating_sub(1) as u32;
         table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -560,6 +562,15 @@ mod tests {
             e.to_string().contains("view 2 of a panel of 2 views"),
             "{e}"
         );
+        let e = Panel::new(
+            UVec2::new(0, 2),
+            ColorFormat::default(),
+            rays.clone(),
+            |_, _, _| 0,
+        )
+        .err()
+        .unwrap();
+        assert!(e.to_string().contains("at least 1x1"), "{e}");
         let kept = Panel::with_table(size, ColorFormat::default(), rays, panel.table().clone());
         assert_eq!(kept.unwrap().table()[..], panel.table()[..]);
     }
