@@ -401,25 +401,27 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
     let packed = pixel_views[i];
     let tg = green_t[i];
     let margin = SEARCH_MARGIN_STEPS * iso.step;
-    var rgb = vec3f(0.0);
-    for (var c = 0u; c < 3u; c++) {
+    // Green's hit, shaded once: any channel of green's view sees it so.
+    let vg = view_of(packed, 1u);
+    let rg = view_ray(vg, fx, fy);
+    var green = missed();
+    if tg >= 0.0 {
+        green = hit_at(rg.o, rg.d, rg.eye, span(rg.o, rg.d), tg);
+    }
+    depth_out[i] = green.depth;
+    var rgb = green.colour.rgb;
+    for (var c = 0u; c < 3u; c += 2u) {
         let v = view_of(packed, c);
+        if v == vg {
+            continue;
+        }
         let r = view_ray(v, fx, fy);
         var hit = missed();
-        if v == view_of(packed, 1u) {
-            if tg >= 0.0 {
-                hit = hit_at(r.o, r.d, r.eye, span(r.o, r.d), tg);
-            }
-        } else {
-            let w = search_window(id.x, id.y, v, tg, margin);
-            if w.y >= w.x {
-                hit = cast_window(r.o, r.d, r.eye, w.x, w.y);
-            }
+        let w = search_window(id.x, id.y, v, tg, margin);
+        if w.y >= w.x {
+            hit = cast_window(r.o, r.d, r.eye, w.x, w.y);
         }
         rgb[c] = hit.colour[c];
-        if c == 1u {
-            depth_out[i] = hit.depth;
-        }
     }
     store_color(i, vec4f(rgb, 1.0), iso.color_format);
 }
