@@ -1,5 +1,5 @@
 //! The CT head's bone isosurface (the CPU reference of issue 17), shaded
-//! flat and coloured by curvature: out/iso_flat.png, out/iso_curvature.png.
+//! flat and colored by curvature: out/iso_flat.png, out/iso_curvature.png.
 //! Run: cargo run --release --example isosurface [VOLUMES_TOML]
 
 use std::path::PathBuf;
@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anari_library_caveray::data::Manifest;
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays};
 use anari_library_caveray::output::write_png;
-use anari_library_caveray::render::iso::{cast, Colouring, IsoSettings};
+use anari_library_caveray::render::iso::{cast, Coloring, IsoSettings};
 use anari_library_caveray::render::FrameDesc;
 use anari_library_caveray::scene::{PlacedVolume, Scene};
 use glam::{DVec3, UVec2};
@@ -31,12 +31,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rays =
         PinholeCamera::new(eye, -eye, DVec3::NEG_Z, 0.8, 1.0, ImageRegion::FULL)?.ray_gen(size);
     std::fs::create_dir_all("out")?;
-    for (name, colouring) in [
-        ("flat", Colouring::Flat(glam::Vec3::new(0.9, 0.85, 0.75))),
-        ("curvature", Colouring::Curvature { radius: 0.03 }),
+    for (name, coloring) in [
+        ("flat", Coloring::Flat(glam::Vec3::new(0.9, 0.85, 0.75))),
+        ("curvature", Coloring::Curvature { radius: 0.03 }),
     ] {
         let settings = IsoSettings {
-            colouring,
+            coloring,
             light: Some(glam::Vec3::new(0.4, -0.6, 0.7)),
             ..IsoSettings::new(isovalue)
         };

@@ -30,7 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let (old, new) = (rays(&head)?, rays(&moved)?);
 
-    // What warps need of the old view: colour, first-hit depth, 4 layers.
+    // What warps need of the old view: color, first-hit depth, 4 layers.
     let stop = AtomicBool::new(false);
     let (source, ms) = renderer.capture(&scene, &old, &settings, image, 4, &stop)?;
     println!("captured the old view in {ms:.1} ms");

@@ -1,9 +1,9 @@
-// A view as image warping needs it (after volume.wgsl and colour.wgsl):
-// colour over nothing, first-hit depth, and the emission-absorption layers
+// A view as image warping needs it (after volume.wgsl and color.wgsl):
+// color over nothing, first-hit depth, and the emission-absorption layers
 // of src/render/warp/layers.rs, recorded sample by sample as the CPU's
 // LayerBuilder does.
 
-// Two vec4s a layer (colour; start, end), `capture.x` layers a pixel.
+// Two vec4s a layer (color; start, end), `capture.x` layers a pixel.
 @group(1) @binding(0) var<storage, read_write> layer_out: array<vec4f>;
 @group(1) @binding(1) var<uniform> capture: vec4u;
 // x: the first row of this band.

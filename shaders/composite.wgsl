@@ -1,6 +1,6 @@
 // The right eye from the re-projection layers: per right pixel, the left
 // rays on its epipolar line whose segments crossed it, nearest first, each
-// blended from the two rays the line passes between (after colour.wgsl
+// blended from the two rays the line passes between (after color.wgsl
 // and stereo.wgsl).
 
 @group(0) @binding(0) var<uniform> stereo: Stereo;

@@ -3,7 +3,7 @@
 // it, the trilinear field (with central differences) or the cubic
 // B-spline (the march's values from 8 trilinear fetches, the hit's
 // gradient and Hessian from the 4x4x4 weights), Blinn-Phong, flat or by
-// mean curvature (after the declarations and colour.wgsl).
+// mean curvature (after the declarations and color.wgsl).
 
 @group(0) @binding(0) var<uniform> iso: Iso;
 @group(0) @binding(1) var volume: texture_3d<f32>;
@@ -159,7 +159,7 @@ fn safe(x: f32) -> f32 {
     return x;
 }
 
-fn curvature_colour(mean: f32) -> vec3f {
+fn curvature_color(mean: f32) -> vec3f {
     let s = clamp(mean * iso.radius, -1.0, 1.0);
     let white = vec3f(0.95);
     if s >= 0.0 {
@@ -169,7 +169,7 @@ fn curvature_colour(mean: f32) -> vec3f {
 }
 
 struct Cast {
-    colour: vec4f,
+    color: vec4f,
     depth: f32,
     // Along the unit ray; negative where nothing was hit.
     t: f32,
@@ -235,7 +235,7 @@ fn steps_before(sp: Span, length: f32) -> u32 {
     return u32(clamp(floor(min(length, sp.t1 - sp.t0) / iso.step), 0.0, 1e6));
 }
 
-// One ray at the isosurface: its shaded colour (or the background), depth
+// One ray at the isosurface: its shaded color (or the background), depth
 // from `eye` (w: 1 if it has one, else along the ray) and t.
 fn cast_ray(o: vec3f, d: vec3f, eye: vec4f) -> Cast {
     let sp = span(o, d);
@@ -317,9 +317,9 @@ fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
         n = -n;
         k = vec2f(-k.y, -k.x);
     }
-    var base = iso.colour.rgb;
+    var base = iso.color.rgb;
     if iso.curvature == 1u {
-        base = curvature_colour(0.5 * (k.x + k.y));
+        base = curvature_color(0.5 * (k.x + k.y));
     }
     var l = -d;
     if iso.light.w != 0.0 {
@@ -348,7 +348,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let d = normalize(iso.ray_dir.xyz + fx * iso.ray_dir_dx.xyz + fy * iso.ray_dir_dy.xyz);
     let c = cast_ray(o, d, iso.eye);
     depth_out[i] = c.depth;
-    store_color(i, c.colour, iso.color_format);
+    store_color(i, c.color, iso.color_format);
 }
 
 // A multi-view panel: each view's rays (seven vec4s: origin, its steps,
@@ -409,7 +409,7 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
         green = hit_at(rg.o, rg.d, rg.eye, span(rg.o, rg.d), tg);
     }
     depth_out[i] = green.depth;
-    var rgb = green.colour.rgb;
+    var rgb = green.color.rgb;
     for (var c = 0u; c < 3u; c += 2u) {
         let v = view_of(packed, c);
         if v == vg {
@@ -421,7 +421,7 @@ fn spectral(@builtin(global_invocation_id) id: vec3u) {
         if w.y >= w.x {
             hit = cast_window(r.o, r.d, r.eye, w.x, w.y);
         }
-        rgb[c] = hit.colour[c];
+        rgb[c] = hit.color[c];
     }
     store_color(i, vec4f(rgb, 1.0), iso.color_format);
 }
@@ -520,7 +520,7 @@ fn per_subpixel(@builtin(global_invocation_id) id: vec3u) {
     for (var c = 0u; c < 3u; c++) {
         let r = view_ray(view_of(packed, c), fx, fy);
         let hit = cast_ray(r.o, r.d, r.eye);
-        rgb[c] = hit.colour[c];
+        rgb[c] = hit.color[c];
         if c == 1u {
             depth_out[i] = hit.depth;
         }

@@ -1,4 +1,4 @@
-// One eye, one invocation per pixel (after volume.wgsl and colour.wgsl).
+// One eye, one invocation per pixel (after volume.wgsl and color.wgsl).
 
 fn on_sample(p: vec3f, lit: vec3f, a: f32) {}
 

@@ -1,6 +1,6 @@
 // The left eye, ray cast over the image plus the pixels the right eye
 // needs beyond its borders, writing each ray's right-eye segments into the
-// re-projection layers (after volume.wgsl, colour.wgsl and stereo.wgsl).
+// re-projection layers (after volume.wgsl, color.wgsl and stereo.wgsl).
 // LAYER_FORMAT is replaced by the layers' storage format before compiling.
 
 @group(1) @binding(0) var<uniform> stereo: Stereo;
@@ -18,7 +18,7 @@ struct Open {
     // The right pixel the segment is in, and the first the ray wrote.
     pixel: i32,
     first: i32,
-    // Premultiplied colour; the right eye's distance to the segment's
+    // Premultiplied color; the right eye's distance to the segment's
     // first sample, to its last, and to where its own opacity reaches the
     // depth threshold.
     color: vec4f,

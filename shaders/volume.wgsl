@@ -5,7 +5,7 @@
 // in front of this file from src/render/gpu/uniforms.rs, which documents
 // the fields.
 // Entry points live in raycast.wgsl and reproject.wgsl, each concatenated
-// after this file with colour.wgsl; each defines `on_sample`, which sees
+// after this file with color.wgsl; each defines `on_sample`, which sees
 // every sample that contributes (the re-projection path splits the ray into
 // right-eye segments there).
 
@@ -56,7 +56,7 @@ fn volume_count() -> u32 {
     return params.volume_count;
 }
 
-// What lies behind pixel `pixel` of the frame: the flat colour, or the
+// What lies behind pixel `pixel` of the frame: the flat color, or the
 // background image stretched over the frame, sampled bilinearly at the
 // pixel's centre as BackgroundImage::at does.
 fn background_at(pixel: vec2u) -> vec4f {
@@ -186,7 +186,7 @@ fn classify(v: u32, value: f32) -> vec4f {
     return a * (1.0 - f) + b * f;
 }
 
-// A primary sample's colour and opacity: under filtered sampling from the
+// A primary sample's color and opacity: under filtered sampling from the
 // stepped table by the texture unit, its opacity already a full step's.
 fn classify_step(v: u32, value: f32) -> vec4f {
     if !FILTERED {
@@ -213,7 +213,7 @@ fn segment_opacity(v: u32, a: f32, seg: f32) -> f32 {
 }
 
 // Overlapping volumes at one sample as one medium, as the reference's
-// Mixture: opacities combine as independent absorbers, colours in
+// Mixture: opacities combine as independent absorbers, colors in
 // proportion to opacity, whatever the volumes' order.
 struct Mixture {
     emitted: vec3f,
@@ -389,7 +389,7 @@ fn region(spans: ptr<function, array<vec2f, MAX_VOLUMES>>, p: vec3f, d: vec3f, t
 
 // The ray of pixel (fx, fy); columns outside the image are allowed.
 struct Marched {
-    // Premultiplied colour and opacity accumulated front to back.
+    // Premultiplied color and opacity accumulated front to back.
     color: vec4f,
     // Distance along the unit ray to the first contributing sample.
     depth: f32,

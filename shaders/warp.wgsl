@@ -3,12 +3,12 @@
 // declarations generated from src/render/gpu/uniforms.rs).
 
 @group(0) @binding(0) var<uniform> w: Warp;
-// The source: premultiplied colour, first-hit depth, and `w.layers` layers
-// a pixel as two vec4s each (colour; start, end).
-@group(0) @binding(1) var<storage, read> colour: array<vec4f>;
+// The source: premultiplied color, first-hit depth, and `w.layers` layers
+// a pixel as two vec4s each (color; start, end).
+@group(0) @binding(1) var<storage, read> color: array<vec4f>;
 @group(0) @binding(2) var<storage, read> depth: array<f32>;
 @group(0) @binding(3) var<storage, read> layers: array<vec4f>;
-@group(0) @binding(4) var<storage, read_write> out_colour: array<vec4f>;
+@group(0) @binding(4) var<storage, read_write> out_color: array<vec4f>;
 @group(0) @binding(5) var<storage, read_write> out_depth: array<f32>;
 // The grid: the nearest surface's distance a target pixel (bits inverted,
 // so that atomicMax keeps the nearest; 0: none), each mesh vertex where it
@@ -96,12 +96,12 @@ fn texel(x: i32, y: i32) -> vec4f {
     if x < 0 || y < 0 || x >= size.x || y >= size.y {
         return vec4f(0.0);
     }
-    return colour[u32(y) * w.from_size.x + u32(x)];
+    return color[u32(y) * w.from_size.x + u32(x)];
 }
 
-// Source colour at image position `s`, bilinear between pixel centres,
+// Source color at image position `s`, bilinear between pixel centres,
 // transparent outside the image.
-fn colour_at(s: vec2f) -> vec4f {
+fn color_at(s: vec2f) -> vec4f {
     if !(all(s >= vec2f(0.0)) && all(s <= vec2f(w.from_size))) {
         return vec4f(0.0);
     }
@@ -121,7 +121,7 @@ fn begin_pixel(id: vec3u) -> i32 {
         return -1;
     }
     let i = id.y * w.to_size.x + id.x;
-    out_colour[i] = vec4f(0.0);
+    out_color[i] = vec4f(0.0);
     out_depth[i] = infinity();
     return i32(i);
 }
@@ -148,8 +148,8 @@ fn quad(@builtin(global_invocation_id) id: vec3u) {
     if !l.ok {
         return;
     }
-    let c = colour_at(l.at);
-    out_colour[i] = c;
+    let c = color_at(l.at);
+    out_color[i] = c;
     if c.a >= w.depth_threshold {
         out_depth[i] = depth_at(seen_to, p, t);
     }
@@ -162,7 +162,7 @@ fn safe(x: f32) -> f32 {
     return x;
 }
 
-// Premultiplied colour and opacity of the stretch [lo, hi] of source
+// Premultiplied color and opacity of the stretch [lo, hi] of source
 // pixel `px`'s ray, for a target step `c` times longer: each overlapping
 // layer absorbs and emits over its share, front to back, exactly.
 fn through(px: vec2f, lo: f32, hi: f32, c: f32) -> vec4f {
@@ -242,7 +242,7 @@ fn layer_march(@builtin(global_invocation_id) id: vec3u) {
             break;
         }
     }
-    out_colour[i] = acc;
+    out_color[i] = acc;
     out_depth[i] = first;
 }
 
@@ -361,7 +361,7 @@ fn grid_pick(@builtin(global_invocation_id) id: vec3u) {
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn grid_colour(@builtin(global_invocation_id) id: vec3u) {
+fn grid_color(@builtin(global_invocation_id) id: vec3u) {
     let i = begin_pixel(id);
     if i < 0 {
         return;
@@ -370,8 +370,8 @@ fn grid_colour(@builtin(global_invocation_id) id: vec3u) {
     if key == 0u {
         return;
     }
-    let c = colour_at(from_at[i]);
-    out_colour[i] = c;
+    let c = color_at(from_at[i]);
+    out_color[i] = c;
     if c.a >= w.depth_threshold {
         let z = bitcast<f32>(~key);
         let seen_to = target_view();

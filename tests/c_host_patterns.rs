@@ -104,10 +104,10 @@ fn vtk(valgrind: bool) {
     // The same scene through the Rust API.
     let table = first.transfer_function.table();
     let (vlo, vhi) = first.transfer_function.value_range();
-    let colours: Vec<Vec4> = table.iter().map(|c| c.truncate().extend(1.0)).collect();
+    let colors: Vec<Vec4> = table.iter().map(|c| c.truncate().extend(1.0)).collect();
     let alphas: Vec<f32> = table.iter().map(|c| c.w).collect();
     // No unitDistance: the default, 1.
-    let phantom_tf = TransferFunction::new(colours, alphas, (vlo, vhi), 1.0).unwrap();
+    let phantom_tf = TransferFunction::new(colors, alphas, (vlo, vhi), 1.0).unwrap();
     let v = &first.volume;
     let cells = v.spacing() * (v.dims() - UVec3::ONE).as_vec3() / 3.0;
     let constant = StructuredVolume::new(
@@ -208,7 +208,7 @@ fn cts(valgrind: bool) {
     .unwrap();
     let size = UVec2::splat(33);
 
-    // One colour (1, 0.5, 0.25), opacity 0.05 per 0.1 units: through the
+    // One color (1, 0.5, 0.25), opacity 0.05 per 0.1 units: through the
     // centre, 2 units of box.
     let single = float_frame(&dir.join("cts_single.color"), size);
     let centre = single.pixel(16, 16);
@@ -241,7 +241,7 @@ fn cts(valgrind: bool) {
         "depth {depth}, want {want}"
     );
 
-    // The colour map, nearest then linear: each as the Rust API renders it,
+    // The color map, nearest then linear: each as the Rust API renders it,
     // and not each other.
     let ramp: Vec<f32> = (0..512).map(|i| (i % 8) as f32 / 7.0).collect();
     let tf = Arc::new(

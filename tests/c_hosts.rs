@@ -300,7 +300,7 @@ fn arrays_freed_after_release_are_never_read_under_valgrind() {
 }
 
 /// An OpenCOVER-style host (tests/c/opencover_host.c): the call sequence
-/// its plug-in makes, rendered 64 times unchanged; colour (sRGB) and depth
+/// its plug-in makes, rendered 64 times unchanged; color (sRGB) and depth
 /// must be the Rust API's for the same wall and eye.
 fn opencover(valgrind: bool) {
     use anari_library_caveray::render::{

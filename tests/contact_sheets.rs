@@ -41,12 +41,12 @@ fn cave_walls_unfold_around_the_front_wall() {
 fn a_sheet_places_scaled_images_in_their_cells() {
     let rig = common::rig("cave_4wall_3m");
     let layout = SheetLayout::for_rig(&rig);
-    let colour = |i: usize| Rgba([50 * i as u8, 255 - 50 * i as u8, 7, 255]);
+    let color = |i: usize| Rgba([50 * i as u8, 255 - 50 * i as u8, 7, 255]);
     // Images of different sizes; the sheet uses the largest as its cell.
     let images: Vec<Option<RgbaImage>> = (0..rig.walls.len())
         .map(|i| {
             let side = if i == 0 { 20 } else { 10 };
-            (i != 2).then(|| RgbaImage::from_pixel(side, side, colour(i)))
+            (i != 2).then(|| RgbaImage::from_pixel(side, side, color(i)))
         })
         .collect();
     let sheet = contact_sheet(&layout, &images);
@@ -58,7 +58,7 @@ fn a_sheet_places_scaled_images_in_their_cells() {
         let want = if i == 2 {
             Rgba([0, 0, 0, 255])
         } else {
-            colour(i)
+            color(i)
         };
         assert_eq!(got, want, "wall {} at {cell}", rig.walls[i].name);
     }

@@ -327,7 +327,7 @@ fn a_background_gradient_through_the_device() {
     h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.0f32]));
     let (frame, _camera) = h.frame(volume, 3.0);
     let r = h.d.new_object(DataType::RENDERER, "scivis");
-    // VTK's gradient: 1 x N of FLOAT32_VEC4, bottom colour first.
+    // VTK's gradient: 1 x N of FLOAT32_VEC4, bottom color first.
     let gradient = h.array(
         DataType::ARRAY2D,
         DataType::FLOAT32_VEC4,

@@ -231,7 +231,7 @@ fn an_isosurface_through_anari_is_the_casters_image() {
         .ray_gen(UVec2::new(W, H));
     let settings = IsoSettings {
         filter: IsoFilter::Trilinear,
-        colouring: anari_library_caveray::render::iso::Colouring::Flat(Vec3::new(0.2, 0.6, 0.9)),
+        coloring: anari_library_caveray::render::iso::Coloring::Flat(Vec3::new(0.2, 0.6, 0.9)),
         ..IsoSettings::new(0.5)
     };
     let (expected, hits) = cast(
@@ -306,7 +306,7 @@ fn the_nearest_of_several_isosurfaces_shows() {
 }
 
 #[test]
-fn the_curvature_material_colours_a_ball_convex_and_instances_move_surfaces() {
+fn the_curvature_material_colors_a_ball_convex_and_instances_move_surfaces() {
     let mut h = Host::new();
     let f = field(&mut h);
     let m = h.d.new_object(DataType::MATERIAL, "curvature");
@@ -649,7 +649,7 @@ fn bad_multi_view_cameras_are_reported_by_name() {
 }
 
 #[test]
-fn a_matte_colour_by_attribute_name_is_drawn_in_the_default_colour_with_a_warning() {
+fn a_matte_color_by_attribute_name_is_drawn_in_the_default_color_with_a_warning() {
     // The conformance tests' matte materials name the `color` attribute;
     // an isosurface has none.
     let mut h = Host::new();
@@ -668,7 +668,7 @@ fn a_matte_colour_by_attribute_name_is_drawn_in_the_default_colour_with_a_warnin
     let fr = frame(&mut h, world, camera, false);
     let image = h.pixels_sized(fr, W, H);
     assert!(h.messages(Severity::Error).is_empty());
-    // The default matte colour is grey: the lit surface has r = g = b.
+    // The default matte color is grey: the lit surface has r = g = b.
     let [r, g, b] = at(&image, W / 2, H / 2);
     assert!(r > 50 && r == g && g == b, "{r} {g} {b}");
 }

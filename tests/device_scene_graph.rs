@@ -126,7 +126,7 @@ fn field_xy(h: &mut Host, value: impl Fn(u32, u32) -> f32) -> u64 {
     f
 }
 
-/// A volume over `field` whose colour (red to blue) and opacity (none to
+/// A volume over `field` whose color (red to blue) and opacity (none to
 /// 0.6) follow the value over [0, 1].
 fn tinted(h: &mut Host, field: u64) -> u64 {
     let v = h.volume(field);

@@ -140,7 +140,7 @@ fn bad_stereo_parameters_are_refused_at_commit_and_the_extension_is_reported() {
     assert!(info.contains(&"ANARI_KHR_CAMERA_STEREO"));
 }
 
-/// A frame's colour as a `Frame` for SSIM.
+/// A frame's color as a `Frame` for SSIM.
 fn as_frame(pixels: Vec<u8>, w: u32, hgt: u32) -> anari_library_caveray::render::Frame {
     anari_library_caveray::render::Frame {
         size: glam::UVec2::new(w, hgt),

@@ -1,5 +1,5 @@
 //! Volumes as hosts build them, through the device model on the CPU
-//! reference: the value range as a VEC2 or collapsed to one value, colour
+//! reference: the value range as a VEC2 or collapsed to one value, color
 //! arrays of every element type, out-of-range maps, the legacy `field`
 //! name and the `filter` values.
 
@@ -49,12 +49,12 @@ fn a_constant_field_takes_the_middle_of_the_maps() {
     let [r, g, b] = centre(&image);
     assert!(
         g > 200 && r < 10 && b < 10,
-        "the middle colour is green, got {r} {g} {b}"
+        "the middle color is green, got {r} {g} {b}"
     );
 }
 
 #[test]
-fn colour_arrays_of_every_element_type_read_alike() {
+fn color_arrays_of_every_element_type_read_alike() {
     // Red, then white at full alpha: exact in every encoding.
     let mut h = Host::new();
     let field = h.field(|x| x as f32 / 3.0, None);
@@ -100,7 +100,7 @@ fn colour_arrays_of_every_element_type_read_alike() {
     for (ty, data) in alike {
         same(&image(ty, data), &reference).unwrap_or_else(|e| panic!("{ty}: {e}"));
     }
-    // Fewer components: the missing colour reads 0 and alpha 1.
+    // Fewer components: the missing color reads 0 and alpha 1.
     let red_only = image(DataType::FLOAT32, bytes(&[1.0f32, 1.0]));
     let [r, g, b] = centre(&red_only);
     assert!(
@@ -149,7 +149,7 @@ fn out_of_range_maps_are_clamped_with_a_warning() {
     assert!(
         warnings
             .iter()
-            .any(|w| w.contains("2 colour components lie outside [0, 1]") && w.contains("clamped"))
+            .any(|w| w.contains("2 color components lie outside [0, 1]") && w.contains("clamped"))
             && warnings
                 .iter()
                 .any(|w| w.contains("1 opacities lie outside [0, 1]")

@@ -1,13 +1,13 @@
 //! Isosurface ray casting on the GPU (shaders/iso.wgsl) against its CPU
 //! reference: two touching balls, placed turned and moved, seen off-axis,
 //! trilinear and tricubic (the GPU's B-spline values from 8 trilinear
-//! fetches), flat and curvature colouring: SSIM >= 0.99 and the same
+//! fetches), flat and curvature coloring: SSIM >= 0.99 and the same
 //! depths but at a few silhouette pixels.
 
 mod common;
 
 use anari_library_caveray::geometry::PrimaryRays;
-use anari_library_caveray::render::iso::{cast, Colouring, IsoFilter, IsoSettings};
+use anari_library_caveray::render::iso::{cast, Coloring, IsoFilter, IsoSettings};
 use anari_library_caveray::render::{ssim, ColorFormat, FrameDesc};
 use anari_library_caveray::scene::PlacedVolume;
 use common::render::{gpu, off_axis_wall};
@@ -37,19 +37,19 @@ fn the_gpu_casts_the_cpus_isosurface() {
         .with_color(ColorFormat::Rgba32F)
         .with_depth();
     for filter in [IsoFilter::Trilinear, IsoFilter::TricubicBSpline] {
-        for colouring in [
-            Colouring::Flat(Vec3::new(0.9, 0.8, 0.7)),
-            Colouring::Curvature { radius: 0.4 },
+        for coloring in [
+            Coloring::Flat(Vec3::new(0.9, 0.8, 0.7)),
+            Coloring::Curvature { radius: 0.4 },
         ] {
             let settings = IsoSettings {
                 filter,
-                colouring,
+                coloring,
                 light: Some(Vec3::new(0.3, 0.6, 1.0)),
                 ..IsoSettings::new(0.5)
             };
             let (cpu, hits) = cast(&placed, &rays, &desc, &settings).unwrap();
             let on_gpu = g.cast_iso(&placed, &rays, &desc, &settings).unwrap();
-            let name = format!("{} {colouring:?}", filter.name());
+            let name = format!("{} {coloring:?}", filter.name());
             assert!(hits.iter().flatten().count() > 200, "{name}: too few hits");
             let s = ssim(&cpu, &on_gpu).unwrap();
             println!("{name}: SSIM {s:.5}");

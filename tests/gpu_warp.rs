@@ -1,7 +1,7 @@
 //! The GPU warp passes against their CPU reference (src/render/warp/):
 //! for a head-mounted view that stepped and turned and for a CAVE wall
 //! whose eye moved, every mode's GPU image is the CPU's (SSIM >= 0.995,
-//! colours within 2e-3 in most pixels); a second source is uploaded, not
+//! colors within 2e-3 in most pixels); a second source is uploaded, not
 //! the first one shown again; bad input fails as on the CPU.
 
 mod common;
@@ -152,7 +152,7 @@ fn a_new_source_is_uploaded_and_bad_input_fails_as_on_the_cpu() {
 }
 
 #[test]
-fn the_gpu_captures_the_cpus_colour_depth_and_layers() {
+fn the_gpu_captures_the_cpus_color_depth_and_layers() {
     let mut g = gpu();
     let scene = phantom(32);
     let from = pinhole(DVec3::new(0.2, 0.1, 3.5), DVec3::ZERO);
@@ -171,7 +171,7 @@ fn the_gpu_captures_the_cpus_colour_depth_and_layers() {
         color: s.color.clone(),
         depth: s.depth.clone(),
     };
-    compare("captured colour", &as_warped(&cpu), &as_warped(&on_gpu));
+    compare("captured color", &as_warped(&cpu), &as_warped(&on_gpu));
     let depths = cpu.depth.iter().zip(&on_gpu.depth);
     let same_depth = depths
         .filter(|(a, b)| (a.is_infinite() && b.is_infinite()) || (*a - *b).abs() < 1e-3)

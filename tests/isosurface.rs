@@ -2,7 +2,7 @@
 //! known radius the first crossing lies on the sphere, the normals are
 //! radial, the principal curvatures are 1/radius from the tricubic
 //! B-spline's Hessian, the secant steps put the hit far closer than the
-//! march's step, the B-spline reproduces linear fields, curvature colouring
+//! march's step, the B-spline reproduces linear fields, curvature coloring
 //! tells a convex view from a concave one, rays march only inside the box
 //! where the field can cross the iso-value, and bad settings fail.
 
@@ -10,7 +10,7 @@ mod common;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::iso::{
-    cast, crossing_box, curvature_colour, Colouring, IsoField, IsoFilter, IsoSettings,
+    cast, crossing_box, curvature_color, Coloring, IsoField, IsoFilter, IsoSettings,
 };
 use anari_library_caveray::render::{ColorFormat, FrameDesc};
 use anari_library_caveray::scene::{PlacedVolume, Voxels};
@@ -137,10 +137,10 @@ fn the_bspline_reproduces_linear_fields_and_their_gradient() {
 }
 
 #[test]
-fn curvature_colouring_tells_convex_from_concave() {
+fn curvature_coloring_tells_convex_from_concave() {
     let ball = ball();
     let settings = IsoSettings {
-        colouring: Colouring::Curvature { radius: 0.5 },
+        coloring: Coloring::Curvature { radius: 0.5 },
         ambient: 1.0,
         diffuse: 0.0,
         specular: 0.0,
@@ -155,7 +155,7 @@ fn curvature_colouring_tells_convex_from_concave() {
     let (o, i) = (centre(&outside.0), centre(&inside.0));
     assert!(o.x > o.z + 0.3, "convex is orange, got {o}");
     assert!(i.z > i.x + 0.3, "concave is blue, got {i}");
-    assert_eq!(curvature_colour(0.0, 1.0), Vec3::splat(0.95));
+    assert_eq!(curvature_color(0.0, 1.0), Vec3::splat(0.95));
 }
 
 #[test]
@@ -192,7 +192,7 @@ fn rays_that_miss_show_the_background_and_bad_settings_fail() {
         ),
         (
             IsoSettings {
-                colouring: Colouring::Curvature { radius: -1.0 },
+                coloring: Coloring::Curvature { radius: -1.0 },
                 ..IsoSettings::new(0.5)
             },
             "curvature radius",

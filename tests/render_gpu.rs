@@ -212,7 +212,7 @@ fn nearest_filter_is_nearest_on_both_renderers() {
             .map(|x| px[(row * size.x + x) as usize].x)
             .collect();
         // Inside the slab's x extent the level is 0 or the full opacity's
-        // colour, never in between.
+        // color, never in between.
         let distinct: Vec<f32> =
             levels
                 .iter()
@@ -236,7 +236,7 @@ fn nearest_filter_is_nearest_on_both_renderers() {
 }
 
 /// A background image (here ANARI's 1 x N gradient) behind an empty
-/// volume: bottom row the first colour, top row the last, blended in
+/// volume: bottom row the first color, top row the last, blended in
 /// between; the GPU equal to the CPU reference.
 #[test]
 fn background_gradients_on_both_renderers() {

@@ -228,7 +228,7 @@ fn both_renderers_take_the_same_samples() {
 }
 
 #[test]
-fn colour_formats_encode_the_same_image() {
+fn color_formats_encode_the_same_image() {
     let scene = common::render::phantom(24);
     let (screen, eye) = off_axis_wall();
     let size = UVec2::new(32, 32);
@@ -269,11 +269,11 @@ fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
     let u = gpu.uploads();
     assert_eq!((u.volumes, u.transfer_functions), (1, 1));
     // A new transfer function re-uploads the table only.
-    let recoloured = Scene::shared(
+    let recolored = Scene::shared(
         scene.volumes()[0].volume.clone(),
         std::sync::Arc::new(preset("mri").unwrap()),
     );
-    gpu.render(&recoloured, &rays, &settings, &FrameDesc::new(size))
+    gpu.render(&recolored, &rays, &settings, &FrameDesc::new(size))
         .unwrap();
     let u = gpu.uploads();
     assert_eq!((u.volumes, u.transfer_functions), (1, 2));
@@ -289,7 +289,7 @@ fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
     .unwrap();
     let other = Scene::shared(
         std::sync::Arc::new(volume),
-        recoloured.volumes()[0].transfer_function.clone(),
+        recolored.volumes()[0].transfer_function.clone(),
     );
     let g = gpu
         .render(&other, &rays, &settings, &FrameDesc::new(size))
@@ -311,17 +311,17 @@ fn the_cpu_reference_notices_a_new_volume_or_transfer_function() {
     let settings = RenderSettings::default();
     let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
     let first = common::render::phantom(16);
-    let recoloured = Scene::shared(
+    let recolored = Scene::shared(
         first.volumes()[0].volume.clone(),
         std::sync::Arc::new(preset("mri").unwrap()),
     );
     let other = Scene::new(
         shepp_logan(12),
-        (*recoloured.volumes()[0].transfer_function).clone(),
+        (*recolored.volumes()[0].transfer_function).clone(),
     );
     // One renderer across scene changes against a fresh one per scene.
     let reused = CpuRenderer::new();
-    for scene in [&first, &recoloured, &other, &first] {
+    for scene in [&first, &recolored, &other, &first] {
         let a = reused.render(scene, &rays, &settings, &desc).unwrap();
         let b = CpuRenderer::new()
             .render(scene, &rays, &settings, &desc)
@@ -329,7 +329,7 @@ fn the_cpu_reference_notices_a_new_volume_or_transfer_function() {
         assert_eq!(a, b);
     }
     let a = reused.render(&first, &rays, &settings, &desc).unwrap();
-    let b = reused.render(&recoloured, &rays, &settings, &desc).unwrap();
+    let b = reused.render(&recolored, &rays, &settings, &desc).unwrap();
     assert_ne!(a, b, "a new transfer function must change the image");
 }
 

@@ -17,7 +17,7 @@ use anari_library_caveray::scene::{
 use common::render::{axis_camera, four_cameras, gpu, off_axis_wall, renderers};
 use glam::{Mat4, UVec2, Vec3, Vec4};
 
-fn coloured(rgb: Vec3, opacity: f32, unit: f32) -> Arc<TransferFunction> {
+fn colored(rgb: Vec3, opacity: f32, unit: f32) -> Arc<TransferFunction> {
     Arc::new(TransferFunction::new(vec![rgb.extend(1.0)], vec![opacity], (0.0, 1.0), unit).unwrap())
 }
 
@@ -36,8 +36,8 @@ fn overlapping_volumes_mix_per_sample_whatever_their_order() {
     // composited after the other would let the front one dominate.
     let (a, unit) = (0.2f32, 0.5f32);
     let cube = Arc::new(solid_box(16));
-    let red = coloured(Vec3::X, a, unit);
-    let blue = coloured(Vec3::Z, a, unit);
+    let red = colored(Vec3::X, a, unit);
+    let blue = colored(Vec3::Z, a, unit);
     // Blue moved 1 along +x: x in [-1, 0) red only, [0, 1] both,
     // (1, 2] blue only.
     let shift = Mat4::from_translation(Vec3::X);
@@ -181,7 +181,7 @@ fn overlapping_rotated_volumes_on_the_gpu_match_the_cpu_reference() {
         ),
         place(
             &cube,
-            &coloured(Vec3::new(0.2, 0.9, 0.3), 0.15, 1.0),
+            &colored(Vec3::new(0.2, 0.9, 0.3), 0.15, 1.0),
             Mat4::from_translation(Vec3::new(0.4, 0.3, 0.2))
                 * Mat4::from_rotation_x(0.7)
                 * Mat4::from_scale(Vec3::splat(0.5)),

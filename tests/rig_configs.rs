@@ -286,10 +286,10 @@ fn wrong_types_are_named() {
     );
     expect_error(
         "ipd = 0.06",
-        "ipd = 0.06\ncolour = 1",
+        "ipd = 0.06\ncolor = 1",
         6,
-        "viewer.colour",
-        "unknown field `colour`",
+        "viewer.color",
+        "unknown field `color`",
     );
 }
 

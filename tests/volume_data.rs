@@ -1,5 +1,5 @@
 //! Volumes and transfer functions: raw files, the manifest, procedural
-//! volumes, presets and ParaView colour maps, and their error messages.
+//! volumes, presets and ParaView color maps, and their error messages.
 
 mod common;
 
@@ -169,7 +169,7 @@ fn transfer_functions_interpolate_and_alpha_scales_opacity() {
     )
     .unwrap();
     assert_eq!(tf.evaluate(0.0), Vec4::new(0.0, 0.0, 1.0, 0.0));
-    // Colour halfway, opacity halfway (0.5), alpha 0.75 -> 0.375.
+    // Color halfway, opacity halfway (0.5), alpha 0.75 -> 0.375.
     assert_eq!(tf.evaluate(0.5), Vec4::new(0.5, 0.0, 0.5, 0.375));
     assert_eq!(tf.evaluate(2.0), Vec4::new(1.0, 0.0, 0.0, 0.5));
     let table = tf.table();
@@ -241,19 +241,19 @@ fn every_preset_is_valid_and_unknown_ones_list_the_choices() {
 }
 
 #[test]
-fn paraview_colour_maps_load() {
+fn paraview_color_maps_load() {
     let dir = scratch("paraview");
     let path = dir.join("map.json");
     std::fs::write(
         &path,
-        r#"[{"Name": "no colours"}, {"Name": "test", "ColorSpace": "RGB",
+        r#"[{"Name": "no colors"}, {"Name": "test", "ColorSpace": "RGB",
             "RGBPoints": [100, 0, 0, 1,  300, 1, 0, 0],
             "Points": [100, 0, 0.5, 0,  200, 0.8, 0.5, 0,  300, 0.2, 0.5, 0]}]"#,
     )
     .unwrap();
     let tf = load_paraview(&path).unwrap();
     assert_eq!(tf.value_range(), (100.0, 300.0));
-    // Opacity peaks at 200 even though no colour point is there.
+    // Opacity peaks at 200 even though no color point is there.
     let mid = tf.evaluate(0.5);
     assert!(
         (mid.w - 0.8).abs() < 0.01 && (mid.x - 0.5).abs() < 0.01,
@@ -269,7 +269,7 @@ fn paraview_colour_maps_load() {
     );
 
     for (text, needle) in [
-        ("{]", "not a ParaView colour map"),
+        ("{]", "not a ParaView color map"),
         (r#"{"Name": "x"}"#, "no entry has RGBPoints"),
         (r#"{"RGBPoints": [0, 1, 1]}"#, "groups of 4"),
         (

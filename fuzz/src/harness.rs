@@ -43,7 +43,7 @@ pub fn display(data: &[u8]) {
     }
 }
 
-/// A ParaView colour map: any text.
+/// A ParaView color map: any text.
 pub fn paraview(data: &[u8]) {
     if let Ok(text) = std::str::from_utf8(data) {
         if let Ok(tf) = parse_paraview(text, "fuzz.json") {

@@ -7,7 +7,7 @@ use std::fs::File;
 use std::io::{Error, ErrorKind, Read};
 use std::path::Path;
 
-/// The most a rig, manifest or colour map file may hold: far more than
+/// The most a rig, manifest or color map file may hold: far more than
 /// any real one, far less than would hurt.
 pub const TEXT_LIMIT: u64 = 16 << 20;
 

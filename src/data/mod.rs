@@ -1,6 +1,6 @@
 //! Where volumes and transfer functions come from: raw files, the
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
-//! colour maps.
+//! color maps.
 
 pub mod files;
 mod manifest;
@@ -57,7 +57,7 @@ pub enum DataError {
     NoManifest { tried: String },
     #[error("unknown voxel type '{0}' (expected uint8, uint16 or float32)")]
     VoxelType(String),
-    #[error("{file}: not a ParaView colour map: {message}")]
+    #[error("{file}: not a ParaView color map: {message}")]
     ParaView { file: String, message: String },
     #[error("unknown transfer function preset '{name}' (presets: {known})")]
     UnknownPreset { name: String, known: String },

@@ -6,11 +6,11 @@ use super::presets::tabulate;
 use super::DataError;
 use crate::scene::TransferFunction;
 
-/// Loads a colour map exported from ParaView as JSON: `RGBPoints` (x, r, g,
+/// Loads a color map exported from ParaView as JSON: `RGBPoints` (x, r, g,
 /// b quadruples) and, if present, `Points` (x, opacity, midpoint,
 /// sharpness; midpoint and sharpness are ignored). The file may hold one
 /// map or a list; the first with `RGBPoints` is used. The value range is
-/// that of the colour points; without `Points` opacity ramps from 0 to 1.
+/// that of the color points; without `Points` opacity ramps from 0 to 1.
 pub fn load_paraview(path: &Path) -> Result<TransferFunction, DataError> {
     let file = path.display().to_string();
     let text = super::files::read_text(path, super::files::TEXT_LIMIT).map_err(|source| {

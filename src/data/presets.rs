@@ -85,7 +85,7 @@ pub fn preset(name: &str) -> Result<TransferFunction, DataError> {
     Ok(tabulate(&colors, &opacities)?)
 }
 
-/// Resamples piecewise-linear colour and opacity control points (value in
+/// Resamples piecewise-linear color and opacity control points (value in
 /// [0, 1], sorted by value; held constant beyond the ends) onto evenly
 /// spaced tables over [0, 1].
 pub(crate) fn tabulate(

@@ -123,7 +123,7 @@ pub const EXT_FRAME_PAIR: &str = "ANARI_CAVERAY_FRAME_STEREO_PAIR";
 pub const EXT_FRAME_DEADLINE: &str = "ANARI_CAVERAY_FRAME_DEADLINE";
 pub const EXT_ISOSURFACE: &str = "ANARI_KHR_GEOMETRY_ISOSURFACE";
 pub const EXT_MATTE: &str = "ANARI_KHR_MATERIAL_MATTE";
-/// Surfaces coloured by curvature (material `curvature`).
+/// Surfaces colored by curvature (material `curvature`).
 pub const EXT_CURVATURE: &str = "ANARI_CAVERAY_MATERIAL_CURVATURE";
 /// Multi-view autostereoscopic panels, each subpixel from its own eye
 /// (camera `multiView`).

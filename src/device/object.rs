@@ -12,7 +12,7 @@ use super::group::GroupModel;
 use super::info::SubtypeInfo;
 use super::instance::InstanceModel;
 use super::light::DirectionalLight;
-use super::material::Colouring;
+use super::material::Coloring;
 use super::surface::SurfaceModel;
 use super::types::{kind_name, DataType};
 use super::value::Params;
@@ -116,7 +116,7 @@ pub enum State {
     World(Derived<WorldModel>),
     Group(Derived<GroupModel>),
     Geometry(Derived<IsoGeometry>),
-    Material(Derived<Colouring>),
+    Material(Derived<Coloring>),
     Surface(Derived<SurfaceModel>),
     Instance(Derived<InstanceModel>),
     Light(Derived<DirectionalLight>),

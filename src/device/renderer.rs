@@ -28,7 +28,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::FLOAT32_VEC4, T::ARRAY2D],
             false,
             Default::Floats(&[0.0, 0.0, 0.0, 1.0]),
-            "colour behind the volume, straight alpha; or an ARRAY2D of FLOAT32_VEC4 stretched over the frame (1 x N: a vertical gradient, bottom first)",
+            "color behind the volume, straight alpha; or an ARRAY2D of FLOAT32_VEC4 stretched over the frame (1 x N: a vertical gradient, bottom first)",
         )
         .elements(&[T::FLOAT32_VEC4]),
         p(

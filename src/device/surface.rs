@@ -24,7 +24,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::MATERIAL],
             true,
             Default::None,
-            "how it is coloured",
+            "how it is colored",
         ),
     ],
     commit: Some(commit),

@@ -565,7 +565,7 @@ fn reprojected(
         ));
     }
     if job.settings.background_image.is_some() {
-        return Err("re-projection takes a background colour, not an image".into());
+        return Err("re-projection takes a background color, not an image".into());
     }
     let plan = Reprojection::new(
         &l,

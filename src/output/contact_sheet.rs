@@ -3,9 +3,9 @@ use image::{imageops, Rgba, RgbaImage};
 
 use crate::cave::Rig;
 
-/// Gap between cells, in pixels, filled with `GAP_COLOUR`.
+/// Gap between cells, in pixels, filled with `GAP_COLOR`.
 const GAP: u32 = 4;
-const GAP_COLOUR: Rgba<u8> = Rgba([48, 48, 48, 255]);
+const GAP_COLOR: Rgba<u8> = Rgba([48, 48, 48, 255]);
 
 /// Where each wall goes on a contact sheet, as grid cells (x right, y
 /// down). CAVE walls are laid out as an unfolded cube around the front
@@ -75,7 +75,7 @@ pub fn contact_sheet(layout: &SheetLayout, images: &[Option<RgbaImage>]) -> Rgba
         a.max(UVec2::new(im.width(), im.height()))
     });
     let size = layout.grid * cell + (layout.grid + UVec2::ONE) * GAP;
-    let mut sheet = RgbaImage::from_pixel(size.x, size.y, GAP_COLOUR);
+    let mut sheet = RgbaImage::from_pixel(size.x, size.y, GAP_COLOR);
     for (image, at) in images.iter().zip(&layout.cells) {
         let origin = *at * (cell + UVec2::splat(GAP)) + UVec2::splat(GAP);
         let fitted = match image {

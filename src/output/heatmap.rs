@@ -5,7 +5,7 @@ use image::{Rgba, RgbaImage};
 use crate::render::SsimMap;
 
 /// Each SSIM window's DSSIM `(1 - SSIM) / 2` as a block of
-/// `stride` x `stride` pixels of `width` x `height`, coloured black (0)
+/// `stride` x `stride` pixels of `width` x `height`, colored black (0)
 /// through red and yellow to white (`full_scale` or more). Rows are
 /// flipped so the picture is upright like the frames' PNGs.
 pub fn dssim_heatmap(map: &SsimMap, width: u32, height: u32, full_scale: f64) -> RgbaImage {
@@ -15,10 +15,10 @@ pub fn dssim_heatmap(map: &SsimMap, width: u32, height: u32, full_scale: f64) ->
         for wx in 0..map.windows.x {
             let ssim = map.values[(wy * map.windows.x + wx) as usize];
             let t = ((1.0 - ssim) / 2.0 / full_scale).clamp(0.0, 1.0);
-            let colour = hot(t);
+            let color = hot(t);
             for y in wy * s..((wy + 1) * s).min(height) {
                 for x in wx * s..((wx + 1) * s).min(width) {
-                    image.put_pixel(x, height - 1 - y, colour);
+                    image.put_pixel(x, height - 1 - y, color);
                 }
             }
         }

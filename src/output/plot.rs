@@ -32,7 +32,7 @@ pub enum XAxis {
     Linear,
 }
 
-const COLOURS: [&str; 8] = [
+const COLORS: [&str; 8] = [
     "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
 ];
 
@@ -120,7 +120,7 @@ impl Chart<'_> {
             escape(self.y_label)
         );
         for (i, s) in self.series.iter().enumerate() {
-            let colour = COLOURS[i % COLOURS.len()];
+            let color = COLORS[i % COLORS.len()];
             let radius = if self.x_axis == XAxis::Linear {
                 2.0
             } else {
@@ -133,20 +133,20 @@ impl Chart<'_> {
                 .collect();
             let _ = writeln!(
                 svg,
-                r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="2"/>"#,
+                r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="2"/>"#,
                 points.join(" ")
             );
             for p in &points {
                 let (x, y) = p.split_once(',').unwrap_or(("0", "0"));
                 let _ = writeln!(
                     svg,
-                    r#"<circle cx="{x}" cy="{y}" r="{radius}" fill="{colour}"/>"#
+                    r#"<circle cx="{x}" cy="{y}" r="{radius}" fill="{color}"/>"#
                 );
             }
             let ly = top + 10.0 + 18.0 * i as f64;
             let _ = writeln!(
                 svg,
-                r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{colour}" stroke-width="2"/><text x="{}" y="{}">{}</text>"#,
+                r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="2"/><text x="{}" y="{}">{}</text>"#,
                 left + pw + 12.0,
                 left + pw + 32.0,
                 left + pw + 38.0,

@@ -5,12 +5,12 @@ use super::RenderError;
 /// Pixel formats of ANARI's `channel.color`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum ColorFormat {
-    /// UFIXED8_VEC4: linear colour, 8 bits per channel.
+    /// UFIXED8_VEC4: linear color, 8 bits per channel.
     #[default]
     Rgba8,
-    /// UFIXED8_RGBA_SRGB: sRGB-encoded colour, linear alpha.
+    /// UFIXED8_RGBA_SRGB: sRGB-encoded color, linear alpha.
     Srgba8,
-    /// FLOAT32_VEC4: linear colour as floats.
+    /// FLOAT32_VEC4: linear color as floats.
     Rgba32F,
 }
 
@@ -42,7 +42,7 @@ pub struct FrameDesc {
 }
 
 /// The most pixels one frame may have: 2^28 (16384 x 16384), whose
-/// colour, depth and working buffers on the CPU reference take about 6 GiB.
+/// color, depth and working buffers on the CPU reference take about 6 GiB.
 pub const MAX_FRAME_PIXELS: u64 = 1 << 28;
 
 /// A buffer of `n` copies of `value`, or an error if the memory cannot be
@@ -99,7 +99,7 @@ impl FrameDesc {
     }
 }
 
-/// A rendered colour channel, lower-left pixel first, rows left to right.
+/// A rendered color channel, lower-left pixel first, rows left to right.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ColorData {
     Rgba8(Vec<u8>),
@@ -107,7 +107,7 @@ pub enum ColorData {
     Rgba32F(Vec<f32>),
 }
 
-/// The result of one render: colour and optional depth, lower-left first.
+/// The result of one render: color and optional depth, lower-left first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     pub size: UVec2,
@@ -161,9 +161,9 @@ impl Frame {
             }
         }
         let mut color = match desc.color {
-            ColorFormat::Rgba8 => ColorData::Rgba8(filled(4 * n, 0, "the frame's colour")?),
-            ColorFormat::Srgba8 => ColorData::Srgba8(filled(4 * n, 0, "the frame's colour")?),
-            ColorFormat::Rgba32F => ColorData::Rgba32F(filled(4 * n, 0.0, "the frame's colour")?),
+            ColorFormat::Rgba8 => ColorData::Rgba8(filled(4 * n, 0, "the frame's color")?),
+            ColorFormat::Srgba8 => ColorData::Srgba8(filled(4 * n, 0, "the frame's color")?),
+            ColorFormat::Rgba32F => ColorData::Rgba32F(filled(4 * n, 0.0, "the frame's color")?),
         };
         let mut depth = match desc.depth {
             true => Some(filled(n, f32::INFINITY, "the frame's depth")?),
@@ -188,7 +188,7 @@ impl Frame {
                 }
                 _ => {
                     return Err(RenderError::Settings(
-                        "internal: stitched parts differ in colour format".into(),
+                        "internal: stitched parts differ in color format".into(),
                     ))
                 }
             }
@@ -213,7 +213,7 @@ impl Frame {
         depth: Option<Vec<f32>>,
     ) -> Result<Frame, RenderError> {
         let encode = |srgb: bool| -> Result<Vec<u8>, RenderError> {
-            let mut out = filled(color.len(), 0u8, "the frame's 8-bit colour")?;
+            let mut out = filled(color.len(), 0u8, "the frame's 8-bit color")?;
             for (o, c) in out.chunks_exact_mut(4).zip(color.chunks_exact(4)) {
                 let rgb = |x: f32| if srgb { linear_to_srgb(x) } else { x };
                 o.copy_from_slice(&[rgb(c[0]), rgb(c[1]), rgb(c[2]), c[3]].map(to_unorm8));

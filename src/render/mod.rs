@@ -217,7 +217,7 @@ impl Renderer {
         self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
     }
 
-    /// What warps need of a view (colour over nothing, first-hit depth and
+    /// What warps need of a view (color over nothing, first-hit depth and
     /// `layers` layers a pixel), and the milliseconds it took: the GPU's
     /// pass clock, or the CPU's wall clock.
     pub fn capture(

@@ -50,7 +50,7 @@ impl ClipPlanes {
 /// How each sample is lit, as in the paper's benchmark ladder.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Shading {
-    /// Transfer-function colour only.
+    /// Transfer-function color only.
     #[default]
     None,
     /// 24 samples towards a parallel light.
@@ -198,8 +198,8 @@ impl BackgroundImage {
         &self.pixels
     }
 
-    /// The colour behind pixel (x, y) of a `frame`-sized image; the shaders
-    /// compute the same (shaders/colour.wgsl).
+    /// The color behind pixel (x, y) of a `frame`-sized image; the shaders
+    /// compute the same (shaders/color.wgsl).
     pub fn at(&self, x: u32, y: u32, frame: UVec2) -> Vec4 {
         let texel = |i: u32, j: u32| self.pixels[(j * self.size.x + i) as usize];
         let coord = |p: u32, f: u32, n: u32| {
@@ -235,7 +235,7 @@ pub struct RenderSettings {
     /// (0 takes the first sample that contributes anything).
     pub depth_threshold: f32,
     pub clip_planes: ClipPlanes,
-    /// Colour times strength of the light, multiplying every shaded sample
+    /// Color times strength of the light, multiplying every shaded sample
     /// (a host's directional light; 1 without one).
     pub light_color: Vec3,
     /// Leap over bricks the transfer function leaves clear
@@ -312,7 +312,7 @@ impl RenderSettings {
         }
         if !self.light_color.is_finite() || self.light_color.min_element() < 0.0 {
             return Err(RenderError::Settings(format!(
-                "light colour must be finite and not negative, got {}",
+                "light color must be finite and not negative, got {}",
                 self.light_color
             )));
         }

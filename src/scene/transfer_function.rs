@@ -7,7 +7,7 @@ pub const TABLE_SIZE: usize = 256;
 
 #[derive(Debug, Error, PartialEq)]
 pub enum TransferFunctionError {
-    #[error("transfer function needs at least one colour and one opacity")]
+    #[error("transfer function needs at least one color and one opacity")]
     Empty,
     #[error("{what}[{index}] is not a finite number in [0, 1]")]
     OutOfRange { what: &'static str, index: usize },
@@ -17,8 +17,8 @@ pub enum TransferFunctionError {
     UnitDistance(f32),
 }
 
-/// ANARI's `transferFunction1D`: colours and opacities spread evenly over
-/// `value_range`; a colour's alpha multiplies the opacity.
+/// ANARI's `transferFunction1D`: colors and opacities spread evenly over
+/// `value_range`; a color's alpha multiplies the opacity.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransferFunction {
     colors: Vec<Vec4>,
@@ -94,9 +94,9 @@ impl TransferFunction {
         Ok(self)
     }
 
-    /// Colour (rgb) and opacity (a), not premultiplied, at position
+    /// Color (rgb) and opacity (a), not premultiplied, at position
     /// `t` in [0, 1] of the value range: each array is interpolated linearly
-    /// on its own, then the colour's alpha scales the opacity.
+    /// on its own, then the color's alpha scales the opacity.
     pub fn evaluate(&self, t: f32) -> Vec4 {
         let c = lerp_table(&self.colors, t);
         let o = lerp_table(&self.opacities, t);

@@ -77,7 +77,7 @@ int main(int argc, char **argv)
   static float voxels[N * N * N];
   float origin[3] = {-1.0f, -1.0f, -2.2f}, spacing[3], isovalue = 0.5f;
   float ll[3] = {-0.5f, -0.3f, 0.0f}, lr[3] = {0.5f, -0.3f, 0.0f}, ur[3] = {0.5f, 0.3f, 0.0f};
-  float colour[3] = {0.9f, 0.8f, 0.6f};
+  float color[3] = {0.9f, 0.8f, 0.6f};
   unsigned size[2] = {w, h};
   ANARIDataType rgba8 = ANARI_UFIXED8_VEC4, f32 = ANARI_FLOAT32;
   const char *const *extensions = NULL;
@@ -137,7 +137,7 @@ int main(int argc, char **argv)
   anariCommitParameters(dev, geometry);
   anariRelease(dev, isovalues);
   material = anariNewMaterial(dev, "matte");
-  anariSetParameter(dev, material, "color", ANARI_FLOAT32_VEC3, colour);
+  anariSetParameter(dev, material, "color", ANARI_FLOAT32_VEC3, color);
   anariCommitParameters(dev, material);
   surface = anariNewSurface(dev);
   anariSetParameter(dev, surface, "geometry", ANARI_GEOMETRY, &geometry);

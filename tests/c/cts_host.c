@@ -1,8 +1,8 @@
 /* A conformance-test-style host, from what the ANARI CTS volume cases send
- * (HOSTS.md): `valueRange` as FLOAT32_VEC2, one FLOAT32_VEC3 colour and one
- * FLOAT32 opacity, `unitDistance` 0.1, colour (FLOAT32_VEC4) and depth
+ * (HOSTS.md): `valueRange` as FLOAT32_VEC2, one FLOAT32_VEC3 color and one
+ * FLOAT32 opacity, `unitDistance` 0.1, color (FLOAT32_VEC4) and depth
  * channels, and the camera placed from the world's `bounds`; then a
- * colour/opacity array volume rendered with `filter` "nearest" and again
+ * color/opacity array volume rendered with `filter` "nearest" and again
  * with "linear".
  * The field is an 8^3 ramp along x (voxel i holds i / 7) on [-1, 1]^3.
  * Usage: cts_host OUT_DIR. Writes OUT_DIR/cts.bounds (the six numbers),
@@ -39,7 +39,7 @@ static void show(ANARIDevice dev, ANARIWorld world, ANARIVolume v)
   anariRelease(dev, list);
 }
 
-/* Renders and writes the colour (and depth if `depth_name`). */
+/* Renders and writes the color (and depth if `depth_name`). */
 static int render(ANARIDevice dev, ANARIFrame frame, const char *dir,
     const char *color_name, const char *depth_name)
 {
@@ -51,7 +51,7 @@ static int render(ANARIDevice dev, ANARIFrame frame, const char *dir,
   anariFrameReady(dev, frame, ANARI_WAIT);
   color = (const float *)anariMapFrame(dev, frame, "channel.color", &w, &h, &type);
   if (!color || w != SIZE || h != SIZE || type != ANARI_FLOAT32_VEC4) {
-    fprintf(stderr, "cts_host: no FLOAT32_VEC4 colour for %s\n", color_name);
+    fprintf(stderr, "cts_host: no FLOAT32_VEC4 color for %s\n", color_name);
     return 0;
   }
   ok &= write_floats(dir, color_name, color, 4 * SIZE * SIZE);

@@ -92,7 +92,7 @@ int main(int argc, char **argv)
   ANARILibrary lib;
   ANARIDevice dev;
   ANARIArray3D data;
-  ANARIArray1D volumes, colour_array, opacity_array;
+  ANARIArray1D volumes, color_array, opacity_array;
   ANARISpatialField field;
   ANARIVolume volume;
   ANARIWorld world;
@@ -124,14 +124,14 @@ int main(int argc, char **argv)
   anariSetParameter(dev, field, "spacing", ANARI_FLOAT32_VEC3, spacing);
   anariCommitParameters(dev, field);
   anariRelease(dev, data);
-  colour_array = anariNewArray1D(dev, colors, NULL, NULL, ANARI_FLOAT32_VEC3, 4);
+  color_array = anariNewArray1D(dev, colors, NULL, NULL, ANARI_FLOAT32_VEC3, 4);
   opacity_array = anariNewArray1D(dev, opacities, NULL, NULL, ANARI_FLOAT32, 4);
   volume = anariNewVolume(dev, "transferFunction1D");
   anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
-  anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &colour_array);
+  anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &color_array);
   anariSetParameter(dev, volume, "opacity", ANARI_ARRAY1D, &opacity_array);
   anariCommitParameters(dev, volume);
-  anariRelease(dev, colour_array);
+  anariRelease(dev, color_array);
   anariRelease(dev, opacity_array);
   world = anariNewWorld(dev);
   volumes = anariNewArray1D(dev, &volume, NULL, NULL, ANARI_VOLUME, 1);

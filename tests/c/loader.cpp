@@ -168,7 +168,7 @@ int main(int argc, char **argv)
   check("perspective fovy default", fovy && std::fabs(*fovy - 1.0471976f) < 1e-6f);
   const float *white = (const float *)dev->getParameterInfo(ANARI_VOLUME,
       "transferFunction1D", "color", ANARI_FLOAT32_VEC3, "default", ANARI_FLOAT32_VEC3);
-  check("colour default for a single colour", white && white[0] == 1.0f && white[2] == 1.0f);
+  check("color default for a single color", white && white[0] == 1.0f && white[2] == 1.0f);
   const char *required = (const char *)dev->getParameterInfo(
       ANARI_CAMERA, "matrix", "view", ANARI_FLOAT32_MAT4, "required", ANARI_BOOL);
   check("matrix view is required", required && *required == 1);
@@ -230,8 +230,8 @@ int main(int argc, char **argv)
   uint32_t w = 0, h = 0;
   ANARIDataType type = ANARI_UNKNOWN;
   const void *pixels = dev->frameBufferMap(frame, "channel.color", &w, &h, &type);
-  check("colour maps", pixels && w == s.size[0] && h == s.size[1] && type == ANARI_UFIXED8_VEC4);
-  check("colour written", pixels && write_rgba(argv[3], "loader", pixels, w, h));
+  check("color maps", pixels && w == s.size[0] && h == s.size[1] && type == ANARI_UFIXED8_VEC4);
+  check("color written", pixels && write_rgba(argv[3], "loader", pixels, w, h));
   const float *d = (const float *)dev->frameBufferMap(frame, "channel.depth", &w, &h, &type);
   bool finite = false;
   for (uint32_t i = 0; d && i < w * h; ++i)

@@ -75,7 +75,7 @@ int main(void)
       anariGetProperty(dev, dev, "version", ANARI_FLOAT32, &fvalue, sizeof fvalue, ANARI_WAIT) == 0);
   expect("property type", ERR, BAD_ARG, "property 'version' is ANARI_INT32");
   check("an unknown property is absent",
-      anariGetProperty(dev, dev, "colour", ANARI_INT32, &version, sizeof version, ANARI_WAIT) == 0);
+      anariGetProperty(dev, dev, "color", ANARI_INT32, &version, sizeof version, ANARI_WAIT) == 0);
   expect_quiet("unknown property");
 
   /* Handles. */
@@ -194,13 +194,13 @@ int main(void)
   volume = anariNewVolume(dev, "transferFunction1D");
   anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
   {
-    /* Every FLOAT32/UFIXED8/UFIXED16/sRGB layout is a colour; UINT32 is not. */
+    /* Every FLOAT32/UFIXED8/UFIXED16/sRGB layout is a color; UINT32 is not. */
     ANARIArray1D words = anariNewArray1D(dev, NULL, NULL, NULL, ANARI_UINT32, 4);
     anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &words);
     anariRelease(dev, words);
   }
   anariCommitParameters(dev, volume);
-  expect("colour array of UINT32", ERR, BAD_ARG, "'color' array holds ANARI_UINT32; expected FLOAT32, UFIXED8 or UFIXED16");
+  expect("color array of UINT32", ERR, BAD_ARG, "'color' array holds ANARI_UINT32; expected FLOAT32, UFIXED8 or UFIXED16");
   anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &camera);
   expect("camera as the field", ERR, BAD_ARG, "'value' expects ANARI_SPATIAL_FIELD");
   {

@@ -1,10 +1,10 @@
 /* An OpenCOVER-style host, from what its ANARI plug-in sends (HOSTS.md):
  * the library loaded as "environment" ($ANARI_LIBRARY), a renderer subtype
  * from the host's config, a field with FLOAT32 data and filter "linear", a
- * transfer function with colour and opacity arrays of different lengths
+ * transfer function with color and opacity arrays of different lengths
  * and no valueRange or unitDistance, an `id` and `name` on objects, the
  * renderer's ambient and denoise settings, an empty clip plane list, one
- * directional light, the frame committed before its size is set, colour as
+ * directional light, the frame committed before its size is set, color as
  * sRGB with depth mapped together, the perspective camera of one wall and
  * eye (imageRegion from caverayPinholeFromScreen), and the channel rendered
  * 64 times with nothing changed, as OpenCOVER does to accumulate.
@@ -18,7 +18,7 @@
 #include "scene.h"
 #include "status.h"
 
-/* `n` colours (RGB) or opacities resampled from the scene's table. */
+/* `n` colors (RGB) or opacities resampled from the scene's table. */
 static float *resample(const float *table, unsigned count, unsigned stride,
     unsigned channels, unsigned n)
 {
@@ -75,7 +75,7 @@ int main(int argc, char **argv)
   anariCommitParameters(dev, field);
   anariRelease(dev, voxels);
 
-  /* 64 colours and 256 opacities: different lengths, as OpenCOVER sends. */
+  /* 64 colors and 256 opacities: different lengths, as OpenCOVER sends. */
   rgb = resample(s.colors, s.ncolors, 4, 3, 64);
   alpha = resample(s.opacities, s.nopacities, 1, 1, s.nopacities);
   colors = anariNewArray1D(dev, rgb, NULL, NULL, ANARI_FLOAT32_VEC3, 64);

@@ -2,7 +2,7 @@
  * one channel after the other (render, wait, next), as its ANARI plug-in
  * does: a perspective camera per eye from caverayPinholeFromScreen (fovy,
  * aspect, imageRegion), frames committed before their size is set,
- * sRGB colour. It renders the wall at four head positions twice: with
+ * sRGB color. It renders the wall at four head positions twice: with
  * the device's pairStereoFrames off, then on, so that the second eye can
  * come from the first eye's re-projection pass; then names each frame
  * the other's stereoPartner (ANARI_CAVERAY_FRAME_STEREO_PAIR) and renders
@@ -49,7 +49,7 @@ static int aim(ANARIDevice dev, ANARICamera camera, const Scene *s, const float 
   return 1;
 }
 
-/* Renders `frame`, waits, and writes its colour to DIR/NAME.rgba if NAME. */
+/* Renders `frame`, waits, and writes its color to DIR/NAME.rgba if NAME. */
 static int render(ANARIDevice dev, ANARIFrame frame, const char *dir, const char *name)
 {
   uint32_t w = 0, h = 0;

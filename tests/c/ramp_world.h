@@ -1,7 +1,7 @@
 /* The small scene the C misuse and stereo programs render: an 8^3 field on
  * [-1, 1]^3 whose voxel (i, j, k) holds lo + (hi - lo) * i / 7, through a
  * transferFunction1D of one opacity and, if `rgb` is given, `ncolors`
- * FLOAT32_VEC3 colours. Returns the world; the field and volume are the
+ * FLOAT32_VEC3 colors. Returns the world; the field and volume are the
  * world's alone. */
 #ifndef CAVERAY_TEST_RAMP_WORLD_H
 #define CAVERAY_TEST_RAMP_WORLD_H

@@ -1,7 +1,7 @@
 /* Test (a): a C host renders one CAVE wall with each of caveray's three
  * ways to express an off-axis view (perspective + imageRegion from
  * caverayPinholeFromScreen, the "matrix" camera, the "offAxis" camera)
- * through the plain ANARI C API, and writes the mapped colour channels.
+ * through the plain ANARI C API, and writes the mapped color channels.
  * Usage: render_wall SCENE_FILE OUT_DIR. Exit status 0 only if every
  * render succeeded and the status callback saw no error. */
 #include <anari/anari.h>

@@ -15,7 +15,7 @@
 #define W 48
 #define H 48
 
-/* Renders `frame` and writes its colour to DIR/NAME.rgba. */
+/* Renders `frame` and writes its color to DIR/NAME.rgba. */
 static int render(ANARIDevice dev, ANARIFrame frame, const char *dir, const char *name,
     uint32_t w, uint32_t h)
 {

@@ -4,7 +4,7 @@
  * frame rendered again unchanged to accumulate, and anariDiscardFrame
  * when the view changes in the middle of a (deliberately slow) render;
  * `duration` and `numSamples` read.
- * The scene is a solid box [-1, 1]^3 of colour (0.2, 0.8, 0.4) and
+ * The scene is a solid box [-1, 1]^3 of color (0.2, 0.8, 0.4) and
  * opacity 0.5 per unit distance, seen down -z through a 4 x 4 window, on
  * a (0.1, 0.1, 0.1) background: the inner half of the image sees 2 units
  * of box.
@@ -132,7 +132,7 @@ int main(int argc, char **argv)
     poll_until_ready(dev, frame);
     pixels = anariMapFrame(dev, frame, "channel.color", &w, &h, &type);
     if (!pixels || w != 64 || h != 64 || type != ANARI_UFIXED8_RGBA_SRGB) {
-      fprintf(stderr, "viewer_host: no 64x64 sRGB colour (render %d)\n", i);
+      fprintf(stderr, "viewer_host: no 64x64 sRGB color (render %d)\n", i);
       return 1;
     }
     if (i == 0) {

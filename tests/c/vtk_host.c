@@ -1,7 +1,7 @@
 /* A VTK/ParaView-style host, from what VTK's ANARI pass sends (HOSTS.md):
  * each dataset's volume in its own group, placed by a `transform`
  * instance in the world's `instance` array; two datasets, the scene's
- * phantom and a constant field (valueRange lo == hi); colour and opacity
+ * phantom and a constant field (valueRange lo == hi); color and opacity
  * as FLOAT32_VEC3 / FLOAT32 arrays and no unitDistance; a 1 x 2 gradient
  * as the renderer's `background` (ARRAY2D); a perspective camera with
  * near and far; `name` set on every object, and set again with every
@@ -98,7 +98,7 @@ int main(int argc, char **argv)
   named_commit(dev, field, "phantom field");
   anariRelease(dev, voxels);
 
-  /* VTK's colour map: RGB samples of the table, the opacities as they are. */
+  /* VTK's color map: RGB samples of the table, the opacities as they are. */
   rgb = (float *)malloc(3 * s.ncolors * sizeof(float));
   for (c = 0; c < s.ncolors; ++c)
     for (k = 0; k < 3; ++k)
@@ -199,7 +199,7 @@ int main(int argc, char **argv)
     }
     pixels = anariMapFrame(dev, frame, "channel.color", &w, &h, &type);
     if (!pixels || w != s.size[0] || h != s.size[1] || type != ANARI_UFIXED8_VEC4) {
-      fprintf(stderr, "vtk_host: no %ux%u colour channel\n", s.size[0], s.size[1]);
+      fprintf(stderr, "vtk_host: no %ux%u color channel\n", s.size[0], s.size[1]);
       ok = 0;
     } else {
       ok &= write_rgba(argv[3], update == 0 ? "vtk" : "vtk2", pixels, w, h);

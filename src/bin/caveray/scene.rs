@@ -37,7 +37,7 @@ pub struct VolumeArgs {
     #[arg(long)]
     manifest: Option<PathBuf>,
     /// Transfer function: a preset (phantom, ct-skin-bone, ct-bone, mri,
-    /// grey, shells) or a ParaView colour map exported as JSON.
+    /// grey, shells) or a ParaView color map exported as JSON.
     #[arg(long)]
     tf: Option<String>,
 }

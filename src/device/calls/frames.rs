@@ -154,7 +154,7 @@ impl Device {
             self.warn(
                 Some(frame),
                 format!(
-                    "anariRenderFrame: {} has a deadline: it shows the renderer's background colour, not its background image",
+                    "anariRenderFrame: {} has a deadline: it shows the renderer's background color, not its background image",
                     frame.describe()
                 ),
             );
@@ -174,7 +174,7 @@ impl Device {
             inputs: inputs.clone(),
             rays: view.rays,
             desc: job.desc,
-            colour: job.settings.background,
+            color: job.settings.background,
             bounds,
             warp,
             called,
@@ -552,7 +552,7 @@ impl Device {
             Some(Ok(f)) => match channel {
                 Channel::Color => match (color_type, &f.color) {
                     (None, _) => {
-                        Err("the frame has no colour channel; set 'channel.color'".to_owned())
+                        Err("the frame has no color channel; set 'channel.color'".to_owned())
                     }
                     (Some(ty), ColorData::Rgba8(b) | ColorData::Srgba8(b)) => Ok((b.as_ptr(), ty)),
                     (Some(ty), ColorData::Rgba32F(v)) => Ok((v.as_ptr().cast(), ty)),

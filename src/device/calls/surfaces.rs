@@ -46,7 +46,7 @@ pub(super) fn iso_surfaces(
             State::Geometry(g) => g.ready(&geometry.describe())?.clone(),
             _ => return Err(not_ours(geometry)),
         };
-        let colouring = match &material.lock().state {
+        let coloring = match &material.lock().state {
             State::Material(m) => *m.ready(&material.describe())?,
             _ => return Err(not_ours(material)),
         };
@@ -65,7 +65,7 @@ pub(super) fn iso_surfaces(
                 filter: geometry_model.filter,
                 // The renderer's step is in half cells.
                 steps_per_cell: (2.0 / renderer.step_factor).clamp(0.25, 64.0),
-                colouring,
+                coloring,
                 light: light.map(|l| l.towards),
                 background: renderer.background,
                 ..IsoSettings::new(isovalue)

@@ -253,7 +253,7 @@ pub struct Present {
     pub inputs: RenderInputs,
     pub rays: RayGen,
     pub desc: FrameDesc,
-    pub colour: Vec4,
+    pub color: Vec4,
     pub bounds: (glam::Vec3, glam::Vec3),
     pub warp: WarpMode,
     pub called: Instant,
@@ -312,7 +312,7 @@ pub fn present(p: Present) {
         None => {
             note = Some("no image has been rendered yet: the frame shows its background".into());
             (
-                Ok(Frame::cleared(&p.desc, p.colour)),
+                Ok(Frame::cleared(&p.desc, p.color)),
                 ShownImage {
                     age_ms: -1.0,
                     warp: WarpMode::None,
@@ -333,7 +333,7 @@ pub fn present(p: Present) {
             let warped = p
                 .warper
                 .warp(&p, &shot.source, &settings)
-                .and_then(|w| w.frame(&p.desc, p.colour));
+                .and_then(|w| w.frame(&p.desc, p.color));
             match warped {
                 Ok(frame) => (Ok(frame), ShownImage { age_ms, warp: mode }),
                 Err(e) => {
@@ -356,7 +356,7 @@ pub fn present(p: Present) {
                     });
                     let fallback = if shot.source.size == p.desc.size {
                         shot.source
-                            .frame(&p.desc, p.colour)
+                            .frame(&p.desc, p.color)
                             .map_err(|e| e.to_string())
                     } else {
                         Err(format!(

@@ -1,7 +1,7 @@
 //! The frame: what to render (world, camera, renderer), at which size and
 //! into which channels. Its parameters are read when it renders, since
 //! hosts commit frames before they know the size; commit only reports a
-//! colour channel caveray cannot fill. A render whose inputs equal the
+//! color channel caveray cannot fill. A render whose inputs equal the
 //! last one's keeps its image (calls/frames.rs).
 
 pub mod deadline;
@@ -23,7 +23,7 @@ use crate::render::ColorFormat;
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::FRAME,
     subtype: "",
-    description: "render target: colour and depth, lower-left pixel first",
+    description: "render target: color and depth, lower-left pixel first",
     extensions: &[
         EXT_COMPLETION,
         EXT_ACCUMULATION,
@@ -46,7 +46,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::DATA_TYPE],
             false,
             Default::None,
-            "UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4 (unset: no colour channel)",
+            "UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4 (unset: no color channel)",
         )
         .data_types(&[T::UFIXED8_VEC4, T::UFIXED8_RGBA_SRGB, T::FLOAT32_VEC4]),
         p(
@@ -141,7 +141,7 @@ pub fn color_format(ty: T) -> Option<ColorFormat> {
     }
 }
 
-/// The colour channel's type, `None` if the frame has none.
+/// The color channel's type, `None` if the frame has none.
 pub fn color_type(p: &Params) -> Result<Option<T>, String> {
     let Some(code) = p.get("channel.color").and_then(|v| v.i32()) else {
         return Ok(None);

@@ -32,7 +32,7 @@ pub struct FrameState {
     /// Which channels the host has mapped; a mapped frame is not rendered
     /// into, so the pointers it holds stay valid.
     pub mapped: [bool; 2],
-    /// The colour channel's ANARI type, if the frame has one.
+    /// The color channel's ANARI type, if the frame has one.
     pub color_type: Option<crate::device::types::DataType>,
     /// What the last render was made from, while its image is good.
     pub last: Option<RenderInputs>,

@@ -27,7 +27,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             VEC3,
             false,
             Default::Floats(&[1.0, 1.0, 1.0]),
-            "light colour",
+            "light color",
         ),
         p(
             "irradiance",
@@ -46,7 +46,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 pub struct DirectionalLight {
     /// Unit vector towards the light (the shading's convention).
     pub towards: Vec3,
-    /// Colour times irradiance.
+    /// Color times irradiance.
     pub color: Vec3,
 }
 

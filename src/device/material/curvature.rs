@@ -1,24 +1,24 @@
-//! caveray's `curvature` material: a surface coloured by its mean
+//! caveray's `curvature` material: a surface colored by its mean
 //! curvature from the field's Hessian (blue concave, white flat, orange
-//! convex), the colouring that shows shape on a display without shadows.
+//! convex), the coloring that shows shape on a display without shadows.
 
 use crate::device::info::{p, Default, SubtypeInfo, EXT_CURVATURE, F32};
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
-use crate::render::iso::Colouring;
+use crate::render::iso::Coloring;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::MATERIAL,
     subtype: "curvature",
-    description: "coloured by mean curvature: blue concave, white flat, orange convex",
+    description: "colored by mean curvature: blue concave, white flat, orange convex",
     extensions: &[EXT_CURVATURE],
     params: &[p(
         "radius",
         F32,
         true,
         Default::None,
-        "the colours saturate at a curvature of 1/radius (world units): the radius of the roundest bumps of interest",
+        "the colors saturate at a curvature of 1/radius (world units): the radius of the roundest bumps of interest",
     )],
     commit: Some(commit),
 };
@@ -29,6 +29,6 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         return Err(format!("radius must be positive and finite, got {radius}"));
     }
     Ok(Some(State::Material(Derived::Ready(
-        Colouring::Curvature { radius },
+        Coloring::Curvature { radius },
     ))))
 }

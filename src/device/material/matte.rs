@@ -1,16 +1,16 @@
-//! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one colour.
+//! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color.
 //! Surfaces are opaque here; an opacity below 1 is drawn opaque, said so.
 
 use crate::device::info::{p, Default, SubtypeInfo, EXT_MATTE, F32};
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
-use crate::render::iso::Colouring;
+use crate::render::iso::Coloring;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::MATERIAL,
     subtype: "matte",
-    description: "one colour (linear RGB), lit by the renderer's shading",
+    description: "one color (linear RGB), lit by the renderer's shading",
     extensions: &[EXT_MATTE],
     params: &[
         p(
@@ -18,7 +18,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING],
             false,
             Default::Floats(&[0.8, 0.8, 0.8]),
-            "the surface's colour, linear RGB in [0, 1] (a fourth component is ignored); an attribute name is drawn in the default colour, as an isosurface has no attributes",
+            "the surface's color, linear RGB in [0, 1] (a fourth component is ignored); an attribute name is drawn in the default color, as an isosurface has no attributes",
         ),
         p(
             "opacity",
@@ -35,7 +35,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     if let Some(name) = r.set("color").and_then(|v| v.string()) {
         warn(format!(
-            "color names the attribute '{name}'; isosurfaces have no attributes, so the surface is drawn in the default colour"
+            "color names the attribute '{name}'; isosurfaces have no attributes, so the surface is drawn in the default color"
         ));
     }
     let color = match r.set("color").and_then(|v| v.f32s()) {
@@ -53,7 +53,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     if opacity < 1.0 {
         warn(format!("opacity {opacity}: caveray draws surfaces opaque"));
     }
-    Ok(Some(State::Material(Derived::Ready(Colouring::Flat(
+    Ok(Some(State::Material(Derived::Ready(Coloring::Flat(
         clamped,
     )))))
 }

@@ -1,6 +1,6 @@
-//! Array elements as colours and opacities: every element type ANARI lets
+//! Array elements as colors and opacities: every element type ANARI lets
 //! a transfer function's `color` array hold (fixed-point, sRGB and float,
-//! one to four components), read into linear RGBA. Missing colour
+//! one to four components), read into linear RGBA. Missing color
 //! components read as 0 and a missing alpha as 1, as the reference device
 //! reads attributes.
 
@@ -16,7 +16,7 @@ enum Encoding {
     Float32,
     Unorm8,
     Unorm16,
-    /// 8-bit sRGB-encoded colour, linear alpha (the `*_SRGB` types).
+    /// 8-bit sRGB-encoded color, linear alpha (the `*_SRGB` types).
     Srgb8,
 }
 
@@ -43,7 +43,7 @@ fn layout(t: T) -> Option<(Encoding, usize)> {
     })
 }
 
-/// The element types a colour array may hold (what `layout` reads).
+/// The element types a color array may hold (what `layout` reads).
 pub const COLOR_ELEMENTS: &[T] = &[
     T::FLOAT32,
     T::FLOAT32_VEC2,
@@ -63,7 +63,7 @@ pub const COLOR_ELEMENTS: &[T] = &[
     T::UFIXED8_RGBA_SRGB,
 ];
 
-/// The colour element types, for messages.
+/// The color element types, for messages.
 pub const COLOR_TYPES: &str =
     "FLOAT32, UFIXED8 or UFIXED16 (1 to 4 components), or UFIXED8_R/RA/RGB/RGBA_SRGB";
 
@@ -75,8 +75,8 @@ fn srgb_to_linear(x: f32) -> f32 {
     }
 }
 
-/// The elements of a colour array as linear RGBA, `None` for an element
-/// type that is no colour.
+/// The elements of a color array as linear RGBA, `None` for an element
+/// type that is no color.
 pub fn colors(array: &Array) -> Option<Vec<Vec4>> {
     let (encoding, n) = layout(array.element())?;
     let bytes = array.bytes();
@@ -87,7 +87,7 @@ pub fn colors(array: &Array) -> Option<Vec<Vec4>> {
             .map(|w| f32::from(u16::from_ne_bytes(w)) / 65535.0)
             .collect(),
     };
-    // sRGB types: ...RA is (colour, alpha); the other alphas are the 4th.
+    // sRGB types: ...RA is (color, alpha); the other alphas are the 4th.
     let alpha_at = if array.element() == T::UFIXED8_RA_SRGB {
         1
     } else {
@@ -141,12 +141,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_listed_colour_types_are_exactly_those_read() {
+    fn the_listed_color_types_are_exactly_those_read() {
         for t in T::ALL {
             assert_eq!(
                 layout(*t).is_some(),
                 COLOR_ELEMENTS.contains(t),
-                "{t} is read as a colour but not listed, or listed but not read"
+                "{t} is read as a color but not listed, or listed but not read"
             );
         }
     }

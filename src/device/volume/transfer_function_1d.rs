@@ -1,4 +1,4 @@
-//! The `transferFunction1D` volume: a spatial field classified by colour
+//! The `transferFunction1D` volume: a spatial field classified by color
 //! and opacity maps spread over `valueRange`.
 
 use std::sync::Arc;
@@ -16,7 +16,7 @@ use crate::scene::TransferFunction;
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::VOLUME,
     subtype: "transferFunction1D",
-    description: "a spatial field classified by a 1D colour and opacity map",
+    description: "a spatial field classified by a 1D color and opacity map",
     extensions: &["ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D"],
     params: &[
         // Required in practice: `value`, or the older `field`.
@@ -28,7 +28,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
           "field values mapped to the first and last entries; lo == hi (a constant field) maps that value to the middle"),
         p("color", &[T::ARRAY1D, T::FLOAT32_VEC3, T::FLOAT32_VEC4], false,
           Default::Floats(&[1.0, 1.0, 1.0]),
-          "ARRAY1D (FLOAT32, UFIXED8 or UFIXED16 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one colour; out of [0, 1] clamped")
+          "ARRAY1D (FLOAT32, UFIXED8 or UFIXED16 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one color; out of [0, 1] clamped")
             .elements(COLOR_ELEMENTS),
         p("opacity", &[T::ARRAY1D, T::FLOAT32], false, Default::Floats(&[1.0]),
           "ARRAY1D of FLOAT32 spread over valueRange, or one opacity; out of [0, 1] clamped")
@@ -76,7 +76,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     let mut components: Vec<f32> = colors.iter().flat_map(|c| c.to_array()).collect();
     if let Some((n, i, x)) = clamp_unit(&mut components) {
         warn(format!(
-            "{n} colour components lie outside [0, 1] (the first: color[{}] component {} = {x}); clamped",
+            "{n} color components lie outside [0, 1] (the first: color[{}] component {} = {x}); clamped",
             i / 4,
             i % 4
         ));

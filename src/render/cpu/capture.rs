@@ -1,4 +1,4 @@
-//! A view as image warping needs it: colour over nothing, first-hit depth
+//! A view as image warping needs it: color over nothing, first-hit depth
 //! and the emission-absorption layers, cast by the scalar path (layers
 //! are recorded per sample, which the packet path does not visit).
 
@@ -34,7 +34,7 @@ impl CpuRenderer {
         let data = self.prepare(scene, &plan)?;
         let field = sample::Field::new(&plan, &data, None);
         let (w, n) = (size.x as usize, size.x as usize * size.y as usize);
-        let mut color = filled(n, Vec4::ZERO, "the warp source's colour")?;
+        let mut color = filled(n, Vec4::ZERO, "the warp source's color")?;
         let mut depth = filled(n, f32::INFINITY, "the warp source's depth")?;
         // One layer a pixel at least, so that every row has its chunk.
         let per = layers.max(1);

@@ -156,7 +156,7 @@ pub(super) fn march(
                     if a > 0.0 {
                         let p = origin + dir * t;
                         let s = shade(field, p, &mut samples);
-                        let lit = classified.colour(l) * s * plan.light_color;
+                        let lit = classified.color(l) * s * plan.light_color;
                         if acc.add(plan, rays, p, t, lit, a) {
                             break 'ray;
                         }
@@ -210,7 +210,7 @@ struct Accumulator {
 }
 
 impl Accumulator {
-    /// Adds a sample at `p` (`t` along the ray) of shaded colour `lit` and
+    /// Adds a sample at `p` (`t` along the ray) of shaded color `lit` and
     /// opacity `a`; true once the ray is opaque enough to stop.
     fn add(&mut self, plan: &MarchPlan, rays: &RayGen, p: Vec3, t: f32, lit: Vec3, a: f32) -> bool {
         let acc = self.color;

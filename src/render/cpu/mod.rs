@@ -212,7 +212,7 @@ impl CpuRenderer {
         };
         let field = sample::Field::new(&plan, &data, channels.as_deref());
         let (w, h) = (desc.size.x as usize, desc.size.y as usize);
-        let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's colour")?;
+        let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's color")?;
         let mut depth = filled(desc.pixels(), 0.0f32, "the frame's depth")?;
         // Square tiles, not rows: neighbouring rays in both directions read
         // the same voxels while they are in cache, and a tile is small

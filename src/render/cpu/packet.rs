@@ -45,10 +45,10 @@ pub(super) struct PacketGrid<'a> {
     pub value_scale: f32,
 }
 
-/// Eight samples' straight colour and corrected opacity (0: nothing).
+/// Eight samples' straight color and corrected opacity (0: nothing).
 #[derive(Clone, Copy, Default)]
 pub(super) struct Packet {
-    /// Straight colour, a channel at a time.
+    /// Straight color, a channel at a time.
     pub rgb: [[f32; LANES]; 3],
     pub alpha: [f32; LANES],
     /// Some sample shows.
@@ -68,7 +68,7 @@ pub(super) fn available() -> bool {
 }
 
 impl Packet {
-    pub fn colour(&self, lane: usize) -> Vec3 {
+    pub fn color(&self, lane: usize) -> Vec3 {
         Vec3::new(self.rgb[0][lane], self.rgb[1][lane], self.rgb[2][lane])
     }
 
@@ -93,7 +93,7 @@ impl Packet {
 
 /// What compositing a packet did.
 pub(super) struct Composited {
-    /// Premultiplied colour and opacity behind the lanes used.
+    /// Premultiplied color and opacity behind the lanes used.
     pub acc: Vec4,
     /// Lanes composited: 8, or fewer where the opacity reached `stop`.
     pub used: usize,
@@ -445,7 +445,7 @@ mod tests {
                     "a {a} exponent {exponent}: {} vs {want}",
                     p.alpha[0]
                 );
-                assert!((p.colour(3) - Vec3::new(0.2, 0.4, 0.6)).length() < 1e-6);
+                assert!((p.color(3) - Vec3::new(0.2, 0.4, 0.6)).length() < 1e-6);
             }
         }
     }
@@ -484,7 +484,7 @@ mod tests {
                 let a = packet.alpha[l];
                 if a > 0.0 {
                     let w = (1.0 - acc.w) * a;
-                    acc = (acc.truncate() + packet.colour(l) * light * w).extend(acc.w + w);
+                    acc = (acc.truncate() + packet.color(l) * light * w).extend(acc.w + w);
                     if depth.is_none() && acc.w >= depth_at {
                         depth = Some(l);
                     }

@@ -197,11 +197,11 @@ impl<'a> Field<'a> {
 
 /// Overlapping volumes at one sample, as one medium: their opacities
 /// combine as independent absorbers (1 - product of transmittances) and
-/// their colours in proportion to their opacities, so the result does not
+/// their colors in proportion to their opacities, so the result does not
 /// depend on the volumes' order.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Mixture {
-    /// Sum of colour times opacity.
+    /// Sum of color times opacity.
     emitted: Vec3,
     /// Sum of opacities.
     weight: f32,
@@ -215,7 +215,7 @@ impl Mixture {
         self.alpha += (1.0 - self.alpha) * a;
     }
 
-    /// Straight colour; meaningful once any opacity was added.
+    /// Straight color; meaningful once any opacity was added.
     pub fn color(&self) -> Vec3 {
         self.emitted / self.weight
     }

@@ -12,7 +12,7 @@ use super::{
     unprepared, GpuRenderer,
 };
 use crate::geometry::RayGen;
-use crate::render::iso::{crossing_box, Colouring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
+use crate::render::iso::{crossing_box, Coloring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
 use crate::render::{Frame, FrameDesc, RenderError};
 use crate::scene::{PlacedVolume, Scene};
 
@@ -369,9 +369,9 @@ fn uniform(
 ) -> Iso {
     let v = |x: glam::Vec3| x.extend(0.0).to_array();
     let m = placed.world_to_grid().as_mat4();
-    let (colour, curvature, radius) = match s.colouring {
-        Colouring::Flat(c) => (c, 0, 1.0),
-        Colouring::Curvature { radius } => (glam::Vec3::ONE, 1, radius),
+    let (color, curvature, radius) = match s.coloring {
+        Coloring::Flat(c) => (c, 0, 1.0),
+        Coloring::Curvature { radius } => (glam::Vec3::ONE, 1, radius),
     };
     Iso {
         ray_origin: v(rays.origin),
@@ -384,7 +384,7 @@ fn uniform(
         to_grid_x: m.row(0).to_array(),
         to_grid_y: m.row(1).to_array(),
         to_grid_z: m.row(2).to_array(),
-        colour: v(colour),
+        color: v(color),
         light: s.light.map_or([0.0; 4], |l| l.extend(1.0).to_array()),
         shading: [s.ambient, s.diffuse, s.specular, s.shininess],
         background: s.background.to_array(),

@@ -262,7 +262,7 @@ impl LayerTarget {
         );
         let pixels = shape.pixels;
         let color_bytes = pixels * shape.color.bytes_per_pixel();
-        let color = buffer(ctx, "right colour", color_bytes, U::STORAGE | U::COPY_SRC);
+        let color = buffer(ctx, "right color", color_bytes, U::STORAGE | U::COPY_SRC);
         let color_read = buffer(
             ctx,
             "right read-back",

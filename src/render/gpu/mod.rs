@@ -331,7 +331,7 @@ impl GpuRenderer {
         let groups = desc.size.max_element().div_ceil(WORKGROUP);
         let reason = if bytes > max_bytes {
             Some(format!(
-                "its {bytes} bytes of colour exceed the largest storage buffer ({max_bytes} bytes)"
+                "its {bytes} bytes of color exceed the largest storage buffer ({max_bytes} bytes)"
             ))
         } else if groups > limits.max_compute_workgroups_per_dimension {
             Some(format!(

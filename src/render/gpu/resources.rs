@@ -323,10 +323,10 @@ impl OutputBuffers {
         Self {
             size,
             format,
-            color: storage("colour", color_bytes),
+            color: storage("color", color_bytes),
             depth: storage("depth", 4 * pixels),
             samples: storage("samples", 4 * pixels),
-            color_read: readable("colour read-back", color_bytes),
+            color_read: readable("color read-back", color_bytes),
             depth_read: readable("depth read-back", 4 * pixels),
             samples_read: readable("samples read-back", 4 * pixels),
         }

@@ -7,7 +7,7 @@ use super::uniforms::declarations;
 use crate::render::stereo::LayerFormat;
 
 const VOLUME: &str = include_str!("../../../shaders/volume.wgsl");
-const COLOUR: &str = include_str!("../../../shaders/colour.wgsl");
+const COLOR: &str = include_str!("../../../shaders/color.wgsl");
 const STEREO: &str = include_str!("../../../shaders/stereo.wgsl");
 const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
 const REPROJECT: &str = include_str!("../../../shaders/reproject.wgsl");
@@ -17,24 +17,24 @@ const CAPTURE: &str = include_str!("../../../shaders/capture.wgsl");
 const ISO: &str = include_str!("../../../shaders/iso.wgsl");
 
 pub(super) fn raycast() -> String {
-    [declarations().as_str(), VOLUME, COLOUR, RAYCAST].join("\n")
+    [declarations().as_str(), VOLUME, COLOR, RAYCAST].join("\n")
 }
 
 /// One eye with its warp layers recorded (src/render/warp/layers.rs).
 pub(super) fn capture() -> String {
-    [declarations().as_str(), VOLUME, COLOUR, CAPTURE].join("\n")
+    [declarations().as_str(), VOLUME, COLOR, CAPTURE].join("\n")
 }
 
 /// The left eye with re-projection; the storage texture's format is part
 /// of the WGSL type, so each layer format is its own module.
 pub(super) fn reproject(format: LayerFormat) -> String {
-    [declarations().as_str(), VOLUME, COLOUR, STEREO, REPROJECT]
+    [declarations().as_str(), VOLUME, COLOR, STEREO, REPROJECT]
         .join("\n")
         .replace("LAYER_FORMAT", format.wgsl())
 }
 
 pub(super) fn composite() -> String {
-    [declarations().as_str(), COLOUR, STEREO, COMPOSITE].join("\n")
+    [declarations().as_str(), COLOR, STEREO, COMPOSITE].join("\n")
 }
 
 pub(super) fn warp() -> String {
@@ -43,5 +43,5 @@ pub(super) fn warp() -> String {
 
 /// Isosurface ray casting (src/render/iso/ is its reference).
 pub(super) fn iso() -> String {
-    [declarations().as_str(), COLOUR, ISO].join("\n")
+    [declarations().as_str(), COLOR, ISO].join("\n")
 }

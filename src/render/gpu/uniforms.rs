@@ -265,8 +265,8 @@ uniform! {
         to_grid_x: [f32; 4],
         to_grid_y: [f32; 4],
         to_grid_z: [f32; 4],
-        /// The flat colour (rgb).
-        colour: [f32; 4],
+        /// The flat color (rgb).
+        color: [f32; 4],
         /// Towards the light (xyz); w: 1 if given, else a headlight.
         light: [f32; 4],
         /// Ambient, diffuse, specular, shininess.
@@ -288,7 +288,7 @@ uniform! {
         secant_steps: u32,
         /// 0 trilinear, 1 tricubic B-spline.
         filtering: u32,
-        /// 1: colour by mean curvature.
+        /// 1: color by mean curvature.
         curvature: u32,
         radius: f32,
         color_format: u32,

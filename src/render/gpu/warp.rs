@@ -1,6 +1,6 @@
 //! The warps on the GPU (shaders/warp.wgsl): quad and layers one
 //! invocation a target pixel; grid as four passes (mesh vertices, a depth
-//! raster with atomics, a pick raster, the colour gather). Pipelines are
+//! raster with atomics, a pick raster, the color gather). Pipelines are
 //! made on the first warp; buffers grow with the largest source and
 //! target seen, and a source is uploaded only when it is not the last one.
 
@@ -42,13 +42,13 @@ struct Capacity {
 
 struct Buffers {
     capacity: Capacity,
-    colour: wgpu::Buffer,
+    color: wgpu::Buffer,
     depth: wgpu::Buffer,
     layers: wgpu::Buffer,
-    out_colour: wgpu::Buffer,
+    out_color: wgpu::Buffer,
     out_depth: wgpu::Buffer,
     nearest: wgpu::Buffer,
-    colour_read: wgpu::Buffer,
+    color_read: wgpu::Buffer,
     depth_read: wgpu::Buffer,
     group: wgpu::BindGroup,
 }
@@ -85,7 +85,7 @@ impl GpuWarp {
             nodes: pipeline("grid_nodes"),
             depth: pipeline("grid_depth"),
             pick: pipeline("grid_pick"),
-            gather: pipeline("grid_colour"),
+            gather: pipeline("grid_color"),
             layout,
             uniform,
             buffers: None,
@@ -140,7 +140,7 @@ impl GpuWarp {
         if self.uploaded != Some(source.generation()) {
             let queue = &ctx.queue;
             queue.write_buffer(
-                &buffers.colour,
+                &buffers.color,
                 0,
                 bytemuck::cast_slice(&vec4s(&source.color)),
             );
@@ -177,19 +177,19 @@ impl GpuWarp {
         };
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(
-            &buffers.out_colour,
+            &buffers.out_color,
             0,
-            &buffers.colour_read,
+            &buffers.color_read,
             0,
             16 * need.to,
         );
         encoder.copy_buffer_to_buffer(&buffers.out_depth, 0, &buffers.depth_read, 0, 4 * need.to);
         ctx.queue.submit([encoder.finish()]);
-        let colour = floats(&ctx.read(&buffers.colour_read, 16 * need.to)?);
+        let color = floats(&ctx.read(&buffers.color_read, 16 * need.to)?);
         let depth = floats(&ctx.read(&buffers.depth_read, 4 * need.to)?);
         ctx.check()?;
-        let mut color = filled(need.to as usize, Vec4::ZERO, "the warped colour")?;
-        for (c, f) in color.iter_mut().zip(colour.chunks_exact(4)) {
+        let mut color = filled(need.to as usize, Vec4::ZERO, "the warped color")?;
+        for (c, f) in color.iter_mut().zip(color.chunks_exact(4)) {
             *c = Vec4::from_slice(f);
         }
         Ok((Warped { size, color, depth }, ms))
@@ -244,10 +244,10 @@ impl GpuWarp {
         };
         let into = wgpu::BufferUsages::COPY_DST;
         let out = wgpu::BufferUsages::COPY_SRC;
-        let colour = storage("warp source colour", 16 * cap.from, into);
+        let color = storage("warp source color", 16 * cap.from, into);
         let depth = storage("warp source depth", 4 * cap.from, into);
         let layers = storage("warp source layers", layer_bytes, into);
-        let out_colour = storage("warped colour", 16 * cap.to, out);
+        let out_color = storage("warped color", 16 * cap.to, out);
         let out_depth = storage("warped depth", 4 * cap.to, out);
         let nearest = storage("grid nearest", 4 * cap.to, into);
         let mesh = storage("grid mesh", 16 * cap.nodes, into);
@@ -258,10 +258,10 @@ impl GpuWarp {
             &self.layout,
             [
                 self.uniform.as_entire_binding(),
-                colour.as_entire_binding(),
+                color.as_entire_binding(),
                 depth.as_entire_binding(),
                 layers.as_entire_binding(),
-                out_colour.as_entire_binding(),
+                out_color.as_entire_binding(),
                 out_depth.as_entire_binding(),
                 nearest.as_entire_binding(),
                 mesh.as_entire_binding(),
@@ -270,12 +270,12 @@ impl GpuWarp {
         );
         self.buffers = Some(Buffers {
             capacity: cap,
-            colour_read: readable("warped colour read-back", 16 * cap.to),
+            color_read: readable("warped color read-back", 16 * cap.to),
             depth_read: readable("warped depth read-back", 4 * cap.to),
-            colour,
+            color,
             depth,
             layers,
-            out_colour,
+            out_color,
             out_depth,
             nearest,
             // The mesh and the source positions live as long as the group.

@@ -5,7 +5,7 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::field::{crossing_box, curvatures, IsoField, IsoFilter};
-use super::{curvature_colour, Colouring, IsoSettings};
+use super::{curvature_color, Coloring, IsoSettings};
 use crate::geometry::RayGen;
 use crate::render::cpu::enter_exit;
 use crate::render::frame::filled;
@@ -22,7 +22,7 @@ pub struct IsoHit {
     pub normal: Vec3,
     /// Principal curvatures, larger first, as the ray's origin sees the
     /// surface: positive where it bulges towards the eye. (0, 0) under
-    /// trilinear filtering unless curvature colours the surface.
+    /// trilinear filtering unless curvature colors the surface.
     pub curvatures: (f32, f32),
 }
 
@@ -150,9 +150,9 @@ impl<'a> Caster<'a> {
                 let t = refine(&at, (ta, fa), (tb, fb), s.secant_steps);
                 // The B-spline's Hessian comes with its gradient; the
                 // trilinear one costs six gradients more, so only where
-                // curvature colours the surface.
+                // curvature colors the surface.
                 let hessian = s.filter == IsoFilter::TricubicBSpline
-                    || matches!(s.colouring, Colouring::Curvature { .. });
+                    || matches!(s.coloring, Coloring::Curvature { .. });
                 let sample = self.field.sample_with(go + gd * t, hessian);
                 let g = sample.gradient;
                 let (k1, k2) = if hessian {
@@ -179,8 +179,8 @@ impl<'a> Caster<'a> {
         None
     }
 
-    /// The colour of `hit` seen along `d`, or the background.
-    pub fn colour(&self, hit: Option<&IsoHit>, d: Vec3) -> Vec4 {
+    /// The color of `hit` seen along `d`, or the background.
+    pub fn color(&self, hit: Option<&IsoHit>, d: Vec3) -> Vec4 {
         match hit {
             Some(h) => shade(h, d, self.settings),
             None => self.settings.background,
@@ -217,7 +217,7 @@ pub fn cast_by(
             *hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut samples);
         }
     });
-    let mut color = filled(4 * n, 0.0f32, "the frame's colour")?;
+    let mut color = filled(4 * n, 0.0f32, "the frame's color")?;
     let mut depth = filled(n, f32::INFINITY, "the frame's depth")?;
     for (i, hit) in hits.iter().enumerate() {
         let (x, y) = ((i % w) as u32, (i / w) as u32);
@@ -225,7 +225,7 @@ pub fn cast_by(
         if let Some(h) = hit {
             depth[i] = rays.depth_at(h.position, h.t);
         }
-        color[4 * i..4 * i + 4].copy_from_slice(&caster.colour(hit.as_ref(), d).to_array());
+        color[4 * i..4 * i + 4].copy_from_slice(&caster.color(hit.as_ref(), d).to_array());
     }
     let frame = Frame::from_linear(desc, color, desc.depth.then_some(depth))?;
     Ok((frame, hits))
@@ -270,10 +270,10 @@ fn refine(
 
 /// Blinn-Phong shading of a hit seen along `d`.
 fn shade(h: &IsoHit, d: Vec3, s: &IsoSettings) -> Vec4 {
-    let base = match s.colouring {
-        Colouring::Flat(c) => c,
-        Colouring::Curvature { radius } => {
-            curvature_colour(0.5 * (h.curvatures.0 + h.curvatures.1), radius)
+    let base = match s.coloring {
+        Coloring::Flat(c) => c,
+        Coloring::Curvature { radius } => {
+            curvature_color(0.5 * (h.curvatures.0 + h.curvatures.1), radius)
         }
     };
     let l = s.light.map_or(-d, |l| l.normalize());

@@ -2,7 +2,7 @@
 //! crossing of the iso-value along each ray, refined by secant steps, with
 //! trilinear or tricubic B-spline filtering, the gradient for the normal
 //! and the Hessian for the principal curvatures; Blinn-Phong shading, in a
-//! flat colour or coloured by curvature. docs/autostereo.md describes it.
+//! flat color or colored by curvature. docs/autostereo.md describes it.
 
 mod cast;
 mod field;
@@ -21,10 +21,10 @@ pub use surfaces::{interleave, nearest, IsoSurface};
 
 use super::RenderError;
 
-/// How the surface is coloured before shading.
+/// How the surface is colored before shading.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Colouring {
-    /// One colour (linear RGB).
+pub enum Coloring {
+    /// One color (linear RGB).
     Flat(Vec3),
     /// By mean curvature: blue where the surface is concave, white where it
     /// is flat, orange where it is convex, saturating at a curvature of
@@ -41,7 +41,7 @@ pub struct IsoSettings {
     pub steps_per_cell: f32,
     /// Secant steps refining each crossing (0: the first sample past it).
     pub secant_steps: u32,
-    pub colouring: Colouring,
+    pub coloring: Coloring,
     /// Towards the light; `None`: from the eye (a headlight).
     pub light: Option<Vec3>,
     pub ambient: f32,
@@ -59,7 +59,7 @@ impl IsoSettings {
             filter: IsoFilter::TricubicBSpline,
             steps_per_cell: 2.0,
             secant_steps: 6,
-            colouring: Colouring::Flat(Vec3::new(0.9, 0.85, 0.75)),
+            coloring: Coloring::Flat(Vec3::new(0.9, 0.85, 0.75)),
             light: None,
             ambient: 0.15,
             diffuse: 0.75,
@@ -103,20 +103,20 @@ impl IsoSettings {
                 ));
             }
         }
-        match self.colouring {
-            Colouring::Curvature { radius } if !(radius.is_finite() && radius > 0.0) => bad(
+        match self.coloring {
+            Coloring::Curvature { radius } if !(radius.is_finite() && radius > 0.0) => bad(
                 format!("the curvature radius must be positive, got {radius}"),
             ),
-            Colouring::Flat(c) if !c.is_finite() => {
-                bad(format!("the colour must be finite, got {c}"))
+            Coloring::Flat(c) if !c.is_finite() => {
+                bad(format!("the color must be finite, got {c}"))
             }
             _ => Ok(()),
         }
     }
 }
 
-/// The colour of mean curvature `mean` under `radius` (see [`Colouring`]).
-pub fn curvature_colour(mean: f32, radius: f32) -> Vec3 {
+/// The color of mean curvature `mean` under `radius` (see [`Coloring`]).
+pub fn curvature_color(mean: f32, radius: f32) -> Vec3 {
     let s = (mean * radius).clamp(-1.0, 1.0);
     let white = Vec3::splat(0.95);
     if s >= 0.0 {

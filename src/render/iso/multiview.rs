@@ -174,9 +174,9 @@ pub fn render_display_by(
             let mut total = 0;
             let mut views = Vec::with_capacity(rays.len());
             for r in rays {
-                let (colours, n) = view_image(caster, r, size)?;
+                let (colors, n) = view_image(caster, r, size)?;
                 total += n;
-                views.push(colours);
+                views.push(colors);
             }
             for (i, px) in rgb.iter_mut().enumerate() {
                 for (c, out) in px.iter_mut().enumerate() {
@@ -195,7 +195,7 @@ pub fn render_display_by(
                         let r = &rays[table[y * w + x][c] as usize];
                         let (o, d) = r.pixel_ray(x as u32, y as u32);
                         let hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
-                        *out = caster.colour(hit.as_ref(), d)[c];
+                        *out = caster.color(hit.as_ref(), d)[c];
                     }
                 }
                 n
@@ -229,7 +229,7 @@ fn view_image(
             for (x, px) in row.iter_mut().enumerate() {
                 let (o, d) = rays.pixel_ray(x as u32, y as u32);
                 let hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut n);
-                let c = caster.colour(hit.as_ref(), d);
+                let c = caster.color(hit.as_ref(), d);
                 *px = [c.x, c.y, c.z];
             }
             n
@@ -282,7 +282,7 @@ fn geometric_spectral(
                 let (_, green_d) = rays[views[1] as usize].pixel_ray(x as u32, y as u32);
                 // Green's ray, and any channel of green's view, shade the
                 // geometric pass's very hit, seen the same way.
-                let green = caster.colour(geometric[i].as_ref(), green_d);
+                let green = caster.color(geometric[i].as_ref(), green_d);
                 for (c, out) in px.iter_mut().enumerate() {
                     if views[c] == views[1] {
                         *out = green[c];
@@ -308,7 +308,7 @@ fn geometric_spectral(
                                     .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n))
                             })
                     };
-                    *out = caster.colour(hit.as_ref(), d)[c];
+                    *out = caster.color(hit.as_ref(), d)[c];
                 }
             }
             n

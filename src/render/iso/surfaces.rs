@@ -34,7 +34,7 @@ impl IsoSurface {
 /// only if `desc` asks for it.
 pub fn nearest(frames: Vec<Frame>, desc: &FrameDesc) -> Result<Frame, RenderError> {
     let n = desc.pixels();
-    let mut color = filled(4 * n, 0.0f32, "the surfaces' colour")?;
+    let mut color = filled(4 * n, 0.0f32, "the surfaces' color")?;
     let mut depth = filled(n, f32::INFINITY, "the surfaces' depth")?;
     for (k, frame) in frames.iter().enumerate() {
         let d = frame

@@ -11,7 +11,7 @@ use thiserror::Error;
 /// Texel format of the re-projection layers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum LayerFormat {
-    /// The paper's choice: half the memory, colour to about 3 digits.
+    /// The paper's choice: half the memory, color to about 3 digits.
     #[default]
     Rgba16F,
     /// Exact: with e = 0 the right image equals the left bit for bit.

@@ -84,7 +84,7 @@ pub(super) fn warp(
         }
     }
     let target = to.rays();
-    let mut color = filled(n, Vec4::ZERO, "the warped colour")?;
+    let mut color = filled(n, Vec4::ZERO, "the warped color")?;
     let mut depth = filled(n, f32::INFINITY, "the warped depth")?;
     for (k, (s, t)) in uv.iter().zip(&z).enumerate() {
         if s.is_nan() {

@@ -16,7 +16,7 @@ pub const MAX_LAYERS: usize = 8;
 
 /// One segment of a source ray: where it starts and ends (distances along
 /// the unit ray from its origin) and what it shows on its own
-/// (premultiplied colour, opacity).
+/// (premultiplied color, opacity).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Layer {
     pub start: f32,
@@ -25,7 +25,7 @@ pub struct Layer {
 }
 
 impl Layer {
-    /// Absorption per unit length and emitted colour per unit opacity: the
+    /// Absorption per unit length and emitted color per unit opacity: the
     /// constants that, integrated from `start` to `end`, give `color`.
     fn coefficients(&self) -> (f32, Vec3) {
         let len = self.end - self.start;
@@ -55,7 +55,7 @@ impl LayerBuilder {
         }
     }
 
-    /// A sample at `t` covering `seg` along the ray, shaded colour `lit`
+    /// A sample at `t` covering `seg` along the ray, shaded color `lit`
     /// and opacity `a`, after which the ray's opacity is `total`.
     pub fn add(&mut self, t: f32, seg: f32, lit: Vec3, a: f32, total: f32) {
         let layer = &mut self.layers[self.current];
@@ -81,7 +81,7 @@ impl LayerBuilder {
 /// the settings' steps between where it enters and leaves the scene: every step
 /// midpoint is projected into the source, and the layer of the source ray
 /// there that holds it absorbs and emits over the step. Returns
-/// premultiplied colour and the depth where the opacity first reached
+/// premultiplied color and the depth where the opacity first reached
 /// the settings' depth threshold.
 pub(super) fn march(
     source: &Source,
@@ -111,7 +111,7 @@ pub(super) fn march(
         let c = d.dot(seen.direction).abs().max(1e-3);
         let (lo, hi) = (seen.along - 0.5 * step * c, seen.along + 0.5 * step * c);
         // The step through the four source pixels around the point,
-        // blended bilinearly as the quad warp blends colours.
+        // blended bilinearly as the quad warp blends colors.
         let q = seen.at - Vec2::splat(0.5);
         let base = q.floor();
         let f = q - base;
@@ -140,7 +140,7 @@ pub(super) fn march(
     (acc, depth)
 }
 
-/// Premultiplied colour and opacity of the stretch [lo, hi] of a source
+/// Premultiplied color and opacity of the stretch [lo, hi] of a source
 /// ray with `layers`, for a target step `c` times longer than it:
 /// each overlapping layer absorbs and emits over its share, front to back,
 /// integrated exactly.

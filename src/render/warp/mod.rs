@@ -1,7 +1,7 @@
 //! Image warping for tracked displays (Buchacher's thesis, chapter 5):
 //! the newest complete image shown from the newest eye, at every refresh,
 //! while the next image renders. A [`Source`] is what a render kept of its
-//! view (colour over nothing, first-hit depth, layers); [`warp`] shows it
+//! view (color over nothing, first-hit depth, layers); [`warp`] shows it
 //! from another view of the same display. docs/warping.md derives the
 //! forms for a head-mounted view and for a CAVE wall.
 
@@ -85,7 +85,7 @@ pub(crate) fn check_layers(layers: usize) -> Result<(), RenderError> {
 pub struct Source {
     pub size: UVec2,
     pub rays: RayGen,
-    /// Premultiplied colour over nothing.
+    /// Premultiplied color over nothing.
     pub color: Vec<Vec4>,
     /// First-hit depth ([`RayGen::depth_at`]); infinite where nothing showed.
     pub depth: Vec<f32>,
@@ -145,7 +145,7 @@ impl Source {
         Ok(Self::new(
             size,
             rays,
-            filled(n, Vec4::ZERO, "the warp source's colour")?,
+            filled(n, Vec4::ZERO, "the warp source's color")?,
             filled(n, f32::INFINITY, "the warp source's depth")?,
             filled(n * k, Layer::default(), "the warp source's layers")?,
             k,
@@ -183,7 +183,7 @@ impl Source {
         self.layers.get(i..i + self.k)
     }
 
-    /// Colour at image position `s` (pixels), bilinear between pixel
+    /// Color at image position `s` (pixels), bilinear between pixel
     /// centres; transparent outside the image.
     pub fn color_at(&self, s: Vec2) -> Vec4 {
         let q = s - Vec2::splat(0.5);
@@ -269,7 +269,7 @@ impl WarpSettings {
     }
 }
 
-/// A warped image: premultiplied colour over nothing and depth, lower-left
+/// A warped image: premultiplied color over nothing and depth, lower-left
 /// first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Warped {
@@ -287,7 +287,7 @@ impl Warped {
                 self.size.x, self.size.y, desc.size.x, desc.size.y
             )));
         }
-        let mut color = filled(4 * self.color.len(), 0.0f32, "the warped frame's colour")?;
+        let mut color = filled(4 * self.color.len(), 0.0f32, "the warped frame's color")?;
         for (o, c) in color.chunks_exact_mut(4).zip(&self.color) {
             // As the renderers composite over their background.
             let out = *c + (1.0 - c.w) * background;
@@ -344,7 +344,7 @@ pub fn warp_by(
             "warp 'layers' needs a source rendered with layers".into()
         ));
     }
-    let mut color = filled(n, Vec4::ZERO, "the warped colour")?;
+    let mut color = filled(n, Vec4::ZERO, "the warped color")?;
     let mut depth = filled(n, f32::INFINITY, "the warped depth")?;
     let w = size.x as usize;
     let stopped = AtomicBool::new(false);

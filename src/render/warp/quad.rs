@@ -9,7 +9,7 @@ use super::project::Projector;
 use super::{Source, WarpSettings};
 use crate::geometry::RayGen;
 
-/// Target pixel (x, y): premultiplied colour and depth.
+/// Target pixel (x, y): premultiplied color and depth.
 pub(super) fn pixel(
     source: &Source,
     from: &Projector,
