@@ -78,7 +78,7 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
                 ..ok.clone()
             },
             FrameDesc::new(size),
-            "step factor must be in [0.015625, 64] (half voxels per step), got 0.0",
+            "step factor must be in [0.015625, 64], got 0.0",
         ),
         (
             RenderSettings {
@@ -86,7 +86,7 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
                 ..ok.clone()
             },
             FrameDesc::new(size),
-            "step factor must be in [0.015625, 64] (half voxels per step), got 1e-30",
+            "step factor must be in [0.015625, 64], got 1e-30",
         ),
         (
             RenderSettings {

@@ -7,7 +7,7 @@ use std::ffi::{c_char, c_void, CString};
 use std::sync::OnceLock;
 
 use super::sys;
-use crate::device::info::{self, Default, CHANNELS, EXTENSIONS, SUBTYPES};
+use crate::device::info::{self, DefaultValue, CHANNELS, EXTENSIONS, SUBTYPES};
 use crate::device::DataType;
 
 struct List {
@@ -221,8 +221,8 @@ pub fn parameter_info(
         // Defaults are FLOAT32 components for the FLOAT32-based types, or
         // a BOOL's byte.
         ("default", Some(t)) if info_type == param_type && !t.is_object() => match p.default {
-            Default::Floats(d) if d.len() * 4 == t.size() => d.as_ptr().cast(),
-            Default::Bool(b) if t == DataType::BOOL => {
+            DefaultValue::Floats(d) if d.len() * 4 == t.size() => d.as_ptr().cast(),
+            DefaultValue::Bool(b) if t == DataType::BOOL => {
                 let b: &'static u8 = if b { &TRUE } else { &FALSE };
                 (b as *const u8).cast()
             }

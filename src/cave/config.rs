@@ -11,9 +11,9 @@ use thiserror::Error;
 use toml::Spanned;
 
 use super::head::{HeadFrame, HeadPose, PathKey};
-use super::rig::{Eye, Rig, ScenePlacement, Units, Viewer, Wall};
+use super::rig::{Eye, Rig, ScenePlacement, Viewer, Wall};
 use super::source_map::locate;
-use crate::geometry::{GeometryError, Screen};
+use crate::geometry::{GeometryError, Screen, Units};
 
 /// Clip planes for rigs that do not set them, in metres.
 const DEFAULT_NEAR_M: f64 = 0.01;
@@ -128,11 +128,6 @@ struct RawWall {
     eyes: Option<Spanned<Vec<Eye>>>,
 }
 
-pub(crate) fn load(path: &Path) -> Result<Rig, ConfigError> {
-    let (text, file) = read(path, "rig file")?;
-    parse(&text, &file)
-}
-
 /// A TOML file's text and its name for messages.
 pub(super) fn read(path: &Path, what: &'static str) -> Result<(String, String), ConfigError> {
     let file = path.display().to_string();
@@ -146,55 +141,6 @@ pub(super) fn read(path: &Path, what: &'static str) -> Result<(String, String), 
 #[derive(Deserialize)]
 struct Probe {
     views: Option<Spanned<toml::Value>>,
-}
-
-pub(crate) fn parse(text: &str, file: &str) -> Result<Rig, ConfigError> {
-    let ctx = Ctx { text, file };
-    // A multi-view display's file is not a rig: say so rather than
-    // reporting its fields as unknown.
-    if let Ok(Probe { views: Some(views) }) = toml::from_str::<Probe>(text) {
-        return Err(ctx.at(
-            &views,
-            "views".into(),
-            format!(
-                "this is a multi-view display (views = {}), not a rig: load it as a display",
-                views.get_ref()
-            ),
-        ));
-    }
-    let raw: RawRig = toml::from_str(text).map_err(|e| {
-        let span = e.span().unwrap_or(0..0);
-        ctx.error(span, None, e.message().to_string())
-    })?;
-    ctx.validate(raw)
-}
-
-/// A head path file's poses, in `rig`'s units and head frame.
-pub(crate) fn parse_head_path(
-    text: &str,
-    file: &str,
-    rig: &Rig,
-) -> Result<Vec<PathKey>, ConfigError> {
-    let ctx = Ctx { text, file };
-    let raw: RawHeadPath = toml::from_str(text).map_err(|e| {
-        let span = e.span().unwrap_or(0..0);
-        ctx.error(span, None, e.message().to_string())
-    })?;
-    if raw.pose.is_empty() {
-        return Err(ctx.error(
-            0..0,
-            Some("pose".into()),
-            "a head path needs at least one [[pose]] (t, head, ypr)".into(),
-        ));
-    }
-    let scale = raw.units.get_ref().metres_per_unit() / rig.units.metres_per_unit();
-    ctx.path(&raw.pose, "pose", &rig.viewer.frame, scale)
-}
-
-/// Reads a head path file (see `parse_head_path`).
-pub(crate) fn load_head_path(path: &Path, rig: &Rig) -> Result<Vec<PathKey>, ConfigError> {
-    let (text, file) = read(path, "head path")?;
-    parse_head_path(&text, &file, rig)
 }
 
 pub(super) struct Ctx<'a> {
@@ -533,5 +479,61 @@ fn join(path: &str, key: &str) -> String {
         key.to_string()
     } else {
         format!("{path}.{key}")
+    }
+}
+
+/// Rigs and head paths are read from files here alone, so the rig types
+/// know nothing of TOML.
+impl Rig {
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let (text, file) = read(path, "rig file")?;
+        Self::from_toml(&text, &file)
+    }
+
+    /// Parses rig TOML; `file` names the source in error messages.
+    pub fn from_toml(text: &str, file: &str) -> Result<Self, ConfigError> {
+        let ctx = Ctx { text, file };
+        // A multi-view display's file is not a rig: say so rather than
+        // reporting its fields as unknown.
+        if let Ok(Probe { views: Some(views) }) = toml::from_str::<Probe>(text) {
+            return Err(ctx.at(
+                &views,
+                "views".into(),
+                format!(
+                    "this is a multi-view display (views = {}), not a rig: load it as a display",
+                    views.get_ref()
+                ),
+            ));
+        }
+        let raw: RawRig = toml::from_str(text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            ctx.error(span, None, e.message().to_string())
+        })?;
+        ctx.validate(raw)
+    }
+
+    /// A head path file's poses (`[[pose]]` with `t`, `head`, `ypr`, in
+    /// the file's `units`), in this rig's units and head frame.
+    pub fn load_head_path(&self, path: &Path) -> Result<Vec<PathKey>, ConfigError> {
+        let (text, file) = read(path, "head path")?;
+        self.head_path_from_toml(&text, &file)
+    }
+
+    /// A head path from TOML text; `file` names it in error messages.
+    pub fn head_path_from_toml(&self, text: &str, file: &str) -> Result<Vec<PathKey>, ConfigError> {
+        let ctx = Ctx { text, file };
+        let raw: RawHeadPath = toml::from_str(text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            ctx.error(span, None, e.message().to_string())
+        })?;
+        if raw.pose.is_empty() {
+            return Err(ctx.error(
+                0..0,
+                Some("pose".into()),
+                "a head path needs at least one [[pose]] (t, head, ypr)".into(),
+            ));
+        }
+        let scale = raw.units.get_ref().metres_per_unit() / self.units.metres_per_unit();
+        ctx.path(&raw.pose, "pose", &self.viewer.frame, scale)
     }
 }

@@ -1,126 +1,189 @@
-//! Multi-view autostereoscopic displays (lenticular or parallax-barrier
-//! panels): every subpixel of the panel is seen from one of `views` eye
-//! positions, spread along a line in front of it. The model answers which
-//! view each subpixel belongs to and where that view's eye is; each view
-//! is an off-axis camera on the panel (never toe-in). docs/autostereo.md
-//! has the formulas and the shipped display.
+//! The TOML format of multi-view displays (`views = N` at the top level):
+//! parsing and validation, with errors that name the file, the line and
+//! the field, as rig files' do.
 
 use std::path::Path;
 
-use glam::{DVec3, UVec2};
+use glam::UVec2;
+use serde::Deserialize;
+use toml::Spanned;
 
-use super::config::ConfigError;
-use super::display_config;
-use super::rig::Units;
-use crate::geometry::{OffAxisCamera, PrimaryRays, RayGen, Result, Screen};
+use super::config::{read, ConfigError, Ctx, Vec3};
+use crate::geometry::{MultiViewDisplay, Screen, Units, ViewPattern, MAX_VIEWS};
 
-/// How the panel's subpixels are assigned to views.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ViewPattern {
-    /// A slanted lens sheet (van Berkel's formula): subpixel column k =
-    /// 3x + c of pixel row y lies `u = k + offset − 3·slant·y` subpixels
-    /// along the lenses; its view is `floor(frac(u / pitch) · views)`.
-    Lens {
-        /// Lens width across the panel, in subpixels.
-        pitch: f64,
-        /// How far the lens moves right per subpixel upward (tan of the
-        /// slant angle, in subpixel widths per subpixel height: a row up
-        /// moves it 3·slant subpixels).
-        slant: f64,
-        /// Where the first lens starts, in subpixels.
-        offset: f64,
-    },
-    /// A table of one period of the pattern: `period.x` pixels across by
-    /// `period.y` rows up, row by row from the lower left, each pixel's red,
-    /// green and blue view.
-    Table { period: UVec2, views: Vec<[u32; 3]> },
+/// The largest panel side, in pixels.
+const MAX_SIDE: u32 = 16384;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDisplay {
+    name: Option<String>,
+    units: Spanned<Units>,
+    views: Spanned<i64>,
+    resolution: Spanned<Vec<i64>>,
+    ll: Vec3,
+    lr: Vec3,
+    ur: Vec3,
+    viewing_distance: Spanned<f64>,
+    view_spacing: Spanned<f64>,
+    lens: Option<Spanned<RawLens>>,
+    table: Option<Spanned<RawTable>>,
 }
 
-/// A multi-view display and where its viewers' eyes are.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MultiViewDisplay {
-    pub name: String,
-    pub units: Units,
-    /// The panel, as its viewer sees it.
-    pub screen: Screen,
-    /// Pixels across and up; three subpixels (R, G, B, left to right) each.
-    pub resolution: UVec2,
-    pub views: u32,
-    pub pattern: ViewPattern,
-    /// From the panel to the line of eyes, along the panel's normal.
-    pub viewing_distance: f64,
-    /// Between the eyes of neighbouring views on that line.
-    pub view_spacing: f64,
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLens {
+    pitch: Spanned<f64>,
+    slant: Spanned<f64>,
+    offset: Option<Spanned<f64>>,
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTable {
+    period: Spanned<Vec<i64>>,
+    views: Spanned<Vec<Vec<i64>>>,
+}
+
+/// Displays are read from files here alone, so the display model knows
+/// nothing of TOML.
 impl MultiViewDisplay {
-    pub fn load(path: &Path) -> std::result::Result<Self, ConfigError> {
-        display_config::load(path)
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let (text, file) = read(path, "display file")?;
+        Self::from_toml(&text, &file)
     }
 
     /// Parses display TOML; `file` names the source in error messages.
-    pub fn from_toml(text: &str, file: &str) -> std::result::Result<Self, ConfigError> {
-        display_config::parse(text, file)
-    }
-
-    /// The view subpixel `channel` (0 red, 1 green, 2 blue) of pixel
-    /// (x, y) belongs to; y = 0 is the bottom row.
-    pub fn view_of(&self, x: u32, y: u32, channel: usize) -> u32 {
-        match &self.pattern {
-            ViewPattern::Lens {
-                pitch,
-                slant,
-                offset,
-            } => {
-                let k = 3.0 * f64::from(x) + channel.min(2) as f64;
-                let u = k + offset - 3.0 * slant * f64::from(y);
-                let along = (u / pitch).rem_euclid(1.0) * f64::from(self.views);
-                // A view boundary that falls on a subpixel must not
-                // depend on rounding: nudge by far less than a view.
-                (along + 1e-9).floor() as u32 % self.views
-            }
-            ViewPattern::Table { period, views } => {
-                let i = (y % period.y) * period.x + x % period.x;
-                views[i as usize][channel.min(2)]
-            }
+    pub fn from_toml(text: &str, file: &str) -> Result<Self, ConfigError> {
+        let ctx = Ctx { text, file };
+        let raw: RawDisplay = toml::from_str(text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            ctx.error(span, None, e.message().to_string())
+        })?;
+        let views = *raw.views.get_ref();
+        if !(1..=i64::from(MAX_VIEWS)).contains(&views) {
+            return Err(ctx.at(
+                &raw.views,
+                "views".into(),
+                format!("must be a whole number from 1 to {MAX_VIEWS}, got {views}"),
+            ));
         }
+        let views = views as u32;
+        let resolution = pair(&ctx, &raw.resolution, "resolution", MAX_SIDE)?;
+        let corner = |v: &Vec3, name: &'static str| ctx.vec3(v, || name.to_string());
+        let (ll, lr, ur) = (
+            corner(&raw.ll, "ll")?,
+            corner(&raw.lr, "lr")?,
+            corner(&raw.ur, "ur")?,
+        );
+        let screen = Screen::new(ll, lr, ur)
+            .map_err(|e| ctx.at(&raw.ll, "ll".into(), format!("the panel's corners: {e}")))?;
+        let viewing_distance = ctx.positive(&raw.viewing_distance, "viewing_distance", false)?;
+        let view_spacing = ctx.positive(&raw.view_spacing, "view_spacing", false)?;
+        let pattern = match (&raw.lens, &raw.table) {
+            (Some(lens), None) => {
+                let l = lens.get_ref();
+                let finite = |v: &Spanned<f64>, field: &str| {
+                    let x = *v.get_ref();
+                    if x.is_finite() {
+                        Ok(x)
+                    } else {
+                        Err(ctx.at(v, field.into(), format!("must be a finite number, got {x}")))
+                    }
+                };
+                ViewPattern::Lens {
+                    pitch: ctx.positive(&l.pitch, "lens.pitch", false)?,
+                    slant: finite(&l.slant, "lens.slant")?,
+                    offset: match &l.offset {
+                        Some(o) => finite(o, "lens.offset")?,
+                        None => 0.0,
+                    },
+                }
+            }
+            (None, Some(table)) => {
+                let t = table.get_ref();
+                let period = pair(&ctx, &t.period, "table.period", 1024)?;
+                let want = (period.x * period.y) as usize;
+                let rows = t.views.get_ref();
+                if rows.len() != want {
+                    return Err(ctx.at(
+                        &t.views,
+                        "table.views".into(),
+                        format!(
+                            "a period of {}x{} pixels needs {want} entries of [red, green, blue] views, got {}",
+                            period.x,
+                            period.y,
+                            rows.len()
+                        ),
+                    ));
+                }
+                let mut entries = Vec::with_capacity(want);
+                for (i, row) in rows.iter().enumerate() {
+                    match row[..] {
+                        [r, g, b]
+                            if [r, g, b].iter().all(|v| (0..i64::from(views)).contains(v)) =>
+                        {
+                            entries.push([r as u32, g as u32, b as u32]);
+                        }
+                        _ => {
+                            return Err(ctx.at(
+                                &t.views,
+                                format!("table.views[{i}]"),
+                                format!(
+                                "expected three views from 0 to {} (red, green, blue), got {row:?}",
+                                views - 1
+                            ),
+                            ))
+                        }
+                    }
+                }
+                ViewPattern::Table {
+                    period,
+                    views: entries,
+                }
+            }
+            (Some(lens), Some(_)) => {
+                return Err(ctx.at(
+                    lens,
+                    "lens".into(),
+                    "give either [lens] or [table], not both".into(),
+                ))
+            }
+            (None, None) => {
+                return Err(ctx.error(
+                    0..0,
+                    Some("lens".into()),
+                    "a display needs [lens] (pitch, slant, offset) or [table] (period, views)"
+                        .into(),
+                ))
+            }
+        };
+        Ok(MultiViewDisplay {
+            name: raw.name.unwrap_or_else(|| file.to_string()),
+            units: *raw.units.get_ref(),
+            screen,
+            resolution,
+            views,
+            pattern,
+            viewing_distance,
+            view_spacing,
+        })
     }
+}
 
-    /// Every subpixel's view over `size` pixels, row by row from the lower
-    /// left: what a naive renderer interleaves, and what tests compare.
-    pub fn view_table(&self, size: UVec2) -> Vec<[u32; 3]> {
-        (0..size.y)
-            .flat_map(|y| (0..size.x).map(move |x| (x, y)))
-            .map(|(x, y)| [0, 1, 2].map(|c| self.view_of(x, y, c)))
-            .collect()
-    }
-
-    /// The eye of `view`: on the line parallel to the panel's x axis at the
-    /// viewing distance in front of its centre, `view_spacing` apart, view
-    /// 0 at the right end (a lens sends the light of the subpixels at its
-    /// left edge to the right).
-    pub fn eye(&self, view: u32) -> DVec3 {
-        let s = &self.screen;
-        let from_middle = 0.5 * f64::from(self.views - 1) - f64::from(view.min(self.views - 1));
-        s.centre()
-            + self.viewing_distance * s.normal()
-            + from_middle * self.view_spacing * s.x_axis()
-    }
-
-    /// The eye that sees subpixel `channel` of pixel (x, y).
-    pub fn subpixel_eye(&self, x: u32, y: u32, channel: usize) -> DVec3 {
-        self.eye(self.view_of(x, y, channel))
-    }
-
-    /// Every view's rays over the panel's pixels, view 0 first.
-    pub fn view_rays(&self) -> Result<Vec<RayGen>> {
-        (0..self.views)
-            .map(|v| self.view_camera(v).map(|c| c.ray_gen(self.resolution)))
-            .collect()
-    }
-
-    /// The camera of `view`: the panel seen off-axis from that view's eye.
-    pub fn view_camera(&self, view: u32) -> Result<OffAxisCamera> {
-        OffAxisCamera::new(self.screen, self.eye(view))
+/// Two whole numbers from 1 to `max`.
+fn pair(ctx: &Ctx<'_>, v: &Spanned<Vec<i64>>, field: &str, max: u32) -> Result<UVec2, ConfigError> {
+    match v.get_ref()[..] {
+        [x, y] if [x, y].iter().all(|n| (1..=i64::from(max)).contains(n)) => {
+            Ok(UVec2::new(x as u32, y as u32))
+        }
+        _ => Err(ctx.at(
+            v,
+            field.into(),
+            format!(
+                "expected two whole numbers from 1 to {max}, got {:?}",
+                v.get_ref()
+            ),
+        )),
     }
 }

@@ -4,14 +4,13 @@
 
 mod config;
 mod display;
-mod display_config;
 mod head;
 pub mod inspect;
 mod rig;
 mod source_map;
 
 pub use config::ConfigError;
-pub use display::{MultiViewDisplay, ViewPattern};
-pub use display_config::MAX_VIEWS;
 pub use head::{pose_along, HeadFrame, HeadPose, PathKey, NECK_TO_EYES_M};
-pub use rig::{Eye, Rig, ScenePlacement, Units, View, Viewer, Wall};
+pub use rig::{Eye, Rig, ScenePlacement, View, Viewer, Wall};
+// A display file is read here; its model is geometry.
+pub use crate::geometry::{MultiViewDisplay, Units, ViewPattern, MAX_VIEWS};

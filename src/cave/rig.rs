@@ -1,39 +1,13 @@
 use std::fmt;
-use std::path::Path;
 
 use glam::{DVec3, UVec2};
 use serde::{Deserialize, Serialize};
 
-use super::config::{self, ConfigError};
 use super::head::{pose_along, HeadFrame, HeadPose, PathKey, NECK_TO_EYES_M};
 use crate::geometry::{
     pinhole_from_matrices, MatrixCamera, OffAxisCamera, OffAxisProjection, PinholeCamera,
-    RecoveredPinhole, Result, Screen,
+    RecoveredPinhole, Result, Screen, Units,
 };
-
-/// Length unit of every coordinate in a rig file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
-pub enum Units {
-    #[serde(rename = "mm")]
-    Millimetres,
-    #[serde(rename = "m")]
-    Metres,
-}
-
-impl Units {
-    pub fn metres_per_unit(self) -> f64 {
-        match self {
-            Units::Millimetres => 1e-3,
-            Units::Metres => 1.0,
-        }
-    }
-    pub fn symbol(self) -> &'static str {
-        match self {
-            Units::Millimetres => "mm",
-            Units::Metres => "m",
-        }
-    }
-}
 
 /// Which eye a view is for. `Mono` is the point midway between the eyes,
 /// for walls driven without stereo.
@@ -168,15 +142,6 @@ impl View {
 }
 
 impl Rig {
-    pub fn load(path: &Path) -> std::result::Result<Self, ConfigError> {
-        config::load(path)
-    }
-
-    /// Parses rig TOML; `file` names the source in error messages.
-    pub fn from_toml(text: &str, file: &str) -> std::result::Result<Self, ConfigError> {
-        config::parse(text, file)
-    }
-
     pub fn wall(&self, name: &str) -> Option<&Wall> {
         self.walls
             .iter()
@@ -192,21 +157,6 @@ impl Rig {
                 self.viewer.frame.orientation(ypr)
             }),
         }
-    }
-
-    /// A head path file's poses (`[[pose]]` with `t`, `head`, `ypr`, in
-    /// the file's `units`), in this rig's units and head frame.
-    pub fn load_head_path(&self, path: &Path) -> std::result::Result<Vec<PathKey>, ConfigError> {
-        config::load_head_path(path, self)
-    }
-
-    /// A head path from TOML text; `file` names it in error messages.
-    pub fn head_path_from_toml(
-        &self,
-        text: &str,
-        file: &str,
-    ) -> std::result::Result<Vec<PathKey>, ConfigError> {
-        config::parse_head_path(text, file, self)
     }
 
     /// This rig with its tracked head point at the neck's pivot: the eyes

@@ -2,7 +2,7 @@
 //! the device's own (it switches callbacks and backends), so the table
 //! serves checks and introspection only.
 
-use super::info::{p, Default, SubtypeInfo, EXT_FRAME_PAIR};
+use super::info::{p, DefaultValue, SubtypeInfo, EXT_FRAME_PAIR};
 use super::types::DataType as T;
 use crate::render::Backend;
 
@@ -12,15 +12,15 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "caveray: off-axis volume ray casting for CAVEs and powerwalls",
     extensions: &[EXT_FRAME_PAIR],
     params: &[
-        p("statusCallback", &[T::STATUS_CALLBACK], false, Default::None,
+        p("statusCallback", &[T::STATUS_CALLBACK], false, DefaultValue::None,
           "function receiving every error, warning and info message; takes effect on commit"),
-        p("statusCallbackUserData", &[T::VOID_POINTER], false, Default::None,
+        p("statusCallbackUserData", &[T::VOID_POINTER], false, DefaultValue::None,
           "passed back as the status callback's first argument"),
-        p("backend", &[T::STRING], false, Default::None,
+        p("backend", &[T::STRING], false, DefaultValue::None,
           "auto | gpu | cpu: the Vulkan ray caster, the CPU renderer, or a hardware GPU when one opens \
            and the CPU otherwise (default auto, or $CAVERAY_BACKEND)")
         .names(&Backend::NAMES),
-        p("pairStereoFrames", &[T::BOOL], false, Default::Bool(true),
+        p("pairStereoFrames", &[T::BOOL], false, DefaultValue::Bool(true),
           "render two frames that show the eyes of one wall in one re-projection pass when the first \
            renders, keeping the second's image for its render (ANARI_CAVERAY_FRAME_STEREO_PAIR)"),
     ],

@@ -17,7 +17,7 @@ pub struct ParamInfo {
     /// Accepted types, the preferred one first.
     pub types: &'static [T],
     pub required: bool,
-    pub default: Default,
+    pub default: DefaultValue,
     pub description: &'static str,
     /// For array parameters: the element types read.
     pub elements: &'static [T],
@@ -49,7 +49,7 @@ impl ParamInfo {
 }
 
 /// A parameter's value when the host sets none.
-pub enum Default {
+pub enum DefaultValue {
     None,
     /// FLOAT32 components (for FLOAT32-based types); the info queries
     /// answer these.
@@ -81,7 +81,7 @@ pub const fn p(
     name: &'static str,
     types: &'static [T],
     required: bool,
-    default: Default,
+    default: DefaultValue,
     description: &'static str,
 ) -> ParamInfo {
     ParamInfo {
@@ -255,26 +255,26 @@ mod tests {
                     p.name
                 );
                 match p.default {
-                    Default::Floats(d) => assert!(
+                    DefaultValue::Floats(d) => assert!(
                         p.types.iter().any(|t| t.size() == 4 * d.len()),
                         "{}.{}: default {d:?} fits none of {:?}",
                         s.subtype,
                         p.name,
                         p.types
                     ),
-                    Default::Text(_) => assert!(
+                    DefaultValue::Text(_) => assert!(
                         p.types.contains(&T::STRING),
                         "{}.{}: a text default for a parameter that takes no STRING",
                         s.subtype,
                         p.name
                     ),
-                    Default::Bool(_) => assert!(
+                    DefaultValue::Bool(_) => assert!(
                         p.types.contains(&T::BOOL),
                         "{}.{}: a BOOL default for a parameter that takes no BOOL",
                         s.subtype,
                         p.name
                     ),
-                    Default::None => {}
+                    DefaultValue::None => {}
                 }
                 assert!(
                     s.params[..i].iter().all(|q| q.name != p.name),

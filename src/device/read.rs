@@ -5,7 +5,7 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::array::Array;
-use super::info::{Default, ParamInfo};
+use super::info::{DefaultValue, ParamInfo};
 use super::object::{ObjectRef, State};
 use super::types::DataType;
 use super::value::{Params, Value};
@@ -42,7 +42,7 @@ impl<'a> Read<'a> {
             }
         }
         match self.info(name).map(|p| (p, &p.default)) {
-            Some((_, Default::Floats(d))) => (*d)
+            Some((_, DefaultValue::Floats(d))) => (*d)
                 .try_into()
                 .map_err(|_| format!("the default of '{name}' has {} numbers, not {N}", d.len())),
             Some((p, _)) => Err(format!(
@@ -55,6 +55,18 @@ impl<'a> Read<'a> {
 
     pub fn f32(&self, name: &str) -> Result<f32, String> {
         self.floats::<1>(name).map(|[x]| x)
+    }
+
+    /// A FLOAT32 within the range its table states: hosts are told that
+    /// range (`minimum`, `maximum`), so it is the one that is enforced.
+    pub fn f32_in_range(&self, name: &str) -> Result<f32, String> {
+        let x = self.f32(name)?;
+        match self.info(name).and_then(|p| p.range) {
+            Some((lo, hi)) if !(lo..=hi).contains(&x) => {
+                Err(format!("{name} must be from {lo} to {hi}, got {x:?}"))
+            }
+            _ => Ok(x),
+        }
     }
 
     pub fn vec3(&self, name: &str) -> Result<Vec3, String> {
@@ -75,7 +87,7 @@ impl<'a> Read<'a> {
             return Ok(b);
         }
         match self.info(name).map(|p| &p.default) {
-            Some(Default::Bool(b)) => Ok(*b),
+            Some(DefaultValue::Bool(b)) => Ok(*b),
             _ => Err(format!(
                 "'{name}' has no BOOL default in this subtype's table"
             )),
@@ -87,7 +99,7 @@ impl<'a> Read<'a> {
         match self.set(name).and_then(|v| v.string()) {
             Some(s) => Some(s),
             None => match self.info(name)?.default {
-                Default::Text(t) => Some(t),
+                DefaultValue::Text(t) => Some(t),
                 _ => None,
             },
         }

@@ -3,7 +3,7 @@
 //! keeps the two equal.
 
 use super::info::{
-    p, Default, SubtypeInfo, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_SHADING, F32, VEC3,
+    p, DefaultValue, SubtypeInfo, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_SHADING, F32, VEC3,
 };
 use super::object::{Derived, State};
 use super::read::Read;
@@ -27,7 +27,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "background",
             &[T::FLOAT32_VEC4, T::ARRAY2D],
             false,
-            Default::Floats(&[0.0, 0.0, 0.0, 1.0]),
+            DefaultValue::Floats(&[0.0, 0.0, 0.0, 1.0]),
             "color behind the volume, straight alpha; or an ARRAY2D of FLOAT32_VEC4 stretched over the frame (1 x N: a vertical gradient, bottom first)",
         )
         .elements(&[T::FLOAT32_VEC4]),
@@ -35,7 +35,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "shading",
             &[T::STRING],
             false,
-            Default::Text("none"),
+            DefaultValue::Text("none"),
             "none | shadows | ao | shadows+ao | directional:N (N <= 64); default none",
         )
         .names(&[
@@ -51,22 +51,22 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "lightDirection",
             VEC3,
             false,
-            Default::Floats(&[0.3, 0.5, 0.8]),
+            DefaultValue::Floats(&[0.3, 0.5, 0.8]),
             "direction towards the parallel light of shadows",
         ),
         p(
             "stepFactor",
             F32,
             false,
-            Default::Floats(&[1.0]),
-            "step length in units of half the smallest voxel extent",
+            DefaultValue::Floats(&[1.0]),
+            "multiplies the step that volumeSamplingRate sets (at the default rate, the step in units of half the smallest voxel extent)",
         )
-        .range(0.1, 10.0),
+        .range(STEP_FACTOR_RANGE.0, STEP_FACTOR_RANGE.1),
         p(
             "volumeSamplingRate",
             F32,
             false,
-            Default::Floats(&[2.0]),
+            DefaultValue::Floats(&[2.0]),
             "samples per smallest voxel extent (2: half-voxel steps); stepFactor scales the step further",
         )
         .range(0.01, 16.0),
@@ -74,7 +74,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "terminationThreshold",
             F32,
             false,
-            Default::Floats(&[0.99]),
+            DefaultValue::Floats(&[0.99]),
             "opacity at which a ray stops; above 1 disables early termination",
         )
         .range(0.5, 1.01),
@@ -82,7 +82,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "depthThreshold",
             F32,
             false,
-            Default::Floats(&[0.5]),
+            DefaultValue::Floats(&[0.5]),
             "accumulated opacity at which channel.depth is taken (0: the first visible sample), so geometry behind a faint haze shows",
         )
         .range(0.0, 1.0),
@@ -90,7 +90,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "clipPlane",
             &[T::ARRAY1D],
             false,
-            Default::None,
+            DefaultValue::None,
             "up to 8 planes (n, d), ARRAY1D of FLOAT32_VEC4: rays keep the points p with dot(n, p) < d",
         )
         .elements(&[T::FLOAT32_VEC4]),
@@ -98,14 +98,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "emptySpaceSkipping",
             &[T::BOOL],
             false,
-            Default::Bool(true),
+            DefaultValue::Bool(true),
             "leap over bricks of the volume its transfer function leaves clear; the image does not change (false: march every step, for comparison)",
         ),
         p(
             "gpuSampling",
             &[T::STRING],
             false,
-            Default::Text("exact"),
+            DefaultValue::Text("exact"),
             "exact | filtered: on the GPU, the shader's trilinear interpolation (the reference's arithmetic), or one hardware-filtered fetch per sample and a table with the step's opacity correction baked in (faster; not with stereo re-projection)",
         )
         .names(&Sampling::NAMES),
@@ -113,7 +113,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "levelOfDetail",
             F32,
             false,
-            Default::Floats(&[0.0]),
+            DefaultValue::Floats(&[0.0]),
             "0: full detail; F > 0, with gpuSampling filtered: the volume's mip level log2(F x pixel footprint / voxel) and a step 2^level longer where a pixel covers more than 1/F voxels (GPU only)",
         )
         .range(0.0, 16.0),
@@ -138,7 +138,8 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         light: light
             .try_normalize()
             .ok_or_else(|| format!("lightDirection {light} has no direction"))?,
-        step_factor: step_factor(r)?,
+        step_factor: r.f32_in_range("stepFactor")?,
+        sampling_rate: r.f32_in_range("volumeSamplingRate")?,
         termination: r.f32("terminationThreshold")?,
         depth_threshold: r.f32("depthThreshold")?,
         clip_planes: clip_planes(r)?,
@@ -171,33 +172,6 @@ fn background_image(r: &Read<'_>) -> Result<Option<Arc<BackgroundImage>>, String
             .map(Arc::new)
             .ok_or_else(|| format!("'background' of {w}x{h} has no pixels"))
     })
-}
-
-/// The step in half voxels that `stepFactor` and `volumeSamplingRate`
-/// give together, refused (with both) outside STEP_FACTOR_RANGE.
-fn step_factor(r: &Read<'_>) -> Result<f32, String> {
-    let (factor, rate) = (r.f32("stepFactor")?, sampling_rate(r)?);
-    let step = factor * 2.0 / rate;
-    let (lo, hi) = STEP_FACTOR_RANGE;
-    if step.is_finite() && (lo..=hi).contains(&step) {
-        Ok(step)
-    } else {
-        Err(format!(
-            "stepFactor {factor:?} with volumeSamplingRate {rate:?} gives steps of {step:?} half voxels; caveray takes {lo} to {hi} (stepFactor 1/64 to 64 at the default rate 2)"
-        ))
-    }
-}
-
-/// `volumeSamplingRate`, checked: the step is its inverse.
-fn sampling_rate(r: &Read<'_>) -> Result<f32, String> {
-    let rate = r.f32("volumeSamplingRate")?;
-    if rate.is_finite() && rate > 0.0 {
-        Ok(rate)
-    } else {
-        Err(format!(
-            "volumeSamplingRate must be finite and positive, got {rate}"
-        ))
-    }
 }
 
 /// The `clipPlane` array, if set.

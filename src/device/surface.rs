@@ -1,7 +1,7 @@
 //! The surface: a geometry drawn in a material, as worlds and groups
 //! hold them.
 
-use super::info::{p, Default, SubtypeInfo};
+use super::info::{p, DefaultValue, SubtypeInfo};
 use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
@@ -16,14 +16,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "geometry",
             &[T::GEOMETRY],
             true,
-            Default::None,
+            DefaultValue::None,
             "what is drawn",
         ),
         p(
             "material",
             &[T::MATERIAL],
             true,
-            Default::None,
+            DefaultValue::None,
             "how it is colored",
         ),
     ],

@@ -11,7 +11,7 @@ use super::camera::stereo::EyeView;
 use super::frame::deadline::{Background, Shot};
 use super::frame::slot::{FrameSlot, Kept};
 use super::types::{DataType, Severity, Status, StatusCode};
-use crate::cave::MultiViewDisplay;
+use crate::geometry::MultiViewDisplay;
 use crate::render::iso::{interleave, IsoSurface, MultiViewMethod, Panel};
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection, StereoFrames};
 use crate::render::warp::{Source, WarpMode};

@@ -4,7 +4,7 @@
 
 use glam::Mat4;
 
-use super::info::{p, Default, ParamInfo, SubtypeInfo};
+use super::info::{p, DefaultValue, ParamInfo, SubtypeInfo};
 use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
@@ -76,7 +76,7 @@ pub(super) const fn object_list(
     element: &'static [T],
     description: &'static str,
 ) -> ParamInfo {
-    p(name, &[T::ARRAY1D], false, Default::None, description).elements(element)
+    p(name, &[T::ARRAY1D], false, DefaultValue::None, description).elements(element)
 }
 
 /// The objects of array parameter `name`, which must hold `element`s.

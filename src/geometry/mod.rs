@@ -9,6 +9,7 @@
 //! and eye directly. Every camera implements [`PrimaryRays`] and lowers to
 //! the same [`RayGen`] value, so a renderer never knows which one it got.
 
+mod display;
 mod error;
 mod from_matrices;
 mod matrix_camera;
@@ -18,7 +19,10 @@ mod pinhole;
 mod projection;
 mod ray;
 mod screen;
+mod slab;
+mod units;
 
+pub use display::{MultiViewDisplay, ViewPattern, MAX_VIEWS};
 pub use error::GeometryError;
 pub use from_matrices::{pinhole_from_matrices, RecoveredPinhole};
 pub use matrix_camera::MatrixCamera;
@@ -28,5 +32,7 @@ pub use pinhole::{ImageRegion, PinholeCamera};
 pub use projection::{frustum, OffAxisProjection};
 pub use ray::{pixel_centre, PrimaryRays, Ray, RayGen};
 pub use screen::{Screen, WallExtents};
+pub use slab::enter_exit;
+pub use units::Units;
 
 pub type Result<T> = std::result::Result<T, GeometryError>;

@@ -121,7 +121,7 @@ impl MarchPlan {
             Shading::Directional(n) => random_directions(n),
             Shading::None | Shading::Shadows => Vec::new(),
         };
-        let step = 0.5 * smallest * settings.step_factor;
+        let step = 0.5 * smallest * settings.step_half_voxels();
         let (lo, hi) = scene.bounds();
         let crossing = ((hi - lo).length() / step).ceil() + 2.0;
         let cut_short = crossing.is_nan() || crossing > MAX_STEPS_PER_RAY as f32;

@@ -13,9 +13,11 @@ pub const MAX_DIRECTIONS: u32 = 64;
 /// Most clip planes a renderer takes.
 pub const MAX_CLIP_PLANES: usize = 8;
 
-/// The step factors caveray takes, in half voxels: from 1/64 (128 samples
-/// per voxel) to 64 (one every 32 voxels). Below, a render of any size
-/// takes hours; above, it samples nothing of a volume's detail.
+/// The step factors caveray takes (ANARI's `stepFactor`, the renderer
+/// table's `minimum` and `maximum`): at the default sampling rate, from
+/// 1/64 of a half voxel (128 samples per voxel) to 64 (one every 32
+/// voxels). Below, a render of any size takes hours; above, it samples
+/// nothing of a volume's detail.
 pub const STEP_FACTOR_RANGE: (f32, f32) = (1.0 / 64.0, 64.0);
 
 /// The most steps one primary ray takes, whatever the scene's size and
@@ -222,8 +224,11 @@ pub struct RenderSettings {
     pub background: Vec4,
     /// Behind the volume instead of `background`, if set.
     pub background_image: Option<Arc<BackgroundImage>>,
-    /// Step length as a multiple of half the smallest voxel extent.
+    /// ANARI's `stepFactor`: multiplies the step that `sampling_rate`
+    /// sets (see [`RenderSettings::step_half_voxels`]).
     pub step_factor: f32,
+    /// ANARI's `volumeSamplingRate`: samples per smallest voxel extent.
+    pub sampling_rate: f32,
     /// Accumulated opacity at which a ray stops (ANARI hosts expect 0.99);
     /// a value above 1 turns early termination off.
     pub termination: f32,
@@ -256,6 +261,7 @@ impl Default for RenderSettings {
             background: Vec4::new(0.0, 0.0, 0.0, 1.0),
             background_image: None,
             step_factor: 1.0,
+            sampling_rate: 2.0,
             termination: 0.99,
             shading: Shading::None,
             light: Vec3::new(0.3, 0.5, 0.8).normalize(),
@@ -269,7 +275,25 @@ impl Default for RenderSettings {
     }
 }
 
+/// `step` if it lies in [`STEP_FACTOR_RANGE`].
+pub fn check_step_factor(step: f32) -> Result<f32, RenderError> {
+    let (lo, hi) = STEP_FACTOR_RANGE;
+    if step.is_finite() && (lo..=hi).contains(&step) {
+        Ok(step)
+    } else {
+        Err(RenderError::Settings(format!(
+            "step factor must be in [{lo}, {hi}], got {step:?}"
+        )))
+    }
+}
+
 impl RenderSettings {
+    /// The step length in units of half the smallest voxel extent: 1 at
+    /// the defaults, the reference's half-voxel steps.
+    pub fn step_half_voxels(&self) -> f32 {
+        self.step_factor * 2.0 / self.sampling_rate
+    }
+
     /// Why these settings cannot render, if they cannot.
     pub fn validate(&self) -> Result<(), RenderError> {
         let unit = |x: f32| x.is_finite() && (0.0..=1.0).contains(&x);
@@ -279,11 +303,11 @@ impl RenderSettings {
                 self.background
             )));
         }
-        let (lo, hi) = STEP_FACTOR_RANGE;
-        if !(self.step_factor.is_finite() && (lo..=hi).contains(&self.step_factor)) {
+        check_step_factor(self.step_factor)?;
+        if !(self.sampling_rate.is_finite() && self.sampling_rate > 0.0) {
             return Err(RenderError::Settings(format!(
-                "step factor must be in [{lo}, {hi}] (half voxels per step), got {:?}",
-                self.step_factor
+                "sampling rate must be finite and positive, got {:?}",
+                self.sampling_rate
             )));
         }
         if !(self.termination.is_finite() && self.termination > 0.0) {

@@ -4,7 +4,7 @@
 use anari_library_caveray::cave::View;
 use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::{
-    Backend, RenderSettings, Renderer, Sampling, Shading, STEP_FACTOR_RANGE,
+    check_step_factor, Backend, RenderSettings, Renderer, Sampling, Shading,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
@@ -18,13 +18,13 @@ pub fn shading(s: &str) -> Result<Shading, String> {
         .map_err(|e: anari_library_caveray::render::RenderError| e.to_string())
 }
 
-/// `--step-factor` values: within STEP_FACTOR_RANGE.
+/// `--step-factor` values: the renderer's own check.
 pub fn step_factor(s: &str) -> Result<f32, String> {
-    let (lo, hi) = STEP_FACTOR_RANGE;
-    match s.trim().parse::<f32>() {
-        Ok(x) if (lo..=hi).contains(&x) => Ok(x),
-        _ => Err(format!("expected a number from {lo} to {hi}, got '{s}'")),
-    }
+    let x = s
+        .trim()
+        .parse::<f32>()
+        .map_err(|_| format!("expected a number, got '{s}'"))?;
+    check_step_factor(x).map_err(|e| e.to_string())
 }
 
 /// `--backend` values, listed in the help and checked by clap.

@@ -64,7 +64,7 @@ pub(super) fn iso_surfaces(
             let settings = IsoSettings {
                 filter: geometry_model.filter,
                 // The renderer's step is in half cells.
-                steps_per_cell: (2.0 / renderer.step_factor).clamp(0.25, 64.0),
+                steps_per_cell: (2.0 / renderer.step_half_voxels()).clamp(0.25, 64.0),
                 coloring,
                 light: light.map(|l| l.towards),
                 background: renderer.background,

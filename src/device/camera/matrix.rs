@@ -3,7 +3,7 @@
 //! extension name as well as ours.
 
 use super::CameraModel;
-use crate::device::info::{p, Default, SubtypeInfo, EXT_MATRIX, EXT_MATRIX_VSNRAY, MAT4};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_MATRIX, EXT_MATRIX_VSNRAY, MAT4};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -20,14 +20,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "view",
             MAT4,
             true,
-            Default::None,
+            DefaultValue::None,
             "OpenGL view matrix, column-major",
         ),
         p(
             "proj",
             MAT4,
             true,
-            Default::None,
+            DefaultValue::None,
             "OpenGL projection matrix, column-major, NDC z in [-1, 1]",
         ),
     ],

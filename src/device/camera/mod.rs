@@ -14,7 +14,7 @@ use glam::{DVec2, DVec3, UVec2};
 
 use self::multi_view::MultiViewCamera;
 use self::stereo::{EyeView, Stereo, StereoMode};
-use super::info::{p, Default, ParamInfo, F32, VEC3};
+use super::info::{p, DefaultValue, ParamInfo, F32, VEC3};
 use super::object::{Derived, State};
 use super::read::Read;
 use super::types::DataType as T;
@@ -31,49 +31,49 @@ pub const fn placed_params(own: ParamInfo) -> [ParamInfo; 8] {
             "position",
             VEC3,
             false,
-            Default::Floats(&[0.0, 0.0, 0.0]),
+            DefaultValue::Floats(&[0.0, 0.0, 0.0]),
             "eye position",
         ),
         p(
             "direction",
             VEC3,
             false,
-            Default::Floats(&[0.0, 0.0, -1.0]),
+            DefaultValue::Floats(&[0.0, 0.0, -1.0]),
             "viewing direction",
         ),
         p(
             "up",
             VEC3,
             false,
-            Default::Floats(&[0.0, 1.0, 0.0]),
+            DefaultValue::Floats(&[0.0, 1.0, 0.0]),
             "up vector",
         ),
         p(
             "aspect",
             F32,
             false,
-            Default::None,
+            DefaultValue::None,
             "width / height (default: the frame's)",
         ),
         p(
             "imageRegion",
             &[T::FLOAT32_BOX2],
             false,
-            Default::Floats(&[0.0, 0.0, 1.0, 1.0]),
+            DefaultValue::Floats(&[0.0, 0.0, 1.0, 1.0]),
             "part of the image that is rendered, (min.x, min.y, max.x, max.y) in [0, 1]",
         ),
         p(
             "near",
             F32,
             false,
-            Default::None,
+            DefaultValue::None,
             "distance along each ray before which nothing is seen (default 0)",
         ),
         p(
             "far",
             F32,
             false,
-            Default::None,
+            DefaultValue::None,
             "distance along each ray beyond which nothing is seen (default: none)",
         ),
         own,
@@ -338,7 +338,7 @@ impl CameraModel {
         &self,
         size: UVec2,
     ) -> Option<(
-        std::sync::Arc<crate::cave::MultiViewDisplay>,
+        std::sync::Arc<crate::geometry::MultiViewDisplay>,
         crate::render::iso::MultiViewMethod,
     )> {
         match self {

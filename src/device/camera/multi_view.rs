@@ -1,6 +1,6 @@
 //! caveray's `multiView` camera: a lenticular or parallax-barrier panel
 //! whose every subpixel is seen from its own eye, the ANARI face of the
-//! display model in `crate::cave::display` (the TOML's fields, renamed to
+//! display model in `crate::geometry::display` (the TOML's fields, renamed to
 //! ANARI's camelCase). The frame is the panel: its size is the panel's
 //! pixels. docs/autostereo.md has the formulas.
 
@@ -9,13 +9,13 @@ use std::sync::Arc;
 use glam::UVec2;
 
 use super::CameraModel;
-use crate::cave::{MultiViewDisplay, Units, ViewPattern, MAX_VIEWS};
 use crate::device::array::Array;
-use crate::device::info::{p, Default, SubtypeInfo, EXT_MULTI_VIEW, F32, VEC3};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_MULTI_VIEW, F32, VEC3};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
 use crate::geometry::Screen;
+use crate::geometry::{MultiViewDisplay, Units, ViewPattern, MAX_VIEWS};
 use crate::render::iso::MultiViewMethod;
 
 /// The largest view table period, in pixels each way.
@@ -27,27 +27,27 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "an autostereoscopic panel: each subpixel seen from the eye of its view, views spread along a line in front of the panel",
     extensions: &[EXT_MULTI_VIEW],
     params: &[
-        p("lowerLeft", VEC3, true, Default::None, "panel's lower-left corner"),
-        p("lowerRight", VEC3, true, Default::None, "panel's lower-right corner"),
-        p("upperRight", VEC3, true, Default::None, "panel's upper-right corner"),
-        p("views", &[T::INT32, T::UINT32], true, Default::None, "number of views, 1 to 64")
+        p("lowerLeft", VEC3, true, DefaultValue::None, "panel's lower-left corner"),
+        p("lowerRight", VEC3, true, DefaultValue::None, "panel's lower-right corner"),
+        p("upperRight", VEC3, true, DefaultValue::None, "panel's upper-right corner"),
+        p("views", &[T::INT32, T::UINT32], true, DefaultValue::None, "number of views, 1 to 64")
             .range(1.0, 64.0),
-        p("viewingDistance", F32, true, Default::None,
+        p("viewingDistance", F32, true, DefaultValue::None,
           "from the panel to the line of eyes, along its normal (world units)"),
-        p("viewSpacing", F32, true, Default::None,
+        p("viewSpacing", F32, true, DefaultValue::None,
           "between neighbouring views' eyes on that line; view 0 at the right end"),
-        p("lens.pitch", F32, false, Default::None,
+        p("lens.pitch", F32, false, DefaultValue::None,
           "lens width across the panel, in subpixels (a lens sheet; or give viewTable)"),
-        p("lens.slant", F32, false, Default::Floats(&[0.0]),
+        p("lens.slant", F32, false, DefaultValue::Floats(&[0.0]),
           "subpixels the lens moves right per subpixel height upward (tan of its slant)"),
-        p("lens.offset", F32, false, Default::Floats(&[0.0]),
+        p("lens.offset", F32, false, DefaultValue::Floats(&[0.0]),
           "where the first lens starts, in subpixels"),
-        p("viewTable", &[T::ARRAY2D], false, Default::None,
+        p("viewTable", &[T::ARRAY2D], false, DefaultValue::None,
           "one period of the pattern, period.x by period.y pixels from the lower left, each pixel's red, green and blue view (instead of lens.*)")
             .elements(&[T::UINT8_VEC3, T::UINT32_VEC3]),
-        p("view", &[T::INT32], false, Default::None,
+        p("view", &[T::INT32], false, DefaultValue::None,
           "one view's image alone (0 to views - 1); unset or -1: the interleaved panel image"),
-        p("method", &[T::STRING], false, Default::Text("passes"),
+        p("method", &[T::STRING], false, DefaultValue::Text("passes"),
           "passes (geometric + spectral: one view's cost), perSubpixel (one ray a subpixel) or naive (every view, then interleaved)")
             .names(&["passes", "perSubpixel", "naive"]),
     ],

@@ -3,7 +3,9 @@
 
 use super::stereo::{self, Stereo};
 use super::CameraModel;
-use crate::device::info::{p, Default, ParamInfo, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, VEC3};
+use crate::device::info::{
+    p, DefaultValue, ParamInfo, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, VEC3,
+};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -25,28 +27,28 @@ static PARAMS: [ParamInfo; 7] = {
             "lowerLeft",
             VEC3,
             true,
-            Default::None,
+            DefaultValue::None,
             "wall's lower-left corner",
         ),
         p(
             "lowerRight",
             VEC3,
             true,
-            Default::None,
+            DefaultValue::None,
             "wall's lower-right corner",
         ),
         p(
             "upperRight",
             VEC3,
             true,
-            Default::None,
+            DefaultValue::None,
             "wall's upper-right corner",
         ),
         p(
             "eye",
             VEC3,
             true,
-            Default::None,
+            DefaultValue::None,
             "eye position, in front of the wall (with stereoMode: between the eyes)",
         ),
         mode,
@@ -55,7 +57,7 @@ static PARAMS: [ParamInfo; 7] = {
             "eyeAxis",
             VEC3,
             false,
-            Default::None,
+            DefaultValue::None,
             "from the left eye towards the right one (the head's right vector; default: along the wall's rows)",
         ),
     ]

@@ -3,7 +3,7 @@
 //! orthographic mode).
 
 use super::{placed_params, CameraModel, Placement};
-use crate::device::info::{p, Default, ParamInfo, SubtypeInfo, EXT_ORTHOGRAPHIC, F32};
+use crate::device::info::{p, DefaultValue, ParamInfo, SubtypeInfo, EXT_ORTHOGRAPHIC, F32};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -12,7 +12,7 @@ static PARAMS: [ParamInfo; 8] = placed_params(p(
     "height",
     F32,
     false,
-    Default::Floats(&[1.0]),
+    DefaultValue::Floats(&[1.0]),
     "height of the image rectangle in world units",
 ));
 

@@ -3,7 +3,7 @@
 
 use super::stereo::{self, Stereo};
 use super::{placed_params, CameraModel, Placement};
-use crate::device::info::{p, Default, ParamInfo, SubtypeInfo, EXT_STEREO, F32};
+use crate::device::info::{p, DefaultValue, ParamInfo, SubtypeInfo, EXT_STEREO, F32};
 use crate::device::object::State;
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -14,7 +14,7 @@ static PARAMS: [ParamInfo; 10] = {
             "fovy",
             F32,
             false,
-            Default::Floats(&[std::f32::consts::FRAC_PI_3]),
+            DefaultValue::Floats(&[std::f32::consts::FRAC_PI_3]),
             "vertical field of view in radians",
         )
         .range(0.01, 3.1),

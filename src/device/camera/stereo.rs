@@ -6,7 +6,7 @@
 
 use glam::{DVec3, UVec2};
 
-use crate::device::info::{p, Default, ParamInfo, F32};
+use crate::device::info::{p, DefaultValue, ParamInfo, F32};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
 use crate::geometry::{MatrixCamera, RayGen};
@@ -19,7 +19,7 @@ pub const fn params() -> [ParamInfo; 2] {
             "stereoMode",
             &[T::STRING],
             false,
-            Default::Text("none"),
+            DefaultValue::Text("none"),
             "none, left, right, sideBySide (left eye in the left half) or topBottom (left eye on top)",
         )
         .names(StereoMode::NAMES),
@@ -27,7 +27,7 @@ pub const fn params() -> [ParamInfo; 2] {
             "interpupillaryDistance",
             F32,
             false,
-            Default::Floats(&[0.0635]),
+            DefaultValue::Floats(&[0.0635]),
             "distance between the eyes of stereoMode, in world units",
         )
         .range(0.0, 1.0),

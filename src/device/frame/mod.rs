@@ -10,8 +10,8 @@ pub mod slot;
 use glam::UVec2;
 
 use super::info::{
-    p, Default, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR,
-    F32,
+    p, DefaultValue, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION, EXT_FRAME_DEADLINE,
+    EXT_FRAME_PAIR, F32,
 };
 use super::object::State;
 use super::read::Read;
@@ -35,17 +35,17 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "size",
             &[T::UINT32_VEC2],
             true,
-            Default::None,
+            DefaultValue::None,
             "width and height in pixels",
         ),
-        p("world", &[T::WORLD], true, Default::None, "what to render"),
-        p("camera", &[T::CAMERA], true, Default::None, "where from"),
-        p("renderer", &[T::RENDERER], true, Default::None, "how"),
+        p("world", &[T::WORLD], true, DefaultValue::None, "what to render"),
+        p("camera", &[T::CAMERA], true, DefaultValue::None, "where from"),
+        p("renderer", &[T::RENDERER], true, DefaultValue::None, "how"),
         p(
             "channel.color",
             &[T::DATA_TYPE],
             false,
-            Default::None,
+            DefaultValue::None,
             "UFIXED8_VEC4, UFIXED8_RGBA_SRGB or FLOAT32_VEC4 (unset: no color channel)",
         )
         .data_types(&[T::UFIXED8_VEC4, T::UFIXED8_RGBA_SRGB, T::FLOAT32_VEC4]),
@@ -53,7 +53,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "channel.depth",
             &[T::DATA_TYPE],
             false,
-            Default::None,
+            DefaultValue::None,
             "FLOAT32: distance from the camera to the first visible sample",
         )
         .data_types(&[T::FLOAT32]),
@@ -61,35 +61,35 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "frameCompletionCallback",
             &[T::FRAME_COMPLETION_CALLBACK],
             false,
-            Default::None,
+            DefaultValue::None,
             "called on the render thread when a frame is done",
         ),
         p(
             "frameCompletionCallbackUserData",
             &[T::VOID_POINTER],
             false,
-            Default::None,
+            DefaultValue::None,
             "first argument of the frame completion callback",
         ),
         p(
             "accumulation",
             &[T::BOOL],
             false,
-            Default::None,
+            DefaultValue::None,
             "accepted: a render is complete at once, and renders of unchanged inputs keep it (numSamples counts them)",
         ),
         p(
             "stereoPartner",
             &[T::FRAME],
             false,
-            Default::None,
+            DefaultValue::None,
             "the frame showing the other eye of this wall: rendered with this one in one re-projection pass, its image kept for its next render if its inputs are unchanged",
         ),
         p(
             "caveray.deadline",
             F32,
             false,
-            Default::Floats(&[0.0]),
+            DefaultValue::Floats(&[0.0]),
             "milliseconds after anariRenderFrame by which the frame is ready: the newest complete image warped to this render's camera, while the full render goes on in the background (0: no deadline, every render whole)",
         )
         .range(0.0, MAX_DEADLINE_MS),
@@ -97,7 +97,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "caveray.warp",
             &[T::STRING],
             false,
-            Default::Text("quad"),
+            DefaultValue::Text("quad"),
             "how a deadline frame brings the newest complete image to its camera: none, quad (the image as a plane through the scene's centre), grid (a mesh on the first-hit depth) or layers (emission-absorption layers re-marched)",
         )
         .names(WARP_NAMES),

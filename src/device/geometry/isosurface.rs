@@ -3,7 +3,7 @@
 //! secant refinement) rather than meshed, so the surface is as smooth as
 //! the field's filter. docs/autostereo.md has the caster.
 
-use crate::device::info::{p, Default, SubtypeInfo, EXT_ISOSURFACE};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_ISOSURFACE};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -22,14 +22,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "field",
             &[T::SPATIAL_FIELD],
             true,
-            Default::None,
+            DefaultValue::None,
             "the spatial field whose level sets are drawn",
         ),
         p(
             "isovalue",
             &[T::FLOAT32, T::ARRAY1D],
             true,
-            Default::None,
+            DefaultValue::None,
             "one iso-value, or an ARRAY1D of FLOAT32 (up to 16; the nearest surface shows)",
         )
         .elements(&[T::FLOAT32]),
@@ -37,7 +37,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "caveray.filter",
             &[T::STRING],
             false,
-            Default::Text("trilinear"),
+            DefaultValue::Text("trilinear"),
             "trilinear (the field's own values) or tricubic (the cubic B-spline: smooth normals and curvature, the data slightly smoothed)",
         )
         .names(&IsoFilter::NAMES),

@@ -4,7 +4,7 @@
 
 use glam::Mat4;
 
-use crate::device::info::{p, Default, SubtypeInfo, MAT4};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, MAT4};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -20,14 +20,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "group",
             &[T::GROUP],
             true,
-            Default::None,
+            DefaultValue::None,
             "the group placed",
         ),
         p(
             "transform",
             MAT4,
             false,
-            Default::Floats(&[
+            DefaultValue::Floats(&[
                 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
             ]),
             "object to world, column-major",

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use crate::device::info::{p, Default, SubtypeInfo, F32, VEC3};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, F32, VEC3};
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -19,21 +19,21 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "direction",
             VEC3,
             false,
-            Default::Floats(&[0.0, 0.0, -1.0]),
+            DefaultValue::Floats(&[0.0, 0.0, -1.0]),
             "direction the light travels in",
         ),
         p(
             "color",
             VEC3,
             false,
-            Default::Floats(&[1.0, 1.0, 1.0]),
+            DefaultValue::Floats(&[1.0, 1.0, 1.0]),
             "light color",
         ),
         p(
             "irradiance",
             F32,
             false,
-            Default::Floats(&[1.0]),
+            DefaultValue::Floats(&[1.0]),
             "strength: shaded samples are multiplied by color times irradiance",
         )
         .range(0.0, 10.0),

@@ -2,7 +2,7 @@
 //! curvature from the field's Hessian (blue concave, white flat, orange
 //! convex), the coloring that shows shape on a display without shadows.
 
-use crate::device::info::{p, Default, SubtypeInfo, EXT_CURVATURE, F32};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_CURVATURE, F32};
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -17,7 +17,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         "radius",
         F32,
         true,
-        Default::None,
+        DefaultValue::None,
         "the colors saturate at a curvature of 1/radius (world units): the radius of the roundest bumps of interest",
     )],
     commit: Some(commit),
@@ -28,7 +28,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     if !(radius.is_finite() && radius > 0.0) {
         return Err(format!("radius must be positive and finite, got {radius}"));
     }
-    Ok(Some(State::Material(Derived::Ready(
-        Coloring::Curvature { radius },
-    ))))
+    Ok(Some(State::Material(Derived::Ready(Coloring::Curvature {
+        radius,
+    }))))
 }

@@ -1,7 +1,7 @@
 //! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color.
 //! Surfaces are opaque here; an opacity below 1 is drawn opaque, said so.
 
-use crate::device::info::{p, Default, SubtypeInfo, EXT_MATTE, F32};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_MATTE, F32};
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -17,14 +17,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "color",
             &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING],
             false,
-            Default::Floats(&[0.8, 0.8, 0.8]),
+            DefaultValue::Floats(&[0.8, 0.8, 0.8]),
             "the surface's color, linear RGB in [0, 1] (a fourth component is ignored); an attribute name is drawn in the default color, as an isosurface has no attributes",
         ),
         p(
             "opacity",
             F32,
             false,
-            Default::Floats(&[1.0]),
+            DefaultValue::Floats(&[1.0]),
             "surfaces are drawn opaque; below 1 is warned about",
         )
         .range(0.0, 1.0),

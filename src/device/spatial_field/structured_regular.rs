@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::UVec3;
 
 use crate::device::array::Array;
-use crate::device::info::{p, Default, SubtypeInfo, VEC3};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, VEC3};
 use crate::device::object::{Derived, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -28,7 +28,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "data",
             &[T::ARRAY3D],
             true,
-            Default::None,
+            DefaultValue::None,
             "voxels: UFIXED8, UFIXED16, FIXED16, FLOAT32 or FLOAT64 (UINT8/UINT16 read as UFIXED)",
         )
         .elements(&[
@@ -44,21 +44,21 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "origin",
             VEC3,
             false,
-            Default::Floats(&[0.0, 0.0, 0.0]),
+            DefaultValue::Floats(&[0.0, 0.0, 0.0]),
             "position of voxel (0, 0, 0)",
         ),
         p(
             "spacing",
             VEC3,
             false,
-            Default::Floats(&[1.0, 1.0, 1.0]),
+            DefaultValue::Floats(&[1.0, 1.0, 1.0]),
             "distance between voxel centres",
         ),
         p(
             "filter",
             &[T::STRING],
             false,
-            Default::Text("linear"),
+            DefaultValue::Text("linear"),
             "linear (trilinear) or nearest (the nearest vertex); other names read as linear",
         )
         .names(&["linear", "nearest"]),

@@ -7,7 +7,7 @@ use glam::Vec4;
 
 use super::elements::{clamp_unit, colors, scalars, COLOR_ELEMENTS, COLOR_TYPES};
 use crate::device::array::Array;
-use crate::device::info::{p, Default, SubtypeInfo, F32};
+use crate::device::info::{p, DefaultValue, SubtypeInfo, F32};
 use crate::device::object::{Derived, ObjectRef, State};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
@@ -20,21 +20,21 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     extensions: &["ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D"],
     params: &[
         // Required in practice: `value`, or the older `field`.
-        p("value", &[T::SPATIAL_FIELD], false, Default::None, "the spatial field"),
-        p("field", &[T::SPATIAL_FIELD], false, Default::None,
+        p("value", &[T::SPATIAL_FIELD], false, DefaultValue::None, "the spatial field"),
+        p("field", &[T::SPATIAL_FIELD], false, DefaultValue::None,
           "the spatial field, under its pre-1.0 name (value wins if both are set)"),
         p("valueRange", &[T::FLOAT32_BOX1, T::FLOAT64_BOX1, T::FLOAT32_VEC2], false,
-          Default::Floats(&[0.0, 1.0]),
+          DefaultValue::Floats(&[0.0, 1.0]),
           "field values mapped to the first and last entries; lo == hi (a constant field) maps that value to the middle"),
         p("color", &[T::ARRAY1D, T::FLOAT32_VEC3, T::FLOAT32_VEC4], false,
-          Default::Floats(&[1.0, 1.0, 1.0]),
+          DefaultValue::Floats(&[1.0, 1.0, 1.0]),
           "ARRAY1D (FLOAT32, UFIXED8 or UFIXED16 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one color; out of [0, 1] clamped")
             .elements(COLOR_ELEMENTS),
-        p("opacity", &[T::ARRAY1D, T::FLOAT32], false, Default::Floats(&[1.0]),
+        p("opacity", &[T::ARRAY1D, T::FLOAT32], false, DefaultValue::Floats(&[1.0]),
           "ARRAY1D of FLOAT32 spread over valueRange, or one opacity; out of [0, 1] clamped")
             .elements(&[T::FLOAT32, T::FLOAT64])
             .range(0.0, 1.0),
-        p("unitDistance", F32, false, Default::Floats(&[1.0]),
+        p("unitDistance", F32, false, DefaultValue::Floats(&[1.0]),
           "world distance over which the opacities apply"),
     ],
     commit: Some(commit),

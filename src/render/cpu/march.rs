@@ -2,7 +2,7 @@ use glam::{IVec3, Vec3, Vec4};
 
 use super::packet::{PacketGrid, LANES};
 use super::sample::{correct, Field, Mixture};
-use crate::geometry::RayGen;
+use crate::geometry::{enter_exit, RayGen};
 use crate::render::empty_space::{Along, EmptySpace};
 use crate::render::march_plan::MarchPlan;
 use crate::render::settings::{Shading, DIRECTIONAL_STEPS, SHADOW_AMBIENT, SHADOW_STEPS};
@@ -234,30 +234,6 @@ struct OneVolume<'a> {
     space: Option<&'a EmptySpace>,
     /// Unit distances in a full step (the opacity correction's exponent).
     exponent: f32,
-}
-
-/// Where a ray enters and leaves the box, clipped to the camera's
-/// `(near, far)` (`near` >= 0).
-pub(crate) fn enter_exit(
-    o: Vec3,
-    d: Vec3,
-    lo: Vec3,
-    hi: Vec3,
-    (near, far): (f32, f32),
-) -> Option<(f32, f32)> {
-    let safe = |x: f32| {
-        if x.abs() < 1e-20 {
-            1e-20_f32.copysign(x)
-        } else {
-            x
-        }
-    };
-    let inv = Vec3::new(safe(d.x), safe(d.y), safe(d.z)).recip();
-    let ta = (lo - o) * inv;
-    let tb = (hi - o) * inv;
-    let t0 = ta.min(tb).max_element().max(near);
-    let t1 = ta.max(tb).min_element().min(far);
-    (t1 > t0).then_some((t0, t1))
 }
 
 /// The part of `(t0, t1)` on the kept side of every clip plane (n, d):

@@ -7,8 +7,6 @@ mod march;
 mod packet;
 mod sample;
 
-pub(crate) use march::enter_exit;
-
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 

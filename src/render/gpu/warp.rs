@@ -176,20 +176,14 @@ impl GpuWarp {
             }
         };
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(
-            &buffers.out_color,
-            0,
-            &buffers.color_read,
-            0,
-            16 * need.to,
-        );
+        encoder.copy_buffer_to_buffer(&buffers.out_color, 0, &buffers.color_read, 0, 16 * need.to);
         encoder.copy_buffer_to_buffer(&buffers.out_depth, 0, &buffers.depth_read, 0, 4 * need.to);
         ctx.queue.submit([encoder.finish()]);
-        let color = floats(&ctx.read(&buffers.color_read, 16 * need.to)?);
+        let read = floats(&ctx.read(&buffers.color_read, 16 * need.to)?);
         let depth = floats(&ctx.read(&buffers.depth_read, 4 * need.to)?);
         ctx.check()?;
         let mut color = filled(need.to as usize, Vec4::ZERO, "the warped color")?;
-        for (c, f) in color.iter_mut().zip(color.chunks_exact(4)) {
+        for (c, f) in color.iter_mut().zip(read.chunks_exact(4)) {
             *c = Vec4::from_slice(f);
         }
         Ok((Warped { size, color, depth }, ms))

@@ -6,8 +6,8 @@ use rayon::prelude::*;
 
 use super::field::{crossing_box, curvatures, IsoField, IsoFilter};
 use super::{curvature_color, Coloring, IsoSettings};
+use crate::geometry::enter_exit;
 use crate::geometry::RayGen;
-use crate::render::cpu::enter_exit;
 use crate::render::frame::filled;
 use crate::render::{Frame, FrameDesc, RenderError};
 use crate::scene::PlacedVolume;

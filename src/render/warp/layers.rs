@@ -8,8 +8,8 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::project::Projector;
 use super::{Source, WarpSettings};
+use crate::geometry::enter_exit;
 use crate::geometry::RayGen;
-use crate::render::cpu::enter_exit;
 
 /// The most layers a pixel may keep.
 pub const MAX_LAYERS: usize = 8;

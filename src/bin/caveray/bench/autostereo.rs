@@ -13,10 +13,10 @@ use std::time::Instant;
 
 use anari_library_caveray::cave::{MultiViewDisplay, ViewPattern};
 use anari_library_caveray::render::iso::{
-    render_display_by, subpixels_differing, values, Caster, IsoFilter, IsoSettings,
+    interleave, render_display_by, subpixels_differing, values, Caster, IsoFilter, IsoSettings,
     MultiViewMethod, Panel,
 };
-use anari_library_caveray::render::{ColorData, Frame, FrameDesc, GpuRenderer};
+use anari_library_caveray::render::{FrameDesc, GpuRenderer};
 use clap::Args;
 use glam::{UVec2, Vec3};
 use serde::Serialize;
@@ -219,7 +219,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                         naive_times.push(naive_ms);
                     }
                     let naive_ms = median(naive_times);
-                    let naive = interleave(&views, &panel);
+                    let naive = interleave(&views, &panel).map_err(runtime)?;
                     let method = |g: &mut GpuRenderer, m| -> Result<_, Failure> {
                         let mut times = Vec::new();
                         let mut frame = None;
@@ -316,27 +316,4 @@ fn with_views(
         pattern,
         ..base.clone()
     })
-}
-
-/// Each subpixel from its view's image (8-bit RGBA, lower-left first).
-fn interleave(views: &[Frame], panel: &Panel) -> Frame {
-    let (w, h) = (panel.size.x, panel.size.y);
-    let mut bytes = vec![255u8; (4 * w * h) as usize];
-    for y in 0..h {
-        for x in 0..w {
-            let i = (y * w + x) as usize;
-            for c in 0..3 {
-                let v = panel.view(x, y, c) as usize;
-                if let ColorData::Rgba8(b) = &views[v].color {
-                    bytes[4 * i + c] = b[4 * i + c];
-                }
-            }
-        }
-    }
-    Frame {
-        size: panel.size,
-        color: ColorData::Rgba8(bytes),
-        depth: None,
-        samples: 0,
-    }
 }
