@@ -86,9 +86,9 @@ entry_points! {
         [0] completeDestructor: _ = ops::library_complete_destructor(library: ANARILibrary) -> ();
         // anariUnloadLibrary calls the deleting destructor, then dlcloses.
         [1] deletingDestructor: anariUnloadLibrary = ops::unload_library(library: ANARILibrary) -> ();
-        [2] newDevice: anariNewDevice = ops::new_device(
+        [2] newDevice: anariNewDevice = made::new_device(
             library: ANARILibrary, deviceSubtype: *const c_char) -> ANARIDevice;
-        [3] newInitializedDevice: anariNewInitializedDevice = ops::new_initialized_device(
+        [3] newInitializedDevice: anariNewInitializedDevice = made::new_initialized_device(
             library: ANARILibrary, deviceSubtype: *const c_char,
             parameters: *const ANARIParameterValue) -> ANARIDevice;
         [4] getDeviceExtensions: anariGetDeviceExtensions = ops::get_device_extensions(
@@ -199,7 +199,7 @@ entry_points! {
     }
 
     exports {
-        anariLoadLibrary = ops::load_library(
+        anariLoadLibrary = made::load_library(
             name: *const c_char, statusCallback: ANARIStatusCallback,
             statusCallbackUserData: *const c_void) -> ANARILibrary;
         caverayPinholeFromScreen = helpers::pinhole_from_screen(
@@ -217,8 +217,54 @@ entry_points! {
     // What libanari's anariLoadLibrary looks up after dlopen; no header
     // declares it.
     unchecked {
-        anari_library_caveray_new_library = ops::new_library(
+        anari_library_caveray_new_library = made::new_library(
             dl_handle: *mut c_void, status_callback: ANARIStatusCallback,
             status_user: *const c_void) -> *mut c_void;
+    }
+}
+
+/// The entry points that make handles. A handle points at its loader
+/// table, so these sit beside the tables and hand them to `ops`.
+mod made {
+    use std::ffi::{c_char, c_void};
+
+    use super::super::handles::Tables;
+    use super::super::ops;
+    use super::super::sys::*;
+    use super::{DEVICE_TABLE, LIBRARY_TABLE};
+
+    fn tables() -> Tables {
+        Tables {
+            library: std::ptr::from_ref(&LIBRARY_TABLE).cast(),
+            device: std::ptr::from_ref(&DEVICE_TABLE).cast(),
+        }
+    }
+
+    pub unsafe extern "C" fn load_library(
+        name: *const c_char,
+        status_callback: ANARIStatusCallback,
+        user: *const c_void,
+    ) -> ANARILibrary {
+        ops::load_library(name, status_callback, user, tables())
+    }
+
+    pub unsafe extern "C" fn new_library(
+        dl_handle: *mut c_void,
+        status_callback: ANARIStatusCallback,
+        user: *const c_void,
+    ) -> *mut c_void {
+        ops::new_library(dl_handle, status_callback, user, tables())
+    }
+
+    pub unsafe extern "C" fn new_device(lib: ANARILibrary, subtype: *const c_char) -> ANARIDevice {
+        ops::new_device(lib, subtype, tables())
+    }
+
+    pub unsafe extern "C" fn new_initialized_device(
+        lib: ANARILibrary,
+        subtype: *const c_char,
+        params: *const ANARIParameterValue,
+    ) -> ANARIDevice {
+        ops::new_initialized_device(lib, subtype, params, tables())
     }
 }

@@ -8,7 +8,6 @@ use std::ffi::c_void;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use super::entry_points::{DeviceTable, LibraryTable, DEVICE_TABLE, LIBRARY_TABLE};
 use super::status::{emit, Callback};
 use super::sys;
 use crate::device::{Device, Reporter, Status};
@@ -16,7 +15,7 @@ use crate::device::{Device, Reporter, Status};
 /// `{vtable*, dlhandle, statusCB, statusUserPtr}`: 32 bytes.
 #[repr(C)]
 pub struct LibraryHandle {
-    table: *const LibraryTable,
+    table: *const c_void,
     pub dl_handle: *mut c_void,
     pub status: sys::ANARIStatusCallback,
     pub status_user: *const c_void,
@@ -25,7 +24,7 @@ pub struct LibraryHandle {
 /// `{vtable*, statusCB, statusUserPtr}` (24 bytes), then our state.
 #[repr(C)]
 pub struct DeviceHandle {
-    table: *const DeviceTable,
+    table: *const c_void,
     pub default_status: sys::ANARIStatusCallback,
     pub default_status_user: *const c_void,
     refs: AtomicU32,
@@ -39,6 +38,14 @@ pub struct DeviceHandle {
 unsafe impl Send for DeviceHandle {}
 unsafe impl Sync for DeviceHandle {}
 
+/// The loader tables a new handle points at. `entry_points` owns them and
+/// hands them down, so this file needs nothing of it.
+#[derive(Clone, Copy)]
+pub struct Tables {
+    pub library: *const c_void,
+    pub device: *const c_void,
+}
+
 /// Live libraries and devices, so that a stale or foreign pointer is
 /// reported instead of dereferenced.
 static LIBRARIES: Mutex<Option<HashSet<usize>>> = Mutex::new(None);
@@ -49,9 +56,9 @@ fn registry(set: &Mutex<Option<HashSet<usize>>>) -> MutexGuard<'_, Option<HashSe
 }
 
 impl LibraryHandle {
-    pub fn create(dl_handle: *mut c_void, cb: Callback) -> *mut LibraryHandle {
+    pub fn create(tables: Tables, dl_handle: *mut c_void, cb: Callback) -> *mut LibraryHandle {
         let lib = Box::into_raw(Box::new(LibraryHandle {
-            table: &LIBRARY_TABLE,
+            table: tables.library,
             dl_handle,
             status: cb.function,
             status_user: cb.user as *const c_void,
@@ -92,7 +99,7 @@ impl LibraryHandle {
 }
 
 impl DeviceHandle {
-    pub fn create(library_callback: Callback) -> *mut DeviceHandle {
+    pub fn create(tables: Tables, library_callback: Callback) -> *mut DeviceHandle {
         let callback = Arc::new(Mutex::new(library_callback));
         let handle = Box::into_raw(Box::new_uninit());
         let reporter: Reporter = {
@@ -106,7 +113,7 @@ impl DeviceHandle {
         // SAFETY: `handle` is a fresh allocation of the right layout.
         unsafe {
             (*handle).write(DeviceHandle {
-                table: &DEVICE_TABLE,
+                table: tables.device,
                 default_status: library_callback.function,
                 default_status_user: library_callback.user as *const c_void,
                 refs: AtomicU32::new(1),

@@ -8,7 +8,7 @@
 use std::ffi::{c_char, c_int, c_void};
 
 use super::convert::{input, string};
-use super::handles::{DeviceHandle, DeviceRef, LibraryHandle};
+use super::handles::{DeviceHandle, DeviceRef, LibraryHandle, Tables};
 use super::info;
 use super::status::{call_error, emit, guard, set_library_callback, Callback};
 use super::sys::*;
@@ -87,10 +87,11 @@ fn device_error(device: &mut Device, code: StatusCode, message: String) {
 
 // ---- library ----
 
-pub unsafe extern "C" fn load_library(
+pub unsafe fn load_library(
     name: *const c_char,
     status_callback: ANARIStatusCallback,
     user: *const c_void,
+    tables: Tables,
 ) -> ANARILibrary {
     guard("anariLoadLibrary", std::ptr::null_mut(), || {
         let cb = Callback {
@@ -123,14 +124,15 @@ pub unsafe extern "C" fn load_library(
             );
             return std::ptr::null_mut();
         }
-        LibraryHandle::create(std::ptr::null_mut(), cb).cast()
+        LibraryHandle::create(tables, std::ptr::null_mut(), cb).cast()
     })
 }
 
-pub unsafe extern "C" fn new_library(
+pub unsafe fn new_library(
     dl_handle: *mut c_void,
     status_callback: ANARIStatusCallback,
     user: *const c_void,
+    tables: Tables,
 ) -> *mut c_void {
     guard(
         "anari_library_caveray_new_library",
@@ -141,7 +143,7 @@ pub unsafe extern "C" fn new_library(
                 user: user as usize,
             };
             set_library_callback(cb);
-            LibraryHandle::create(dl_handle, cb).cast()
+            LibraryHandle::create(tables, dl_handle, cb).cast()
         },
     )
 }
@@ -229,23 +231,24 @@ fn check_device_subtype(l: &LibraryHandle, call: &str, subtype: *const c_char) -
     }
 }
 
-pub unsafe extern "C" fn new_device(lib: ANARILibrary, subtype: *const c_char) -> ANARIDevice {
+pub unsafe fn new_device(lib: ANARILibrary, subtype: *const c_char, tables: Tables) -> ANARIDevice {
     guard("anariNewDevice", std::ptr::null_mut(), || {
         match library(lib, "anariNewDevice") {
             Some(l) if check_device_subtype(l, "anariNewDevice", subtype) => {
-                DeviceHandle::create(l.callback()).cast()
+                DeviceHandle::create(tables, l.callback()).cast()
             }
             _ => std::ptr::null_mut(),
         }
     })
 }
 
-pub unsafe extern "C" fn new_initialized_device(
+pub unsafe fn new_initialized_device(
     lib: ANARILibrary,
     subtype: *const c_char,
     params: *const ANARIParameterValue,
+    tables: Tables,
 ) -> ANARIDevice {
-    let dev = new_device(lib, subtype);
+    let dev = new_device(lib, subtype, tables);
     if dev.is_null() || params.is_null() {
         return dev;
     }
