@@ -1,4 +1,4 @@
-//! The CT head's bone isosurface (the CPU reference of issue 17), shaded
+//! The CT head's bone isosurface (the CPU reference caster), shaded
 //! flat and colored by curvature: out/iso_flat.png, out/iso_curvature.png.
 //! Run: cargo run --release --example isosurface [VOLUMES_TOML]
 

@@ -1,4 +1,4 @@
-//! Multi-view displays (issue 17, the display model): the shipped 8-view
+//! Multi-view displays (the display model): the shipped 8-view
 //! lenticular monitor assigns subpixels to views as a hand-computed table
 //! says, its pattern repeats every 5 pixels across and 8 rows up, every
 //! view gets its share, a [table] gives the same display as the lens that

@@ -1,5 +1,5 @@
 //! The display image of a multi-view display, each subpixel from its own
-//! eye (issue 17): one ray a subpixel gives exactly the naive interleaving
+//! eye: one ray a subpixel gives exactly the naive interleaving
 //! of separately rendered views, at any number of views; the geometric +
 //! spectral passes match it but for a stated share of subpixels, for
 //! little more than one view's field evaluations, while the naive cost

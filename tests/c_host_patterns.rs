@@ -420,7 +420,7 @@ fn stereo_side_by_side_through_the_c_api_holds_both_eyes() {
     assert_eq!(half(&pair, 0).color, left.color);
     assert_eq!(half(&pair, 48).color, right.color);
     // On the GPU, one re-projection pass: the left eye as its own pass,
-    // the right within the paper's DSSIM bound.
+    // the right within Buchacher & Erdt's DSSIM bound.
     let (left, right, pair) = stereo_pairs("gpu", false);
     let s = ssim(&half(&pair, 0), &left).unwrap();
     let d = anari_library_caveray::render::dssim(&half(&pair, 48), &right).unwrap();

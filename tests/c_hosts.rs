@@ -40,7 +40,7 @@ fn c_host_renders_a_cave_wall_with_each_camera() {
     render_wall(&dir, &wall_scene(&dir, 96, phantom(), false), false);
 }
 
-/// The issue's bar: a C program renders a CT volume through the matrix
+/// What a CAVE host needs most: a C program renders a CT volume through the matrix
 /// camera (and the other two). Needs the shared data (a failure in CI).
 #[test]
 fn c_host_renders_a_ct_volume() {
@@ -440,7 +440,7 @@ fn opencover_style_eyes_as_two_frames_come_from_one_pass() {
     let image = |name: &str| read_rgba(&dir.join(format!("{name}.rgba")), size);
     let (left, right) = (image("alone_left"), image("alone_right"));
     // The first eye is the image it renders alone, byte for byte; the
-    // second within the re-projection's bound (issue 5: DSSIM 0.02).
+    // second within the re-projection's bound (DSSIM 0.02).
     assert_eq!(image("paired_left").color, left.color);
     assert_eq!(image("named_left").color, left.color);
     let unmoved = dssim(&left, &right).unwrap();
@@ -468,10 +468,10 @@ fn opencover_style_paired_frames_are_clean_under_valgrind() {
     assert_eq!(image("named_right").color, image("alone_right").color);
 }
 
-/// Inputs that used to abort or hang the host (tests/c/budgets.c): a
-/// 100000 x 100000 frame, step factors of 1e-6 and 1e-30, eyes at
-/// infinity and NaN, an array of strings, and releasing a frame or the
-/// device while a minutes-long render runs.
+/// Inputs that would abort or hang the host without the budgets
+/// (tests/c/budgets.c): a 100000 x 100000 frame, step factors of 1e-6 and
+/// 1e-30, eyes at infinity and NaN, an array of strings, and releasing a
+/// frame or the device while a minutes-long render runs.
 fn budgets(valgrind: bool) {
     let dir = scratch(if valgrind {
         "c_budgets_valgrind"

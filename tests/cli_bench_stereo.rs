@@ -1,5 +1,5 @@
 //! `caveray bench stereo` end to end on a tiny setup: every measurement
-//! the paper reports is in the JSON, the plot and heat maps are written,
+//! Buchacher & Erdt report is in the JSON, the plot and heat maps are written,
 //! and bad arguments are one-line errors.
 
 mod common;

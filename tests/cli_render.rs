@@ -211,7 +211,7 @@ fn bad_arguments_are_one_line_errors() {
             "expected rgba16f or rgba32f",
         ),
         (vec!["--stereo", "anaglyph"], "invalid value 'anaglyph'"),
-        // Inputs that used to hang, abort or read forever.
+        // Inputs that would hang, abort or read forever without the budgets.
         (
             vec!["--step-factor", "1e-30"],
             "expected a number from 0.015625 to 64, got '1e-30'",

@@ -422,7 +422,7 @@ fn bad_surfaces_are_reported_and_leave_the_device_usable() {
     assert!(e.iter().any(|m| m.contains("warps volume images")), "{e:?}");
 }
 
-/// The display the multi-view tests use: 8 views, the paper's lens.
+/// The display the multi-view tests use: 8 views, the shipped monitor's lens.
 fn display(size: UVec2) -> MultiViewDisplay {
     MultiViewDisplay {
         name: "test".into(),

@@ -1,4 +1,4 @@
-//! Isosurface ray casting, the CPU reference (issue 17): on a ball of
+//! Isosurface ray casting, the CPU reference: on a ball of
 //! known radius the first crossing lies on the sphere, the normals are
 //! radial, the principal curvatures are 1/radius from the tricubic
 //! B-spline's Hessian, the secant steps put the hit far closer than the

@@ -133,8 +133,8 @@ fn bad_settings_and_frames_are_errors_on_both_renderers() {
             FrameDesc::new(UVec2::new(0, 4)),
             "frame size must be at least 1x1, got 0x4",
         ),
-        // Refused before anything is allocated: it used to abort the host
-        // ("memory allocation of 160000000000 bytes failed").
+        // Refused before anything is allocated: allocating it would abort
+        // the host ("memory allocation of 160000000000 bytes failed").
         (
             ok.clone(),
             FrameDesc::new(UVec2::new(100_000, 100_000)),

@@ -496,7 +496,7 @@ fn wall_names_cannot_leave_the_output_folder_or_take_the_contact_sheets() {
 
 #[test]
 fn characters_of_several_bytes_near_an_equals_sign_are_located() {
-    // The locator used to slice inside the character and panic.
+    // Slicing the text inside the character would panic.
     let text = GOOD.replacen(
         "head = [0, 1.7, 0]",
         "head = [0, 1.7, 0]\neye_offset = { «x» = 1 }",

@@ -35,7 +35,7 @@ struct Pair {
     size: UVec2,
 }
 
-/// The paper's HMD protocol at `width`, the sphere spanning `span` pixels.
+/// Buchacher & Erdt's HMD protocol at `width`, the sphere spanning `span` pixels.
 fn hmd(width: u32, span: f64, angle: f64) -> Pair {
     let (left, right) = HmdStereo::protocol(width, span).eyes(angle).unwrap();
     Pair {

@@ -25,7 +25,7 @@ fn paper_numbers() {
     let a = 55f64.to_radians();
     let h = minimal_focal_length(1.0, 0.065, 768.0, 32.0, a);
     assert!((h - 0.446486).abs() < 1e-6, "h = {h}");
-    // The paper reports h = 0.435 m, which d_p = 33 reproduces.
+    // Buchacher & Erdt report h = 0.435 m, which d_p = 33 reproduces.
     let h33 = minimal_focal_length(1.0, 0.065, 768.0, 33.0, a);
     assert!((h33 - 0.435).abs() < 5e-4, "h(33) = {h33}");
     // Back again: s = 768 / (2 h tan a) = 768 / 1.275293 = 602.21 px per metre,
@@ -57,7 +57,7 @@ fn layers_cover_the_longest_span() {
     );
     assert_eq!(HmdStereo::paper(31.5).plan().unwrap().layers, 33);
     assert_eq!(HmdStereo::paper_for_layers(32), HmdStereo::paper(31.0));
-    // The paper's d_p = 32 with 32 layers would let two rays share texels
+    // Buchacher & Erdt's d_p = 32 with 32 layers would let two rays share texels
     // at the sphere's extremes; the planner asks for 33.
     let setup = HmdStereo::paper(32.0);
     match setup.plan_with(32) {

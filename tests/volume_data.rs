@@ -385,7 +385,7 @@ fn sizes_that_overflow_or_exceed_the_budget_are_refused_before_reading() {
     let dir = scratch("rawhuge");
     let empty = dir.join("empty.raw");
     std::fs::write(&empty, []).unwrap();
-    // 2^64 bytes wrapped to 0 once; now it is refused by its voxel count.
+    // 2^64 bytes would wrap to 0 as a byte count: refused by its voxel count.
     for dims in [
         UVec3::splat(u32::MAX),
         UVec3::new(1 << 16, 1 << 16, 1 << 16),

@@ -72,7 +72,7 @@ pub fn marschner_lobb(n: u32) -> StructuredVolume {
     })
 }
 
-/// A volume filled with 1.0 everywhere: the paper's solid box, whose
+/// A volume filled with 1.0 everywhere: a solid box, whose
 /// transmittance is known in closed form.
 pub fn solid_box(n: u32) -> StructuredVolume {
     sampled(n, |_| 1.0)

@@ -7,7 +7,7 @@ use glam::{UVec2, Vec3, Vec4};
 
 use super::RenderError;
 
-/// Most directions `directional:N` may ask for (the paper used up to 16).
+/// Most directions `directional:N` may ask for (Buchacher & Erdt used up to 16).
 pub const MAX_DIRECTIONS: u32 = 64;
 
 /// Most clip planes a renderer takes.
@@ -49,7 +49,7 @@ impl ClipPlanes {
     }
 }
 
-/// How each sample is lit, as in the paper's benchmark ladder.
+/// How each sample is lit, as in Buchacher & Erdt's benchmark ladder.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Shading {
     /// Transfer-function color only.
@@ -60,7 +60,7 @@ pub enum Shading {
     /// Ambient occlusion from 14 samples on a sphere.
     Ao,
     ShadowsAo,
-    /// The paper's parametrised shading: N random directions, each traced
+    /// Buchacher & Erdt's parametrised shading: N random directions, each traced
     /// up to 4 steps (N = 0 adds no samples and equals `None`).
     Directional(u32),
 }

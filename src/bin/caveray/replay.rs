@@ -1,4 +1,4 @@
-//! `caveray replay`: the thesis' evaluation of asynchronous rendering with
+//! `caveray replay`: Buchacher's thesis' evaluation of asynchronous rendering with
 //! image warping (its Figure 18). A display refreshes at --hz along a head
 //! path while the ray caster renders cells within each refresh's budget;
 //! every refresh shows the newest complete image warped to that instant's

@@ -1,4 +1,4 @@
-//! Isosurface ray casting (issue 17; the CPU reference): the first
+//! Isosurface ray casting (the CPU reference): the first
 //! crossing of the iso-value along each ray, refined by secant steps, with
 //! trilinear or tricubic B-spline filtering, the gradient for the normal
 //! and the Hessian for the principal curvatures; Blinn-Phong shading, in a

@@ -1,5 +1,5 @@
 //! The display image of a multi-view display, every subpixel from its own
-//! eye (issue 17): the naive way (every view rendered, then interleaved),
+//! eye: the naive way (every view rendered, then interleaved),
 //! the per-subpixel way (one ray per subpixel, from its eye: the same
 //! image, whatever the number of views), and a geometric pass plus a
 //! spectral pass, which casts one channel's ray in full and finds the

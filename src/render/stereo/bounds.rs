@@ -11,7 +11,7 @@ use crate::scene::Scene;
 /// What the scene occupies.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bounds {
-    /// The planner's classic bound (the paper's and the thesis'), taken
+    /// The planner's classic bound (Buchacher & Erdt's), taken
     /// whole.
     Sphere { centre: DVec3, radius: f64 },
     /// The volume's box, clipped to the views.

@@ -1,4 +1,4 @@
-//! The paper's HMD views as OpenGL matrices: two parallel, symmetric
+//! Buchacher & Erdt's HMD views as OpenGL matrices: two parallel, symmetric
 //! frustums whose eyes sit e apart, orbiting a bounding sphere centred at
 //! the origin whose near side touches the image plane.
 

@@ -11,7 +11,7 @@ use thiserror::Error;
 /// Texel format of the re-projection layers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum LayerFormat {
-    /// The paper's choice: half the memory, color to about 3 digits.
+    /// Buchacher & Erdt's choice: half the memory, color to about 3 digits.
     #[default]
     Rgba16F,
     /// Exact: with e = 0 the right image equals the left bit for bit.
@@ -64,7 +64,7 @@ pub fn layers_for(span_px: f64) -> u32 {
 }
 
 /// Bytes of `layers` layers of `size` texels: `M = w h L b`, with `b` the
-/// bytes of one texel (the paper's `w^2 L bytes channels` when square).
+/// bytes of one texel (Buchacher & Erdt's `w^2 L bytes channels` when square).
 pub fn layer_memory(size: UVec2, layers: u32, format: LayerFormat) -> u64 {
     u64::from(size.x) * u64::from(size.y) * u64::from(layers) * format.bytes_per_texel()
 }

@@ -1,7 +1,7 @@
 //! Single-pass stereo by re-projection layers (Buchacher & Erdt, EGSR
 //! 2017): the left eye is ray cast, its ray segments are re-projected into
 //! the right eye's image through a texture array of layers, and a
-//! compositing pass blends them. `plan` sizes the layers for the paper's
+//! compositing pass blends them. `plan` sizes the layers for their
 //! setup, `epipolar` plans any pair of views from their matrices
 //! (docs/reprojection_stereo.md), `layers` holds what the layers are and
 //! cost, `reproject` turns a plan into what the GPU pass needs; the passes

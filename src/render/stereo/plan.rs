@@ -1,4 +1,4 @@
-//! The re-projection planner for the paper's HMD-style setup: two
+//! The re-projection planner for Buchacher & Erdt's HMD-style setup: two
 //! coplanar image planes at focal length h, eyes e apart, a volume inside
 //! a bounding sphere of radius r whose near side touches the image plane.
 //!
@@ -23,7 +23,7 @@ pub enum StereoError {
     Layers(#[from] LayerCountError),
 }
 
-/// The paper's protocol (docs/reprojection_stereo.md): image width and
+/// Buchacher & Erdt's protocol (docs/reprojection_stereo.md): image width and
 /// height, full horizontal field of view, eye distance, bounding radius of
 /// the volume, re-projection layers, largest re-projected span (which
 /// fixes the focal length), and views in the 360 degree turn about y.
@@ -70,7 +70,7 @@ pub fn minimal_focal_length(
     -radius + (radius * radius + eye_distance * radius * width / (span_px * half_fov.tan())).sqrt()
 }
 
-/// The paper's setup, in metres and radians.
+/// Buchacher & Erdt's setup, in metres and radians.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HmdStereo {
     /// Image width (and height) in pixels.
@@ -96,19 +96,19 @@ pub struct LayerPlan {
 }
 
 impl HmdStereo {
-    /// The paper's protocol with the shortest focal length that `layers`
+    /// Buchacher & Erdt's protocol with the shortest focal length that `layers`
     /// layers allow: a span of `layers - 1` pixels.
     pub fn paper_for_layers(layers: u32) -> Self {
         Self::paper(f64::from(layers.max(2) - 1))
     }
 
-    /// The paper's protocol: 768^2, 2a = 110 degrees, e = 0.065 m, r = 1 m,
+    /// Buchacher & Erdt's protocol: 768^2, 2a = 110 degrees, e = 0.065 m, r = 1 m,
     /// and the focal length at which the sphere spans `span_px` pixels.
     pub fn paper(span_px: f64) -> Self {
         Self::protocol(paper::WIDTH, span_px)
     }
 
-    /// The paper's protocol at another image width.
+    /// Buchacher & Erdt's protocol at another image width.
     pub fn protocol(width: u32, span_px: f64) -> Self {
         let (fov, e, r) = (
             paper::FOV_DEGREES.to_radians(),

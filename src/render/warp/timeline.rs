@@ -1,4 +1,4 @@
-//! The display timeline of the thesis' evaluation (its Figure 18): a
+//! The display timeline of the evaluation in Buchacher's thesis (its Figure 18): a
 //! display refreshing at `hz` while the ray caster renders cells within
 //! each refresh's budget; at every refresh the newest complete image is
 //! warped to the view of that instant and compared with the image a

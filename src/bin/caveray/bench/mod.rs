@@ -13,11 +13,11 @@ use crate::Failure;
 
 #[derive(Subcommand)]
 pub enum BenchCommand {
-    /// The paper's ray-casting setup: 768^2, 110 degree field of view,
+    /// Buchacher & Erdt's ray-casting setup: 768^2, 110 degree field of view,
     /// volume scaled to a 1 m bounding radius, 360 degrees about y.
     Raycast(raycast::RaycastArgs),
     /// Single-pass stereo by re-projection against rendering both eyes,
-    /// by the paper's protocol (writes JSON, an SVG plot and heat maps).
+    /// by Buchacher & Erdt's protocol (writes JSON, an SVG plot and heat maps).
     Stereo(stereo::StereoBenchArgs),
     /// Single-pass stereo on every wall of a CAVE along a head path: the
     /// share of wall-frames re-projected, V and DSSIM per wall (writes

@@ -1,4 +1,4 @@
-//! `caveray bench raycast`: the paper's ray-casting setup (its protocol
+//! `caveray bench raycast`: Buchacher & Erdt's ray-casting setup (its protocol
 //! constants and focal length come from the stereo planner) on the GPU and
 //! the CPU, over volumes, shading modes and empty-space skipping on and
 //! off, optionally beside the scalar CPU reference marching every step.
@@ -52,7 +52,7 @@ pub struct RaycastArgs {
     #[arg(long, default_value = "on", value_delimiter = ',', value_parser = on_off)]
     skipping: Vec<bool>,
     /// Also time the scalar CPU reference marching every step (the CPU
-    /// renderer before packets and skipping) on the CPU's views.
+    /// renderer without packets or skipping) on the CPU's views.
     #[arg(long)]
     cpu_reference: bool,
     /// GPU sampling modes, comma-separated: exact, filtered; with both,

@@ -1,4 +1,4 @@
-//! `caveray bench stereo`: the paper's protocol for single-pass stereo by
+//! `caveray bench stereo`: Buchacher & Erdt's protocol for single-pass stereo by
 //! re-projection (Buchacher & Erdt 2017; docs/reprojection_stereo.md). Per data
 //! set and shading level, over a rotation about y: the left eye alone
 //! (T_l), the right eye alone (T_r), the left eye with re-projection plus
@@ -32,7 +32,7 @@ use crate::report::{write_json, Adapter, Machine, RendererInfo};
 use crate::scene::VolumeArgs;
 use crate::Failure;
 
-/// The paper's data sets, as named in volumes.toml.
+/// Buchacher & Erdt's data sets, as named in volumes.toml.
 const PAPER_VOLUMES: &str = "cthead,dti,engine,vis_male,bonsai";
 /// DSSIM shown white in the heat maps.
 const HEATMAP_FULL_SCALE: f64 = 0.05;
@@ -40,7 +40,7 @@ const HEATMAP_FULL_SCALE: f64 = 0.05;
 #[derive(Args)]
 pub struct StereoBenchArgs {
     /// Volumes, comma-separated (names from volumes.toml, phantom[:N], ...).
-    /// Default: the paper's cthead, dti, engine, vis_male, bonsai.
+    /// Default: Buchacher & Erdt's cthead, dti, engine, vis_male, bonsai.
     #[command(flatten)]
     volume: VolumeArgs,
     /// Image width and height in pixels.
@@ -50,7 +50,7 @@ pub struct StereoBenchArgs {
     /// the 1 m bounding sphere fits them.
     #[arg(long, default_value_t = paper::LAYERS)]
     layers: u32,
-    /// Shading levels, comma-separated; the paper's ladder is none and 1,
+    /// Shading levels, comma-separated; Buchacher & Erdt's ladder is none and 1,
     /// 4 and 16 directions (0, 4, 16, 64 extra samples per sample).
     #[arg(
         long,
@@ -62,7 +62,7 @@ pub struct StereoBenchArgs {
     /// Views in the 360 degree rotation about y.
     #[arg(long, default_value_t = paper::VIEWS)]
     steps: u32,
-    /// Texel format of the layers: rgba16f (the paper's) or rgba32f.
+    /// Texel format of the layers: rgba16f (Buchacher & Erdt's) or rgba32f.
     #[arg(long, default_value = "rgba16f")]
     layer_format: LayerFormat,
     /// Where to write the results; the plot (SVG) and the DSSIM heat maps
@@ -370,7 +370,7 @@ pub(super) fn heatmap(two_pass: &Frame, reprojected: &Frame, path: &Path) -> Res
 }
 
 /// V in percent against extra samples per sample, a line per data set
-/// (the paper's Figure 10).
+/// (Buchacher & Erdt's Figure 10).
 fn speedup_chart(report: &StereoReport) -> String {
     let series: Vec<Series> = report
         .datasets
