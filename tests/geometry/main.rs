@@ -6,6 +6,5 @@ mod common;
 
 mod contact_sheets;
 mod displays;
-mod errors;
 mod invariants;
 mod rigs;

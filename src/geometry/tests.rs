@@ -1,6 +1,6 @@
 //! Degenerate input gives an error that says what is wrong, never NaN.
 
-use anari_library_caveray::geometry::{
+use crate::geometry::{
     frustum, pinhole_from_matrices, GeometryError, ImageRegion, MatrixCamera, OffAxisCamera,
     OffAxisProjection, PinholeCamera, Screen,
 };
@@ -141,7 +141,7 @@ fn non_perspective_matrices_are_rejected() {
         0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -0.2, 0.0, 0.0, 0.0, -1.0, 1.0,
     ]);
     let cam = MatrixCamera::new(view, ortho).unwrap();
-    let r = anari_library_caveray::geometry::PrimaryRays::ray_through(&cam, DVec2::splat(0.5));
+    let r = crate::geometry::PrimaryRays::ray_through(&cam, DVec2::splat(0.5));
     assert!(r.direction.is_finite() && r.origin.is_finite());
     let err = pinhole_from_matrices(view, ortho).unwrap_err();
     assert_eq!(
@@ -205,7 +205,7 @@ fn orientation_does_not_matter_to_the_pinhole_basis() {
         ImageRegion::FULL,
     )
     .unwrap();
-    use anari_library_caveray::geometry::PrimaryRays;
+    use crate::geometry::PrimaryRays;
     for s in [DVec2::ZERO, DVec2::ONE, DVec2::new(0.2, 0.9)] {
         let (a, b) = (
             tilted.ray_through(s).direction,
