@@ -1,5 +1,5 @@
 //! What each fuzz target feeds its input to. Kept apart from libFuzzer so
-//! that `tests/fuzz_corpus.rs` replays the committed corpus and every
+//! that `tests/fuzz_corpus/main.rs` replays the committed corpus and every
 //! input that once crashed through the same code on stable Rust.
 //! Every function here must return, whatever its input: a panic, abort,
 //! hang or out-of-memory is a bug in caveray.

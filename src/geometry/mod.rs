@@ -22,6 +22,9 @@ mod screen;
 mod slab;
 mod units;
 
+#[cfg(test)]
+mod tests;
+
 pub use display::{MultiViewDisplay, ViewPattern, MAX_VIEWS};
 pub use error::GeometryError;
 pub use from_matrices::{pinhole_from_matrices, RecoveredPinhole};

@@ -1,4 +1,4 @@
-//! Building and running the C host programs of `tests/c/` against the
+//! Building and running the C host programs of `tests/capi/c/` against the
 //! library cargo built, and the scene they render.
 
 use std::path::{Path, PathBuf};

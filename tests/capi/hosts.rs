@@ -1,0 +1,504 @@
+//! C and C++ host programs (tests/capi/c/) built with the system compiler
+//! against include/ and the library cargo built: a CAVE wall through three
+//! cameras, every misuse the C API must survive, and the ANARI SDK
+//! loader's virtual dispatch. The first two also run under valgrind
+//! memcheck when it is installed.
+
+use crate::common;
+
+use anari_library_caveray::data::{preset, Manifest};
+use anari_library_caveray::render::ssim;
+use common::c::{
+    compile, describe, phantom, read_rgba, run, scratch, valgrind_available, wall_scene, WallScene,
+};
+use common::{missing, shared_manifest};
+
+/// Test (a): each camera's image from the C API matches the Rust API's.
+fn render_wall(dir: &std::path::Path, scene: &WallScene, valgrind: bool) {
+    let program = dir.join("render_wall");
+    compile(&["tests/capi/c/render_wall.c"], &program, false, true);
+    let output = run(&program, &[&scene.file, dir], valgrind);
+    assert!(
+        output.status.success(),
+        "render_wall: {}",
+        describe(&output)
+    );
+    for camera in ["perspective", "matrix", "offAxis"] {
+        let image = read_rgba(&dir.join(format!("{camera}.rgba")), scene.size);
+        let s = ssim(&image, &scene.reference).unwrap();
+        eprintln!("{camera}: SSIM {s:.6} against the Rust API");
+        assert!(
+            s > 0.98,
+            "{camera} camera through the C API: SSIM {s:.4} against the Rust API's image"
+        );
+    }
+}
+
+#[test]
+fn c_host_renders_a_cave_wall_with_each_camera() {
+    let dir = scratch("c_render_wall");
+    render_wall(&dir, &wall_scene(&dir, 96, phantom(), false), false);
+}
+
+/// What a CAVE host needs most: a C program renders a CT volume through the matrix
+/// camera (and the other two). Needs the shared data (a failure in CI).
+#[test]
+fn c_host_renders_a_ct_volume() {
+    let loaded = Manifest::locate(None, &[shared_manifest()]).and_then(|m| m.load_volume("cthead"));
+    let volume = match loaded {
+        Ok(v) => v,
+        Err(e) => {
+            missing(&format!("the CT head is not available ({e})"));
+            return;
+        }
+    };
+    let dir = scratch("c_render_ct");
+    let tf = preset("ct-skin-bone").unwrap();
+    render_wall(&dir, &wall_scene(&dir, 96, (volume, tf), true), false);
+}
+
+#[test]
+fn c_host_render_is_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    let dir = scratch("c_render_wall_valgrind");
+    render_wall(&dir, &wall_scene(&dir, 32, phantom(), false), true);
+}
+
+/// Test (b): every misuse reaches the status callback with the right
+/// severity, code and message, and the device still renders afterwards.
+fn misuse(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_misuse_valgrind"
+    } else {
+        "c_misuse"
+    });
+    let program = dir.join("misuse");
+    compile(&["tests/capi/c/misuse.c"], &program, false, true);
+    let output = run(&program, &[], valgrind);
+    let text = describe(&output);
+    assert!(output.status.success(), "misuse: {text}");
+    assert!(!text.contains("FAIL"), "misuse: {text}");
+    let passed = text.matches("PASS").count();
+    assert!(passed >= 30, "only {passed} misuse checks ran: {text}");
+}
+
+#[test]
+fn misuse_reaches_the_status_callback() {
+    misuse(false);
+}
+
+#[test]
+fn misuse_is_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    misuse(true);
+}
+
+/// Test (c): a C++ host that, like the SDK's libanari, dlopens the library,
+/// calls `anari_library_caveray_new_library` and drives the returned
+/// objects through their virtual tables only.
+#[test]
+fn sdk_loader_protocol_renders_the_wall() {
+    let dir = scratch("c_loader");
+    let scene = wall_scene(&dir, 128, phantom(), false);
+    let program = dir.join("loader");
+    compile(&["tests/capi/c/loader.cpp"], &program, true, false);
+    let lib = common::c::lib_dir().join("libanari_library_caveray.so");
+    let rig = common::rig("cologne_5wall");
+    let head = rig.viewer.head;
+    let b = rig.eye_position(&head, anari_library_caveray::cave::Eye::Right)
+        - rig.eye_position(&head, anari_library_caveray::cave::Eye::Left);
+    let baseline = format!("{},{},{}", b.x, b.y, b.z);
+    let output = common::c::run_with(
+        &program,
+        &[&lib, &scene.file, &dir, std::path::Path::new(&baseline)],
+        false,
+        &[("CAVERAY_BACKEND", "gpu")],
+    );
+    assert!(output.status.success(), "loader: {}", describe(&output));
+    let image = read_rgba(&dir.join("loader.rgba"), scene.size);
+    let s = ssim(&image, &scene.reference).unwrap();
+    assert!(
+        s > 0.98,
+        "matrix camera through the loader protocol: SSIM {s:.4}"
+    );
+    // Both eyes: a per-eye pair and a sideBySide frame, each right eye
+    // within the re-projection's bound of the right eye rendered alone.
+    use anari_library_caveray::render::{dssim, ColorData, Frame};
+    let eye = |name: &str| read_rgba(&dir.join(format!("{name}.rgba")), scene.size);
+    let alone = eye("alone_right");
+    let (w, h) = (scene.size.x as usize, scene.size.y as usize);
+    let wide = read_rgba(
+        &dir.join("side_by_side.rgba"),
+        glam::UVec2::new(2 * scene.size.x, scene.size.y),
+    );
+    let half = |x0: usize| {
+        let ColorData::Rgba8(bytes) = &wide.color else {
+            panic!("RGBA8 expected")
+        };
+        Frame {
+            color: ColorData::Rgba8(
+                (0..h)
+                    .flat_map(|y| bytes[4 * (y * 2 * w + x0)..4 * (y * 2 * w + x0 + w)].to_vec())
+                    .collect(),
+            ),
+            ..alone.clone()
+        }
+    };
+    let unmoved = dssim(&eye("pair_left"), &alone).unwrap();
+    for (what, right) in [
+        ("stereoPartner", eye("pair_right")),
+        ("sideBySide", half(w)),
+    ] {
+        let d = dssim(&right, &alone).unwrap();
+        eprintln!("{what} through the loader protocol: right eye DSSIM {d:.4} (left as right {unmoved:.4})");
+        assert!(
+            d < 0.03 && d < 0.5 * unmoved,
+            "{what}: DSSIM {d} vs {unmoved}"
+        );
+    }
+    let s = ssim(&half(0), &eye("pair_left")).unwrap();
+    assert!(
+        s > 0.99,
+        "sideBySide left eye against the left frame: SSIM {s:.4}"
+    );
+}
+
+/// The README's C example builds with one cc command and renders both eyes.
+#[test]
+fn cave_wall_example_renders_both_eyes() {
+    let dir = scratch("c_example");
+    let program = dir.join("cave_wall");
+    compile(&["examples/c/cave_wall.c"], &program, false, true);
+    let output = common::c::host_command(&program)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "cave_wall: {}", describe(&output));
+    for eye in ["left", "right"] {
+        let ppm = std::fs::read(dir.join(format!("cave_wall_{eye}.ppm"))).unwrap();
+        assert!(ppm.starts_with(b"P6\n"), "{eye} image is not a PPM");
+        let pixels = &ppm[ppm.len() - 3 * 64 * 64..];
+        let lit = pixels
+            .chunks(3)
+            .filter(|p| p.iter().any(|&c| c > 20))
+            .count();
+        assert!(
+            lit > 200,
+            "{eye} image shows almost no volume ({lit} lit pixels)"
+        );
+    }
+    let left = std::fs::read(dir.join("cave_wall_left.ppm")).unwrap();
+    let right = std::fs::read(dir.join("cave_wall_right.ppm")).unwrap();
+    assert_ne!(left, right, "the two eyes see the wall from the same place");
+}
+
+/// The benchmark host of examples/c/ runs small, writes its JSON with the
+/// samples the device counted, and skipping changes the samples, not the
+/// picture.
+#[test]
+fn the_shells_benchmark_host_reports_what_it_measured() {
+    let dir = scratch("c_bench_shells");
+    let program = dir.join("bench_shells");
+    compile(&["examples/c/bench_shells.c"], &program, false, true);
+    let mut runs = Vec::new();
+    for skipping in ["1", "0"] {
+        let json = dir.join(format!("skipping_{skipping}.json"));
+        let ppm = dir.join(format!("skipping_{skipping}.ppm"));
+        let output = common::c::host_command(&program)
+            .args([
+                "--backend",
+                "cpu",
+                "--size",
+                "48",
+                "--voxels",
+                "32",
+                "--frames",
+                "2",
+            ])
+            .args(["--skipping", skipping, "--json"])
+            .arg(&json)
+            .arg("--ppm")
+            .arg(&ppm)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "bench_shells: {}",
+            describe(&output)
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(report["benchmark"], "capi-shells");
+        assert_eq!(report["ms"].as_array().unwrap().len(), 2);
+        assert!(report["machine"]["cpu"]
+            .as_str()
+            .is_some_and(|c| !c.is_empty()));
+        assert_eq!(report["skipping"], skipping == "1");
+        runs.push((
+            report["last_frame_samples"].as_u64().unwrap(),
+            std::fs::read(&ppm).unwrap(),
+        ));
+    }
+    let ((on, on_image), (off, off_image)) = (&runs[0], &runs[1]);
+    assert!(
+        *on > 0 && on < off,
+        "samples with skipping {on}, without {off}"
+    );
+    assert_eq!(on_image, off_image, "skipping changed the picture");
+    let usage = common::c::host_command(&program)
+        .args(["--frames", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(usage.status.code(), Some(2), "{}", describe(&usage));
+}
+
+/// The SDK test scenes' pattern: arrays on host memory are released, and
+/// the memory overwritten and freed, before the objects using them are
+/// committed. The device must have copied them at release; the image must
+/// be the one the intact scene gives.
+fn release_then_free(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_release_then_free_valgrind"
+    } else {
+        "c_release_then_free"
+    });
+    let scene = wall_scene(&dir, if valgrind { 32 } else { 64 }, phantom(), false);
+    let program = dir.join("release_then_free");
+    compile(&["tests/capi/c/release_then_free.c"], &program, false, true);
+    let output = run(&program, &[&scene.file, &dir], valgrind);
+    assert!(
+        output.status.success(),
+        "release_then_free: {}",
+        describe(&output)
+    );
+    let image = read_rgba(&dir.join("freed.rgba"), scene.size);
+    let s = ssim(&image, &scene.reference).unwrap();
+    assert!(
+        s > 0.98,
+        "arrays freed after release: SSIM {s:.4} against the intact scene"
+    );
+}
+
+#[test]
+fn arrays_freed_after_release_still_render() {
+    release_then_free(false);
+}
+
+#[test]
+fn arrays_freed_after_release_are_never_read_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    release_then_free(true);
+}
+
+/// An OpenCOVER-style host (tests/capi/c/opencover_host.c): the call sequence
+/// its plug-in makes, rendered 64 times unchanged; color (sRGB) and depth
+/// must be the Rust API's for the same wall and eye.
+fn opencover(valgrind: bool) {
+    use anari_library_caveray::render::{
+        ColorData, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings,
+    };
+    let dir = scratch(if valgrind {
+        "c_opencover_valgrind"
+    } else {
+        "c_opencover"
+    });
+    let scene = wall_scene(&dir, if valgrind { 32 } else { 64 }, phantom(), false);
+    let program = dir.join("opencover_host");
+    compile(&["tests/capi/c/opencover_host.c"], &program, false, true);
+    let output = common::c::run_with(
+        &program,
+        &[&scene.file, &dir],
+        valgrind,
+        &[("ANARI_LIBRARY", "caveray")],
+    );
+    assert!(
+        output.status.success(),
+        "opencover_host: {}",
+        describe(&output)
+    );
+
+    let desc = FrameDesc::new(scene.size)
+        .with_color(ColorFormat::Srgba8)
+        .with_depth();
+    let reference = CpuRenderer::new()
+        .render(&scene.scene, &scene.rays, &RenderSettings::default(), &desc)
+        .unwrap();
+    let bytes = std::fs::read(dir.join("opencover.rgba")).unwrap();
+    let image = Frame {
+        size: scene.size,
+        color: ColorData::Srgba8(bytes),
+        depth: None,
+        samples: 0,
+    };
+    let s = ssim(&image, &reference).unwrap();
+    assert!(
+        s > 0.98,
+        "OpenCOVER-style sRGB image: SSIM {s:.4} against the Rust API's"
+    );
+
+    let depth: Vec<f32> = std::fs::read(dir.join("opencover.depth"))
+        .unwrap()
+        .chunks_exact(4)
+        .map(|c| f32::from_ne_bytes(c.try_into().unwrap()))
+        .collect();
+    let want = reference.depth.as_ref().unwrap();
+    let (mut hits, mut disagree, mut worst) = (0, 0, 0.0f32);
+    for (a, b) in depth.iter().zip(want) {
+        match (a.is_finite(), b.is_finite()) {
+            (true, true) => {
+                hits += 1;
+                worst = worst.max((a - b).abs() / b);
+            }
+            (false, false) => {}
+            _ => disagree += 1,
+        }
+    }
+    // The phantom is translucent: only its denser parts pass the depth
+    // threshold (0.5 accumulated opacity), but those must agree.
+    assert!(hits >= 20, "only {hits} pixels have a depth");
+    assert!(
+        disagree * 100 < depth.len(),
+        "{disagree} pixels disagree on hitting anything"
+    );
+    assert!(
+        worst < 0.02,
+        "depth differs by {:.2}% from the Rust API's",
+        100.0 * worst
+    );
+    // And as OpenCOVER uses it (eye + unit ray * depth), every depth is a
+    // point inside the volume's box, past the first sample.
+    let (lo, hi) = scene.scene.bounds();
+    let slack = 1e-3 * (hi - lo).max_element();
+    for (i, d) in depth.iter().enumerate().filter(|(_, d)| d.is_finite()) {
+        let (x, y) = (i as u32 % scene.size.x, i as u32 / scene.size.x);
+        let (origin, dir) = scene.rays.pixel_ray(x, y);
+        let p = origin + dir * *d;
+        assert!(
+            p.cmpge(lo - slack).all() && p.cmple(hi + slack).all(),
+            "pixel ({x}, {y}): depth {d} puts the volume at {p}, outside {lo}..{hi}"
+        );
+    }
+}
+
+#[test]
+fn opencover_style_host_renders_a_wall_channel() {
+    opencover(false);
+}
+
+#[test]
+fn opencover_style_host_is_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    opencover(true);
+}
+
+/// OpenCOVER's two channels of one wall (tests/capi/c/pair_host.c): each eye
+/// a frame of its own, rendered one after the other, without and then
+/// with the device pairing them into one re-projection pass.
+fn pair_host(valgrind: bool) -> std::path::PathBuf {
+    use anari_library_caveray::cave::Eye;
+    let dir = scratch(if valgrind {
+        "c_pair_host_valgrind"
+    } else {
+        "c_pair_host"
+    });
+    let scene = wall_scene(&dir, if valgrind { 24 } else { 128 }, phantom(), true);
+    let rig = common::rig("cologne_5wall");
+    let head = rig.viewer.head;
+    let baseline = rig.eye_position(&head, Eye::Right) - rig.eye_position(&head, Eye::Left);
+    let baseline = format!("{},{},{}", baseline.x, baseline.y, baseline.z);
+    let program = dir.join("pair_host");
+    compile(&["tests/capi/c/pair_host.c"], &program, false, true);
+    let backend = if valgrind { "cpu" } else { "gpu" };
+    let output = common::c::run_with(
+        &program,
+        &[&scene.file, &dir, std::path::Path::new(&baseline)],
+        valgrind,
+        &[("ANARI_LIBRARY", "caveray"), ("CAVERAY_BACKEND", backend)],
+    );
+    assert!(output.status.success(), "pair_host: {}", describe(&output));
+    eprint!("{}", String::from_utf8_lossy(&output.stdout));
+    dir
+}
+
+#[test]
+fn opencover_style_eyes_as_two_frames_come_from_one_pass() {
+    use anari_library_caveray::render::dssim;
+    let dir = pair_host(false);
+    let size = glam::UVec2::splat(128);
+    let image = |name: &str| read_rgba(&dir.join(format!("{name}.rgba")), size);
+    let (left, right) = (image("alone_left"), image("alone_right"));
+    // The first eye is the image it renders alone, byte for byte; the
+    // second within the re-projection's bound (DSSIM 0.02).
+    assert_eq!(image("paired_left").color, left.color);
+    assert_eq!(image("named_left").color, left.color);
+    let unmoved = dssim(&left, &right).unwrap();
+    for name in ["paired_right", "named_right"] {
+        let d = dssim(&image(name), &right).unwrap();
+        eprintln!("{name}: DSSIM {d:.4} against its own pass (left as right {unmoved:.4})");
+        assert!(
+            d < 0.02 && d < 0.5 * unmoved,
+            "{name}: DSSIM {d} vs {unmoved}"
+        );
+    }
+}
+
+#[test]
+fn opencover_style_paired_frames_are_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    // The CPU reference renders each eye alone; what counts here is that
+    // frames naming each other as partners are freed.
+    let dir = pair_host(true);
+    let size = glam::UVec2::splat(24);
+    let image = |name: &str| read_rgba(&dir.join(format!("{name}.rgba")), size);
+    assert_eq!(image("named_right").color, image("alone_right").color);
+}
+
+/// Inputs that would abort or hang the host without the budgets
+/// (tests/capi/c/budgets.c): a
+/// 100000 x 100000 frame, step factors of 1e-6 and 1e-30, eyes at
+/// infinity and NaN, an array of strings, and releasing a frame or the
+/// device while a minutes-long render runs.
+fn budgets(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_budgets_valgrind"
+    } else {
+        "c_budgets"
+    });
+    let program = dir.join("budgets");
+    compile(&["tests/capi/c/budgets.c"], &program, false, true);
+    // The CPU reference, where a release must interrupt a running render.
+    let output = common::c::run_with(&program, &[], valgrind, &[("CAVERAY_BACKEND", "cpu")]);
+    let text = describe(&output);
+    assert!(output.status.success(), "budgets: {text}");
+    assert!(!text.contains("FAIL"), "budgets: {text}");
+    assert!(text.matches("PASS").count() >= 15, "budgets: {text}");
+}
+
+#[test]
+fn inputs_beyond_the_budgets_are_errors_not_aborts() {
+    budgets(false);
+}
+
+#[test]
+fn inputs_beyond_the_budgets_are_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    budgets(true);
+}

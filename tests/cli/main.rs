@@ -1,0 +1,11 @@
+//! The `caveray` tool end to end: its commands run as a user runs them.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bench_autostereo;
+mod bench_cave_stereo;
+mod bench_stereo;
+mod inspect;
+mod render;
+mod replay;

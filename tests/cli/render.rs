@@ -1,0 +1,393 @@
+//! `caveray render` end to end: files, timings and one-line errors.
+
+use crate::common;
+
+use common::caveray;
+
+use std::path::{Path, PathBuf};
+
+use anari_library_caveray::render::GpuRenderer;
+use serde_json::Value;
+
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("caveray-render-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn render(out: &Path, extra: &[&str]) -> Value {
+    let mut args = vec![
+        "render",
+        "--config",
+        "cave_configs/cologne_5wall.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let result = caveray(&args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let text = std::fs::read_to_string(out.join("timings.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+fn png(path: &Path) -> image::RgbaImage {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgba8()
+}
+
+/// Mean absolute difference of two 8-bit images, in levels.
+fn mean_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: u64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| u64::from(x.abs_diff(*y)))
+        .sum();
+    sum as f64 / a.as_raw().len() as f64
+}
+
+#[test]
+fn every_wall_and_eye_of_the_cologne_cave_is_rendered() {
+    let out = scratch("cologne");
+    let report = render(&out, &["--scale", "0.02", "--volume", "phantom:48"]);
+    let views = report["views"].as_array().unwrap();
+    assert_eq!(views.len(), 10);
+    for v in views {
+        let file = v["file"].as_str().unwrap();
+        assert_eq!(
+            file,
+            format!(
+                "{}_{}.png",
+                v["wall"].as_str().unwrap(),
+                v["eye"].as_str().unwrap()
+            )
+        );
+        let image = png(&out.join(file));
+        assert_eq!(image.dimensions(), (32, 32));
+        assert!(v["ms"].as_f64().unwrap() > 0.0);
+        assert!(v["rays_per_s"].as_f64().unwrap() > 0.0);
+        // A wall that sees only air takes no sample: its bricks are clear.
+        let samples = v["samples_per_s"].as_f64().unwrap();
+        assert!(samples >= 0.0);
+        if file == "front_left.png" {
+            assert!(samples > 0.0, "the front wall sampled nothing");
+        }
+    }
+    // The volume floats in front of the viewer: the front wall shows it.
+    let front = png(&out.join("front_left.png"));
+    let lit = front.pixels().filter(|p| p.0[0] > 40).count();
+    assert!(lit > 50, "front wall shows only {lit} lit pixels");
+    // Left and right eyes differ (stereo), but only a little.
+    let right = png(&out.join("front_right.png"));
+    let d = mean_difference(&front, &right);
+    assert!(d > 0.0 && d < 20.0, "eyes differ by {d} levels");
+    for eye in ["left", "right"] {
+        let sheet = png(&out.join(format!("cave_{eye}.png")));
+        // Unfolded cube of 5 walls: 3 x 3 cells of 32 px plus 4 px gaps.
+        assert_eq!(sheet.dimensions(), (3 * 32 + 4 * 4, 3 * 32 + 4 * 4));
+    }
+    // `auto` takes a hardware GPU, and the CPU over a software adapter.
+    let adapter = GpuRenderer::probe().unwrap();
+    if adapter.device_type == wgpu::DeviceType::Cpu {
+        assert_eq!(report["renderer"]["backend"], "cpu");
+    } else {
+        assert_eq!(report["renderer"]["backend"], "gpu");
+        assert_eq!(report["renderer"]["api"], "Vulkan");
+    }
+    assert_eq!(report["strategy"], "offaxis");
+    assert_eq!(report["volume"]["dims"], serde_json::json!([48, 48, 48]));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn strategies_and_backends_give_the_same_pictures() {
+    let base = scratch("strategies");
+    let common = [
+        "--scale",
+        "0.04",
+        "--volume",
+        "phantom:32",
+        "--shading",
+        "ao",
+    ];
+    let run = |name: &str, extra: &[&str]| {
+        let out = base.join(name);
+        let mut args = common.to_vec();
+        args.extend_from_slice(extra);
+        let report = render(&out, &args);
+        (out, report)
+    };
+    let (reference, _) = run("offaxis", &[]);
+    for (name, extra) in [
+        ("matrix", vec!["--strategy", "matrix"]),
+        ("pinhole", vec!["--strategy", "pinhole"]),
+        ("from-matrices", vec!["--strategy", "from-matrices"]),
+        ("cpu", vec!["--backend", "cpu"]),
+    ] {
+        let (out, report) = run(name, &extra);
+        if name == "cpu" {
+            assert_eq!(report["renderer"]["backend"], "cpu");
+        }
+        for file in [
+            "front_left.png",
+            "left_right.png",
+            "floor_left.png",
+            "cave_right.png",
+        ] {
+            let d = mean_difference(&png(&reference.join(file)), &png(&out.join(file)));
+            assert!(d < 0.5, "{name} {file}: differs by {d} levels on average");
+        }
+    }
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn a_wall_the_eye_is_behind_is_reported_and_the_rest_rendered() {
+    let out = scratch("behind");
+    // Outside the CAVE, beyond the left wall.
+    let report = render(
+        &out,
+        &[
+            "--scale",
+            "0.02",
+            "--volume",
+            "phantom:16",
+            "--head=-2000,0,200",
+        ],
+    );
+    let views = report["views"].as_array().unwrap();
+    let errors: Vec<&Value> = views.iter().filter(|v| v.get("error").is_some()).collect();
+    assert_eq!(errors.len(), 2, "{views:?}");
+    for e in errors {
+        assert_eq!(e["wall"], "left");
+        assert!(e["error"].as_str().unwrap().contains("behind"), "{e}");
+    }
+    assert!(out.join("front_left.png").is_file());
+    assert!(!out.join("left_left.png").exists());
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn bad_arguments_are_one_line_errors() {
+    let out = scratch("errors");
+    let raw = out.join("short.raw");
+    std::fs::write(&raw, [0u8; 100]).unwrap();
+    let o = out.to_str().unwrap();
+    let r = raw.to_str().unwrap();
+    let config = "cave_configs/cologne_5wall.toml";
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--scale", "0"], "--scale must be in (0, 4], got 0"),
+        (vec!["--shading", "phong"], "unknown shading mode \"phong\""),
+        (
+            vec!["--volume", r],
+            "is a raw file: give its size with --dims",
+        ),
+        (
+            vec!["--volume", r, "--dims", "8,8,8"],
+            "has 100 bytes, but 8x8x8 uint8 needs 512 bytes",
+        ),
+        (
+            vec!["--volume", "phantom:1"],
+            "must be a whole number in 2..=1024",
+        ),
+        (
+            vec!["--tf", "rainbow"],
+            "unknown transfer function preset 'rainbow'",
+        ),
+        (vec!["--strategy", "fisheye"], "invalid value 'fisheye'"),
+        (
+            vec!["--stereo", "reprojection", "--layers", "0"],
+            "--layers must be at least 1",
+        ),
+        (
+            vec!["--layer-format", "rgb8"],
+            "expected rgba16f or rgba32f",
+        ),
+        (vec!["--stereo", "anaglyph"], "invalid value 'anaglyph'"),
+        // Inputs that would hang, abort or read forever without the budgets.
+        (
+            vec!["--step-factor", "1e-30"],
+            "expected a number from 0.015625 to 64, got '1e-30'",
+        ),
+        (
+            vec!["--head", "1e300,0,0"],
+            "expected three finite numbers X,Y,Z, got '1e300,0,0'",
+        ),
+        (
+            vec!["--step-factor", "0"],
+            "expected a number from 0.015625 to 64, got '0'",
+        ),
+        (
+            vec!["--volume", "/dev/zero", "--dims", "8,8,8"],
+            "not a regular file",
+        ),
+        (
+            vec!["--volume", r, "--dims", "4294967295,4294967295,4294967295"],
+            "more than caveray loads (2147483648 voxels at most)",
+        ),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", "--config", config, "--out", o];
+        args.extend_from_slice(&extra);
+        let result = caveray(&args);
+        let err = String::from_utf8(result.stderr).unwrap();
+        assert_eq!(result.status.code(), Some(2), "{extra:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{extra:?}: {err}");
+        assert!(
+            err.starts_with("caveray: ") && err.contains(needle),
+            "{extra:?}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn reprojection_renders_every_wall_and_says_why_when_it_cannot() {
+    let common = [
+        "--scale",
+        "0.05",
+        "--volume",
+        "phantom:48",
+        "--step-factor",
+        "0.5",
+        "--backend",
+        "gpu",
+    ];
+    let two = scratch("two-pass");
+    render(&two, &common);
+    let one = scratch("reprojection");
+    let mut args = common.to_vec();
+    args.extend_from_slice(&["--stereo", "reprojection"]);
+    let report = render(&one, &args);
+    assert_eq!(report["stereo"], "reprojection");
+    let views = report["views"].as_array().unwrap();
+    let view = |wall: &str, eye: &str| {
+        views
+            .iter()
+            .find(|v| v["wall"] == wall && v["eye"] == eye)
+            .unwrap_or_else(|| panic!("{wall} {eye} missing"))
+    };
+    for eye in ["left", "right"] {
+        // Facing the front wall with a level head: one pass.
+        let front = view("front", eye);
+        assert!(
+            front["path"]
+                .as_str()
+                .unwrap()
+                .starts_with("reprojection ("),
+            "{front}"
+        );
+        assert!(front["layers"].as_u64().unwrap() >= 2);
+        assert_eq!(front["families"], 1, "{front}");
+        // The side walls' baseline points into them: lines radiate from
+        // the epipole, both families, still one pass.
+        for wall in ["left", "right"] {
+            let side = view(wall, eye);
+            assert!(
+                side["path"].as_str().unwrap().starts_with("reprojection ("),
+                "{side}"
+            );
+            assert_eq!(side["families"], 2, "{side}");
+        }
+    }
+    // The left eye is ray cast either way; the right one is re-projected.
+    let (a, b) = (
+        png(&two.join("front_left.png")),
+        png(&one.join("front_left.png")),
+    );
+    assert_eq!(mean_difference(&a, &b), 0.0);
+    let (a, b) = (
+        png(&two.join("front_right.png")),
+        png(&one.join("front_right.png")),
+    );
+    let d = mean_difference(&a, &b);
+    assert!(d < 1.5, "mean difference {d} levels");
+    assert!(one.join("cave_right.png").is_file());
+
+    // Too few layers for the front wall: it falls back and says so.
+    let few = scratch("few-layers");
+    let mut args = common.to_vec();
+    args.extend_from_slice(&["--stereo", "reprojection", "--layers", "1"]);
+    let report = render(&few, &args);
+    let front = report["views"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|v| v["wall"] == "front" && v["eye"] == "right")
+        .unwrap()
+        .clone();
+    assert_eq!(front["path"], "two-pass");
+    assert!(
+        front["fallback"]
+            .as_str()
+            .unwrap()
+            .contains("1 layers are too few"),
+        "{front}"
+    );
+    for dir in [two, one, few] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+}
+
+/// Rigs that would write outside the output folder, over the contact
+/// sheets, or frames beyond memory: refused before anything is written.
+#[test]
+fn rigs_that_would_escape_or_overflow_are_refused() {
+    let out = scratch("rig_errors");
+    let good = std::fs::read_to_string("cave_configs/powerwall.toml").unwrap();
+    let first_name = good
+        .lines()
+        .skip_while(|l| !l.starts_with("[[walls]]"))
+        .find(|l| l.trim_start().starts_with("name"))
+        .unwrap()
+        .to_string();
+    let resolution = good
+        .lines()
+        .find(|l| l.trim_start().starts_with("resolution"))
+        .unwrap()
+        .to_string();
+    let cases = [
+        (
+            good.replacen(&first_name, "name = \"../escape\"", 1),
+            "must be 1 to 64 letters, digits",
+        ),
+        (
+            good.replacen(&first_name, "name = \"/tmp/abs\"", 1),
+            "must be 1 to 64 letters, digits",
+        ),
+        (
+            good.replacen(&first_name, "name = \"cave\"", 1),
+            "taken by the contact sheets",
+        ),
+        (
+            good.replacen(&resolution, "resolution = [100000, 100000]", 1),
+            "is 10000000000 pixels; caveray renders up to 268435456",
+        ),
+    ];
+    for (i, (text, needle)) in cases.iter().enumerate() {
+        let rig = out.join(format!("rig{i}.toml"));
+        std::fs::write(&rig, text).unwrap();
+        let dest = out.join(format!("out{i}"));
+        let result = caveray(&[
+            "render",
+            "--config",
+            rig.to_str().unwrap(),
+            "--out",
+            dest.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8(result.stderr).unwrap();
+        assert_eq!(result.status.code(), Some(2), "{needle}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "{err}");
+        assert!(!dest.exists(), "nothing is written for a refused rig");
+    }
+    assert!(!out.join("../escape_left.png").exists());
+    std::fs::remove_dir_all(&out).unwrap();
+}

@@ -1,0 +1,6 @@
+//! Volume data and transfer functions as files, manifests and presets.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod volumes;

@@ -1,0 +1,348 @@
+//! Frames as hosts render them: OpenCOVER renders an unchanged channel up
+//! to 64 times and VTK several times per frame, expecting accumulation;
+//! an unchanged frame keeps its image, counts the renders in `numSamples`,
+//! and any change of its inputs renders anew.
+
+use crate::common;
+
+use anari_library_caveray::device::{DataType, Property, Severity, Subject};
+use common::device::{bytes, same, Host};
+
+fn property(h: &mut Host, frame: u64, name: &str) -> Option<Property> {
+    h.d.property(Subject::Object(frame), name, true)
+}
+
+#[test]
+fn unchanged_frames_keep_their_image_and_changes_render_anew() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+    let (frame, camera) = h.frame(volume, 3.0);
+    h.set(frame, "accumulation", DataType::BOOL, vec![1]);
+    h.d.commit(Subject::Object(frame));
+
+    let first = h.pixels(frame);
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+    for n in 2..=64 {
+        let again = h.pixels(frame);
+        same(&again, &first).unwrap();
+        assert_eq!(
+            property(&mut h, frame, "numSamples"),
+            Some(Property::Int32(n))
+        );
+    }
+    assert_eq!(
+        property(&mut h, frame, "renderProgress"),
+        Some(Property::Float32(1.0))
+    );
+
+    // Committing the renderer with the same values changes nothing.
+    let renderer = h.d.new_object(DataType::RENDERER, "default");
+    h.d.commit(Subject::Object(renderer));
+    h.set_object(frame, "renderer", DataType::RENDERER, renderer);
+    h.d.commit(Subject::Object(frame));
+    same(&h.pixels(frame), &first).unwrap();
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(65))
+    );
+
+    // A camera that moved: a new image.
+    h.set(
+        camera,
+        "position",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.4f32, 0.0, 2.5]),
+    );
+    h.d.commit(Subject::Object(camera));
+    let moved = h.pixels(frame);
+    assert!(
+        same(&moved, &first).is_err(),
+        "the moved camera shows the old image"
+    );
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+
+    // A recommitted volume (new derived data, even if equal): rendered again.
+    h.d.commit(Subject::Object(volume));
+    same(&h.pixels(frame), &moved).unwrap();
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+
+    // Another size: rendered again, at that size.
+    h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[8u32, 8]));
+    h.d.commit(Subject::Object(frame));
+    h.d.render_frame(frame, None);
+    let mapped = h.d.map_frame(frame, "channel.color").unwrap();
+    assert_eq!(mapped.size.to_array(), [8, 8]);
+    h.d.unmap_frame(frame, "channel.color");
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(1))
+    );
+    let problems: Vec<_> =
+        h.d.take_statuses()
+            .into_iter()
+            .filter(|s| (s.severity as i32) <= Severity::Warning as i32)
+            .map(|s| s.message)
+            .collect();
+    assert!(problems.is_empty(), "{problems:?}");
+}
+
+#[test]
+fn a_failed_render_is_never_kept() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    let (frame, _camera) = h.frame(volume, 3.0);
+    // Without a size the render fails, twice, and is not "unchanged".
+    h.d.unset_param(Subject::Object(frame), "size");
+    h.d.commit(Subject::Object(frame));
+    for _ in 0..2 {
+        h.d.render_frame(frame, None);
+        assert!(h.d.map_frame(frame, "channel.color").is_none());
+        assert_eq!(
+            property(&mut h, frame, "numSamples"),
+            Some(Property::Int32(0))
+        );
+    }
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .filter(|e| e.starts_with("anariRenderFrame") && e.contains("'size'"))
+            .count()
+            == 2,
+        "{errors:?}"
+    );
+}
+
+#[test]
+fn orthographic_cameras_and_clip_ranges_through_the_device() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+    let (frame, _perspective) = h.frame(volume, 3.0);
+    let perspective = h.pixels(frame);
+
+    let ortho = h.d.new_object(DataType::CAMERA, "orthographic");
+    h.set(
+        ortho,
+        "position",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.0f32, 0.0, 3.0]),
+    );
+    h.set(ortho, "height", DataType::FLOAT32, bytes(&[3.0f32]));
+    h.d.commit(Subject::Object(ortho));
+    h.set_object(frame, "camera", DataType::CAMERA, ortho);
+    h.d.commit(Subject::Object(frame));
+    let parallel = h.pixels(frame);
+    let lit = parallel.chunks(4).filter(|p| p[0] > 10).count();
+    assert!(lit > 100, "the orthographic view shows {lit} lit pixels");
+    assert!(same(&parallel, &perspective).is_err());
+
+    // Far before the volume: the background only.
+    h.set(ortho, "far", DataType::FLOAT32, bytes(&[1.0f32]));
+    h.d.commit(Subject::Object(ortho));
+    let clipped = h.pixels(frame);
+    assert!(
+        clipped.chunks(4).all(|p| p[..3] == [0, 0, 0]),
+        "far 1 still shows the volume"
+    );
+
+    // near >= far, or negative: refused at commit, with the reason.
+    h.set(ortho, "near", DataType::FLOAT32, bytes(&[2.0f32]));
+    h.d.commit(Subject::Object(ortho));
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("near 2 and far 1 must satisfy 0 <= near < far")),
+        "{errors:?}"
+    );
+}
+
+#[test]
+fn renderer_clip_planes_and_sampling_rate_through_the_device() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+    let (frame, _camera) = h.frame(volume, 3.0);
+    let with = |h: &mut Host, setup: &dyn Fn(&mut Host, u64)| {
+        let r = h.d.new_object(DataType::RENDERER, "default");
+        setup(h, r);
+        h.d.commit(Subject::Object(r));
+        h.set_object(frame, "renderer", DataType::RENDERER, r);
+        h.d.commit(Subject::Object(frame));
+        h.d.release(r);
+        h.pixels(frame)
+    };
+    let rate4 = with(&mut h, &|h, r| {
+        h.set(r, "volumeSamplingRate", DataType::FLOAT32, bytes(&[4.0f32]))
+    });
+    let half_step = with(&mut h, &|h, r| {
+        h.set(r, "stepFactor", DataType::FLOAT32, bytes(&[0.5f32]))
+    });
+    same(&rate4, &half_step).unwrap();
+
+    let clipped = with(&mut h, &|h, r| {
+        let planes = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32_VEC4,
+            [1, 1, 1],
+            &bytes(&[1.0f32, 0.0, 0.0, 0.0]),
+        );
+        h.set_object(r, "clipPlane", DataType::ARRAY1D, planes);
+        h.d.release(planes);
+    });
+    let size = common::device::SIZE as usize;
+    let lit = |x: usize| (0..size).any(|y| clipped[4 * (y * size + x)] > 0);
+    assert!(
+        (0..size / 2 - 1).any(lit),
+        "the kept half (x < 0) shows nothing"
+    );
+    assert!(
+        !(size / 2 + 1..size).any(lit),
+        "the clipped half (x > 0) shows the volume"
+    );
+    let errors = h.messages(Severity::Error);
+    assert!(errors.is_empty(), "{errors:?}");
+}
+
+#[test]
+fn the_first_directional_light_sets_the_shading_light() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.5f32]));
+    let image = |h: &mut Host, lights: &[u64], shading: &str| {
+        let (frame, camera) = h.lit_frame(volume, 3.0, lights);
+        let r = h.d.new_object(DataType::RENDERER, "default");
+        h.d.set_param(
+            Subject::Object(r),
+            "shading",
+            anari_library_caveray::device::Input::String(shading.into()),
+        );
+        h.d.commit(Subject::Object(r));
+        h.set_object(frame, "renderer", DataType::RENDERER, r);
+        h.d.commit(Subject::Object(frame));
+        let pixels = h.pixels(frame);
+        for o in [frame, camera, r] {
+            h.d.release(o);
+        }
+        pixels
+    };
+    let light = |h: &mut Host, direction: [f32; 3], irradiance: f32| {
+        let l = h.d.new_object(DataType::LIGHT, "directional");
+        h.set(l, "direction", DataType::FLOAT32_VEC3, bytes(&direction));
+        h.set(l, "irradiance", DataType::FLOAT32, bytes(&[irradiance]));
+        h.d.commit(Subject::Object(l));
+        l
+    };
+    let unlit = image(&mut h, &[], "none");
+    let half = light(&mut h, [0.0, 0.0, -1.0], 0.5);
+    // A point light (not implemented) first: skipped for the directional one.
+    let point = h.d.new_object(DataType::LIGHT, "point");
+    let dimmed = image(&mut h, &[point, half], "none");
+    let centre = 4 * (12 * 24 + 12);
+    let (a, b) = (f32::from(unlit[centre]), f32::from(dimmed[centre]));
+    assert!(
+        a > 40.0 && (b - 0.5 * a).abs() <= 2.0,
+        "irradiance 0.5: {a} -> {b}"
+    );
+    // Shadows follow the light's direction.
+    let from_left = light(&mut h, [1.0, 0.0, 0.0], 1.0);
+    let from_right = light(&mut h, [-1.0, 0.0, 0.0], 1.0);
+    let left = image(&mut h, &[from_left], "shadows");
+    let right = image(&mut h, &[from_right], "shadows");
+    assert!(
+        same(&left, &right).is_err(),
+        "the light's direction changes nothing"
+    );
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings.len() == 1 && warnings[0].contains("does not implement light 'point'"),
+        "{warnings:?}"
+    );
+    assert!(h.messages(Severity::Error).is_empty());
+}
+
+/// `anariDiscardFrame` stops the CPU reference between rows: a frame far
+/// too slow to finish first reports the discard, not an image, and the
+/// next render works.
+#[test]
+fn discard_stops_a_render_in_progress() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    let (frame, _camera) = h.frame(volume, 3.0);
+    // 2048^2 with shadows: a minute on the CPU reference if it ran through.
+    h.set(
+        frame,
+        "size",
+        DataType::UINT32_VEC2,
+        bytes(&[2048u32, 2048]),
+    );
+    let r = h.d.new_object(DataType::RENDERER, "default");
+    h.d.set_param(
+        Subject::Object(r),
+        "shading",
+        anari_library_caveray::device::Input::String("shadows".into()),
+    );
+    h.d.commit(Subject::Object(r));
+    h.set_object(frame, "renderer", DataType::RENDERER, r);
+    h.d.commit(Subject::Object(frame));
+    h.d.render_frame(frame, None);
+    h.d.discard_frame(frame);
+    assert!(h.d.map_frame(frame, "channel.color").is_none());
+    let errors = h.messages(Severity::Error);
+    assert!(errors.iter().any(|e| e.contains("discarded")), "{errors:?}");
+    assert_eq!(
+        property(&mut h, frame, "numSamples"),
+        Some(Property::Int32(0))
+    );
+    // A small render afterwards is whole.
+    h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[16u32, 16]));
+    h.d.commit(Subject::Object(frame));
+    h.d.render_frame(frame, None);
+    assert!(h.d.map_frame(frame, "channel.color").is_some());
+    h.d.unmap_frame(frame, "channel.color");
+}
+
+#[test]
+fn a_background_gradient_through_the_device() {
+    let mut h = Host::new();
+    let field = h.field(|_| 0.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.0f32]));
+    let (frame, _camera) = h.frame(volume, 3.0);
+    let r = h.d.new_object(DataType::RENDERER, "scivis");
+    // VTK's gradient: 1 x N of FLOAT32_VEC4, bottom color first.
+    let gradient = h.array(
+        DataType::ARRAY2D,
+        DataType::FLOAT32_VEC4,
+        [1, 2, 1],
+        &bytes(&[1.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]),
+    );
+    h.set_object(r, "background", DataType::ARRAY2D, gradient);
+    h.d.release(gradient);
+    h.d.commit(Subject::Object(r));
+    h.set_object(frame, "renderer", DataType::RENDERER, r);
+    h.d.commit(Subject::Object(frame));
+    let pixels = h.pixels(frame);
+    let size = common::device::SIZE as usize;
+    let at = |y: usize| &pixels[4 * y * size..4 * y * size + 3];
+    assert_eq!(at(0), [255, 0, 0], "bottom row");
+    assert_eq!(at(size - 1), [0, 0, 255], "top row");
+    assert!(h.messages(Severity::Error).is_empty());
+}

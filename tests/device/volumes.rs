@@ -1,0 +1,201 @@
+//! Volumes as hosts build them, through the device model on the CPU
+//! reference: the value range as a VEC2 or collapsed to one value, color
+//! arrays of every element type, out-of-range maps, the legacy `field`
+//! name and the `filter` values.
+
+use crate::common;
+
+use anari_library_caveray::device::{DataType, Severity};
+use common::device::{bytes, centre, same, Host};
+
+#[test]
+fn value_range_as_a_vec2_equals_the_box1() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let mut image = |ty| {
+        let v = h.volume(field);
+        h.set(v, "valueRange", ty, bytes(&[0.0f32, 1.0]));
+        h.set(v, "opacity", DataType::FLOAT32, bytes(&[0.5f32]));
+        h.render(v)
+    };
+    let boxed = image(DataType::FLOAT32_BOX1);
+    let vec2 = image(DataType::FLOAT32_VEC2);
+    same(&boxed, &vec2).unwrap();
+    assert!(centre(&boxed)[0] > 50, "{:?}", centre(&boxed));
+    assert!(h.messages(Severity::Error).is_empty());
+}
+
+#[test]
+fn a_constant_field_takes_the_middle_of_the_maps() {
+    let mut h = Host::new();
+    let field = h.field(|_| 7.0, None);
+    let v = h.volume(field);
+    h.set(
+        v,
+        "valueRange",
+        DataType::FLOAT32_BOX1,
+        bytes(&[7.0f32, 7.0]),
+    );
+    let colors = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32_VEC3,
+        [3, 1, 1],
+        &bytes(&[1.0f32, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]),
+    );
+    h.set_object(v, "color", DataType::ARRAY1D, colors);
+    h.set(v, "opacity", DataType::FLOAT32, bytes(&[1.0f32]));
+    let image = h.render(v);
+    assert!(h.messages(Severity::Error).is_empty());
+    let [r, g, b] = centre(&image);
+    assert!(
+        g > 200 && r < 10 && b < 10,
+        "the middle color is green, got {r} {g} {b}"
+    );
+}
+
+#[test]
+fn color_arrays_of_every_element_type_read_alike() {
+    // Red, then white at full alpha: exact in every encoding.
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let mut image = |ty: DataType, data: Vec<u8>| {
+        let v = h.volume(field);
+        let a = h.array(DataType::ARRAY1D, ty, [2, 1, 1], &data);
+        h.set_object(v, "color", DataType::ARRAY1D, a);
+        h.set(v, "opacity", DataType::FLOAT32, bytes(&[0.6f32]));
+        h.d.release(a);
+        let img = h.render(v);
+        let errors = h.messages(Severity::Error);
+        assert!(errors.is_empty(), "{ty}: {errors:?}");
+        img
+    };
+    let reference = image(
+        DataType::FLOAT32_VEC4,
+        bytes(&[1.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
+    );
+    let alike = [
+        (
+            DataType::FLOAT32_VEC3,
+            bytes(&[1.0f32, 0.0, 0.0, 1.0, 1.0, 1.0]),
+        ),
+        (
+            DataType::UFIXED8_VEC4,
+            vec![255, 0, 0, 255, 255, 255, 255, 255],
+        ),
+        (DataType::UFIXED8_VEC3, vec![255, 0, 0, 255, 255, 255]),
+        (
+            DataType::UFIXED16_VEC4,
+            bytes(&[65535u16, 0, 0, 65535, 65535, 65535, 65535, 65535]),
+        ),
+        (
+            DataType::UFIXED16_VEC3,
+            bytes(&[65535u16, 0, 0, 65535, 65535, 65535]),
+        ),
+        (
+            DataType::UFIXED8_RGBA_SRGB,
+            vec![255, 0, 0, 255, 255, 255, 255, 255],
+        ),
+        (DataType::UFIXED8_RGB_SRGB, vec![255, 0, 0, 255, 255, 255]),
+    ];
+    for (ty, data) in alike {
+        same(&image(ty, data), &reference).unwrap_or_else(|e| panic!("{ty}: {e}"));
+    }
+    // Fewer components: the missing color reads 0 and alpha 1.
+    let red_only = image(DataType::FLOAT32, bytes(&[1.0f32, 1.0]));
+    let [r, g, b] = centre(&red_only);
+    assert!(
+        r > 50 && g == 0 && b == 0,
+        "one component is red: {r} {g} {b}"
+    );
+    same(&image(DataType::UFIXED8, vec![255, 255]), &red_only).unwrap();
+    same(&image(DataType::UFIXED8_R_SRGB, vec![255, 255]), &red_only).unwrap();
+    // sRGB is decoded: 188 is about 0.5 linear, 128 would be 0.216.
+    let srgb = image(
+        DataType::UFIXED8_RGBA_SRGB,
+        vec![188, 188, 188, 255, 188, 188, 188, 255],
+    );
+    let linear = image(
+        DataType::FLOAT32_VEC4,
+        bytes(&[0.5f32, 0.5, 0.5, 1.0, 0.5, 0.5, 0.5, 1.0]),
+    );
+    let d = centre(&srgb)[0].abs_diff(centre(&linear)[0]);
+    assert!(
+        d <= 2,
+        "sRGB 188 reads {} against linear 0.5's {}",
+        centre(&srgb)[0],
+        centre(&linear)[0]
+    );
+}
+
+#[test]
+fn out_of_range_maps_are_clamped_with_a_warning() {
+    fn image(h: &mut Host, field: u64, rgb: [f32; 3], opacity: f32) -> Vec<u8> {
+        let v = h.volume(field);
+        h.set(v, "color", DataType::FLOAT32_VEC3, bytes(&rgb));
+        let o = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32,
+            [1, 1, 1],
+            &bytes(&[opacity]),
+        );
+        h.set_object(v, "opacity", DataType::ARRAY1D, o);
+        h.d.release(o);
+        h.render(v)
+    }
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let clamped = image(&mut h, field, [1.5, -0.5, 0.5], 2.0);
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("2 color components lie outside [0, 1]") && w.contains("clamped"))
+            && warnings
+                .iter()
+                .any(|w| w.contains("1 opacities lie outside [0, 1]")
+                    && w.contains("opacity[0] = 2")),
+        "{warnings:?}"
+    );
+    assert!(h.messages(Severity::Error).is_empty());
+    same(&clamped, &image(&mut h, field, [1.0, 0.0, 0.5], 1.0)).unwrap();
+}
+
+#[test]
+fn the_legacy_field_name_and_every_filter_value() {
+    let mut h = Host::new();
+    // A faint ramp, so how the field is sampled shows in the image.
+    let faint = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32,
+        [2, 1, 1],
+        &bytes(&[0.0f32, 0.2]),
+    );
+    let ramp = |x: u32| x as f32 / 3.0;
+    let image = |h: &mut Host, filter: Option<&str>, name: &str| {
+        let f = h.field(ramp, filter);
+        let v = h.d.new_object(DataType::VOLUME, "transferFunction1D");
+        h.set_object(v, name, DataType::SPATIAL_FIELD, f);
+        h.set_object(v, "opacity", DataType::ARRAY1D, faint);
+        h.render(v)
+    };
+    let by_value = image(&mut h, None, "value");
+    let by_field = image(&mut h, None, "field");
+    same(&by_value, &by_field).unwrap();
+    assert!(h.messages(Severity::Error).is_empty());
+
+    let linear = image(&mut h, Some("linear"), "value");
+    same(&linear, &by_value).unwrap();
+    let cubic = image(&mut h, Some("cubic"), "value");
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings.iter().any(|w| w.contains("filter 'cubic' is not one of linear, nearest; sampling is linear")),
+        "{warnings:?}"
+    );
+    same(&cubic, &linear).unwrap();
+    let nearest = image(&mut h, Some("nearest"), "value");
+    assert!(h.messages(Severity::Warning).is_empty());
+    assert!(
+        same(&nearest, &linear).is_err(),
+        "nearest rendered as linear"
+    );
+}

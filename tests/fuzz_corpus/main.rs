@@ -1,0 +1,55 @@
+//! Replays the fuzzers' committed corpus (fuzz/corpus/<target>/) and every
+//! input that once crashed caveray (fuzz/regressions/<target>/) through
+//! the fuzz targets' own harness, on stable Rust: each must return. The
+//! fuzzing itself (nightly, libFuzzer) is `scripts/fuzz`.
+
+#[path = "../../fuzz/src/harness.rs"]
+#[allow(dead_code)]
+mod harness;
+
+use std::path::Path;
+
+type Target = fn(&[u8]);
+
+const TARGETS: [(&str, Target); 5] = [
+    ("rig", harness::rig),
+    ("display", harness::display),
+    ("paraview", harness::paraview),
+    ("raw_manifest", harness::raw_manifest),
+    ("capi", harness::capi),
+];
+
+/// Every file under fuzz/<kind>/<target>/, sorted.
+fn inputs(kind: &str, target: &str) -> Vec<std::path::PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz")
+        .join(kind)
+        .join(target);
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    files.sort();
+    files
+}
+
+#[test]
+fn the_committed_corpus_and_every_past_crash_run_through_cleanly() {
+    for (target, run) in TARGETS {
+        let corpus = inputs("corpus", target);
+        assert!(
+            corpus.len() >= 10,
+            "fuzz/corpus/{target} holds {} inputs; run scripts/fuzz to grow it",
+            corpus.len()
+        );
+        let past = inputs("regressions", target);
+        for file in corpus.iter().chain(&past) {
+            let data = std::fs::read(file).unwrap();
+            run(&data);
+        }
+        eprintln!(
+            "{target}: {} corpus inputs, {} past crashes",
+            corpus.len(),
+            past.len()
+        );
+    }
+}

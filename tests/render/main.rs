@@ -1,0 +1,16 @@
+//! The renderers, GPU and CPU reference: known answers, the GPU held to
+//! the CPU, several volumes, empty-space skipping, filtered sampling,
+//! isosurfaces and multi-view display images.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod autostereo;
+mod empty_space;
+mod errors;
+mod fast_path;
+mod filtered_sampling;
+mod isosurface;
+mod known_answers;
+mod ray_casting;
+mod several_volumes;
