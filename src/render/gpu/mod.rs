@@ -39,7 +39,7 @@ use super::frame::{ColorData, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::stereo::{Reprojection, StereoFrames};
 use super::warp::{check_layers, Source};
-use super::{ColorFormat, RenderError, RenderSettings, Sampling};
+use super::{ColorFormat, Render, RenderError, RenderSettings, Sampling};
 use crate::geometry::RayGen;
 use crate::render::iso::{IsoSettings, MultiViewMethod, Panel};
 use crate::scene::{PlacedVolume, Scene};
@@ -389,22 +389,14 @@ impl GpuRenderer {
         }
         Ok(())
     }
+}
 
-    pub fn render(
-        &mut self,
-        scene: &Scene,
-        rays: &RayGen,
-        settings: &RenderSettings,
-        desc: &FrameDesc,
-    ) -> Result<Frame, RenderError> {
-        self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
-    }
-
-    /// `render`, cast in bands of rows (about 2^18 pixels each), each its
-    /// own submission: once `stop` is set no further band starts, and
+impl Render for &mut GpuRenderer {
+    /// Cast in bands of rows (about 2^18 pixels each), each its own
+    /// submission: once `stop` is set no further band starts, and
     /// `RenderError::Stopped` is returned.
-    pub fn render_until(
-        &mut self,
+    fn render_until(
+        self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
