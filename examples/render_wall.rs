@@ -6,6 +6,7 @@ use anari_library_caveray::cave::{Eye, Rig};
 use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
 use anari_library_caveray::scene::Scene;
 use glam::UVec2;

@@ -11,6 +11,7 @@ use anari_library_caveray::cave::{Eye, Rig};
 use anari_library_caveray::data::{preset, shepp_logan, Manifest};
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
 use anari_library_caveray::scene::{PlacedVolume, Scene, MAX_VOLUMES};
 use glam::{Mat4, UVec2, Vec3};

@@ -10,6 +10,7 @@ use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
 use anari_library_caveray::render::warp::{WarpMode, WarpSettings};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{dssim, Backend, FrameDesc, RenderSettings, Renderer};
 use anari_library_caveray::scene::Scene;
 use glam::{DVec3, UVec2};

@@ -1,13 +1,7 @@
-// A view as image warping needs it (after volume.wgsl and color.wgsl):
-// color over nothing, first-hit depth, and the emission-absorption layers
-// of src/render/warp/layers.rs, recorded sample by sample as the CPU's
-// LayerBuilder does.
-
-// Two vec4s a layer (color; start, end), `capture.x` layers a pixel.
-@group(1) @binding(0) var<storage, read_write> layer_out: array<vec4f>;
-@group(1) @binding(1) var<uniform> capture: vec4u;
-// x: the first row of this band.
-@group(2) @binding(0) var<uniform> band: vec4u;
+// #import volume, color, capture_bindings, band_bindings
+// A view as image warping needs it: color over nothing, first-hit depth,
+// and the emission-absorption layers of src/render/warp/layers.rs,
+// recorded sample by sample as the CPU's LayerBuilder does.
 
 const MAX_KEPT: u32 = 8u;
 

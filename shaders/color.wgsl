@@ -1,5 +1,6 @@
-// Writes one pixel of `color_out` in the frame's format; the file that
-// includes this one declares `color_out` (array<u32>).
+// #import constants
+// Writes one pixel of `color_out` in the frame's format; the pass's
+// bindings declare `color_out` (array<u32>).
 
 fn linear_to_srgb(x: f32) -> f32 {
     if x <= 0.0031308 {

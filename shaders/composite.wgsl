@@ -1,14 +1,7 @@
+// #import color, stereo, composite_bindings
 // The right eye from the re-projection layers: per right pixel, the left
 // rays on its epipolar line whose segments crossed it, nearest first, each
-// blended from the two rays the line passes between (after color.wgsl
-// and stereo.wgsl).
-
-@group(0) @binding(0) var<uniform> stereo: Stereo;
-@group(0) @binding(1) var layers: texture_2d_array<f32>;
-@group(0) @binding(2) var<storage, read> spans: array<vec4i>;
-@group(0) @binding(3) var<storage, read_write> color_out: array<u32>;
-@group(0) @binding(4) var depths: texture_2d_array<f32>;
-@group(0) @binding(5) var<storage, read_write> depth_out: array<f32>;
+// blended from the two rays the line passes between.
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {

@@ -1,10 +1,7 @@
-// One eye, one invocation per pixel (after volume.wgsl and color.wgsl).
+// #import volume, color, band_bindings
+// One eye, one invocation per pixel.
 
 fn on_sample(p: vec3f, lit: vec3f, a: f32) {}
-
-// x: the first row of this band (the frame is cast a band of rows at a
-// time, so a discard can stop it between bands).
-@group(1) @binding(0) var<uniform> band: vec4u;
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {

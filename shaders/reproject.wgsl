@@ -1,12 +1,7 @@
+// #import volume, color, stereo, reproject_bindings
 // The left eye, ray cast over the image plus the pixels the right eye
 // needs beyond its borders, writing each ray's right-eye segments into the
-// re-projection layers (after volume.wgsl, color.wgsl and stereo.wgsl).
-// LAYER_FORMAT is replaced by the layers' storage format before compiling.
-
-@group(1) @binding(0) var<uniform> stereo: Stereo;
-@group(1) @binding(1) var layers: texture_storage_2d_array<LAYER_FORMAT, write>;
-@group(1) @binding(2) var<storage, read_write> spans: array<vec4i>;
-@group(1) @binding(3) var depths: texture_storage_2d_array<rgba32float, write>;
+// re-projection layers, whose storage format is the binding table's.
 
 const NO_PIXEL: i32 = -2147483647;
 const INFINITY: f32 = 3.4028235e38;

@@ -1,3 +1,4 @@
+// #import constants
 // What the re-projection and compositing passes share
 // (docs/reprojection_stereo.md, src/render/stereo/epipolar.rs).
 //
@@ -9,8 +10,8 @@
 // p.y mod L, after family 0's L layers where both are in use. The rays one texel could receive lie on one line, fewer
 // than L pixels apart along it, so no two of them share a layer.
 
-// `Stereo` is declared in front of this file from src/render/gpu/uniforms.rs,
-// which documents its fields.
+// `Stereo` is generated from src/render/gpu/uniforms.rs, which documents
+// its fields; the entry file's bindings declare `stereo`.
 
 fn g_of(p: vec2i) -> vec2f {
     return stereo.epipole.z * vec2f(p) - stereo.epipole.xy;

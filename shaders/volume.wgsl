@@ -1,42 +1,14 @@
+// #import constants, volume_bindings
 // Emission-absorption volume ray casting: the march along one primary ray.
 // Mirrors src/render/cpu/ (the reference) operation for operation, so the
 // two agree to rounding; all derived numbers arrive in `params`. Its
-// struct `Params` and the constants (SHADE_, TABLE_SIZE, ...) are declared
-// in front of this file from src/render/gpu/uniforms.rs, which documents
-// the fields.
-// Entry points live in raycast.wgsl and reproject.wgsl, each concatenated
-// after this file with color.wgsl; each defines `on_sample`, which sees
-// every sample that contributes (the re-projection path splits the ray into
-// right-eye segments there).
-
-@group(0) @binding(0) var<uniform> params: Params;
-// Volume v's values; volumes 1 to 7 are bound after the other resources
-// (a 1x1x1 stand-in where the scene has fewer), so WGSL needs no binding
-// arrays, which not every adapter offers.
-@group(0) @binding(1) var volume0: texture_3d<f32>;
-// Row v: volume v's table.
-@group(0) @binding(2) var table: texture_2d<f32>;
-@group(0) @binding(3) var<storage, read> directions: array<vec4f>;
-@group(0) @binding(4) var<storage, read_write> color_out: array<u32>;
-@group(0) @binding(5) var<storage, read_write> depth_out: array<f32>;
-// Volume samples per pixel (primary and shading), summed on the host.
-@group(0) @binding(6) var<storage, read_write> samples_out: array<u32>;
-@group(0) @binding(7) var background_image: texture_2d<f32>;
-@group(0) @binding(8) var volume1: texture_3d<f32>;
-@group(0) @binding(9) var volume2: texture_3d<f32>;
-@group(0) @binding(10) var volume3: texture_3d<f32>;
-@group(0) @binding(11) var volume4: texture_3d<f32>;
-@group(0) @binding(12) var volume5: texture_3d<f32>;
-@group(0) @binding(13) var volume6: texture_3d<f32>;
-@group(0) @binding(14) var volume7: texture_3d<f32>;
-// Per brick of each volume, the chessboard distance (in bricks) to the
-// nearest brick its table could make visible; volume v's from
-// params.volumes[v].brick_offset on (src/render/empty_space.rs).
-@group(0) @binding(15) var<storage, read> bricks: array<u32>;
-// Linear where the adapter filters 32-bit floats (filtered sampling).
-@group(0) @binding(16) var linear: sampler;
-// The same, blending between mip levels (level of detail).
-@group(0) @binding(17) var linear_mips: sampler;
+// struct `RayUniforms` and the constants (SHADE_, TABLE_SIZE, ...) are
+// generated from src/render/gpu/uniforms.rs, which documents the fields;
+// the bindings (`params`, `volume0`, `table`, ...) from the ray caster's
+// table in src/render/gpu/raycast.rs.
+// Entry points live in raycast.wgsl, capture.wgsl and reproject.wgsl; each
+// defines `on_sample`, which sees every sample that contributes (the
+// re-projection path splits the ray into right-eye segments there).
 
 // Filtered sampling (RenderSettings::sampling): one hardware-filtered fetch
 // per volume sample, and for primary samples one filtered fetch of the

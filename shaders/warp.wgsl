@@ -1,22 +1,6 @@
+// #import constants, warp_bindings
 // Image warping (src/render/warp/): the quad, grid and layers warps, each
-// the port of its CPU reference, which the tests hold it to (after the
-// declarations generated from src/render/gpu/uniforms.rs).
-
-@group(0) @binding(0) var<uniform> w: Warp;
-// The source: premultiplied color, first-hit depth, and `w.layers` layers
-// a pixel as two vec4s each (color; start, end).
-@group(0) @binding(1) var<storage, read> color: array<vec4f>;
-@group(0) @binding(2) var<storage, read> depth: array<f32>;
-@group(0) @binding(3) var<storage, read> layers: array<vec4f>;
-@group(0) @binding(4) var<storage, read_write> out_color: array<vec4f>;
-@group(0) @binding(5) var<storage, read_write> out_depth: array<f32>;
-// The grid: the nearest surface's distance a target pixel (bits inverted,
-// so that atomicMax keeps the nearest; 0: none), each mesh vertex where it
-// landed in the target (x, y, distance, 1 if it landed), and each target
-// pixel's source position.
-@group(0) @binding(6) var<storage, read_write> nearest: array<atomic<u32>>;
-@group(0) @binding(7) var<storage, read_write> mesh: array<vec4f>;
-@group(0) @binding(8) var<storage, read_write> from_at: array<vec2f>;
+// the port of its CPU reference, which the tests hold it to.
 
 fn infinity() -> f32 {
     return bitcast<f32>(0x7f800000u);

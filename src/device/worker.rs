@@ -15,6 +15,7 @@ use crate::geometry::MultiViewDisplay;
 use crate::render::iso::{interleave, IsoSurface, MultiViewMethod, Panel};
 use crate::render::stereo::{Bounds, LayerFormat, Reprojection, StereoFrames};
 use crate::render::warp::{Source, WarpMode};
+use crate::render::Render as _;
 use crate::render::{
     AutoChoice, Backend, ColorFormat, Frame, FrameDesc, RenderError, RenderSettings, Renderer,
 };

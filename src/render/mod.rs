@@ -131,6 +131,35 @@ impl std::fmt::Display for AutoChoice {
     }
 }
 
+/// Renders frames of a scene: the CPU's renderer, the GPU's, and
+/// [`Renderer`] (either). Implemented for references (`&CpuRenderer`,
+/// `&mut GpuRenderer`, `&mut Renderer`), since the CPU renders through a
+/// shared reference and the GPU through an exclusive one; call it on the
+/// renderer as a method either way.
+pub trait Render: Sized {
+    /// A frame of `scene` through `rays`, giving up with
+    /// `RenderError::Stopped` once `stop` is set.
+    fn render_until(
+        self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+        stop: &AtomicBool,
+    ) -> Result<Frame, RenderError>;
+
+    /// A frame of `scene` through `rays`.
+    fn render(
+        self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+    ) -> Result<Frame, RenderError> {
+        self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
+    }
+}
+
 /// The GPU renderer where a hardware adapter exists, else the CPU's.
 pub enum Renderer {
     Gpu(Box<GpuRenderer>),
@@ -205,16 +234,6 @@ impl Renderer {
             Renderer::Gpu(g) => g.upload(scene),
             Renderer::Cpu(_) => Ok(()),
         }
-    }
-
-    pub fn render(
-        &mut self,
-        scene: &Scene,
-        rays: &RayGen,
-        settings: &RenderSettings,
-        desc: &FrameDesc,
-    ) -> Result<Frame, RenderError> {
-        self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
     }
 
     /// What warps need of a view (color over nothing, first-hit depth and
@@ -317,12 +336,13 @@ impl Renderer {
             }
         }
     }
+}
 
-    /// `render`, giving up with `RenderError::Stopped` once `stop` is set:
-    /// the CPU reference checks it between pixels, the GPU between bands of
-    /// rows (about 2^18 pixels each).
-    pub fn render_until(
-        &mut self,
+impl Render for &mut Renderer {
+    /// The CPU reference checks `stop` between pixels, the GPU between
+    /// bands of rows (about 2^18 pixels each).
+    fn render_until(
+        self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,

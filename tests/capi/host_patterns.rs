@@ -11,6 +11,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, BackgroundImage, ColorData, CpuRenderer, Frame, FrameDesc, RenderSettings,
 };

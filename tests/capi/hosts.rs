@@ -8,6 +8,7 @@ use crate::common;
 
 use anari_library_caveray::data::{preset, Manifest};
 use anari_library_caveray::render::ssim;
+use anari_library_caveray::render::Render as _;
 use common::c::{
     compile, describe, phantom, read_rgba, run, scratch, valgrind_available, wall_scene, WallScene,
 };

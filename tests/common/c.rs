@@ -7,6 +7,7 @@ use std::process::{Command, Output};
 use anari_library_caveray::cave::Eye;
 use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::PrimaryRays;
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{CpuRenderer, Frame, FrameDesc, RenderSettings};
 use anari_library_caveray::scene::{Scene, StructuredVolume, TransferFunction};
 use glam::UVec2;

@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 use anari_library_caveray::data::{concentric_shells, preset, shepp_logan};
 use anari_library_caveray::geometry::RayGen;
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, ClipPlanes, Frame, FrameDesc, RenderSettings, Renderer, Shading,
 };

@@ -3,6 +3,7 @@
 
 use crate::common;
 
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, CpuRenderer, FrameDesc, RenderError, RenderSettings, Shading,
 };

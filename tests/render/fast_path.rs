@@ -7,6 +7,7 @@ use crate::common;
 use std::sync::Arc;
 
 use anari_library_caveray::data::{concentric_shells, preset, shepp_logan};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, AutoChoice, Backend, CpuRenderer, FrameDesc, GpuRenderer, RenderSettings, Renderer,
     Shading,

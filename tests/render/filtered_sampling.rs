@@ -8,6 +8,7 @@ use crate::common;
 use std::sync::Arc;
 
 use anari_library_caveray::data::{concentric_shells, preset, shepp_logan, solid_box};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, ColorData, ColorFormat, FrameDesc, RenderSettings, Sampling, Shading,
 };

@@ -5,6 +5,7 @@ use crate::common;
 
 use anari_library_caveray::data::{preset, shepp_logan, solid_box};
 use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, ColorData, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Shading,
 };

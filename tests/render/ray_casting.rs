@@ -5,6 +5,7 @@ use crate::common;
 
 use anari_library_caveray::cave::Eye;
 use anari_library_caveray::geometry::PrimaryRays;
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, ssim_map, CpuRenderer, FrameDesc, RenderSettings, Shading,
 };

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use anari_library_caveray::data::{preset, shepp_logan, solid_box};
 use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, ColorFormat, CpuRenderer, FrameDesc, RenderSettings, Shading,
 };

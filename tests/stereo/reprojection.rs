@@ -12,6 +12,7 @@ use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
 use anari_library_caveray::render::stereo::{
     Bounds, HmdStereo, LayerCountError, LayerFormat, NotEpipolar, Reprojection, ReprojectionError,
 };
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     dssim, ColorFormat, FrameDesc, GpuRenderer, RenderSettings, Shading,
 };

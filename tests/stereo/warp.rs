@@ -19,6 +19,7 @@ use anari_library_caveray::render::cells::{CellGrid, CellRun, Predictor};
 use anari_library_caveray::render::warp::{
     warp, Projector, Source, Timeline, WarpMode, WarpSettings,
 };
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     dssim, ColorFormat, CpuRenderer, Frame, FrameDesc, RenderError, RenderSettings, Renderer,
 };

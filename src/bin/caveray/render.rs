@@ -9,6 +9,7 @@ use anari_library_caveray::cave::{Eye, Rig, View};
 use anari_library_caveray::geometry::RayGen;
 use anari_library_caveray::output::{contact_sheet, frame_to_rgba, write_rgba_png, SheetLayout};
 use anari_library_caveray::render::stereo::{Bounds, LayerFormat, Reprojection};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer};
 use anari_library_caveray::scene::Scene;
 use clap::{Args, ValueEnum};

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use super::frame::{filled, Frame, FrameDesc};
 use super::iso::{self, IsoFilter, IsoSettings};
 use super::march_plan::MarchPlan;
-use super::{RenderError, RenderSettings};
+use super::{Render, RenderError, RenderSettings};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
 use crate::scene::{PlacedVolume, Scene, StructuredVolume, TransferFunction};
@@ -180,21 +180,12 @@ impl CpuRenderer {
         *cache = next;
         Ok(converted)
     }
+}
 
-    pub fn render(
-        &self,
-        scene: &Scene,
-        rays: &RayGen,
-        settings: &RenderSettings,
-        desc: &FrameDesc,
-    ) -> Result<Frame, RenderError> {
-        self.render_until(scene, rays, settings, desc, &AtomicBool::new(false))
-    }
-
-    /// `render`, casting no further pixel once `stop` is set and then
-    /// returning `RenderError::Stopped`.
-    pub fn render_until(
-        &self,
+impl Render for &CpuRenderer {
+    /// Casts no further pixel once `stop` is set.
+    fn render_until(
+        self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,

@@ -6,94 +6,103 @@ use std::sync::atomic::AtomicBool;
 
 use glam::{UVec2, Vec4};
 
-use super::context::Pass;
-use super::{
-    bind_group, buffer_type, compute_pipeline_with, floats, layout_entry, shaders, unprepared,
-    GpuRenderer, Variants,
-};
-use crate::geometry::RayGen;
-use crate::render::frame::ColorData;
-use crate::render::warp::{check_layers, Layer, Source};
-use crate::render::{ColorFormat, FrameDesc, RenderError, RenderSettings};
+use super::bindings::{binding_table, Kind};
+use super::context::{unprepared, Context, Pass};
+use super::raycast::{RaycastPass, Sampled};
+use super::resources::floats;
+use crate::render::frame::Frame;
+use crate::render::warp::Layer;
+use crate::render::{FrameDesc, RenderError, RenderSettings};
 use crate::scene::Scene;
 
-pub(super) struct CaptureGpu {
-    layout: wgpu::BindGroupLayout,
-    exact: Variants,
-    filtered: Option<Variants>,
+binding_table! {
+    /// Group 1 of the capture pass (group 0 is the ray caster's, group 2
+    /// its band).
+    CaptureResources / CaptureLayout = "capture_bindings" imports [] () {
+        /// Two vec4s a layer (color; start, end), `capture.x` layers a
+        /// pixel.
+        layer_out: Kind::storage_rw("array<vec4f>"),
+        /// x: the layer count a pixel.
+        capture: Kind::uniform("vec4u"),
+    }
+}
+
+pub(super) struct CapturePass {
+    layout: CaptureLayout,
+    pipelines: Sampled,
     /// The layer count a pixel (x).
     uniform: wgpu::Buffer,
     /// Layer buffers of `bytes` and the group binding them.
     buffers: Option<(u64, wgpu::Buffer, wgpu::Buffer, wgpu::BindGroup)>,
 }
 
-impl GpuRenderer {
-    /// `rays` cast for an image of `size` keeping `layers` layers a pixel
-    /// (0: none), the background left out: what
-    /// [`crate::render::CpuRenderer::capture`] makes, from the GPU. Returns
-    /// the source and the pass's milliseconds (GPU timestamps where the
-    /// adapter has them).
+impl CapturePass {
+    pub fn new(ctx: &Context, raycast: &RaycastPass) -> Result<Self, RenderError> {
+        let device = &ctx.device;
+        let layout = CaptureLayout::new(device);
+        let pipelines = Sampled::new(
+            ctx,
+            "capture",
+            "capture",
+            &[
+                raycast.volume_layout.group(),
+                layout.group(),
+                raycast.band_layout.group(),
+            ],
+        )?;
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("capture"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Self {
+            layout,
+            pipelines,
+            uniform,
+            buffers: None,
+        })
+    }
+
+    /// Casts the frame the ray caster's uniforms describe (bound by
+    /// `raycast`), keeping `layers` layers a pixel (the layer buffers hold
+    /// `bytes`): the frame, its layers and the pass's milliseconds.
+    #[allow(clippy::too_many_arguments)]
     pub fn capture(
         &mut self,
+        ctx: &Context,
+        raycast: &RaycastPass,
         scene: &Scene,
-        rays: &RayGen,
         settings: &RenderSettings,
-        size: UVec2,
+        desc: &FrameDesc,
         layers: usize,
+        bytes: u64,
         stop: &AtomicBool,
-    ) -> Result<(Source, f64), RenderError> {
-        check_layers(layers)?;
-        let desc = FrameDesc::new(size)
-            .with_color(ColorFormat::Rgba32F)
-            .with_depth();
-        let settings = RenderSettings {
-            background: Vec4::ZERO,
-            background_image: None,
-            ..settings.clone()
-        };
-        self.begin(scene, rays, &settings, &desc)?;
+    ) -> Result<(Frame, Vec<Layer>, f64), RenderError> {
+        let size = desc.size;
         let pixels = u64::from(size.x) * u64::from(size.y);
-        let bytes = (pixels * layers.max(1) as u64).saturating_mul(32);
-        if bytes > self.ctx.limits.max_storage_buffer_binding_size {
-            return Err(RenderError::FrameTooLarge {
-                size: size.to_array(),
-                reason: format!(
-                    "its {layers} layers a pixel take {bytes} bytes, more than one buffer holds"
-                ),
-                adapter: self.ctx.info.name.clone(),
-            });
-        }
-        if self.capture.is_none() {
-            self.capture = Some(CaptureGpu::new(self));
-        }
-        let bands = self.write_bands(size);
-        if let Some(capture) = self.capture.as_mut() {
-            capture.reserve(&self.ctx, bytes);
-        }
-        let capture = self.capture.as_ref().ok_or_else(unprepared)?;
-        let (_, layer_buffer, layer_read, group) =
-            capture.buffers.as_ref().ok_or_else(unprepared)?;
-        self.ctx.queue.write_buffer(
-            &capture.uniform,
+        let bands = raycast.write_bands(ctx, size);
+        self.reserve(ctx, bytes);
+        let (_, layer_buffer, layer_read, group) = self.buffers.as_ref().ok_or_else(unprepared)?;
+        ctx.queue.write_buffer(
+            &self.uniform,
             0,
             bytemuck::cast_slice(&[layers as u32, 0, 0, 0]),
         );
-        let main = self.bind_group.as_ref().ok_or_else(unprepared)?;
-        let pipeline = self.variant(&capture.exact, &capture.filtered, scene, &settings)?;
+        let main = raycast.group()?;
         let pass = Pass {
-            pipeline,
+            pipeline: self.pipelines.pick(ctx, scene, settings)?,
             groups: &[main, group],
-            band: Some(&self.band_group),
+            band: Some(&raycast.band_group),
         };
-        let ms = self.ctx.dispatch_bands(&pass, &bands, stop)?;
-        self.last_pass_ms = ms;
-        let frame = self.read_frame(&desc)?;
+        let ms = ctx.dispatch_bands(&pass, &bands, stop)?;
+        let frame = raycast.read_frame(ctx, desc)?;
         let kept = if layers > 0 {
             let used = pixels * layers as u64 * 32;
-            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(layer_buffer, 0, layer_read, 0, used);
-            self.ctx.queue.submit([encoder.finish()]);
-            floats(&self.ctx.read(layer_read, used)?)
+            ctx.queue.submit([encoder.finish()]);
+            floats(&ctx.read(layer_read, used)?)
                 .chunks_exact(8)
                 .map(|l| Layer {
                     color: Vec4::from_slice(&l[..4]),
@@ -104,69 +113,12 @@ impl GpuRenderer {
         } else {
             Vec::new()
         };
-        self.ctx.check()?;
-        let (ColorData::Rgba32F(c), Some(depth)) = (frame.color, frame.depth) else {
-            return Err(unprepared());
-        };
-        let color = c.chunks_exact(4).map(Vec4::from_slice).collect();
-        Ok((
-            Source::new(size, *rays, color, depth, kept, layers, frame.samples),
-            ms,
-        ))
-    }
-}
-
-impl CaptureGpu {
-    fn new(gpu: &GpuRenderer) -> Self {
-        let device = &gpu.ctx.device;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("capture"),
-            entries: &[
-                layout_entry(
-                    0,
-                    buffer_type(wgpu::BufferBindingType::Storage { read_only: false }),
-                ),
-                layout_entry(1, buffer_type(wgpu::BufferBindingType::Uniform)),
-            ],
-        });
-        let source = shaders::capture();
-        let layouts = [&gpu.layout, &layout, &gpu.band_layout];
-        let variant = |filtered: bool, one: bool| {
-            let flag = |b: bool| if b { 1.0 } else { 0.0 };
-            compute_pipeline_with(
-                device,
-                "capture",
-                &source,
-                &layouts,
-                "main",
-                &[("FILTERED", flag(filtered)), ("ONE_VOLUME", flag(one))],
-            )
-        };
-        let exact = Variants {
-            one: variant(false, true),
-            several: variant(false, false),
-        };
-        let filtered = gpu.filtered.is_some().then(|| Variants {
-            one: variant(true, true),
-            several: variant(true, false),
-        });
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("capture"),
-            size: 16,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        Self {
-            layout,
-            exact,
-            filtered,
-            uniform,
-            buffers: None,
-        }
+        ctx.check()?;
+        Ok((frame, kept, ms))
     }
 
     /// Layer buffers of at least `bytes`.
-    fn reserve(&mut self, ctx: &super::context::Context, bytes: u64) {
+    fn reserve(&mut self, ctx: &Context, bytes: u64) {
         if self.buffers.as_ref().is_some_and(|b| b.0 >= bytes) {
             return;
         }
@@ -181,12 +133,37 @@ impl CaptureGpu {
         use wgpu::BufferUsages as U;
         let layers = buffer("capture layers", U::STORAGE | U::COPY_SRC);
         let read = buffer("capture layers read-back", U::MAP_READ | U::COPY_DST);
-        let group = bind_group(
-            &ctx.device,
-            "capture",
-            &self.layout,
-            [layers.as_entire_binding(), self.uniform.as_entire_binding()],
-        );
+        let group = CaptureResources {
+            layer_out: layers.as_entire_binding(),
+            capture: self.uniform.as_entire_binding(),
+        }
+        .bind(&ctx.device, &self.layout);
         self.buffers = Some((bytes, layers, read, group));
+    }
+}
+
+/// Layer bytes of a capture of `size` with `layers` layers a pixel.
+pub(super) fn layer_bytes(size: UVec2, layers: usize) -> u64 {
+    let pixels = u64::from(size.x) * u64::from(size.y);
+    (pixels * layers.max(1) as u64).saturating_mul(32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::gpu::bindings::assert_declared;
+    use crate::render::gpu::raycast::{BandLayout, VolumeLayout};
+    use crate::render::gpu::shaders::compose;
+
+    #[test]
+    fn the_capture_shader_declares_its_tables() {
+        for filterable in [false, true] {
+            let groups = [
+                &VolumeLayout::table(filterable),
+                &CaptureLayout::table(),
+                &BandLayout::table(),
+            ];
+            assert_declared(&compose("capture", &groups).unwrap(), &groups);
+        }
     }
 }

@@ -1,9 +1,17 @@
+//! What every pass shares: the adapter and device, what the adapter
+//! allows, the pass clock, and how a pass is dispatched.
+
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use serde::Serialize;
 
+use crate::render::frame::FrameDesc;
 use crate::render::RenderError;
+use crate::scene::Scene;
+
+/// Invocations per workgroup along x and y.
+pub(super) const WORKGROUP: u32 = 8;
 
 /// Bytes between bands' entries in a band buffer: the largest uniform
 /// offset alignment WebGPU allows an adapter to ask for.
@@ -262,6 +270,49 @@ impl Context {
         }
     }
 
+    /// Fails, before touching the GPU, if the scene or frame exceeds what
+    /// this adapter allows.
+    pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
+        let limits = &self.limits;
+        let max = limits.max_texture_dimension_3d;
+        for placed in scene.volumes() {
+            let dims = placed.volume.dims();
+            if dims.max_element() > max {
+                return Err(RenderError::VolumeTooLarge {
+                    dims: [dims.x, dims.y, dims.z],
+                    max,
+                    adapter: self.info.name.clone(),
+                });
+            }
+        }
+        let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
+        let bytes = pixels * desc.color.bytes_per_pixel();
+        let max_bytes = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let groups = desc.size.max_element().div_ceil(WORKGROUP);
+        let reason = if bytes > max_bytes {
+            Some(format!(
+                "its {bytes} bytes of color exceed the largest storage buffer ({max_bytes} bytes)"
+            ))
+        } else if groups > limits.max_compute_workgroups_per_dimension {
+            Some(format!(
+                "{groups} workgroups per side exceed the limit of {}",
+                limits.max_compute_workgroups_per_dimension
+            ))
+        } else {
+            None
+        };
+        if let Some(reason) = reason {
+            return Err(RenderError::FrameTooLarge {
+                size: [desc.size.x, desc.size.y],
+                reason,
+                adapter: self.info.name.clone(),
+            });
+        }
+        Ok(())
+    }
+
     /// Copies a MAP_READ buffer's first `bytes` back to the host.
     pub fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, RenderError> {
         let slice = buffer.slice(..bytes);
@@ -280,4 +331,9 @@ impl Context {
         buffer.unmap();
         Ok(data)
     }
+}
+
+/// A pass's resource asked for before the pass made it.
+pub(super) fn unprepared() -> RenderError {
+    RenderError::Gpu("internal: render target used before it was made".into())
 }

@@ -1,23 +1,47 @@
-//! Isosurface ray casting on the GPU (shaders/iso.wgsl), held to the CPU
-//! reference in src/render/iso/: the pipeline is made on the first cast,
-//! the volume shares the renderer's uploaded textures.
+//! Isosurface ray casting on the GPU (shaders/iso.wgsl, and
+//! iso_panel.wgsl for multi-view panels), held to the CPU reference in
+//! src/render/iso/: the pipelines are made on the first cast, the volume
+//! shares the renderer's uploaded textures.
 
 use bytemuck::Zeroable;
 use glam::Vec3;
+use wgpu::TextureViewDimension as Dim;
 
-use super::resources::OutputBuffers;
-use super::uniforms::{Iso, WORKGROUP};
-use super::{
-    bind_group, buffer_type, color_data, compute_pipeline, floats, layout_entry, shaders,
-    unprepared, GpuRenderer,
-};
+use super::bindings::{binding_table, Kind};
+use super::context::{unprepared, Context, WORKGROUP};
+use super::resources::{color_data, floats, OutputBuffers};
+use super::shaders::compute_pipeline;
+use super::uniforms::Iso;
 use crate::geometry::RayGen;
-use crate::render::iso::{crossing_box, Coloring, IsoFilter, IsoSettings, MultiViewMethod, Panel};
+use crate::render::iso::{crossing_box, Coloring, IsoFilter, IsoSettings, MultiViewMethod};
 use crate::render::{Frame, FrameDesc, RenderError};
-use crate::scene::{PlacedVolume, Scene};
+use crate::scene::PlacedVolume;
+
+binding_table! {
+    /// Group 0 of every isosurface pass.
+    IsoResources / IsoLayout = "iso_bindings" imports ["iso_uniforms"] (filterable: bool) {
+        iso: Kind::uniform("Iso"),
+        volume: Kind::texture(Dim::D3, filterable),
+        color_out: Kind::storage_rw("array<u32>"),
+        depth_out: Kind::storage_rw("array<f32>"),
+    }
+}
+
+binding_table! {
+    /// Group 1 of the multi-view panel passes.
+    PanelResources / PanelLayout = "iso_panel_bindings" imports [] () {
+        /// Each view's rays (seven vec4s: origin, its steps, direction,
+        /// its steps, eye).
+        view_rays: Kind::storage("array<vec4f>"),
+        /// Each pixel's red, green and blue views (a byte each).
+        pixel_views: Kind::storage("array<u32>"),
+        /// The geometric pass's green t per pixel (negative: missed).
+        green_t: Kind::storage_rw("array<f32>"),
+    }
+}
 
 /// A panel's buffers for one display image, and how it is made.
-struct PanelBuffers<'a> {
+pub(super) struct PanelBuffers<'a> {
     rays: &'a wgpu::Buffer,
     views: &'a wgpu::Buffer,
     /// The geometric pass's green t per pixel.
@@ -25,11 +49,11 @@ struct PanelBuffers<'a> {
     method: MultiViewMethod,
 }
 
-pub(super) struct IsoGpu {
-    layout: wgpu::BindGroupLayout,
+pub(super) struct IsoPass {
+    layout: IsoLayout,
     pipeline: wgpu::ComputePipeline,
     /// A multi-view panel's rays and per-pixel views (group 1).
-    panel_layout: wgpu::BindGroupLayout,
+    panel_layout: PanelLayout,
     per_subpixel: wgpu::ComputePipeline,
     geometric: wgpu::ComputePipeline,
     spectral: wgpu::ComputePipeline,
@@ -66,97 +90,91 @@ impl Crossing {
     }
 }
 
-impl GpuRenderer {
-    /// `placed`'s isosurface seen through `rays`, as
-    /// [`crate::render::iso::cast`] renders it, on the GPU.
-    pub fn cast_iso(
-        &mut self,
-        placed: &PlacedVolume,
-        rays: &RayGen,
-        desc: &FrameDesc,
-        settings: &IsoSettings,
-    ) -> Result<Frame, RenderError> {
-        self.run_iso(placed, rays, desc, settings, None)
+impl IsoPass {
+    pub fn new(ctx: &Context) -> Result<Self, RenderError> {
+        let device = &ctx.device;
+        let layout = IsoLayout::new(device, ctx.filterable);
+        let pipeline = compute_pipeline(device, "iso", "iso", "main", &[layout.group()], &[])?;
+        let panel_layout = PanelLayout::new(device);
+        let panel_pipeline = |entry: &str| {
+            compute_pipeline(
+                device,
+                "iso panel",
+                "iso_panel",
+                entry,
+                &[layout.group(), panel_layout.group()],
+                &[],
+            )
+        };
+        let per_subpixel = panel_pipeline("per_subpixel")?;
+        let geometric = panel_pipeline("geometric")?;
+        let spectral = panel_pipeline("spectral")?;
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("iso"),
+            size: size_of::<Iso>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Self {
+            layout,
+            pipeline,
+            panel_layout,
+            per_subpixel,
+            geometric,
+            spectral,
+            uniform,
+            target: None,
+            panel: None,
+            crossing: None,
+        })
     }
 
-    /// A multi-view panel's image, every subpixel from its own view, as
-    /// [`crate::render::iso::render_display`] makes it: one ray a subpixel
-    /// (`PerSubpixel`) or the geometric and spectral passes. The naive way
-    /// is the CPU's (or `cast_iso` per view).
+    /// A multi-view panel's image from its views' rays (`rays`, seven
+    /// vec4s a view, `first` the first view) and each pixel's three views
+    /// (`packed`): one ray a subpixel (`PerSubpixel`) or the geometric and
+    /// spectral passes. Returns the frame and the passes' milliseconds.
+    #[allow(clippy::too_many_arguments)]
     pub fn cast_display(
         &mut self,
+        ctx: &Context,
+        volume: &wgpu::TextureView,
         placed: &PlacedVolume,
-        panel: &Panel,
+        first: &RayGen,
+        rays: Vec<[f32; 4]>,
+        packed: Vec<u32>,
+        desc: &FrameDesc,
         settings: &IsoSettings,
         method: MultiViewMethod,
-    ) -> Result<Frame, RenderError> {
-        if method == MultiViewMethod::Naive {
-            return Err(RenderError::Settings(
-                "the GPU makes a panel's image per subpixel or by passes; naive is cast_iso per view".into(),
-            ));
-        }
-        let views = panel.views.len();
-        if views == 0 || views > 256 {
-            return Err(RenderError::Settings(format!(
-                "a panel on the GPU has 1 to 256 views, not {views}"
-            )));
-        }
-        let desc = FrameDesc::new(panel.size).with_color(panel.color);
-        desc.validate()?;
-        let v = |x: glam::Vec3| x.extend(0.0).to_array();
-        let rays: Vec<[f32; 4]> = panel
-            .views
-            .iter()
-            .flat_map(|r| {
-                [
-                    v(r.origin),
-                    v(r.origin_dx),
-                    v(r.origin_dy),
-                    v(r.direction),
-                    v(r.direction_dx),
-                    v(r.direction_dy),
-                    r.eye.map_or([0.0; 4], |e| e.extend(1.0).to_array()),
-                ]
-            })
-            .collect();
-        // Each pixel's three views, a byte each (at most 256 views).
-        let packed: Vec<u32> = panel
-            .checked_table()?
-            .iter()
-            .map(|v| v[0] | v[1] << 8 | v[2] << 16)
-            .collect();
+    ) -> Result<(Frame, f64), RenderError> {
         // A display's rays and pattern stay from frame to frame: its
         // buffers are kept, and written again only when they change.
-        let mut kept = self.iso.as_mut().and_then(|iso| iso.panel.take());
-        let fits = kept
+        let fits = self
+            .panel
             .as_ref()
             .is_some_and(|k| k.ray_data.len() == rays.len() && k.packed.len() == packed.len());
-        let cache = match kept.take() {
+        let cache = match self.panel.take() {
             Some(mut k) if fits => {
                 if k.ray_data != rays {
-                    self.ctx
-                        .queue
+                    ctx.queue
                         .write_buffer(&k.rays, 0, bytemuck::cast_slice(&rays));
                     k.ray_data = rays;
                 }
                 if k.packed != packed {
-                    self.ctx
-                        .queue
+                    ctx.queue
                         .write_buffer(&k.views, 0, bytemuck::cast_slice(&packed));
                     k.packed = packed;
                 }
                 k
             }
             _ => {
-                let device = &self.ctx.device;
                 let buffer = |label, bytes: &[u8]| {
-                    let b = device.create_buffer(&wgpu::BufferDescriptor {
+                    let b = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                         label: Some(label),
                         size: bytes.len().max(16) as u64,
                         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                         mapped_at_creation: false,
                     });
-                    self.ctx.queue.write_buffer(&b, 0, bytes);
+                    ctx.queue.write_buffer(&b, 0, bytes);
                     b
                 };
                 PanelCache {
@@ -174,43 +192,29 @@ impl GpuRenderer {
             green: &cache.green,
             method,
         };
-        let frame = self.run_iso(placed, &panel.views[0], &desc, settings, Some(buffers));
-        if let Some(iso) = self.iso.as_mut() {
-            iso.panel = Some(cache);
-        }
+        let frame = self.cast(ctx, volume, placed, first, desc, settings, Some(buffers));
+        self.panel = Some(cache);
         frame
     }
 
     /// The iso shader over `rays` (`main`), or over a panel: `per_subpixel`,
-    /// or `geometric` then `spectral`.
-    fn run_iso(
+    /// or `geometric` then `spectral`; `volume` is `placed`'s texture.
+    /// Returns the frame and the passes' milliseconds.
+    #[allow(clippy::too_many_arguments)]
+    pub fn cast(
         &mut self,
+        ctx: &Context,
+        volume: &wgpu::TextureView,
         placed: &PlacedVolume,
         rays: &RayGen,
         desc: &FrameDesc,
         settings: &IsoSettings,
         panel: Option<PanelBuffers>,
-    ) -> Result<Frame, RenderError> {
-        desc.validate()?;
-        settings.validate()?;
-        let scene = Scene::placed(vec![placed.clone()])
-            .map_err(|e| RenderError::Settings(e.to_string()))?;
-        self.check_limits(&scene, desc)?;
-        self.upload_scene(&scene);
-        if self.iso.is_none() {
-            self.iso = Some(IsoGpu::new(self));
+    ) -> Result<(Frame, f64), RenderError> {
+        if !matches!(&self.target, Some(t) if t.size == desc.size && t.format == desc.color) {
+            self.target = Some(OutputBuffers::new(ctx, desc.size, desc.color));
         }
-        let ctx = &self.ctx;
-        let view = self
-            .volumes
-            .first()
-            .map(|(_, v)| v)
-            .ok_or_else(unprepared)?;
-        let iso = self.iso.as_mut().ok_or_else(unprepared)?;
-        if !matches!(&iso.target, Some(t) if t.size == desc.size && t.format == desc.color) {
-            iso.target = Some(OutputBuffers::new(ctx, desc.size, desc.color));
-        }
-        let bounds = match &iso.crossing {
+        let bounds = match &self.crossing {
             Some((key, bounds)) if key.matches(placed, settings) => *bounds,
             _ => {
                 let v = &placed.volume;
@@ -225,50 +229,42 @@ impl GpuRenderer {
                     isovalue: settings.isovalue,
                     filter: settings.filter,
                 };
-                iso.crossing = Some((key, bounds));
+                self.crossing = Some((key, bounds));
                 bounds
             }
         };
-        let target = iso.target.as_ref().ok_or_else(unprepared)?;
+        let target = self.target.as_ref().ok_or_else(unprepared)?;
         let uniform = uniform(placed, rays, desc, settings, bounds);
         ctx.queue
-            .write_buffer(&iso.uniform, 0, bytemuck::bytes_of(&uniform));
-        let group = bind_group(
-            &ctx.device,
-            "iso",
-            &iso.layout,
-            [
-                iso.uniform.as_entire_binding(),
-                wgpu::BindingResource::TextureView(view),
-                target.color.as_entire_binding(),
-                target.depth.as_entire_binding(),
-            ],
-        );
+            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        let group = IsoResources {
+            iso: self.uniform.as_entire_binding(),
+            volume: wgpu::BindingResource::TextureView(volume),
+            color_out: target.color.as_entire_binding(),
+            depth_out: target.depth.as_entire_binding(),
+        }
+        .bind(&ctx.device, &self.layout);
         let workgroups = [
             desc.size.x.div_ceil(WORKGROUP),
             desc.size.y.div_ceil(WORKGROUP),
             1,
         ];
-        self.last_pass_ms = match panel {
-            None => ctx.dispatch(&iso.pipeline, &[&group], workgroups)?,
+        let ms = match panel {
+            None => ctx.dispatch(&self.pipeline, &[&group], workgroups)?,
             Some(p) => {
-                let panel_group = bind_group(
-                    &ctx.device,
-                    "iso panel",
-                    &iso.panel_layout,
-                    [
-                        p.rays.as_entire_binding(),
-                        p.views.as_entire_binding(),
-                        p.green.as_entire_binding(),
-                    ],
-                );
+                let panel_group = PanelResources {
+                    view_rays: p.rays.as_entire_binding(),
+                    pixel_views: p.views.as_entire_binding(),
+                    green_t: p.green.as_entire_binding(),
+                }
+                .bind(&ctx.device, &self.panel_layout);
                 let groups = [&group, &panel_group];
                 match p.method {
                     MultiViewMethod::GeometricSpectral => {
-                        ctx.dispatch(&iso.geometric, &groups, workgroups)?
-                            + ctx.dispatch(&iso.spectral, &groups, workgroups)?
+                        ctx.dispatch(&self.geometric, &groups, workgroups)?
+                            + ctx.dispatch(&self.spectral, &groups, workgroups)?
                     }
-                    _ => ctx.dispatch(&iso.per_subpixel, &groups, workgroups)?,
+                    _ => ctx.dispatch(&self.per_subpixel, &groups, workgroups)?,
                 }
             }
         };
@@ -285,78 +281,13 @@ impl GpuRenderer {
             })
             .transpose()?;
         ctx.check()?;
-        Ok(Frame {
+        let frame = Frame {
             size: desc.size,
             color: color_data(desc.color, color),
             depth,
             samples: 0,
-        })
-    }
-}
-
-impl IsoGpu {
-    fn new(gpu: &GpuRenderer) -> Self {
-        let device = &gpu.ctx.device;
-        let storage = buffer_type(wgpu::BufferBindingType::Storage { read_only: false });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("iso"),
-            entries: &[
-                layout_entry(0, buffer_type(wgpu::BufferBindingType::Uniform)),
-                layout_entry(
-                    1,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float {
-                            filterable: gpu.ctx.filterable,
-                        },
-                        view_dimension: wgpu::TextureViewDimension::D3,
-                        multisampled: false,
-                    },
-                ),
-                layout_entry(2, storage),
-                layout_entry(3, storage),
-            ],
-        });
-        let source = shaders::iso();
-        let pipeline = compute_pipeline(device, "iso", &source, &[&layout], "main");
-        let read = buffer_type(wgpu::BufferBindingType::Storage { read_only: true });
-        let panel_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("iso panel"),
-            entries: &[
-                layout_entry(0, read),
-                layout_entry(1, read),
-                layout_entry(2, storage),
-            ],
-        });
-        let panel_pipeline = |entry: &str| {
-            compute_pipeline(
-                device,
-                "iso panel",
-                &source,
-                &[&layout, &panel_layout],
-                entry,
-            )
         };
-        let per_subpixel = panel_pipeline("per_subpixel");
-        let geometric = panel_pipeline("geometric");
-        let spectral = panel_pipeline("spectral");
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("iso"),
-            size: size_of::<Iso>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        Self {
-            layout,
-            pipeline,
-            panel_layout,
-            per_subpixel,
-            geometric,
-            spectral,
-            uniform,
-            target: None,
-            panel: None,
-            crossing: None,
-        }
+        Ok((frame, ms))
     }
 }
 
@@ -403,5 +334,22 @@ fn uniform(
         radius,
         color_format: desc.color.code(),
         ..Iso::zeroed()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::gpu::bindings::assert_declared;
+    use crate::render::gpu::shaders::compose;
+
+    #[test]
+    fn the_iso_shaders_declare_their_tables() {
+        for filterable in [false, true] {
+            let groups = [&IsoLayout::table(filterable)];
+            assert_declared(&compose("iso", &groups).unwrap(), &groups);
+            let groups = [&IsoLayout::table(filterable), &PanelLayout::table()];
+            assert_declared(&compose("iso_panel", &groups).unwrap(), &groups);
+        }
     }
 }

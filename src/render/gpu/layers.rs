@@ -6,28 +6,52 @@
 //! reads nothing outside it.
 
 use glam::UVec2;
+use wgpu::TextureViewDimension as Dim;
 
-use super::context::Context;
-use super::uniforms::{Stereo, WORKGROUP};
-use super::{
-    bind_group, buffer_type, color_data, compute_pipeline, compute_pipeline_with, floats,
-    layout_entry, unprepared, GpuRenderer, Variants,
-};
-use crate::geometry::RayGen;
+use super::bindings::{binding_table, Kind};
+use super::context::{unprepared, Context, WORKGROUP};
+use super::raycast::{RaycastPass, Variants};
+use super::resources::{color_data, floats};
+use super::shaders::compute_pipeline;
+use super::uniforms::Stereo;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
-use crate::render::stereo::{LayerFormat, Reprojection, StereoFrames, StereoTimes};
+use crate::render::stereo::{LayerFormat, Reprojection, StereoTimes};
 use crate::render::{RenderError, RenderSettings};
 use crate::scene::Scene;
 
+binding_table! {
+    /// Group 1 of the re-projection pass (group 0 is the ray caster's).
+    ReprojectResources / ReprojectLayout = "reproject_bindings" imports ["stereo_uniforms"]
+        (format: wgpu::TextureFormat)
+    {
+        stereo: Kind::uniform("Stereo"),
+        layers: Kind::write_texture(Dim::D2Array, format),
+        spans: Kind::storage_rw("array<vec4i>"),
+        depths: Kind::write_texture(Dim::D2Array, wgpu::TextureFormat::Rgba32Float),
+    }
+}
+
+binding_table! {
+    /// The compositing pass's only group.
+    CompositeResources / CompositeLayout = "composite_bindings" imports ["stereo_uniforms"] () {
+        stereo: Kind::uniform("Stereo"),
+        layers: Kind::texture(Dim::D2Array, false),
+        spans: Kind::storage("array<vec4i>"),
+        color_out: Kind::storage_rw("array<u32>"),
+        depths: Kind::texture(Dim::D2Array, false),
+        depth_out: Kind::storage_rw("array<f32>"),
+    }
+}
+
 /// Pipelines for one layer format, and the resources of the last shape.
-pub(super) struct StereoGpu {
+pub(super) struct LayersPass {
     format: LayerFormat,
     /// The left eye's march, for one volume and for several.
     reproject: Variants,
     clear: wgpu::ComputePipeline,
     composite: wgpu::ComputePipeline,
-    writer_layout: wgpu::BindGroupLayout,
-    composite_layout: wgpu::BindGroupLayout,
+    writer_layout: ReprojectLayout,
+    composite_layout: CompositeLayout,
     target: Option<LayerTarget>,
 }
 
@@ -105,83 +129,42 @@ fn texture_format(format: LayerFormat) -> wgpu::TextureFormat {
     }
 }
 
-fn storage_texture(index: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
-    layout_entry(
-        index,
-        wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format,
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-        },
-    )
-}
-
-fn sampled_texture(index: u32) -> wgpu::BindGroupLayoutEntry {
-    layout_entry(
-        index,
-        wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-            multisampled: false,
-        },
-    )
-}
-
-impl StereoGpu {
-    fn new(ctx: &Context, volume_layout: &wgpu::BindGroupLayout, format: LayerFormat) -> Self {
+impl LayersPass {
+    pub fn new(
+        ctx: &Context,
+        raycast: &RaycastPass,
+        format: LayerFormat,
+    ) -> Result<Self, RenderError> {
         let device = &ctx.device;
-        let uniform = buffer_type(wgpu::BufferBindingType::Uniform);
-        let read_write = buffer_type(wgpu::BufferBindingType::Storage { read_only: false });
-        let writer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("re-projection layers"),
-            entries: &[
-                layout_entry(0, uniform),
-                storage_texture(1, texture_format(format)),
-                layout_entry(2, read_write),
-                storage_texture(3, wgpu::TextureFormat::Rgba32Float),
-            ],
-        });
-        let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compositing"),
-            entries: &[
-                layout_entry(0, uniform),
-                sampled_texture(1),
-                layout_entry(
-                    2,
-                    buffer_type(wgpu::BufferBindingType::Storage { read_only: true }),
-                ),
-                layout_entry(3, read_write),
-                sampled_texture(4),
-                layout_entry(5, read_write),
-            ],
-        });
-        let source = super::shaders::reproject(format);
-        let writer = [volume_layout, &writer_layout];
-        Self {
+        let writer_layout = ReprojectLayout::new(device, texture_format(format));
+        let composite_layout = CompositeLayout::new(device);
+        let writer = [raycast.volume_layout.group(), writer_layout.group()];
+        let pipeline = |label, entry, constants: &[(&str, f64)]| {
+            compute_pipeline(device, label, "reproject", entry, &writer, constants)
+        };
+        Ok(Self {
             format,
             reproject: Variants {
-                one: compute_pipeline_with(
-                    device,
-                    "re-projection",
-                    &source,
-                    &writer,
-                    "main",
-                    &[("ONE_VOLUME", 1.0)],
-                ),
-                several: compute_pipeline(device, "re-projection", &source, &writer, "main"),
+                one: pipeline("re-projection", "main", &[("ONE_VOLUME", 1.0)])?,
+                several: pipeline("re-projection", "main", &[])?,
             },
-            clear: compute_pipeline(device, "layer clear", &source, &writer, "clear"),
+            clear: pipeline("layer clear", "clear", &[])?,
             composite: compute_pipeline(
                 device,
                 "compositing",
-                &super::shaders::composite(),
-                &[&composite_layout],
+                "composite",
                 "main",
-            ),
+                &[composite_layout.group()],
+                &[],
+            )?,
             writer_layout,
             composite_layout,
             target: None,
-        }
+        })
+    }
+
+    pub fn format(&self) -> LayerFormat {
+        self.format
     }
 
     /// Makes resources for `shape` and `cast` left pixels unless the last
@@ -232,7 +215,7 @@ fn array_texture(
 }
 
 impl LayerTarget {
-    fn new(gpu: &StereoGpu, ctx: &Context, shape: Shape, cast: u64) -> Self {
+    fn new(gpu: &LayersPass, ctx: &Context, shape: Shape, cast: u64) -> Self {
         let layers = array_texture(
             ctx,
             "re-projection layers",
@@ -297,7 +280,7 @@ impl LayerTarget {
     }
 
     /// The same layers with a spans buffer for `cast` left pixels.
-    fn with_spans(self, gpu: &StereoGpu, ctx: &Context, cast: u64) -> Self {
+    fn with_spans(self, gpu: &LayersPass, ctx: &Context, cast: u64) -> Self {
         let (writer, composite) = bind_groups(gpu, ctx, &self.res, &spans_buffer(ctx, cast));
         Self {
             cast,
@@ -310,36 +293,28 @@ impl LayerTarget {
 
 /// The re-projection pass's group 1 and the compositing pass's group 0.
 fn bind_groups(
-    gpu: &StereoGpu,
+    gpu: &LayersPass,
     ctx: &Context,
     res: &Resources,
     spans: &wgpu::Buffer,
 ) -> (wgpu::BindGroup, wgpu::BindGroup) {
     let device = &ctx.device;
-    let writer = bind_group(
-        device,
-        "re-projection layers",
-        &gpu.writer_layout,
-        [
-            res.uniform.as_entire_binding(),
-            wgpu::BindingResource::TextureView(&res.layers),
-            spans.as_entire_binding(),
-            wgpu::BindingResource::TextureView(&res.depths),
-        ],
-    );
-    let composite = bind_group(
-        device,
-        "compositing",
-        &gpu.composite_layout,
-        [
-            res.uniform.as_entire_binding(),
-            wgpu::BindingResource::TextureView(&res.layers),
-            spans.as_entire_binding(),
-            res.color.as_entire_binding(),
-            wgpu::BindingResource::TextureView(&res.depths),
-            res.depth.as_entire_binding(),
-        ],
-    );
+    let writer = ReprojectResources {
+        stereo: res.uniform.as_entire_binding(),
+        layers: wgpu::BindingResource::TextureView(&res.layers),
+        spans: spans.as_entire_binding(),
+        depths: wgpu::BindingResource::TextureView(&res.depths),
+    }
+    .bind(device, &gpu.writer_layout);
+    let composite = CompositeResources {
+        stereo: res.uniform.as_entire_binding(),
+        layers: wgpu::BindingResource::TextureView(&res.layers),
+        spans: spans.as_entire_binding(),
+        color_out: res.color.as_entire_binding(),
+        depths: wgpu::BindingResource::TextureView(&res.depths),
+        depth_out: res.depth.as_entire_binding(),
+    }
+    .bind(device, &gpu.composite_layout);
     (writer, composite)
 }
 
@@ -359,15 +334,15 @@ fn spans_buffer(ctx: &Context, cast: u64) -> wgpu::Buffer {
     buffer(ctx, "spans", SPAN_BYTES * cast, wgpu::BufferUsages::STORAGE)
 }
 
-impl GpuRenderer {
+impl LayersPass {
     /// Fails, before touching the GPU, if the layers exceed what this
     /// adapter allows.
-    fn check_layers(&self, r: &Reprojection) -> Result<(), RenderError> {
-        let limits = &self.ctx.limits;
+    pub fn check(ctx: &Context, r: &Reprojection) -> Result<(), RenderError> {
+        let limits = &ctx.limits;
         let too_large = |reason: String| RenderError::FrameTooLarge {
             size: [r.size.x, r.size.y],
             reason,
-            adapter: self.ctx.info.name.clone(),
+            adapter: ctx.info.name.clone(),
         };
         let layers = r.layers * r.plan.family_count();
         if layers > limits.max_texture_array_layers {
@@ -398,37 +373,19 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Both eyes from one ray casting pass: the left eye from `left`'s
-    /// rays, the right eye re-projected from them as `reprojection` plans,
-    /// with a depth channel if `desc` has one. The frame size is the
-    /// plan's.
-    pub fn render_reprojected(
+    /// The right eye re-projected from the left eye's march (the ray
+    /// caster's uniforms and group 0, as `raycast` bound them for the left
+    /// eye) as `reprojection` plans: the right frame and both passes'
+    /// milliseconds.
+    pub fn render(
         &mut self,
+        ctx: &Context,
+        raycast: &RaycastPass,
         scene: &Scene,
-        left: &RayGen,
         reprojection: &Reprojection,
         settings: &RenderSettings,
         desc: &FrameDesc,
-    ) -> Result<StereoFrames, RenderError> {
-        desc.validate()?;
-        if desc.size != reprojection.size {
-            return Err(RenderError::Settings(format!(
-                "the frame is {}x{} but the re-projection was planned for {}x{}",
-                desc.size.x, desc.size.y, reprojection.size.x, reprojection.size.y
-            )));
-        }
-        self.check_layers(reprojection)?;
-        if settings.background_image.is_some() {
-            return Err(RenderError::Settings(
-                "re-projection composites over a flat background only; render background images in two passes".into(),
-            ));
-        }
-        self.begin(scene, left, settings, desc)?;
-        let ctx = &self.ctx;
-        if !matches!(&self.stereo, Some(s) if s.format == reprojection.format) {
-            self.stereo = Some(StereoGpu::new(ctx, &self.layout, reprojection.format));
-        }
-        let stereo = self.stereo.as_mut().ok_or_else(unprepared)?;
+    ) -> Result<(Frame, StereoTimes), RenderError> {
         let plan = &reprojection.plan;
         let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
         let shape = Shape {
@@ -439,26 +396,20 @@ impl GpuRenderer {
             depth: desc.depth,
         };
         let cast = plan.cast;
-        stereo.reshape(ctx, shape, u64::from(cast.x) * u64::from(cast.y));
-        let stereo = &*stereo;
-        let target = stereo.target.as_ref().ok_or_else(unprepared)?;
+        self.reshape(ctx, shape, u64::from(cast.x) * u64::from(cast.y));
+        let target = self.target.as_ref().ok_or_else(unprepared)?;
         let res = &target.res;
         let uniform = Stereo::new(reprojection, desc.color, settings, desc.depth);
         ctx.queue
             .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
-        let volume = self.bind_group.as_ref().ok_or_else(unprepared)?;
-        let reproject = if scene.volumes().len() == 1 {
-            &stereo.reproject.one
-        } else {
-            &stereo.reproject.several
-        };
+        let volume = raycast.group()?;
         let left_ms = ctx.dispatch(
-            reproject,
+            self.reproject.for_scene(scene),
             &[volume, &target.writer],
             [cast.x.div_ceil(WORKGROUP), cast.y.div_ceil(WORKGROUP), 1],
         )?;
         let composite_ms = ctx.dispatch(
-            &stereo.composite,
+            &self.composite,
             &[&target.composite],
             [
                 desc.size.x.div_ceil(WORKGROUP),
@@ -485,27 +436,23 @@ impl GpuRenderer {
             depth,
             samples: 0,
         };
-        self.last_pass_ms = left_ms;
-        let left = self.read_frame(desc)?;
-        Ok(StereoFrames {
-            left,
+        Ok((
             right,
-            times: StereoTimes {
+            StereoTimes {
                 left_ms,
                 composite_ms,
             },
-        })
+        ))
     }
 
     /// Milliseconds a full clear of the last frame's layers takes: the
     /// cost the span scheme avoids, for the benchmark to report.
-    pub fn time_layer_clear(&mut self) -> Result<f64, RenderError> {
-        let stereo = self.stereo.as_ref().ok_or_else(no_layers)?;
-        let target = stereo.target.as_ref().ok_or_else(no_layers)?;
-        let volume = self.bind_group.as_ref().ok_or_else(unprepared)?;
+    pub fn time_clear(&self, ctx: &Context, raycast: &RaycastPass) -> Result<f64, RenderError> {
+        let target = self.target.as_ref().ok_or_else(no_layers)?;
+        let volume = raycast.group()?;
         let s = target.shape;
-        self.ctx.dispatch(
-            &stereo.clear,
+        ctx.dispatch(
+            &self.clear,
             &[volume, &target.writer],
             [
                 s.texels.x.div_ceil(WORKGROUP),
@@ -516,6 +463,27 @@ impl GpuRenderer {
     }
 }
 
-fn no_layers() -> RenderError {
+pub(super) fn no_layers() -> RenderError {
     RenderError::Settings("no re-projection layers yet: render a re-projected frame first".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::gpu::bindings::assert_declared;
+    use crate::render::gpu::raycast::VolumeLayout;
+    use crate::render::gpu::shaders::compose;
+
+    #[test]
+    fn the_stereo_shaders_declare_their_tables() {
+        for format in [LayerFormat::Rgba16F, LayerFormat::Rgba32F] {
+            let groups = [
+                &VolumeLayout::table(false),
+                &ReprojectLayout::table(texture_format(format)),
+            ];
+            assert_declared(&compose("reproject", &groups).unwrap(), &groups);
+        }
+        let groups = [&CompositeLayout::table()];
+        assert_declared(&compose("composite", &groups).unwrap(), &groups);
+    }
 }

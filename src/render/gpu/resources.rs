@@ -1,11 +1,14 @@
+//! What the passes upload and read back: volume textures with their mip
+//! chains, transfer function tables, background images, clear-brick
+//! distances, and the frame's output buffers.
+
 use glam::{UVec2, UVec3};
 
 use wgpu::util::DeviceExt;
 
 use super::context::Context;
-use super::uniforms::BrickSlot;
 use crate::render::empty_space::EmptySpace;
-use crate::render::frame::ColorFormat;
+use crate::render::frame::{ColorData, ColorFormat};
 use crate::render::BackgroundImage;
 use crate::scene::{StructuredVolume, TransferFunction, MAX_VOLUMES, TABLE_SIZE};
 
@@ -31,7 +34,7 @@ pub(super) fn stand_in_volume(ctx: &Context) -> wgpu::TextureView {
 
 /// Mip levels of a volume texture at most (level of detail): full
 /// resolution and three halvings.
-pub(crate) const LOD_LEVELS: u32 = 4;
+pub(super) const LOD_LEVELS: u32 = 4;
 
 /// An R32Float 3D texture of `dims` holding `value(i)` at voxel i (x
 /// fastest), written a bounded slab at a time, with its mip chain (each
@@ -141,6 +144,13 @@ fn halve(dims: UVec3, value: impl Fn(usize) -> f32) -> Vec<f32> {
         }
     }
     out
+}
+
+/// Where one volume's clear-brick distances lie in the bricks buffer.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct BrickSlot {
+    pub offset: u32,
+    pub bricks: [u32; 3],
 }
 
 /// Every volume's clear-brick distances, one u32 per brick, one volume
@@ -339,6 +349,21 @@ impl OutputBuffers {
     pub fn scalar_bytes(&self) -> u64 {
         self.depth.size()
     }
+}
+
+pub(super) fn color_data(format: ColorFormat, bytes: Vec<u8>) -> ColorData {
+    match format {
+        ColorFormat::Rgba8 => ColorData::Rgba8(bytes),
+        ColorFormat::Srgba8 => ColorData::Srgba8(bytes),
+        ColorFormat::Rgba32F => ColorData::Rgba32F(floats(&bytes)),
+    }
+}
+
+pub(super) fn floats(bytes: &[u8]) -> Vec<f32> {
+    bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
 }
 
 #[cfg(test)]

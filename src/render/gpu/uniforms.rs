@@ -1,15 +1,18 @@
 //! The uniforms the shaders read, as `#[repr(C)]` Rust structs, and the
-//! constants both sides share: written here once, and declared to every
-//! shader from here (the WGSL structs are generated from the Rust ones; a
-//! test parses the shaders and checks that WGSL lays them out as Rust does).
+//! constants both sides share: written here once, and given to the shaders
+//! from here as WGSL modules (modules.rs): `constants`, `iso_constants`,
+//! and one module per struct, listed by [`modules`] (the WGSL structs are
+//! generated from the Rust ones; a test parses them and checks that WGSL
+//! lays them out as Rust does).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec2, Vec3};
 
+use super::context::WORKGROUP;
+use super::resources::{BrickSlot, LOD_LEVELS};
 use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::ColorFormat;
-use crate::render::gpu::resources::LOD_LEVELS;
 use crate::render::iso::{same_view_offsets, SAME_VIEW_SAMPLES, SEARCH_MARGIN_STEPS};
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
@@ -18,9 +21,6 @@ use crate::render::settings::{
 use crate::render::stereo::Reprojection;
 use crate::render::RenderSettings;
 use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
-
-/// Invocations per workgroup along x and y.
-pub(super) const WORKGROUP: u32 = 8;
 
 /// The WGSL type of a uniform field's Rust type.
 trait WgslType {
@@ -45,12 +45,15 @@ wgsl_types! {
     [VolumeSlot; MAX_VOLUMES] => "array<VolumeSlot, 8>",
 }
 
-/// Defines a uniform struct, its WGSL declaration, and the list of its
+/// Defines a uniform struct, its WGSL declaration (module `$module`,
+/// importing the modules of the structs it holds), and the list of its
 /// fields with their byte offsets, which the layout test holds against
 /// what WGSL makes of the declaration. Fields named `_...` pad the Rust
 /// struct to WGSL's size and are not declared.
 macro_rules! uniform {
-    ($(#[$doc:meta])* $name:ident { $($(#[$fdoc:meta])* $field:ident: $ty:ty,)* }) => {
+    ($(#[$doc:meta])* $name:ident = $module:literal imports [$($import:literal),*] {
+        $($(#[$fdoc:meta])* $field:ident: $ty:ty,)*
+    }) => {
         $(#[$doc])*
         #[repr(C)]
         #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -64,10 +67,19 @@ macro_rules! uniform {
             const FIELDS: &'static [(&'static str, usize)] =
                 &[$((stringify!($field), std::mem::offset_of!($name, $field)),)*];
 
-            /// `struct Name { field: type, ... }` in WGSL.
+            /// The WGSL module declaring it.
+            const MODULE: &'static str = $module;
+
+            /// `struct Name { field: type, ... }` in WGSL, after the
+            /// imports of the structs it holds.
             fn wgsl() -> String {
                 let fields: &[(&str, &str)] = &[$((stringify!($field), <$ty as WgslType>::WGSL),)*];
-                let mut out = format!("struct {} {{\n", stringify!($name));
+                let imports: &[&str] = &[$($import),*];
+                let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
+                if !imports.is_empty() {
+                    out += &format!("// #import {}\n", imports.join(", "));
+                }
+                out += &format!("struct {} {{\n", stringify!($name));
                 for (field, ty) in fields.iter().filter(|(f, _)| !f.starts_with('_')) {
                     out += &format!("    {field}: {ty},\n");
                 }
@@ -79,7 +91,7 @@ macro_rules! uniform {
 
 uniform! {
     /// `VolumeSlot` in shaders/volume.wgsl: how one volume is sampled.
-    VolumeSlot {
+    VolumeSlot = "volume_slot" imports [] {
         /// Rows of the world-to-grid affine map, applied to (p, 1).
         world_to_grid_x: [f32; 4],
         world_to_grid_y: [f32; 4],
@@ -101,8 +113,9 @@ uniform! {
 }
 
 uniform! {
-    /// `Params` in shaders/volume.wgsl: one eye's rays and the march plan.
-    Params {
+    /// `RayUniforms` in shaders/volume.wgsl (`params`): one eye's rays and
+    /// the march plan.
+    RayUniforms = "ray_uniforms" imports ["volume_slot"] {
         /// The ray of pixel (0, 0) and its change per pixel.
         ray_origin: [f32; 3],
         /// Primary step length, world units.
@@ -165,7 +178,7 @@ uniform! {
     /// `Stereo` in shaders/stereo.wgsl: what the re-projection and the
     /// compositing pass share (src/render/stereo/epipolar.rs explains
     /// the epipole and lambda).
-    Stereo {
+    Stereo = "stereo_uniforms" imports [] {
         /// Right-eye pixel (x, y) of world point p is
         /// (dot(right_x, (p, 1)), dot(right_y, (p, 1))) / dot(right_w, (p, 1)).
         right_x: [f32; 4],
@@ -202,8 +215,8 @@ uniform! {
 uniform! {
     /// `Warp` in shaders/warp.wgsl: a source view, a target view and how
     /// one is shown from the other.
-    Warp {
-        /// The target's rays (xyz; w unused), as `Params` holds them.
+    Warp = "warp_uniforms" imports [] {
+        /// The target's rays (xyz; w unused), as `RayUniforms` holds them.
         to_origin: [f32; 4],
         to_origin_dx: [f32; 4],
         to_origin_dy: [f32; 4],
@@ -251,7 +264,7 @@ uniform! {
 uniform! {
     /// `Iso` in shaders/iso.wgsl: one view's rays at one volume's
     /// isosurface, and how it is shaded (src/render/iso/).
-    Iso {
+    Iso = "iso_uniforms" imports [] {
         /// The ray of pixel (0, 0) and its change per pixel (xyz).
         ray_origin: [f32; 4],
         ray_origin_dx: [f32; 4],
@@ -315,14 +328,7 @@ impl VolumeSlot {
     }
 }
 
-/// Where one volume's clear-brick distances lie in the bricks buffer.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(super) struct BrickSlot {
-    pub offset: u32,
-    pub bricks: [u32; 3],
-}
-
-impl Params {
+impl RayUniforms {
     /// `bricks`: each volume's place in the bricks buffer, when `plan`
     /// skips.
     pub fn new(
@@ -422,9 +428,22 @@ pub(super) fn directions(dirs: &[Vec3]) -> Vec<[f32; 4]> {
     out
 }
 
-/// What every shader is given: the constants and the uniform structs
-/// Rust and the shaders share.
-pub(super) fn declarations() -> String {
+/// The generated WGSL modules, as (name, source): the shared constants,
+/// the multi-view panel's constants, and each uniform struct.
+pub(super) fn modules() -> Vec<(&'static str, String)> {
+    vec![
+        ("constants", constants()),
+        ("iso_constants", iso_constants()),
+        (VolumeSlot::MODULE, VolumeSlot::wgsl()),
+        (RayUniforms::MODULE, RayUniforms::wgsl()),
+        (Stereo::MODULE, Stereo::wgsl()),
+        (Warp::MODULE, Warp::wgsl()),
+        (Iso::MODULE, Iso::wgsl()),
+    ]
+}
+
+/// The constants Rust and the shaders share.
+fn constants() -> String {
     let u32s = [
         ("WORKGROUP", WORKGROUP),
         ("TABLE_SIZE", TABLE_SIZE as u32),
@@ -451,8 +470,13 @@ pub(super) fn declarations() -> String {
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
-    // The spectral pass: steps before its samples' surfaces at which it
-    // searches, how many samples, and where it looks for them.
+    out
+}
+
+/// The spectral pass's: steps before its samples' surfaces at which it
+/// searches, how many samples, and where it looks for them.
+fn iso_constants() -> String {
+    let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     out += &format!("const SEARCH_MARGIN_STEPS: f32 = {SEARCH_MARGIN_STEPS:?}f;\n");
     out += &format!("const SAME_VIEW_SAMPLES: u32 = {SAME_VIEW_SAMPLES}u;\n");
     let offsets = same_view_offsets();
@@ -467,15 +491,23 @@ pub(super) fn declarations() -> String {
         offsets.len(),
         listed.join(", ")
     );
-    out + &VolumeSlot::wgsl() + &Params::wgsl() + &Stereo::wgsl() + &Warp::wgsl() + &Iso::wgsl()
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::gpu::shaders;
-    use crate::render::stereo::LayerFormat;
+    use crate::render::gpu::modules::Library;
     use wgpu::naga;
+
+    /// Struct module `module` with the modules it imports.
+    fn composed(module: &str) -> String {
+        let mut lib = Library::default();
+        for (name, source) in modules() {
+            lib.add(name, source);
+        }
+        lib.compose(module).unwrap()
+    }
 
     /// The members of WGSL struct `name` as (name, offset), and its size.
     fn wgsl_struct(source: &str, name: &str) -> (Vec<(String, usize)>, usize) {
@@ -510,32 +542,37 @@ mod tests {
 
     #[test]
     fn the_wgsl_structs_mirror_the_rust_ones() {
-        let raycast = shaders::raycast();
-        same_layout(Params::FIELDS, size_of::<Params>(), &raycast, "Params");
+        let rays = composed(RayUniforms::MODULE);
+        same_layout(
+            RayUniforms::FIELDS,
+            size_of::<RayUniforms>(),
+            &rays,
+            "RayUniforms",
+        );
         same_layout(
             VolumeSlot::FIELDS,
             size_of::<VolumeSlot>(),
-            &raycast,
+            &rays,
             "VolumeSlot",
         );
-        for format in [LayerFormat::Rgba16F, LayerFormat::Rgba32F] {
-            let reproject = shaders::reproject(format);
-            same_layout(Params::FIELDS, size_of::<Params>(), &reproject, "Params");
-            same_layout(Stereo::FIELDS, size_of::<Stereo>(), &reproject, "Stereo");
-        }
         same_layout(
             Stereo::FIELDS,
             size_of::<Stereo>(),
-            &shaders::composite(),
+            &composed(Stereo::MODULE),
             "Stereo",
         );
-        same_layout(Warp::FIELDS, size_of::<Warp>(), &shaders::warp(), "Warp");
-        same_layout(Iso::FIELDS, size_of::<Iso>(), &shaders::iso(), "Iso");
+        same_layout(
+            Warp::FIELDS,
+            size_of::<Warp>(),
+            &composed(Warp::MODULE),
+            "Warp",
+        );
+        same_layout(Iso::FIELDS, size_of::<Iso>(), &composed(Iso::MODULE), "Iso");
     }
 
     #[test]
     fn the_shadow_ambient_constant_is_the_same_f32() {
-        let c = declarations();
+        let c = constants();
         let line = c.lines().find(|l| l.contains("SHADOW_AMBIENT")).unwrap();
         let literal = line.split('=').nth(1).unwrap().trim().trim_end_matches(";");
         let parsed: f32 = literal.trim_end_matches('f').parse().unwrap();

@@ -6,9 +6,11 @@
 
 use glam::{UVec2, Vec3, Vec4};
 
-use super::context::Context;
-use super::uniforms::{Warp, WORKGROUP};
-use super::{bind_group, buffer_type, compute_pipeline, floats, layout_entry, shaders};
+use super::bindings::{binding_table, Kind};
+use super::context::{unprepared, Context, WORKGROUP};
+use super::resources::floats;
+use super::shaders::compute_pipeline;
+use super::uniforms::Warp;
 use crate::geometry::RayGen;
 use crate::render::frame::filled;
 use crate::render::warp::{Projector, Source, WarpMode, WarpSettings, Warped};
@@ -17,8 +19,29 @@ use crate::render::{FrameDesc, RenderError};
 /// Triangles a grid pass covers per workgroup (shaders/warp.wgsl).
 const TRIANGLES_PER_GROUP: u32 = 64;
 
-pub(super) struct GpuWarp {
-    layout: wgpu::BindGroupLayout,
+binding_table! {
+    /// The warp passes' only group.
+    WarpResources / WarpLayout = "warp_bindings" imports ["warp_uniforms"] () {
+        w: Kind::uniform("Warp"),
+        /// The source: premultiplied color, first-hit depth, and
+        /// `w.layers` layers a pixel as two vec4s each (color; start, end).
+        color: Kind::storage("array<vec4f>"),
+        depth: Kind::storage("array<f32>"),
+        layers: Kind::storage("array<vec4f>"),
+        out_color: Kind::storage_rw("array<vec4f>"),
+        out_depth: Kind::storage_rw("array<f32>"),
+        /// The grid: the nearest surface's distance a target pixel (bits
+        /// inverted, so that atomicMax keeps the nearest; 0: none), each
+        /// mesh vertex where it landed in the target (x, y, distance, 1 if
+        /// it landed), and each target pixel's source position.
+        nearest: Kind::storage_rw("array<atomic<u32>>"),
+        mesh: Kind::storage_rw("array<vec4f>"),
+        from_at: Kind::storage_rw("array<vec2f>"),
+    }
+}
+
+pub(super) struct WarpPass {
+    layout: WarpLayout,
     quad: wgpu::ComputePipeline,
     layers: wgpu::ComputePipeline,
     nodes: wgpu::ComputePipeline,
@@ -53,44 +76,30 @@ struct Buffers {
     group: wgpu::BindGroup,
 }
 
-impl GpuWarp {
-    pub fn new(ctx: &Context) -> Self {
+impl WarpPass {
+    pub fn new(ctx: &Context) -> Result<Self, RenderError> {
         let device = &ctx.device;
-        let storage = |read_only| buffer_type(wgpu::BufferBindingType::Storage { read_only });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("warp"),
-            entries: &[
-                layout_entry(0, buffer_type(wgpu::BufferBindingType::Uniform)),
-                layout_entry(1, storage(true)),
-                layout_entry(2, storage(true)),
-                layout_entry(3, storage(true)),
-                layout_entry(4, storage(false)),
-                layout_entry(5, storage(false)),
-                layout_entry(6, storage(false)),
-                layout_entry(7, storage(false)),
-                layout_entry(8, storage(false)),
-            ],
-        });
-        let source = shaders::warp();
-        let pipeline = |entry: &str| compute_pipeline(device, "warp", &source, &[&layout], entry);
+        let layout = WarpLayout::new(device);
+        let pipeline =
+            |entry: &str| compute_pipeline(device, "warp", "warp", entry, &[layout.group()], &[]);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("warp uniform"),
             size: size_of::<Warp>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Self {
-            quad: pipeline("quad"),
-            layers: pipeline("layer_march"),
-            nodes: pipeline("grid_nodes"),
-            depth: pipeline("grid_depth"),
-            pick: pipeline("grid_pick"),
-            gather: pipeline("grid_color"),
+        Ok(Self {
+            quad: pipeline("quad")?,
+            layers: pipeline("layer_march")?,
+            nodes: pipeline("grid_nodes")?,
+            depth: pipeline("grid_depth")?,
+            pick: pipeline("grid_pick")?,
+            gather: pipeline("grid_color")?,
             layout,
             uniform,
             buffers: None,
             uploaded: None,
-        }
+        })
     }
 
     /// `source` shown from `target` (an image of `size`): the warped image
@@ -136,7 +145,7 @@ impl GpuWarp {
             nodes: pixels(nodes),
         };
         self.reserve(ctx, need)?;
-        let buffers = self.buffers.as_ref().ok_or_else(super::unprepared)?;
+        let buffers = self.buffers.as_ref().ok_or_else(unprepared)?;
         if self.uploaded != Some(source.generation()) {
             let queue = &ctx.queue;
             queue.write_buffer(
@@ -246,22 +255,18 @@ impl GpuWarp {
         let nearest = storage("grid nearest", 4 * cap.to, into);
         let mesh = storage("grid mesh", 16 * cap.nodes, into);
         let from_at = storage("grid source positions", 8 * cap.to, into);
-        let group = bind_group(
-            device,
-            "warp",
-            &self.layout,
-            [
-                self.uniform.as_entire_binding(),
-                color.as_entire_binding(),
-                depth.as_entire_binding(),
-                layers.as_entire_binding(),
-                out_color.as_entire_binding(),
-                out_depth.as_entire_binding(),
-                nearest.as_entire_binding(),
-                mesh.as_entire_binding(),
-                from_at.as_entire_binding(),
-            ],
-        );
+        let group = WarpResources {
+            w: self.uniform.as_entire_binding(),
+            color: color.as_entire_binding(),
+            depth: depth.as_entire_binding(),
+            layers: layers.as_entire_binding(),
+            out_color: out_color.as_entire_binding(),
+            out_depth: out_depth.as_entire_binding(),
+            nearest: nearest.as_entire_binding(),
+            mesh: mesh.as_entire_binding(),
+            from_at: from_at.as_entire_binding(),
+        }
+        .bind(device, &self.layout);
         self.buffers = Some(Buffers {
             capacity: cap,
             color_read: readable("warped color read-back", 16 * cap.to),
@@ -337,5 +342,18 @@ fn uniform(
         depth_threshold: settings.depth_threshold,
         near: t.t_near,
         far: t.t_far,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::gpu::bindings::assert_declared;
+    use crate::render::gpu::shaders::compose;
+
+    #[test]
+    fn the_warp_shader_declares_its_table() {
+        let groups = [&WarpLayout::table()];
+        assert_declared(&compose("warp", &groups).unwrap(), &groups);
     }
 }

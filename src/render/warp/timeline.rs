@@ -11,6 +11,7 @@ use glam::UVec2;
 use super::{Source, WarpMode, WarpSettings};
 use crate::geometry::RayGen;
 use crate::render::cells::{CellGrid, CellRun};
+use crate::render::Render as _;
 use crate::render::{dssim, ColorFormat, Frame, FrameDesc, RenderError, RenderSettings, Renderer};
 use crate::scene::Scene;
 

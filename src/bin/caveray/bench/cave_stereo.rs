@@ -15,6 +15,7 @@ use anari_library_caveray::output::{Chart, Series, XAxis};
 use anari_library_caveray::render::stereo::{
     Bounds, LayerFormat, NotEpipolar, Reprojection, ReprojectionError,
 };
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     dssim, Frame, FrameDesc, GpuRenderer, RenderSettings, Shading,
 };

@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::stereo::{paper, HmdStereo};
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, Backend, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer, Sampling, Shading,
     LOD_MAX,

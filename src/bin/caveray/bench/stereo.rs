@@ -17,6 +17,7 @@ use anari_library_caveray::output::{
 use anari_library_caveray::render::stereo::{
     layer_memory, paper, Bounds, HmdStereo, LayerFormat, Reprojection,
 };
+use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     dssim, ssim_map, Frame, FrameDesc, GpuRenderer, RenderSettings, Shading,
 };

@@ -1,0 +1,213 @@
+//! The scene on the GPU: its volumes as textures, its transfer functions
+//! as rows of one table texture, the background image and the clear-brick
+//! distances, uploaded when a scene brings new ones and kept otherwise.
+//! Passes bind these; `generation` tells them when a bind group made
+//! before binds something no longer current.
+
+use std::sync::Arc;
+
+use super::context::Context;
+use super::resources::{self, BrickSlot};
+use crate::render::empty_space::{EmptySpace, SpaceCache};
+use crate::render::march_plan::MarchPlan;
+use crate::render::{BackgroundImage, RenderError};
+use crate::scene::{Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
+
+/// How often data went to the GPU; lets tests (and curious users) check
+/// that unchanged scenes are not uploaded again.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Uploads {
+    pub volumes: u32,
+    pub transfer_functions: u32,
+}
+
+pub(super) struct GpuScene {
+    /// Whether the volume textures carry mip chains: from the first frame
+    /// with level of detail on (software Vulkan samples textures without
+    /// them faster, so full detail does not pay for them before).
+    mips: bool,
+    /// The scene's volumes on the GPU, in its order.
+    volumes: Vec<(Arc<StructuredVolume>, wgpu::TextureView)>,
+    /// Bound where a scene has fewer than MAX_VOLUMES volumes.
+    no_volume: wgpu::TextureView,
+    /// One row per volume slot; which transfer function each row holds.
+    table: wgpu::Texture,
+    table_view: wgpu::TextureView,
+    tables: [Option<Arc<TransferFunction>>; MAX_VOLUMES],
+    /// Which table and step exponent each stepped table row holds.
+    stepped: [Option<(Arc<TransferFunction>, f32)>; MAX_VOLUMES],
+    /// The background image bound now (`None`: the stand-in), and the
+    /// stand-in bound when there is none.
+    background: Option<(Arc<BackgroundImage>, wgpu::TextureView)>,
+    no_background: wgpu::TextureView,
+    /// Each placed volume's clear bricks under its table, which the bricks
+    /// buffer holds.
+    space_cache: SpaceCache,
+    bricks: wgpu::Buffer,
+    brick_slots: Vec<BrickSlot>,
+    uploads: Uploads,
+    /// Counts changes of what is bound: the volume textures, the
+    /// background and the bricks buffer (tables are rewritten in place).
+    generation: u64,
+}
+
+impl GpuScene {
+    pub fn new(ctx: &Context) -> Self {
+        let no_background = resources::upload_background(ctx, None);
+        let no_volume = resources::stand_in_volume(ctx);
+        let table = resources::table_texture(ctx);
+        let table_view = table.create_view(&Default::default());
+        let (bricks, _) = resources::bricks_buffer(ctx, &[]);
+        Self {
+            mips: false,
+            volumes: Vec::new(),
+            no_volume,
+            table,
+            table_view,
+            tables: Default::default(),
+            stepped: Default::default(),
+            background: None,
+            no_background,
+            space_cache: SpaceCache::default(),
+            bricks,
+            brick_slots: Vec::new(),
+            uploads: Uploads::default(),
+            generation: 0,
+        }
+    }
+
+    pub fn uploads(&self) -> Uploads {
+        self.uploads
+    }
+
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Volume slot `i`'s texture (the stand-in past the scene's volumes).
+    pub fn volume(&self, i: usize) -> &wgpu::TextureView {
+        self.volumes.get(i).map_or(&self.no_volume, |(_, v)| v)
+    }
+
+    /// The first volume's texture, if the scene has one.
+    pub fn first_volume(&self) -> Option<&wgpu::TextureView> {
+        self.volumes.first().map(|(_, v)| v)
+    }
+
+    pub fn table_view(&self) -> &wgpu::TextureView {
+        &self.table_view
+    }
+
+    pub fn background(&self) -> &wgpu::TextureView {
+        self.background
+            .as_ref()
+            .map_or(&self.no_background, |(_, v)| v)
+    }
+
+    pub fn bricks(&self) -> &wgpu::Buffer {
+        &self.bricks
+    }
+
+    /// Each volume's place in the bricks buffer, when primary rays skip.
+    pub fn brick_slots(&self, skipping: bool) -> &[BrickSlot] {
+        if skipping {
+            &self.brick_slots
+        } else {
+            &[]
+        }
+    }
+
+    /// From now on volumes carry their mip chains: those on the GPU are
+    /// uploaded again on the next upload.
+    pub fn use_mips(&mut self) {
+        if !self.mips {
+            self.mips = true;
+            self.volumes.clear();
+            self.generation += 1;
+        }
+    }
+
+    /// Uploads whatever of the scene is not on the GPU (a new volume
+    /// texture changes the generation; tables are rows of one texture,
+    /// rewritten in place).
+    pub fn upload(&mut self, ctx: &Context, scene: &Scene) {
+        let mut volumes = Vec::with_capacity(scene.volumes().len());
+        for placed in scene.volumes() {
+            // A grid placed twice is one texture.
+            let kept = volumes
+                .iter()
+                .chain(&self.volumes)
+                .find(|(v, _)| Arc::ptr_eq(v, &placed.volume))
+                .map(|(_, view)| view.clone());
+            let view = kept.unwrap_or_else(|| {
+                self.uploads.volumes += 1;
+                resources::upload_volume(ctx, &placed.volume, self.mips)
+            });
+            volumes.push((Arc::clone(&placed.volume), view));
+        }
+        let changed = volumes.len() != self.volumes.len()
+            || volumes
+                .iter()
+                .zip(&self.volumes)
+                .any(|((a, _), (b, _))| !Arc::ptr_eq(a, b));
+        self.volumes = volumes;
+        for (row, placed) in scene.volumes().iter().enumerate() {
+            let tf = &placed.transfer_function;
+            if !matches!(&self.tables[row], Some(t) if Arc::ptr_eq(t, tf)) {
+                resources::write_table(ctx, &self.table, row as u32, tf);
+                self.tables[row] = Some(Arc::clone(tf));
+                self.uploads.transfer_functions += 1;
+            }
+        }
+        if changed {
+            self.generation += 1;
+        }
+    }
+
+    /// Binds `background` (or the stand-in), uploading it if it is not the
+    /// one bound now.
+    pub fn set_background(&mut self, ctx: &Context, background: Option<&Arc<BackgroundImage>>) {
+        let same = match (&self.background, background) {
+            (None, None) => true,
+            (Some((a, _)), Some(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        };
+        if !same {
+            self.background =
+                background.map(|b| (Arc::clone(b), resources::upload_background(ctx, Some(b))));
+            self.generation += 1;
+        }
+    }
+
+    /// The tables with opacities corrected for this plan's primary step,
+    /// rewritten where the table or the step changed.
+    pub fn write_stepped_tables(&mut self, ctx: &Context, scene: &Scene, plan: &MarchPlan) {
+        for (row, (placed, vplan)) in scene.volumes().iter().zip(&plan.volumes).enumerate() {
+            let tf = &placed.transfer_function;
+            let exponent = plan.step * vplan.inv_unit_distance;
+            let current =
+                matches!(&self.stepped[row], Some((t, e)) if Arc::ptr_eq(t, tf) && *e == exponent);
+            if !current {
+                resources::write_stepped_table(ctx, &self.table, row as u32, tf, exponent);
+                self.stepped[row] = Some((Arc::clone(tf), exponent));
+            }
+        }
+    }
+
+    /// Makes the clear-brick distances of the scene's volumes under their
+    /// tables, where they are new, and the buffer that holds them.
+    pub fn find_clear_bricks(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        plan: &MarchPlan,
+    ) -> Result<(), RenderError> {
+        let (spaces, changed) = self.space_cache.update(scene, plan)?;
+        if changed {
+            let list: Vec<&EmptySpace> = spaces.iter().map(Arc::as_ref).collect();
+            (self.bricks, self.brick_slots) = resources::bricks_buffer(ctx, &list);
+            self.generation += 1;
+        }
+        Ok(())
+    }
+}
