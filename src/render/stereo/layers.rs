@@ -25,13 +25,6 @@ impl LayerFormat {
             LayerFormat::Rgba32F => 16,
         }
     }
-    /// The WGSL storage texel format.
-    pub fn wgsl(self) -> &'static str {
-        match self {
-            LayerFormat::Rgba16F => "rgba16float",
-            LayerFormat::Rgba32F => "rgba32float",
-        }
-    }
 }
 
 impl fmt::Display for LayerFormat {
