@@ -124,3 +124,38 @@ fn unknown_parameters_are_warned_once_per_object_and_name() {
     assert_eq!(errors.len(), 2);
     assert!(d.property(Subject::Device, "version", false) == Some(Property::Int32(1)));
 }
+
+/// A renderer's FLOAT32 as the bytes a host passes.
+fn float(x: f32) -> Input {
+    Input::Bytes(DataType::FLOAT32, x.to_ne_bytes().to_vec())
+}
+
+#[test]
+fn step_factor_and_sampling_rate_take_exactly_the_range_hosts_are_told() {
+    use anari_library_caveray::device::info;
+    let mut d = device();
+    for name in ["stepFactor", "volumeSamplingRate"] {
+        let (lo, hi) = info::param(DataType::RENDERER, "default", name)
+            .and_then(|p| p.range)
+            .unwrap_or_else(|| panic!("{name} states no range"));
+        let r = d.new_object(DataType::RENDERER, "default");
+        for ok in [lo, 1.0f32.clamp(lo, hi), hi] {
+            d.set_param(Subject::Object(r), name, float(ok));
+            d.commit(Subject::Object(r));
+            let errors = messages(&mut d, Severity::Error);
+            assert!(errors.is_empty(), "{name} {ok}: {errors:?}");
+        }
+        for bad in [lo * 0.99, hi * 1.01] {
+            d.set_param(Subject::Object(r), name, float(bad));
+            d.commit(Subject::Object(r));
+            let errors = messages(&mut d, Severity::Error);
+            assert!(
+                errors.len() == 1
+                    && errors[0]
+                        .contains(&format!("{name} must be from {lo} to {hi}, got {bad:?}")),
+                "{name} {bad}: {errors:?}"
+            );
+        }
+        d.release(r);
+    }
+}
