@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use super::inputs::{EyeView, Inputs, Views};
 use super::job::{FrameRenders, Partner, RenderJob};
-use super::passes::DEVICE_LAYERS;
+use super::passes::REPROJECTION_LAYERS;
 use crate::geometry::{MatrixCamera, PrimaryRays};
 use crate::render::stereo::{decide, Bounds, Eyes};
 use crate::scene::Scene;
@@ -99,7 +99,7 @@ impl<'a> OwnEye<'a> {
             right: Ok(matrix),
             sizes: [own.desc.size; 2],
         };
-        let plan = decide(eyes, Bounds::of(self.scene), DEVICE_LAYERS, None)
+        let plan = decide(eyes, Bounds::of(self.scene), REPROJECTION_LAYERS, None)
             .map_err(|e| Unpaired::Unsuited(format!("cannot be re-projected: {e}")))?;
         Ok((
             baseline,

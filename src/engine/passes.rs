@@ -21,7 +21,7 @@ use crate::render::{ColorFormat, Frame, FrameDesc, RenderError, Renderer};
 use crate::scene::Scene;
 
 /// The layers the device re-projects with: as many as the plan needs.
-pub const DEVICE_LAYERS: LayerRequest = LayerRequest {
+pub const REPROJECTION_LAYERS: LayerRequest = LayerRequest {
     count: None,
     format: LayerFormat::Rgba16F,
 };
@@ -133,8 +133,13 @@ fn stereo_camera(
         right: right.matrix.ok_or_else(not_perspective),
         sizes: [left.size, right.size],
     };
-    let plan = decide(eyes, Bounds::of(scene), DEVICE_LAYERS, Some(facts(r, job)))
-        .map_err(|e| e.to_string())?;
+    let plan = decide(
+        eyes,
+        Bounds::of(scene),
+        REPROJECTION_LAYERS,
+        Some(facts(r, job)),
+    )
+    .map_err(|e| e.to_string())?;
     let pair = reproject(r, scene, job, left, &plan)?;
     Ok((pair, plan.layers))
 }

@@ -18,7 +18,7 @@ use crate::render::warp::{Source, WarpMode};
 use crate::render::{AutoChoice, Backend, Frame, Renderer};
 
 /// Layers a background render keeps for the `layers` warp.
-const DEVICE_LAYERS: usize = 4;
+const WARP_LAYERS: usize = 4;
 
 pub struct Worker {
     sender: Option<Sender<RenderJob>>,
@@ -143,7 +143,7 @@ fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, re
         };
         let r = renderer_for(renderer, inputs.backend, &say)?;
         let layers = if back.warp == WarpMode::Layers {
-            DEVICE_LAYERS
+            WARP_LAYERS
         } else {
             0
         };
