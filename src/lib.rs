@@ -2,6 +2,7 @@ pub mod capi;
 pub mod cave;
 pub mod data;
 pub mod device;
+pub mod engine;
 pub mod geometry;
 pub mod output;
 pub mod render;

@@ -13,7 +13,8 @@ use super::info;
 use super::status::{call_error, emit, guard, set_library_callback, Callback};
 use super::sys::*;
 use crate::device::{
-    object_kind, DataType, Device, HostMemory, Property, Severity, Status, StatusCode, Subject,
+    object_kind, DataType, Device, FrameSlot, HostMemory, OnDone, Property, Severity, Status,
+    StatusCode, Subject,
 };
 
 /// Runs `f` on the live device behind `dev`, then delivers the messages the
@@ -770,16 +771,27 @@ pub unsafe extern "C" fn get_property(
             wait_for(dev, "anariGetProperty", obj);
         }
     }
+    let wait = mask & 1 != 0;
+    let value = when_idle("anariGetProperty", || {
+        with_named(
+            dev,
+            "anariGetProperty",
+            name,
+            "the property name",
+            Ok(None),
+            |d, device, name| device.try_property(target(d, obj), &name, wait),
+        )
+    });
+    let Some(value) = value else {
+        return 0;
+    };
     with_named(
         dev,
         "anariGetProperty",
         name,
         "the property name",
         0,
-        |d, device, name| {
-            let Some(value) = device.property(target(d, obj), &name, mask & 1 != 0) else {
-                return 0;
-            };
+        |_, device, name| {
             let (expected, bytes): (DataType, Vec<u8>) = match value {
                 Property::Int32(v) => (DataType::INT32, v.to_ne_bytes().to_vec()),
                 Property::UInt64(v) => (DataType::UINT64, v.to_ne_bytes().to_vec()),
@@ -858,20 +870,26 @@ pub unsafe extern "C" fn map_frame(
     if !wait_for(dev, "anariMapFrame", frame) {
         return std::ptr::null();
     }
-    with_named(
-        dev,
-        "anariMapFrame",
-        channel,
-        "the channel name",
-        std::ptr::null(),
-        |_, device, channel| match device.map_frame(frame as usize as u64, &channel) {
-            Some(m) => {
-                write(m.size.x, m.size.y, m.ty as i32);
-                m.ptr.cast()
-            }
-            None => std::ptr::null(),
-        },
-    )
+    when_idle("anariMapFrame", || {
+        with_named(
+            dev,
+            "anariMapFrame",
+            channel,
+            "the channel name",
+            Ok(std::ptr::null()),
+            |_, device, channel| {
+                Ok(
+                    match device.try_map_frame(frame as usize as u64, &channel)? {
+                        Some(m) => {
+                            write(m.size.x, m.size.y, m.ty as i32);
+                            m.ptr.cast()
+                        }
+                        None => std::ptr::null(),
+                    },
+                )
+            },
+        )
+    })
 }
 
 pub unsafe extern "C" fn unmap_frame(dev: ANARIDevice, frame: ANARIFrame, channel: *const c_char) {
@@ -886,33 +904,56 @@ pub unsafe extern "C" fn unmap_frame(dev: ANARIDevice, frame: ANARIFrame, channe
 }
 
 pub unsafe extern "C" fn render_frame(dev: ANARIDevice, frame: ANARIFrame) {
-    with_device(dev, "anariRenderFrame", (), |d, device| {
-        let h = frame as usize as u64;
-        let callback = device
-            .committed(h, "frameCompletionCallback")
-            .and_then(|v| v.pointer())
-            .filter(|&a| a != 0);
-        let user = device
-            .committed(h, "frameCompletionCallbackUserData")
-            .and_then(|v| v.pointer())
-            .unwrap_or(0);
-        let device_ptr = d.ptr() as usize;
-        let on_done = callback.map(|f| {
-            Box::new(move || {
-                // SAFETY: the host declared this value an ANARIFrameCompletionCallback.
-                let f: unsafe extern "C" fn(*const c_void, ANARIDevice, ANARIFrame) =
-                    unsafe { std::mem::transmute(f) };
-                unsafe {
-                    f(
-                        user as *const c_void,
-                        device_ptr as ANARIDevice,
-                        h as usize as ANARIFrame,
-                    )
-                }
-            }) as Box<dyn FnOnce() + Send>
-        });
-        device.render_frame(h, on_done)
+    let h = frame as usize as u64;
+    let mut on_done = None;
+    let mut read = false;
+    when_idle("anariRenderFrame", || {
+        with_device(dev, "anariRenderFrame", Ok(()), |d, device| {
+            if !std::mem::replace(&mut read, true) {
+                on_done = completion(d, device, h);
+            }
+            device.start_render(h, &mut on_done)
+        })
     })
+}
+
+/// The frame's completion callback as the device calls it, if it has one.
+fn completion(d: &DeviceRef, device: &mut Device, h: u64) -> Option<OnDone> {
+    let callback = device
+        .committed(h, "frameCompletionCallback")
+        .and_then(|v| v.pointer())
+        .filter(|&a| a != 0);
+    let user = device
+        .committed(h, "frameCompletionCallbackUserData")
+        .and_then(|v| v.pointer())
+        .unwrap_or(0);
+    let device_ptr = d.ptr() as usize;
+    callback.map(|f| {
+        Box::new(move || {
+            // SAFETY: the host declared this value an ANARIFrameCompletionCallback.
+            let f: unsafe extern "C" fn(*const c_void, ANARIDevice, ANARIFrame) =
+                unsafe { std::mem::transmute(f) };
+            unsafe {
+                f(
+                    user as *const c_void,
+                    device_ptr as ANARIDevice,
+                    h as usize as ANARIFrame,
+                )
+            }
+        }) as OnDone
+    })
+}
+
+/// Calls `f` until it stops answering that a frame is rendering, waiting
+/// for that render between calls without holding the device, so that
+/// callbacks on the render thread may call into the device meanwhile.
+fn when_idle<R>(call: &str, mut f: impl FnMut() -> Result<R, std::sync::Arc<FrameSlot>>) -> R {
+    loop {
+        match f() {
+            Ok(r) => return r,
+            Err(slot) => guard(call, (), || drop(slot.wait())),
+        }
+    }
 }
 
 /// Waits for a frame without holding the device, so that callbacks on the

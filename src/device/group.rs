@@ -1,11 +1,10 @@
 //! The group: volumes and surfaces an instance places in the world
 //! together.
 
-use super::info::SubtypeInfo;
+use super::info::{object_list, SubtypeInfo};
 use super::object::{Derived, ObjectRef, State};
 use super::read::Read;
 use super::types::DataType as T;
-use super::world::{object_list, objects};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::GROUP,
@@ -28,7 +27,7 @@ pub struct GroupModel {
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     Ok(Some(State::Group(Derived::Ready(GroupModel {
-        volumes: objects(r, "volume", T::VOLUME)?,
-        surfaces: objects(r, "surface", T::SURFACE)?,
+        volumes: r.objects("volume", T::VOLUME)?,
+        surfaces: r.objects("surface", T::SURFACE)?,
     }))))
 }

@@ -77,6 +77,15 @@ pub struct SubtypeInfo {
     pub commit: Option<Commit>,
 }
 
+/// An optional ARRAY1D parameter of objects of one kind.
+pub const fn object_list(
+    name: &'static str,
+    element: &'static [T],
+    description: &'static str,
+) -> ParamInfo {
+    p(name, &[T::ARRAY1D], false, DefaultValue::None, description).elements(element)
+}
+
 pub const fn p(
     name: &'static str,
     types: &'static [T],

@@ -1,9 +1,13 @@
 //! The ANARI object model in plain Rust: objects behind handles,
-//! parameters set and committed, arrays, frames and the render thread.
-//! Each implemented subtype is a module of its own (a folder per object
-//! kind, helide-style) holding its parameter table and its commit; `info`
-//! lists them. The C layer (`crate::capi`) converts and forwards to this.
+//! parameters set and committed, arrays and frames. Each implemented
+//! subtype is a module of its own (a folder per object kind, helide-style)
+//! holding its parameter table and its commit; `info` lists them. When a
+//! frame renders, `snapshot` reads its objects (through the typed
+//! accessors of `access`, the one place that looks inside an object's
+//! state) into plain values, which `crate::engine` renders. The C layer
+//! (`crate::capi`) converts and forwards to this.
 
+mod access;
 mod array;
 mod calls;
 pub mod camera;
@@ -18,18 +22,17 @@ mod material;
 mod object;
 mod read;
 mod renderer;
+mod snapshot;
 mod spatial_field;
 mod surface;
 mod types;
 mod value;
 pub mod volume;
-mod worker;
 mod world;
 
+pub use crate::engine::{panic_message, FrameSlot};
 pub use array::{Array, HostMemory};
-pub use calls::{Device, Input, Mapped, Property, Subject};
+pub use calls::{Device, Input, Mapped, OnDone, Property, Subject};
 pub use camera::CameraModel;
-pub use frame::slot::FrameSlot;
-pub use types::{kind_name, object_kind, DataType, Severity, Status, StatusCode};
+pub use types::{kind_name, object_kind, DataType, Reporter, Severity, Status, StatusCode};
 pub use value::{Params, Value};
-pub use worker::{panic_message, Reporter};

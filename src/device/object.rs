@@ -6,7 +6,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::array::Array;
 use super::camera::CameraModel;
-use super::frame::slot::FrameState;
+use super::frame::state::FrameState;
 use super::geometry::IsoGeometry;
 use super::group::GroupModel;
 use super::info::SubtypeInfo;
@@ -107,6 +107,14 @@ impl<T> Derived<T> {
             Derived::Invalid(e) => Err(format!("{what} is not usable: {e}")),
         }
     }
+}
+
+/// Why an object gives no value of the type asked for.
+pub enum Unready {
+    /// It is an object of another kind (or one caveray does not implement).
+    OtherKind,
+    /// Not committed, or its commit failed: the message says which.
+    Unusable(String),
 }
 
 pub enum State {

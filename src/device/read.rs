@@ -6,7 +6,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use super::array::Array;
 use super::info::{DefaultValue, ParamInfo};
-use super::object::{ObjectRef, State};
+use super::object::ObjectRef;
 use super::types::DataType;
 use super::value::{Params, Value};
 
@@ -119,11 +119,9 @@ impl<'a> Read<'a> {
         let Some(object) = self.object(name) else {
             return Ok(None);
         };
-        let guard = object.lock();
-        match &guard.state {
-            State::Array(a) => read(a).map(Some),
-            _ => Err(format!("'{name}' is {}, not an array", object.describe())),
-        }
+        object
+            .with_array(|a| read(a).map(Some))
+            .unwrap_or_else(|| Err(format!("'{name}' is {}, not an array", object.describe())))
     }
 
     /// `read` applied to array parameter `name` if it holds `element`s.
@@ -142,5 +140,14 @@ impl<'a> Read<'a> {
             }
             read(a)
         })
+    }
+
+    /// The objects of array parameter `name`, which must hold `element`s;
+    /// none if it is unset.
+    pub fn objects(&self, name: &str, element: DataType) -> Result<Vec<ObjectRef>, String> {
+        let objects = self.array_of(name, element, |a| {
+            Ok(a.objects.iter().flatten().cloned().collect())
+        })?;
+        Ok(objects.unwrap_or_default())
     }
 }

@@ -3,6 +3,8 @@
 
 use std::fmt;
 
+pub use crate::engine::{Severity, StatusCode};
+
 const PTR: usize = std::mem::size_of::<usize>();
 
 macro_rules! data_types {
@@ -194,29 +196,6 @@ pub fn kind_name(kind: DataType) -> &'static str {
     }
 }
 
-/// ANARI's status severities.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Severity {
-    FatalError = 1,
-    Error = 2,
-    Warning = 3,
-    PerformanceWarning = 4,
-    Info = 5,
-    Debug = 6,
-}
-
-/// ANARI's status codes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StatusCode {
-    NoError = 0,
-    UnknownError = 1,
-    InvalidArgument = 2,
-    InvalidOperation = 3,
-    OutOfMemory = 4,
-    UnsupportedDevice = 5,
-    VersionMismatch = 6,
-}
-
 /// One message for the host's status callback. `source` is the handle the
 /// message is about (0 for none) with its kind.
 #[derive(Clone, Debug, PartialEq)]
@@ -227,3 +206,6 @@ pub struct Status {
     pub source_kind: DataType,
     pub message: String,
 }
+
+/// Where a device's status messages go; called from any thread.
+pub type Reporter = std::sync::Arc<dyn Fn(Status) + Send + Sync>;

@@ -4,8 +4,10 @@
 
 use glam::Mat4;
 
-use super::info::{p, DefaultValue, ParamInfo, SubtypeInfo};
-use super::object::{Derived, ObjectRef, State};
+use super::group::GroupModel;
+use super::info::{object_list, SubtypeInfo};
+use super::instance::InstanceModel;
+use super::object::{Derived, ObjectRef, State, Unready};
 use super::read::Read;
 use super::types::DataType as T;
 use crate::scene::MAX_VOLUMES;
@@ -36,22 +38,23 @@ pub struct WorldModel {
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let direct = |name, kind| -> Result<Vec<(ObjectRef, Option<Mat4>)>, String> {
-        Ok(objects(r, name, kind)?
+        Ok(r.objects(name, kind)?
             .into_iter()
             .map(|o| (o, None))
             .collect())
     };
     let mut volumes = direct("volume", T::VOLUME)?;
     let mut surfaces = direct("surface", T::SURFACE)?;
-    for instance in objects(r, "instance", T::INSTANCE)? {
-        let model = match &instance.lock().state {
-            State::Instance(i) => i.ready(&instance.describe())?.clone(),
-            _ => continue,
+    for instance in r.objects("instance", T::INSTANCE)? {
+        let model = match instance.derived::<InstanceModel>() {
+            Ok(model) => model,
+            Err(Unready::OtherKind) => continue,
+            Err(Unready::Unusable(why)) => return Err(why),
         };
-        let group = &model.group;
-        let members = match &group.lock().state {
-            State::Group(g) => g.ready(&group.describe())?.clone(),
-            _ => continue,
+        let members = match model.group.derived::<GroupModel>() {
+            Ok(members) => members,
+            Err(Unready::OtherKind) => continue,
+            Err(Unready::Unusable(why)) => return Err(why),
         };
         let placed = |o: &ObjectRef| (o.clone(), Some(model.transform));
         volumes.extend(members.volumes.iter().map(placed));
@@ -66,23 +69,6 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     Ok(Some(State::World(Derived::Ready(WorldModel {
         volumes,
         surfaces,
-        lights: objects(r, "light", T::LIGHT)?,
+        lights: r.objects("light", T::LIGHT)?,
     }))))
-}
-
-/// An optional ARRAY1D parameter of objects of one kind.
-pub(super) const fn object_list(
-    name: &'static str,
-    element: &'static [T],
-    description: &'static str,
-) -> ParamInfo {
-    p(name, &[T::ARRAY1D], false, DefaultValue::None, description).elements(element)
-}
-
-/// The objects of array parameter `name`, which must hold `element`s.
-pub(super) fn objects(r: &Read<'_>, name: &str, element: T) -> Result<Vec<ObjectRef>, String> {
-    let objects = r.array_of(name, element, |a| {
-        Ok(a.objects.iter().flatten().cloned().collect())
-    })?;
-    Ok(objects.unwrap_or_default())
 }

@@ -8,7 +8,9 @@ use std::time::Instant;
 use anari_library_caveray::cave::{Eye, Rig, View};
 use anari_library_caveray::geometry::RayGen;
 use anari_library_caveray::output::{contact_sheet, frame_to_rgba, write_rgba_png, SheetLayout};
-use anari_library_caveray::render::stereo::{Bounds, LayerFormat, Reprojection};
+use anari_library_caveray::render::stereo::{
+    decide, Bounds, Eyes, LayerFormat, LayerRequest, RenderFacts, Reprojection,
+};
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer};
 use anari_library_caveray::scene::Scene;
@@ -56,8 +58,8 @@ pub struct StereoArgs {
     /// two-pass: ray cast each eye. reprojection: ray cast the left eye and
     /// re-project it into the right (GPU only); walls where that does not
     /// apply fall back to two passes, with the reason in the output.
-    #[arg(long, value_enum, default_value_t = StereoMode::TwoPass)]
-    pub stereo: StereoMode,
+    #[arg(long, value_enum, default_value_t = StereoMethod::TwoPass)]
+    pub stereo: StereoMethod,
     /// Re-projection layers (default: as many as each wall needs).
     #[arg(long)]
     pub layers: Option<u32>,
@@ -66,17 +68,19 @@ pub struct StereoArgs {
     pub layer_format: LayerFormat,
 }
 
+/// How a wall's two eyes are rendered (`--stereo`): not the camera's
+/// ANARI `stereoMode`, which says where each eye goes in a frame.
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum StereoMode {
+pub enum StereoMethod {
     TwoPass,
     Reprojection,
 }
 
-impl StereoMode {
+impl StereoMethod {
     fn name(self) -> &'static str {
         match self {
-            StereoMode::TwoPass => "two-pass",
-            StereoMode::Reprojection => "reprojection",
+            StereoMethod::TwoPass => "two-pass",
+            StereoMethod::Reprojection => "reprojection",
         }
     }
 }
@@ -242,10 +246,15 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             .filter(|(w, _, _)| std::ptr::eq(*w, wall))
             .collect();
         let pair = match args.stereo.stereo {
-            StereoMode::TwoPass => Err("--stereo two-pass".to_string()),
-            StereoMode::Reprojection => {
-                stereo_pair(&wall_views, &renderer, &scene, size, &args.stereo)
-            }
+            StereoMethod::TwoPass => Err("--stereo two-pass".to_string()),
+            StereoMethod::Reprojection => stereo_pair(
+                &wall_views,
+                &renderer,
+                &scene,
+                &settings,
+                size,
+                &args.stereo,
+            ),
         };
         match pair {
             Ok((left, reprojection)) => {
@@ -291,7 +300,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
                         }
                     };
                     let (frame, mut rendered) = job.single(&mut renderer, &label, &rays, size)?;
-                    if args.stereo.stereo == StereoMode::Reprojection && *eye != Eye::Mono {
+                    if args.stereo.stereo == StereoMethod::Reprojection && *eye != Eye::Mono {
                         rendered.fallback = Some(reason.clone());
                     }
                     let image = frame_to_rgba(&frame);
@@ -427,31 +436,36 @@ fn stereo_pair<'v>(
     )],
     renderer: &Renderer,
     scene: &Scene,
+    settings: &RenderSettings,
     size: UVec2,
     args: &StereoArgs,
 ) -> Result<(&'v View, Reprojection), String> {
-    if renderer.backend() != Backend::Gpu {
-        return Err("re-projection runs on the GPU renderer only".into());
-    }
     let find = |eye: Eye| {
         views
             .iter()
             .find(|(_, e, _)| *e == eye)
             .and_then(|(_, _, v)| v.as_ref().ok())
     };
-    let (Some(left), Some(right)) = (find(Eye::Left), find(Eye::Right)) else {
-        return Err("the wall does not show a usable left and right eye".into());
-    };
+    let pair = find(Eye::Left).zip(find(Eye::Right));
+    let missing = || "the wall does not show a usable left and right eye".to_string();
     let camera = |v: &View| v.matrix_camera().map_err(|e| e.to_string());
-    let reprojection = Reprojection::new(
-        &camera(left)?,
-        &camera(right)?,
-        size,
-        Bounds::of(scene),
-        args.layers,
-        args.layer_format,
-    )
-    .map_err(|e| e.to_string())?;
+    let eyes = Eyes {
+        left: pair.ok_or_else(missing).and_then(|(l, _)| camera(l)),
+        right: pair.ok_or_else(missing).and_then(|(_, r)| camera(r)),
+        sizes: [size; 2],
+    };
+    let facts = RenderFacts {
+        reprojects: renderer.backend() == Backend::Gpu,
+        background_image: settings.background_image.is_some(),
+    };
+    let layers = LayerRequest {
+        count: args.layers,
+        format: args.layer_format,
+    };
+    let reprojection =
+        decide(eyes, Bounds::of(scene), layers, Some(facts)).map_err(|e| e.to_string())?;
+    // Planned, so both eyes are there.
+    let (left, _) = pair.ok_or_else(missing)?;
     Ok((left, reprojection))
 }
 

@@ -82,10 +82,8 @@ impl Device {
 
     /// Takes references to the objects an object array names.
     fn resolve_array_objects(&mut self, cell: &ObjectRef) {
-        let (handles, element) = {
-            let g = cell.lock();
-            let State::Array(a) = &g.state else { return };
-            (a.handles(), a.element())
+        let Some((handles, element)) = cell.with_array(|a| (a.handles(), a.element())) else {
+            return;
         };
         let mut objects = Vec::with_capacity(handles.len());
         for (i, h) in handles.into_iter().enumerate() {
@@ -108,9 +106,7 @@ impl Device {
             }
             objects.push(o);
         }
-        if let State::Array(a) = &mut cell.lock().state {
-            a.objects = objects;
-        }
+        cell.with_array(|a| a.objects = objects);
     }
 
     /// Runs `f` on the array behind `handle`, or reports that it is none.
@@ -121,10 +117,7 @@ impl Device {
         f: impl FnOnce(&mut Array) -> R,
     ) -> Option<(ObjectRef, R)> {
         let cell = self.lookup(handle, call)?;
-        let result = match &mut cell.lock().state {
-            State::Array(a) => Some(f(a)),
-            _ => None,
-        };
+        let result = cell.with_array(f);
         match result {
             Some(r) => Some((cell, r)),
             None => {
@@ -160,6 +153,7 @@ impl Device {
     }
 
     pub fn unmap_array(&mut self, handle: u64) {
+        self.changed();
         let Some((cell, (was_mapped, objects))) = self.with_array(handle, "anariUnmapArray", |a| {
             (
                 std::mem::replace(&mut a.mapped, false),

@@ -7,22 +7,25 @@
 mod arrays;
 mod frames;
 mod params;
-mod surfaces;
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
-use super::frame::slot::FrameSlot;
+use super::geometry::IsoGeometry;
 use super::info::{self, SubtypeInfo};
 use super::object::{ObjectCell, ObjectRef, State};
-use super::types::{kind_name, object_kind, DataType, Severity, Status, StatusCode};
+use super::snapshot::Epoch;
+use super::surface::SurfaceModel;
+use super::types::{kind_name, object_kind, DataType, Reporter, Severity, Status, StatusCode};
 use super::value::{Params, Value};
-use super::worker::{Reporter, Worker};
+use super::volume::VolumeModel;
 use super::world::WorldModel;
+use crate::engine::{About, Engine, FrameSlot, Note};
 use crate::render::Backend;
+use crate::scene::StructuredVolume;
 
-pub use frames::Mapped;
+pub use frames::{Mapped, OnDone};
 
 static NEXT_DEVICE: AtomicU64 = AtomicU64::new(1);
 
@@ -86,11 +89,11 @@ pub struct Device {
     /// found and rendered together.
     pairing: bool,
     statuses: Vec<Status>,
-    pub(super) worker: Worker,
-    /// What deadline frames warp with.
-    warper: std::sync::Arc<crate::device::frame::deadline::Warper>,
-    /// Deadline frames' presenter threads, joined when the device goes.
-    presenters: Vec<std::thread::JoinHandle<()>>,
+    /// Counts commits, array changes and releases: a frame's snapshot
+    /// stands while it is the same.
+    epoch: Epoch,
+    /// The render thread, deadline presenters and their warps.
+    engine: Engine,
 }
 
 impl Device {
@@ -112,10 +115,26 @@ impl Device {
             backend,
             pairing: true,
             statuses: Vec::new(),
-            worker: Worker::new(report),
-            warper: Default::default(),
-            presenters: Vec::new(),
+            epoch: 0,
+            engine: Engine::new(Arc::new(move |n: Note| {
+                let (source, source_kind) = match n.about {
+                    About::Device => (0, DataType::DEVICE),
+                    About::Frame(handle) => (handle, DataType::FRAME),
+                };
+                report(Status {
+                    severity: n.severity,
+                    code: n.code,
+                    source,
+                    source_kind,
+                    message: n.message,
+                })
+            })),
         }
+    }
+
+    /// Something a snapshot may have read changed.
+    pub(super) fn changed(&mut self) {
+        self.epoch += 1;
     }
 
     pub fn take_statuses(&mut self) -> Vec<Status> {
@@ -240,6 +259,7 @@ impl Device {
         if self.lookup(handle, "anariRelease").is_none() {
             return;
         }
+        self.changed();
         let gone = match self.objects.get_mut(&handle) {
             Some(e) => {
                 e.1 -= 1;
@@ -258,10 +278,7 @@ impl Device {
                 // Still a parameter of something: keep what the host may
                 // now free.
                 if Arc::strong_count(cell) > 1 {
-                    let copied = match &mut cell.lock().state {
-                        State::Array(a) => a.privatize(),
-                        _ => Ok(false),
-                    };
+                    let copied = cell.with_array(|a| a.privatize()).unwrap_or(Ok(false));
                     if let Err(e) = copied {
                         self.error(
                             StatusCode::OutOfMemory,
@@ -287,9 +304,26 @@ impl Device {
         }
     }
 
-    /// `anariGetProperty`. `None`: no such property (not an error).
+    /// `anariGetProperty`. `None`: no such property (not an error). With
+    /// `wait`, a frame's render finishes first.
     pub fn property(&mut self, target: Subject, name: &str, wait: bool) -> Option<Property> {
-        match target {
+        loop {
+            match self.try_property(target, name, wait) {
+                Ok(p) => return p,
+                Err(slot) => drop(slot.wait()),
+            }
+        }
+    }
+
+    /// `property` without waiting: `Err(slot)` while a frame's render runs
+    /// and `wait` asks for its end.
+    pub fn try_property(
+        &mut self,
+        target: Subject,
+        name: &str,
+        wait: bool,
+    ) -> Result<Option<Property>, Arc<FrameSlot>> {
+        Ok(match target {
             Subject::Device => match name {
                 "version" => Some(Property::Int32(1)),
                 "version.major" => Some(Property::Int32(version_part(env!(
@@ -310,15 +344,20 @@ impl Device {
                     .map(Property::Subtypes),
             },
             Subject::Object(h) => {
-                let cell = self.lookup(h, &format!("anariGetProperty('{name}')"))?;
-                let slot = match &cell.lock().state {
-                    State::Frame(f) => f.slot.clone(),
-                    State::World(w) if name == "bounds" => {
-                        return w.ready("").ok().and_then(world_bounds);
-                    }
-                    _ => return None,
+                let Some(cell) = self.lookup(h, &format!("anariGetProperty('{name}')")) else {
+                    return Ok(None);
                 };
-                let s = if wait { slot.wait() } else { slot.lock() };
+                let Some(slot) = cell.with_frame(|f| f.renders.slot.clone()) else {
+                    if name != "bounds" {
+                        return Ok(None);
+                    }
+                    return Ok(cell.usable::<WorldModel>().and_then(|w| world_bounds(&w)));
+                };
+                let s = slot.lock();
+                if wait && s.busy && !slot.finishes_here() {
+                    drop(s);
+                    return Err(slot);
+                }
                 match name {
                     "duration" => Some(Property::Float32(s.duration.as_secs_f32())),
                     // A render is whole or not started: no partial progress.
@@ -336,7 +375,7 @@ impl Device {
                     _ => None,
                 }
             }
-        }
+        })
     }
 }
 
@@ -366,10 +405,7 @@ impl Device {
     /// The slot of a frame, to wait on without holding the device.
     pub fn frame_slot(&mut self, handle: u64, call: &str) -> Option<Arc<FrameSlot>> {
         let cell = self.lookup(handle, call)?;
-        let slot = match &cell.lock().state {
-            State::Frame(f) => Some(f.slot.clone()),
-            _ => None,
-        };
+        let slot = cell.with_frame(|f| f.renders.slot.clone());
         if slot.is_none() {
             self.error(
                 StatusCode::InvalidArgument,
@@ -392,26 +428,16 @@ impl Device {
 /// The box around a world's volumes and surfaces, if any is ready.
 fn world_bounds(world: &WorldModel) -> Option<Property> {
     let field_of = |o: &ObjectRef| -> Option<ObjectRef> {
-        match &o.lock().state {
-            State::Volume(m) => Some(m.ready("").ok()?.field.clone()),
-            State::Surface(s) => {
-                let geometry = s.ready("").ok()?.geometry.clone();
-                let field = match &geometry.lock().state {
-                    State::Geometry(g) => g.ready("").ok()?.field.clone(),
-                    _ => return None,
-                };
-                Some(field)
-            }
-            _ => None,
+        if let Some(volume) = o.usable::<VolumeModel>() {
+            return Some(volume.field);
         }
+        let geometry = o.usable::<SurfaceModel>()?.geometry;
+        Some(geometry.usable::<IsoGeometry>()?.field)
     };
     let placed = world.volumes.iter().chain(&world.surfaces);
     let mut boxes = placed.filter_map(|(v, transform)| {
         let field = field_of(v)?;
-        let grid = match &field.lock().state {
-            State::Field(f) => f.ready("").ok()?.bounds(),
-            _ => return None,
-        };
+        let grid = field.usable::<Arc<StructuredVolume>>()?.bounds();
         Some(match transform {
             None => grid,
             Some(m) => crate::scene::transformed_box(*m, grid),
@@ -428,13 +454,7 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
 impl Drop for Device {
     fn drop(&mut self) {
         self.forget_partners();
-        // No thread of ours may outlive the device: the host may unload
-        // the library right after releasing it. A presenter ends by its
-        // frame's deadline; the warper's GPU opens in about a second.
-        for presenter in self.presenters.drain(..) {
-            let _ = presenter.join();
-        }
-        self.warper.join();
+        self.engine.join_presenters();
     }
 }
 

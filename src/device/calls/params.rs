@@ -139,6 +139,7 @@ impl Device {
     /// the subtype's commit rebuilds the object's state; problems are
     /// reported now.
     pub fn commit(&mut self, target: Subject) {
+        self.changed();
         let cell = match target {
             Subject::Device => return self.commit_device(),
             Subject::Object(h) => match self.lookup(h, "anariCommitParameters") {
@@ -196,7 +197,7 @@ impl Device {
                 }
             }
         };
-        let old = std::mem::replace(&mut cell.lock().state, new_state);
+        let old = cell.replace_state(new_state);
         drop(old);
     }
 

@@ -13,11 +13,12 @@ pub mod stereo;
 use glam::{DVec2, DVec3, UVec2};
 
 use self::multi_view::MultiViewCamera;
-use self::stereo::{EyeView, Stereo, StereoMode};
+use self::stereo::{Stereo, StereoMode};
 use super::info::{p, DefaultValue, ParamInfo, F32, VEC3};
 use super::object::{Derived, State};
 use super::read::Read;
 use super::types::DataType as T;
+use crate::engine::{EyeView, PanelViews, Views};
 use crate::geometry::{
     ImageRegion, MatrixCamera, OffAxisCamera, OrthographicCamera, PinholeCamera, PrimaryRays,
     RayGen,
@@ -249,26 +250,28 @@ impl CameraModel {
         }
     }
 
-    /// The eyes of a frame of `size` and where each goes in it: one view
-    /// of the whole frame, or two for a stereo perspective camera.
-    pub fn views(&self, size: UVec2) -> Result<Vec<EyeView>, String> {
+    /// What a frame of `size` shows and where each eye goes in it: one
+    /// view of the whole frame, the two eyes of a stereo perspective
+    /// camera, or a multi-view camera's panel.
+    pub fn views(&self, size: UVec2) -> Result<Views, String> {
         let whole = || {
-            Ok(vec![EyeView {
+            Ok(Views::Mono(EyeView {
                 rays: self.ray_gen(size)?,
                 offset: UVec2::ZERO,
                 size,
                 matrix: self.matrix(size),
-            }])
+            }))
         };
         let stereo = match self {
             CameraModel::Perspective { stereo, .. } | CameraModel::OffAxis { stereo, .. } => {
                 *stereo
             }
             // The panel image: every view over the whole frame, which the
-            // frame interleaves (see `panel`).
+            // frame interleaves.
             CameraModel::MultiView(m) if m.view.is_none() => {
-                let rays = m.panel(size).view_rays().map_err(|e| e.to_string())?;
-                return Ok(rays
+                let display = m.panel(size);
+                let rays = display.view_rays().map_err(|e| e.to_string())?;
+                let views = rays
                     .into_iter()
                     .map(|rays| EyeView {
                         rays,
@@ -276,7 +279,12 @@ impl CameraModel {
                         size,
                         matrix: None,
                     })
-                    .collect());
+                    .collect();
+                return Ok(Views::Panel(PanelViews {
+                    views,
+                    display,
+                    method: m.method,
+                }));
             }
             _ => return whole(),
         };
@@ -284,7 +292,7 @@ impl CameraModel {
             return whole();
         }
         let pair = matches!(stereo.mode, StereoMode::SideBySide | StereoMode::TopBottom);
-        stereo
+        let mut eyes = stereo
             .mode
             .layout(size)
             .into_iter()
@@ -329,21 +337,11 @@ impl CameraModel {
                     matrix,
                 })
             })
-            .collect()
-    }
-
-    /// The panel whose subpixels interleave this camera's views, for a
-    /// multi-view camera asked for the panel image.
-    pub fn panel(
-        &self,
-        size: UVec2,
-    ) -> Option<(
-        std::sync::Arc<crate::geometry::MultiViewDisplay>,
-        crate::render::iso::MultiViewMethod,
-    )> {
-        match self {
-            CameraModel::MultiView(m) if m.view.is_none() => Some((m.panel(size), m.method)),
-            _ => None,
+            .collect::<Result<Vec<_>, String>>()?;
+        match (eyes.pop(), eyes.pop()) {
+            (Some(right), Some(left)) => Ok(Views::StereoPair([left, right])),
+            (Some(one), None) => Ok(Views::Mono(one)),
+            _ => Err("internal: a stereo mode without eyes".into()),
         }
     }
 

@@ -9,7 +9,6 @@ use glam::{DVec3, UVec2};
 use crate::device::info::{p, DefaultValue, ParamInfo, F32};
 use crate::device::read::Read;
 use crate::device::types::DataType as T;
-use crate::geometry::{MatrixCamera, RayGen};
 
 /// `stereoMode` and `interpupillaryDistance`, as every stereo camera
 /// declares them.
@@ -140,17 +139,6 @@ impl Stereo {
         }
         centre + axis.normalize_or_zero() * (0.5 * self.ipd * side)
     }
-}
-
-/// One eye's rays and the rectangle of the frame they fill.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EyeView {
-    pub rays: RayGen,
-    pub offset: UVec2,
-    pub size: UVec2,
-    /// The eye as OpenGL matrices, where it has them (a stereo pair with
-    /// the whole image region): what re-projection plans with.
-    pub matrix: Option<MatrixCamera>,
 }
 
 #[cfg(test)]

@@ -2,10 +2,9 @@
 //! into which channels. Its parameters are read when it renders, since
 //! hosts commit frames before they know the size; commit only reports a
 //! color channel caveray cannot fill. A render whose inputs equal the
-//! last one's keeps its image (calls/frames.rs).
+//! last one's keeps its image (the engine's `FrameRenders`).
 
-pub mod deadline;
-pub mod slot;
+pub mod state;
 
 use glam::UVec2;
 
@@ -17,6 +16,7 @@ use super::object::State;
 use super::read::Read;
 use super::types::DataType as T;
 use super::value::Params;
+use crate::engine::Deadline;
 use crate::render::warp::WarpMode;
 use crate::render::ColorFormat;
 
@@ -116,7 +116,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
 }
 
 /// The deadline (if any) and warp a frame asks for.
-pub fn deadline(p: &Params) -> Result<Option<(std::time::Duration, WarpMode)>, String> {
+pub fn deadline(p: &Params) -> Result<Option<Deadline>, String> {
     let r = Read::new(p, INFO.params);
     let ms = r.f32("caveray.deadline")?;
     if !(ms.is_finite() && (0.0..=MAX_DEADLINE_MS).contains(&ms)) {
@@ -128,7 +128,10 @@ pub fn deadline(p: &Params) -> Result<Option<(std::time::Duration, WarpMode)>, S
     let warp = warp
         .parse::<WarpMode>()
         .map_err(|e| format!("caveray.warp: {e}"))?;
-    Ok((ms > 0.0).then(|| (std::time::Duration::from_secs_f32(ms / 1e3), warp)))
+    Ok((ms > 0.0).then(|| Deadline {
+        after: std::time::Duration::from_secs_f32(ms / 1e3),
+        warp,
+    }))
 }
 
 /// The renderer's pixel format for a `channel.color` type.
@@ -160,7 +163,7 @@ pub struct Setup {
     pub size: UVec2,
     pub color_type: Option<T>,
     pub depth: bool,
-    pub deadline: Option<(std::time::Duration, WarpMode)>,
+    pub deadline: Option<Deadline>,
 }
 
 pub fn setup(p: &Params) -> Result<Setup, String> {

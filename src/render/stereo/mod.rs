@@ -4,10 +4,12 @@
 //! compositing pass blends them. `plan` sizes the layers for their
 //! setup, `epipolar` plans any pair of views from their matrices
 //! (docs/reprojection_stereo.md), `layers` holds what the layers are and
-//! cost, `reproject` turns a plan into what the GPU pass needs; the passes
-//! are shaders/reproject.wgsl and shaders/composite.wgsl.
+//! cost, `reproject` turns a plan into what the GPU pass needs, and
+//! `decide` is the one place that says whether a pair re-projects; the
+//! passes are shaders/reproject.wgsl and shaders/composite.wgsl.
 
 mod bounds;
+mod decide;
 mod epipolar;
 mod hmd;
 mod layers;
@@ -15,6 +17,7 @@ mod plan;
 mod reproject;
 
 pub use bounds::Bounds;
+pub use decide::{decide, Eyes, LayerRequest, RenderFacts, TwoPasses};
 pub use epipolar::{plan_views, Axis, NotEpipolar, ViewPlan};
 pub use layers::{layer_count, layer_memory, layers_for, LayerCountError, LayerFormat};
 pub use plan::{

@@ -13,7 +13,8 @@ use anari_library_caveray::cave::{pose_along, Eye, HeadPose, PathKey, Rig, Wall}
 use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
 use anari_library_caveray::output::{Chart, Series, XAxis};
 use anari_library_caveray::render::stereo::{
-    Bounds, LayerFormat, NotEpipolar, Reprojection, ReprojectionError,
+    decide, Bounds, Eyes, LayerFormat, LayerRequest, NotEpipolar, Reprojection, ReprojectionError,
+    TwoPasses,
 };
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
@@ -24,8 +25,8 @@ use clap::Args;
 use glam::UVec2;
 use serde::Serialize;
 
-use super::stereo::heatmap;
-use super::{mean, runtime};
+use super::charts::{self, heatmap};
+use super::{mean, runtime, GPU};
 use crate::options::{shading, step_factor};
 use crate::progress::Progress;
 use crate::render::wall_size;
@@ -351,16 +352,18 @@ impl Bench<'_> {
                 return Ok(record("not visible", Some(e.to_string()), None))
             }
         };
-        let plan = match Reprojection::new(
-            &left,
-            &right,
-            size,
-            Bounds::of(self.scene),
-            None,
-            self.format,
-        ) {
+        let eyes = Eyes {
+            left: Ok(left),
+            right: Ok(right),
+            sizes: [size; 2],
+        };
+        let layers = LayerRequest {
+            count: None,
+            format: self.format,
+        };
+        let plan = match decide(eyes, Bounds::of(self.scene), layers, Some(GPU)) {
             Ok(plan) => plan,
-            Err(ReprojectionError::NotEpipolar(NotEpipolar::Behind)) => {
+            Err(TwoPasses::Plan(ReprojectionError::NotEpipolar(NotEpipolar::Behind))) => {
                 return Ok(record("not visible", None, None))
             }
             Err(e) => return Ok(record("two-pass", Some(e.to_string()), None)),
@@ -545,6 +548,9 @@ fn summarise(
     }
 }
 
+/// The x axis of both plots over time.
+const TIME_AXIS: &str = "time along the head path [s]";
+
 /// One series per wall of `value` over time, re-projected frames only.
 fn per_wall(report: &CaveStereoReport, value: fn(&Measured) -> f64) -> Vec<Series> {
     report
@@ -577,7 +583,7 @@ fn dssim_chart(report: &CaveStereoReport) -> String {
     );
     Chart {
         title: &title,
-        x_label: "time along the head path [s]",
+        x_label: TIME_AXIS,
         y_label: "DSSIM",
         y_range: (0.0, top),
         series: &series,
@@ -588,23 +594,11 @@ fn dssim_chart(report: &CaveStereoReport) -> String {
 
 fn speedup_chart(report: &CaveStereoReport) -> String {
     let series = per_wall(report, |m| 100.0 * m.speedup_v);
-    let lowest = series
-        .iter()
-        .flat_map(|s| s.points.iter().map(|p| p.1))
-        .fold(0.0f64, f64::min);
     let title = format!(
         "Re-projection speed-up V per wall, {}",
         report.renderer.adapter().map_or("", |a| &a.name)
     );
-    Chart {
-        title: &title,
-        x_label: "time along the head path [s]",
-        y_label: "V = 1 - (T_l+r - T_l) / T_r  [%]",
-        y_range: ((lowest / 20.0).floor() * 20.0, 100.0),
-        series: &series,
-        x_axis: XAxis::Linear,
-    }
-    .to_svg()
+    charts::speedup_chart(&title, TIME_AXIS, &series, XAxis::Linear)
 }
 
 fn print_table(report: &CaveStereoReport) {

@@ -4,9 +4,11 @@
 
 mod autostereo;
 mod cave_stereo;
+mod charts;
 mod raycast;
 mod stereo;
 
+use anari_library_caveray::render::stereo::RenderFacts;
 use clap::Subcommand;
 
 use crate::Failure;
@@ -37,6 +39,13 @@ pub fn run(command: BenchCommand) -> Result<(), Failure> {
         BenchCommand::Autostereo(args) => autostereo::run(args),
     }
 }
+
+/// What the stereo benchmarks' renderer brings to the re-projection
+/// decision: the GPU's pass, over the background color.
+const GPU: RenderFacts = RenderFacts {
+    reprojects: true,
+    background_image: false,
+};
 
 fn mean(v: impl IntoIterator<Item = f64>) -> f64 {
     let (sum, n) = v

@@ -11,22 +11,21 @@
 use std::path::{Path, PathBuf};
 
 use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
-use anari_library_caveray::output::{
-    dssim_heatmap, frame_to_rgba, side_by_side, write_rgba_png, Chart, Series,
-};
+use anari_library_caveray::output::{Series, XAxis};
 use anari_library_caveray::render::stereo::{
-    layer_memory, paper, Bounds, HmdStereo, LayerFormat, Reprojection,
+    decide, layer_memory, paper, Bounds, Eyes, HmdStereo, LayerFormat, LayerRequest, Reprojection,
 };
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
-    dssim, ssim_map, Frame, FrameDesc, GpuRenderer, RenderSettings, Shading,
+    dssim, Frame, FrameDesc, GpuRenderer, RenderSettings, Shading,
 };
 use anari_library_caveray::scene::Scene;
 use clap::Args;
 use glam::{UVec2, Vec3};
 use serde::Serialize;
 
-use super::{mean, runtime};
+use super::charts::{self, heatmap, HEATMAP_FULL_SCALE};
+use super::{mean, runtime, GPU};
 use crate::options::shading;
 use crate::progress::Progress;
 use crate::report::{write_json, Adapter, Machine, RendererInfo};
@@ -35,8 +34,6 @@ use crate::Failure;
 
 /// Buchacher & Erdt's data sets, as named in volumes.toml.
 const PAPER_VOLUMES: &str = "cthead,dti,engine,vis_male,bonsai";
-/// DSSIM shown white in the heat maps.
-const HEATMAP_FULL_SCALE: f64 = 0.05;
 
 #[derive(Args)]
 pub struct StereoBenchArgs {
@@ -188,18 +185,20 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
         let longest = extent.max_element() * 2.0 / extent.length();
         let scene = loaded.placed(Vec3::ZERO, longest)?;
         gpu.upload(&scene).map_err(runtime)?;
+        let layers = LayerRequest {
+            count: Some(args.layers),
+            format: args.layer_format,
+        };
         let plans = eyes
             .iter()
             .map(|(l, r)| {
-                Reprojection::new(
-                    l,
-                    r,
-                    image,
-                    Bounds::of(&scene),
-                    Some(args.layers),
-                    args.layer_format,
-                )
-                .map_err(|e| Failure::Runtime(format!("{name}: {e}")))
+                let eyes = Eyes {
+                    left: Ok(*l),
+                    right: Ok(*r),
+                    sizes: [image; 2],
+                };
+                decide(eyes, Bounds::of(&scene), layers, Some(GPU))
+                    .map_err(|e| Failure::Runtime(format!("{name}: {e}")))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let mut runs = Vec::new();
@@ -358,18 +357,6 @@ fn summarise(shading: Shading, results: &[ViewResult]) -> StereoRun {
     }
 }
 
-/// Two-pass right image, re-projected right image, and their per-window
-/// DSSIM, side by side.
-pub(super) fn heatmap(two_pass: &Frame, reprojected: &Frame, path: &Path) -> Result<(), Failure> {
-    let map = ssim_map(reprojected, two_pass).map_err(runtime)?;
-    let heat = dssim_heatmap(&map, two_pass.size.x, two_pass.size.y, HEATMAP_FULL_SCALE);
-    let strip = side_by_side(
-        &[&frame_to_rgba(two_pass), &frame_to_rgba(reprojected), &heat],
-        8,
-    );
-    write_rgba_png(&strip, path).map_err(runtime)
-}
-
 /// V in percent against extra samples per sample, a line per data set
 /// (Buchacher & Erdt's Figure 10).
 fn speedup_chart(report: &StereoReport) -> String {
@@ -385,10 +372,6 @@ fn speedup_chart(report: &StereoReport) -> String {
                 .collect(),
         })
         .collect();
-    let lowest = series
-        .iter()
-        .flat_map(|s| s.points.iter().map(|p| p.1))
-        .fold(0.0f64, f64::min);
     let title = format!(
         "Re-projection speed-up V, {}x{}, {} layers, {}",
         report.image[0],
@@ -396,15 +379,12 @@ fn speedup_chart(report: &StereoReport) -> String {
         report.layers,
         report.renderer.adapter().map_or("", |a| &a.name)
     );
-    Chart {
-        title: &title,
-        x_label: "extra volume samples per sample (shading)",
-        y_label: "V = 1 - (T_l+r - T_l) / T_r  [%]",
-        y_range: ((lowest / 20.0).floor() * 20.0, 100.0),
-        series: &series,
-        x_axis: Default::default(),
-    }
-    .to_svg()
+    charts::speedup_chart(
+        &title,
+        "extra volume samples per sample (shading)",
+        &series,
+        XAxis::Slots,
+    )
 }
 
 fn print_table(report: &StereoReport) {

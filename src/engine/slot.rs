@@ -1,61 +1,37 @@
-//! Frames: the result slot a render worker fills and the host maps.
+//! The slot a frame's render fills and the host waits on.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::thread::ThreadId;
 use std::time::Duration;
 
-use super::deadline::ShownImage;
-use crate::device::worker::RenderInputs;
+use super::inputs::Inputs;
+use crate::render::warp::WarpMode;
 use crate::render::Frame;
 
-/// Channels a host can map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Channel {
-    Color,
-    Depth,
+/// What a render that was stopped leaves in its frame.
+pub const DISCARDED: &str = "the render was discarded (anariDiscardFrame)";
+
+/// What a deadline frame showed (properties `caveray.imageAge` and
+/// `caveray.warp`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShownImage {
+    /// From the camera of the image shown to this render's call (ms); -1
+    /// when nothing had been rendered yet and the frame shows its
+    /// background.
+    pub age_ms: f32,
+    /// The warp applied; `None` for the image of this very camera.
+    pub warp: WarpMode,
 }
 
-impl Channel {
-    /// ANARI 1.x names, plus the pre-1.0 ones older hosts still pass.
-    pub fn parse(name: &str) -> Option<Self> {
-        match name {
-            "channel.color" | "color" => Some(Channel::Color),
-            "channel.depth" | "depth" => Some(Channel::Depth),
-            _ => None,
-        }
-    }
-}
-
-#[derive(Default)]
-pub struct FrameState {
-    pub slot: Arc<FrameSlot>,
-    /// Which channels the host has mapped; a mapped frame is not rendered
-    /// into, so the pointers it holds stay valid.
-    pub mapped: [bool; 2],
-    /// The color channel's ANARI type, if the frame has one.
-    pub color_type: Option<crate::device::types::DataType>,
-    /// What the last render was made from, while its image is good.
-    pub last: Option<RenderInputs>,
-    /// The background renders of a frame with a deadline.
-    pub background: Arc<super::deadline::Background>,
-}
-
-impl Drop for FrameState {
-    /// A frame the host has released for good: a render still running
-    /// for it stops, so nobody waits on an image nobody can map.
-    fn drop(&mut self) {
-        self.slot.cancel();
-        self.background.cancel();
-    }
-}
-
-/// Shared between the device and the worker rendering into the frame.
+/// Shared between the device and the thread rendering into the frame.
 #[derive(Default)]
 pub struct FrameSlot {
     state: Mutex<SlotState>,
     done: Condvar,
-    /// Set by `anariDiscardFrame`: the render in flight stops where it
-    /// can (between the CPU reference's rows) and keeps no image.
+    /// Set by a discard or a release: the render in flight stops where it
+    /// can (between the CPU reference's rows, the GPU's bands of rows, or
+    /// the passes and views of a job) and keeps no image.
     pub stop: AtomicBool,
     /// This frame's eye from a stereo pass another frame rendered, for
     /// the inputs it was made from.
@@ -65,7 +41,7 @@ pub struct FrameSlot {
 /// An image made for a frame by its stereo partner's render.
 pub struct Kept {
     /// What this frame's render must ask for to be given the image.
-    pub inputs: RenderInputs,
+    pub inputs: Arc<Inputs>,
     pub frame: Frame,
     /// This eye's share of the pass.
     pub duration: Duration,
@@ -83,6 +59,8 @@ pub struct SlotState {
     pub samples: u32,
     /// What a deadline frame showed; `None` for a whole render.
     pub shown: Option<ShownImage>,
+    /// The thread that will finish the render in flight, once it has it.
+    finisher: Option<ThreadId>,
 }
 
 impl FrameSlot {
@@ -93,7 +71,24 @@ impl FrameSlot {
     pub fn start(&self) {
         let mut s = self.lock();
         s.busy = true;
+        s.finisher = None;
         self.stop.store(false, Ordering::Relaxed);
+    }
+
+    /// The render in flight is `thread`'s to finish.
+    pub fn hand_to(&self, thread: ThreadId) {
+        let mut s = self.lock();
+        if s.busy {
+            s.finisher = Some(thread);
+        }
+    }
+
+    /// Whether a render is in flight that only the calling thread can
+    /// finish (a completion callback on the render thread asking about a
+    /// frame queued behind its own): waiting for it would never end.
+    pub fn finishes_here(&self) -> bool {
+        let s = self.lock();
+        s.busy && s.finisher == Some(std::thread::current().id())
     }
 
     /// Whether the last render succeeded; then a render of the same
@@ -108,6 +103,7 @@ impl FrameSlot {
         s.duration = duration;
         s.samples = s.samples.saturating_add(1);
         s.busy = false;
+        s.finisher = None;
         self.done.notify_all();
     }
 
@@ -137,6 +133,7 @@ impl FrameSlot {
         s.duration = duration;
         s.shown = shown;
         s.busy = false;
+        s.finisher = None;
         self.done.notify_all();
     }
 
@@ -147,24 +144,27 @@ impl FrameSlot {
 
     /// The kept image if it was made for `inputs`; a kept image for other
     /// inputs is dropped, never shown.
-    pub fn take_kept(&self, inputs: &RenderInputs) -> Option<Kept> {
+    pub fn take_kept(&self, inputs: &Inputs) -> Option<Kept> {
         let kept = self.kept.lock().unwrap_or_else(|e| e.into_inner()).take()?;
-        (kept.inputs == *inputs).then_some(kept)
+        (*kept.inputs == *inputs).then_some(kept)
     }
 
     /// Whether a kept image waits for `inputs`.
-    pub fn keeps(&self, inputs: &RenderInputs) -> bool {
+    pub fn keeps(&self, inputs: &Inputs) -> bool {
         self.kept
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .as_ref()
-            .is_some_and(|k| k.inputs == *inputs)
+            .is_some_and(|k| *k.inputs == *inputs)
     }
 
-    /// Blocks until no render is in flight; returns the state locked.
+    /// Blocks until no render is in flight; returns the state locked. The
+    /// thread that is to finish the render is not made to wait for itself:
+    /// it gets the state at once, still busy.
     pub fn wait(&self) -> MutexGuard<'_, SlotState> {
+        let me = std::thread::current().id();
         let mut s = self.lock();
-        while s.busy {
+        while s.busy && s.finisher != Some(me) {
             s = self.done.wait(s).unwrap_or_else(|e| e.into_inner());
         }
         s
@@ -180,5 +180,48 @@ impl FrameSlot {
         if s.busy {
             self.stop.store(true, Ordering::Relaxed);
         }
+    }
+
+    /// Whether the render in flight was asked to stop.
+    pub fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_finishing_thread_never_waits_for_itself() {
+        let slot = Arc::new(FrameSlot::default());
+        slot.start();
+        slot.hand_to(std::thread::current().id());
+        assert!(slot.finishes_here());
+        assert!(slot.wait().busy, "returns at once, still busy");
+        // Another thread waits until this one finishes the render.
+        let other = {
+            let slot = Arc::clone(&slot);
+            std::thread::spawn(move || {
+                assert!(!slot.finishes_here());
+                slot.wait().busy
+            })
+        };
+        std::thread::sleep(Duration::from_millis(20));
+        slot.finish(Err("done".into()), Duration::ZERO);
+        assert!(!other.join().unwrap());
+        assert!(!slot.finishes_here());
+    }
+
+    #[test]
+    fn only_a_busy_slot_is_stopped() {
+        let slot = FrameSlot::default();
+        slot.cancel();
+        assert!(!slot.stopped());
+        slot.start();
+        slot.cancel();
+        assert!(slot.stopped());
+        slot.start();
+        assert!(!slot.stopped(), "a new render starts unstopped");
     }
 }

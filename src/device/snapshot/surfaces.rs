@@ -7,11 +7,14 @@ use std::sync::{Arc, OnceLock};
 
 use glam::Mat4;
 
+use crate::device::geometry::IsoGeometry;
 use crate::device::light::DirectionalLight;
-use crate::device::object::{ObjectRef, State};
+use crate::device::material::Coloring;
+use crate::device::object::{ObjectCell, ObjectRef};
+use crate::device::surface::SurfaceModel;
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
-use crate::scene::{PlacedVolume, TransferFunction};
+use crate::scene::{PlacedVolume, StructuredVolume, TransferFunction};
 
 /// The transfer function a surface's field is placed with: the caster
 /// reads the field alone and never evaluates it. One for all, so the GPU
@@ -29,32 +32,21 @@ fn unclassified() -> Result<Arc<TransferFunction>, String> {
 
 /// The isosurfaces of `surfaces` (each with the transform of the instance
 /// that placed it), or why one cannot be drawn.
-pub(super) fn iso_surfaces(
+pub fn iso_surfaces(
     surfaces: &[(ObjectRef, Option<Mat4>)],
     renderer: &RenderSettings,
     light: Option<DirectionalLight>,
 ) -> Result<Vec<IsoSurface>, String> {
     let mut out = Vec::new();
     for (surface, transform) in surfaces {
-        let not_ours = |o: &ObjectRef| format!("{} is not implemented by caveray", o.describe());
-        let model = match &surface.lock().state {
-            State::Surface(s) => s.ready(&surface.describe())?.clone(),
-            _ => return Err(not_ours(surface)),
-        };
+        let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
+        let model = surface.ready::<SurfaceModel>(not_ours)?;
         let (geometry, material) = (&model.geometry, &model.material);
-        let geometry_model = match &geometry.lock().state {
-            State::Geometry(g) => g.ready(&geometry.describe())?.clone(),
-            _ => return Err(not_ours(geometry)),
-        };
-        let coloring = match &material.lock().state {
-            State::Material(m) => *m.ready(&material.describe())?,
-            _ => return Err(not_ours(material)),
-        };
-        let field = &geometry_model.field;
-        let volume = match &field.lock().state {
-            State::Field(f) => f.ready(&field.describe())?.clone(),
-            _ => return Err(not_ours(field)),
-        };
+        let geometry_model = geometry.ready::<IsoGeometry>(not_ours)?;
+        let coloring = material.ready::<Coloring>(not_ours)?;
+        let volume = geometry_model
+            .field
+            .ready::<Arc<StructuredVolume>>(not_ours)?;
         let placed = PlacedVolume {
             volume,
             transfer_function: unclassified()?,

@@ -10,9 +10,10 @@ use std::time::{Duration, Instant};
 
 use glam::Vec4;
 
-use super::slot::FrameSlot;
-use crate::device::types::{DataType, Severity, Status, StatusCode};
-use crate::device::worker::{RenderInputs, Reporter};
+use super::inputs::Inputs;
+use super::slot::{FrameSlot, ShownImage, DISCARDED};
+use super::status::{About, Note, Notify, Severity, StatusCode};
+use super::threads::join_unless_current;
 use crate::geometry::RayGen;
 use crate::render::warp::{warp_by, Source, WarpMode, WarpSettings, Warped};
 use crate::render::{Backend, Frame, FrameDesc, GpuRenderer, RenderError, Renderer};
@@ -21,7 +22,7 @@ use crate::render::{Backend, Frame, FrameDesc, GpuRenderer, RenderError, Rendere
 /// when its camera was taken.
 pub struct Shot {
     pub source: Source,
-    pub inputs: RenderInputs,
+    pub inputs: Arc<Inputs>,
     pub taken: Instant,
 }
 
@@ -48,18 +49,6 @@ struct BackState {
     told: bool,
 }
 
-/// What a deadline frame showed (properties `caveray.imageAge` and
-/// `caveray.warp`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShownImage {
-    /// From the camera of the image shown to this render's call (ms); -1
-    /// when nothing had been rendered yet and the frame shows its
-    /// background.
-    pub age_ms: f32,
-    /// The warp applied; `None` for the image of this very camera.
-    pub warp: WarpMode,
-}
-
 impl Background {
     fn lock(&self) -> MutexGuard<'_, BackState> {
         self.state.lock().unwrap_or_else(|e| e.into_inner())
@@ -68,9 +57,9 @@ impl Background {
     /// Claims the background for a render of `inputs`, returning the slot
     /// it renders under; `None` if one is running or the newest image is
     /// already of these inputs.
-    pub fn claim(&self, inputs: &RenderInputs) -> Option<Arc<FrameSlot>> {
+    pub fn claim(&self, inputs: &Inputs) -> Option<Arc<FrameSlot>> {
         let mut s = self.lock();
-        let current = s.newest.as_ref().is_some_and(|n| n.inputs == *inputs);
+        let current = s.newest.as_ref().is_some_and(|n| *n.inputs == *inputs);
         if s.running.is_some() || current {
             return None;
         }
@@ -90,21 +79,24 @@ impl Background {
         self.changed.notify_all();
     }
 
-    /// Stops the render in flight (discard, release).
+    /// Stops the render in flight (discard, release), and wakes the
+    /// presenters waiting for it, which look at their own stop flags.
     pub fn cancel(&self) {
-        if let Some(slot) = &self.lock().running {
+        let s = self.lock();
+        if let Some(slot) = &s.running {
             slot.cancel();
         }
+        self.changed.notify_all();
     }
 
-    /// Waits until the image of `inputs` is complete or `until`; returns
-    /// the newest image then.
-    fn newest_by(&self, inputs: &RenderInputs, until: Instant) -> Option<Arc<Shot>> {
+    /// Waits until the image of `inputs` is complete, `until`, or the
+    /// presentation in `slot` is stopped; returns the newest image then.
+    fn newest_by(&self, inputs: &Inputs, until: Instant, slot: &FrameSlot) -> Option<Arc<Shot>> {
         let mut s = self.lock();
         loop {
-            let current = s.newest.as_ref().is_some_and(|n| n.inputs == *inputs);
+            let current = s.newest.as_ref().is_some_and(|n| *n.inputs == *inputs);
             let now = Instant::now();
-            if current || now >= until {
+            if current || now >= until || slot.stopped() {
                 return s.newest.clone();
             }
             s = self
@@ -183,7 +175,7 @@ impl Warper {
                             let mut opener = self.opener.lock().unwrap_or_else(|e| e.into_inner());
                             if let Some(old) = opener.replace(thread) {
                                 drop(s);
-                                let _ = old.join();
+                                join_unless_current(old);
                             }
                         }
                         Err(_) => *s = Opened::Failed(backend),
@@ -203,11 +195,11 @@ impl Warper {
     pub fn join(&self) {
         let opener = self.opener.lock().unwrap_or_else(|e| e.into_inner()).take();
         if let Some(thread) = opener {
-            let _ = thread.join();
+            join_unless_current(thread);
         }
     }
 
-    fn open(&self, backend: Backend, say: Reporter) {
+    fn open(&self, backend: Backend, say: Notify) {
         let made = Renderer::choose(backend);
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         if !matches!(&*s, Opened::Opening(b) if *b == backend) {
@@ -236,11 +228,10 @@ impl Warper {
                 format!("deadline frames warp on the CPU: {e}")
             }
         };
-        say(Status {
+        say(Note {
             severity: Severity::Info,
             code: StatusCode::NoError,
-            source: 0,
-            source_kind: DataType::DEVICE,
+            about: About::Device,
             message,
         });
     }
@@ -250,7 +241,7 @@ impl Warper {
 pub struct Present {
     pub background: Arc<Background>,
     pub slot: Arc<FrameSlot>,
-    pub inputs: RenderInputs,
+    pub inputs: Arc<Inputs>,
     pub rays: RayGen,
     pub desc: FrameDesc,
     pub color: Vec4,
@@ -260,7 +251,7 @@ pub struct Present {
     pub deadline: Duration,
     pub warper: Arc<Warper>,
     pub backend: Backend,
-    pub report: Reporter,
+    pub report: Notify,
     /// The frame's handle, which the host's messages name.
     pub frame: u64,
 }
@@ -306,7 +297,19 @@ pub fn present(p: Present) {
         reserve(cost)
     };
     let until = p.called + p.deadline.saturating_sub(lead);
-    let newest = p.background.newest_by(&p.inputs, until);
+    let newest = p.background.newest_by(&p.inputs, until, &p.slot);
+    if p.slot.stopped() {
+        // Discarded or released while it waited: it shows nothing.
+        let message = format!("rendering frame {:#x} failed: {DISCARDED}", p.frame);
+        (p.report)(Note {
+            severity: Severity::Info,
+            code: StatusCode::UnknownError,
+            about: About::Frame(p.frame),
+            message,
+        });
+        p.slot.finish(Err(DISCARDED.into()), p.called.elapsed());
+        return;
+    }
     let clock = Instant::now();
     let (frame, shown) = match newest {
         None => {
@@ -385,13 +388,11 @@ pub fn present(p: Present) {
         };
     }
     if let Some(note) = note {
-        (p.report)(Status {
-            severity: Severity::Info,
-            code: StatusCode::NoError,
-            source: p.frame,
-            source_kind: DataType::FRAME,
-            message: format!("frame {:#x}: {note}", p.frame),
-        });
+        (p.report)(Note::frame(
+            Severity::Info,
+            p.frame,
+            format!("frame {:#x}: {note}", p.frame),
+        ));
     }
     p.slot.finish_shown(frame, p.called.elapsed(), shown);
 }

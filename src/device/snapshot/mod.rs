@@ -1,0 +1,128 @@
+//! What a committed frame renders, read out of its objects into the plain
+//! values the engine takes (`engine::Inputs`): the world as a `Scene` with
+//! its surfaces, the camera as views, the renderer's settings, the
+//! frame's size and channels. The device keeps a frame's snapshot until
+//! anything is committed, changed or released (its epoch moves on), so
+//! that pairing frames compares snapshots instead of reading every
+//! candidate's objects again.
+
+mod surfaces;
+
+use std::sync::Arc;
+
+use glam::Mat4;
+
+use super::camera::CameraModel;
+use super::frame::{self, color_format};
+use super::light::DirectionalLight;
+use super::object::{ObjectCell, ObjectRef};
+use super::types::{kind_name, DataType};
+use super::volume::VolumeModel;
+use super::world::WorldModel;
+use crate::engine::{Deadline, Inputs, Unrenderable};
+use crate::render::{Backend, FrameDesc, RenderSettings};
+use crate::scene::{PlacedVolume, Scene, StructuredVolume};
+
+/// The device's count of changes: a snapshot taken at one epoch stands
+/// while the epoch is the same.
+pub type Epoch = u64;
+
+/// A frame's render, as values.
+pub struct FrameSnapshot {
+    pub inputs: Arc<Inputs>,
+    /// The color channel's ANARI type, if the frame has one.
+    pub color_type: Option<DataType>,
+    pub deadline: Option<Deadline>,
+}
+
+/// Reads what `frame` renders with `backend` out of its committed
+/// objects, or says why it cannot render.
+pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String> {
+    let params = frame
+        .lock()
+        .committed
+        .clone()
+        .ok_or("the frame has not been committed")?;
+    let frame::Setup {
+        size,
+        color_type,
+        depth,
+        deadline,
+    } = frame::setup(&params)?;
+    let needed = |name: &str, kind: DataType| -> Result<ObjectRef, String> {
+        let o = params.object(name).ok_or_else(|| {
+            format!(
+                "no {0}: set parameter '{name}' to a {0} and commit the frame",
+                kind_name(kind)
+            )
+        })?;
+        if !o.implemented {
+            return Err(format!("{} is not implemented by caveray", o.describe()));
+        }
+        Ok(o.clone())
+    };
+    let camera = needed("camera", DataType::CAMERA)?;
+    let renderer = needed("renderer", DataType::RENDERER)?;
+    let world = needed("world", DataType::WORLD)?;
+    let cannot_be = |role: &'static str| {
+        move |o: &ObjectCell| format!("{} cannot be used as the frame's {role}", o.describe())
+    };
+    let views = camera
+        .ready::<CameraModel>(cannot_be("camera"))?
+        .views(size)?;
+    let mut settings = renderer.ready::<RenderSettings>(cannot_be("renderer"))?;
+    let world_model = world.ready::<WorldModel>(cannot_be("world"))?;
+    // The first usable directional light lights the shading.
+    let light = world_model
+        .lights
+        .iter()
+        .find_map(|l| l.usable::<DirectionalLight>());
+    if let Some(light) = light {
+        settings.light = light.towards;
+        settings.light_color = light.color;
+    }
+    let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
+    let mut placed = Vec::with_capacity(world_model.volumes.len());
+    for (v, transform) in &world_model.volumes {
+        let model = v.ready::<VolumeModel>(not_ours)?;
+        let volume = model.field.ready::<Arc<StructuredVolume>>(not_ours)?;
+        placed.push(PlacedVolume {
+            volume,
+            transfer_function: model.transfer_function,
+            transform: transform.unwrap_or(Mat4::IDENTITY),
+        });
+    }
+    let scene = if placed.is_empty() {
+        None
+    } else {
+        Some(Scene::placed(placed).map_err(|e| format!("{}: {e}", world.describe()))?)
+    };
+    let surfaces = surfaces::iso_surfaces(&world_model.surfaces, &settings, light)?;
+    let mut desc =
+        FrameDesc::new(size).with_color(color_type.and_then(color_format).unwrap_or_default());
+    desc.depth = depth;
+    let inputs = Inputs {
+        scene,
+        surfaces,
+        views,
+        settings,
+        desc,
+        backend,
+    };
+    inputs.check().map_err(|e| match e {
+        Unrenderable::VolumesAndSurfaces => format!(
+            "{} holds volumes and surfaces; caveray draws one or the other in a frame (a volume composited with isosurfaces is not implemented)",
+            world.describe()
+        ),
+        Unrenderable::PanelDepth => "a multi-view panel image has no depth channel (each subpixel has its own eye): unset 'channel.depth', or set the camera's 'view'".into(),
+        Unrenderable::PanelSurfaces(n) => format!(
+            "{} has {n} isosurfaces (surfaces times iso-values); a multi-view panel image shows one",
+            world.describe()
+        ),
+    })?;
+    Ok(FrameSnapshot {
+        inputs: Arc::new(inputs),
+        color_type,
+        deadline,
+    })
+}

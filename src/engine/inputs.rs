@@ -1,0 +1,124 @@
+//! What a frame's render is made of, as plain values: the device's
+//! snapshot of its objects when the frame renders.
+
+use std::sync::Arc;
+
+use glam::UVec2;
+
+use crate::geometry::{MatrixCamera, MultiViewDisplay, RayGen};
+use crate::render::iso::{IsoSurface, MultiViewMethod};
+use crate::render::{Backend, FrameDesc, RenderSettings};
+use crate::scene::Scene;
+
+/// One eye's rays and the rectangle of the frame they fill.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeView {
+    pub rays: RayGen,
+    pub offset: UVec2,
+    pub size: UVec2,
+    /// The eye as OpenGL matrices, where it has them (a stereo pair with
+    /// the whole image region): what re-projection plans with.
+    pub matrix: Option<MatrixCamera>,
+}
+
+/// What a frame's camera shows, and so how its image is made. (Views live
+/// in an `Arc<Inputs>`; boxing the eyes would only add an indirection.)
+#[derive(Clone, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)]
+pub enum Views {
+    /// One view of the whole frame.
+    Mono(EyeView),
+    /// The two eyes of a stereo camera, left then right, each into its
+    /// part of the frame: one re-projection pass where that applies.
+    StereoPair([EyeView; 2]),
+    /// A multi-view panel: every view over the whole frame, interleaved
+    /// subpixel by subpixel into one image.
+    Panel(PanelViews),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct PanelViews {
+    pub views: Vec<EyeView>,
+    /// Which view each subpixel shows.
+    pub display: Arc<MultiViewDisplay>,
+    pub method: MultiViewMethod,
+}
+
+impl Views {
+    /// Every view, in order.
+    pub fn all(&self) -> &[EyeView] {
+        match self {
+            Views::Mono(one) => std::slice::from_ref(one),
+            Views::StereoPair(pair) => pair,
+            Views::Panel(panel) => &panel.views,
+        }
+    }
+}
+
+/// Everything a frame's render depends on, copied out of the committed
+/// objects so the host may change them while the frame renders. Equal
+/// inputs make the same image: the scene and the surfaces compare by
+/// identity (a commit makes new derived values, so any change makes new
+/// ones), everything else by value.
+#[derive(Clone)]
+pub struct Inputs {
+    /// The world's volumes; `None` with no `surfaces` renders the
+    /// background only (an empty world).
+    pub scene: Option<Scene>,
+    /// The world's isosurfaces (a world holds volumes or surfaces).
+    pub surfaces: Vec<IsoSurface>,
+    pub views: Views,
+    pub settings: RenderSettings,
+    pub desc: FrameDesc,
+    pub backend: Backend,
+}
+
+impl PartialEq for Inputs {
+    fn eq(&self, other: &Self) -> bool {
+        let same_scene = match (&self.scene, &other.scene) {
+            (None, None) => true,
+            (Some(a), Some(b)) => a.same(b),
+            _ => false,
+        };
+        same_scene
+            && self.surfaces.len() == other.surfaces.len()
+            && self
+                .surfaces
+                .iter()
+                .zip(&other.surfaces)
+                .all(|(a, b)| a.same(b))
+            && self.views == other.views
+            && self.settings == other.settings
+            && self.desc == other.desc
+            && self.backend == other.backend
+    }
+}
+
+/// Why inputs cannot be rendered as one image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unrenderable {
+    /// Volumes and isosurfaces in one world.
+    VolumesAndSurfaces,
+    /// A panel image asked for depth.
+    PanelDepth,
+    /// A panel image of more than one isosurface (how many).
+    PanelSurfaces(usize),
+}
+
+impl Inputs {
+    /// Whether the renderers can make one image of these inputs.
+    pub fn check(&self) -> Result<(), Unrenderable> {
+        if self.scene.is_some() && !self.surfaces.is_empty() {
+            return Err(Unrenderable::VolumesAndSurfaces);
+        }
+        if let Views::Panel(_) = self.views {
+            if self.desc.depth {
+                return Err(Unrenderable::PanelDepth);
+            }
+            if self.surfaces.len() > 1 {
+                return Err(Unrenderable::PanelSurfaces(self.surfaces.len()));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,121 @@
+//! The job the render thread runs, and what the engine keeps of a frame
+//! between its renders to build the next job.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::deadline::Background;
+use super::inputs::{EyeView, Inputs};
+use super::slot::FrameSlot;
+use crate::render::stereo::Reprojection;
+use crate::render::warp::WarpMode;
+use crate::render::Backend;
+
+pub struct RenderJob {
+    /// The frame's handle, which messages name.
+    pub frame: u64,
+    pub inputs: Arc<Inputs>,
+    pub slot: Arc<FrameSlot>,
+    pub on_done: Option<Box<dyn FnOnce() + Send>>,
+    /// The frame's last image is still right: keep it, render nothing.
+    pub unchanged: bool,
+    /// Another frame's eye to render with this one in one pass.
+    pub partner: Option<Partner>,
+    /// A deadline frame's background render: its image goes there, not
+    /// into `slot` (which only tracks the render).
+    pub background: Option<BackgroundRender>,
+}
+
+impl RenderJob {
+    /// Whether the job was asked to stop (discard, release).
+    pub fn stopped(&self) -> bool {
+        self.slot.stopped()
+    }
+}
+
+/// The other eye of a stereo pair, shown by another frame of the device:
+/// rendered with the job in one re-projection pass and kept for that
+/// frame's next render.
+pub struct Partner {
+    pub frame: u64,
+    pub view: EyeView,
+    pub slot: Arc<FrameSlot>,
+    /// What that frame's render must ask for to be given the image.
+    pub inputs: Arc<Inputs>,
+    /// The pair's re-projection, planned when the partner was chosen.
+    pub plan: Reprojection,
+}
+
+/// Where a deadline frame's full render goes, and what it must keep.
+pub struct BackgroundRender {
+    pub target: Arc<Background>,
+    pub warp: WarpMode,
+    /// When the camera it renders was taken.
+    pub taken: Instant,
+}
+
+/// What the engine keeps of one frame between its renders.
+#[derive(Default)]
+pub struct FrameRenders {
+    pub slot: Arc<FrameSlot>,
+    /// What the last render was made from, while its image is good.
+    last: Option<Arc<Inputs>>,
+    /// The background renders of a frame with a deadline.
+    pub background: Arc<Background>,
+}
+
+impl FrameRenders {
+    /// The whole render of `inputs` into this frame. Hosts render
+    /// unchanged frames again (OpenCOVER up to 64 times, to accumulate):
+    /// then the last image stands.
+    pub fn job(&mut self, frame: u64, inputs: Arc<Inputs>) -> RenderJob {
+        let unchanged = self.last.as_deref() == Some(&*inputs) && self.slot.holds_image();
+        self.last = Some(Arc::clone(&inputs));
+        RenderJob {
+            frame,
+            inputs,
+            slot: Arc::clone(&self.slot),
+            on_done: None,
+            unchanged,
+            partner: None,
+            background: None,
+        }
+    }
+
+    /// A deadline frame's render keeps nothing for the next one.
+    pub fn presenting(&mut self) {
+        self.last = None;
+    }
+
+    /// Whether this frame's image of `inputs` is already made: its last
+    /// render's, or one its stereo partner kept for it.
+    pub fn has_image_of(&self, inputs: &Inputs) -> bool {
+        (self.last.as_deref() == Some(inputs) && self.slot.holds_image()) || self.slot.keeps(inputs)
+    }
+
+    /// `anariDiscardFrame`: the render in flight stops and what was kept
+    /// no longer stands for the frame's next render.
+    pub fn discard(&mut self) {
+        self.slot.cancel();
+        self.background.cancel();
+        self.last = None;
+    }
+}
+
+impl Drop for FrameRenders {
+    /// A frame the host has released for good: a render still running
+    /// for it stops, so nobody waits on an image nobody can map.
+    fn drop(&mut self) {
+        self.slot.cancel();
+        self.background.cancel();
+    }
+}
+
+impl RenderJob {
+    /// Whether rendering another frame's eye with this one could gain
+    /// anything: this render makes a new image, no partner kept one for
+    /// it, and the renderer may be the GPU's.
+    pub fn wants_partner(&self) -> bool {
+        !self.unchanged && !self.slot.keeps(&self.inputs) && self.inputs.backend != Backend::Cpu
+    }
+}

@@ -1,0 +1,268 @@
+//! How each kind of job is rendered: one view, a stereo camera's two
+//! eyes (one re-projection pass where the stereo decision allows it), a
+//! frame with its stereo partner's eye, a multi-view panel, and
+//! isosurfaces. Each kind looks at the job's stop flag between its passes
+//! and views; the ray casters look at it between rows.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use super::inputs::{EyeView, PanelViews, Views};
+use super::job::{Partner, RenderJob};
+use super::slot::Kept;
+use super::status::{Note, Notify, Severity};
+use crate::geometry::MultiViewDisplay;
+use crate::render::iso::{interleave, Panel};
+use crate::render::stereo::{
+    decide, Bounds, Eyes, LayerFormat, LayerRequest, RenderFacts, Reprojection, StereoFrames,
+    TwoPasses,
+};
+use crate::render::Render as _;
+use crate::render::{ColorFormat, Frame, FrameDesc, RenderError, Renderer};
+use crate::scene::Scene;
+
+/// The layers the device re-projects with: as many as the plan needs.
+pub const REPROJECTION_LAYERS: LayerRequest = LayerRequest {
+    count: None,
+    format: LayerFormat::Rgba16F,
+};
+
+fn stop_check(job: &RenderJob) -> Result<(), RenderError> {
+    if job.stopped() {
+        return Err(RenderError::Stopped);
+    }
+    Ok(())
+}
+
+/// The job's views, each into its rectangle of the frame: one render for
+/// a single view, one per eye (stitched) for a stereo camera, and one
+/// pass for both eyes where re-projection applies: the two eyes of a
+/// stereo camera, or the frame's view and its partner frame's, whose share
+/// of the pass goes to `handed`.
+pub fn render_views(
+    r: &mut Renderer,
+    scene: &Scene,
+    job: &RenderJob,
+    report: &Notify,
+    handed: &mut Duration,
+) -> Result<Frame, RenderError> {
+    let info = |message: String| report(Note::frame(Severity::Info, job.frame, message));
+    let inputs = &job.inputs;
+    match (&inputs.views, &job.partner) {
+        (Views::StereoPair([left, right]), _) => {
+            stop_check(job)?;
+            match stereo_camera(r, scene, job, left, right) {
+                Ok((pair, layers)) => {
+                    info(format!(
+                        "stereo frame: both eyes in one re-projection pass ({layers} layers)"
+                    ));
+                    return Frame::stitched(
+                        &inputs.desc,
+                        &[(left.offset, pair.left), (right.offset, pair.right)],
+                    );
+                }
+                Err(why) => info(format!("stereo frame: two passes ({why})")),
+            }
+        }
+        (Views::Mono(one), Some(partner)) => {
+            stop_check(job)?;
+            match with_partner(r, scene, job, one, partner) {
+                Ok(pair) => {
+                    let share = Duration::from_secs_f64(pair.times.composite_ms.max(0.0) / 1e3);
+                    partner.slot.keep(Kept {
+                        inputs: Arc::clone(&partner.inputs),
+                        frame: pair.right,
+                        duration: share,
+                        by: job.frame,
+                    });
+                    *handed = share;
+                    info(format!(
+                        "stereo pair: frame {:#x} and frame {:#x} in one re-projection pass ({} layers)",
+                        job.frame, partner.frame, partner.plan.layers
+                    ));
+                    return Ok(pair.left);
+                }
+                Err(why) => info(format!(
+                    "stereo pair: frame {:#x} renders alone, not with frame {:#x} ({why})",
+                    job.frame, partner.frame
+                )),
+            }
+        }
+        _ => {}
+    }
+    let render = |r: &mut Renderer, view: &EyeView| {
+        let desc = FrameDesc {
+            size: view.size,
+            ..inputs.desc
+        };
+        r.render_until(scene, &view.rays, &inputs.settings, &desc, &job.slot.stop)
+    };
+    match inputs.views.all() {
+        [one] if one.size == inputs.desc.size => render(r, one),
+        views => {
+            let mut parts = Vec::with_capacity(views.len());
+            for view in views.iter().filter(|v| v.size.min_element() > 0) {
+                parts.push((view.offset, render(r, view)?));
+            }
+            Frame::stitched(&inputs.desc, &parts)
+        }
+    }
+}
+
+/// What the job's renderer brings to the stereo decision.
+fn facts(r: &Renderer, job: &RenderJob) -> RenderFacts {
+    RenderFacts {
+        reprojects: matches!(r, Renderer::Gpu(_)),
+        background_image: job.inputs.settings.background_image.is_some(),
+    }
+}
+
+/// A stereo camera's two eyes from one re-projection pass, the right eye
+/// re-projected from the left one's samples, each of its eye's size; or
+/// why not. The left eye is cast with its own rays, so it is the image it
+/// renders alone.
+fn stereo_camera(
+    r: &mut Renderer,
+    scene: &Scene,
+    job: &RenderJob,
+    left: &EyeView,
+    right: &EyeView,
+) -> Result<(StereoFrames, u32), String> {
+    let not_perspective = || "an eye is not a perspective camera".to_owned();
+    let eyes = Eyes {
+        left: left.matrix.ok_or_else(not_perspective),
+        right: right.matrix.ok_or_else(not_perspective),
+        sizes: [left.size, right.size],
+    };
+    let plan = decide(
+        eyes,
+        Bounds::of(scene),
+        REPROJECTION_LAYERS,
+        Some(facts(r, job)),
+    )
+    .map_err(|e| e.to_string())?;
+    let pair = reproject(r, scene, job, left, &plan)?;
+    Ok((pair, plan.layers))
+}
+
+/// The frame's view and its partner's from the pass planned when the
+/// partner was chosen, if this renderer may run it.
+fn with_partner(
+    r: &mut Renderer,
+    scene: &Scene,
+    job: &RenderJob,
+    one: &EyeView,
+    partner: &Partner,
+) -> Result<StereoFrames, String> {
+    facts(r, job).admit().map_err(|e| e.to_string())?;
+    reproject(r, scene, job, one, &partner.plan)
+}
+
+fn reproject(
+    r: &mut Renderer,
+    scene: &Scene,
+    job: &RenderJob,
+    left: &EyeView,
+    plan: &Reprojection,
+) -> Result<StereoFrames, String> {
+    let Renderer::Gpu(gpu) = r else {
+        return Err(TwoPasses::NotOnThisRenderer.to_string());
+    };
+    let desc = FrameDesc {
+        size: left.size,
+        ..job.inputs.desc
+    };
+    gpu.render_reprojected(scene, &left.rays, plan, &job.inputs.settings, &desc)
+        .map_err(|e| e.to_string())
+}
+
+/// The last panel's views of each subpixel: a display's pattern stays
+/// from frame to frame, and looking every subpixel up costs a frame of a
+/// full-size panel tens of milliseconds.
+#[derive(Default)]
+pub struct KeptPanel(Option<(Arc<MultiViewDisplay>, ViewTable)>);
+
+/// Each subpixel's view, row by row from the lower left.
+type ViewTable = Arc<[[u32; 3]]>;
+
+impl KeptPanel {
+    fn panel(&mut self, job: &RenderJob, views: &PanelViews) -> Result<Panel, RenderError> {
+        let display = &views.display;
+        let rays = views.views.iter().map(|v| v.rays).collect();
+        let (size, color) = (job.inputs.desc.size, job.inputs.desc.color);
+        if let Some((kept, table)) = &self.0 {
+            if kept == display && display.resolution == size {
+                return Panel::with_table(size, color, rays, table.clone());
+            }
+        }
+        self.0 = None;
+        let panel = Panel::new(size, color, rays, |x, y, c| display.view_of(x, y, c))?;
+        self.0 = Some((display.clone(), panel.table().clone()));
+        Ok(panel)
+    }
+}
+
+/// A multi-view panel's image: of an isosurface by the camera's method;
+/// of volumes the naive way (every view rendered, then interleaved), as
+/// the per-pixel-eye passes are the isosurface caster's.
+pub fn render_panel(
+    r: &mut Renderer,
+    job: &RenderJob,
+    views: &PanelViews,
+    kept: &mut KeptPanel,
+) -> Result<Frame, RenderError> {
+    let panel = kept.panel(job, views)?;
+    let inputs = &job.inputs;
+    match (&inputs.scene, inputs.surfaces.as_slice()) {
+        (Some(scene), _) => {
+            // Views in floats: an 8-bit panel is quantised once.
+            let desc = FrameDesc::new(panel.size).with_color(ColorFormat::Rgba32F);
+            let mut frames = Vec::with_capacity(views.views.len());
+            for v in &views.views {
+                frames.push(r.render_until(
+                    scene,
+                    &v.rays,
+                    &inputs.settings,
+                    &desc,
+                    &job.slot.stop,
+                )?);
+            }
+            interleave(&frames, &panel)
+        }
+        (None, [surface]) => {
+            stop_check(job)?;
+            r.cast_display(surface, &panel, views.method)
+        }
+        (None, surfaces) => Err(RenderError::Settings(format!(
+            "a multi-view panel image shows one isosurface, not {}",
+            surfaces.len()
+        ))),
+    }
+}
+
+/// The job's views of its isosurfaces, each into its rectangle of the
+/// frame.
+pub fn render_surface_views(r: &mut Renderer, job: &RenderJob) -> Result<Frame, RenderError> {
+    let inputs = &job.inputs;
+    let mut parts = Vec::with_capacity(inputs.views.all().len());
+    for view in inputs
+        .views
+        .all()
+        .iter()
+        .filter(|v| v.size.min_element() > 0)
+    {
+        stop_check(job)?;
+        let desc = FrameDesc {
+            size: view.size,
+            ..inputs.desc
+        };
+        parts.push((
+            view.offset,
+            r.cast_surfaces(&inputs.surfaces, &view.rays, &desc)?,
+        ));
+    }
+    match parts.as_slice() {
+        [(_, one)] if one.size == inputs.desc.size => Ok(parts.remove(0).1),
+        _ => Frame::stitched(&inputs.desc, &parts),
+    }
+}
