@@ -7,7 +7,8 @@ use std::ffi::{c_char, c_void, CString};
 use std::sync::OnceLock;
 
 use super::sys;
-use crate::device::info::{self, DefaultValue, CHANNELS, EXTENSIONS, SUBTYPES};
+use crate::device::info::{self, CHANNELS, EXTENSIONS, SUBTYPES};
+use crate::device::table::DefaultValue;
 use crate::device::DataType;
 
 struct List {

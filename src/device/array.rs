@@ -1,9 +1,9 @@
 //! ANARI arrays: device-owned memory, or the host's memory shared until the
 //! device no longer needs it.
 
-use super::object::ObjectRef;
+use super::object::{ObjectCell, ObjectRef};
+use super::types::words;
 use super::types::DataType;
-use super::value::words;
 
 /// Memory the host lent to an array. Dropping it returns the memory to the
 /// host (the C layer calls the host's deleter there, exactly once).
@@ -145,4 +145,11 @@ pub fn byte_len(element: DataType, dims: [u64; 3]) -> Option<u64> {
     dims.iter()
         .try_fold(element.size() as u64, |acc, &d| acc.checked_mul(d))
         .filter(|&b| b <= isize::MAX as u64)
+}
+
+impl ObjectCell {
+    /// `f` on the array, if the object is one.
+    pub fn with_array<R>(&self, f: impl FnOnce(&mut Array) -> R) -> Option<R> {
+        self.with_held(f)
+    }
 }

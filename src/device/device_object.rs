@@ -2,7 +2,7 @@
 //! the device's own (it switches callbacks and backends), so the table
 //! serves checks and introspection only.
 
-use super::info::{p, DefaultValue, SubtypeInfo, EXT_FRAME_PAIR};
+use super::table::{p, DefaultValue, SubtypeInfo, EXT_FRAME_PAIR};
 use super::types::DataType as T;
 use crate::render::Backend;
 

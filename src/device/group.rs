@@ -1,9 +1,9 @@
 //! The group: volumes and surfaces an instance places in the world
 //! together.
 
-use super::info::{object_list, SubtypeInfo};
-use super::object::{Derived, ObjectRef, State};
-use super::read::Read;
+use super::object::{ObjectRef, State};
+use super::table::Read;
+use super::table::{object_list, SubtypeInfo};
 use super::types::DataType as T;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
@@ -26,8 +26,8 @@ pub struct GroupModel {
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    Ok(Some(State::Group(Derived::Ready(GroupModel {
+    Ok(Some(State::ready(GroupModel {
         volumes: r.objects("volume", T::VOLUME)?,
         surfaces: r.objects("surface", T::SURFACE)?,
-    }))))
+    })))
 }

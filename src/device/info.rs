@@ -1,142 +1,33 @@
-//! What caveray implements: one `SubtypeInfo` per object kind and subtype,
-//! each in its own module beside its commit, listed once in `SUBTYPES`.
-//! Setting a parameter is checked against these tables, commits read their
-//! defaults from them, and the info queries (`anariGetObjectInfo`,
-//! `anariGetParameterInfo`) answer from them.
+//! What caveray implements: every subtype's table (`table.rs`), each in
+//! its own module beside its commit, listed once in `SUBTYPES`, with the
+//! extensions and channels the device reports.
 
+use std::sync::Arc;
+
+use super::camera::CameraModel;
+use super::frame::state::FrameState;
+use super::geometry::IsoGeometry;
+use super::group::GroupModel;
+use super::instance::InstanceModel;
+use super::light::DirectionalLight;
+use super::material::Coloring;
 use super::object::State;
-use super::read::Read;
+use super::surface::SurfaceModel;
+use super::table::{
+    ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_COMPLETION,
+    EXT_CURVATURE, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR, EXT_ISOSURFACE, EXT_MATRIX,
+    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_SHADING,
+    EXT_STEREO,
+};
 use super::types::DataType as T;
+use super::volume::VolumeModel;
+use super::world::WorldModel;
 use super::{
     camera, device_object, frame, geometry, group, instance, light, material, renderer,
     spatial_field, surface, volume, world,
 };
-
-pub struct ParamInfo {
-    pub name: &'static str,
-    /// Accepted types, the preferred one first.
-    pub types: &'static [T],
-    pub required: bool,
-    pub default: DefaultValue,
-    pub description: &'static str,
-    /// For array parameters: the element types read.
-    pub elements: &'static [T],
-    /// For enumerations (STRING): the names understood.
-    pub names: &'static [&'static str],
-    /// For DATA_TYPE parameters: the types understood.
-    pub data_types: &'static [T],
-    /// For numbers: the smallest and largest sensible value.
-    pub range: Option<(f32, f32)>,
-}
-
-impl ParamInfo {
-    pub const fn elements(mut self, elements: &'static [T]) -> Self {
-        self.elements = elements;
-        self
-    }
-    pub const fn names(mut self, names: &'static [&'static str]) -> Self {
-        self.names = names;
-        self
-    }
-    pub const fn data_types(mut self, types: &'static [T]) -> Self {
-        self.data_types = types;
-        self
-    }
-    pub const fn range(mut self, lo: f32, hi: f32) -> Self {
-        self.range = Some((lo, hi));
-        self
-    }
-}
-
-/// A parameter's value when the host sets none.
-pub enum DefaultValue {
-    None,
-    /// FLOAT32 components (for FLOAT32-based types); the info queries
-    /// answer these.
-    Floats(&'static [f32]),
-    /// An enumeration's default name.
-    Text(&'static str),
-    /// A BOOL's.
-    Bool(bool),
-}
-
-/// What committing a subtype derives from its parameters: its new state,
-/// `None` where parameters are read later (frames, at render time), or
-/// why the parameters cannot be used. Warnings about accepted-but-odd
-/// input go to the callback.
-pub type Commit = fn(&Read<'_>, &mut dyn FnMut(String)) -> Result<Option<State>, String>;
-
-pub struct SubtypeInfo {
-    pub kind: T,
-    pub subtype: &'static str,
-    pub description: &'static str,
-    /// Extensions (by name) this subtype belongs to.
-    pub extensions: &'static [&'static str],
-    pub params: &'static [ParamInfo],
-    /// `None` for the device, whose commit is the device's own.
-    pub commit: Option<Commit>,
-}
-
-/// An optional ARRAY1D parameter of objects of one kind.
-pub const fn object_list(
-    name: &'static str,
-    element: &'static [T],
-    description: &'static str,
-) -> ParamInfo {
-    p(name, &[T::ARRAY1D], false, DefaultValue::None, description).elements(element)
-}
-
-pub const fn p(
-    name: &'static str,
-    types: &'static [T],
-    required: bool,
-    default: DefaultValue,
-    description: &'static str,
-) -> ParamInfo {
-    ParamInfo {
-        name,
-        types,
-        required,
-        default,
-        description,
-        elements: &[],
-        names: &[],
-        data_types: &[],
-        range: None,
-    }
-}
-
-pub const VEC3: &[T] = &[T::FLOAT32_VEC3];
-pub const F32: &[T] = &[T::FLOAT32];
-pub const MAT4: &[T] = &[T::FLOAT32_MAT4];
-
-/// The matrix camera's extension under anari-visionaray's name (clients
-/// written for it work unchanged) and under ours. Every name carries the
-/// `ANARI_` prefix, as hosts look extensions up with it.
-pub const EXT_MATRIX_VSNRAY: &str = "ANARI_VSNRAY_CAMERA_MATRIX";
-pub const EXT_MATRIX: &str = "ANARI_CAVERAY_CAMERA_MATRIX";
-pub const EXT_OFF_AXIS: &str = "ANARI_CAVERAY_CAMERA_OFF_AXIS";
-pub const EXT_SHADING: &str = "ANARI_CAVERAY_RENDERER_SHADING";
-pub const EXT_BACKGROUND: &str = "ANARI_KHR_RENDERER_BACKGROUND_COLOR";
-pub const EXT_BACKGROUND_IMAGE: &str = "ANARI_KHR_RENDERER_BACKGROUND_IMAGE";
-pub const EXT_COMPLETION: &str = "ANARI_KHR_FRAME_COMPLETION_CALLBACK";
-pub const EXT_ACCUMULATION: &str = "ANARI_KHR_FRAME_ACCUMULATION";
-pub const EXT_STEREO: &str = "ANARI_KHR_CAMERA_STEREO";
-pub const EXT_ORTHOGRAPHIC: &str = "ANARI_KHR_CAMERA_ORTHOGRAPHIC";
-/// Per-eye frames rendered in one re-projection pass (frame
-/// `stereoPartner`, device `pairStereoFrames`).
-pub const EXT_FRAME_PAIR: &str = "ANARI_CAVERAY_FRAME_STEREO_PAIR";
-/// Frames that are ready by a deadline, showing the newest complete image
-/// warped to their camera (frame `caveray.deadline`, `caveray.warp`;
-/// properties `caveray.imageAge`, `caveray.warp`).
-pub const EXT_FRAME_DEADLINE: &str = "ANARI_CAVERAY_FRAME_DEADLINE";
-pub const EXT_ISOSURFACE: &str = "ANARI_KHR_GEOMETRY_ISOSURFACE";
-pub const EXT_MATTE: &str = "ANARI_KHR_MATERIAL_MATTE";
-/// Surfaces colored by curvature (material `curvature`).
-pub const EXT_CURVATURE: &str = "ANARI_CAVERAY_MATERIAL_CURVATURE";
-/// Multi-view autostereoscopic panels, each subpixel from its own eye
-/// (camera `multiView`).
-pub const EXT_MULTI_VIEW: &str = "ANARI_CAVERAY_CAMERA_MULTI_VIEW";
+use crate::render::RenderSettings;
+use crate::scene::StructuredVolume;
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
@@ -198,6 +89,30 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &frame::INFO,
 ];
 
+/// The state of a new object of `kind`: what its commit will derive, not
+/// yet derived.
+pub fn initial_state(kind: T, implemented: bool) -> State {
+    if !implemented {
+        return State::Inert;
+    }
+    match kind {
+        T::SPATIAL_FIELD => State::uncommitted::<Arc<StructuredVolume>>(),
+        T::VOLUME => State::uncommitted::<VolumeModel>(),
+        T::WORLD => State::uncommitted::<WorldModel>(),
+        T::GROUP => State::uncommitted::<GroupModel>(),
+        T::GEOMETRY => State::uncommitted::<IsoGeometry>(),
+        T::MATERIAL => State::uncommitted::<Coloring>(),
+        T::SURFACE => State::uncommitted::<SurfaceModel>(),
+        T::INSTANCE => State::uncommitted::<InstanceModel>(),
+        T::LIGHT => State::uncommitted::<DirectionalLight>(),
+        T::CAMERA => State::uncommitted::<CameraModel>(),
+        // A renderer works with its defaults before any commit.
+        T::RENDERER => State::ready(RenderSettings::default()),
+        T::FRAME => State::held(FrameState::default()),
+        _ => State::Inert,
+    }
+}
+
 /// Subtype names of `kind` that caveray implements, in table order.
 pub fn subtypes(kind: T) -> Vec<&'static str> {
     SUBTYPES
@@ -252,6 +167,7 @@ pub const IGNORED_PARAMS: &[&str] = &[
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::device::table::DefaultValue;
 
     #[test]
     fn defaults_fit_their_types_and_names_are_unique() {

@@ -20,13 +20,14 @@ mod instance;
 mod light;
 mod material;
 mod object;
-mod read;
+pub mod table;
+
 mod renderer;
 mod snapshot;
 mod spatial_field;
 mod surface;
 mod types;
-mod value;
+
 pub mod volume;
 mod world;
 
@@ -34,5 +35,5 @@ pub use crate::engine::{panic_message, FrameSlot};
 pub use array::{Array, HostMemory};
 pub use calls::{Device, Input, Mapped, OnDone, Property, Subject};
 pub use camera::CameraModel;
+pub use object::{Params, Value};
 pub use types::{kind_name, object_kind, DataType, Reporter, Severity, Status, StatusCode};
-pub use value::{Params, Value};

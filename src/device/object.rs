@@ -1,25 +1,16 @@
 //! One ANARI object: its kind and subtype, the parameters set since the
-//! last commit, the committed ones, and what was derived from them.
+//! last commit (values as the device stores them between `set` and
+//! `commit`), the committed ones, and what was derived from them. The
+//! derived value is kept as whatever type its subtype derives, so this
+//! file knows no subtype; `access.rs` hands it out by type.
 
-use std::collections::BTreeSet;
+use std::any::{Any, TypeId};
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use super::array::Array;
-use super::camera::CameraModel;
-use super::frame::state::FrameState;
-use super::geometry::IsoGeometry;
-use super::group::GroupModel;
-use super::info::SubtypeInfo;
-use super::instance::InstanceModel;
-use super::light::DirectionalLight;
-use super::material::Coloring;
-use super::surface::SurfaceModel;
-use super::types::{kind_name, DataType};
-use super::value::Params;
-use super::volume::VolumeModel;
-use super::world::WorldModel;
-use crate::render::RenderSettings;
-use crate::scene::StructuredVolume;
+use glam::{Mat4, Vec2, Vec3, Vec4};
+
+use super::types::{kind_name, words, DataType};
 
 /// Objects are shared: the host's handle and every parameter or array that
 /// names the object keep it alive.
@@ -32,8 +23,6 @@ pub struct ObjectCell {
     /// Whether caveray implements this kind and subtype; other objects are
     /// created, accept parameters and render nothing.
     pub implemented: bool,
-    /// The subtype's table, which checks its parameters and commits it.
-    pub info: Option<&'static SubtypeInfo>,
     inner: Mutex<Object>,
 }
 
@@ -42,7 +31,7 @@ impl ObjectCell {
         handle: u64,
         kind: DataType,
         subtype: &str,
-        (implemented, info): (bool, Option<&'static SubtypeInfo>),
+        implemented: bool,
         state: State,
     ) -> Self {
         Self {
@@ -50,7 +39,6 @@ impl ObjectCell {
             kind,
             subtype: subtype.to_owned(),
             implemented,
-            info,
             inner: Mutex::new(Object {
                 pending: Params::default(),
                 committed: None,
@@ -118,43 +106,211 @@ pub enum Unready {
 }
 
 pub enum State {
-    Array(Array),
-    Field(Derived<Arc<StructuredVolume>>),
-    Volume(Derived<VolumeModel>),
-    World(Derived<WorldModel>),
-    Group(Derived<GroupModel>),
-    Geometry(Derived<IsoGeometry>),
-    Material(Derived<Coloring>),
-    Surface(Derived<SurfaceModel>),
-    Instance(Derived<InstanceModel>),
-    Light(Derived<DirectionalLight>),
-    Camera(Derived<CameraModel>),
-    Renderer(Derived<RenderSettings>),
-    Frame(FrameState),
+    /// What the object's commit derives (a field's volume, a camera's
+    /// model, a renderer's settings), of the type `of`, or why there is
+    /// none yet.
+    Model {
+        of: TypeId,
+        derived: Derived<Box<dyn Any + Send>>,
+    },
+    /// What the device changes in place between commits: an array's
+    /// memory, a frame's render slot and channels.
+    Held(Box<dyn Any + Send>),
+    /// Kinds and subtypes caveray does not implement.
     Inert,
 }
 
 impl State {
-    /// The empty state of a new object of `kind` (implemented or not).
-    pub fn for_kind(kind: DataType, implemented: bool) -> Self {
-        if !implemented {
-            return State::Inert;
+    /// Not committed yet; its commit will derive a `T`.
+    pub fn uncommitted<T: Any>() -> Self {
+        State::Model {
+            of: TypeId::of::<T>(),
+            derived: Derived::Uncommitted,
         }
-        match kind {
-            DataType::SPATIAL_FIELD => State::Field(Derived::Uncommitted),
-            DataType::VOLUME => State::Volume(Derived::Uncommitted),
-            DataType::WORLD => State::World(Derived::Uncommitted),
-            DataType::GROUP => State::Group(Derived::Uncommitted),
-            DataType::GEOMETRY => State::Geometry(Derived::Uncommitted),
-            DataType::MATERIAL => State::Material(Derived::Uncommitted),
-            DataType::SURFACE => State::Surface(Derived::Uncommitted),
-            DataType::INSTANCE => State::Instance(Derived::Uncommitted),
-            DataType::LIGHT => State::Light(Derived::Uncommitted),
-            DataType::CAMERA => State::Camera(Derived::Uncommitted),
-            // A renderer works with its defaults before any commit.
-            DataType::RENDERER => State::Renderer(Derived::Ready(RenderSettings::default())),
-            DataType::FRAME => State::Frame(FrameState::default()),
-            _ => State::Inert,
+    }
+
+    /// A commit's result.
+    pub fn ready<T: Any + Send>(value: T) -> Self {
+        State::Model {
+            of: TypeId::of::<T>(),
+            derived: Derived::Ready(Box::new(value)),
         }
+    }
+
+    pub fn held<T: Any + Send>(value: T) -> Self {
+        State::Held(Box::new(value))
+    }
+
+    /// This state's kind, unusable for `why` (its commit failed); `None`
+    /// for states a commit never replaces (arrays, frames, inert objects).
+    pub fn invalid(&self, why: String) -> Option<Self> {
+        match self {
+            State::Model { of, .. } => Some(State::Model {
+                of: *of,
+                derived: Derived::Invalid(why),
+            }),
+            State::Held(_) | State::Inert => None,
+        }
+    }
+}
+
+/// A parameter value. Values passed by pointer are kept as their bytes,
+/// so any type can be stored and read back as what it is.
+#[derive(Clone)]
+pub enum Value {
+    Bytes {
+        ty: DataType,
+        bytes: Vec<u8>,
+    },
+    String(String),
+    /// VOID_POINTER and the callback types: an address the device only
+    /// hands back to the host.
+    Pointer {
+        ty: DataType,
+        addr: usize,
+    },
+    Object {
+        ty: DataType,
+        object: ObjectRef,
+    },
+}
+
+impl Value {
+    /// The numbers of a FLOAT32-based value (scalar, vector, box, matrix).
+    pub fn f32s(&self) -> Option<Vec<f32>> {
+        match self {
+            Value::Bytes { ty, bytes } if is_f32_based(*ty) => {
+                Some(words(bytes).map(f32::from_ne_bytes).collect())
+            }
+            Value::Bytes { ty, bytes } if is_f64_based(*ty) => {
+                Some(words(bytes).map(|w| f64::from_ne_bytes(w) as f32).collect())
+            }
+            _ => None,
+        }
+    }
+
+    pub fn u32s(&self) -> Option<Vec<u32>> {
+        match self {
+            Value::Bytes {
+                ty: DataType::UINT32 | DataType::UINT32_VEC2,
+                bytes,
+            } => Some(words(bytes).map(u32::from_ne_bytes).collect()),
+            _ => None,
+        }
+    }
+
+    /// An INT32 or DATA_TYPE value.
+    pub fn i32(&self) -> Option<i32> {
+        match self {
+            Value::Bytes {
+                ty: DataType::INT32 | DataType::DATA_TYPE,
+                bytes,
+            } => words(bytes).next().map(i32::from_ne_bytes),
+            _ => None,
+        }
+    }
+
+    /// A BOOL value (one byte, non-zero is true).
+    pub fn bool(&self) -> Option<bool> {
+        match self {
+            Value::Bytes {
+                ty: DataType::BOOL,
+                bytes,
+            } => bytes.first().map(|b| *b != 0),
+            _ => None,
+        }
+    }
+
+    pub fn string(&self) -> Option<&str> {
+        match self {
+            Value::String(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    pub fn object(&self) -> Option<&ObjectRef> {
+        match self {
+            Value::Object { object, .. } => Some(object),
+            _ => None,
+        }
+    }
+
+    pub fn pointer(&self) -> Option<usize> {
+        match self {
+            Value::Pointer { addr, .. } => Some(*addr),
+            _ => None,
+        }
+    }
+}
+
+fn is_f32_based(ty: DataType) -> bool {
+    matches!(
+        ty,
+        DataType::FLOAT32
+            | DataType::FLOAT32_VEC2
+            | DataType::FLOAT32_VEC3
+            | DataType::FLOAT32_VEC4
+            | DataType::FLOAT32_BOX1
+            | DataType::FLOAT32_BOX2
+            | DataType::FLOAT32_BOX3
+            | DataType::FLOAT32_MAT4
+    )
+}
+
+fn is_f64_based(ty: DataType) -> bool {
+    matches!(
+        ty,
+        DataType::FLOAT64
+            | DataType::FLOAT64_VEC2
+            | DataType::FLOAT64_VEC3
+            | DataType::FLOAT64_VEC4
+            | DataType::FLOAT64_BOX1
+    )
+}
+
+/// An object's parameters by name.
+#[derive(Clone, Default)]
+pub struct Params(BTreeMap<String, Value>);
+
+impl Params {
+    pub fn get(&self, name: &str) -> Option<&Value> {
+        self.0.get(name)
+    }
+    pub fn set(&mut self, name: &str, value: Value) {
+        self.0.insert(name.to_owned(), value);
+    }
+    pub fn unset(&mut self, name: &str) -> Option<Value> {
+        self.0.remove(name)
+    }
+    pub fn clear(&mut self) {
+        self.0.clear();
+    }
+    fn floats<const N: usize>(&self, name: &str) -> Option<[f32; N]> {
+        self.get(name)?.f32s()?.try_into().ok()
+    }
+    pub fn f32(&self, name: &str, default: f32) -> f32 {
+        self.floats::<1>(name).map_or(default, |[x]| x)
+    }
+    pub fn vec2(&self, name: &str) -> Option<Vec2> {
+        self.floats::<2>(name).map(Vec2::from)
+    }
+    pub fn vec3(&self, name: &str) -> Option<Vec3> {
+        self.floats::<3>(name).map(Vec3::from)
+    }
+    pub fn vec4(&self, name: &str) -> Option<Vec4> {
+        self.floats::<4>(name).map(Vec4::from)
+    }
+    pub fn mat4(&self, name: &str) -> Option<Mat4> {
+        self.floats::<16>(name).map(|m| Mat4::from_cols_array(&m))
+    }
+    pub fn bool(&self, name: &str) -> Option<bool> {
+        self.get(name).and_then(Value::bool)
+    }
+
+    pub fn string(&self, name: &str) -> Option<&str> {
+        self.get(name)?.string()
+    }
+    pub fn object(&self, name: &str) -> Option<&ObjectRef> {
+        self.get(name)?.object()
     }
 }

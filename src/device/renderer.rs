@@ -2,11 +2,11 @@
 //! shading modes. Its table holds the defaults of `RenderSettings`; a test
 //! keeps the two equal.
 
-use super::info::{
+use super::object::State;
+use super::table::Read;
+use super::table::{
     p, DefaultValue, SubtypeInfo, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_SHADING, F32, VEC3,
 };
-use super::object::{Derived, State};
-use super::read::Read;
 use super::types::DataType as T;
 use glam::Vec4;
 
@@ -122,7 +122,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    settings(r).map(|s| Some(State::Renderer(Derived::Ready(s))))
+    settings(r).map(|s| Some(State::ready(s)))
 }
 
 /// The settings the committed parameters describe.
@@ -191,7 +191,7 @@ fn clip_planes(r: &Read<'_>) -> Result<ClipPlanes, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::device::value::Params;
+    use crate::device::object::Params;
 
     #[test]
     fn the_table_holds_the_default_settings() {

@@ -1,9 +1,9 @@
 //! The surface: a geometry drawn in a material, as worlds and groups
 //! hold them.
 
-use super::info::{p, DefaultValue, SubtypeInfo};
-use super::object::{Derived, ObjectRef, State};
-use super::read::Read;
+use super::object::{ObjectRef, State};
+use super::table::Read;
+use super::table::{p, DefaultValue, SubtypeInfo};
 use super::types::DataType as T;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
@@ -44,8 +44,8 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
             .cloned()
             .ok_or_else(|| format!("parameter '{name}' ({kind}) is required"))
     };
-    Ok(Some(State::Surface(Derived::Ready(SurfaceModel {
+    Ok(Some(State::ready(SurfaceModel {
         geometry: object("geometry", T::GEOMETRY)?,
         material: object("material", T::MATERIAL)?,
-    }))))
+    })))
 }

@@ -209,3 +209,12 @@ pub struct Status {
 
 /// Where a device's status messages go; called from any thread.
 pub type Reporter = std::sync::Arc<dyn Fn(Status) + Send + Sync>;
+
+/// `bytes` as native-endian values of `N` bytes each (trailing bytes ignored).
+pub(crate) fn words<const N: usize>(bytes: &[u8]) -> impl Iterator<Item = [u8; N]> + '_ {
+    bytes.chunks_exact(N).map(|c| {
+        let mut word = [0u8; N];
+        word.copy_from_slice(c);
+        word
+    })
+}

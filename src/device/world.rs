@@ -5,10 +5,10 @@
 use glam::Mat4;
 
 use super::group::GroupModel;
-use super::info::{object_list, SubtypeInfo};
 use super::instance::InstanceModel;
-use super::object::{Derived, ObjectRef, State, Unready};
-use super::read::Read;
+use super::object::{ObjectRef, State, Unready};
+use super::table::Read;
+use super::table::{object_list, SubtypeInfo};
 use super::types::DataType as T;
 use crate::scene::MAX_VOLUMES;
 
@@ -66,9 +66,9 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
             volumes.len()
         ));
     }
-    Ok(Some(State::World(Derived::Ready(WorldModel {
+    Ok(Some(State::ready(WorldModel {
         volumes,
         surfaces,
         lights: r.objects("light", T::LIGHT)?,
-    }))))
+    })))
 }

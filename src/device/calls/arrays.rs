@@ -73,7 +73,7 @@ impl Device {
                 }
             },
         };
-        let cell = self.insert(kind, "", (true, None), State::Array(array));
+        let cell = self.insert(kind, "", true, State::held(array));
         if element.is_object() {
             self.resolve_array_objects(&cell);
         }

@@ -13,12 +13,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use super::geometry::IsoGeometry;
-use super::info::{self, SubtypeInfo};
+use super::info;
 use super::object::{ObjectCell, ObjectRef, State};
+use super::object::{Params, Value};
 use super::snapshot::Epoch;
 use super::surface::SurfaceModel;
 use super::types::{kind_name, object_kind, DataType, Reporter, Severity, Status, StatusCode};
-use super::value::{Params, Value};
 use super::volume::VolumeModel;
 use super::world::WorldModel;
 use crate::engine::{About, Engine, FrameSlot, Note};
@@ -192,12 +192,12 @@ impl Device {
         &mut self,
         kind: DataType,
         subtype: &str,
-        info: (bool, Option<&'static SubtypeInfo>),
+        implemented: bool,
         state: State,
     ) -> ObjectRef {
         let handle = self.serial << 32 | self.next;
         self.next += 1;
-        let cell = ObjectRef::new(ObjectCell::new(handle, kind, subtype, info, state));
+        let cell = ObjectRef::new(ObjectCell::new(handle, kind, subtype, implemented, state));
         self.objects.insert(handle, (cell.clone(), 1));
         cell
     }
@@ -211,8 +211,8 @@ impl Device {
         let cell = self.insert(
             kind,
             subtype,
-            (implemented, table),
-            State::for_kind(kind, implemented),
+            implemented,
+            info::initial_state(kind, implemented),
         );
         if let Some(t) = table.filter(|t| t.subtype != subtype && !t.subtype.is_empty()) {
             self.status(

@@ -2,10 +2,9 @@
 //! committed, when the subtype's commit derives the object's state.
 
 use super::{Device, Input, Subject};
-use crate::device::object::{Derived, State};
-use crate::device::read::Read;
+use crate::device::object::Value;
+use crate::device::table::Read;
 use crate::device::types::{DataType, StatusCode};
-use crate::device::value::Value;
 use crate::device::{device_object, info};
 
 impl Device {
@@ -15,7 +14,7 @@ impl Device {
         let (table, cell) = match target {
             Subject::Device => (Some(&device_object::INFO), None),
             Subject::Object(h) => match self.lookup(h, &format!("anariSetParameter('{name}')")) {
-                Some(c) => (c.info, Some(c)),
+                Some(c) => (info::for_new_object(c.kind, &c.subtype), Some(c)),
                 None => return,
             },
         };
@@ -156,7 +155,7 @@ impl Device {
         if !cell.implemented {
             return;
         }
-        let Some(subtype) = cell.info else {
+        let Some(subtype) = info::for_new_object(cell.kind, &cell.subtype) else {
             return;
         };
         // Frames are committed before hosts know all they need; what is
@@ -191,7 +190,8 @@ impl Device {
                     Some(&cell),
                     format!("anariCommitParameters: {}: {e}", cell.describe()),
                 );
-                match invalid_state(cell.kind, e) {
+                let invalid = cell.lock().state.invalid(e);
+                match invalid {
                     Some(s) => s,
                     None => return,
                 }
@@ -218,24 +218,4 @@ impl Device {
             }
         }
     }
-}
-
-/// The state of an object whose commit failed: unusable, with the reason
-/// kept for render time. `None` for kinds whose state a commit never
-/// replaces (frames).
-fn invalid_state(kind: DataType, why: String) -> Option<State> {
-    Some(match kind {
-        DataType::SPATIAL_FIELD => State::Field(Derived::Invalid(why)),
-        DataType::VOLUME => State::Volume(Derived::Invalid(why)),
-        DataType::WORLD => State::World(Derived::Invalid(why)),
-        DataType::LIGHT => State::Light(Derived::Invalid(why)),
-        DataType::GROUP => State::Group(Derived::Invalid(why)),
-        DataType::GEOMETRY => State::Geometry(Derived::Invalid(why)),
-        DataType::MATERIAL => State::Material(Derived::Invalid(why)),
-        DataType::SURFACE => State::Surface(Derived::Invalid(why)),
-        DataType::INSTANCE => State::Instance(Derived::Invalid(why)),
-        DataType::CAMERA => State::Camera(Derived::Invalid(why)),
-        DataType::RENDERER => State::Renderer(Derived::Invalid(why)),
-        _ => return None,
-    })
 }

@@ -3,9 +3,9 @@
 //! extension name as well as ours.
 
 use super::CameraModel;
-use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_MATRIX, EXT_MATRIX_VSNRAY, MAT4};
 use crate::device::object::State;
-use crate::device::read::Read;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_MATRIX, EXT_MATRIX_VSNRAY, MAT4};
 use crate::device::types::DataType as T;
 use crate::geometry::MatrixCamera;
 

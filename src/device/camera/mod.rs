@@ -14,9 +14,9 @@ use glam::{DVec2, DVec3, UVec2};
 
 use self::multi_view::MultiViewCamera;
 use self::stereo::{Stereo, StereoMode};
-use super::info::{p, DefaultValue, ParamInfo, F32, VEC3};
-use super::object::{Derived, State};
-use super::read::Read;
+use super::object::State;
+use super::table::Read;
+use super::table::{p, DefaultValue, ParamInfo, F32, VEC3};
 use super::types::DataType as T;
 use crate::engine::{EyeView, PanelViews, Views};
 use crate::geometry::{
@@ -350,7 +350,7 @@ impl CameraModel {
     /// certain when a frame renders it.
     fn committed(self) -> Result<Option<State>, String> {
         self.ray_gen(UVec2::ONE)?;
-        Ok(Some(State::Camera(Derived::Ready(self))))
+        Ok(Some(State::ready(self)))
     }
 }
 

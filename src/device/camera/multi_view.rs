@@ -10,9 +10,9 @@ use glam::UVec2;
 
 use super::CameraModel;
 use crate::device::array::Array;
-use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_MULTI_VIEW, F32, VEC3};
 use crate::device::object::State;
-use crate::device::read::Read;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_MULTI_VIEW, F32, VEC3};
 use crate::device::types::DataType as T;
 use crate::geometry::Screen;
 use crate::geometry::{MultiViewDisplay, Units, ViewPattern, MAX_VIEWS};

@@ -3,11 +3,11 @@
 
 use super::stereo::{self, Stereo};
 use super::CameraModel;
-use crate::device::info::{
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{
     p, DefaultValue, ParamInfo, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, VEC3,
 };
-use crate::device::object::State;
-use crate::device::read::Read;
 use crate::device::types::DataType as T;
 use crate::geometry::{OffAxisCamera, Screen};
 

@@ -3,9 +3,9 @@
 //! orthographic mode).
 
 use super::{placed_params, CameraModel, Placement};
-use crate::device::info::{p, DefaultValue, ParamInfo, SubtypeInfo, EXT_ORTHOGRAPHIC, F32};
 use crate::device::object::State;
-use crate::device::read::Read;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, ParamInfo, SubtypeInfo, EXT_ORTHOGRAPHIC, F32};
 use crate::device::types::DataType as T;
 
 static PARAMS: [ParamInfo; 8] = placed_params(p(

@@ -3,9 +3,9 @@
 
 use super::stereo::{self, Stereo};
 use super::{placed_params, CameraModel, Placement};
-use crate::device::info::{p, DefaultValue, ParamInfo, SubtypeInfo, EXT_STEREO, F32};
 use crate::device::object::State;
-use crate::device::read::Read;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, ParamInfo, SubtypeInfo, EXT_STEREO, F32};
 use crate::device::types::DataType as T;
 
 static PARAMS: [ParamInfo; 10] = {

@@ -6,8 +6,8 @@
 
 use glam::{DVec3, UVec2};
 
-use crate::device::info::{p, DefaultValue, ParamInfo, F32};
-use crate::device::read::Read;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, ParamInfo, F32};
 use crate::device::types::DataType as T;
 
 /// `stereoMode` and `interpupillaryDistance`, as every stereo camera

@@ -8,14 +8,14 @@ pub mod state;
 
 use glam::UVec2;
 
-use super::info::{
+use super::object::Params;
+use super::object::State;
+use super::table::Read;
+use super::table::{
     p, DefaultValue, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION, EXT_FRAME_DEADLINE,
     EXT_FRAME_PAIR, F32,
 };
-use super::object::State;
-use super::read::Read;
 use super::types::DataType as T;
-use super::value::Params;
 use crate::engine::Deadline;
 use crate::render::warp::WarpMode;
 use crate::render::ColorFormat;

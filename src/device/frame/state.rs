@@ -4,6 +4,7 @@
 
 use std::sync::Arc;
 
+use crate::device::object::ObjectCell;
 use crate::device::snapshot::{Epoch, FrameSnapshot};
 use crate::device::types::DataType;
 use crate::engine::FrameRenders;
@@ -39,4 +40,11 @@ pub struct FrameState {
     /// The frame's snapshot and the device epoch it was taken at: it
     /// stands until anything is committed, changed or released.
     pub snapshot: Option<(Epoch, Result<Arc<FrameSnapshot>, String>)>,
+}
+
+impl ObjectCell {
+    /// `f` on the frame's state, if the object is a frame.
+    pub fn with_frame<R>(&self, f: impl FnOnce(&mut FrameState) -> R) -> Option<R> {
+        self.with_held(f)
+    }
 }

@@ -3,9 +3,9 @@
 //! secant refinement) rather than meshed, so the surface is as smooth as
 //! the field's filter. docs/autostereo.md has the caster.
 
-use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_ISOSURFACE};
-use crate::device::object::{Derived, ObjectRef, State};
-use crate::device::read::Read;
+use crate::device::object::{ObjectRef, State};
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_ISOSURFACE};
 use crate::device::types::DataType as T;
 use crate::render::iso::IsoFilter;
 
@@ -84,9 +84,9 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
             IsoFilter::Trilinear
         }
     };
-    Ok(Some(State::Geometry(Derived::Ready(IsoGeometry {
+    Ok(Some(State::ready(IsoGeometry {
         field,
         isovalues,
         filter,
-    }))))
+    })))
 }

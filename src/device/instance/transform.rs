@@ -4,9 +4,9 @@
 
 use glam::Mat4;
 
-use crate::device::info::{p, DefaultValue, SubtypeInfo, MAT4};
-use crate::device::object::{Derived, ObjectRef, State};
-use crate::device::read::Read;
+use crate::device::object::{ObjectRef, State};
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, MAT4};
 use crate::device::types::DataType as T;
 use crate::scene::PlacedVolume;
 
@@ -50,8 +50,5 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         .clone();
     let transform = r.mat4("transform")?;
     PlacedVolume::check_transform(transform).map_err(|e| format!("transform {transform} {e}"))?;
-    Ok(Some(State::Instance(Derived::Ready(InstanceModel {
-        group,
-        transform,
-    }))))
+    Ok(Some(State::ready(InstanceModel { group, transform })))
 }

@@ -4,9 +4,9 @@
 
 use glam::Vec3;
 
-use crate::device::info::{p, DefaultValue, SubtypeInfo, F32, VEC3};
-use crate::device::object::{Derived, State};
-use crate::device::read::Read;
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, F32, VEC3};
 use crate::device::types::DataType as T;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
@@ -66,8 +66,8 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
             "color {color} and irradiance {irradiance} must be finite and not negative"
         ));
     }
-    Ok(Some(State::Light(Derived::Ready(DirectionalLight {
+    Ok(Some(State::ready(DirectionalLight {
         towards,
         color: color * irradiance,
-    }))))
+    })))
 }

@@ -2,9 +2,9 @@
 //! curvature from the field's Hessian (blue concave, white flat, orange
 //! convex), the coloring that shows shape on a display without shadows.
 
-use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_CURVATURE, F32};
-use crate::device::object::{Derived, State};
-use crate::device::read::Read;
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_CURVATURE, F32};
 use crate::device::types::DataType as T;
 use crate::render::iso::Coloring;
 
@@ -28,7 +28,5 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     if !(radius.is_finite() && radius > 0.0) {
         return Err(format!("radius must be positive and finite, got {radius}"));
     }
-    Ok(Some(State::Material(Derived::Ready(Coloring::Curvature {
-        radius,
-    }))))
+    Ok(Some(State::ready(Coloring::Curvature { radius })))
 }

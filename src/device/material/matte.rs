@@ -1,9 +1,9 @@
 //! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color.
 //! Surfaces are opaque here; an opacity below 1 is drawn opaque, said so.
 
-use crate::device::info::{p, DefaultValue, SubtypeInfo, EXT_MATTE, F32};
-use crate::device::object::{Derived, State};
-use crate::device::read::Read;
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_MATTE, F32};
 use crate::device::types::DataType as T;
 use crate::render::iso::Coloring;
 
@@ -53,7 +53,5 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     if opacity < 1.0 {
         warn(format!("opacity {opacity}: caveray draws surfaces opaque"));
     }
-    Ok(Some(State::Material(Derived::Ready(Coloring::Flat(
-        clamped,
-    )))))
+    Ok(Some(State::ready(Coloring::Flat(clamped))))
 }

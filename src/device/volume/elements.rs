@@ -7,8 +7,8 @@
 use glam::Vec4;
 
 use crate::device::array::Array;
+use crate::device::types::words;
 use crate::device::types::DataType as T;
-use crate::device::value::words;
 
 /// How one element type is stored: components, their encoding.
 #[derive(Clone, Copy)]

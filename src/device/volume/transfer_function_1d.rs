@@ -7,9 +7,9 @@ use glam::Vec4;
 
 use super::elements::{clamp_unit, colors, scalars, COLOR_ELEMENTS, COLOR_TYPES};
 use crate::device::array::Array;
-use crate::device::info::{p, DefaultValue, SubtypeInfo, F32};
-use crate::device::object::{Derived, ObjectRef, State};
-use crate::device::read::Read;
+use crate::device::object::{ObjectRef, State};
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, F32};
 use crate::device::types::DataType as T;
 use crate::scene::TransferFunction;
 
@@ -89,10 +89,10 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     }
     let tf = TransferFunction::new(colors, opacities, (lo, hi), r.f32("unitDistance")?)
         .map_err(|e| e.to_string())?;
-    Ok(Some(State::Volume(Derived::Ready(VolumeModel {
+    Ok(Some(State::ready(VolumeModel {
         field,
         transfer_function: Arc::new(tf),
-    }))))
+    })))
 }
 
 /// The elements of array parameter `name`, read by `read`; `None` from it
