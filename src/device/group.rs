@@ -12,8 +12,12 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "volumes and surfaces placed together by an instance",
     extensions: &[],
     params: &[
-        object_list("volume", &[T::VOLUME], "ARRAY1D of ANARI_VOLUME"),
-        object_list("surface", &[T::SURFACE], "ARRAY1D of ANARI_SURFACE"),
+        object_list("volume", &[T::VOLUME, T::OBJECT], "ARRAY1D of ANARI_VOLUME"),
+        object_list(
+            "surface",
+            &[T::SURFACE, T::OBJECT],
+            "ARRAY1D of ANARI_SURFACE",
+        ),
     ],
     commit: Some(commit),
 };

@@ -77,7 +77,9 @@ pub struct SubtypeInfo {
     pub commit: Option<Commit>,
 }
 
-/// An optional ARRAY1D parameter of objects of one kind.
+/// An optional ARRAY1D parameter of objects of one kind; `element` lists
+/// that kind and `ANARI_OBJECT`, as hosts such as pynari type every object
+/// list (`Read::objects` checks each object).
 pub const fn object_list(
     name: &'static str,
     element: &'static [T],
@@ -272,9 +274,24 @@ impl<'a> Read<'a> {
 
     /// The objects of array parameter `name`, which must hold `element`s;
     /// none if it is unset.
+    /// An array of `ANARI_OBJECT` (as pynari builds every object list)
+    /// is taken too when each object in it is of kind `element`.
     pub fn objects(&self, name: &str, element: DataType) -> Result<Vec<ObjectRef>, String> {
-        let objects = self.array_of(name, element, |a| {
-            Ok(a.objects.iter().flatten().cloned().collect())
+        let objects = self.array(name, |a| {
+            if a.element() != element && a.element() != DataType::OBJECT {
+                return Err(format!(
+                    "'{name}' array holds {}; expected {element}",
+                    a.element()
+                ));
+            }
+            let objects: Vec<ObjectRef> = a.objects.iter().flatten().cloned().collect();
+            match objects.iter().find(|o| o.kind != element) {
+                Some(o) => Err(format!(
+                    "'{name}' array holds {}; expected only {element}s",
+                    o.describe()
+                )),
+                None => Ok(objects),
+            }
         })?;
         Ok(objects.unwrap_or_default())
     }

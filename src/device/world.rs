@@ -18,10 +18,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "the scene: up to 8 volumes, composited sample by sample where they overlap, or isosurfaces, the nearest showing; lit by the first directional light",
     extensions: &[],
     params: &[
-        object_list("volume", &[T::VOLUME], "ARRAY1D of ANARI_VOLUME"),
-        object_list("surface", &[T::SURFACE], "ARRAY1D of ANARI_SURFACE (isosurfaces)"),
-        object_list("light", &[T::LIGHT], "ARRAY1D of ANARI_LIGHT; the first directional light sets the shading's light"),
-        object_list("instance", &[T::INSTANCE], "ARRAY1D of ANARI_INSTANCE: groups of volumes and surfaces, each placed by its transform"),
+        object_list("volume", &[T::VOLUME, T::OBJECT], "ARRAY1D of ANARI_VOLUME"),
+        object_list("surface", &[T::SURFACE, T::OBJECT], "ARRAY1D of ANARI_SURFACE (isosurfaces)"),
+        object_list("light", &[T::LIGHT, T::OBJECT], "ARRAY1D of ANARI_LIGHT; the first directional light sets the shading's light"),
+        object_list("instance", &[T::INSTANCE, T::OBJECT], "ARRAY1D of ANARI_INSTANCE: groups of volumes and surfaces, each placed by its transform"),
     ],
     commit: Some(commit),
 };

@@ -254,3 +254,48 @@ fn several_volumes_in_one_world_are_all_drawn_and_more_than_eight_refused() {
     );
     h.d.release(nine);
 }
+
+/// A world whose `volume` list is an ARRAY1D of `element` holding `objects`.
+fn world_listing(h: &mut Host, element: DataType, objects: &[u64]) -> u64 {
+    let handles: Vec<usize> = objects.iter().map(|&o| o as usize).collect();
+    let list = h.array(
+        DataType::ARRAY1D,
+        element,
+        [objects.len() as u64, 1, 1],
+        &bytes(&handles),
+    );
+    let world = h.d.new_object(DataType::WORLD, "");
+    h.set_object(world, "volume", DataType::ARRAY1D, list);
+    h.d.commit(Subject::Object(world));
+    h.d.release(list);
+    world
+}
+
+#[test]
+fn object_lists_typed_as_anari_object_hold_their_kind() {
+    // pynari types every object list it builds as ANARI_OBJECT.
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.d.commit(Subject::Object(volume));
+    let typed = world_listing(&mut h, DataType::VOLUME, &[volume]);
+    let generic = world_listing(&mut h, DataType::OBJECT, &[volume]);
+    assert!(h.messages(Severity::Warning).is_empty());
+    assert!(h.messages(Severity::Error).is_empty());
+    // Host::field places its grid on [-1, 1]^3.
+    let cube = Some(Property::Box3([-1.0, -1.0, -1.0, 1.0, 1.0, 1.0]));
+    for world in [typed, generic] {
+        assert_eq!(h.d.property(Subject::Object(world), "bounds", true), cube);
+    }
+
+    // Anything but volumes in the list is refused by name.
+    let camera = h.d.new_object(DataType::CAMERA, "perspective");
+    world_listing(&mut h, DataType::OBJECT, &[volume, camera]);
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors.len() == 1
+            && errors[0].contains("'volume' array holds camera 'perspective'")
+            && errors[0].contains("expected only ANARI_VOLUMEs"),
+        "{errors:?}"
+    );
+}
