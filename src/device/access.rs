@@ -48,6 +48,12 @@ impl ObjectCell {
         }
     }
 
+    /// The state a failed commit leaves: this object's kind, unusable for
+    /// `why`; `None` where a commit never replaces the state.
+    pub fn invalid_state(&self, why: String) -> Option<State> {
+        self.lock().state.invalid(why)
+    }
+
     /// Puts in what a commit derived; returns what it replaces, to be
     /// dropped outside the object's lock.
     pub fn replace_state(&self, state: State) -> State {

@@ -190,8 +190,7 @@ impl Device {
                     Some(&cell),
                     format!("anariCommitParameters: {}: {e}", cell.describe()),
                 );
-                let invalid = cell.lock().state.invalid(e);
-                match invalid {
+                match cell.invalid_state(e) {
                     Some(s) => s,
                     None => return,
                 }
