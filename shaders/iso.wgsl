@@ -1,4 +1,4 @@
-// #import constants, color, iso_bindings
+// #import constants, color, iso_bindings, band_bindings
 // Isosurface ray casting, the port of src/render/iso/ (its reference):
 // fixed steps to the first crossing of the iso-value, secant steps within
 // it, the trilinear field (with central differences) or the cubic
@@ -333,7 +333,8 @@ fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main(@builtin(global_invocation_id) id: vec3u) {
+fn main(@builtin(global_invocation_id) invocation: vec3u) {
+    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
     if id.x >= iso.width || id.y >= iso.height {
         return;
     }

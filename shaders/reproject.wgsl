@@ -1,4 +1,4 @@
-// #import volume, color, stereo, reproject_bindings
+// #import volume, color, stereo, reproject_bindings, band_bindings
 // The left eye, ray cast over the image plus the pixels the right eye
 // needs beyond its borders, writing each ray's right-eye segments into the
 // re-projection layers, whose storage format is the binding table's.
@@ -98,7 +98,8 @@ fn on_sample(p: vec3f, lit: vec3f, a: f32) {
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main(@builtin(global_invocation_id) id: vec3u) {
+fn main(@builtin(global_invocation_id) invocation: vec3u) {
+    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
     if id.x >= stereo.cast_pixels.x || id.y >= stereo.cast_pixels.y {
         return;
     }

@@ -61,7 +61,10 @@ pub fn render_views(
                         &[(left.offset, pair.left), (right.offset, pair.right)],
                     );
                 }
-                Err(why) => info(format!("stereo frame: two passes ({why})")),
+                Err(why) => {
+                    stop_check(job)?;
+                    info(format!("stereo frame: two passes ({why})"))
+                }
             }
         }
         (Views::Mono(one), Some(partner)) => {
@@ -82,10 +85,13 @@ pub fn render_views(
                     ));
                     return Ok(pair.left);
                 }
-                Err(why) => info(format!(
-                    "stereo pair: frame {:#x} renders alone, not with frame {:#x} ({why})",
-                    job.frame, partner.frame
-                )),
+                Err(why) => {
+                    stop_check(job)?;
+                    info(format!(
+                        "stereo pair: frame {:#x} renders alone, not with frame {:#x} ({why})",
+                        job.frame, partner.frame
+                    ))
+                }
             }
         }
         _ => {}
@@ -172,7 +178,8 @@ fn reproject(
         size: left.size,
         ..job.inputs.desc
     };
-    gpu.render_reprojected(scene, &left.rays, plan, &job.inputs.settings, &desc)
+    let stop = &job.slot.stop;
+    gpu.render_reprojected_until(scene, &left.rays, plan, &job.inputs.settings, &desc, stop)
         .map_err(|e| e.to_string())
 }
 
@@ -196,7 +203,15 @@ impl KeptPanel {
             }
         }
         self.0 = None;
-        let panel = Panel::new(size, color, rays, |x, y, c| display.view_of(x, y, c))?;
+        // A stopped job's table is left unfinished, and never kept.
+        let stop = &job.slot.stop;
+        let panel = Panel::new(size, color, rays, |x, y, c| {
+            match stop.load(std::sync::atomic::Ordering::Relaxed) {
+                true => 0,
+                false => display.view_of(x, y, c),
+            }
+        })?;
+        stop_check(job)?;
         self.0 = Some((display.clone(), panel.table().clone()));
         Ok(panel)
     }
@@ -231,7 +246,7 @@ pub fn render_panel(
         }
         (None, [surface]) => {
             stop_check(job)?;
-            r.cast_display(surface, &panel, views.method)
+            r.cast_display(surface, &panel, views.method, &job.slot.stop)
         }
         (None, surfaces) => Err(RenderError::Settings(format!(
             "a multi-view panel image shows one isosurface, not {}",
@@ -258,7 +273,7 @@ pub fn render_surface_views(r: &mut Renderer, job: &RenderJob) -> Result<Frame, 
         };
         parts.push((
             view.offset,
-            r.cast_surfaces(&inputs.surfaces, &view.rays, &desc)?,
+            r.cast_surfaces(&inputs.surfaces, &view.rays, &desc, &job.slot.stop)?,
         ));
     }
     match parts.as_slice() {

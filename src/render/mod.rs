@@ -278,12 +278,14 @@ impl Renderer {
     }
 
     /// `surfaces` seen through `rays`, the nearest per pixel: the CPU
-    /// reference's caster or the GPU's.
+    /// reference's caster (which looks at `stop` between rows) or the
+    /// GPU's (between bands of rows).
     pub fn cast_surfaces(
         &mut self,
         surfaces: &[iso::IsoSurface],
         rays: &RayGen,
         desc: &FrameDesc,
+        stop: &AtomicBool,
     ) -> Result<Frame, RenderError> {
         let one = FrameDesc {
             depth: desc.depth || surfaces.len() > 1,
@@ -292,11 +294,12 @@ impl Renderer {
         let mut frames = Vec::with_capacity(surfaces.len());
         for s in surfaces {
             frames.push(match self {
-                Renderer::Gpu(g) => g.cast_iso(&s.placed, rays, &one, &s.settings)?,
+                Renderer::Gpu(g) => g.cast_iso(&s.placed, rays, &one, &s.settings, stop)?,
                 Renderer::Cpu(c) => {
                     s.settings.validate()?;
                     let (values, bounds) = c.iso_field(&s.placed, &s.settings)?;
-                    let caster = iso::Caster::with_bounds(&s.placed, &values, &s.settings, bounds);
+                    let caster = iso::Caster::with_bounds(&s.placed, &values, &s.settings, bounds)
+                        .until(stop);
                     iso::cast_by(&caster, rays, &one)?.0
                 }
             });
@@ -308,13 +311,15 @@ impl Renderer {
         }
     }
 
-    /// A multi-view panel's image of `surface` by `method`. The GPU's naive
-    /// way is a cast per view, interleaved.
+    /// A multi-view panel's image of `surface` by `method`, until `stop`
+    /// (as `cast_surfaces`). The GPU's naive way is a cast per view,
+    /// interleaved.
     pub fn cast_display(
         &mut self,
         surface: &iso::IsoSurface,
         panel: &iso::Panel,
         method: iso::MultiViewMethod,
+        stop: &AtomicBool,
     ) -> Result<Frame, RenderError> {
         let (placed, settings) = (&surface.placed, &surface.settings);
         match self {
@@ -323,15 +328,16 @@ impl Renderer {
                 let desc = FrameDesc::new(panel.size).with_color(ColorFormat::Rgba32F);
                 let mut views = Vec::with_capacity(panel.views.len());
                 for rays in &panel.views {
-                    views.push(g.cast_iso(placed, rays, &desc, settings)?);
+                    views.push(g.cast_iso(placed, rays, &desc, settings, stop)?);
                 }
                 iso::interleave(&views, panel)
             }
-            Renderer::Gpu(g) => g.cast_display(placed, panel, settings, method),
+            Renderer::Gpu(g) => g.cast_display(placed, panel, settings, method, stop),
             Renderer::Cpu(c) => {
                 settings.validate()?;
                 let (values, bounds) = c.iso_field(placed, settings)?;
-                let caster = iso::Caster::with_bounds(placed, &values, settings, bounds);
+                let caster =
+                    iso::Caster::with_bounds(placed, &values, settings, bounds).until(stop);
                 Ok(iso::render_display_by(&caster, panel, method)?.0)
             }
         }

@@ -201,8 +201,6 @@ impl Render for &CpuRenderer {
         };
         let field = sample::Field::new(&plan, &data, channels.as_deref());
         let (w, h) = (desc.size.x as usize, desc.size.y as usize);
-        let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's color")?;
-        let mut depth = filled(desc.pixels(), 0.0f32, "the frame's depth")?;
         // Square tiles, not rows: neighbouring rays in both directions read
         // the same voxels while they are in cache, and a tile is small
         // enough that two threads stay busy to the frame's end.
@@ -235,6 +233,13 @@ impl Render for &CpuRenderer {
                 (tile, c, d, samples)
             })
             .collect();
+        // A stopped render leaves at once: filling a large frame's buffers
+        // alone takes a good part of a second.
+        if stop.load(Ordering::Relaxed) {
+            return Err(RenderError::Stopped);
+        }
+        let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's color")?;
+        let mut depth = filled(desc.pixels(), 0.0f32, "the frame's depth")?;
         let mut samples = 0;
         for (tile, c, d, n) in tiles {
             samples += n;

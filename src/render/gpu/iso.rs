@@ -3,12 +3,15 @@
 //! src/render/iso/: the pipelines are made on the first cast, the volume
 //! shares the renderer's uploaded textures.
 
+use std::sync::atomic::AtomicBool;
+
 use bytemuck::Zeroable;
 use glam::Vec3;
 use wgpu::TextureViewDimension as Dim;
 
 use super::bindings::{binding_table, Kind};
-use super::context::{unprepared, Context, WORKGROUP};
+use super::context::{unprepared, Context, Pass};
+use super::raycast::RaycastPass;
 use super::resources::{color_data, floats, OutputBuffers};
 use super::shaders::compute_pipeline;
 use super::uniforms::Iso;
@@ -91,10 +94,14 @@ impl Crossing {
 }
 
 impl IsoPass {
-    pub fn new(ctx: &Context) -> Result<Self, RenderError> {
+    /// Cast in `raycast`'s bands of rows (its band group last), so that a
+    /// discard stops a cast between bands.
+    pub fn new(ctx: &Context, raycast: &RaycastPass) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let layout = IsoLayout::new(device, ctx.filterable);
-        let pipeline = compute_pipeline(device, "iso", "iso", "main", &[layout.group()], &[])?;
+        let bands = raycast.band_layout.group();
+        let pipeline =
+            compute_pipeline(device, "iso", "iso", "main", &[layout.group(), bands], &[])?;
         let panel_layout = PanelLayout::new(device);
         let panel_pipeline = |entry: &str| {
             compute_pipeline(
@@ -102,7 +109,7 @@ impl IsoPass {
                 "iso panel",
                 "iso_panel",
                 entry,
-                &[layout.group(), panel_layout.group()],
+                &[layout.group(), panel_layout.group(), bands],
                 &[],
             )
         };
@@ -145,6 +152,7 @@ impl IsoPass {
         desc: &FrameDesc,
         settings: &IsoSettings,
         method: MultiViewMethod,
+        (raycast, stop): (&RaycastPass, &AtomicBool),
     ) -> Result<(Frame, f64), RenderError> {
         // A display's rays and pattern stay from frame to frame: its
         // buffers are kept, and written again only when they change.
@@ -192,14 +200,24 @@ impl IsoPass {
             green: &cache.green,
             method,
         };
-        let frame = self.cast(ctx, volume, placed, first, desc, settings, Some(buffers));
+        let frame = self.cast(
+            ctx,
+            volume,
+            placed,
+            first,
+            desc,
+            settings,
+            Some(buffers),
+            (raycast, stop),
+        );
         self.panel = Some(cache);
         frame
     }
 
     /// The iso shader over `rays` (`main`), or over a panel: `per_subpixel`,
     /// or `geometric` then `spectral`; `volume` is `placed`'s texture.
-    /// Returns the frame and the passes' milliseconds.
+    /// Returns the frame and the passes' milliseconds, or
+    /// `RenderError::Stopped` once `stop` is set between bands.
     #[allow(clippy::too_many_arguments)]
     pub fn cast(
         &mut self,
@@ -210,6 +228,7 @@ impl IsoPass {
         desc: &FrameDesc,
         settings: &IsoSettings,
         panel: Option<PanelBuffers>,
+        (raycast, stop): (&RaycastPass, &AtomicBool),
     ) -> Result<(Frame, f64), RenderError> {
         if !matches!(&self.target, Some(t) if t.size == desc.size && t.format == desc.color) {
             self.target = Some(OutputBuffers::new(ctx, desc.size, desc.color));
@@ -244,13 +263,14 @@ impl IsoPass {
             depth_out: target.depth.as_entire_binding(),
         }
         .bind(&ctx.device, &self.layout);
-        let workgroups = [
-            desc.size.x.div_ceil(WORKGROUP),
-            desc.size.y.div_ceil(WORKGROUP),
-            1,
-        ];
+        let bands = raycast.write_bands(ctx, desc.size);
+        let banded = |pipeline, groups| Pass {
+            pipeline,
+            groups,
+            band: Some(&raycast.band_group),
+        };
         let ms = match panel {
-            None => ctx.dispatch(&self.pipeline, &[&group], workgroups)?,
+            None => ctx.dispatch_bands(&banded(&self.pipeline, &[&group]), &bands, stop)?,
             Some(p) => {
                 let panel_group = PanelResources {
                     view_rays: p.rays.as_entire_binding(),
@@ -260,11 +280,13 @@ impl IsoPass {
                 .bind(&ctx.device, &self.panel_layout);
                 let groups = [&group, &panel_group];
                 match p.method {
+                    // Every band's green first: the spectral pass reads
+                    // it about each pixel, across band edges.
                     MultiViewMethod::GeometricSpectral => {
-                        ctx.dispatch(&self.geometric, &groups, workgroups)?
-                            + ctx.dispatch(&self.spectral, &groups, workgroups)?
+                        ctx.dispatch_bands(&banded(&self.geometric, &groups), &bands, stop)?
+                            + ctx.dispatch_bands(&banded(&self.spectral, &groups), &bands, stop)?
                     }
-                    _ => ctx.dispatch(&self.per_subpixel, &groups, workgroups)?,
+                    _ => ctx.dispatch_bands(&banded(&self.per_subpixel, &groups), &bands, stop)?,
                 }
             }
         };
@@ -341,14 +363,16 @@ fn uniform(
 mod tests {
     use super::*;
     use crate::render::gpu::bindings::assert_declared;
+    use crate::render::gpu::raycast::BandLayout;
     use crate::render::gpu::shaders::compose;
 
     #[test]
     fn the_iso_shaders_declare_their_tables() {
         for filterable in [false, true] {
-            let groups = [&IsoLayout::table(filterable)];
+            let bands = BandLayout::table();
+            let groups = [&IsoLayout::table(filterable), &bands];
             assert_declared(&compose("iso", &groups).unwrap(), &groups);
-            let groups = [&IsoLayout::table(filterable), &PanelLayout::table()];
+            let groups = [&IsoLayout::table(filterable), &PanelLayout::table(), &bands];
             assert_declared(&compose("iso_panel", &groups).unwrap(), &groups);
         }
     }

@@ -5,11 +5,13 @@
 //! records the span of right pixels it wrote this frame, and compositing
 //! reads nothing outside it.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use glam::UVec2;
 use wgpu::TextureViewDimension as Dim;
 
 use super::bindings::{binding_table, Kind};
-use super::context::{unprepared, Context, WORKGROUP};
+use super::context::{unprepared, Context, Pass, WORKGROUP};
 use super::raycast::{RaycastPass, Variants};
 use super::resources::{color_data, floats};
 use super::shaders::compute_pipeline;
@@ -138,7 +140,13 @@ impl LayersPass {
         let device = &ctx.device;
         let writer_layout = ReprojectLayout::new(device, texture_format(format));
         let composite_layout = CompositeLayout::new(device);
-        let writer = [raycast.volume_layout.group(), writer_layout.group()];
+        // The march is cast in the ray caster's bands of rows (its band
+        // group last), so that a discard stops it between bands.
+        let writer = [
+            raycast.volume_layout.group(),
+            writer_layout.group(),
+            raycast.band_layout.group(),
+        ];
         let pipeline = |label, entry, constants: &[(&str, f64)]| {
             compute_pipeline(device, label, "reproject", entry, &writer, constants)
         };
@@ -379,12 +387,12 @@ impl LayersPass {
     /// milliseconds.
     pub fn render(
         &mut self,
-        ctx: &Context,
-        raycast: &RaycastPass,
+        (ctx, raycast): (&Context, &RaycastPass),
         scene: &Scene,
         reprojection: &Reprojection,
         settings: &RenderSettings,
         desc: &FrameDesc,
+        stop: &AtomicBool,
     ) -> Result<(Frame, StereoTimes), RenderError> {
         let plan = &reprojection.plan;
         let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
@@ -403,11 +411,15 @@ impl LayersPass {
         ctx.queue
             .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = raycast.group()?;
-        let left_ms = ctx.dispatch(
-            self.reproject.for_scene(scene),
-            &[volume, &target.writer],
-            [cast.x.div_ceil(WORKGROUP), cast.y.div_ceil(WORKGROUP), 1],
-        )?;
+        let march = Pass {
+            pipeline: self.reproject.for_scene(scene),
+            groups: &[volume, &target.writer],
+            band: Some(&raycast.band_group),
+        };
+        let left_ms = ctx.dispatch_bands(&march, &raycast.write_bands(ctx, cast), stop)?;
+        if stop.load(Ordering::Relaxed) {
+            return Err(RenderError::Stopped);
+        }
         let composite_ms = ctx.dispatch(
             &self.composite,
             &[&target.composite],
@@ -451,15 +463,18 @@ impl LayersPass {
         let target = self.target.as_ref().ok_or_else(no_layers)?;
         let volume = raycast.group()?;
         let s = target.shape;
-        ctx.dispatch(
-            &self.clear,
-            &[volume, &target.writer],
-            [
-                s.texels.x.div_ceil(WORKGROUP),
-                s.texels.y.div_ceil(WORKGROUP),
-                s.layers,
-            ],
-        )
+        // One band: the clear reads no band, but its pipeline binds one.
+        let clear = Pass {
+            pipeline: &self.clear,
+            groups: &[volume, &target.writer],
+            band: Some(&raycast.band_group),
+        };
+        let all = [
+            s.texels.x.div_ceil(WORKGROUP),
+            s.texels.y.div_ceil(WORKGROUP),
+            s.layers,
+        ];
+        ctx.dispatch_bands(&clear, &[all], &AtomicBool::new(false))
     }
 }
 
@@ -471,7 +486,7 @@ pub(super) fn no_layers() -> RenderError {
 mod tests {
     use super::*;
     use crate::render::gpu::bindings::assert_declared;
-    use crate::render::gpu::raycast::VolumeLayout;
+    use crate::render::gpu::raycast::{BandLayout, VolumeLayout};
     use crate::render::gpu::shaders::compose;
 
     #[test]
@@ -480,6 +495,7 @@ mod tests {
             let groups = [
                 &VolumeLayout::table(false),
                 &ReprojectLayout::table(texture_format(format)),
+                &BandLayout::table(),
             ];
             assert_declared(&compose("reproject", &groups).unwrap(), &groups);
         }

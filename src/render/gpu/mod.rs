@@ -194,6 +194,22 @@ impl GpuRenderer {
         settings: &RenderSettings,
         desc: &FrameDesc,
     ) -> Result<StereoFrames, RenderError> {
+        let never = AtomicBool::new(false);
+        self.render_reprojected_until(scene, left, reprojection, settings, desc, &never)
+    }
+
+    /// `render_reprojected`, its march cast in bands of rows: once `stop`
+    /// is set no further band starts, and `RenderError::Stopped` is
+    /// returned.
+    pub fn render_reprojected_until(
+        &mut self,
+        scene: &Scene,
+        left: &RayGen,
+        reprojection: &Reprojection,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+        stop: &AtomicBool,
+    ) -> Result<StereoFrames, RenderError> {
         desc.validate()?;
         if desc.size != reprojection.size {
             return Err(RenderError::Settings(format!(
@@ -215,8 +231,14 @@ impl GpuRenderer {
                 .stereo
                 .insert(LayersPass::new(ctx, &self.raycast, reprojection.format)?),
         };
-        let (right, times) =
-            stereo.render(ctx, &self.raycast, scene, reprojection, settings, desc)?;
+        let (right, times) = stereo.render(
+            (ctx, &self.raycast),
+            scene,
+            reprojection,
+            settings,
+            desc,
+            stop,
+        )?;
         self.last_pass_ms = times.left_ms;
         let left = self.raycast.read_frame(ctx, desc)?;
         Ok(StereoFrames { left, right, times })
@@ -290,32 +312,46 @@ impl GpuRenderer {
     }
 
     /// `placed`'s isosurface seen through `rays`, as
-    /// [`crate::render::iso::cast`] renders it, on the GPU.
+    /// [`crate::render::iso::cast`] renders it, on the GPU, in bands of
+    /// rows: once `stop` is set no further band starts, and
+    /// `RenderError::Stopped` is returned.
     pub fn cast_iso(
         &mut self,
         placed: &PlacedVolume,
         rays: &RayGen,
         desc: &FrameDesc,
         settings: &IsoSettings,
+        stop: &AtomicBool,
     ) -> Result<Frame, RenderError> {
         self.iso_ready(placed, desc, settings)?;
         let volume = self.scene.first_volume().ok_or_else(unprepared)?;
         let iso = self.iso.as_mut().ok_or_else(unprepared)?;
-        let (frame, ms) = iso.cast(&self.ctx, volume, placed, rays, desc, settings, None)?;
+        let (frame, ms) = iso.cast(
+            &self.ctx,
+            volume,
+            placed,
+            rays,
+            desc,
+            settings,
+            None,
+            (&self.raycast, stop),
+        )?;
         self.last_pass_ms = ms;
         Ok(frame)
     }
 
     /// A multi-view panel's image, every subpixel from its own view, as
     /// [`crate::render::iso::render_display`] makes it: one ray a subpixel
-    /// (`PerSubpixel`) or the geometric and spectral passes. The naive way
-    /// is the CPU's (or `cast_iso` per view).
+    /// (`PerSubpixel`) or the geometric and spectral passes, in bands of
+    /// rows until `stop`. The naive way is the CPU's (or `cast_iso` per
+    /// view).
     pub fn cast_display(
         &mut self,
         placed: &PlacedVolume,
         panel: &Panel,
         settings: &IsoSettings,
         method: MultiViewMethod,
+        stop: &AtomicBool,
     ) -> Result<Frame, RenderError> {
         if method == MultiViewMethod::Naive {
             return Err(RenderError::Settings(
@@ -365,6 +401,7 @@ impl GpuRenderer {
             &desc,
             settings,
             method,
+            (&self.raycast, stop),
         )?;
         self.last_pass_ms = ms;
         Ok(frame)
@@ -385,7 +422,7 @@ impl GpuRenderer {
         self.ctx.check_limits(&scene, desc)?;
         self.scene.upload(&self.ctx, &scene);
         if self.iso.is_none() {
-            self.iso = Some(IsoPass::new(&self.ctx)?);
+            self.iso = Some(IsoPass::new(&self.ctx, &self.raycast)?);
         }
         Ok(())
     }

@@ -319,7 +319,13 @@ impl RaycastPass {
     /// The bands a frame of `size` is cast in: each one's first row written
     /// to the bands buffer, and its workgroups.
     pub fn write_bands(&self, ctx: &Context, size: UVec2) -> Vec<[u32; 3]> {
-        let rows = band_rows(size);
+        // A software adapter takes hundreds of times longer over a band:
+        // smaller bands keep a discard as prompt there.
+        let pixels = match ctx.info.device_type {
+            wgpu::DeviceType::Cpu => SOFTWARE_BAND_PIXELS,
+            _ => BAND_PIXELS,
+        };
+        let rows = band_rows(size, pixels);
         let first_rows: Vec<u32> = (0..size.y).step_by(rows as usize).collect();
         let mut words = vec![0u32; first_rows.len() * (BAND_STRIDE / 4) as usize];
         for (band, first) in first_rows.iter().enumerate() {
@@ -393,13 +399,15 @@ impl RaycastPass {
 
 /// Pixels per band of a frame cast in bands: 1920 x 1080 is 8 bands.
 const BAND_PIXELS: u32 = 1 << 18;
+/// Pixels per band on a software adapter (Mesa's lavapipe).
+const SOFTWARE_BAND_PIXELS: u32 = 1 << 14;
 /// The most bands a frame is cast in.
-const MAX_BANDS: u32 = 64;
+const MAX_BANDS: u32 = 1024;
 
-/// Rows per band of a frame of `size`: whole workgroups, about
-/// BAND_PIXELS, and no more than MAX_BANDS bands.
-fn band_rows(size: UVec2) -> u32 {
-    let by_pixels = (BAND_PIXELS / size.x.max(1)).max(1);
+/// Rows per band of a frame of `size`: whole workgroups, about `pixels`,
+/// and no more than MAX_BANDS bands.
+fn band_rows(size: UVec2, pixels: u32) -> u32 {
+    let by_pixels = (pixels / size.x.max(1)).max(1);
     let by_count = size.y.div_ceil(MAX_BANDS);
     by_pixels.max(by_count).next_multiple_of(WORKGROUP)
 }
@@ -419,16 +427,15 @@ mod tests {
             UVec2::new(16384, 16384),
             UVec2::new(1, 100_000),
         ] {
-            let rows = band_rows(size);
-            assert_eq!(rows % WORKGROUP, 0, "{size}");
-            assert!(size.y.div_ceil(rows) <= MAX_BANDS, "{size}: {rows} rows");
+            for pixels in [BAND_PIXELS, SOFTWARE_BAND_PIXELS] {
+                let rows = band_rows(size, pixels);
+                assert_eq!(rows % WORKGROUP, 0, "{size}");
+                assert!(size.y.div_ceil(rows) <= MAX_BANDS, "{size}: {rows} rows");
+            }
         }
-        assert_eq!(
-            UVec2::new(1920, 1080)
-                .y
-                .div_ceil(band_rows(UVec2::new(1920, 1080))),
-            8
-        );
+        let hd = UVec2::new(1920, 1080);
+        assert_eq!(hd.y.div_ceil(band_rows(hd, BAND_PIXELS)), 8);
+        assert_eq!(hd.y.div_ceil(band_rows(hd, SOFTWARE_BAND_PIXELS)), 135);
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! The isosurface caster's march: fixed steps through the grid until the
 //! field crosses the iso-value, then secant steps within that bracket.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -34,6 +36,9 @@ pub struct Caster<'a> {
     /// The grid-space box outside which the field cannot cross the
     /// iso-value: rays march inside it only.
     pub bounds: (Vec3, Vec3),
+    /// Set by a discard or a release: the rows not yet cast are skipped,
+    /// and the image is refused (`RenderError::Stopped`).
+    stop: Option<&'a AtomicBool>,
 }
 
 /// The volume's values as f32, which a [`Caster`] reads.
@@ -66,6 +71,28 @@ impl<'a> Caster<'a> {
             step: placed.smallest_cell() / settings.steps_per_cell,
             settings,
             bounds,
+            stop: None,
+        }
+    }
+
+    /// The caster, stopping once `stop` is set.
+    pub fn until(self, stop: &'a AtomicBool) -> Self {
+        Self {
+            stop: Some(stop),
+            ..self
+        }
+    }
+
+    /// Whether the cast was asked to stop: each row looks before it starts.
+    pub fn stopped(&self) -> bool {
+        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+    }
+
+    /// `Err(Stopped)` once the cast was asked to stop.
+    pub fn check_stop(&self) -> Result<(), RenderError> {
+        match self.stopped() {
+            true => Err(RenderError::Stopped),
+            false => Ok(()),
         }
     }
 
@@ -211,12 +238,16 @@ pub fn cast_by(
     let (w, n) = (desc.size.x as usize, desc.pixels());
     let mut hits = filled(n, None, "the hits")?;
     hits.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        if caster.stopped() {
+            return;
+        }
         let mut samples = 0;
         for (x, hit) in row.iter_mut().enumerate() {
             let (o, d) = rays.pixel_ray(x as u32, y as u32);
             *hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut samples);
         }
     });
+    caster.check_stop()?;
     let mut color = filled(4 * n, 0.0f32, "the frame's color")?;
     let mut depth = filled(n, f32::INFINITY, "the frame's depth")?;
     for (i, hit) in hits.iter().enumerate() {

@@ -189,6 +189,9 @@ pub fn render_display_by(
             .par_chunks_mut(w)
             .enumerate()
             .map(|(y, row)| {
+                if caster.stopped() {
+                    return 0;
+                }
                 let mut n = 0;
                 for (x, px) in row.iter_mut().enumerate() {
                     for (c, out) in px.iter_mut().enumerate() {
@@ -205,6 +208,7 @@ pub fn render_display_by(
             geometric_spectral(caster, table, rays, size, &mut rgb)?
         }
     };
+    caster.check_stop()?;
     // A panel shows no alpha.
     let mut color = filled(4 * desc.pixels(), 0.0f32, "the display image")?;
     for (o, px) in color.chunks_exact_mut(4).zip(&rgb) {
@@ -225,6 +229,9 @@ fn view_image(
         .par_chunks_mut(w)
         .enumerate()
         .map(|(y, row)| {
+            if caster.stopped() {
+                return 0;
+            }
             let mut n = 0;
             for (x, px) in row.iter_mut().enumerate() {
                 let (o, d) = rays.pixel_ray(x as u32, y as u32);
@@ -253,6 +260,9 @@ fn geometric_spectral(
         .par_chunks_mut(w)
         .enumerate()
         .map(|(y, row)| {
+            if caster.stopped() {
+                return 0;
+            }
             let mut n = 0;
             for (x, hit) in row.iter_mut().enumerate() {
                 let r = &rays[table[y * w + x][1] as usize];
@@ -275,6 +285,9 @@ fn geometric_spectral(
         .par_chunks_mut(w)
         .enumerate()
         .map(|(y, row)| {
+            if caster.stopped() {
+                return 0;
+            }
             let mut n = 0;
             for (x, px) in row.iter_mut().enumerate() {
                 let i = y * w + x;

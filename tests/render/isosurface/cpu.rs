@@ -7,6 +7,7 @@
 //! where the field can cross the iso-value, and bad settings fail.
 
 use crate::common;
+use std::sync::atomic::AtomicBool;
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::iso::{
@@ -258,7 +259,9 @@ fn the_cpu_renderer_keeps_a_fields_values_and_boxes_and_draws_as_the_caster() {
             placed: placed.clone(),
             settings,
         };
-        let kept = r.cast_surfaces(&[surface], &rays, &desc).unwrap();
+        let kept = r
+            .cast_surfaces(&[surface], &rays, &desc, &AtomicBool::new(false))
+            .unwrap();
         let (fresh, _) = cast(placed, &rays, &desc, &settings).unwrap();
         assert_eq!(kept.color, fresh.color, "iso-value {isovalue}");
         assert_eq!(kept.depth, fresh.depth, "iso-value {isovalue}");

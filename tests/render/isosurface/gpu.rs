@@ -5,6 +5,7 @@
 //! depths but at a few silhouette pixels.
 
 use crate::common;
+use std::sync::atomic::AtomicBool;
 
 use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::render::iso::{cast, Coloring, IsoFilter, IsoSettings};
@@ -27,6 +28,7 @@ fn balls() -> PlacedVolume {
 #[test]
 fn the_gpu_casts_the_cpus_isosurface() {
     let mut g = gpu();
+    let go = AtomicBool::new(false);
     let placed = balls();
     let (screen, eye) = off_axis_wall();
     let size = UVec2::new(56, 48);
@@ -48,7 +50,7 @@ fn the_gpu_casts_the_cpus_isosurface() {
                 ..IsoSettings::new(0.5)
             };
             let (cpu, hits) = cast(&placed, &rays, &desc, &settings).unwrap();
-            let on_gpu = g.cast_iso(&placed, &rays, &desc, &settings).unwrap();
+            let on_gpu = g.cast_iso(&placed, &rays, &desc, &settings, &go).unwrap();
             let name = format!("{} {coloring:?}", filter.name());
             assert!(hits.iter().flatten().count() > 200, "{name}: too few hits");
             let s = ssim(&cpu, &on_gpu).unwrap();
@@ -69,10 +71,10 @@ fn the_gpu_casts_the_cpus_isosurface() {
     }
     // Bad settings fail as on the CPU, and the renderer stays usable.
     let e = g
-        .cast_iso(&placed, &rays, &desc, &IsoSettings::new(f32::NAN))
+        .cast_iso(&placed, &rays, &desc, &IsoSettings::new(f32::NAN), &go)
         .unwrap_err();
     assert!(e.to_string().contains("iso-value must be finite"), "{e}");
-    g.cast_iso(&placed, &rays, &desc, &IsoSettings::new(0.5))
+    g.cast_iso(&placed, &rays, &desc, &IsoSettings::new(0.5), &go)
         .unwrap();
 }
 
@@ -83,6 +85,7 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
         render_display, subpixels_differing, MultiViewMethod,
     };
     let mut g = gpu();
+    let go = AtomicBool::new(false);
     let mut placed = balls();
     placed.transform = Mat4::from_translation(Vec3::new(0.0, 0.0, -1.2)) * placed.transform;
     let display = |offset: f64| {
@@ -106,7 +109,9 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
             MultiViewMethod::GeometricSpectral,
         ] {
             let (cpu, _) = render_display(&placed, &panel, &settings, method).unwrap();
-            let on_gpu = g.cast_display(&placed, &panel, &settings, method).unwrap();
+            let on_gpu = g
+                .cast_display(&placed, &panel, &settings, method, &go)
+                .unwrap();
             let differ = subpixels_differing(&cpu, &on_gpu, 2);
             println!(
                 "lens offset {offset}, {}, GPU against CPU: {:.3}% of subpixels differ",
@@ -131,7 +136,7 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
     let d = display(0.0);
     let panel = common::iso::panel(&d);
     let e = g
-        .cast_display(&placed, &panel, &settings, MultiViewMethod::Naive)
+        .cast_display(&placed, &panel, &settings, MultiViewMethod::Naive, &go)
         .unwrap_err();
     assert!(e.to_string().contains("naive is cast_iso per view"), "{e}");
 }

@@ -9,6 +9,7 @@
 //! device makes them once.
 
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use anari_library_caveray::cave::{MultiViewDisplay, ViewPattern};
@@ -211,7 +212,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                         views.clear();
                         for rays in &panel.views {
                             views.push(
-                                g.cast_iso(placed, rays, &desc, &settings)
+                                g.cast_iso(placed, rays, &desc, &settings, &AtomicBool::new(false))
                                     .map_err(runtime)?,
                             );
                             naive_ms += g.last_pass_ms();
@@ -225,8 +226,14 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                         let mut frame = None;
                         for _ in 0..args.repeat {
                             frame = Some(
-                                g.cast_display(placed, &panel, &settings, m)
-                                    .map_err(runtime)?,
+                                g.cast_display(
+                                    placed,
+                                    &panel,
+                                    &settings,
+                                    m,
+                                    &AtomicBool::new(false),
+                                )
+                                .map_err(runtime)?,
                             );
                             times.push(g.last_pass_ms());
                         }
