@@ -48,7 +48,9 @@ extern "C" {
  * render goes on in the background. "caveray.warp" (ANARI_STRING: none,
  * quad, grid or layers; default quad) chooses the warp. Frame properties:
  * "caveray.imageAge" (ANARI_FLOAT32, ms from the call whose camera the shown
- * image was rendered for to this one; -1 before any image exists) and
+ * image was rendered for to this one; -1 where the frame shows its
+ * background: before any image exists, or resized since and its warp
+ * missed the deadline) and
  * "caveray.warp" (ANARI_STRING, the warp applied: none for the image of
  * this very camera). */
 #define CAVERAY_EXTENSION_FRAME_DEADLINE "ANARI_CAVERAY_FRAME_DEADLINE"

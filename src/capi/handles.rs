@@ -8,6 +8,7 @@ use std::ffi::c_void;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
+use super::gate::{teardown, HostGate};
 use super::status::{emit, Callback};
 use super::sys;
 use crate::device::{Device, Reporter, Status};
@@ -32,6 +33,8 @@ pub struct DeviceHandle {
     /// The callback in effect: the device's committed `statusCallback`, or
     /// the library's. Shared with the render thread.
     callback: Arc<Mutex<Callback>>,
+    /// What every call into the host passes; closed by the last release.
+    pub gate: Arc<HostGate>,
 }
 
 // The raw pointers are the host's opaque values, only handed back to it.
@@ -101,13 +104,14 @@ impl LibraryHandle {
 impl DeviceHandle {
     pub fn create(tables: Tables, library_callback: Callback) -> *mut DeviceHandle {
         let callback = Arc::new(Mutex::new(library_callback));
+        let gate = Arc::new(HostGate::default());
         let handle = Box::into_raw(Box::new_uninit());
         let reporter: Reporter = {
-            let callback = callback.clone();
+            let (callback, gate) = (callback.clone(), gate.clone());
             let device = handle as usize;
             Arc::new(move |s: Status| {
                 let cb = *callback.lock().unwrap_or_else(|e| e.into_inner());
-                emit(cb, device as *mut c_void, &s);
+                gate.call(|| emit(cb, device as *mut c_void, &s));
             })
         };
         // SAFETY: `handle` is a fresh allocation of the right layout.
@@ -119,6 +123,7 @@ impl DeviceHandle {
                 refs: AtomicU32::new(1),
                 device: Mutex::new(Device::new(reporter)),
                 callback,
+                gate,
             });
         }
         let handle = handle as *mut DeviceHandle;
@@ -165,8 +170,10 @@ impl DeviceHandle {
         self.refs.fetch_add(1, Ordering::AcqRel);
     }
 
-    /// Drops one reference; the last one frees the device (after its
-    /// render thread finished).
+    /// Drops one reference. The last one hands the device to a teardown
+    /// thread, which stops its renders and frees it, and then closes the
+    /// device's way back to the host (gate.rs): what the stopped renders
+    /// had to say within the release's wait is still heard.
     pub fn release(ptr: *mut DeviceHandle) {
         let mut reg = registry(&DEVICES);
         // SAFETY: callers hold a reference, so the box is alive.
@@ -177,7 +184,10 @@ impl DeviceHandle {
             }
             drop(reg);
             // SAFETY: the last reference is gone and the pointer unregistered.
-            drop(unsafe { Box::from_raw(ptr) });
+            let handle = unsafe { Box::from_raw(ptr) };
+            let gate = Arc::clone(&handle.gate);
+            teardown(handle);
+            gate.close();
         }
     }
 }

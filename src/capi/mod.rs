@@ -6,6 +6,7 @@
 
 mod convert;
 pub mod entry_points;
+mod gate;
 mod handles;
 mod helpers;
 mod info;

@@ -8,6 +8,7 @@
 use std::ffi::{c_char, c_int, c_void};
 
 use super::convert::{input, string};
+use super::gate::finish_teardowns;
 use super::handles::{DeviceHandle, DeviceRef, LibraryHandle, Tables};
 use super::info;
 use super::status::{call_error, emit, guard, set_library_callback, Callback};
@@ -42,7 +43,7 @@ fn with_device<R: Clone>(
         };
         let cb = d.callback();
         for s in &statuses {
-            emit(cb, d.ptr(), s);
+            d.gate.call(|| emit(cb, d.ptr(), s));
         }
         r
     })
@@ -151,6 +152,9 @@ pub unsafe fn new_library(
 
 pub unsafe extern "C" fn unload_library(lib: ANARILibrary) {
     guard("anariUnloadLibrary", (), || {
+        // The loader unloads the code next: released devices' teardowns
+        // must be done first.
+        finish_teardowns();
         if !LibraryHandle::destroy(lib) {
             call_error(
                 StatusCode::InvalidArgument,
@@ -767,8 +771,8 @@ pub unsafe extern "C" fn get_property(
         let is_frame = with_device(dev, "anariGetProperty", false, |_, device| {
             device.kind_of(obj as usize as u64) == Some(DataType::FRAME)
         });
-        if is_frame {
-            wait_for(dev, "anariGetProperty", obj);
+        if is_frame && !wait_for(dev, "anariGetProperty", obj) {
+            return 0;
         }
     }
     let wait = mask & 1 != 0;
@@ -928,18 +932,19 @@ fn completion(d: &DeviceRef, device: &mut Device, h: u64) -> Option<OnDone> {
         .and_then(|v| v.pointer())
         .unwrap_or(0);
     let device_ptr = d.ptr() as usize;
+    let gate = std::sync::Arc::clone(&d.gate);
     callback.map(|f| {
         Box::new(move || {
             // SAFETY: the host declared this value an ANARIFrameCompletionCallback.
             let f: unsafe extern "C" fn(*const c_void, ANARIDevice, ANARIFrame) =
                 unsafe { std::mem::transmute(f) };
-            unsafe {
+            gate.call(|| unsafe {
                 f(
                     user as *const c_void,
                     device_ptr as ANARIDevice,
                     h as usize as ANARIFrame,
                 )
-            }
+            })
         }) as OnDone
     })
 }

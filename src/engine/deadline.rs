@@ -8,7 +8,7 @@
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
 use std::time::{Duration, Instant};
 
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 
 use super::inputs::Inputs;
 use super::slot::{FrameSlot, ShownImage, DISCARDED};
@@ -125,50 +125,64 @@ fn warp_pool() -> Option<&'static rayon::ThreadPool> {
 /// renderer of the device's backend (a GPU of its own, so that warps need
 /// not wait for the render thread's). Opening a GPU takes longer than a
 /// deadline, so it opens on a thread of its own the first time it is
-/// wanted, and the CPU warps until it is ready.
+/// wanted, and the CPU warps until it is ready. A GPU warp cannot stop
+/// midway, so it runs on a thread of its own too, waited for until the
+/// deadline; one that overruns finishes unseen, and the CPU warps until
+/// the GPU is free again.
 #[derive(Default)]
 pub struct Warper {
     state: Mutex<Opened>,
     /// The thread opening a renderer, if one was started.
     opener: Mutex<Option<std::thread::JoinHandle<()>>>,
+    /// The thread of the last GPU warp.
+    warping: Mutex<Option<std::thread::JoinHandle<()>>>,
 }
+
+/// The GPU deadline frames warp with, shared with the warp in flight.
+type WarpGpu = Arc<Mutex<Box<GpuRenderer>>>;
 
 #[derive(Default)]
 enum Opened {
     #[default]
     Nothing,
     Opening(Backend),
-    Ready(Backend, Box<GpuRenderer>),
+    Ready(Backend, WarpGpu),
     /// No GPU for it: none opened, or `auto` chose the CPU (the CPU warps).
     Failed(Backend),
 }
 
 impl Warper {
-    /// `source` shown from the frame's camera by `settings`, on the
-    /// backend's renderer if it is open, else on the CPU, which gives up at
-    /// the deadline.
+    /// The newest image shown from the frame's camera by `settings`, on
+    /// the backend's GPU if it is open and free, else on the CPU; either
+    /// gives up at the deadline (`RenderError::Stopped`).
     fn warp(
         self: &Arc<Self>,
         p: &Present,
-        source: &Source,
+        shot: &Arc<Shot>,
         settings: &WarpSettings,
     ) -> Result<Warped, RenderError> {
-        let (backend, rays, size) = (p.backend, &p.rays, p.desc.size);
+        let give_up = p.called + p.deadline;
+        let backend = p.backend;
         if backend != Backend::Cpu {
             let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
             match &mut *s {
                 Opened::Ready(b, g) if *b == backend => {
-                    return g.warp(source, rays, size, settings).map(|(w, _)| w);
+                    let gpu = Arc::clone(g);
+                    drop(s);
+                    if let Some(warped) = self.on_gpu(gpu, p, shot, settings, give_up) {
+                        return warped;
+                    }
                 }
                 Opened::Opening(b) | Opened::Failed(b) if *b == backend => {}
                 _ => {
                     *s = Opened::Opening(backend);
                     let me = Arc::clone(self);
+                    let (rays, bounds) = (p.rays, p.bounds);
                     let spawned = std::thread::Builder::new()
                         .name("caveray-warp-open".into())
                         .spawn({
                             let say = Arc::clone(&p.report);
-                            move || me.open(backend, say)
+                            move || me.open(backend, (rays, bounds), say)
                         });
                     match spawned {
                         Ok(thread) => {
@@ -183,49 +197,95 @@ impl Warper {
                 }
             }
         }
-        let give_up = p.called + p.deadline;
-        let run = || warp_by(source, rays, size, settings, Some(give_up));
+        let (rays, size) = (&p.rays, p.desc.size);
+        let run = || warp_by(&shot.source, rays, size, settings, Some(give_up));
         match warp_pool() {
             Some(pool) => pool.install(run),
             None => run(),
         }
     }
 
-    /// Waits for the thread opening a renderer, if one runs.
+    /// The warp on `gpu`, on a thread of its own, waited for until
+    /// `give_up`; `None` if the last GPU warp is still running (or no
+    /// thread could be started): then the CPU warps.
+    fn on_gpu(
+        &self,
+        gpu: WarpGpu,
+        p: &Present,
+        shot: &Arc<Shot>,
+        settings: &WarpSettings,
+        give_up: Instant,
+    ) -> Option<Result<Warped, RenderError>> {
+        let mut warping = self.warping.lock().unwrap_or_else(|e| e.into_inner());
+        if warping.as_ref().is_some_and(|t| !t.is_finished()) {
+            return None;
+        }
+        if let Some(done) = warping.take() {
+            join_unless_current(done);
+        }
+        let (tx, rx) = std::sync::mpsc::sync_channel(1);
+        let (shot, rays, size, settings) = (Arc::clone(shot), p.rays, p.desc.size, *settings);
+        let spawned = std::thread::Builder::new()
+            .name("caveray-warp-gpu".into())
+            .spawn(move || {
+                let mut g = gpu.lock().unwrap_or_else(|e| e.into_inner());
+                let warped = g.warp(&shot.source, &rays, size, &settings);
+                let _ = tx.send(warped.map(|(w, _)| w));
+            });
+        *warping = Some(spawned.ok()?);
+        drop(warping);
+        let wait = give_up.saturating_duration_since(Instant::now());
+        Some(rx.recv_timeout(wait).unwrap_or(Err(RenderError::Stopped)))
+    }
+
+    /// Waits for the threads opening a renderer and running a GPU warp, if
+    /// they run.
     pub fn join(&self) {
-        let opener = self.opener.lock().unwrap_or_else(|e| e.into_inner()).take();
-        if let Some(thread) = opener {
-            join_unless_current(thread);
+        for thread in [&self.opener, &self.warping] {
+            let thread = thread.lock().unwrap_or_else(|e| e.into_inner()).take();
+            if let Some(thread) = thread {
+                join_unless_current(thread);
+            }
         }
     }
 
-    fn open(&self, backend: Backend, say: Notify) {
+    /// Opens the backend's GPU and runs each warp once on a small empty
+    /// image of `view` (rays and scene bounds), so that the first warp a
+    /// frame waits for is not the one that compiles the GPU's shaders.
+    fn open(&self, backend: Backend, view: (RayGen, (Vec3, Vec3)), say: Notify) {
         let made = Renderer::choose(backend);
-        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        if !matches!(&*s, Opened::Opening(b) if *b == backend) {
-            return;
-        }
         let message = match made {
-            Ok((Renderer::Gpu(g), _)) => {
+            Ok((Renderer::Gpu(mut g), _)) => {
+                let warmed = warm_up(&mut g, view);
                 let info = g.adapter();
                 let m = format!(
-                    "deadline frames warp with GPU: {} ({:?}, {})",
-                    info.name, info.backend, info.driver
+                    "deadline frames warp with GPU: {} ({:?}, {}){}",
+                    info.name,
+                    info.backend,
+                    info.driver,
+                    warmed
+                        .err()
+                        .map_or(String::new(), |e| format!("; its first warp failed ({e})"))
                 );
-                *s = Opened::Ready(backend, g);
+                let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+                if !matches!(&*s, Opened::Opening(b) if *b == backend) {
+                    return;
+                }
+                *s = Opened::Ready(backend, Arc::new(Mutex::new(g)));
                 m
             }
-            // `auto` without a hardware GPU: the CPU warps, on its pool.
-            Ok((Renderer::Cpu(_), why)) => {
-                *s = Opened::Failed(backend);
-                match why {
-                    Some(why) => format!("deadline frames warp on the CPU: {why}"),
-                    None => "deadline frames warp on the CPU".into(),
+            other => {
+                let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+                if !matches!(&*s, Opened::Opening(b) if *b == backend) {
+                    return;
                 }
-            }
-            Err(e) => {
                 *s = Opened::Failed(backend);
-                format!("deadline frames warp on the CPU: {e}")
+                match other {
+                    // `auto` without a hardware GPU: the CPU warps, on its pool.
+                    Ok((_, Some(why))) => format!("deadline frames warp on the CPU: {why}"),
+                    Ok((_, None)) => "deadline frames warp on the CPU".into(),
+                    Err(e) => format!("deadline frames warp on the CPU: {e}"),
+                }
             }
         };
         say(Note {
@@ -237,6 +297,19 @@ impl Warper {
     }
 }
 
+/// Each warp once, on an empty 16 x 16 image of `rays`.
+fn warm_up(g: &mut GpuRenderer, (rays, bounds): (RayGen, (Vec3, Vec3))) -> Result<(), RenderError> {
+    let size = glam::UVec2::splat(16);
+    let source = Source::empty(size, rays, WARP_WARM_UP_LAYERS)?;
+    for mode in WarpMode::ALL {
+        g.warp(&source, &rays, size, &WarpSettings::new(mode, bounds))?;
+    }
+    Ok(())
+}
+
+/// Layers of the warm-up image (the layers warp wants some).
+const WARP_WARM_UP_LAYERS: usize = 4;
+
 /// What the presenter of one render needs.
 pub struct Present {
     pub background: Arc<Background>,
@@ -245,7 +318,7 @@ pub struct Present {
     pub rays: RayGen,
     pub desc: FrameDesc,
     pub color: Vec4,
-    pub bounds: (glam::Vec3, glam::Vec3),
+    pub bounds: (Vec3, Vec3),
     pub warp: WarpMode,
     pub called: Instant,
     pub deadline: Duration,
@@ -299,16 +372,7 @@ pub fn present(p: Present) {
     let until = p.called + p.deadline.saturating_sub(lead);
     let newest = p.background.newest_by(&p.inputs, until, &p.slot);
     if p.slot.stopped() {
-        // Discarded or released while it waited: it shows nothing.
-        let message = format!("rendering frame {:#x} failed: {DISCARDED}", p.frame);
-        (p.report)(Note {
-            severity: Severity::Info,
-            code: StatusCode::UnknownError,
-            about: About::Frame(p.frame),
-            message,
-        });
-        p.slot.finish(Err(DISCARDED.into()), p.called.elapsed());
-        return;
+        return discarded(&p);
     }
     let clock = Instant::now();
     let (frame, shown) = match newest {
@@ -335,7 +399,7 @@ pub fn present(p: Present) {
             let settings = WarpSettings::new(mode, p.bounds);
             let warped = p
                 .warper
-                .warp(&p, &shot.source, &settings)
+                .warp(&p, &shot, &settings)
                 .and_then(|w| w.frame(&p.desc, p.color));
             match warped {
                 Ok(frame) => (Ok(frame), ShownImage { age_ms, warp: mode }),
@@ -357,23 +421,36 @@ pub fn present(p: Present) {
                             mode.name()
                         ),
                     });
-                    let fallback = if shot.source.size == p.desc.size {
-                        shot.source
-                            .frame(&p.desc, p.color)
-                            .map_err(|e| e.to_string())
+                    if shot.source.size == p.desc.size {
+                        let frame = shot.source.frame(&p.desc, p.color);
+                        (
+                            frame.map_err(|e| e.to_string()),
+                            ShownImage {
+                                age_ms,
+                                warp: WarpMode::None,
+                            },
+                        )
                     } else {
-                        Err(format!(
-                            "the newest image is {}x{}, the frame {}x{}",
-                            shot.source.size.x, shot.source.size.y, p.desc.size.x, p.desc.size.y
-                        ))
-                    };
-                    (
-                        fallback,
-                        ShownImage {
-                            age_ms,
-                            warp: WarpMode::None,
-                        },
-                    )
+                        // The frame was resized since: the old image does
+                        // not fit it unwarped, so its background stands in
+                        // until its own render is done.
+                        note = note.map(|n| {
+                            format!(
+                                "{n} (it is {}x{}, the frame {}x{}: the frame shows its background)",
+                                shot.source.size.x,
+                                shot.source.size.y,
+                                p.desc.size.x,
+                                p.desc.size.y
+                            )
+                        });
+                        (
+                            Ok(Frame::cleared(&p.desc, p.color)),
+                            ShownImage {
+                                age_ms: -1.0,
+                                warp: WarpMode::None,
+                            },
+                        )
+                    }
                 }
             }
         }
@@ -387,6 +464,10 @@ pub fn present(p: Present) {
             0.75 * *cost + 0.25 * ms
         };
     }
+    if p.slot.stopped() {
+        // Discarded while it warped: what it made is not shown.
+        return discarded(&p);
+    }
     if let Some(note) = note {
         (p.report)(Note::frame(
             Severity::Info,
@@ -395,4 +476,16 @@ pub fn present(p: Present) {
         ));
     }
     p.slot.finish_shown(frame, p.called.elapsed(), shown);
+}
+
+/// Ends a presentation that was discarded or released: it shows nothing.
+fn discarded(p: &Present) {
+    let message = format!("rendering frame {:#x} failed: {DISCARDED}", p.frame);
+    (p.report)(Note {
+        severity: Severity::Info,
+        code: StatusCode::UnknownError,
+        about: About::Frame(p.frame),
+        message,
+    });
+    p.slot.finish(Err(DISCARDED.into()), p.called.elapsed());
 }

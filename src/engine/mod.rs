@@ -29,16 +29,21 @@
 //!   the frame is discarded, then warps and calls the completion callback.
 //! - **The warper's opener** (`caveray-warp-open`, at most one at a time,
 //!   owned by the `Warper`): opens the second GPU deadline frames warp
-//!   with and waits for nothing. The CPU warps on a rayon pool of its own
-//!   (`caveray-warp-N`), never the render thread's.
+//!   with, runs each warp once to compile it, and waits for nothing.
+//! - **The GPU warp** (`caveray-warp-gpu`, at most one at a time, owned by
+//!   the `Warper`): a presenter waits for it until the deadline only; one
+//!   that overruns finishes unseen while the CPU warps. The CPU warps on a
+//!   rayon pool of its own (`caveray-warp-N`), never the render thread's.
 //!
 //! No thread joins or waits for itself: a join is skipped on the thread
 //! being joined, and `FrameSlot::wait` returns at once to the thread that
 //! is to finish the render (the device then says that the frame is still
 //! rendering). Every kind of render looks at its slot's stop flag, which a
-//! discard or a release sets: the ray casters between rows, the passes
-//! between views and passes, the background render while it captures, a
-//! presenter while it waits.
+//! discard or a release sets: the ray casters between rows (GPU passes
+//! between bands of rows), the passes between views and passes, the
+//! background render while it captures, a presenter while it waits and
+//! after it warps. Dropping the engine stops the presenters before it
+//! joins them, so it never waits for a deadline.
 
 mod deadline;
 mod inputs;
@@ -77,14 +82,22 @@ pub struct Deadline {
     pub warp: WarpMode,
 }
 
+/// A deadline frame's presenter thread and what stops it.
+struct Presenter {
+    thread: JoinHandle<()>,
+    slot: Arc<FrameSlot>,
+    background: Arc<Background>,
+}
+
 /// One device's engine: its render thread, its deadline presenters and
 /// what they warp with.
 pub struct Engine {
     worker: Worker,
     /// What deadline frames warp with.
     warper: Arc<Warper>,
-    /// Deadline frames' presenter threads, joined when the engine goes.
-    presenters: Vec<JoinHandle<()>>,
+    /// Deadline frames' presenter threads, stopped and joined when the
+    /// engine goes.
+    presenters: Vec<Presenter>,
     report: Notify,
 }
 
@@ -179,8 +192,9 @@ impl Engine {
     /// ready by its deadline whatever the background render does. Its slot
     /// must be started.
     pub fn spawn_presenter(&mut self, present: Present, on_done: Option<Box<dyn FnOnce() + Send>>) {
-        self.presenters.retain(|p| !p.is_finished());
+        self.presenters.retain(|p| !p.thread.is_finished());
         let slot = Arc::clone(&present.slot);
+        let background = Arc::clone(&present.background);
         let spawned = std::thread::Builder::new()
             .name("caveray-present".into())
             .spawn(move || {
@@ -191,7 +205,11 @@ impl Engine {
                 }
             });
         match spawned {
-            Ok(thread) => self.presenters.push(thread),
+            Ok(thread) => self.presenters.push(Presenter {
+                thread,
+                slot,
+                background,
+            }),
             Err(e) => slot.finish(
                 Err(format!("cannot start the frame's presenter: {e}")),
                 Default::default(),
@@ -199,14 +217,18 @@ impl Engine {
         }
     }
 
-    /// Waits for the presenters and the warper's opener: no thread of
-    /// ours may outlive the device, as the host may unload the library
-    /// right after releasing it. A presenter ends by its frame's deadline
-    /// (sooner if its frame was discarded); the warper's GPU opens in
-    /// about a second.
-    pub fn join_presenters(&mut self) {
-        for presenter in self.presenters.drain(..) {
-            join_unless_current(presenter);
+    /// Stops the presenters and waits for them and the warper's opener:
+    /// no thread of ours may outlive the device, as the host may unload
+    /// the library right after releasing it. A stopped presenter ends at
+    /// once, its frame discarded, whatever its deadline; the warper's GPU
+    /// opens in about a second.
+    pub fn stop_presenters(&mut self) {
+        for p in &self.presenters {
+            p.slot.cancel();
+            p.background.cancel();
+        }
+        for p in self.presenters.drain(..) {
+            join_unless_current(p.thread);
         }
         self.warper.join();
     }
@@ -214,8 +236,8 @@ impl Engine {
 
 impl Drop for Engine {
     /// The presenters and the warper's opener first; the render thread
-    /// then goes with the worker.
+    /// then goes with the worker, which stops its jobs.
     fn drop(&mut self) {
-        self.join_presenters();
+        self.stop_presenters();
     }
 }

@@ -10,5 +10,6 @@ mod bindings;
 mod deadline_host;
 mod dlopen;
 mod host_patterns;
+mod hostile_host;
 mod hosts;
 mod info;

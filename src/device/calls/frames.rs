@@ -155,12 +155,12 @@ impl Device {
 
     /// A call on the render thread (a completion callback) that would wait
     /// for a render queued behind its own, which never ends.
-    fn still_rendering(&mut self, frame: &ObjectRef, call: &str) {
+    pub(super) fn still_rendering(&mut self, frame: &ObjectRef, call: &str) {
         self.error(
             StatusCode::InvalidOperation,
             Some(frame),
             format!(
-                "{call}: {} is still rendering, on this very thread once this callback returns: it cannot be waited for here",
+                "{call}: {} is still rendering, on the thread running this frame completion callback, once the callback returns: it cannot be waited for here",
                 frame.describe()
             ),
         );

@@ -402,18 +402,25 @@ impl Device {
         self.objects.get(&handle).map(|e| e.0.kind)
     }
 
-    /// The slot of a frame, to wait on without holding the device.
+    /// The slot of a frame, to wait on without holding the device; `None`
+    /// (and the error said) for what is not a frame, or a frame whose
+    /// render only the calling thread can finish: a completion callback
+    /// waiting on a render queued behind its own would wait forever.
     pub fn frame_slot(&mut self, handle: u64, call: &str) -> Option<Arc<FrameSlot>> {
         let cell = self.lookup(handle, call)?;
-        let slot = cell.with_frame(|f| f.renders.slot.clone());
-        if slot.is_none() {
+        let Some(slot) = cell.with_frame(|f| f.renders.slot.clone()) else {
             self.error(
                 StatusCode::InvalidArgument,
                 Some(&cell),
                 format!("{call}: {} is not a frame", cell.describe()),
             );
+            return None;
+        };
+        if slot.finishes_here() {
+            self.still_rendering(&cell, call);
+            return None;
         }
-        slot
+        Some(slot)
     }
 
     /// A committed parameter of an object (the C layer reads the frame's
@@ -454,7 +461,7 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
 impl Drop for Device {
     fn drop(&mut self) {
         self.forget_partners();
-        self.engine.join_presenters();
+        self.engine.stop_presenters();
     }
 }
 
