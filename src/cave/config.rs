@@ -183,10 +183,12 @@ impl Ctx<'_> {
             return Err(self.at(v, field(), format!("expected 3 numbers, got {n}")));
         };
         let p = DVec3::new(x, y, z);
-        if p.is_finite() {
-            Ok(p)
-        } else {
-            Err(self.at(v, field(), "coordinates must be finite numbers".into()))
+        if !p.is_finite() {
+            return Err(self.at(v, field(), "coordinates must be finite numbers".into()));
+        }
+        match p.to_array().into_iter().find(|&x| !fits_f32(x)) {
+            Some(x) => Err(self.at(v, field(), beyond_f32(x))),
+            None => Ok(p),
         }
     }
 
@@ -197,7 +199,9 @@ impl Ctx<'_> {
         allow_zero: bool,
     ) -> Result<f64, ConfigError> {
         let x = *v.get_ref();
-        if x.is_finite() && (x > 0.0 || (allow_zero && x == 0.0)) {
+        if x.is_finite() && !fits_f32(x) {
+            Err(self.at(v, field.into(), beyond_f32(x)))
+        } else if x.is_finite() && (x > 0.0 || (allow_zero && x == 0.0)) {
             Ok(x)
         } else {
             let want = if allow_zero { ">= 0" } else { "> 0" };
@@ -268,15 +272,44 @@ impl Ctx<'_> {
                 },
             },
         };
-        Ok(Rig {
-            name: raw.name.unwrap_or_else(|| self.file.to_string()),
+        let rig = Rig {
+            name: raw.name.clone().unwrap_or_else(|| self.file.to_string()),
             units,
             near,
             far,
             viewer,
             scene,
             walls,
-        })
+        };
+        self.eyes_fit_f32(&raw.viewer, &rig)?;
+        Ok(rig)
+    }
+
+    /// Each field fits f32 on its own; an eye is a sum of them (head,
+    /// offset, half the ipd), which may not.
+    fn eyes_fit_f32(&self, raw: &RawViewer, rig: &Rig) -> Result<(), ConfigError> {
+        let viewer = &rig.viewer;
+        let poses = std::iter::once(&viewer.head).chain(viewer.path.iter().map(|k| &k.pose));
+        for pose in poses {
+            for eye in Eye::ALL {
+                let at = rig.eye_position(pose, eye);
+                if let Some(x) = at.to_array().into_iter().find(|&x| !fits_f32(x)) {
+                    let culprit = raw.eye_offset.as_ref().unwrap_or(&raw.head);
+                    return Err(self.at(
+                        culprit,
+                        "viewer".into(),
+                        format!(
+                            "the {eye} eye lies at [{:e}, {:e}, {:e}]: {}",
+                            at.x,
+                            at.y,
+                            at.z,
+                            beyond_f32(x)
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     fn viewer(&self, raw: &RawViewer, per_m: f64) -> Result<Viewer, ConfigError> {
@@ -444,6 +477,20 @@ impl Ctx<'_> {
             eyes,
         })
     }
+}
+
+/// Whether `x` survives the renderers' single precision: rays, corners
+/// and clip distances are f32 there, and a value beyond it becomes
+/// infinite, so that every view would fail when it renders.
+fn fits_f32(x: f64) -> bool {
+    x.abs() <= f64::from(f32::MAX)
+}
+
+fn beyond_f32(x: f64) -> String {
+    format!(
+        "{x:e} is beyond single precision (at most {:e} in size), which caveray renders in",
+        f32::MAX
+    )
 }
 
 /// The longest wall name: it becomes part of file names.

@@ -9,7 +9,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::config::{read, ConfigError, Ctx, Vec3};
-use crate::geometry::{MultiViewDisplay, Screen, Units, ViewPattern, MAX_VIEWS};
+use crate::geometry::{MultiViewDisplay, PanelNumber, Screen, Units, ViewPattern, MAX_VIEWS};
 
 /// The largest panel side, in pixels.
 const MAX_SIDE: u32 = 16384;
@@ -91,14 +91,14 @@ impl MultiViewDisplay {
                         Err(ctx.at(v, field.into(), format!("must be a finite number, got {x}")))
                     }
                 };
-                ViewPattern::Lens {
-                    pitch: ctx.positive(&l.pitch, "lens.pitch", false)?,
-                    slant: finite(&l.slant, "lens.slant")?,
-                    offset: match &l.offset {
+                ViewPattern::lens(
+                    ctx.positive(&l.pitch, "lens.pitch", false)?,
+                    finite(&l.slant, "lens.slant")?,
+                    match &l.offset {
                         Some(o) => finite(o, "lens.offset")?,
                         None => 0.0,
                     },
-                }
+                )
             }
             (None, Some(table)) => {
                 let t = table.get_ref();
@@ -158,7 +158,7 @@ impl MultiViewDisplay {
                 ))
             }
         };
-        Ok(MultiViewDisplay {
+        let display = MultiViewDisplay {
             name: raw.name.unwrap_or_else(|| file.to_string()),
             units: *raw.units.get_ref(),
             screen,
@@ -167,7 +167,23 @@ impl MultiViewDisplay {
             pattern,
             viewing_distance,
             view_spacing,
-        })
+        };
+        if let Some((number, must)) = display.out_of_range() {
+            let lens = raw.lens.as_ref().map(|l| l.get_ref());
+            let (value, field) = match (number, lens) {
+                (PanelNumber::ViewingDistance, _) => (&raw.viewing_distance, "viewing_distance"),
+                (PanelNumber::ViewSpacing, _) => (&raw.view_spacing, "view_spacing"),
+                (PanelNumber::Pitch, Some(l)) => (&l.pitch, "lens.pitch"),
+                (PanelNumber::Slant, Some(l)) => (&l.slant, "lens.slant"),
+                (_, None) => unreachable!("only a lens has a pitch and a slant"),
+            };
+            return Err(ctx.at(
+                value,
+                field.into(),
+                format!("{must}, got {:?}", value.get_ref()),
+            ));
+        }
+        Ok(display)
     }
 }
 

@@ -34,6 +34,49 @@ pub enum ViewPattern {
     Table { period: UVec2, views: Vec<[u32; 3]> },
 }
 
+/// The viewing distance, and the length of the line of eyes, a panel may
+/// have, in panel widths. Farther, the eyes look from so far that the
+/// rays' single-precision origins lose the scene (the panel renders
+/// blank); nearer, they graze the panel.
+pub const EYES_IN_PANEL_WIDTHS: (f64, f64) = (0.01, 100.0);
+
+/// The lens widths a lens sheet may have, in subpixels. Narrower, `u /
+/// pitch` outgrows the precision of its fraction; wider, one lens spans
+/// more than any panel and the panel shows one view.
+pub const PITCH_RANGE: (f64, f64) = (1.0, 10_000.0);
+
+/// The largest |slant| (tan of the lens's angle from vertical, about 84
+/// degrees): steeper, the rows' shift `3 · slant · y` swamps the columns'
+/// and a row shows one view.
+pub const MAX_SLANT: f64 = 10.0;
+
+/// Which of a display's numbers is out of its range.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PanelNumber {
+    ViewingDistance,
+    ViewSpacing,
+    Pitch,
+    Slant,
+}
+
+impl ViewPattern {
+    /// A lens sheet; the offset is taken modulo the pitch (the same
+    /// lenses), exactly, so that a large one keeps the subpixels'
+    /// positions along the lens.
+    pub fn lens(pitch: f64, slant: f64, offset: f64) -> Self {
+        let offset = if pitch > 0.0 && offset.is_finite() {
+            offset.rem_euclid(pitch)
+        } else {
+            offset
+        };
+        ViewPattern::Lens {
+            pitch,
+            slant,
+            offset,
+        }
+    }
+}
+
 /// A multi-view display and where its viewers' eyes are.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MultiViewDisplay {
@@ -94,6 +137,48 @@ impl MultiViewDisplay {
         s.centre()
             + self.viewing_distance * s.normal()
             + from_middle * self.view_spacing * s.x_axis()
+    }
+
+    /// The first number that puts the views' eyes out of sight of the
+    /// panel, or the panel in one view, and what it must be.
+    pub fn out_of_range(&self) -> Option<(PanelNumber, String)> {
+        let width = self.screen.width();
+        let (lo, hi) = EYES_IN_PANEL_WIDTHS;
+        if !(lo * width..=hi * width).contains(&self.viewing_distance) {
+            return Some((
+                PanelNumber::ViewingDistance,
+                format!(
+                    "must be from {lo} to {hi} panel widths ({} to {} for this panel)",
+                    lo * width,
+                    hi * width
+                ),
+            ));
+        }
+        if f64::from(self.views - 1) * self.view_spacing > hi * width {
+            return Some((
+                PanelNumber::ViewSpacing,
+                format!(
+                    "times views - 1 (the line of eyes) must be at most {hi} panel widths ({} for this panel)",
+                    hi * width
+                ),
+            ));
+        }
+        if let ViewPattern::Lens { pitch, slant, .. } = self.pattern {
+            let (lo, hi) = PITCH_RANGE;
+            if !(lo..=hi).contains(&pitch) {
+                return Some((
+                    PanelNumber::Pitch,
+                    format!("must be from {lo} to {hi} subpixels"),
+                ));
+            }
+            if !(-MAX_SLANT..=MAX_SLANT).contains(&slant) {
+                return Some((
+                    PanelNumber::Slant,
+                    format!("must be from -{MAX_SLANT} to {MAX_SLANT}"),
+                ));
+            }
+        }
+        None
     }
 
     /// The eye that sees subpixel `channel` of pixel (x, y).

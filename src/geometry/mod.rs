@@ -25,7 +25,10 @@ mod units;
 #[cfg(test)]
 mod tests;
 
-pub use display::{MultiViewDisplay, ViewPattern, MAX_VIEWS};
+pub use display::{
+    MultiViewDisplay, PanelNumber, ViewPattern, EYES_IN_PANEL_WIDTHS, MAX_SLANT, MAX_VIEWS,
+    PITCH_RANGE,
+};
 pub use error::GeometryError;
 pub use from_matrices::{pinhole_from_matrices, RecoveredPinhole};
 pub use matrix_camera::MatrixCamera;

@@ -36,10 +36,13 @@ pub struct ClipPlanes {
 }
 
 impl ClipPlanes {
-    /// `None` if there are more than `MAX_CLIP_PLANES`.
+    /// `planes`, each scaled to a unit normal; `None` if there are more
+    /// than `MAX_CLIP_PLANES`.
     pub fn new(planes: &[Vec4]) -> Option<Self> {
         let mut out = Self::default();
-        out.planes.get_mut(..planes.len())?.copy_from_slice(planes);
+        for (slot, plane) in out.planes.get_mut(..planes.len())?.iter_mut().zip(planes) {
+            *slot = unit_normal(*plane);
+        }
         out.count = planes.len();
         Some(out)
     }
@@ -47,6 +50,24 @@ impl ClipPlanes {
     pub fn as_slice(&self) -> &[Vec4] {
         &self.planes[..self.count]
     }
+}
+
+/// Plane (n, d) as (n / |n|, d / |n|), the same half-space. The length is
+/// taken in f64: in f32 the squared length of (1e-30, 0, 0) is 0 and that
+/// of (3e38, 3e38, 3e38) infinite, though both name a plane, and the
+/// renderers' f32 arithmetic on such normals loses the plane. A zero or
+/// non-finite normal is left as it is, for `validate` to refuse; a
+/// distance beyond f32 keeps its side (the plane is far past any volume).
+fn unit_normal(plane: Vec4) -> Vec4 {
+    let p = plane.as_dvec4();
+    let length = p.truncate().length();
+    if !(length.is_finite() && length > 0.0 && p.w.is_finite()) {
+        return plane;
+    }
+    let most = f64::from(f32::MAX);
+    (p.truncate() / length)
+        .extend((p.w / length).clamp(-most, most))
+        .as_vec4()
 }
 
 /// How each sample is lit, as in Buchacher & Erdt's benchmark ladder.
@@ -188,7 +209,8 @@ pub struct BackgroundImage {
 }
 
 impl BackgroundImage {
-    /// `None` unless `pixels` holds `size.x * size.y` values.
+    /// `None` unless `pixels` holds `size.x * size.y` values (whose
+    /// range `RenderSettings::validate` checks).
     pub fn new(size: UVec2, pixels: Vec<Vec4>) -> Option<Self> {
         (size.min_element() > 0 && pixels.len() as u64 == u64::from(size.x) * u64::from(size.y))
             .then_some(Self { size, pixels })
@@ -296,12 +318,24 @@ impl RenderSettings {
 
     /// Why these settings cannot render, if they cannot.
     pub fn validate(&self) -> Result<(), RenderError> {
-        let unit = |x: f32| x.is_finite() && (0.0..=1.0).contains(&x);
-        if !self.background.to_array().into_iter().all(unit) {
+        let unit = |c: &Vec4| c.to_array().into_iter().all(|x| (0.0..=1.0).contains(&x));
+        if !unit(&self.background) {
             return Err(RenderError::Settings(format!(
                 "background must be four numbers in [0, 1], got {}",
                 self.background
             )));
+        }
+        // The image is held to the color's range: out of it, a NaN or a
+        // negative reaches the frame's pixels through the blend.
+        if let Some(image) = &self.background_image {
+            if let Some((i, c)) = image.pixels.iter().enumerate().find(|(_, c)| !unit(c)) {
+                let w = image.size.x as usize;
+                return Err(RenderError::Settings(format!(
+                    "'background' pixel ({}, {}) is {c}; every pixel must be four numbers in [0, 1], as the background color's",
+                    i % w,
+                    i / w
+                )));
+            }
         }
         check_step_factor(self.step_factor)?;
         if !(self.sampling_rate.is_finite() && self.sampling_rate > 0.0) {

@@ -370,6 +370,20 @@ fn rigs_that_would_escape_or_overflow_are_refused() {
             good.replacen(&resolution, "resolution = [100000, 100000]", 1),
             "is 10000000000 pixels; caveray renders up to 268435456",
         ),
+        // Numbers beyond f32, which every view would fail on at render.
+        (
+            good.replacen("ipd = 0.063", "ipd = 0.063\neye_offset = [0, 1e308, 0]", 1),
+            "viewer.eye_offset: 1e308 is beyond single precision",
+        ),
+        (
+            good.replacen("ipd = 0.063", "ipd = 1e39", 1),
+            "viewer.ipd: 1e39 is beyond single precision",
+        ),
+        (
+            good.replacen("ipd = 0.063", "ipd = 0.063\neye_offset = [3e38, 0, 0]", 1)
+                .replacen("head = [0, 1.7, 3.0]", "head = [3e38, 1.7, 3.0]", 1),
+            "viewer: the left eye lies at [",
+        ),
     ];
     for (i, (text, needle)) in cases.iter().enumerate() {
         let rig = out.join(format!("rig{i}.toml"));

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use anari_library_caveray::device::{DataType, Device, Input, Severity, Status, Subject};
+use anari_library_caveray::device::{
+    DataType, Device, Input, Severity, Status, StatusCode, Subject,
+};
 
 pub const SIZE: u32 = 24;
 
@@ -192,6 +194,17 @@ impl Host {
             self.unread.drain(..).partition(|s| s.severity == severity);
         self.unread = rest;
         asked.into_iter().map(|s| s.message).collect()
+    }
+
+    /// The errors since the last ask for them, with their status codes.
+    pub fn errors(&mut self) -> Vec<(StatusCode, String)> {
+        self.unread.extend(self.d.take_statuses());
+        let (asked, rest): (Vec<Status>, Vec<Status>) = self
+            .unread
+            .drain(..)
+            .partition(|s| s.severity == Severity::Error);
+        self.unread = rest;
+        asked.into_iter().map(|s| (s.code, s.message)).collect()
     }
 }
 

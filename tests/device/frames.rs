@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use anari_library_caveray::device::{DataType, Property, Severity, Subject};
+use anari_library_caveray::device::{DataType, Property, Severity, StatusCode, Subject};
 use common::device::{bytes, same, Host};
 
 fn property(h: &mut Host, frame: u64, name: &str) -> Option<Property> {
@@ -217,6 +217,164 @@ fn renderer_clip_planes_and_sampling_rate_through_the_device() {
     );
     let errors = h.messages(Severity::Error);
     assert!(errors.is_empty(), "{errors:?}");
+}
+
+/// A frame of the ramp volume through a renderer `setup` prepares; the
+/// errors its commit reported.
+fn through_renderer(
+    h: &mut Host,
+    frame: u64,
+    setup: &dyn Fn(&mut Host, u64),
+) -> (Vec<u8>, Vec<(StatusCode, String)>) {
+    let r = h.d.new_object(DataType::RENDERER, "default");
+    setup(h, r);
+    h.d.commit(Subject::Object(r));
+    let errors = h.errors();
+    h.set_object(frame, "renderer", DataType::RENDERER, r);
+    h.d.commit(Subject::Object(frame));
+    h.d.release(r);
+    h.d.render_frame(frame, None);
+    let pixels = match h.d.map_frame(frame, "channel.color") {
+        Some(mapped) => {
+            let n = (4 * mapped.size.x * mapped.size.y) as usize;
+            // SAFETY: a mapped RGBA8 frame of its size, valid until unmap.
+            let pixels = unsafe { std::slice::from_raw_parts(mapped.ptr, n) }.to_vec();
+            h.d.unmap_frame(frame, "channel.color");
+            pixels
+        }
+        None => Vec::new(),
+    };
+    h.errors();
+    (pixels, errors)
+}
+
+fn clip_plane(plane: [f32; 4]) -> impl Fn(&mut Host, u64) {
+    move |h: &mut Host, r: u64| {
+        let a = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32_VEC4,
+            [1, 1, 1],
+            &bytes(&plane),
+        );
+        h.set_object(r, "clipPlane", DataType::ARRAY1D, a);
+        h.d.release(a);
+    }
+}
+
+#[test]
+fn clip_plane_normals_of_any_finite_length_name_their_plane() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+    let (frame, _camera) = h.frame(volume, 3.0);
+    let lit = |p: &[u8]| {
+        p.chunks(4)
+            .filter(|c| c[..3].iter().any(|&v| v > 0))
+            .count()
+    };
+    let (all, _) = through_renderer(&mut h, frame, &|_, _| {});
+    for (unit, scaled) in [
+        ([1.0f32, 1.0, 1.0, 0.0], [3e38f32, 3e38, 3e38, 1.0]),
+        ([1.0, 0.0, 0.0, 0.0], [1e-30, 0.0, 0.0, 0.0]),
+        // Subnormal: 2^-130 and 2^-132, exactly.
+        (
+            [0.0, -1.0, 0.0, 0.25],
+            [0.0, -f32::from_bits(1 << 19), 0.0, f32::from_bits(1 << 17)],
+        ),
+    ] {
+        let (a, e) = through_renderer(&mut h, frame, &clip_plane(unit));
+        assert!(e.is_empty(), "{unit:?}: {e:?}");
+        let (b, e) = through_renderer(&mut h, frame, &clip_plane(scaled));
+        assert!(e.is_empty(), "{scaled:?}: {e:?}");
+        assert!(
+            lit(&a) > 0 && lit(&a) < lit(&all),
+            "{unit:?} cuts the volume"
+        );
+        assert_eq!(lit(&b), lit(&a), "{scaled:?} lights as {unit:?}");
+        same(&b, &a).unwrap();
+    }
+    for bad in [
+        [0.0f32, 0.0, 0.0, 1.0],
+        [f32::INFINITY, 0.0, 0.0, 0.0],
+        [1.0, f32::NAN, 0.0, 0.0],
+        [1.0, 0.0, 0.0, f32::INFINITY],
+    ] {
+        let (_, e) = through_renderer(&mut h, frame, &clip_plane(bad));
+        assert!(
+            e.len() == 1
+                && e[0].0 == StatusCode::InvalidArgument
+                && e[0]
+                    .1
+                    .contains("needs a finite, non-zero normal and a finite distance"),
+            "{bad:?}: {e:?}"
+        );
+    }
+}
+
+#[test]
+fn background_images_are_held_to_the_background_colors_range() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    let (frame, _camera) = h.frame(volume, 3.0);
+    let image = |pixels: [[f32; 4]; 4]| {
+        move |h: &mut Host, r: u64| {
+            let a = h.array(
+                DataType::ARRAY2D,
+                DataType::FLOAT32_VEC4,
+                [2, 2, 1],
+                &bytes(&pixels),
+            );
+            h.set_object(r, "background", DataType::ARRAY2D, a);
+            h.d.release(a);
+        }
+    };
+    let grey = [0.5f32, 0.5, 0.5, 1.0];
+    let (good, e) = through_renderer(&mut h, frame, &image([grey; 4]));
+    assert!(e.is_empty() && !good.is_empty(), "{e:?}");
+    let hostile = [
+        [f32::NAN, 0.0, 0.0, 1.0],
+        [f32::INFINITY, 0.0, 0.0, 1.0],
+        [-5.0, 0.0, 0.0, 1.0],
+        grey,
+    ];
+    let (_, e) = through_renderer(&mut h, frame, &image(hostile));
+    assert!(
+        e.len() == 1
+            && e[0].0 == StatusCode::InvalidArgument
+            && e[0].1.contains("'background' pixel (0, 0) is [NaN, 0, 0, 1]; every pixel must be four numbers in [0, 1], as the background color's"),
+        "{e:?}"
+    );
+    for (i, bad) in [
+        [f32::INFINITY, 0.0, 0.0, 1.0],
+        [-5.0, 0.0, 0.0, 1.0],
+        [0.5, 0.5, 1.5, 1.0],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let mut pixels = [grey; 4];
+        pixels[3] = bad;
+        let (_, e) = through_renderer(&mut h, frame, &image(pixels));
+        assert!(
+            e.len() == 1 && e[0].1.contains("'background' pixel (1, 1) is"),
+            "{i}: {e:?}"
+        );
+    }
+    // The color is refused the same way.
+    let (_, e) = through_renderer(&mut h, frame, &|h: &mut Host, r: u64| {
+        h.set(
+            r,
+            "background",
+            DataType::FLOAT32_VEC4,
+            bytes(&[-5.0f32, 0.0, 0.0, 1.0]),
+        );
+    });
+    assert!(
+        e.len() == 1 && e[0].1.contains("background must be four numbers in [0, 1]"),
+        "{e:?}"
+    );
 }
 
 #[test]

@@ -8,7 +8,7 @@
 use crate::common;
 
 use anari_library_caveray::cave::{MultiViewDisplay, Units, ViewPattern};
-use anari_library_caveray::device::{DataType, Input, Property, Severity, Subject};
+use anari_library_caveray::device::{DataType, Input, Property, Severity, StatusCode, Subject};
 use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays, Screen};
 use anari_library_caveray::render::iso::{cast, IsoFilter, IsoSettings};
 use anari_library_caveray::render::FrameDesc;
@@ -613,6 +613,61 @@ fn bad_multi_view_cameras_are_reported_by_name() {
         h.d.commit(Subject::Object(c));
         let e = h.messages(Severity::Error);
         assert!(e.iter().any(|m| m.contains(message)), "{name}: {e:?}");
+    }
+    // Eyes out of sight of the panel (blank before), a panel in one view
+    // (view 0 everywhere before). The panel is 1 wide.
+    let far: [(&str, f32, &str); 5] = [
+        (
+            "viewingDistance",
+            1e30,
+            "viewingDistance must be from 0.01 to 100 panel widths (0.01 to 100 for this panel), got 1e30",
+        ),
+        (
+            "viewSpacing",
+            1e30,
+            "viewSpacing times views - 1 (the line of eyes) must be at most 100 panel widths (100 for this panel), got 1e30",
+        ),
+        (
+            "lens.pitch",
+            1e-38,
+            "lens.pitch must be from 1 to 10000 subpixels, got 1e-38",
+        ),
+        (
+            "lens.pitch",
+            1e30,
+            "lens.pitch must be from 1 to 10000 subpixels, got 1e30",
+        ),
+        (
+            "lens.slant",
+            1e30,
+            "lens.slant must be from -10 to 10, got 1e30",
+        ),
+    ];
+    for (name, value, message) in far {
+        let c = multi_view(&mut h, -1, "passes");
+        assert!(h.errors().is_empty());
+        h.set(c, name, DataType::FLOAT32, bytes(&[value]));
+        h.d.commit(Subject::Object(c));
+        let e = h.errors();
+        assert!(
+            e.len() == 1 && e[0].0 == StatusCode::InvalidArgument && e[0].1.contains(message),
+            "{name} {value}: {e:?}"
+        );
+    }
+    // The ends of the ranges are taken.
+    for (name, value) in [
+        ("viewingDistance", 0.011f32),
+        ("viewingDistance", 100.0),
+        ("viewSpacing", 100.0 / 7.0),
+        ("lens.pitch", 1.0),
+        ("lens.pitch", 10000.0),
+        ("lens.slant", -10.0),
+    ] {
+        let c = multi_view(&mut h, -1, "passes");
+        h.set(c, name, DataType::FLOAT32, bytes(&[value]));
+        h.d.commit(Subject::Object(c));
+        let e = h.errors();
+        assert!(e.is_empty(), "{name} {value}: {e:?}");
     }
     let c = multi_view(&mut h, -1, "passes");
     let a = h.array(

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use anari_library_caveray::device::{DataType, Input, Severity, Subject};
+use anari_library_caveray::device::{DataType, Input, Severity, StatusCode, Subject};
 use common::device::{bytes, same, Host, SIZE};
 
 /// A translucent ramp seen from z = 3, with the camera returned.
@@ -133,11 +133,102 @@ fn bad_stereo_parameters_are_refused_at_commit_and_the_extension_is_reported() {
     assert!(
         errors
             .iter()
-            .any(|e| e.contains("interpupillaryDistance must be a finite number >= 0")),
+            .any(|e| e.contains("interpupillaryDistance must be from 0 to 1, got -0.06")),
         "{errors:?}"
     );
     let info = anari_library_caveray::device::info::EXTENSIONS;
     assert!(info.contains(&"ANARI_KHR_CAMERA_STEREO"));
+}
+
+/// The one error since the last ask, which must be `code`'s.
+fn one_error(h: &mut Host, code: StatusCode) -> String {
+    let errors = h.errors();
+    match &errors[..] {
+        [(c, m)] if *c == code => m.clone(),
+        _ => panic!("expected one {code:?} error, got {errors:?}"),
+    }
+}
+
+#[test]
+fn an_interpupillary_distance_beyond_the_stated_range_is_refused_at_commit() {
+    let mut h = Host::new();
+    let (frame, perspective) = scene(&mut h);
+    let off_axis = h.d.new_object(DataType::CAMERA, "offAxis");
+    for (name, corner) in [
+        ("lowerLeft", [-1.0f32, -1.0, 0.0]),
+        ("lowerRight", [1.0, -1.0, 0.0]),
+        ("upperRight", [1.0, 1.0, 0.0]),
+        ("eye", [0.0, 0.0, 3.0]),
+    ] {
+        h.set(off_axis, name, DataType::FLOAT32_VEC3, bytes(&corner));
+    }
+    let (lo, hi) = anari_library_caveray::device::info::param(
+        DataType::CAMERA,
+        "perspective",
+        "interpupillaryDistance",
+    )
+    .and_then(|p| p.range)
+    .expect("a stated range");
+    assert_eq!((lo, hi), (0.0, 1.0));
+    // The wall, 2 wide, gives the off-axis camera its scale (a rig in
+    // millimetres has eyes 60 apart), so its table states no range.
+    let wall = anari_library_caveray::device::info::param(
+        DataType::CAMERA,
+        "offAxis",
+        "interpupillaryDistance",
+    )
+    .expect("offAxis takes stereo");
+    assert_eq!(wall.range, None);
+    for (camera, most, range) in [
+        (perspective, hi, "0 to 1"),
+        (off_axis, 2.0, "0 to the wall's width (2)"),
+    ] {
+        h.set_object(frame, "camera", DataType::CAMERA, camera);
+        h.d.commit(Subject::Object(frame));
+        stereo(&mut h, camera, "left", most);
+        let good = h.pixels(frame);
+        assert!(h.errors().is_empty());
+        for bad in [50.0f32, 1e30, f32::NAN] {
+            stereo(&mut h, camera, "left", bad);
+            let e = one_error(&mut h, StatusCode::InvalidArgument);
+            assert!(
+                e.contains(&format!(
+                    "interpupillaryDistance must be from {range}, got {bad:?}"
+                )),
+                "{e}"
+            );
+        }
+        stereo(&mut h, camera, "left", most);
+        same(&h.pixels(frame), &good).unwrap();
+        assert!(h.errors().is_empty());
+    }
+}
+
+#[test]
+fn a_split_stereo_frame_one_pixel_across_is_refused_at_render() {
+    let mut h = Host::new();
+    let (frame, camera) = scene(&mut h);
+    for (mode, (w, hgt), side) in [
+        ("sideBySide", (1, 8), "wide"),
+        ("topBottom", (8, 1), "high"),
+    ] {
+        stereo(&mut h, camera, mode, 0.1);
+        size(&mut h, frame, w, hgt);
+        h.d.render_frame(frame, None);
+        let e = one_error(&mut h, StatusCode::InvalidOperation);
+        assert!(
+            e.contains(&format!(
+                "stereoMode {mode} splits the frame between the eyes, so it must be at least 2 pixels {side}; this frame is {w}x{hgt}"
+            )),
+            "{e}"
+        );
+        // The other way round, each eye has its pixels.
+        size(&mut h, frame, hgt, w);
+        h.pixels_sized(frame, hgt, w);
+        size(&mut h, frame, 2, 2);
+        h.pixels_sized(frame, 2, 2);
+        assert!(h.errors().is_empty());
+    }
 }
 
 /// A frame's color as a `Frame` for SSIM.

@@ -142,6 +142,37 @@ fn bad_display_files_fail_naming_the_field() {
             "> 0",
         ),
         ("pitch = 3.75", "pitch = 0.0", "lens.pitch", "> 0"),
+        // Eyes out of sight of the panel, or a panel in one view.
+        (
+            "viewing_distance = 700.0",
+            "viewing_distance = 1e30",
+            "viewing_distance",
+            "must be from 0.01 to 100 panel widths",
+        ),
+        (
+            "view_spacing = 32.5",
+            "view_spacing = 1e30",
+            "view_spacing",
+            "the line of eyes) must be at most 100 panel widths",
+        ),
+        (
+            "pitch = 3.75",
+            "pitch = 1e-38",
+            "lens.pitch",
+            "must be from 1 to 10000 subpixels, got 1e-38",
+        ),
+        (
+            "pitch = 3.75",
+            "pitch = 1e30",
+            "lens.pitch",
+            "must be from 1 to 10000 subpixels",
+        ),
+        (
+            "slant = 0.15625",
+            "slant = 1e30",
+            "lens.slant",
+            "must be from -10 to 10",
+        ),
         (
             "ur = [259.2, 162.0, 0.0]",
             "ur = [259.2, -162.0, 0.0]",
@@ -190,4 +221,26 @@ fn bad_display_files_fail_naming_the_field() {
     let rig = std::fs::read_to_string(common::config_dir().join("cologne_5wall.toml")).unwrap();
     let e = MultiViewDisplay::from_toml(&rig, "rig.toml").unwrap_err();
     assert!(e.to_string().contains("unknown field"), "{e}");
+}
+
+#[test]
+fn a_lens_offset_is_taken_modulo_the_pitch() {
+    // Added to the subpixels' positions as it is, an offset of 1e30 would
+    // round every one of them to the same place, and so to one view.
+    let far = ViewPattern::lens(3.75, 0.15625, 1e30);
+    let ViewPattern::Lens { offset, .. } = far else {
+        panic!("a lens")
+    };
+    assert!((0.0..3.75).contains(&offset), "{offset}");
+    let near = ViewPattern::lens(3.75, 0.15625, 1e30f64.rem_euclid(3.75));
+    assert_eq!(far, near);
+    let display = MultiViewDisplay {
+        pattern: far,
+        ..shipped()
+    };
+    let size = UVec2::new(10, 8);
+    let seen: std::collections::HashSet<u32> =
+        display.view_table(size).into_iter().flatten().collect();
+    assert_eq!(seen.len(), 8, "{seen:?}");
+    assert_eq!(display.out_of_range(), None);
 }

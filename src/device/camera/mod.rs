@@ -291,13 +291,13 @@ impl CameraModel {
         if stereo.mode == StereoMode::None {
             return whole();
         }
+        stereo.mode.fits(size)?;
         let pair = matches!(stereo.mode, StereoMode::SideBySide | StereoMode::TopBottom);
         let mut eyes = stereo
             .mode
             .layout(size)
             .into_iter()
             .map(|(side, offset, eye_size)| {
-                let eye_size = eye_size.max(UVec2::ONE);
                 let (rays, matrix) = match self {
                     CameraModel::Perspective {
                         placement, fovy, ..

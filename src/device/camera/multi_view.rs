@@ -15,7 +15,9 @@ use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_MULTI_VIEW, F32, VEC3};
 use crate::device::types::DataType as T;
 use crate::geometry::Screen;
-use crate::geometry::{MultiViewDisplay, Units, ViewPattern, MAX_VIEWS};
+use crate::geometry::{
+    MultiViewDisplay, PanelNumber, Units, ViewPattern, MAX_SLANT, MAX_VIEWS, PITCH_RANGE,
+};
 use crate::render::iso::MultiViewMethod;
 
 /// The largest view table period, in pixels each way.
@@ -33,13 +35,15 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         p("views", &[T::INT32, T::UINT32], true, DefaultValue::None, "number of views, 1 to 64")
             .range(1.0, 64.0),
         p("viewingDistance", F32, true, DefaultValue::None,
-          "from the panel to the line of eyes, along its normal (world units)"),
+          "from the panel to the line of eyes, along its normal (world units): 0.01 to 100 panel widths"),
         p("viewSpacing", F32, true, DefaultValue::None,
-          "between neighbouring views' eyes on that line; view 0 at the right end"),
+          "between neighbouring views' eyes on that line, view 0 at the right end: positive, the line (views - 1 spacings) at most 100 panel widths"),
         p("lens.pitch", F32, false, DefaultValue::None,
-          "lens width across the panel, in subpixels (a lens sheet; or give viewTable)"),
+          "lens width across the panel, in subpixels, 1 to 10000 (a lens sheet; or give viewTable)")
+            .range(PITCH_RANGE.0 as f32, PITCH_RANGE.1 as f32),
         p("lens.slant", F32, false, DefaultValue::Floats(&[0.0]),
-          "subpixels the lens moves right per subpixel height upward (tan of its slant)"),
+          "subpixels the lens moves right per subpixel height upward (tan of its slant), -10 to 10")
+            .range(-MAX_SLANT as f32, MAX_SLANT as f32),
         p("lens.offset", F32, false, DefaultValue::Floats(&[0.0]),
           "where the first lens starts, in subpixels"),
         p("viewTable", &[T::ARRAY2D], false, DefaultValue::None,
@@ -122,11 +126,11 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
                     Err(format!("{name} must be finite, got {x}"))
                 }
             };
-            ViewPattern::Lens {
-                pitch: positive("lens.pitch")?,
-                slant: finite("lens.slant")?,
-                offset: finite("lens.offset")?,
-            }
+            ViewPattern::lens(
+                positive("lens.pitch")?,
+                finite("lens.slant")?,
+                finite("lens.offset")?,
+            )
         }
     };
     let view = match whole(r, "view")? {
@@ -160,6 +164,15 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         viewing_distance,
         view_spacing,
     };
+    if let Some((number, must)) = display.out_of_range() {
+        let name = match number {
+            PanelNumber::ViewingDistance => "viewingDistance",
+            PanelNumber::ViewSpacing => "viewSpacing",
+            PanelNumber::Pitch => "lens.pitch",
+            PanelNumber::Slant => "lens.slant",
+        };
+        return Err(format!("{name} {must}, got {:?}", r.f32(name)?));
+    }
     // Every view's eye must see the panel's front.
     for v in [0, views - 1] {
         display

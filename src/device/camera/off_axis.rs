@@ -22,6 +22,13 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 static PARAMS: [ParamInfo; 7] = {
     let [mode, ipd] = stereo::params();
+    // The wall gives the scale: a rig in millimetres has eyes 60 apart.
+    let ipd = ParamInfo {
+        description:
+            "distance between the eyes of stereoMode, in world units, 0 to the wall's width",
+        range: None,
+        ..ipd
+    };
     [
         p(
             "lowerLeft",
@@ -79,6 +86,15 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     let axis = axis
         .try_normalize()
         .ok_or_else(|| format!("eyeAxis {axis} has no direction"))?;
+    // Eyes farther apart than the wall is wide look past it (a blank
+    // frame), whatever the units.
+    let ipd = r.f32("interpupillaryDistance")?;
+    if !(0.0..=screen.width()).contains(&f64::from(ipd)) {
+        return Err(format!(
+            "interpupillaryDistance must be from 0 to the wall's width ({}), got {ipd:?}",
+            screen.width()
+        ));
+    }
     CameraModel::OffAxis {
         camera,
         stereo: Stereo::from_params(r)?,

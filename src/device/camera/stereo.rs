@@ -27,7 +27,7 @@ pub const fn params() -> [ParamInfo; 2] {
             F32,
             false,
             DefaultValue::Floats(&[0.0635]),
-            "distance between the eyes of stereoMode, in world units",
+            "distance between the eyes of stereoMode, in world units, 0 to 1",
         )
         .range(0.0, 1.0),
     ]
@@ -68,8 +68,37 @@ impl StereoMode {
         })
     }
 
+    /// Why a frame of `size` cannot hold both eyes of this mode: halving
+    /// a side of one pixel leaves one eye no pixels at all.
+    pub fn fits(self, size: UVec2) -> Result<(), String> {
+        let (side, across) = match self {
+            StereoMode::SideBySide => ("wide", size.x),
+            StereoMode::TopBottom => ("high", size.y),
+            _ => return Ok(()),
+        };
+        if across >= 2 {
+            return Ok(());
+        }
+        Err(format!(
+            "stereoMode {} splits the frame between the eyes, so it must be at least 2 pixels {side}; this frame is {}x{}",
+            self.name(),
+            size.x,
+            size.y
+        ))
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StereoMode::None => "none",
+            StereoMode::Left => "left",
+            StereoMode::Right => "right",
+            StereoMode::SideBySide => "sideBySide",
+            StereoMode::TopBottom => "topBottom",
+        }
+    }
+
     /// The eyes (-1 left, +1 right) and where each goes in a frame of
-    /// `size`: (eye, offset, size).
+    /// `size`: (eye, offset, size); each eye has pixels where `fits`.
     pub fn layout(self, size: UVec2) -> Vec<(f64, UVec2, UVec2)> {
         match self {
             StereoMode::None => vec![(0.0, UVec2::ZERO, size)],
@@ -106,11 +135,13 @@ pub struct Stereo {
 }
 
 impl Stereo {
-    /// The committed `params()`.
+    /// The committed `params()`. The distance is held to the range the
+    /// table tells hosts: eyes metres apart in a scene of metres look
+    /// past the whole scene, and the frame comes out blank.
     pub fn from_params(r: &Read<'_>) -> Result<Self, String> {
         Self::read(
             r.string("stereoMode").unwrap_or_default(),
-            r.f32("interpupillaryDistance")?,
+            r.f32_in_range("interpupillaryDistance")?,
         )
     }
 
@@ -174,5 +205,23 @@ mod tests {
             .unwrap_err()
             .contains("sideBySide"));
         assert!(Stereo::read("left", -1.0).is_err());
+    }
+
+    #[test]
+    fn a_split_frame_needs_two_pixels_across_the_split() {
+        for mode in [StereoMode::SideBySide, StereoMode::TopBottom] {
+            for size in [UVec2::new(2, 2), UVec2::new(64, 32)] {
+                assert!(mode.fits(size).is_ok(), "{mode:?} {size}");
+                assert!(mode
+                    .layout(size)
+                    .iter()
+                    .all(|(_, _, s)| s.min_element() > 0));
+            }
+        }
+        assert!(StereoMode::SideBySide.fits(UVec2::new(1, 9)).is_err());
+        assert!(StereoMode::SideBySide.fits(UVec2::new(9, 1)).is_ok());
+        assert!(StereoMode::TopBottom.fits(UVec2::new(1, 9)).is_ok());
+        assert!(StereoMode::TopBottom.fits(UVec2::new(9, 1)).is_err());
+        assert!(StereoMode::Left.fits(UVec2::ONE).is_ok());
     }
 }
