@@ -170,12 +170,13 @@ impl MultiViewDisplay {
         };
         if let Some((number, must)) = display.out_of_range() {
             let lens = raw.lens.as_ref().map(|l| l.get_ref());
+            // Only a lens has a pitch and a slant: without one, the line
+            // named is the panel's distance, which sets the pattern too.
             let (value, field) = match (number, lens) {
-                (PanelNumber::ViewingDistance, _) => (&raw.viewing_distance, "viewing_distance"),
-                (PanelNumber::ViewSpacing, _) => (&raw.view_spacing, "view_spacing"),
                 (PanelNumber::Pitch, Some(l)) => (&l.pitch, "lens.pitch"),
                 (PanelNumber::Slant, Some(l)) => (&l.slant, "lens.slant"),
-                (_, None) => unreachable!("only a lens has a pitch and a slant"),
+                (PanelNumber::ViewSpacing, _) => (&raw.view_spacing, "view_spacing"),
+                _ => (&raw.viewing_distance, "viewing_distance"),
             };
             return Err(ctx.at(
                 value,
