@@ -234,6 +234,9 @@ pub fn render_panel(
             let desc = FrameDesc::new(panel.size).with_color(ColorFormat::Rgba32F);
             let mut frames = Vec::with_capacity(views.views.len());
             for v in &views.views {
+                // Before each view: a large view's buffers take long to
+                // make, and a stopped job needs none.
+                stop_check(job)?;
                 frames.push(r.render_until(
                     scene,
                     &v.rays,

@@ -2,7 +2,8 @@
  * release it or wait on their own frame; a second host thread calling
  * while a frame renders; releases and discards in the middle of long
  * renders of every kind; deadline frames resized between renders.
- * Usage: hostile_host CASE. Prints PASS/FAIL per check and "measured: NAME
+ * Usage: hostile_host CASE [PANEL_SIZE] (the panel "discard" renders,
+ * 2048 unless given). Prints PASS/FAIL per check and "measured: NAME
  * MS" lines (times are printed, never checked); exit status 1 on any FAIL.
  * A deadlock is a failure too: an alarm ends the program after 120 s. */
 #define _DEFAULT_SOURCE /* usleep */
@@ -529,7 +530,7 @@ int main(int argc, char **argv)
     release_deadline(lib, 1);
   } else if (strcmp(which, "discard") == 0) {
     discard_long(lib, "iso", 1024);
-    discard_long(lib, "panel", 2048);
+    discard_long(lib, "panel", argc > 2 ? (unsigned)atoi(argv[2]) : 2048);
     discard_long(lib, "stereo", 1024);
     discard_deadline(lib);
   } else if (strcmp(which, "resize-deadline") == 0) {
