@@ -36,14 +36,18 @@ fn with_device<R: Clone>(
             call_error(StatusCode::InvalidArgument, format!("{call}: {why}"));
             return neutral;
         };
-        let (r, statuses) = {
+        let (r, statuses, due) = {
             let mut device = d.lock();
             let r = f(&d, &mut device);
-            (r, device.take_statuses())
+            (r, device.take_statuses(), device.take_due())
         };
         let cb = d.callback();
         for s in &statuses {
             d.gate.call(|| emit(cb, d.ptr(), s));
+        }
+        // Each passes the gate itself (`completion`).
+        for done in due {
+            done();
         }
         r
     })

@@ -71,6 +71,9 @@ impl Device {
         while let Err(slot) = self.start_render(handle, &mut on_done) {
             drop(slot.wait());
         }
+        for done in self.take_due() {
+            done();
+        }
     }
 
     /// `render_frame` without waiting: `Err(slot)` while the frame's last
@@ -145,9 +148,9 @@ impl Device {
                     format!("anariRenderFrame: {}: {e}", frame.describe()),
                 );
                 slot.finish(Err(e), Default::default());
-                if let Some(done) = on_done {
-                    done();
-                }
+                // Called once the device is unlocked: the callback may
+                // call into it.
+                self.due.extend(on_done);
             }
         }
         Ok(())

@@ -89,6 +89,9 @@ pub struct Device {
     /// found and rendered together.
     pairing: bool,
     statuses: Vec<Status>,
+    /// Completion callbacks a call made due (a render refused at once),
+    /// to be called by the caller once the device is unlocked.
+    due: Vec<OnDone>,
     /// Counts commits, array changes and releases: a frame's snapshot
     /// stands while it is the same.
     epoch: Epoch,
@@ -115,6 +118,7 @@ impl Device {
             backend,
             pairing: true,
             statuses: Vec::new(),
+            due: Vec::new(),
             epoch: 0,
             engine: Engine::new(Arc::new(move |n: Note| {
                 let (source, source_kind) = match n.about {
@@ -139,6 +143,11 @@ impl Device {
 
     pub fn take_statuses(&mut self) -> Vec<Status> {
         std::mem::take(&mut self.statuses)
+    }
+
+    /// The completion callbacks the last calls made due.
+    pub fn take_due(&mut self) -> Vec<OnDone> {
+        std::mem::take(&mut self.due)
     }
 
     pub fn backend(&self) -> Backend {

@@ -259,6 +259,36 @@ static void callback_waits_on_own_frame(ANARILibrary lib)
   anariRelease(dev, dev);
 }
 
+/* A render refused at once (the frame has no camera) still completes: its
+ * callback runs, and may call into the device. */
+static volatile int refused_called = 0;
+
+static void ask_about_frame(const void *user, ANARIDevice dev, ANARIFrame frame)
+{
+  float duration = 0;
+  (void)user;
+  anariGetProperty(dev, frame, "duration", ANARI_FLOAT32, &duration, sizeof duration, ANARI_NO_WAIT);
+  anariFrameReady(dev, frame, ANARI_NO_WAIT);
+  refused_called = 1;
+}
+
+static void callback_of_refused_render(ANARILibrary lib)
+{
+  ANARIDevice dev = new_device(lib);
+  ANARIFrame frame = anariNewFrame(dev);
+  unsigned size[2] = {8, 8};
+  anariSetParameter(dev, frame, "size", ANARI_UINT32_VEC2, size);
+  anariSetParameter(dev, frame, "frameCompletionCallback", ANARI_FRAME_COMPLETION_CALLBACK,
+      (const void *)&(ANARIFrameCompletionCallback){ask_about_frame});
+  anariCommitParameters(dev, frame);
+  errors_seen = 0;
+  anariRenderFrame(dev, frame);
+  check("a render refused at once reports why", errors_seen > 0);
+  check("and its callback ran, calling into the device", refused_called);
+  anariRelease(dev, frame);
+  anariRelease(dev, dev);
+}
+
 /* ---- a second host thread while a frame renders ---- */
 
 typedef struct Asker {
@@ -522,6 +552,7 @@ int main(int argc, char **argv)
     release_while_called(lib);
   } else if (strcmp(which, "callback-wait") == 0) {
     callback_waits_on_own_frame(lib);
+    callback_of_refused_render(lib);
   } else if (strcmp(which, "second-thread") == 0) {
     second_thread(lib, 0.f);
     second_thread(lib, 8000.f);
