@@ -6,7 +6,7 @@
 
 use std::ffi::{c_void, CString};
 use std::path::Path;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 use anari_library_caveray::capi::entry_points::*;
 use anari_library_caveray::capi::sys;
@@ -146,23 +146,537 @@ fn settable() -> Vec<DataType> {
         .collect()
 }
 
+/// What both host threads pick from: subtypes, parameter names and types.
+struct Words {
+    types: Vec<DataType>,
+    names: Vec<&'static str>,
+    subtypes: Vec<&'static str>,
+}
+
+impl Words {
+    fn new() -> Self {
+        let mut names: Vec<&str> = SUBTYPES
+            .iter()
+            .flat_map(|s| s.params.iter().map(|p| p.name))
+            .filter(|n| *n != "size")
+            .collect();
+        names.extend(["", "name", "ünïcode", "channel.normal"]);
+        let mut subtypes: Vec<&str> = SUBTYPES.iter().map(|s| s.subtype).collect();
+        subtypes.extend(["", "pathtracer", "unknown"]);
+        Self {
+            types: settable(),
+            names,
+            subtypes,
+        }
+    }
+}
+
+/// The callbacks' script: what the frame completion and status callbacks
+/// do, one byte per action, taken in the order they are called; and the
+/// handles the host handed them (retained for them), which they may
+/// release. Static, since a render thread may still be leaving a callback
+/// when `capi` returns; each input starts it afresh.
+struct Callbacks {
+    script: Vec<u8>,
+    at: usize,
+    owned: Vec<usize>,
+}
+
+static CALLBACKS: Mutex<Callbacks> = Mutex::new(Callbacks {
+    script: Vec::new(),
+    at: 0,
+    owned: Vec::new(),
+});
+
+fn callbacks() -> std::sync::MutexGuard<'static, Callbacks> {
+    CALLBACKS.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The callbacks' next action byte, if the script has one left.
+fn next_action() -> Option<u8> {
+    let mut c = callbacks();
+    let b = c.script.get(c.at).copied();
+    c.at += usize::from(b.is_some());
+    b
+}
+
+/// A handle the host handed the callbacks, taken (to release) or looked at.
+fn owned(take: bool) -> Option<usize> {
+    let mut c = callbacks();
+    if take {
+        c.owned.pop()
+    } else {
+        c.owned.last().copied()
+    }
+}
+
+thread_local! {
+    /// How deep this thread is in callbacks calling back into the API
+    /// (which may report a status, which calls the status callback...).
+    static DEPTH: std::cell::Cell<u8> = const { std::cell::Cell::new(0) };
+}
+
+thread_local! {
+    /// Whether this thread is inside `anariRenderFrame` (see `render_frame`).
+    static RENDERING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// `anariRenderFrame`, marked on this thread while it runs. A render that
+/// cannot start (a frame with no camera, say) calls the frame's completion
+/// callback inside this call, with the device locked, where a call back
+/// into the API waits for the device forever; the callback does nothing
+/// then.
+unsafe fn render_frame(dev: sys::ANARIDevice, frame: sys::ANARIFrame) {
+    let outer = RENDERING.with(|r| r.replace(true));
+    anariRenderFrame(dev, frame);
+    RENDERING.with(|r| r.set(outer));
+}
+
+/// Runs `f` unless this thread is already two callbacks deep.
+fn reenter(f: impl FnOnce()) {
+    let depth = DEPTH.with(|d| d.get());
+    if depth >= 2 {
+        return;
+    }
+    DEPTH.with(|d| d.set(depth + 1));
+    f();
+    DEPTH.with(|d| d.set(depth));
+}
+
+const FRAME_PROPERTIES: [&std::ffi::CStr; 5] = [
+    c"duration",
+    c"numSamples",
+    c"renderProgress",
+    c"caveray.imageAge",
+    c"caveray.volumeSamples",
+];
+
+/// `anariGetProperty` of a frame property, as a FLOAT32 (or anything
+/// four bytes long), waiting or not.
+unsafe fn frame_property(dev: sys::ANARIDevice, frame: sys::ANARIObject, b: u8, wait: bool) {
+    let mut out = [0u8; 8];
+    let name = FRAME_PROPERTIES[usize::from(b) % FRAME_PROPERTIES.len()];
+    anariGetProperty(
+        dev,
+        frame,
+        name.as_ptr(),
+        DataType::FLOAT32 as i32,
+        out.as_mut_ptr().cast(),
+        4,
+        u32::from(wait),
+    );
+}
+
+/// The frame completion callback: each call takes one to three actions
+/// from the script, calling back into the API from the render thread (or
+/// a deadline frame's presenter).
+unsafe extern "C" fn on_frame_done(
+    _: *const c_void,
+    dev: sys::ANARIDevice,
+    frame: sys::ANARIFrame,
+) {
+    if RENDERING.with(|r| r.get()) {
+        return;
+    }
+    reenter(|| {
+        let Some(first) = next_action() else { return };
+        for _ in 0..=first % 3 {
+            let Some(b) = next_action() else { return };
+            match b % 11 {
+                0 => {
+                    let mut version = 0i32;
+                    anariGetProperty(
+                        dev,
+                        dev,
+                        c"version".as_ptr(),
+                        DataType::INT32 as i32,
+                        (&mut version as *mut i32).cast(),
+                        4,
+                        0,
+                    );
+                }
+                1 => frame_property(dev, frame, b / 11, false),
+                // Waiting on the very frame this callback finishes.
+                2 => frame_property(dev, frame, b / 11, true),
+                3 => {
+                    anariFrameReady(dev, frame, 0);
+                }
+                4 => {
+                    anariFrameReady(dev, frame, 1);
+                }
+                5 => render_frame(dev, frame),
+                6 => anariDiscardFrame(dev, frame),
+                7 => {
+                    let (mut w, mut h, mut t) = (0u32, 0u32, 0i32);
+                    let channel = c"channel.color".as_ptr();
+                    if !anariMapFrame(dev, frame, channel, &mut w, &mut h, &mut t).is_null() {
+                        anariUnmapFrame(dev, frame, channel);
+                    }
+                }
+                // Another frame (or anything) the host handed the callbacks.
+                8 => {
+                    if let Some(other) = owned(false) {
+                        let other = other as sys::ANARIFrame;
+                        render_frame(dev, other);
+                        anariFrameReady(dev, other, u32::from(b & 0x80 != 0));
+                    }
+                }
+                // Releasing a handle the host handed over: a frame, the
+                // device, anything.
+                9 => {
+                    if let Some(h) = owned(true) {
+                        anariRelease(dev, h as sys::ANARIObject);
+                    }
+                }
+                _ => {
+                    anariCommitParameters(dev, frame);
+                }
+            }
+        }
+    })
+}
+
+/// The device's status callback: one action from the script per message.
+unsafe extern "C" fn on_status(
+    _: *const c_void,
+    dev: sys::ANARIDevice,
+    source: sys::ANARIObject,
+    source_type: sys::ANARIDataType,
+    _: sys::ANARIStatusSeverity,
+    _: sys::ANARIStatusCode,
+    _: *const std::ffi::c_char,
+) {
+    reenter(|| {
+        let Some(b) = next_action() else { return };
+        match b % 6 {
+            0 => {
+                let mut out = [0u8; 24];
+                anariGetProperty(
+                    dev,
+                    source,
+                    c"bounds".as_ptr(),
+                    DataType::FLOAT32_BOX3 as i32,
+                    out.as_mut_ptr().cast(),
+                    24,
+                    0,
+                );
+            }
+            1 if source_type == DataType::FRAME as i32 => {
+                anariFrameReady(dev, source, 0);
+                frame_property(dev, source, b / 6, false);
+            }
+            2 => {
+                if let Some(h) = owned(true) {
+                    anariRelease(dev, h as sys::ANARIObject);
+                }
+            }
+            _ => {}
+        }
+    })
+}
+
+/// One host thread: its script, the device, the handles it made and
+/// those it may use but does not own (the other thread's).
+struct Host<'a, 'w> {
+    input: Input<'a>,
+    dev: sys::ANARIDevice,
+    words: &'w Words,
+    objects: Vec<sys::ANARIObject>,
+    shared: Vec<usize>,
+}
+
+impl Host<'_, '_> {
+    /// A handle from the script: one of the thread's own or shared ones,
+    /// NULL, garbage, or (with none yet) a small number.
+    fn handle(&mut self) -> sys::ANARIObject {
+        let n = self.objects.len() + self.shared.len();
+        match self.input.byte() {
+            255 => 0x1234 as sys::ANARIObject,
+            254 => std::ptr::null_mut(),
+            i if n == 0 => i as usize as sys::ANARIObject,
+            i => {
+                let i = usize::from(i) % n;
+                match self.objects.get(i) {
+                    Some(&o) => o,
+                    None => self.shared[i - self.objects.len()] as sys::ANARIObject,
+                }
+            }
+        }
+    }
+
+    unsafe fn create(&mut self) {
+        let dev = self.dev;
+        let sub = CString::new(*self.input.pick(&self.words.subtypes)).unwrap_or_default();
+        let s = sub.as_ptr();
+        let o = match self.input.byte() % 11 {
+            0 => anariNewCamera(dev, s),
+            1 => anariNewSpatialField(dev, s),
+            2 => anariNewVolume(dev, s),
+            3 => anariNewRenderer(dev, s),
+            4 => anariNewLight(dev, s),
+            5 => anariNewInstance(dev, s),
+            6 => anariNewGroup(dev),
+            7 => anariNewWorld(dev),
+            8 => anariNewFrame(dev),
+            9 => anariNewGeometry(dev, s),
+            _ => anariNewObject(dev, c"extension".as_ptr(), s),
+        };
+        if !o.is_null() {
+            self.objects.push(o);
+        }
+    }
+
+    unsafe fn set(&mut self) {
+        let dev = self.dev;
+        let o = self.handle();
+        let name = CString::new(*self.input.pick(&self.words.names)).unwrap_or_default();
+        let ty = *self.input.pick(&self.words.types);
+        if ty == DataType::STRING {
+            let len = usize::from(self.input.byte() % 16);
+            let text = CString::new(
+                self.input
+                    .take(len)
+                    .into_iter()
+                    .filter(|&b| b != 0)
+                    .collect::<Vec<u8>>(),
+            )
+            .unwrap_or_default();
+            anariSetParameter(dev, o, name.as_ptr(), ty as i32, text.as_ptr().cast());
+        } else if ty.is_object() {
+            let h = self.handle();
+            anariSetParameter(
+                dev,
+                o,
+                name.as_ptr(),
+                ty as i32,
+                (&h as *const sys::ANARIObject).cast(),
+            );
+        } else {
+            let mut mem = self.input.take(ty.size());
+            mem.resize(ty.size().max(1), 0);
+            anariSetParameter(dev, o, name.as_ptr(), ty as i32, mem.as_ptr().cast());
+        }
+    }
+
+    unsafe fn array(&mut self) {
+        let dev = self.dev;
+        let element = *self.input.pick(&self.words.types);
+        let dims = [
+            self.input.byte() % 17,
+            self.input.byte() % 17,
+            self.input.byte() % 17,
+        ]
+        .map(u64::from);
+        let rank = usize::from(self.input.byte() % 3) + 1;
+        let none = std::ptr::null();
+        let ty = element as i32;
+        let a = match rank {
+            1 => anariNewArray1D(dev, none, None, none, ty, dims[0]),
+            2 => anariNewArray2D(dev, none, None, none, ty, dims[0], dims[1]),
+            _ => anariNewArray3D(dev, none, None, none, ty, dims[0], dims[1], dims[2]),
+        };
+        if !a.is_null() {
+            let p = anariMapArray(dev, a);
+            if !p.is_null() && !element.is_object() {
+                let count: u64 = dims[..rank].iter().product();
+                let bytes = count as usize * element.size();
+                let fill = self.input.take(bytes);
+                std::ptr::copy_nonoverlapping(fill.as_ptr(), p.cast::<u8>(), fill.len());
+            }
+            anariUnmapArray(dev, a);
+            self.objects.push(a);
+        }
+    }
+
+    unsafe fn render(&mut self) {
+        let dev = self.dev;
+        let f = self.handle();
+        let size = [
+            u32::from(self.input.byte() % 64) + 1,
+            u32::from(self.input.byte() % 64) + 1,
+        ];
+        anariSetParameter(
+            dev,
+            f,
+            c"size".as_ptr(),
+            DataType::UINT32_VEC2 as i32,
+            size.as_ptr().cast(),
+        );
+        anariCommitParameters(dev, f);
+        render_frame(dev, f);
+        if self.input.byte() % 4 == 0 {
+            anariDiscardFrame(dev, f);
+        }
+        anariFrameReady(dev, f, sys::ANARIWaitMask::from(1u32));
+        let (mut w, mut h, mut t) = (0u32, 0u32, 0i32);
+        let channel = if self.input.byte() % 2 == 0 {
+            c"channel.color"
+        } else {
+            c"channel.depth"
+        };
+        let p = anariMapFrame(dev, f, channel.as_ptr(), &mut w, &mut h, &mut t);
+        if !p.is_null() {
+            anariUnmapFrame(dev, f, channel.as_ptr());
+        }
+    }
+
+    unsafe fn unset(&mut self) {
+        let o = self.handle();
+        let name = CString::new(*self.input.pick(&self.words.names)).unwrap_or_default();
+        anariUnsetParameter(self.dev, o, name.as_ptr());
+    }
+
+    unsafe fn property(&mut self, wait: bool) {
+        let o = self.handle();
+        let mut out = [0u8; 64];
+        let name = CString::new(*self.input.pick(&[
+            "bounds",
+            "duration",
+            "numSamples",
+            "renderProgress",
+            "version",
+            "extension",
+            "subtypes.renderer",
+        ]))
+        .unwrap_or_default();
+        let ty = *self.input.pick(&self.words.types);
+        let size = (ty.size() as u64).min(64);
+        anariGetProperty(
+            self.dev,
+            o,
+            name.as_ptr(),
+            ty as i32,
+            out.as_mut_ptr().cast(),
+            size,
+            u32::from(wait),
+        );
+    }
+
+    /// Releases one of the thread's own objects.
+    unsafe fn release(&mut self) {
+        if !self.objects.is_empty() {
+            let i = usize::from(self.input.byte()) % self.objects.len();
+            anariRelease(self.dev, self.objects.swap_remove(i));
+        }
+    }
+
+    /// A frame gets the completion callback (and the callbacks' script
+    /// grows by up to 31 bytes).
+    unsafe fn completion_callback(&mut self) {
+        let f = self.handle();
+        let n = usize::from(self.input.byte() % 32);
+        let script = self.input.take(n);
+        callbacks().script.extend(script);
+        let callback: sys::ANARIFrameCompletionCallback = Some(on_frame_done);
+        anariSetParameter(
+            self.dev,
+            f,
+            c"frameCompletionCallback".as_ptr(),
+            DataType::FRAME_COMPLETION_CALLBACK as i32,
+            (&callback as *const sys::ANARIFrameCompletionCallback).cast(),
+        );
+        anariSetParameter(
+            self.dev,
+            f,
+            c"frameCompletionCallbackUserData".as_ptr(),
+            DataType::VOID_POINTER as i32,
+            std::ptr::null(),
+        );
+        anariCommitParameters(self.dev, f);
+    }
+
+    /// Retains the device or a handle for the callbacks, which own that
+    /// reference from then on.
+    unsafe fn hand_over(&mut self) {
+        let h = if self.input.byte() % 4 == 0 {
+            self.dev
+        } else {
+            self.handle()
+        };
+        anariRetain(self.dev, h);
+        callbacks().owned.push(h as usize);
+    }
+
+    /// The device gets the status callback (and the script grows).
+    unsafe fn status_callback(&mut self) {
+        let n = usize::from(self.input.byte() % 32);
+        let script = self.input.take(n);
+        callbacks().script.extend(script);
+        let callback: sys::ANARIStatusCallback = Some(on_status);
+        anariSetParameter(
+            self.dev,
+            self.dev,
+            c"statusCallback".as_ptr(),
+            DataType::STATUS_CALLBACK as i32,
+            (&callback as *const sys::ANARIStatusCallback).cast(),
+        );
+        anariCommitParameters(self.dev, self.dev);
+    }
+}
+
+/// The second host thread: its own script, objects of its own (released
+/// at its end) and the first thread's handles as they were when it
+/// started, which it renders, queries, discards and sets but never
+/// releases.
+fn second_host(dev: usize, script: &[u8], words: &Words, shared: Vec<usize>) {
+    let mut host = Host {
+        input: Input(script),
+        dev: dev as sys::ANARIDevice,
+        words,
+        objects: Vec::new(),
+        shared,
+    };
+    // SAFETY: as in `capi`.
+    unsafe {
+        while !host.input.done() && host.objects.len() < 32 {
+            match host.input.byte() % 9 {
+                0 => host.create(),
+                1 => host.set(),
+                2 => {
+                    let o = host.handle();
+                    anariCommitParameters(host.dev, o);
+                }
+                3 => host.render(),
+                4 => {
+                    let wait = host.input.byte() % 2 == 0;
+                    host.property(wait)
+                }
+                5 => {
+                    let f = host.handle();
+                    anariDiscardFrame(host.dev, f);
+                }
+                6 => host.release(),
+                7 => {
+                    let f = host.handle();
+                    anariFrameReady(host.dev, f, 0);
+                }
+                _ => host.array(),
+            }
+        }
+        for o in host.objects {
+            anariRelease(host.dev, o);
+        }
+    }
+}
+
 /// A host driving the C API: objects of every kind and subtype (and
 /// unknown ones), parameters of every name caveray knows (and others) set
 /// with any type and bytes, arrays of any element type, commits, renders
 /// of small frames (the harness keeps `size` to 64 x 64 so that each
-/// input runs in milliseconds), discards and releases, in any order.
+/// input runs in milliseconds), discards and releases, in any order; a
+/// frame completion callback and a status callback that call back into
+/// the API (properties, waits, renders, discards, maps, releases of the
+/// handles handed to them) as a script in the input says; and a second
+/// host thread, with a script of its own, calling at the same time.
 pub fn capi(data: &[u8]) {
-    let mut input = Input(data);
     let lib = library();
-    let types = settable();
-    let mut names: Vec<&str> = SUBTYPES
-        .iter()
-        .flat_map(|s| s.params.iter().map(|p| p.name))
-        .filter(|n| *n != "size")
-        .collect();
-    names.extend(["", "name", "ünïcode", "channel.normal"]);
-    let mut subtypes: Vec<&str> = SUBTYPES.iter().map(|s| s.subtype).collect();
-    subtypes.extend(["", "pathtracer", "unknown"]);
+    let words = Words::new();
+    {
+        let mut c = callbacks();
+        c.script.clear();
+        c.at = 0;
+        c.owned.clear();
+    }
     // SAFETY: every call gets valid pointers of the sizes its types need;
     // handles may be anything, which the device must survive.
     unsafe {
@@ -177,188 +691,53 @@ pub fn capi(data: &[u8]) {
             c"cpu".as_ptr().cast(),
         );
         anariCommitParameters(dev, dev);
-        let mut objects: Vec<sys::ANARIObject> = Vec::new();
-        let handle = |input: &mut Input, objects: &[sys::ANARIObject]| -> sys::ANARIObject {
-            match input.byte() {
-                255 => 0x1234 as sys::ANARIObject,
-                254 => std::ptr::null_mut(),
-                i if objects.is_empty() => i as usize as sys::ANARIObject,
-                i => objects[usize::from(i) % objects.len()],
+        let objects = std::thread::scope(|scope| {
+            let mut host = Host {
+                input: Input(data),
+                dev,
+                words: &words,
+                objects: Vec::new(),
+                shared: Vec::new(),
+            };
+            let mut second = None;
+            while !host.input.done() && host.objects.len() < 64 {
+                match host.input.byte() % 14 {
+                    0 | 1 => host.create(),
+                    2 | 3 => host.set(),
+                    4 => {
+                        let o = host.handle();
+                        anariCommitParameters(dev, o);
+                    }
+                    5 => host.array(),
+                    6 => host.render(),
+                    7 => host.unset(),
+                    8 => host.property(true),
+                    9 => host.release(),
+                    10 => host.completion_callback(),
+                    11 => host.hand_over(),
+                    12 => host.status_callback(),
+                    _ if second.is_none() => {
+                        let n = usize::from(host.input.byte()) * 2;
+                        let script = host.input.take(n);
+                        let shared = host.objects.iter().map(|&o| o as usize).collect();
+                        let (dev, words) = (dev as usize, &words);
+                        second =
+                            Some(scope.spawn(move || second_host(dev, &script, words, shared)));
+                    }
+                    _ => {}
+                }
             }
+            host.objects
+        });
+        // The callbacks do nothing more; what they were handed and did not
+        // release goes now.
+        let handed = {
+            let mut c = callbacks();
+            c.at = c.script.len();
+            std::mem::take(&mut c.owned)
         };
-        while !input.done() && objects.len() < 64 {
-            match input.byte() % 10 {
-                0 | 1 => {
-                    let sub = CString::new(*input.pick(&subtypes)).unwrap_or_default();
-                    let s = sub.as_ptr();
-                    let o = match input.byte() % 11 {
-                        0 => anariNewCamera(dev, s),
-                        1 => anariNewSpatialField(dev, s),
-                        2 => anariNewVolume(dev, s),
-                        3 => anariNewRenderer(dev, s),
-                        4 => anariNewLight(dev, s),
-                        5 => anariNewInstance(dev, s),
-                        6 => anariNewGroup(dev),
-                        7 => anariNewWorld(dev),
-                        8 => anariNewFrame(dev),
-                        9 => anariNewGeometry(dev, s),
-                        _ => anariNewObject(dev, c"extension".as_ptr(), s),
-                    };
-                    if !o.is_null() {
-                        objects.push(o);
-                    }
-                }
-                2 | 3 => {
-                    let o = handle(&mut input, &objects);
-                    let name = CString::new(*input.pick(&names)).unwrap_or_default();
-                    let ty = *input.pick(&types);
-                    if ty == DataType::STRING {
-                        let len = usize::from(input.byte() % 16);
-                        let text = CString::new(
-                            input
-                                .take(len)
-                                .into_iter()
-                                .filter(|&b| b != 0)
-                                .collect::<Vec<u8>>(),
-                        )
-                        .unwrap_or_default();
-                        anariSetParameter(dev, o, name.as_ptr(), ty as i32, text.as_ptr().cast());
-                    } else if ty.is_object() {
-                        let h = handle(&mut input, &objects);
-                        anariSetParameter(
-                            dev,
-                            o,
-                            name.as_ptr(),
-                            ty as i32,
-                            (&h as *const sys::ANARIObject).cast(),
-                        );
-                    } else {
-                        let mut mem = input.take(ty.size());
-                        mem.resize(ty.size().max(1), 0);
-                        anariSetParameter(dev, o, name.as_ptr(), ty as i32, mem.as_ptr().cast());
-                    }
-                }
-                4 => {
-                    let o = handle(&mut input, &objects);
-                    anariCommitParameters(dev, o);
-                }
-                5 => {
-                    let element = *input.pick(&types);
-                    let dims =
-                        [input.byte() % 17, input.byte() % 17, input.byte() % 17].map(u64::from);
-                    let rank = usize::from(input.byte() % 3) + 1;
-                    let a = match rank {
-                        1 => anariNewArray1D(
-                            dev,
-                            std::ptr::null(),
-                            None,
-                            std::ptr::null(),
-                            element as i32,
-                            dims[0],
-                        ),
-                        2 => anariNewArray2D(
-                            dev,
-                            std::ptr::null(),
-                            None,
-                            std::ptr::null(),
-                            element as i32,
-                            dims[0],
-                            dims[1],
-                        ),
-                        _ => anariNewArray3D(
-                            dev,
-                            std::ptr::null(),
-                            None,
-                            std::ptr::null(),
-                            element as i32,
-                            dims[0],
-                            dims[1],
-                            dims[2],
-                        ),
-                    };
-                    if !a.is_null() {
-                        let p = anariMapArray(dev, a);
-                        if !p.is_null() && !element.is_object() {
-                            let count: u64 = dims[..rank].iter().product();
-                            let bytes = count as usize * element.size();
-                            let fill = input.take(bytes);
-                            std::ptr::copy_nonoverlapping(
-                                fill.as_ptr(),
-                                p.cast::<u8>(),
-                                fill.len(),
-                            );
-                        }
-                        anariUnmapArray(dev, a);
-                        objects.push(a);
-                    }
-                }
-                6 => {
-                    let f = handle(&mut input, &objects);
-                    let size = [
-                        u32::from(input.byte() % 64) + 1,
-                        u32::from(input.byte() % 64) + 1,
-                    ];
-                    anariSetParameter(
-                        dev,
-                        f,
-                        c"size".as_ptr(),
-                        DataType::UINT32_VEC2 as i32,
-                        size.as_ptr().cast(),
-                    );
-                    anariCommitParameters(dev, f);
-                    anariRenderFrame(dev, f);
-                    if input.byte() % 4 == 0 {
-                        anariDiscardFrame(dev, f);
-                    }
-                    anariFrameReady(dev, f, sys::ANARIWaitMask::from(1u32));
-                    let (mut w, mut h, mut t) = (0u32, 0u32, 0i32);
-                    let channel = if input.byte() % 2 == 0 {
-                        c"channel.color"
-                    } else {
-                        c"channel.depth"
-                    };
-                    let p = anariMapFrame(dev, f, channel.as_ptr(), &mut w, &mut h, &mut t);
-                    if !p.is_null() {
-                        anariUnmapFrame(dev, f, channel.as_ptr());
-                    }
-                }
-                7 => {
-                    let o = handle(&mut input, &objects);
-                    let name = CString::new(*input.pick(&names)).unwrap_or_default();
-                    anariUnsetParameter(dev, o, name.as_ptr());
-                }
-                8 => {
-                    let o = handle(&mut input, &objects);
-                    let mut out = [0u8; 64];
-                    let name = CString::new(*input.pick(&[
-                        "bounds",
-                        "duration",
-                        "numSamples",
-                        "renderProgress",
-                        "version",
-                        "extension",
-                        "subtypes.renderer",
-                    ]))
-                    .unwrap_or_default();
-                    let ty = *input.pick(&types);
-                    let size = (ty.size() as u64).min(64);
-                    anariGetProperty(
-                        dev,
-                        o,
-                        name.as_ptr(),
-                        ty as i32,
-                        out.as_mut_ptr().cast(),
-                        size,
-                        1,
-                    );
-                }
-                _ => {
-                    if !objects.is_empty() {
-                        let i = usize::from(input.byte()) % objects.len();
-                        anariRelease(dev, objects.swap_remove(i));
-                    }
-                }
-            }
+        for h in handed {
+            anariRelease(dev, h as sys::ANARIObject);
         }
         for o in objects {
             anariRelease(dev, o);

@@ -46,6 +46,31 @@ impl ParamInfo {
         self.range = Some((lo, hi));
         self
     }
+
+    /// Whether `value` is an array this parameter can never take: one
+    /// whose element type its table does not list, or an `ANARI_OBJECT`
+    /// array holding an object of a kind it does not list. Such a value
+    /// is refused at commit and not kept: the objects it holds may lead
+    /// back to the object it is set on, and the loop would outlive every
+    /// handle.
+    pub fn never_takes(&self, value: &Value) -> bool {
+        if self.elements.is_empty() {
+            return false;
+        }
+        let Some(object) = value.object() else {
+            return false;
+        };
+        object
+            .with_array(|a| {
+                !self.elements.contains(&a.element())
+                    || (a.element() == T::OBJECT
+                        && a.objects
+                            .iter()
+                            .flatten()
+                            .any(|o| !self.elements.contains(&o.kind)))
+            })
+            .unwrap_or(false)
+    }
 }
 
 /// A parameter's value when the host sets none.

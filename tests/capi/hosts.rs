@@ -300,6 +300,43 @@ fn arrays_freed_after_release_are_never_read_under_valgrind() {
     release_then_free(true);
 }
 
+/// Object parameters a commit refuses for their kind, each closing a loop
+/// back to its own object (tests/capi/c/refused_cycle.c): the refusal says
+/// the parameter was unset, every refused array's deleter runs once its
+/// handle goes, and the group renders with a valid array afterwards.
+fn refused_cycle(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_refused_cycle_valgrind"
+    } else {
+        "c_refused_cycle"
+    });
+    let program = dir.join("refused_cycle");
+    compile(&["tests/capi/c/refused_cycle.c"], &program, false, true);
+    let output = run(&program, &[], valgrind);
+    let text = describe(&output);
+    assert!(output.status.success(), "refused_cycle: {text}");
+    assert!(!text.contains("FAIL"), "refused_cycle: {text}");
+    let passed = text.matches("PASS").count();
+    assert!(
+        passed >= 20,
+        "only {passed} refused_cycle checks ran: {text}"
+    );
+}
+
+#[test]
+fn refused_object_parameters_keep_nothing_alive() {
+    refused_cycle(false);
+}
+
+#[test]
+fn refused_object_parameters_leak_nothing_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    refused_cycle(true);
+}
+
 /// An OpenCOVER-style host (tests/capi/c/opencover_host.c): the call sequence
 /// its plug-in makes, rendered 64 times unchanged; color (sRGB) and depth
 /// must be the Rust API's for the same wall and eye.

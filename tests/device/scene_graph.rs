@@ -299,3 +299,36 @@ fn object_lists_typed_as_anari_object_hold_their_kind() {
         "{errors:?}"
     );
 }
+
+#[test]
+fn a_list_refused_for_its_kind_is_unset_and_the_other_parameters_stay() {
+    let mut h = Host::new();
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    h.d.commit(Subject::Object(volume));
+    let world = world_of(&mut h, &[volume]);
+    assert!(h.messages(Severity::Error).is_empty());
+    let camera = h.d.new_object(DataType::CAMERA, "perspective");
+    let handles = [camera as usize];
+    let list = h.array(
+        DataType::ARRAY1D,
+        DataType::OBJECT,
+        [1, 1, 1],
+        &bytes(&handles),
+    );
+    h.set_object(world, "instance", DataType::ARRAY1D, list);
+    h.d.release(list);
+    h.d.commit(Subject::Object(world));
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors.len() == 1
+            && errors[0].contains("'instance' array holds camera 'perspective'")
+            && errors[0].ends_with("; 'instance' is unset"),
+        "{errors:?}"
+    );
+    // Committed again, the world has its volume and no instance list.
+    h.d.commit(Subject::Object(world));
+    assert!(h.messages(Severity::Error).is_empty());
+    let cube = Some(Property::Box3([-1.0, -1.0, -1.0, 1.0, 1.0, 1.0]));
+    assert_eq!(h.d.property(Subject::Object(world), "bounds", true), cube);
+}

@@ -8,6 +8,11 @@
 mod harness;
 
 use std::path::Path;
+use std::sync::mpsc::RecvTimeoutError;
+use std::time::Duration;
+
+/// How long one input may run: each takes milliseconds.
+const LIMIT: Duration = Duration::from_secs(30);
 
 type Target = fn(&[u8]);
 
@@ -44,7 +49,20 @@ fn the_committed_corpus_and_every_past_crash_run_through_cleanly() {
         let past = inputs("regressions", target);
         for file in corpus.iter().chain(&past) {
             let data = std::fs::read(file).unwrap();
-            run(&data);
+            // Each input on a thread of its own, so that one that hangs is
+            // named instead of stopping the test for good.
+            let (done, finished) = std::sync::mpsc::channel();
+            std::thread::spawn(move || {
+                run(&data);
+                let _ = done.send(());
+            });
+            let ran = finished.recv_timeout(LIMIT);
+            assert!(
+                !matches!(ran, Err(RecvTimeoutError::Timeout)),
+                "{} did not return within {LIMIT:?}",
+                file.display()
+            );
+            assert!(ran.is_ok(), "{} panicked", file.display());
         }
         eprintln!(
             "{target}: {} corpus inputs, {} past crashes",

@@ -2,8 +2,8 @@
 //! committed, when the subtype's commit derives the object's state.
 
 use super::{Device, Input, Subject};
-use crate::device::object::Value;
-use crate::device::table::Read;
+use crate::device::object::{ObjectRef, Params, Value};
+use crate::device::table::{ParamInfo, Read};
 use crate::device::types::{DataType, StatusCode};
 use crate::device::{device_object, info};
 
@@ -175,20 +175,36 @@ impl Device {
             }),
             (None, None) => Ok(None),
         };
+        let unset = self.drop_never_taken(&cell, subtype.params, &params);
+        drop(params);
         for w in warnings {
             self.warn(
                 Some(&cell),
                 format!("anariCommitParameters: {}: {w}", cell.describe()),
             );
         }
+        if derived.is_ok() && !unset.is_empty() {
+            self.warn(
+                Some(&cell),
+                format!(
+                    "anariCommitParameters: {}: {unset} (an array of what it never takes)",
+                    cell.describe()
+                ),
+            );
+        }
         let new_state = match derived {
             Ok(None) => return,
             Ok(Some(s)) => s,
             Err(e) => {
+                let unset = if unset.is_empty() {
+                    unset
+                } else {
+                    format!("; {unset}")
+                };
                 self.error(
                     StatusCode::InvalidArgument,
                     Some(&cell),
-                    format!("anariCommitParameters: {}: {e}", cell.describe()),
+                    format!("anariCommitParameters: {}: {e}{unset}", cell.describe()),
                 );
                 match cell.invalid_state(e) {
                     Some(s) => s,
@@ -198,6 +214,50 @@ impl Device {
         };
         let old = cell.replace_state(new_state);
         drop(old);
+    }
+
+    /// Unsets, pending and committed, the parameters whose values the
+    /// table says they never take (`ParamInfo::never_takes`): what such a
+    /// value holds stays alive no longer than the host's handles to it.
+    /// Returns "'volume' is unset" (or "'a', 'b' are unset"), or "" when
+    /// nothing was.
+    fn drop_never_taken(
+        &mut self,
+        cell: &ObjectRef,
+        table: &'static [ParamInfo],
+        params: &Params,
+    ) -> String {
+        let names: Vec<&str> = table
+            .iter()
+            .filter(|p| params.get(p.name).is_some_and(|v| p.never_takes(v)))
+            .map(|p| p.name)
+            .collect();
+        if names.is_empty() {
+            return String::new();
+        }
+        let removed: Vec<_> = {
+            let mut g = cell.lock();
+            names
+                .iter()
+                .map(|n| {
+                    let committed = g.committed.as_mut().and_then(|c| c.unset(n));
+                    (g.pending.unset(n), committed)
+                })
+                .collect()
+        };
+        // Dropped outside the lock: the last reference to an array runs
+        // its host deleter.
+        drop(removed);
+        let list = names
+            .iter()
+            .map(|n| format!("'{n}'"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        if names.len() == 1 {
+            format!("{list} is unset")
+        } else {
+            format!("{list} are unset")
+        }
     }
 
     fn commit_device(&mut self) {
