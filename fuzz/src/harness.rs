@@ -216,22 +216,6 @@ thread_local! {
     static DEPTH: std::cell::Cell<u8> = const { std::cell::Cell::new(0) };
 }
 
-thread_local! {
-    /// Whether this thread is inside `anariRenderFrame` (see `render_frame`).
-    static RENDERING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-/// `anariRenderFrame`, marked on this thread while it runs. A render that
-/// cannot start (a frame with no camera, say) calls the frame's completion
-/// callback inside this call, with the device locked, where a call back
-/// into the API waits for the device forever; the callback does nothing
-/// then.
-unsafe fn render_frame(dev: sys::ANARIDevice, frame: sys::ANARIFrame) {
-    let outer = RENDERING.with(|r| r.replace(true));
-    anariRenderFrame(dev, frame);
-    RENDERING.with(|r| r.set(outer));
-}
-
 /// Runs `f` unless this thread is already two callbacks deep.
 fn reenter(f: impl FnOnce()) {
     let depth = DEPTH.with(|d| d.get());
@@ -275,9 +259,6 @@ unsafe extern "C" fn on_frame_done(
     dev: sys::ANARIDevice,
     frame: sys::ANARIFrame,
 ) {
-    if RENDERING.with(|r| r.get()) {
-        return;
-    }
     reenter(|| {
         let Some(first) = next_action() else { return };
         for _ in 0..=first % 3 {
@@ -304,7 +285,7 @@ unsafe extern "C" fn on_frame_done(
                 4 => {
                     anariFrameReady(dev, frame, 1);
                 }
-                5 => render_frame(dev, frame),
+                5 => anariRenderFrame(dev, frame),
                 6 => anariDiscardFrame(dev, frame),
                 7 => {
                     let (mut w, mut h, mut t) = (0u32, 0u32, 0i32);
@@ -317,7 +298,7 @@ unsafe extern "C" fn on_frame_done(
                 8 => {
                     if let Some(other) = owned(false) {
                         let other = other as sys::ANARIFrame;
-                        render_frame(dev, other);
+                        anariRenderFrame(dev, other);
                         anariFrameReady(dev, other, u32::from(b & 0x80 != 0));
                     }
                 }
@@ -503,7 +484,7 @@ impl Host<'_, '_> {
             size.as_ptr().cast(),
         );
         anariCommitParameters(dev, f);
-        render_frame(dev, f);
+        anariRenderFrame(dev, f);
         if self.input.byte() % 4 == 0 {
             anariDiscardFrame(dev, f);
         }
