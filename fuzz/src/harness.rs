@@ -6,7 +6,7 @@
 
 use std::ffi::{c_void, CString};
 use std::path::Path;
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 
 use anari_library_caveray::capi::entry_points::*;
 use anari_library_caveray::capi::sys;
@@ -116,13 +116,10 @@ unsafe extern "C" fn quiet(
 ) {
 }
 
-/// The library, loaded once per process as a host loads it.
+/// The library, loaded for one input as a host loads it.
 fn library() -> sys::ANARILibrary {
-    static LIBRARY: OnceLock<usize> = OnceLock::new();
-    *LIBRARY.get_or_init(|| {
-        // SAFETY: a valid name and callback.
-        unsafe { anariLoadLibrary(c"caveray".as_ptr(), Some(quiet), std::ptr::null()) as usize }
-    }) as sys::ANARILibrary
+    // SAFETY: a valid name and callback.
+    unsafe { anariLoadLibrary(c"caveray".as_ptr(), Some(quiet), std::ptr::null()) }
 }
 
 /// Types a host may pass to anariSetParameter with `mem` pointing at
@@ -724,5 +721,9 @@ pub fn capi(data: &[u8]) {
             anariRelease(dev, o);
         }
         anariRelease(dev, dev);
+        // The device's teardown may go on after its release returns;
+        // unloading waits for it, so that each input ends with all it
+        // made freed (the leak check runs between inputs).
+        anariUnloadLibrary(lib);
     }
 }

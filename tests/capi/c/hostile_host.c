@@ -443,6 +443,7 @@ static void discard_long(ANARILibrary lib, const char *kind, unsigned size)
   ANARIDevice dev = new_device(lib);
   Scene s = volume_scene(dev, 32, 32, "ao", 3.f);
   double t;
+  char name[128];
   if (strcmp(kind, "iso") == 0) {
     ANARIWorld world = iso_world(dev);
     anariSetParameter(dev, s.frame, "world", ANARI_WORLD, &world);
@@ -468,8 +469,8 @@ static void discard_long(ANARILibrary lib, const char *kind, unsigned size)
   anariDiscardFrame(dev, s.frame);
   anariFrameReady(dev, s.frame, ANARI_WAIT);
   t = now_ms() - t;
-  printf("%s %ux%u: discarded\n", kind, size, size);
-  measured("discard to ready", t);
+  snprintf(name, sizeof name, "%s %ux%u: discard to ready", kind, size, size);
+  measured(name, t);
   check("the discarded render says so", discards > 0);
   check("the discarded render leaves no image", !has_image(&s));
   anariRenderFrame(dev, s.frame);
@@ -477,7 +478,8 @@ static void discard_long(ANARILibrary lib, const char *kind, unsigned size)
   release_scene(&s);
   t = now_ms();
   anariRelease(dev, dev);
-  measured("device release while it renders", now_ms() - t);
+  snprintf(name, sizeof name, "%s %ux%u: device release while it renders", kind, size, size);
+  measured(name, now_ms() - t);
 }
 
 /* A deadline frame discarded while its presenter waits shows nothing. */
