@@ -41,9 +41,10 @@ pub enum ViewPattern {
 pub const EYES_IN_PANEL_WIDTHS: (f64, f64) = (0.01, 100.0);
 
 /// The lens widths a lens sheet may have, in subpixels. Narrower, `u /
-/// pitch` outgrows the precision of its fraction; wider, one lens spans
+/// pitch` outgrows the precision of its fraction (a lens narrower than a
+/// subpixel is a pattern still: tests use 0.47); wider, one lens spans
 /// more than any panel and the panel shows one view.
-pub const PITCH_RANGE: (f64, f64) = (1.0, 10_000.0);
+pub const PITCH_RANGE: (f64, f64) = (1.0 / 64.0, 10_000.0);
 
 /// The largest |slant| (tan of the lens's angle from vertical, about 84
 /// degrees): steeper, the rows' shift `3 · slant · y` swamps the columns'

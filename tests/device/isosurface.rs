@@ -630,12 +630,12 @@ fn bad_multi_view_cameras_are_reported_by_name() {
         (
             "lens.pitch",
             1e-38,
-            "lens.pitch must be from 1 to 10000 subpixels, got 1e-38",
+            "lens.pitch must be from 0.015625 to 10000 subpixels, got 1e-38",
         ),
         (
             "lens.pitch",
             1e30,
-            "lens.pitch must be from 1 to 10000 subpixels, got 1e30",
+            "lens.pitch must be from 0.015625 to 10000 subpixels, got 1e30",
         ),
         (
             "lens.slant",

@@ -159,13 +159,13 @@ fn bad_display_files_fail_naming_the_field() {
             "pitch = 3.75",
             "pitch = 1e-38",
             "lens.pitch",
-            "must be from 1 to 10000 subpixels, got 1e-38",
+            "must be from 0.015625 to 10000 subpixels, got 1e-38",
         ),
         (
             "pitch = 3.75",
             "pitch = 1e30",
             "lens.pitch",
-            "must be from 1 to 10000 subpixels",
+            "must be from 0.015625 to 10000 subpixels",
         ),
         (
             "slant = 0.15625",

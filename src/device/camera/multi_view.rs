@@ -39,7 +39,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         p("viewSpacing", F32, true, DefaultValue::None,
           "between neighbouring views' eyes on that line, view 0 at the right end: positive, the line (views - 1 spacings) at most 100 panel widths"),
         p("lens.pitch", F32, false, DefaultValue::None,
-          "lens width across the panel, in subpixels, 1 to 10000 (a lens sheet; or give viewTable)")
+          "lens width across the panel, in subpixels, 1/64 to 10000 (a lens sheet; or give viewTable)")
             .range(PITCH_RANGE.0 as f32, PITCH_RANGE.1 as f32),
         p("lens.slant", F32, false, DefaultValue::Floats(&[0.0]),
           "subpixels the lens moves right per subpixel height upward (tan of its slant), -10 to 10")
