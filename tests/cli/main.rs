@@ -6,6 +6,7 @@ mod common;
 mod bench_autostereo;
 mod bench_cave_stereo;
 mod bench_stereo;
+mod deps;
 mod inspect;
 mod render;
 mod replay;
