@@ -18,6 +18,10 @@ use crate::geometry::RayGen;
 use crate::render::warp::{warp_by, Source, WarpMode, WarpSettings, Warped};
 use crate::render::{Backend, Frame, FrameDesc, GpuRenderer, RenderError, Renderer};
 
+/// Layers a background render keeps for the `layers` warp (and the warm-up
+/// image has, so that it compiles what the real warps run).
+pub(super) const WARP_LAYERS: usize = 4;
+
 /// A complete background render, with the inputs it was made for and
 /// when its camera was taken.
 pub struct Shot {
@@ -300,15 +304,12 @@ impl Warper {
 /// Each warp once, on an empty 16 x 16 image of `rays`.
 fn warm_up(g: &mut GpuRenderer, (rays, bounds): (RayGen, (Vec3, Vec3))) -> Result<(), RenderError> {
     let size = glam::UVec2::splat(16);
-    let source = Source::empty(size, rays, WARP_WARM_UP_LAYERS)?;
+    let source = Source::empty(size, rays, WARP_LAYERS)?;
     for mode in WarpMode::ALL {
         g.warp(&source, &rays, size, &WarpSettings::new(mode, bounds))?;
     }
     Ok(())
 }
-
-/// Layers of the warm-up image (the layers warp wants some).
-const WARP_WARM_UP_LAYERS: usize = 4;
 
 /// What the presenter of one render needs.
 pub struct Present {

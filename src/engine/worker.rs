@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use super::deadline::Shot;
+use super::deadline::{Shot, WARP_LAYERS};
 use super::inputs::Views;
 use super::job::RenderJob;
 use super::passes::{render_panel, render_surface_views, render_views, KeptPanel};
@@ -16,9 +16,6 @@ use super::status::{panic_message, About, Note, Notify, Severity, StatusCode};
 use super::threads::join_unless_current;
 use crate::render::warp::{Source, WarpMode};
 use crate::render::{AutoChoice, Backend, Frame, Renderer};
-
-/// Layers a background render keeps for the `layers` warp.
-const WARP_LAYERS: usize = 4;
 
 pub struct Worker {
     sender: Option<Sender<RenderJob>>,
