@@ -69,6 +69,23 @@ pub(super) struct Context {
     timestamps: Option<Timestamps>,
 }
 
+/// Mesa's implicit device-selection layer looks for a Wayland display
+/// while it enumerates GPUs. With no `XDG_RUNTIME_DIR` there can be none,
+/// and libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set"
+/// for every enumeration, on the host's stderr. Its only job is to put the
+/// display's GPU first; the adapter is chosen here by type, so the layer is
+/// turned off in exactly that case, once, before the first instance, and
+/// never where the host set either variable itself.
+fn quiet_device_select() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let has = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+        if !has("XDG_RUNTIME_DIR") && std::env::var_os("NODEVICE_SELECT").is_none() {
+            std::env::set_var("NODEVICE_SELECT", "1");
+        }
+    });
+}
+
 impl Context {
     /// The adapter `new` would open, without a device: what it is.
     pub fn probe() -> Result<wgpu::AdapterInfo, RenderError> {
@@ -76,6 +93,7 @@ impl Context {
     }
 
     fn adapter() -> Result<wgpu::Adapter, RenderError> {
+        quiet_device_select();
         // Vulkan only: GL's 1D textures and array layers are unreliable,
         // and CI runs lavapipe, which is Vulkan.
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
