@@ -1,5 +1,6 @@
 //! The CT head's bone isosurface (the CPU reference caster), shaded
-//! flat and colored by curvature: out/iso_flat.png, out/iso_curvature.png.
+//! flat and colored by curvature: iso_flat.png and iso_curvature.png in
+//! out/examples/isosurface/.
 //! Run: cargo run --release --example isosurface [VOLUMES_TOML]
 
 use std::path::PathBuf;
@@ -11,6 +12,9 @@ use anari_library_caveray::render::iso::{cast, Coloring, IsoSettings};
 use anari_library_caveray::render::FrameDesc;
 use anari_library_caveray::scene::{PlacedVolume, Scene};
 use glam::{DVec3, UVec2};
+
+/// Each example writes into its own folder, never over the demo's files.
+const OUT: &str = "out/examples/isosurface";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let manifest = std::env::args().nth(1).map_or_else(
@@ -30,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let eye = DVec3::new(1.2, -2.8, -0.6);
     let rays =
         PinholeCamera::new(eye, -eye, DVec3::NEG_Z, 0.8, 1.0, ImageRegion::FULL)?.ray_gen(size);
-    std::fs::create_dir_all("out")?;
+    std::fs::create_dir_all(OUT)?;
     for (name, coloring) in [
         ("flat", Coloring::Flat(glam::Vec3::new(0.9, 0.85, 0.75))),
         ("curvature", Coloring::Curvature { radius: 0.03 }),
@@ -48,7 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             hits.len(),
             start.elapsed().as_secs_f64()
         );
-        write_png(&frame, format!("out/iso_{name}.png").as_ref())?;
+        write_png(&frame, format!("{OUT}/iso_{name}.png").as_ref())?;
     }
     Ok(())
 }

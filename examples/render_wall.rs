@@ -1,5 +1,5 @@
-//! Render both eyes of one CAVE wall to out/front_<eye>.png, on the GPU if
-//! there is one, else on the CPU reference.
+//! Render both eyes of one CAVE wall to out/examples/render_wall/front_<eye>.png,
+//! on the GPU if there is one, else on the CPU reference.
 //! Run: cargo run --release --example render_wall
 
 use anari_library_caveray::cave::{Eye, Rig};
@@ -10,6 +10,9 @@ use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
 use anari_library_caveray::scene::Scene;
 use glam::UVec2;
+
+/// Each example writes into its own folder, never over the demo's files.
+const OUT: &str = "out/examples/render_wall";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rig = Rig::load("cave_configs/cologne_5wall.toml".as_ref())?;
@@ -30,14 +33,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Default::default()
     };
     let wall = rig.wall("front").ok_or("no front wall")?;
-    std::fs::create_dir_all("out")?;
+    std::fs::create_dir_all(OUT)?;
     for eye in [Eye::Left, Eye::Right] {
         let view = rig.view(wall, eye, &head)?;
         let image = UVec2::new(400, 400);
         // Any camera lowers to the same RayGen; strategy 1 shown here.
         let rays = view.matrix_camera()?.ray_gen(image);
         let frame = renderer.render(&scene, &rays, &settings, &FrameDesc::new(image))?;
-        let file = format!("out/front_{}.png", eye.name());
+        let file = format!("{OUT}/front_{}.png", eye.name());
         write_png(&frame, file.as_ref())?;
         println!(
             "{file}: {} samples on {}",

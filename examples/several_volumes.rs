@@ -1,7 +1,7 @@
 //! Several volumes in one scene on the CAVE's front wall: a CT head with a
 //! phantom turned and pushed into it, each with its own transfer function,
-//! composited per sample. Writes out/several_volumes.png and prints the
-//! cost of 1, 2, 4 and 8 overlapping volumes against one.
+//! composited per sample. Writes out/examples/several_volumes/several_volumes.png
+//! and prints the cost of 1, 2, 4 and 8 overlapping volumes against one.
 //! Run: cargo run --release --example several_volumes [-- cpu|gpu]
 
 use std::sync::Arc;
@@ -15,6 +15,9 @@ use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
 use anari_library_caveray::scene::{PlacedVolume, Scene, MAX_VOLUMES};
 use glam::{Mat4, UVec2, Vec3};
+
+/// Each example writes into its own folder, never over the demo's files.
+const OUT: &str = "out/examples/several_volumes";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let backend: Backend = std::env::args().nth(1).unwrap_or("auto".into()).parse()?;
@@ -69,7 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Default::default()
     };
     let desc = FrameDesc::new(image);
-    std::fs::create_dir_all("out")?;
+    std::fs::create_dir_all(OUT)?;
     println!(
         "{} at {}x{}, shadows, on {}",
         wall.name,
@@ -96,9 +99,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ms / one
         );
         if n == 2 {
-            write_png(&frame, "out/several_volumes.png".as_ref())?;
+            write_png(&frame, format!("{OUT}/several_volumes.png").as_ref())?;
         }
     }
-    println!("wrote out/several_volumes.png (the head and one phantom)");
+    println!("wrote {OUT}/several_volumes.png (the head and one phantom)");
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! Both eyes of the Cologne CAVE's front wall from one ray casting pass:
 //! the left eye is ray cast, the right one re-projected from it.
-//! Writes out/stereo_front_<eye>.png. Needs a Vulkan adapter (lavapipe
-//! will do). Run: cargo run --release --example stereo_wall
+//! Writes out/examples/stereo_wall/stereo_front_<eye>.png. Needs a Vulkan
+//! adapter (lavapipe will do). Run: cargo run --release --example stereo_wall
 
 use anari_library_caveray::cave::{Eye, Rig};
 use anari_library_caveray::data::{preset, shepp_logan};
@@ -11,6 +11,9 @@ use anari_library_caveray::render::stereo::{Bounds, LayerFormat, Reprojection};
 use anari_library_caveray::render::{FrameDesc, GpuRenderer, RenderSettings};
 use anari_library_caveray::scene::Scene;
 use glam::UVec2;
+
+/// Each example writes into its own folder, never over the demo's files.
+const OUT: &str = "out/examples/stereo_wall";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rig = Rig::load("cave_configs/cologne_5wall.toml".as_ref())?;
@@ -40,9 +43,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &RenderSettings::default(),
         &FrameDesc::new(image),
     )?;
-    std::fs::create_dir_all("out")?;
-    write_png(&frames.left, "out/stereo_front_left.png".as_ref())?;
-    write_png(&frames.right, "out/stereo_front_right.png".as_ref())?;
+    std::fs::create_dir_all(OUT)?;
+    write_png(
+        &frames.left,
+        format!("{OUT}/stereo_front_left.png").as_ref(),
+    )?;
+    write_png(
+        &frames.right,
+        format!("{OUT}/stereo_front_right.png").as_ref(),
+    )?;
     println!(
         "{} layers ({:.1} MiB); left eye + layers {:.1} ms, compositing {:.1} ms",
         plan.layers,

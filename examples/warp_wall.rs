@@ -1,6 +1,7 @@
 //! The front wall of the Cologne CAVE rendered for one eye position, then
 //! shown from an eye 100 mm to the right by each warp, against the frame
-//! rendered there: prints DSSIM per warp and writes out/warp_<mode>.png.
+//! rendered there: prints DSSIM per warp and writes
+//! out/examples/warp_wall/warp_<mode>.png.
 //! Run: cargo run --release --example warp_wall
 
 use std::sync::atomic::AtomicBool;
@@ -14,6 +15,9 @@ use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{dssim, Backend, FrameDesc, RenderSettings, Renderer};
 use anari_library_caveray::scene::Scene;
 use glam::{DVec3, UVec2};
+
+/// Each example writes into its own folder, never over the demo's files.
+const OUT: &str = "out/examples/warp_wall";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rig = Rig::load("cave_configs/cologne_5wall.toml".as_ref())?;
@@ -37,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("captured the old view in {ms:.1} ms");
     let desc = FrameDesc::new(image);
     let ideal = renderer.render(&scene, &new, &settings, &desc)?;
-    std::fs::create_dir_all("out")?;
+    std::fs::create_dir_all(OUT)?;
     for mode in WarpMode::ALL {
         let warp = WarpSettings::new(mode, scene.bounds());
         let (warped, ms) = renderer.warp(&source, &new, image, &warp)?;
@@ -47,7 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "{:<7} {ms:7.2} ms  DSSIM {d:.4} against the new view",
             mode.name()
         );
-        write_png(&frame, format!("out/warp_{}.png", mode.name()).as_ref())?;
+        write_png(&frame, format!("{OUT}/warp_{}.png", mode.name()).as_ref())?;
     }
     Ok(())
 }

@@ -7,6 +7,7 @@ mod bench_autostereo;
 mod bench_cave_stereo;
 mod bench_stereo;
 mod deps;
+mod examples;
 mod inspect;
 mod render;
 mod replay;
