@@ -11,9 +11,10 @@ use thiserror::Error;
 use toml::Spanned;
 
 use super::head::{HeadFrame, HeadPose, PathKey};
-use super::rig::{Eye, Rig, ScenePlacement, Viewer, Wall};
+use super::placement::ScenePlacement;
+use super::rig::{Eye, Rig, Viewer, Wall};
 use super::source_map::locate;
-use crate::geometry::{GeometryError, Screen, Units};
+use crate::geometry::{GeometryError, Screen, Units, VolumeAxis};
 
 /// Clip planes for rigs that do not set them, in metres.
 const DEFAULT_NEAR_M: f64 = 0.01;
@@ -76,6 +77,8 @@ struct RawRig {
 struct RawScene {
     centre: Option<Vec3>,
     size: Option<Spanned<f64>>,
+    volume_up: Option<Spanned<String>>,
+    volume_front: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -177,6 +180,16 @@ impl Ctx<'_> {
         self.error(value.span(), Some(field), message)
     }
 
+    fn volume_axis(
+        &self,
+        v: &Option<Spanned<String>>,
+        field: &str,
+    ) -> Result<Option<VolumeAxis>, ConfigError> {
+        v.as_ref()
+            .map(|s| s.get_ref().parse().map_err(|e| self.at(s, field.into(), e)))
+            .transpose()
+    }
+
     pub(super) fn vec3(&self, v: &Vec3, field: impl Fn() -> String) -> Result<DVec3, ConfigError> {
         let [x, y, z] = v.get_ref()[..] else {
             let n = v.get_ref().len();
@@ -258,19 +271,29 @@ impl Ctx<'_> {
             }
             walls.push(wall);
         }
-        let scene = ScenePlacement::around(&walls);
+        let scene = ScenePlacement::around(walls.iter().flat_map(|w| w.screen.corners()));
         let scene = match &raw.scene {
             None => scene,
-            Some(s) => ScenePlacement {
-                centre: match &s.centre {
-                    Some(c) => self.vec3(c, || "scene.centre".into())?,
-                    None => scene.centre,
-                },
-                size: match &s.size {
-                    Some(v) => self.positive(v, "scene.size", false)?,
-                    None => scene.size,
-                },
-            },
+            Some(s) => {
+                let up = self.volume_axis(&s.volume_up, "scene.volume_up")?;
+                let front = self.volume_axis(&s.volume_front, "scene.volume_front")?;
+                if let (Some(at), Err(e)) = (&s.volume_front, ScenePlacement::check_axes(up, front))
+                {
+                    return Err(self.at(at, "scene.volume_front".into(), e));
+                }
+                ScenePlacement {
+                    centre: match &s.centre {
+                        Some(c) => self.vec3(c, || "scene.centre".into())?,
+                        None => scene.centre,
+                    },
+                    size: match &s.size {
+                        Some(v) => self.positive(v, "scene.size", false)?,
+                        None => scene.size,
+                    },
+                    up,
+                    front,
+                }
+            }
         };
         let rig = Rig {
             name: raw.name.clone().unwrap_or_else(|| self.file.to_string()),

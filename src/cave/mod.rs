@@ -6,11 +6,13 @@ mod config;
 mod display;
 mod head;
 pub mod inspect;
+mod placement;
 mod rig;
 mod source_map;
 
 pub use config::ConfigError;
 pub use head::{pose_along, HeadFrame, HeadPose, PathKey, NECK_TO_EYES_M};
-pub use rig::{Eye, Rig, ScenePlacement, View, Viewer, Wall};
+pub use placement::ScenePlacement;
+pub use rig::{Eye, Rig, View, Viewer, Wall};
 // A display file is read here; its model is geometry.
 pub use crate::geometry::{MultiViewDisplay, Units, ViewPattern, MAX_VIEWS};

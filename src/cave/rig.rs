@@ -4,6 +4,7 @@ use glam::{DVec3, UVec2};
 use serde::{Deserialize, Serialize};
 
 use super::head::{pose_along, HeadFrame, HeadPose, PathKey, NECK_TO_EYES_M};
+use super::placement::ScenePlacement;
 use crate::geometry::{
     pinhole_from_matrices, MatrixCamera, OffAxisCamera, OffAxisProjection, PinholeCamera,
     RecoveredPinhole, Result, Screen, Units,
@@ -83,37 +84,6 @@ pub struct Rig {
     /// Where a volume goes unless the user says otherwise.
     pub scene: ScenePlacement,
     pub walls: Vec<Wall>,
-}
-
-/// Where a rig puts the volume: its bounding box is centred at `centre`
-/// and its longest side is `size` long, in rig units.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScenePlacement {
-    pub centre: DVec3,
-    pub size: f64,
-}
-
-impl ScenePlacement {
-    /// The default: the centre of the walls' bounding box, a third of its
-    /// smallest non-zero side (a single flat wall has one zero side).
-    pub fn around(walls: &[Wall]) -> Self {
-        let corners = walls.iter().flat_map(|w| w.screen.corners());
-        let (lo, hi) = corners.fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), c| (lo.min(c), hi.max(c)),
-        );
-        let extent = hi - lo;
-        let sides = extent.to_array();
-        let smallest = sides
-            .iter()
-            .copied()
-            .filter(|&s| s > 1e-9 * extent.max_element())
-            .fold(f64::INFINITY, f64::min);
-        Self {
-            centre: 0.5 * (lo + hi),
-            size: smallest / 3.0,
-        }
-    }
 }
 
 /// Everything needed to render one eye on one wall.

@@ -5,8 +5,10 @@ use serde::Deserialize;
 use sha2::{Digest, Sha256};
 
 use super::files;
+use super::orientation::{known_orientation, Orientation};
 use super::raw::{decode_raw, read_raw};
 use super::{DataError, VoxelType};
+use crate::geometry::VolumeAxis;
 use crate::scene::StructuredVolume;
 
 /// A `volumes.toml` manifest: named raw volumes beside it.
@@ -32,6 +34,24 @@ pub struct ManifestEntry {
     pub sha256: Option<String>,
     #[serde(default)]
     pub source: String,
+    /// The grid axis that points to the top of the object (a CT series
+    /// stored crown first has -z), if the data set says.
+    #[serde(default)]
+    pub up: Option<VolumeAxis>,
+    /// The grid axis the object's front faces, if the data set says.
+    #[serde(default)]
+    pub front: Option<VolumeAxis>,
+}
+
+impl ManifestEntry {
+    /// The axes the entry states; if it states neither, those of the
+    /// published data set its hash names.
+    pub fn orientation(&self) -> Orientation {
+        match (self.up, self.front, self.sha256.as_deref()) {
+            (None, None, Some(sha)) => known_orientation(sha),
+            (up, front, _) => Orientation { up, front },
+        }
+    }
 }
 
 #[derive(Deserialize)]

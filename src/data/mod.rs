@@ -4,12 +4,14 @@
 
 pub mod files;
 mod manifest;
+mod orientation;
 mod paraview;
 mod presets;
 mod procedural;
 mod raw;
 
 pub use manifest::{Manifest, ManifestEntry};
+pub use orientation::{known_orientation, Orientation};
 pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};
 pub use procedural::{concentric_shells, marschner_lobb, shepp_logan, solid_box};

@@ -9,6 +9,7 @@
 //! and eye directly. Every camera implements [`PrimaryRays`] and lowers to
 //! the same [`RayGen`] value, so a renderer never knows which one it got.
 
+mod axis;
 mod display;
 mod error;
 mod from_matrices;
@@ -25,6 +26,7 @@ mod units;
 #[cfg(test)]
 mod tests;
 
+pub use axis::VolumeAxis;
 pub use display::{
     MultiViewDisplay, PanelNumber, ViewPattern, EYES_IN_PANEL_WIDTHS, MAX_SLANT, MAX_VIEWS,
     PITCH_RANGE,

@@ -405,3 +405,146 @@ fn rigs_that_would_escape_or_overflow_are_refused() {
     assert!(!out.join("../escape_left.png").exists());
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// Run as the README shows, without `scripts/env`: no runtime directory and
+/// no Vulkan driver chosen. Whatever adapter `auto` and `gpu` find, stderr
+/// holds only caveray's own lines.
+#[test]
+fn a_plain_shell_run_prints_only_caveray_lines() {
+    let out = scratch("plain-shell");
+    for backend in ["auto", "gpu"] {
+        if backend == "gpu" && GpuRenderer::probe().is_err() {
+            continue;
+        }
+        let result = std::process::Command::new(env!("CARGO_BIN_EXE_caveray"))
+            .args(["render", "--config", "cave_configs/powerwall.toml"])
+            .args(["--scale", "0.02", "--backend", backend, "--out"])
+            .arg(&out)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env_remove("XDG_RUNTIME_DIR")
+            .env_remove("NODEVICE_SELECT")
+            .env_remove("VK_ICD_FILENAMES")
+            .output()
+            .expect("caveray runs");
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(result.status.success(), "{backend}: {stderr}");
+        for line in stderr.lines() {
+            let line = line.rsplit('\r').next().unwrap_or(line);
+            assert!(
+                line.is_empty() || line.starts_with("caveray: ") || line.starts_with('['),
+                "{backend}: a line that is not caveray's: {line:?}\n{stderr}"
+            );
+        }
+    }
+}
+
+/// A 16³ raw volume, opaque only in its first four z slices: a marker for
+/// which way the volume's -z end ends up.
+fn marked_volume(dir: &Path) -> PathBuf {
+    let voxels: Vec<u8> = (0..16 * 16 * 16)
+        .map(|i| if i / 256 < 4 { 255 } else { 0 })
+        .collect();
+    let file = dir.join("marked.raw");
+    std::fs::write(&file, voxels).unwrap();
+    file
+}
+
+/// The mean image row of the lit pixels, 0 the top and 1 the bottom.
+fn lit_height(image: &image::RgbaImage) -> f64 {
+    let (mut sum, mut n) = (0.0, 0.0);
+    for (_, y, p) in image.enumerate_pixels() {
+        let w = f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2]);
+        sum += w * f64::from(y);
+        n += w;
+    }
+    assert!(n > 0.0, "nothing lit");
+    sum / n / f64::from(image.height() - 1)
+}
+
+/// The powerwall with a volume placed by `extra`, from `rig` (default: the
+/// shipped powerwall): how high the marked end is on the wall.
+fn marker_height(dir: &Path, rig: &str, extra: &[&str]) -> f64 {
+    let raw = marked_volume(dir);
+    let out = dir.join(format!("out{}", extra.join("").replace(['-', ','], "_")));
+    let mut args = vec!["render", "--config", rig, "--backend", "cpu"];
+    args.extend([
+        "--scale",
+        "0.04",
+        "--tf",
+        "grey",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    args.extend(["--volume", raw.to_str().unwrap(), "--dims", "16,16,16"]);
+    args.extend_from_slice(extra);
+    let result = caveray(&args);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{extra:?}: {stderr}");
+    lit_height(&png(&out.join("wall_left.png")))
+}
+
+#[test]
+fn the_volume_is_placed_and_turned_as_asked() {
+    let dir = scratch("placement");
+    let rig = "cave_configs/powerwall.toml";
+    // On the y-up powerwall the volume's -z end faces the viewer unless
+    // it is told which axis is up.
+    let level = marker_height(&dir, rig, &[]);
+    assert!((level - 0.5).abs() < 0.08, "marker at {level}");
+    let top = marker_height(&dir, rig, &["--volume-up=-z"]);
+    let bottom = marker_height(&dir, rig, &["--volume-up", "+z"]);
+    assert!(top < 0.4 && bottom > 0.6, "up -z: {top}, up +z: {bottom}");
+    // Up and front together, and the centre moved up the wall.
+    let both = marker_height(&dir, rig, &["--volume-up=-z", "--volume-front", "+x"]);
+    assert!((both - top).abs() < 0.05, "{both} against {top}");
+    let higher = marker_height(
+        &dir,
+        rig,
+        &[
+            "--volume-up=-z",
+            "--volume-centre",
+            "0,2.2,0.3",
+            "--volume-size",
+            "0.6",
+        ],
+    );
+    assert!(higher < top - 0.1, "moved up: {higher} against {top}");
+
+    // A rig's [scene] says which way up volumes go that do not say; the
+    // command line wins over it.
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(rig)).unwrap();
+    let turned = dir.join("turned.toml");
+    let text = text.replace("size = 1.2", "size = 1.2\nvolume_up = \"-z\"");
+    std::fs::write(&turned, text).unwrap();
+    let turned = turned.to_str().unwrap();
+    let rig_top = marker_height(&dir, turned, &[]);
+    assert!((rig_top - top).abs() < 0.02, "{rig_top} against {top}");
+    let overridden = marker_height(&dir, turned, &["--volume-up=+z"]);
+    assert!(
+        (overridden - bottom).abs() < 0.02,
+        "{overridden} against {bottom}"
+    );
+}
+
+#[test]
+fn placement_options_that_cannot_hold_are_refused() {
+    for (extra, needle) in [
+        (
+            &["--volume-up", "+z", "--volume-front=-z"][..],
+            "must be different axes",
+        ),
+        (&["--volume-up", "up"][..], "--volume-up"),
+        (&["--volume-size", "0"][..], "expected a finite number > 0"),
+        (&["--volume-centre", "1,2"][..], "three"),
+    ] {
+        let out = scratch("refused-placement");
+        let mut args = vec!["render", "--config", "cave_configs/powerwall.toml"];
+        args.extend(["--scale", "0.01", "--out", out.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        let result = caveray(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{extra:?}: {stderr}");
+    }
+}

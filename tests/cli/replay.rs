@@ -88,7 +88,7 @@ fn bad_replay_arguments_are_usage_errors() {
         (vec!["--warp-ms", "50"], "less than a refresh"),
         (vec!["--grid-spacing", "0"], "grid spacing must be 1 to 256"),
         (vec!["--path", "nowhere.toml"], "nowhere.toml"),
-        (vec!["--size=-1"], "--size must be a positive number"),
+        (vec!["--volume-size=-1"], "expected a finite number > 0"),
     ] {
         let mut all = vec!["replay", "--volume", "phantom:8"];
         all.extend(args.iter().copied());

@@ -423,3 +423,38 @@ fn sizes_that_overflow_or_exceed_the_budget_are_refused_before_reading() {
     assert!(err.to_string().contains("not a regular file"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_manifest_entry_says_which_way_up_its_data_is() {
+    use anari_library_caveray::geometry::VolumeAxis;
+    let entry = |extra: &str| {
+        format!(
+            "[[volume]]\nname = \"a\"\nfile = \"a.raw\"\ndims = [2, 2, 2]\n\
+             dtype = \"uint8\"\nspacing = [1, 1, 1]\n{extra}\n"
+        )
+    };
+    let path = Path::new("volumes.toml");
+    let stated = Manifest::parse(&entry("up = \"-z\"\nfront = \"+y\""), path).unwrap();
+    let o = stated.find("a").unwrap().orientation();
+    assert_eq!(
+        (o.up, o.front),
+        (Some(VolumeAxis::NegZ), Some(VolumeAxis::PosY))
+    );
+    // The Stanford CT head's hash names it; an entry that states an axis
+    // is taken at its word.
+    let cthead = "sha256 = \"8a378356d37fc55a977032375b1bd34298c0b137167dd0f05e025d66e0ae5d94\"";
+    let known = Manifest::parse(&entry(cthead), path).unwrap();
+    let o = known.find("a").unwrap().orientation();
+    assert_eq!(
+        (o.up, o.front),
+        (Some(VolumeAxis::NegZ), Some(VolumeAxis::NegY))
+    );
+    let own = Manifest::parse(&entry(&format!("{cthead}\nup = \"+x\"")), path).unwrap();
+    let o = own.find("a").unwrap().orientation();
+    assert_eq!((o.up, o.front), (Some(VolumeAxis::PosX), None));
+    let plain = Manifest::parse(&entry(""), path).unwrap();
+    assert_eq!(plain.find("a").unwrap().orientation().up, None);
+
+    let err = Manifest::parse(&entry("up = \"sideways\""), path).unwrap_err();
+    assert!(err.to_string().contains("'sideways'"), "{err}");
+}

@@ -569,3 +569,40 @@ fn head_paths_load_in_the_rigs_units_and_bad_ones_name_the_line() {
         assert!(e.to_string().contains(needle), "{e}");
     }
 }
+
+/// `GOOD` with a `[scene]` table of `lines` before its first wall, and the
+/// line number of the table's first entry.
+fn with_scene(lines: &str) -> (String, usize) {
+    let at = GOOD.find("[[walls]]").unwrap();
+    let line = GOOD[..at].lines().count() + 2;
+    (
+        format!("{}[scene]\n{lines}\n\n{}", &GOOD[..at], &GOOD[at..]),
+        line,
+    )
+}
+
+#[test]
+fn the_scene_says_which_volume_axes_are_up_and_in_front() {
+    use anari_library_caveray::geometry::VolumeAxis;
+    let (text, _) = with_scene("volume_up = \"-z\"\nvolume_front = \"+X\"");
+    let rig = parse(&text).unwrap();
+    assert_eq!(rig.scene.up, Some(VolumeAxis::NegZ));
+    assert_eq!(rig.scene.front, Some(VolumeAxis::PosX));
+    assert_eq!(parse(GOOD).unwrap().scene.up, None);
+
+    let (text, line) = with_scene("volume_up = \"upwards\"");
+    let err = parse(&text).unwrap_err();
+    assert_eq!(
+        (err.line(), err.field()),
+        (Some(line), Some("scene.volume_up"))
+    );
+    assert!(err.to_string().contains("+x, -x, +y, -y, +z, -z"), "{err}");
+
+    let (text, line) = with_scene("volume_up = \"z\"\nvolume_front = \"-z\"");
+    let err = parse(&text).unwrap_err();
+    assert_eq!(
+        (err.line(), err.field()),
+        (Some(line + 1), Some("scene.volume_front"))
+    );
+    assert!(err.to_string().contains("must be different axes"), "{err}");
+}

@@ -218,7 +218,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     }
     let head = args.head.pose(&rig)?;
     let loaded = args.volume.load()?;
-    let scene = loaded.placed(rig.scene.centre.as_vec3(), rig.scene.size as f32)?;
+    let scene = loaded.placed(rig.scene, &rig.viewer.frame)?;
     let settings = args.render.settings();
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", args.out.display())))?;

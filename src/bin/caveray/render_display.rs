@@ -14,7 +14,7 @@ use anari_library_caveray::render::iso::{
 use anari_library_caveray::render::FrameDesc;
 use glam::Vec3;
 
-use crate::scene::VolumeArgs;
+use crate::scene::{at, panel_frame, VolumeArgs};
 use crate::Failure;
 
 /// Views a row of the contact sheet.
@@ -58,7 +58,10 @@ pub fn run(
     // Behind the panel, a third of its width across.
     let panel = &display.screen;
     let centre = panel.centre() - panel.normal() * panel.width() / 3.0;
-    let scene = loaded.placed(centre.as_vec3(), (panel.width() / 3.0) as f32)?;
+    let scene = loaded.placed(
+        at(centre.as_vec3(), (panel.width() / 3.0) as f32),
+        &panel_frame(panel),
+    )?;
     let placed = &scene.volumes()[0];
     let (lo, hi) = placed.volume.value_range();
     let settings = IsoSettings {

@@ -77,13 +77,6 @@ pub struct ReplayArgs {
     warp_ms: f64,
     #[command(flatten)]
     volume: VolumeArgs,
-    /// Centre of the volume's bounding box X,Y,Z in rig units (default:
-    /// the rig's placement).
-    #[arg(long, value_parser = crate::triple, allow_hyphen_values = true)]
-    centre: Option<glam::DVec3>,
-    /// Longest side of the volume in rig units (default: the rig's).
-    #[arg(long)]
-    size: Option<f64>,
     /// gpu, cpu, or auto (a hardware GPU where there is one, else the CPU):
     /// what renders the cells, the ideal frames and the warps.
     #[arg(long, default_value = "auto", value_parser = crate::options::backend())]
@@ -208,14 +201,7 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
         })
         .collect::<Result<_, Failure>>()?;
     let loaded = args.volume.load()?;
-    let centre = args.centre.unwrap_or(rig.scene.centre);
-    let side = args.size.unwrap_or(rig.scene.size);
-    if !(side.is_finite() && side > 0.0 && (side as f32).is_finite()) {
-        return Err(usage(format!(
-            "--size must be a positive number, got {side}"
-        )));
-    }
-    let scene = loaded.placed(centre.as_vec3(), side as f32)?;
+    let scene = loaded.placed(rig.scene, &rig.viewer.frame)?;
     let settings = RenderSettings {
         shading: args.shading,
         ..RenderSettings::default()

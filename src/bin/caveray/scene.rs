@@ -2,13 +2,18 @@
 
 use std::path::{Path, PathBuf};
 
+use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
     concentric_shells, load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box,
-    Manifest, VoxelType,
+    Manifest, Orientation, VoxelType,
 };
-use anari_library_caveray::scene::{Scene, StructuredVolume, TransferFunction, Voxels};
+use anari_library_caveray::geometry::VolumeAxis;
+use anari_library_caveray::scene::{
+    PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
+};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
-use glam::{UVec3, Vec3};
+use glam::{DVec3, UVec3};
 
 use crate::{triple, Failure};
 
@@ -40,6 +45,69 @@ pub struct VolumeArgs {
     /// grey, shells) or a ParaView color map exported as JSON.
     #[arg(long)]
     tf: Option<String>,
+    #[command(flatten)]
+    placement: PlacementArgs,
+}
+
+/// Where the volume goes and which way up; each unset part is the
+/// command's default (a rig's `[scene]`).
+#[derive(Args, Clone, Copy)]
+pub struct PlacementArgs {
+    /// Centre of the volume's bounding box X,Y,Z, in the rig's units.
+    #[arg(long, value_parser = triple, allow_hyphen_values = true)]
+    volume_centre: Option<DVec3>,
+    /// Longest side of the volume's bounding box, in the rig's units.
+    #[arg(long, value_parser = positive)]
+    volume_size: Option<f64>,
+    /// The volume axis that points up, along the viewer's up (a CT series
+    /// stored crown first wants -z).
+    #[arg(long, value_parser = axis())]
+    volume_up: Option<VolumeAxis>,
+    /// The volume axis that faces a viewer at rest (against the viewer's
+    /// forward).
+    #[arg(long, value_parser = axis())]
+    volume_front: Option<VolumeAxis>,
+}
+
+impl PlacementArgs {
+    /// `default` with the parts given on the command line in its place.
+    /// The axes come from the command line, else from the data set itself
+    /// (`data`), else from `default` (a rig's `[scene]`).
+    pub fn over(
+        &self,
+        default: ScenePlacement,
+        data: Orientation,
+    ) -> Result<ScenePlacement, Failure> {
+        let pick = |cli: Option<VolumeAxis>, data: Option<VolumeAxis>, rig: Option<VolumeAxis>| {
+            cli.map(|a| (a, "--volume-"))
+                .or(data.map(|a| (a, "the data set's ")))
+                .or(rig.map(|a| (a, "the rig's scene.volume_")))
+        };
+        let up = pick(self.volume_up, data.up, default.up);
+        let front = pick(self.volume_front, data.front, default.front);
+        let placement = ScenePlacement {
+            centre: self.volume_centre.unwrap_or(default.centre),
+            size: self.volume_size.unwrap_or(default.size),
+            up: up.map(|(a, _)| a),
+            front: front.map(|(a, _)| a),
+        };
+        ScenePlacement::check_axes(placement.up, placement.front).map_err(|e| {
+            let from = |p: Option<(VolumeAxis, &'static str)>| p.map_or("", |(_, s)| s);
+            Failure::Usage(format!("{e} ({}up, {}front)", from(up), from(front)))
+        })?;
+        Ok(placement)
+    }
+}
+
+fn axis() -> impl TypedValueParser<Value = VolumeAxis> {
+    PossibleValuesParser::new(VolumeAxis::NAMES).try_map(|s| s.parse::<VolumeAxis>())
+}
+
+fn positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x > 0.0 && (x as f32).is_finite() => Ok(x),
+        _ => Err(format!("expected a finite number > 0, got '{s}'")),
+    }
 }
 
 fn dims(s: &str) -> Result<UVec3, String> {
@@ -61,6 +129,9 @@ pub struct Loaded {
     tf: TransferFunction,
     /// Presets span the data's range; a ParaView map keeps its own.
     stretch_tf: bool,
+    placement: PlacementArgs,
+    /// Which way up the data set says it is.
+    orientation: Orientation,
 }
 
 impl VolumeArgs {
@@ -86,13 +157,15 @@ impl VolumeArgs {
     pub fn load(&self) -> Result<Loaded, Failure> {
         let usage = |e: &dyn std::fmt::Display| Failure::Usage(e.to_string());
         let spec = self.volume.as_deref().unwrap_or("phantom");
-        let (name, volume, default_tf) = if let Some((name, volume)) = procedural(spec)? {
+        let (name, volume, default_tf, orientation) = if let Some((name, volume)) =
+            procedural(spec)?
+        {
             let tf = if name.starts_with("shells") {
                 "shells"
             } else {
                 "phantom"
             };
-            (name, volume, tf)
+            (name, volume, tf, Orientation::UNKNOWN)
         } else if self.dims.is_some() || Path::new(spec).is_file() {
             let dims = self.dims.ok_or_else(|| {
                 Failure::Usage(format!(
@@ -102,7 +175,7 @@ impl VolumeArgs {
             let dtype = VoxelType::parse(&self.dtype).map_err(|e| usage(&e))?;
             let spacing = self.spacing.unwrap_or(glam::DVec3::ONE).as_vec3();
             let volume = load_raw(Path::new(spec), dims, dtype, spacing).map_err(|e| usage(&e))?;
-            (file_stem(spec), volume, "grey")
+            (file_stem(spec), volume, "grey", Orientation::UNKNOWN)
         } else {
             let manifest =
                 Manifest::locate(self.manifest.as_deref(), &[PathBuf::from(SHARED_MANIFEST)])
@@ -116,7 +189,7 @@ impl VolumeArgs {
             let volume = manifest
                 .load_volume(spec)
                 .map_err(|e| Failure::Runtime(e.to_string()))?;
-            (spec.to_string(), volume, tf)
+            (spec.to_string(), volume, tf, entry.orientation())
         };
         let tf_spec = self.tf.as_deref().unwrap_or(default_tf);
         let (tf, stretch_tf) = if Path::new(tf_spec).is_file() {
@@ -141,17 +214,28 @@ impl VolumeArgs {
             volume,
             tf,
             stretch_tf,
+            placement: self.placement,
+            orientation,
         })
     }
 }
 
 impl Loaded {
-    /// The scene with the volume's bounding box centred at `centre`, its
-    /// longest side `size` long. Opacities keep their look at any size:
-    /// presets are tuned for a volume two units across.
-    pub fn placed(&self, centre: Vec3, size: f32) -> Result<Scene, Failure> {
+    /// Where the volume goes: `default`, less what the command line says.
+    pub fn placement(&self, default: ScenePlacement) -> Result<ScenePlacement, Failure> {
+        self.placement.over(default, self.orientation)
+    }
+
+    /// The scene with the volume's bounding box centred where `default`
+    /// or the command line says, its longest side that long, turned so its
+    /// up and front axes point along `frame`'s up and toward its viewer.
+    /// Opacities keep their look at any size: presets are tuned for a
+    /// volume two units across.
+    pub fn placed(&self, default: ScenePlacement, frame: &HeadFrame) -> Result<Scene, Failure> {
         let runtime = |e: &dyn std::fmt::Display| Failure::Runtime(e.to_string());
-        let volume = self.volume.clone().placed(centre, size);
+        let placement = self.placement(default)?;
+        let size = placement.size as f32;
+        let volume = self.volume.clone().placed(placement.centre.as_vec3(), size);
         let mut tf = self
             .tf
             .clone()
@@ -163,7 +247,23 @@ impl Loaded {
                 tf = tf.with_value_range(lo, hi).map_err(|e| runtime(&e))?;
             }
         }
-        Ok(Scene::new(volume, tf))
+        Scene::placed(vec![PlacedVolume {
+            volume: volume.into(),
+            transfer_function: tf.into(),
+            transform: placement.transform(frame).as_mat4(),
+        }])
+        .map_err(|e| runtime(&e))
+    }
+}
+
+/// A placement at `centre` of longest side `size`, the volume's axes the
+/// world's: for commands that are not given a rig.
+pub fn at(centre: glam::Vec3, size: f32) -> ScenePlacement {
+    ScenePlacement {
+        centre: centre.as_dvec3(),
+        size: f64::from(size),
+        up: None,
+        front: None,
     }
 }
 
@@ -198,4 +298,19 @@ fn file_stem(path: &str) -> String {
     Path::new(path)
         .file_stem()
         .map_or_else(|| path.to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// The frame of a viewer in front of a display panel: looking into it,
+/// up its right edge.
+pub fn panel_frame(panel: &anari_library_caveray::geometry::Screen) -> HeadFrame {
+    HeadFrame::new(-panel.normal(), panel.y_axis()).unwrap_or(protocol_frame())
+}
+
+/// The benchmark protocols' first view: looking down -z, y up.
+pub fn protocol_frame() -> HeadFrame {
+    HeadFrame::new(DVec3::NEG_Z, DVec3::Y).unwrap_or(HeadFrame {
+        forward: DVec3::NEG_Z,
+        up: DVec3::Y,
+        right: DVec3::X,
+    })
 }

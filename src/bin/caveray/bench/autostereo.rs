@@ -24,7 +24,7 @@ use serde::Serialize;
 
 use super::runtime;
 use crate::report::{write_json, Machine};
-use crate::scene::VolumeArgs;
+use crate::scene::{at, panel_frame, VolumeArgs};
 use crate::Failure;
 
 #[derive(Args)]
@@ -148,7 +148,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         let panel = &base.screen;
         let size = (panel.width() / 3.0) as f32;
         let centre = panel.centre() - panel.normal() * panel.width() / 3.0;
-        let scene = loaded.placed(centre.as_vec3(), size)?;
+        let scene = loaded.placed(at(centre.as_vec3(), size), &panel_frame(panel))?;
         let placed = &scene.volumes()[0];
         let (lo, hi) = placed.volume.value_range();
         let settings = IsoSettings {

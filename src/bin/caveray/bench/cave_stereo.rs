@@ -9,7 +9,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use anari_library_caveray::cave::{pose_along, Eye, HeadPose, PathKey, Rig, Wall};
+use anari_library_caveray::cave::{pose_along, Eye, HeadPose, PathKey, Rig, ScenePlacement, Wall};
 use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
 use anari_library_caveray::output::{Chart, Series, XAxis};
 use anari_library_caveray::render::stereo::{
@@ -32,7 +32,7 @@ use crate::progress::Progress;
 use crate::render::wall_size;
 use crate::report::{write_json, Adapter, Machine, RendererInfo};
 use crate::scene::VolumeArgs;
-use crate::{triple, Failure};
+use crate::Failure;
 
 #[derive(Args)]
 pub struct CaveStereoArgs {
@@ -50,15 +50,9 @@ pub struct CaveStereoArgs {
     #[arg(long, default_value_t = 60)]
     frames: u32,
     /// The volume (default: cthead), placed where the rig's `[scene]` says
-    /// unless --scene-centre or --scene-size say otherwise.
+    /// unless the --volume-* placement options say otherwise.
     #[command(flatten)]
     volume: VolumeArgs,
-    /// Centre of the volume X,Y,Z, in the rig's units.
-    #[arg(long, value_parser = triple)]
-    scene_centre: Option<glam::DVec3>,
-    /// Longest side of the volume, in the rig's units.
-    #[arg(long)]
-    scene_size: Option<f64>,
     /// none, shadows, ao, shadows+ao or directional:N.
     #[arg(long, default_value = "none", value_parser = shading)]
     shading: Shading,
@@ -206,14 +200,8 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
         .next()
         .unwrap_or_else(|| "cthead".into());
     let loaded = args.volume.with_volume(&name).load()?;
-    let centre = args.scene_centre.unwrap_or(rig.scene.centre);
-    let extent = args.scene_size.unwrap_or(rig.scene.size);
-    if !(centre.is_finite() && extent.is_finite() && extent > 0.0) {
-        return Err(Failure::Usage(format!(
-            "--scene-centre must be finite and --scene-size finite and > 0, got {centre} and {extent}"
-        )));
-    }
-    let scene = loaded.placed(centre.as_vec3(), extent as f32)?;
+    let placement = loaded.placement(rig.scene)?;
+    let scene = loaded.placed(rig.scene, &rig.viewer.frame)?;
     let mut gpu = GpuRenderer::new().map_err(|e| {
         Failure::Runtime(format!("{e} (re-projection runs on the GPU renderer only)"))
     })?;
@@ -277,7 +265,7 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
     };
     let report = summarise(
         &args,
-        &rig,
+        (&rig, &placement),
         &sizes,
         &name,
         RendererInfo::Gpu(Adapter::of(&gpu)),
@@ -441,7 +429,7 @@ fn share(part: usize, whole: usize) -> f64 {
 
 fn summarise(
     args: &CaveStereoArgs,
-    rig: &Rig,
+    (rig, placement): (&Rig, &ScenePlacement),
     sizes: &[UVec2],
     volume: &str,
     renderer: RendererInfo,
@@ -528,8 +516,8 @@ fn summarise(
         frames: args.frames,
         scale: args.scale,
         volume: volume.to_string(),
-        scene_centre: args.scene_centre.unwrap_or(rig.scene.centre).to_array(),
-        scene_size: args.scene_size.unwrap_or(rig.scene.size),
+        scene_centre: placement.centre.to_array(),
+        scene_size: placement.size,
         shading: args.shading.to_string(),
         layer_format: args.layer_format.to_string(),
         wall_frames: all.len(),
