@@ -9,11 +9,12 @@ mod frame;
 pub mod gpu;
 pub mod iso;
 mod march_plan;
+mod progress;
 mod settings;
 pub mod stereo;
 pub mod warp;
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use thiserror::Error;
 
@@ -21,6 +22,7 @@ pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
 pub use cpu::CpuRenderer;
 pub use frame::{ColorData, ColorFormat, Frame, FrameDesc, MAX_FRAME_PIXELS};
 pub use gpu::{GpuRenderer, PassClock, Uploads};
+pub use progress::{Done, Progress, Watch};
 pub use settings::{
     check_step_factor, BackgroundImage, ClipPlanes, RenderSettings, Sampling, Shading, LOD_MAX,
     MAX_CLIP_PLANES, MAX_DIRECTIONS, MAX_STEPS_PER_RAY, STEP_FACTOR_RANGE,
@@ -138,14 +140,16 @@ impl std::fmt::Display for AutoChoice {
 /// renderer as a method either way.
 pub trait Render: Sized {
     /// A frame of `scene` through `rays`, giving up with
-    /// `RenderError::Stopped` once `stop` is set.
-    fn render_until(
+    /// `RenderError::Stopped` once the watch's stop flag is set (a bare
+    /// `&AtomicBool` will do), counting into its [`Progress`]: CPU tiles,
+    /// GPU bands.
+    fn render_until<'w>(
         self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
         desc: &FrameDesc,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Frame, RenderError>;
 
     /// A frame of `scene` through `rays`.
@@ -238,21 +242,24 @@ impl Renderer {
 
     /// What warps need of a view (color over nothing, first-hit depth and
     /// `layers` layers a pixel), and the milliseconds it took: the GPU's
-    /// pass clock, or the CPU's wall clock.
-    pub fn capture(
+    /// pass clock, or the CPU's wall clock. Counts rows on the CPU, bands
+    /// on the GPU.
+    #[allow(clippy::too_many_arguments)]
+    pub fn capture<'w>(
         &mut self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
         size: glam::UVec2,
         layers: usize,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<(warp::Source, f64), RenderError> {
+        let watch = watch.into();
         match self {
-            Renderer::Gpu(g) => g.capture(scene, rays, settings, size, layers, stop),
+            Renderer::Gpu(g) => g.capture(scene, rays, settings, size, layers, watch),
             Renderer::Cpu(c) => {
                 let clock = std::time::Instant::now();
-                let source = c.capture(scene, rays, settings, size, layers, stop)?;
+                let source = c.capture(scene, rays, settings, size, layers, watch)?;
                 Ok((source, clock.elapsed().as_secs_f64() * 1e3))
             }
         }
@@ -278,28 +285,32 @@ impl Renderer {
     }
 
     /// `surfaces` seen through `rays`, the nearest per pixel: the CPU
-    /// reference's caster (which looks at `stop` between rows) or the
-    /// GPU's (between bands of rows).
-    pub fn cast_surfaces(
+    /// reference's caster (which looks at the stop flag and counts between
+    /// rows) or the GPU's (between bands of rows), every surface's units
+    /// announced before the first is cast.
+    pub fn cast_surfaces<'w>(
         &mut self,
         surfaces: &[iso::IsoSurface],
         rays: &RayGen,
         desc: &FrameDesc,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Frame, RenderError> {
+        let watch = watch.into();
         let one = FrameDesc {
             depth: desc.depth || surfaces.len() > 1,
             ..*desc
         };
+        watch.expect(self.cast_units(desc.size) * surfaces.len() as u64);
+        let part = watch.part();
         let mut frames = Vec::with_capacity(surfaces.len());
         for s in surfaces {
             frames.push(match self {
-                Renderer::Gpu(g) => g.cast_iso(&s.placed, rays, &one, &s.settings, stop)?,
+                Renderer::Gpu(g) => g.cast_iso(&s.placed, rays, &one, &s.settings, part)?,
                 Renderer::Cpu(c) => {
                     s.settings.validate()?;
                     let (values, bounds) = c.iso_field(&s.placed, &s.settings)?;
                     let caster = iso::Caster::with_bounds(&s.placed, &values, &s.settings, bounds)
-                        .until(stop);
+                        .watched(part);
                     iso::cast_by(&caster, rays, &one)?.0
                 }
             });
@@ -311,55 +322,68 @@ impl Renderer {
         }
     }
 
-    /// A multi-view panel's image of `surface` by `method`, until `stop`
-    /// (as `cast_surfaces`). The GPU's naive way is a cast per view,
-    /// interleaved.
-    pub fn cast_display(
+    /// A multi-view panel's image of `surface` by `method`, watched as
+    /// `cast_surfaces` is: every pass's rows (CPU) or bands (GPU); the
+    /// GPU's naive way is a cast per view, interleaved.
+    pub fn cast_display<'w>(
         &mut self,
         surface: &iso::IsoSurface,
         panel: &iso::Panel,
         method: iso::MultiViewMethod,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Frame, RenderError> {
+        let watch = watch.into();
         let (placed, settings) = (&surface.placed, &surface.settings);
         match self {
             Renderer::Gpu(g) if method == iso::MultiViewMethod::Naive => {
                 // Views in floats: an 8-bit panel is quantised once.
                 let desc = FrameDesc::new(panel.size).with_color(ColorFormat::Rgba32F);
+                watch.expect(g.band_count(panel.size) * panel.views.len() as u64);
                 let mut views = Vec::with_capacity(panel.views.len());
                 for rays in &panel.views {
-                    views.push(g.cast_iso(placed, rays, &desc, settings, stop)?);
+                    views.push(g.cast_iso(placed, rays, &desc, settings, watch.part())?);
                 }
                 iso::interleave(&views, panel)
             }
-            Renderer::Gpu(g) => g.cast_display(placed, panel, settings, method, stop),
+            Renderer::Gpu(g) => g.cast_display(placed, panel, settings, method, watch),
             Renderer::Cpu(c) => {
                 settings.validate()?;
                 let (values, bounds) = c.iso_field(placed, settings)?;
                 let caster =
-                    iso::Caster::with_bounds(placed, &values, settings, bounds).until(stop);
+                    iso::Caster::with_bounds(placed, &values, settings, bounds).watched(watch);
                 Ok(iso::render_display_by(&caster, panel, method)?.0)
             }
+        }
+    }
+
+    /// The units one isosurface cast of an image of `size` counts: its
+    /// rows on the CPU, its bands on the GPU.
+    fn cast_units(&self, size: glam::UVec2) -> u64 {
+        match self {
+            Renderer::Gpu(g) => g.band_count(size),
+            Renderer::Cpu(_) => u64::from(size.y),
         }
     }
 }
 
 impl Render for &mut Renderer {
-    /// The CPU reference checks `stop` between pixels, the GPU between
-    /// bands of rows (about 2^18 pixels each).
-    fn render_until(
+    /// The CPU reference checks the stop flag between pixels and counts
+    /// tiles; the GPU checks it and counts between bands of rows (about
+    /// 2^18 pixels each).
+    fn render_until<'w>(
         self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
         desc: &FrameDesc,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Frame, RenderError> {
+        let watch = watch.into();
         let frame = match self {
-            Renderer::Gpu(g) => g.render_until(scene, rays, settings, desc, stop),
-            Renderer::Cpu(c) => c.render_until(scene, rays, settings, desc, stop),
+            Renderer::Gpu(g) => g.render_until(scene, rays, settings, desc, watch),
+            Renderer::Cpu(c) => c.render_until(scene, rays, settings, desc, watch),
         }?;
-        if stop.load(Ordering::Relaxed) {
+        if watch.stopped() {
             return Err(RenderError::Stopped);
         }
         Ok(frame)

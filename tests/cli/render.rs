@@ -548,3 +548,106 @@ fn placement_options_that_cannot_hold_are_refused() {
         assert_eq!(stderr.lines().count(), 1, "{extra:?}: {stderr}");
     }
 }
+
+/// `caveray render` with `args`, stderr a pipe (not a terminal) and
+/// in-view progress lines every `every` seconds.
+fn render_logged(args: &[&str], every: &str) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_caveray"))
+        .arg("render")
+        .args(args)
+        .env("CAVERAY_PROGRESS_EVERY", every)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("caveray runs")
+}
+
+/// The percentage an in-view progress line gives for `label`'s view.
+fn view_percent(line: &str, label: &str) -> Option<f64> {
+    let rest = line
+        .strip_prefix('[')?
+        .split_once(&format!("  {label} "))?
+        .1;
+    rest.strip_suffix('%')?.parse().ok()
+}
+
+#[test]
+fn the_progress_moves_within_a_view_in_whole_lines_when_logged() {
+    let out = scratch("progress");
+    let result = render_logged(
+        &[
+            "--config",
+            "cave_configs/fishtank_desktop.toml",
+            "--backend",
+            "cpu",
+            "--volume",
+            "phantom:48",
+            "--shading",
+            "shadows",
+            "--scale",
+            "0.15",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "0.01",
+    );
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert!(result.status.success(), "{err}");
+    // Not a terminal: whole lines, no carriage returns or escapes.
+    assert!(!err.contains('\r') && !err.contains('\x1b'), "{err:?}");
+    let within: Vec<(&str, f64)> = err
+        .lines()
+        .filter_map(|l| view_percent(l, "monitor_left").map(|p| (l, p)))
+        .collect();
+    assert!(
+        !within.is_empty(),
+        "no line within the left eye's view:\n{err}"
+    );
+    for (line, percent) in &within {
+        assert!((0.0..=100.0).contains(percent), "{line}");
+        assert!(line.contains(" 0/2 "), "{line}");
+    }
+    // Each eye's own line when it is done, the last one without an ETA.
+    let last = err.lines().last().unwrap();
+    assert!(
+        last.contains("] 2/2 ") && last.contains("monitor_right 384x216"),
+        "{last}"
+    );
+    assert!(!last.contains("ETA"), "{last}");
+    assert!(
+        err.lines()
+            .any(|l| l.contains("] 1/2 ") && l.contains(", ETA ")),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+
+    // A multi-view display: the panel's image, then each view, as steps.
+    let out = scratch("progress-display");
+    let result = render_logged(
+        &[
+            "--config",
+            "cave_configs/lenticular_8view.toml",
+            "--volume",
+            "phantom:24",
+            "--scale",
+            "0.03",
+            "--iso",
+            "0.2",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "5",
+    );
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert!(result.status.success(), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 9, "{err}");
+    assert!(
+        lines[0].contains("] 1/9 ") && lines[0].contains("interleaved 58x36"),
+        "{err}"
+    );
+    assert!(
+        lines[8].contains("] 9/9 ") && lines[8].contains("view 7 58x36"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}

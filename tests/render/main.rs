@@ -12,5 +12,6 @@ mod fast_path;
 mod filtered_sampling;
 mod isosurface;
 mod known_answers;
+mod progress;
 mod ray_casting;
 mod several_volumes;

@@ -11,6 +11,7 @@ use anari_library_caveray::output::{contact_sheet, frame_to_rgba, write_rgba_png
 use anari_library_caveray::render::stereo::{
     decide, Bounds, Eyes, LayerFormat, LayerRequest, RenderFacts, Reprojection,
 };
+use anari_library_caveray::render::Progress as ViewProgress;
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, Frame, FrameDesc, RenderSettings, Renderer};
 use anari_library_caveray::scene::Scene;
@@ -258,7 +259,9 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         };
         match pair {
             Ok((left, reprojection)) => {
-                let frames = job.reprojected(&mut renderer, &wall.name, left, &reprojection)?;
+                let frames = progress.within(2, &wall.name, |counter| {
+                    job.reprojected(&mut renderer, &wall.name, left, &reprojection, counter)
+                })?;
                 for (eye, frame, rendered) in frames {
                     let image = frame_to_rgba(&frame);
                     write(&image, &args.out.join(&rendered.file))?;
@@ -299,7 +302,9 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
                             continue;
                         }
                     };
-                    let (frame, mut rendered) = job.single(&mut renderer, &label, &rays, size)?;
+                    let (frame, mut rendered) = progress.within(1, &label, |counter| {
+                        job.single(&mut renderer, &label, &rays, size, counter)
+                    })?;
                     if args.stereo.stereo == StereoMethod::Reprojection && *eye != Eye::Mono {
                         rendered.fallback = Some(reason.clone());
                     }
@@ -348,17 +353,24 @@ struct ViewJob<'a> {
 }
 
 impl ViewJob<'_> {
-    /// One eye, ray cast on its own.
+    /// One eye, ray cast on its own, counting into `counter`.
     fn single(
         &self,
         renderer: &mut Renderer,
         label: &str,
         rays: &RayGen,
         size: UVec2,
+        counter: &ViewProgress,
     ) -> Result<(Frame, Rendered), Failure> {
         let t = Instant::now();
         let frame = renderer
-            .render(self.scene, rays, self.settings, &FrameDesc::new(size))
+            .render_until(
+                self.scene,
+                rays,
+                self.settings,
+                &FrameDesc::new(size),
+                counter,
+            )
             .map_err(|e| Failure::Runtime(format!("{label}: {e}")))?;
         let ms = t.elapsed().as_secs_f64() * 1e3;
         let rendered = Rendered::new(
@@ -371,13 +383,15 @@ impl ViewJob<'_> {
         Ok((frame, rendered))
     }
 
-    /// Both eyes of a wall from one ray casting pass.
+    /// Both eyes of a wall from one ray casting pass, counting into
+    /// `counter`.
     fn reprojected(
         &self,
         renderer: &mut Renderer,
         wall: &str,
         left: &View,
         reprojection: &Reprojection,
+        counter: &ViewProgress,
     ) -> Result<Vec<(Eye, Frame, Rendered)>, Failure> {
         let Renderer::Gpu(gpu) = renderer else {
             return Err(Failure::Runtime(
@@ -391,12 +405,13 @@ impl ViewJob<'_> {
             .map_err(|e| Failure::Runtime(format!("{wall}: {e}")))?;
         let t = Instant::now();
         let frames = gpu
-            .render_reprojected(
+            .render_reprojected_until(
                 self.scene,
                 &rays,
                 reprojection,
                 self.settings,
                 &FrameDesc::new(size),
+                counter,
             )
             .map_err(|e| Failure::Runtime(format!("{wall}: {e}")))?;
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;

@@ -9,11 +9,13 @@ use std::time::Instant;
 use anari_library_caveray::cave::MultiViewDisplay;
 use anari_library_caveray::output::{frame_to_rgba, write_png, write_rgba_png};
 use anari_library_caveray::render::iso::{
-    cast, render_display, IsoFilter, IsoSettings, MultiViewMethod, Panel,
+    cast_by, crossing_box, render_display_by, values, Caster, IsoFilter, IsoSettings,
+    MultiViewMethod, Panel,
 };
-use anari_library_caveray::render::FrameDesc;
+use anari_library_caveray::render::{FrameDesc, Watch};
 use glam::Vec3;
 
+use crate::progress::Progress;
 use crate::scene::{at, panel_frame, VolumeArgs};
 use crate::Failure;
 
@@ -76,10 +78,29 @@ pub fn run(
         display.view_of(x, y, c)
     })
     .map_err(|e| runtime(&e))?;
+    settings.validate().map_err(|e| runtime(&e))?;
+    // The field and its crossing box once, for the panel and every view.
+    let field = values(placed).map_err(|e| runtime(&e))?;
+    let bounds = crossing_box(
+        placed.volume.dims(),
+        |i| field[i],
+        settings.isovalue,
+        settings.filter,
+    );
+    let mut progress = Progress::new(1 + rays.len());
     let start = Instant::now();
-    let (interleaved, _) = render_display(placed, &panel, &settings, MultiViewMethod::PerSubpixel)
+    let (interleaved, _) = progress
+        .within(1, "interleaved", |counter| {
+            let caster = Caster::with_bounds(placed, &field, &settings, bounds)
+                .watched(Watch::from(counter));
+            render_display_by(&caster, &panel, MultiViewMethod::PerSubpixel)
+        })
         .map_err(|e| runtime(&e))?;
     let interleaved_ms = start.elapsed().as_secs_f64() * 1e3;
+    progress.step(&format!(
+        "interleaved {}x{} {interleaved_ms:.1} ms",
+        resolution.x, resolution.y
+    ));
     write_png(&interleaved, &out.join("display_interleaved.png")).map_err(|e| runtime(&e))?;
     let (w, h) = (resolution.x, resolution.y);
     let cols = SHEET_COLUMNS.min(display.views);
@@ -91,8 +112,21 @@ pub fn run(
         image::Rgba([255, 255, 255, 255]),
     );
     for (v, r) in rays.iter().enumerate() {
-        let (frame, _) =
-            cast(placed, r, &FrameDesc::new(resolution), &settings).map_err(|e| runtime(&e))?;
+        let label = format!("view {v}");
+        let t = Instant::now();
+        let (frame, _) = progress
+            .within(1, &label, |counter| {
+                let caster = Caster::with_bounds(placed, &field, &settings, bounds)
+                    .watched(Watch::from(counter));
+                cast_by(&caster, r, &FrameDesc::new(resolution))
+            })
+            .map_err(|e| runtime(&e))?;
+        progress.step(&format!(
+            "{label} {}x{} {:.1} ms",
+            resolution.x,
+            resolution.y,
+            t.elapsed().as_secs_f64() * 1e3
+        ));
         let (col, row) = (v as u32 % cols, v as u32 / cols);
         // Row 0 of the sheet at the top, view 0 first.
         image::imageops::overlay(

@@ -2,8 +2,6 @@
 //! and the emission-absorption layers, cast by the scalar path (layers
 //! are recorded per sample, which the packet path does not visit).
 
-use std::sync::atomic::{AtomicBool, Ordering};
-
 use glam::{UVec2, Vec4};
 use rayon::prelude::*;
 
@@ -12,22 +10,23 @@ use crate::geometry::RayGen;
 use crate::render::frame::filled;
 use crate::render::march_plan::MarchPlan;
 use crate::render::warp::{check_layers, Layer, LayerBuilder, Source};
-use crate::render::{FrameDesc, RenderError, RenderSettings};
+use crate::render::{FrameDesc, RenderError, RenderSettings, Watch};
 use crate::scene::Scene;
 
 impl CpuRenderer {
     /// `rays` cast for an image of `size`, keeping `layers` layers per
     /// pixel (0: none, 1..=MAX_LAYERS). The background is left out: warps
-    /// composite over it after they have moved the image.
-    pub fn capture(
+    /// composite over it after they have moved the image. Counts rows.
+    pub fn capture<'w>(
         &self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
         size: UVec2,
         layers: usize,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Source, RenderError> {
+        let watch = watch.into();
         FrameDesc::new(size).validate()?;
         check_layers(layers)?;
         let plan = MarchPlan::new(scene, rays, settings)?;
@@ -39,6 +38,7 @@ impl CpuRenderer {
         // One layer a pixel at least, so that every row has its chunk.
         let per = layers.max(1);
         let mut kept = filled(n * per, Layer::default(), "the warp source's layers")?;
+        watch.expect(u64::from(size.y));
         let samples: u64 = color
             .par_chunks_mut(w)
             .zip(depth.par_chunks_mut(w))
@@ -47,8 +47,8 @@ impl CpuRenderer {
             .map(|(y, ((c, d), l))| {
                 let mut samples = 0u64;
                 for x in 0..w {
-                    if stop.load(Ordering::Relaxed) {
-                        break;
+                    if watch.stopped() {
+                        return samples;
                     }
                     let (o, dir) = rays.pixel_ray(x as u32, y as u32);
                     let mut builder = LayerBuilder::new(per);
@@ -60,10 +60,11 @@ impl CpuRenderer {
                     }
                     samples += u64::from(ray.samples);
                 }
+                watch.advance(1);
                 samples
             })
             .sum();
-        if stop.load(Ordering::Relaxed) {
+        if watch.stopped() {
             return Err(RenderError::Stopped);
         }
         if layers == 0 {

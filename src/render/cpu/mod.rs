@@ -7,7 +7,6 @@ mod march;
 mod packet;
 mod sample;
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use glam::{Vec3, Vec4};
@@ -16,7 +15,7 @@ use rayon::prelude::*;
 use super::frame::{filled, Frame, FrameDesc};
 use super::iso::{self, IsoFilter, IsoSettings};
 use super::march_plan::MarchPlan;
-use super::{Render, RenderError, RenderSettings};
+use super::{Render, RenderError, RenderSettings, Watch};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
 use crate::scene::{PlacedVolume, Scene, StructuredVolume, TransferFunction};
@@ -183,14 +182,30 @@ impl CpuRenderer {
 }
 
 impl Render for &CpuRenderer {
-    /// Casts no further pixel once `stop` is set.
-    fn render_until(
+    /// Casts no further pixel once the stop flag is set; counts tiles of
+    /// 16 x 16 pixels.
+    fn render_until<'w>(
         self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
         desc: &FrameDesc,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
+    ) -> Result<Frame, RenderError> {
+        self.render_watched(scene, rays, settings, desc, watch.into())
+    }
+}
+
+impl CpuRenderer {
+    /// `render_until` past the conversion, made once for every kind of
+    /// watch.
+    fn render_watched(
+        &self,
+        scene: &Scene,
+        rays: &RayGen,
+        settings: &RenderSettings,
+        desc: &FrameDesc,
+        watch: Watch,
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
@@ -205,6 +220,7 @@ impl Render for &CpuRenderer {
         // the same voxels while they are in cache, and a tile is small
         // enough that two threads stay busy to the frame's end.
         let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        watch.expect((tx * ty) as u64);
         let tiles: Vec<(usize, Vec<f32>, Vec<f32>, u64)> = (0..tx * ty)
             .into_par_iter()
             .map(|tile| {
@@ -216,7 +232,7 @@ impl Render for &CpuRenderer {
                 for y in y0..y1 {
                     for x in x0..x1 {
                         // Per pixel: one slow tile must not hold up a stop.
-                        if stop.load(Ordering::Relaxed) {
+                        if watch.stopped() {
                             return (tile, c, d, samples);
                         }
                         let (o, dir) = rays.pixel_ray(x as u32, y as u32);
@@ -230,12 +246,13 @@ impl Render for &CpuRenderer {
                         samples += u64::from(ray.samples);
                     }
                 }
+                watch.advance(1);
                 (tile, c, d, samples)
             })
             .collect();
         // A stopped render leaves at once: filling a large frame's buffers
         // alone takes a good part of a second.
-        if stop.load(Ordering::Relaxed) {
+        if watch.stopped() {
             return Err(RenderError::Stopped);
         }
         let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's color")?;
@@ -251,7 +268,7 @@ impl Render for &CpuRenderer {
                 depth[at..at + dr.len()].copy_from_slice(dr);
             }
         }
-        if stop.load(Ordering::Relaxed) {
+        if watch.stopped() {
             return Err(RenderError::Stopped);
         }
         let mut frame = Frame::from_linear(desc, color, desc.depth.then_some(depth))?;

@@ -2,8 +2,6 @@
 //! caster's march with each contributing sample recorded into the pixel's
 //! emission-absorption layers, cast in bands like a frame.
 
-use std::sync::atomic::AtomicBool;
-
 use glam::{UVec2, Vec4};
 
 use super::bindings::{binding_table, Kind};
@@ -12,7 +10,7 @@ use super::raycast::{RaycastPass, Sampled};
 use super::resources::floats;
 use crate::render::frame::Frame;
 use crate::render::warp::Layer;
-use crate::render::{FrameDesc, RenderError, RenderSettings};
+use crate::render::{FrameDesc, RenderError, RenderSettings, Watch};
 use crate::scene::Scene;
 
 binding_table! {
@@ -77,11 +75,12 @@ impl CapturePass {
         desc: &FrameDesc,
         layers: usize,
         bytes: u64,
-        stop: &AtomicBool,
+        watch: Watch,
     ) -> Result<(Frame, Vec<Layer>, f64), RenderError> {
         let size = desc.size;
         let pixels = u64::from(size.x) * u64::from(size.y);
         let bands = raycast.write_bands(ctx, size);
+        watch.expect(bands.len() as u64);
         self.reserve(ctx, bytes);
         let (_, layer_buffer, layer_read, group) = self.buffers.as_ref().ok_or_else(unprepared)?;
         ctx.queue.write_buffer(
@@ -95,7 +94,7 @@ impl CapturePass {
             groups: &[main, group],
             band: Some(&raycast.band_group),
         };
-        let ms = ctx.dispatch_bands(&pass, &bands, stop)?;
+        let ms = ctx.dispatch_bands(&pass, &bands, watch)?;
         let frame = raycast.read_frame(ctx, desc)?;
         let kept = if layers > 0 {
             let used = pixels * layers as u64 * 32;

@@ -1,13 +1,13 @@
 //! What every pass shares: the adapter and device, what the adapter
 //! allows, the pass clock, and how a pass is dispatched.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 
 use serde::Serialize;
 
 use crate::render::frame::FrameDesc;
-use crate::render::RenderError;
+use crate::render::{RenderError, Watch};
 use crate::scene::Scene;
 
 /// Invocations per workgroup along x and y.
@@ -210,24 +210,26 @@ impl Context {
             groups,
             band: None,
         };
-        self.dispatch_bands(&pass, &[workgroups], &AtomicBool::new(false))
+        self.dispatch_bands(&pass, &[workgroups], Watch::new(&AtomicBool::new(false)))
     }
 
     /// Runs `pass` once per entry of `bands` (band i's workgroups, and its
     /// band group bound at dynamic offset i * BAND_STRIDE), each its own
     /// submission with at most two in flight, and gives up with
-    /// `RenderError::Stopped` between bands once `stop` is set. Returns
-    /// the milliseconds from the first band's start to the last's end.
+    /// `RenderError::Stopped` between bands once the watch's stop flag is
+    /// set. Counts each band into the watch's progress once the GPU has
+    /// finished it (the caller announced them). Returns the milliseconds
+    /// from the first band's start to the last's end.
     pub fn dispatch_bands(
         &self,
         pass: &Pass<'_>,
         bands: &[[u32; 3]],
-        stop: &AtomicBool,
+        watch: Watch,
     ) -> Result<f64, RenderError> {
         let start = std::time::Instant::now();
         let mut in_flight: Option<wgpu::SubmissionIndex> = None;
         for (i, workgroups) in bands.iter().enumerate() {
-            if stop.load(Ordering::Relaxed) {
+            if watch.stopped() {
                 self.wait()?;
                 return Err(RenderError::Stopped);
             }
@@ -269,9 +271,13 @@ impl Context {
                         timeout: None,
                     })
                     .map_err(|e| RenderError::Gpu(e.to_string()))?;
+                watch.advance(1);
             }
         }
         self.wait()?;
+        if !bands.is_empty() {
+            watch.advance(1);
+        }
         let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
         self.check()?;
         match &self.timestamps {

@@ -3,8 +3,6 @@
 //! src/render/iso/: the pipelines are made on the first cast, the volume
 //! shares the renderer's uploaded textures.
 
-use std::sync::atomic::AtomicBool;
-
 use bytemuck::Zeroable;
 use glam::Vec3;
 use wgpu::TextureViewDimension as Dim;
@@ -17,7 +15,7 @@ use super::shaders::compute_pipeline;
 use super::uniforms::Iso;
 use crate::geometry::RayGen;
 use crate::render::iso::{crossing_box, Coloring, IsoFilter, IsoSettings, MultiViewMethod};
-use crate::render::{Frame, FrameDesc, RenderError};
+use crate::render::{Frame, FrameDesc, RenderError, Watch};
 use crate::scene::PlacedVolume;
 
 binding_table! {
@@ -152,7 +150,7 @@ impl IsoPass {
         desc: &FrameDesc,
         settings: &IsoSettings,
         method: MultiViewMethod,
-        (raycast, stop): (&RaycastPass, &AtomicBool),
+        (raycast, watch): (&RaycastPass, Watch),
     ) -> Result<(Frame, f64), RenderError> {
         // A display's rays and pattern stay from frame to frame: its
         // buffers are kept, and written again only when they change.
@@ -208,7 +206,7 @@ impl IsoPass {
             desc,
             settings,
             Some(buffers),
-            (raycast, stop),
+            (raycast, watch),
         );
         self.panel = Some(cache);
         frame
@@ -217,7 +215,8 @@ impl IsoPass {
     /// The iso shader over `rays` (`main`), or over a panel: `per_subpixel`,
     /// or `geometric` then `spectral`; `volume` is `placed`'s texture.
     /// Returns the frame and the passes' milliseconds, or
-    /// `RenderError::Stopped` once `stop` is set between bands.
+    /// `RenderError::Stopped` once the stop flag is set between bands.
+    /// Counts every pass's bands.
     #[allow(clippy::too_many_arguments)]
     pub fn cast(
         &mut self,
@@ -228,7 +227,7 @@ impl IsoPass {
         desc: &FrameDesc,
         settings: &IsoSettings,
         panel: Option<PanelBuffers>,
-        (raycast, stop): (&RaycastPass, &AtomicBool),
+        (raycast, watch): (&RaycastPass, Watch),
     ) -> Result<(Frame, f64), RenderError> {
         if !matches!(&self.target, Some(t) if t.size == desc.size && t.format == desc.color) {
             self.target = Some(OutputBuffers::new(ctx, desc.size, desc.color));
@@ -264,13 +263,18 @@ impl IsoPass {
         }
         .bind(&ctx.device, &self.layout);
         let bands = raycast.write_bands(ctx, desc.size);
+        let passes = match &panel {
+            Some(p) if p.method == MultiViewMethod::GeometricSpectral => 2,
+            _ => 1,
+        };
+        watch.expect(passes * bands.len() as u64);
         let banded = |pipeline, groups| Pass {
             pipeline,
             groups,
             band: Some(&raycast.band_group),
         };
         let ms = match panel {
-            None => ctx.dispatch_bands(&banded(&self.pipeline, &[&group]), &bands, stop)?,
+            None => ctx.dispatch_bands(&banded(&self.pipeline, &[&group]), &bands, watch)?,
             Some(p) => {
                 let panel_group = PanelResources {
                     view_rays: p.rays.as_entire_binding(),
@@ -283,10 +287,10 @@ impl IsoPass {
                     // Every band's green first: the spectral pass reads
                     // it about each pixel, across band edges.
                     MultiViewMethod::GeometricSpectral => {
-                        ctx.dispatch_bands(&banded(&self.geometric, &groups), &bands, stop)?
-                            + ctx.dispatch_bands(&banded(&self.spectral, &groups), &bands, stop)?
+                        ctx.dispatch_bands(&banded(&self.geometric, &groups), &bands, watch)?
+                            + ctx.dispatch_bands(&banded(&self.spectral, &groups), &bands, watch)?
                     }
-                    _ => ctx.dispatch_bands(&banded(&self.per_subpixel, &groups), &bands, stop)?,
+                    _ => ctx.dispatch_bands(&banded(&self.per_subpixel, &groups), &bands, watch)?,
                 }
             }
         };

@@ -5,7 +5,7 @@
 //! records the span of right pixels it wrote this frame, and compositing
 //! reads nothing outside it.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use glam::UVec2;
 use wgpu::TextureViewDimension as Dim;
@@ -18,7 +18,7 @@ use super::shaders::compute_pipeline;
 use super::uniforms::Stereo;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
 use crate::render::stereo::{LayerFormat, Reprojection, StereoTimes};
-use crate::render::{RenderError, RenderSettings};
+use crate::render::{RenderError, RenderSettings, Watch};
 use crate::scene::Scene;
 
 binding_table! {
@@ -384,7 +384,8 @@ impl LayersPass {
     /// The right eye re-projected from the left eye's march (the ray
     /// caster's uniforms and group 0, as `raycast` bound them for the left
     /// eye) as `reprojection` plans: the right frame and both passes'
-    /// milliseconds.
+    /// milliseconds. Counts the march's bands and one unit for the
+    /// compositing.
     pub fn render(
         &mut self,
         (ctx, raycast): (&Context, &RaycastPass),
@@ -392,7 +393,7 @@ impl LayersPass {
         reprojection: &Reprojection,
         settings: &RenderSettings,
         desc: &FrameDesc,
-        stop: &AtomicBool,
+        watch: Watch,
     ) -> Result<(Frame, StereoTimes), RenderError> {
         let plan = &reprojection.plan;
         let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
@@ -416,8 +417,10 @@ impl LayersPass {
             groups: &[volume, &target.writer],
             band: Some(&raycast.band_group),
         };
-        let left_ms = ctx.dispatch_bands(&march, &raycast.write_bands(ctx, cast), stop)?;
-        if stop.load(Ordering::Relaxed) {
+        let bands = raycast.write_bands(ctx, cast);
+        watch.expect(bands.len() as u64 + 1);
+        let left_ms = ctx.dispatch_bands(&march, &bands, watch)?;
+        if watch.stopped() {
             return Err(RenderError::Stopped);
         }
         let composite_ms = ctx.dispatch(
@@ -429,6 +432,7 @@ impl LayersPass {
                 1,
             ],
         )?;
+        watch.advance(1);
         let (color_bytes, depth_bytes) = (pixels * desc.color.bytes_per_pixel(), 4 * pixels);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&res.color, 0, &res.color_read, 0, color_bytes);
@@ -474,7 +478,7 @@ impl LayersPass {
             s.texels.y.div_ceil(WORKGROUP),
             s.layers,
         ];
-        ctx.dispatch_bands(&clear, &[all], &AtomicBool::new(false))
+        ctx.dispatch_bands(&clear, &[all], Watch::new(&AtomicBool::new(false)))
     }
 }
 

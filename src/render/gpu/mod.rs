@@ -39,7 +39,7 @@ use super::frame::{ColorData, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::stereo::{Reprojection, StereoFrames};
 use super::warp::{check_layers, Source};
-use super::{ColorFormat, Render, RenderError, RenderSettings, Sampling};
+use super::{ColorFormat, Render, RenderError, RenderSettings, Sampling, Watch};
 use crate::geometry::RayGen;
 use crate::render::iso::{IsoSettings, MultiViewMethod, Panel};
 use crate::scene::{PlacedVolume, Scene};
@@ -198,18 +198,20 @@ impl GpuRenderer {
         self.render_reprojected_until(scene, left, reprojection, settings, desc, &never)
     }
 
-    /// `render_reprojected`, its march cast in bands of rows: once `stop`
-    /// is set no further band starts, and `RenderError::Stopped` is
-    /// returned.
-    pub fn render_reprojected_until(
+    /// `render_reprojected`, its march cast in bands of rows: once the
+    /// watch's stop flag is set no further band starts, and
+    /// `RenderError::Stopped` is returned. Counts the march's bands and
+    /// one unit for the compositing.
+    pub fn render_reprojected_until<'w>(
         &mut self,
         scene: &Scene,
         left: &RayGen,
         reprojection: &Reprojection,
         settings: &RenderSettings,
         desc: &FrameDesc,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<StereoFrames, RenderError> {
+        let watch = watch.into();
         desc.validate()?;
         if desc.size != reprojection.size {
             return Err(RenderError::Settings(format!(
@@ -237,7 +239,7 @@ impl GpuRenderer {
             reprojection,
             settings,
             desc,
-            stop,
+            watch,
         )?;
         self.last_pass_ms = times.left_ms;
         let left = self.raycast.read_frame(ctx, desc)?;
@@ -255,16 +257,17 @@ impl GpuRenderer {
     /// (0: none), the background left out: what
     /// [`crate::render::CpuRenderer::capture`] makes, from the GPU. Returns
     /// the source and the pass's milliseconds (GPU timestamps where the
-    /// adapter has them).
-    pub fn capture(
+    /// adapter has them). Counts bands.
+    pub fn capture<'w>(
         &mut self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
         size: UVec2,
         layers: usize,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<(Source, f64), RenderError> {
+        let watch = watch.into();
         check_layers(layers)?;
         let desc = FrameDesc::new(size)
             .with_color(ColorFormat::Rgba32F)
@@ -298,7 +301,7 @@ impl GpuRenderer {
             &desc,
             layers,
             bytes,
-            stop,
+            watch,
         )?;
         self.last_pass_ms = ms;
         let (ColorData::Rgba32F(c), Some(depth)) = (frame.color, frame.depth) else {
@@ -313,16 +316,17 @@ impl GpuRenderer {
 
     /// `placed`'s isosurface seen through `rays`, as
     /// [`crate::render::iso::cast`] renders it, on the GPU, in bands of
-    /// rows: once `stop` is set no further band starts, and
-    /// `RenderError::Stopped` is returned.
-    pub fn cast_iso(
+    /// rows (counted): once the stop flag is set no further band starts,
+    /// and `RenderError::Stopped` is returned.
+    pub fn cast_iso<'w>(
         &mut self,
         placed: &PlacedVolume,
         rays: &RayGen,
         desc: &FrameDesc,
         settings: &IsoSettings,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Frame, RenderError> {
+        let watch = watch.into();
         self.iso_ready(placed, desc, settings)?;
         let volume = self.scene.first_volume().ok_or_else(unprepared)?;
         let iso = self.iso.as_mut().ok_or_else(unprepared)?;
@@ -334,7 +338,7 @@ impl GpuRenderer {
             desc,
             settings,
             None,
-            (&self.raycast, stop),
+            (&self.raycast, watch),
         )?;
         self.last_pass_ms = ms;
         Ok(frame)
@@ -343,16 +347,17 @@ impl GpuRenderer {
     /// A multi-view panel's image, every subpixel from its own view, as
     /// [`crate::render::iso::render_display`] makes it: one ray a subpixel
     /// (`PerSubpixel`) or the geometric and spectral passes, in bands of
-    /// rows until `stop`. The naive way is the CPU's (or `cast_iso` per
-    /// view).
-    pub fn cast_display(
+    /// rows (every pass's counted) until the stop flag is set. The naive
+    /// way is the CPU's (or `cast_iso` per view).
+    pub fn cast_display<'w>(
         &mut self,
         placed: &PlacedVolume,
         panel: &Panel,
         settings: &IsoSettings,
         method: MultiViewMethod,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Frame, RenderError> {
+        let watch = watch.into();
         if method == MultiViewMethod::Naive {
             return Err(RenderError::Settings(
                 "the GPU makes a panel's image per subpixel or by passes; naive is cast_iso per view".into(),
@@ -401,10 +406,16 @@ impl GpuRenderer {
             &desc,
             settings,
             method,
-            (&self.raycast, stop),
+            (&self.raycast, watch),
         )?;
         self.last_pass_ms = ms;
         Ok(frame)
+    }
+
+    /// The bands this adapter casts a frame of `size` in: the units a
+    /// watched GPU pass over it counts.
+    pub fn band_count(&self, size: UVec2) -> u64 {
+        raycast::band_count(&self.ctx, size)
     }
 
     /// Checks an isosurface cast of `placed`, uploads its volume and makes
@@ -430,20 +441,21 @@ impl GpuRenderer {
 
 impl Render for &mut GpuRenderer {
     /// Cast in bands of rows (about 2^18 pixels each), each its own
-    /// submission: once `stop` is set no further band starts, and
+    /// submission, each counted once the GPU has finished it: once the
+    /// stop flag is set no further band starts, and
     /// `RenderError::Stopped` is returned.
-    fn render_until(
+    fn render_until<'w>(
         self,
         scene: &Scene,
         rays: &RayGen,
         settings: &RenderSettings,
         desc: &FrameDesc,
-        stop: &AtomicBool,
+        watch: impl Into<Watch<'w>>,
     ) -> Result<Frame, RenderError> {
         self.begin(scene, rays, settings, desc)?;
         let ms = self
             .raycast
-            .cast(&self.ctx, scene, settings, desc.size, stop)?;
+            .cast(&self.ctx, scene, settings, desc.size, watch.into())?;
         self.last_pass_ms = ms;
         self.raycast.read_frame(&self.ctx, desc)
     }

@@ -3,7 +3,7 @@
 //! uniforms, the scene's textures and the frame's outputs) is also group
 //! 0 of the capture and re-projection passes, which march the same way.
 
-use std::sync::atomic::AtomicBool;
+use crate::render::Watch;
 
 use glam::UVec2;
 use wgpu::TextureViewDimension as Dim;
@@ -319,13 +319,7 @@ impl RaycastPass {
     /// The bands a frame of `size` is cast in: each one's first row written
     /// to the bands buffer, and its workgroups.
     pub fn write_bands(&self, ctx: &Context, size: UVec2) -> Vec<[u32; 3]> {
-        // A software adapter takes hundreds of times longer over a band:
-        // smaller bands keep a discard as prompt there.
-        let pixels = match ctx.info.device_type {
-            wgpu::DeviceType::Cpu => SOFTWARE_BAND_PIXELS,
-            _ => BAND_PIXELS,
-        };
-        let rows = band_rows(size, pixels);
+        let rows = adapter_band_rows(ctx, size);
         let first_rows: Vec<u32> = (0..size.y).step_by(rows as usize).collect();
         let mut words = vec![0u32; first_rows.len() * (BAND_STRIDE / 4) as usize];
         for (band, first) in first_rows.iter().enumerate() {
@@ -342,7 +336,7 @@ impl RaycastPass {
             .collect()
     }
 
-    /// Casts the frame the uniforms describe, band by band, until `stop`;
+    /// Casts the frame the uniforms describe, band by band, watched;
     /// returns the pass's milliseconds.
     pub fn cast(
         &self,
@@ -350,16 +344,17 @@ impl RaycastPass {
         scene: &Scene,
         settings: &RenderSettings,
         size: UVec2,
-        stop: &AtomicBool,
+        watch: Watch,
     ) -> Result<f64, RenderError> {
         let bands = self.write_bands(ctx, size);
+        watch.expect(bands.len() as u64);
         let group = self.group()?;
         let pass = Pass {
             pipeline: self.pipelines.pick(ctx, scene, settings)?,
             groups: &[group],
             band: Some(&self.band_group),
         };
-        ctx.dispatch_bands(&pass, &bands, stop)
+        ctx.dispatch_bands(&pass, &bands, watch)
     }
 
     /// Copies the left (or only) eye's frame out of the target buffers.
@@ -403,6 +398,22 @@ const BAND_PIXELS: u32 = 1 << 18;
 const SOFTWARE_BAND_PIXELS: u32 = 1 << 14;
 /// The most bands a frame is cast in.
 const MAX_BANDS: u32 = 1024;
+
+/// The bands `write_bands` casts a frame of `size` in.
+pub(super) fn band_count(ctx: &Context, size: UVec2) -> u64 {
+    u64::from(size.y.div_ceil(adapter_band_rows(ctx, size)))
+}
+
+/// Rows per band of a frame of `size` on this adapter.
+fn adapter_band_rows(ctx: &Context, size: UVec2) -> u32 {
+    // A software adapter takes hundreds of times longer over a band:
+    // smaller bands keep a discard as prompt there.
+    let pixels = match ctx.info.device_type {
+        wgpu::DeviceType::Cpu => SOFTWARE_BAND_PIXELS,
+        _ => BAND_PIXELS,
+    };
+    band_rows(size, pixels)
+}
 
 /// Rows per band of a frame of `size`: whole workgroups, about `pixels`,
 /// and no more than MAX_BANDS bands.

@@ -1,7 +1,7 @@
 //! The isosurface caster's march: fixed steps through the grid until the
 //! field crosses the iso-value, then secant steps within that bracket.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -11,7 +11,7 @@ use super::{curvature_color, Coloring, IsoSettings};
 use crate::geometry::enter_exit;
 use crate::geometry::RayGen;
 use crate::render::frame::filled;
-use crate::render::{Frame, FrameDesc, RenderError};
+use crate::render::{Frame, FrameDesc, RenderError, Watch};
 use crate::scene::PlacedVolume;
 
 /// Where a ray meets the isosurface, and the surface there.
@@ -36,9 +36,10 @@ pub struct Caster<'a> {
     /// The grid-space box outside which the field cannot cross the
     /// iso-value: rays march inside it only.
     pub bounds: (Vec3, Vec3),
-    /// Set by a discard or a release: the rows not yet cast are skipped,
-    /// and the image is refused (`RenderError::Stopped`).
-    stop: Option<&'a AtomicBool>,
+    /// Its stop flag set by a discard or a release: the rows not yet cast
+    /// are skipped, and the image is refused (`RenderError::Stopped`).
+    /// Casts count rows into its progress.
+    watch: Option<Watch<'a>>,
 }
 
 /// The volume's values as f32, which a [`Caster`] reads.
@@ -71,21 +72,41 @@ impl<'a> Caster<'a> {
             step: placed.smallest_cell() / settings.steps_per_cell,
             settings,
             bounds,
-            stop: None,
+            watch: None,
         }
     }
 
     /// The caster, stopping once `stop` is set.
     pub fn until(self, stop: &'a AtomicBool) -> Self {
+        self.watched(Watch::new(stop))
+    }
+
+    /// The caster, stopping once the watch's stop flag is set and counting
+    /// each row it finishes into its progress.
+    pub fn watched(self, watch: Watch<'a>) -> Self {
         Self {
-            stop: Some(stop),
+            watch: Some(watch),
             ..self
         }
     }
 
     /// Whether the cast was asked to stop: each row looks before it starts.
     pub fn stopped(&self) -> bool {
-        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+        self.watch.is_some_and(|w| w.stopped())
+    }
+
+    /// Announces a cast's rows, all its passes' together.
+    pub(crate) fn expect(&self, rows: u64) {
+        if let Some(w) = self.watch {
+            w.expect(rows);
+        }
+    }
+
+    /// One more row cast.
+    pub(crate) fn row_done(&self) {
+        if let Some(w) = self.watch {
+            w.advance(1);
+        }
     }
 
     /// `Err(Stopped)` once the cast was asked to stop.
@@ -237,6 +258,7 @@ pub fn cast_by(
     desc.validate()?;
     let (w, n) = (desc.size.x as usize, desc.pixels());
     let mut hits = filled(n, None, "the hits")?;
+    caster.expect(u64::from(desc.size.y));
     hits.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         if caster.stopped() {
             return;
@@ -246,6 +268,7 @@ pub fn cast_by(
             let (o, d) = rays.pixel_ray(x as u32, y as u32);
             *hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut samples);
         }
+        caster.row_done();
     });
     caster.check_stop()?;
     let mut color = filled(4 * n, 0.0f32, "the frame's color")?;

@@ -169,6 +169,14 @@ pub fn render_display_by(
     let w = size.x as usize;
     let table = display.checked_table()?;
     let mut rgb = filled(desc.pixels(), [0.0f32; 3], "the display image")?;
+    // Every pass's rows before the first starts, so that the fraction
+    // done never falls back.
+    let passes = match method {
+        MultiViewMethod::Naive => rays.len(),
+        MultiViewMethod::PerSubpixel => 1,
+        MultiViewMethod::GeometricSpectral => 2,
+    };
+    caster.expect(passes as u64 * u64::from(size.y));
     let samples = match method {
         MultiViewMethod::Naive => {
             let mut total = 0;
@@ -201,6 +209,7 @@ pub fn render_display_by(
                         *out = caster.color(hit.as_ref(), d)[c];
                     }
                 }
+                caster.row_done();
                 n
             })
             .sum(),
@@ -239,6 +248,7 @@ fn view_image(
                 let c = caster.color(hit.as_ref(), d);
                 *px = [c.x, c.y, c.z];
             }
+            caster.row_done();
             n
         })
         .sum();
@@ -269,6 +279,7 @@ fn geometric_spectral(
                 let (o, d) = r.pixel_ray(x as u32, y as u32);
                 *hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
             }
+            caster.row_done();
             n
         })
         .sum();
@@ -324,6 +335,7 @@ fn geometric_spectral(
                     *out = caster.color(hit.as_ref(), d)[c];
                 }
             }
+            caster.row_done();
             n
         })
         .sum();
