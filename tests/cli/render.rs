@@ -651,3 +651,63 @@ fn the_progress_moves_within_a_view_in_whole_lines_when_logged() {
     );
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// An option the chosen kind of config would ignore is refused, naming it.
+#[test]
+fn options_that_would_do_nothing_are_refused() {
+    let out = scratch("unused-options");
+    let o = out.to_str().unwrap();
+    let display = "cave_configs/lenticular_8view.toml";
+    let cologne = "cave_configs/cologne_5wall.toml";
+    for (config, extra, want) in [
+        (
+            display,
+            &["--shading", "shadows", "--stereo", "reprojection"][..],
+            "--shading and --stereo do not apply to a multi-view display",
+        ),
+        (
+            display,
+            &["--time", "2"][..],
+            "--time does not apply to a multi-view display",
+        ),
+        (
+            cologne,
+            &["--iso", "0.3"][..],
+            "--iso applies to multi-view displays only",
+        ),
+        (
+            cologne,
+            &["--layer-format", "rgba32f"][..],
+            "--layer-format applies to --stereo reprojection only",
+        ),
+        (
+            cologne,
+            &["--time", "100"][..],
+            "--time 100 is outside the rig's head path (0 to 8 s)",
+        ),
+        (cologne, &["--time=-1"][..], "outside the rig's head path"),
+        (
+            "cave_configs/powerwall.toml",
+            &["--time", "1"][..],
+            "--time needs a head path",
+        ),
+    ] {
+        let mut args = vec!["render", "--config", config, "--scale", "0.01", "--out", o];
+        args.extend_from_slice(extra);
+        let result = caveray(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(want), "{extra:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{extra:?}: {stderr}");
+    }
+    // A rig takes its own options, a time at the path's very end included.
+    let ok = caveray(&[
+        "render", "--config", cologne, "--scale", "0.01", "--out", o, "--time", "8", "--stereo",
+        "two-pass",
+    ]);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+}

@@ -13,7 +13,8 @@ mod scene;
 use std::process::ExitCode;
 
 use anari_library_caveray::cave::{HeadPose, Rig};
-use clap::{Args, Parser, Subcommand};
+use clap::parser::ValueSource;
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use glam::DVec3;
 
 #[derive(Parser)]
@@ -67,6 +68,21 @@ impl HeadArgs {
                 )));
             }
         }
+        if let Some(t) = self.time {
+            let path = &rig.viewer.path;
+            let (Some(first), Some(last)) = (path.first(), path.last()) else {
+                return Err(Failure::Usage(format!(
+                    "--time needs a head path, and rig \"{}\" has none",
+                    rig.name
+                )));
+            };
+            if !(first.time..=last.time).contains(&t) {
+                return Err(Failure::Usage(format!(
+                    "--time {t} is outside the rig's head path ({} to {} s)",
+                    first.time, last.time
+                )));
+            }
+        }
         let base = self.time.map_or(rig.viewer.head, |t| rig.head_at(t));
         Ok(HeadPose {
             position: self.head.unwrap_or(base.position),
@@ -91,6 +107,39 @@ pub fn triple(s: &str) -> Result<DVec3, String> {
     }
 }
 
+/// The options given on the command line (not defaulted), by long name.
+pub struct Given(Vec<String>);
+
+impl Given {
+    fn of(matches: &ArgMatches) -> Self {
+        Self(
+            matches
+                .ids()
+                .filter(|id| matches.value_source(id.as_str()) == Some(ValueSource::CommandLine))
+                .map(|id| format!("--{}", id.as_str().replace('_', "-")))
+                .collect(),
+        )
+    }
+
+    /// Those of `names` (long names, `--` included) that were given.
+    pub fn among(&self, names: &[&str]) -> Vec<String> {
+        names
+            .iter()
+            .filter(|n| self.0.iter().any(|g| g == *n))
+            .map(|n| n.to_string())
+            .collect()
+    }
+}
+
+/// "--a", "--a and --b", "--a, --b and --c".
+pub fn listed(names: &[String]) -> String {
+    match names {
+        [] => String::new(),
+        [one] => one.clone(),
+        [init @ .., last] => format!("{} and {last}", init.join(", ")),
+    }
+}
+
 /// A failure the user caused (exit 2) or one the tool hit (exit 1).
 pub enum Failure {
     Usage(String),
@@ -98,8 +147,11 @@ pub enum Failure {
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
-        Ok(cli) => cli,
+    let parsed = Cli::command()
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m).map(|cli| (cli, m)));
+    let (cli, matches) = match parsed {
+        Ok(parsed) => parsed,
         Err(e) if !e.use_stderr() => {
             // --help and --version
             print!("{e}");
@@ -107,8 +159,13 @@ fn main() -> ExitCode {
         }
         Err(e) => return fail(Failure::Usage(first_line(&e.to_string()))),
     };
+    let given = |name: &str| {
+        matches
+            .subcommand_matches(name)
+            .map_or(Given(Vec::new()), Given::of)
+    };
     let result = match cli.command {
-        Command::Render(args) => render::run(args),
+        Command::Render(args) => render::run(args, &given("render")),
         Command::Inspect(args) => inspect::run(args),
         Command::Bench(command) => bench::run(command),
         Command::Replay(args) => replay::run(args),

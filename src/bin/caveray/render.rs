@@ -23,7 +23,7 @@ use crate::options::{RenderOptions, Strategy};
 use crate::progress::Progress;
 use crate::report::{write_json, RendererInfo, VolumeInfo};
 use crate::scene::VolumeArgs;
-use crate::{Failure, HeadArgs};
+use crate::{listed, Failure, Given, HeadArgs};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -188,14 +188,65 @@ pub fn wall_size(resolution: glam::UVec2, scale: f64) -> glam::UVec2 {
         .as_uvec2()
 }
 
-pub fn run(args: RenderArgs) -> Result<(), Failure> {
+pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     if !(args.scale.is_finite() && args.scale > 0.0 && args.scale <= 4.0) {
         return Err(Failure::Usage(format!(
             "--scale must be in (0, 4], got {}",
             args.scale
         )));
     }
-    if crate::render_display::is_display(&args.config) {
+    let display = crate::render_display::is_display(&args.config);
+    let unused = if display {
+        given.among(&[
+            "--strategy",
+            "--shading",
+            "--backend",
+            "--step-factor",
+            "--gpu-sampling",
+            "--stereo",
+            "--layers",
+            "--layer-format",
+            "--head",
+            "--head-ypr",
+            "--time",
+        ])
+    } else {
+        given.among(&["--iso", "--iso-filter"])
+    };
+    if !unused.is_empty() {
+        let (does, what) = if display {
+            (
+                "does",
+                "a multi-view display, which renders an isosurface per view on the CPU from the \
+                 display's own eye line (its options: --iso, --iso-filter, --scale and the \
+                 volume options)",
+            )
+        } else {
+            ("applies", "multi-view displays only, not to a rig")
+        };
+        let verb = if unused.len() == 1 { does } else { "do" };
+        let verb = if display {
+            format!("{verb} not apply to")
+        } else {
+            format!("{verb} to")
+        };
+        return Err(Failure::Usage(format!("{} {verb} {what}", listed(&unused))));
+    }
+    if args.stereo.stereo == StereoMethod::TwoPass {
+        let unused = given.among(&["--layers", "--layer-format"]);
+        if !unused.is_empty() {
+            let verb = if unused.len() == 1 {
+                "applies"
+            } else {
+                "apply"
+            };
+            return Err(Failure::Usage(format!(
+                "{} {verb} to --stereo reprojection only",
+                listed(&unused)
+            )));
+        }
+    }
+    if display {
         return crate::render_display::run(
             &args.config,
             &args.volume,
