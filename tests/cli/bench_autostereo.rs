@@ -155,3 +155,40 @@ fn the_gpu_backend_times_the_gpu_passes() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Without --json a bench writes under out/bench/ of the folder it runs
+/// in, which git ignores, and makes that folder.
+#[test]
+fn without_json_the_report_goes_to_out_bench() {
+    let dir =
+        std::env::temp_dir().join(format!("caveray-autostereo-default-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let config =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/lenticular_8view.toml");
+    let result = std::process::Command::new(env!("CARGO_BIN_EXE_caveray"))
+        .args(["bench", "autostereo", "--config"])
+        .arg(&config)
+        .args([
+            "--volume",
+            "phantom:16",
+            "--views",
+            "2",
+            "--scale",
+            "0.02",
+            "--repeat",
+            "1",
+        ])
+        .current_dir(&dir)
+        .output()
+        .expect("caveray runs");
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let json = dir.join("out/bench/autostereo.json");
+    let report: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["rows"].as_array().map(Vec::len), Some(1));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -78,7 +78,10 @@ fn bad_arguments_are_one_line_errors() {
         (vec!["--layers", "1"], "--layers >= 2"),
         (vec!["--size", "4"], "--size >= 8"),
         (vec!["--shading", "phong"], "unknown shading mode"),
-        (vec!["--layer-format", "rgb"], "expected rgba16f or rgba32f"),
+        (
+            vec!["--layer-format", "rgb"],
+            "[possible values: rgba16f, rgba32f]",
+        ),
         (
             vec!["--volume", "phantom:24,phantom:1"],
             "must be a whole number in 2..=1024",

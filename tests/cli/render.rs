@@ -208,7 +208,7 @@ fn bad_arguments_are_one_line_errors() {
         ),
         (
             vec!["--layer-format", "rgb8"],
-            "expected rgba16f or rgba32f",
+            "[possible values: rgba16f, rgba32f]",
         ),
         (vec!["--stereo", "anaglyph"], "invalid value 'anaglyph'"),
         // Inputs that would hang, abort or read forever without the budgets.

@@ -33,7 +33,8 @@ enum Command {
     /// Render every wall and eye of a rig to PNGs, contact sheets and
     /// timings; or a multi-view display's interleaved image and its views.
     Render(render::RenderArgs),
-    /// Show every wall's and eye's camera under the three off-axis strategies.
+    /// Show every wall's and eye's camera under the four camera models
+    /// (the three off-axis strategies and the native off-axis camera).
     Inspect(inspect::InspectArgs),
     /// Measure rendering speed (writes JSON, prints a summary).
     #[command(subcommand)]

@@ -3,6 +3,7 @@
 
 use anari_library_caveray::cave::View;
 use anari_library_caveray::geometry::{pinhole_from_matrices, MatrixCamera, PrimaryRays, RayGen};
+use anari_library_caveray::render::stereo::LayerFormat;
 use anari_library_caveray::render::{
     check_step_factor, Backend, RenderSettings, Renderer, Sampling, Shading,
 };
@@ -25,6 +26,11 @@ pub fn step_factor(s: &str) -> Result<f32, String> {
         .parse::<f32>()
         .map_err(|_| format!("expected a number, got '{s}'"))?;
     check_step_factor(x).map_err(|e| e.to_string())
+}
+
+/// `--layer-format` values, listed in the help and checked by clap.
+pub fn layer_format() -> impl TypedValueParser<Value = LayerFormat> {
+    PossibleValuesParser::new(LayerFormat::NAMES).try_map(|s| s.parse::<LayerFormat>())
 }
 
 /// `--backend` values, listed in the help and checked by clap.

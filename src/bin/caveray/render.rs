@@ -64,8 +64,8 @@ pub struct StereoArgs {
     /// Re-projection layers (default: as many as each wall needs).
     #[arg(long)]
     pub layers: Option<u32>,
-    /// Texel format of the layers: rgba16f or rgba32f.
-    #[arg(long, default_value = "rgba16f")]
+    /// Texel format of the layers (rgba32f: exact, twice the memory).
+    #[arg(long, default_value = "rgba16f", value_parser = crate::options::layer_format())]
     pub layer_format: LayerFormat,
 }
 
@@ -595,6 +595,10 @@ fn print_summary(report: &RenderReport) {
             r.samples_per_s / 1e6
         );
     }
+    println!(
+        "path: two-pass ray casts each eye on its own; reprojection ray casts the left eye and \
+         re-projects it into the right (--stereo reprojection)"
+    );
     println!(
         "upload {:.1} ms, total {:.1} ms; images, contact sheets and timings.json are in the output folder",
         report.upload_ms, report.total_ms

@@ -85,7 +85,7 @@ pub struct ReplayArgs {
     #[arg(long, default_value = "none", value_parser = crate::options::shading)]
     shading: Shading,
     /// Where the JSON report goes.
-    #[arg(long, default_value = "bench_results/replay.json")]
+    #[arg(long, default_value = "out/replay/replay.json")]
     json: PathBuf,
     /// Folder for the SVG traces and the strips of frames.
     #[arg(long, default_value = "out/replay")]

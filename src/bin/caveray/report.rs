@@ -99,6 +99,10 @@ impl VolumeInfo {
 /// Writes `report` as pretty JSON to `path`.
 pub fn write_json(report: &impl Serialize, path: &std::path::Path) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(report).map_err(|e| Failure::Runtime(e.to_string()))?;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", dir.display())))?;
+    }
     std::fs::write(path, text + "\n")
         .map_err(|e| Failure::Runtime(format!("cannot write {}: {e}", path.display())))
 }

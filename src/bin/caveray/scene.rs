@@ -61,11 +61,11 @@ pub struct PlacementArgs {
     volume_size: Option<f64>,
     /// The volume axis that points up, along the viewer's up (a CT series
     /// stored crown first wants -z).
-    #[arg(long, value_parser = axis())]
+    #[arg(long, value_parser = axis(), allow_hyphen_values = true)]
     volume_up: Option<VolumeAxis>,
     /// The volume axis that faces a viewer at rest (against the viewer's
     /// forward).
-    #[arg(long, value_parser = axis())]
+    #[arg(long, value_parser = axis(), allow_hyphen_values = true)]
     volume_front: Option<VolumeAxis>,
 }
 

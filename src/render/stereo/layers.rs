@@ -19,6 +19,8 @@ pub enum LayerFormat {
 }
 
 impl LayerFormat {
+    pub const NAMES: [&'static str; 2] = ["rgba16f", "rgba32f"];
+
     pub fn bytes_per_texel(self) -> u64 {
         match self {
             LayerFormat::Rgba16F => 8,

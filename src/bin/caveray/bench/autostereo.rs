@@ -56,7 +56,8 @@ pub struct AutostereoArgs {
     /// is shared and noisy).
     #[arg(long, default_value_t = 3)]
     repeat: u32,
-    #[arg(long)]
+    /// Where to write the results.
+    #[arg(long, default_value = "out/bench/autostereo.json")]
     json: PathBuf,
 }
 

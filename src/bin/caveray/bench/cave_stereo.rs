@@ -59,11 +59,11 @@ pub struct CaveStereoArgs {
     /// Step length in units of half the smallest voxel.
     #[arg(long, default_value_t = 1.0, value_parser = step_factor)]
     step_factor: f32,
-    /// Texel format of the layers: rgba16f or rgba32f.
-    #[arg(long, default_value = "rgba16f")]
+    /// Texel format of the layers (rgba32f: exact, twice the memory).
+    #[arg(long, default_value = "rgba16f", value_parser = crate::options::layer_format())]
     layer_format: LayerFormat,
     /// Where to write the results; the plots and the heat map go next to it.
-    #[arg(long)]
+    #[arg(long, default_value = "out/bench/cave_stereo.json")]
     json: PathBuf,
 }
 

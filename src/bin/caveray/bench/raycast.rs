@@ -66,7 +66,7 @@ pub struct RaycastArgs {
     #[arg(long, default_value_t = 0.0, value_parser = lod)]
     lod: f32,
     /// Where to write the results.
-    #[arg(long)]
+    #[arg(long, default_value = "out/bench/raycast.json")]
     json: PathBuf,
 }
 

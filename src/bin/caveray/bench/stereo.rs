@@ -61,11 +61,11 @@ pub struct StereoBenchArgs {
     #[arg(long, default_value_t = paper::VIEWS)]
     steps: u32,
     /// Texel format of the layers: rgba16f (Buchacher & Erdt's) or rgba32f.
-    #[arg(long, default_value = "rgba16f")]
+    #[arg(long, default_value = "rgba16f", value_parser = crate::options::layer_format())]
     layer_format: LayerFormat,
     /// Where to write the results; the plot (SVG) and the DSSIM heat maps
     /// (PNG) go next to it.
-    #[arg(long)]
+    #[arg(long, default_value = "out/bench/stereo.json")]
     json: PathBuf,
 }
 
