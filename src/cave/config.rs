@@ -13,7 +13,7 @@ use toml::Spanned;
 use super::head::{HeadFrame, HeadPose, PathKey};
 use super::rig::{Eye, Rig, ScenePlacement, Viewer, Wall};
 use super::source_map::locate;
-use crate::geometry::{GeometryError, Screen, Units};
+use crate::geometry::{GeometryError, Rounded, Screen, Units};
 
 /// Clip planes for rigs that do not set them, in metres.
 const DEFAULT_NEAR_M: f64 = 0.01;
@@ -208,7 +208,7 @@ impl Ctx<'_> {
             Err(self.at(
                 v,
                 field.into(),
-                format!("must be a finite number {want}, got {x}"),
+                format!("must be a finite number {want}, got {}", Rounded(x)),
             ))
         }
     }
@@ -233,7 +233,11 @@ impl Ctx<'_> {
             return Err(self.error(
                 span,
                 Some("far".into()),
-                format!("far ({far}) must be greater than near ({near})"),
+                format!(
+                    "far ({}) must be greater than near ({})",
+                    Rounded(far),
+                    Rounded(near)
+                ),
             ));
         }
         let viewer = self.viewer(&raw.viewer, per_m)?;
@@ -299,10 +303,10 @@ impl Ctx<'_> {
                         culprit,
                         "viewer".into(),
                         format!(
-                            "the {eye} eye lies at [{:e}, {:e}, {:e}]: {}",
-                            at.x,
-                            at.y,
-                            at.z,
+                            "the {eye} eye lies at [{}, {}, {}]: {}",
+                            Rounded(at.x),
+                            Rounded(at.y),
+                            Rounded(at.z),
                             beyond_f32(x)
                         ),
                     ));
@@ -405,7 +409,7 @@ impl Ctx<'_> {
                 return Err(self.at(
                     &k.t,
                     format!("{field}.t"),
-                    format!("times must be finite and increasing, got {time}"),
+                    format!("times must be finite and increasing, got {}", Rounded(time)),
                 ));
             }
             path.push(PathKey {
@@ -488,8 +492,9 @@ fn fits_f32(x: f64) -> bool {
 
 fn beyond_f32(x: f64) -> String {
     format!(
-        "{x:e} is beyond single precision (at most {:e} in size), which caveray renders in",
-        f32::MAX
+        "{} is beyond single precision (at most {} in size), which caveray renders in",
+        Rounded(x),
+        Rounded::from(f32::MAX)
     )
 }
 

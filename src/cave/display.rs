@@ -9,7 +9,9 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::config::{read, ConfigError, Ctx, Vec3};
-use crate::geometry::{MultiViewDisplay, PanelNumber, Screen, Units, ViewPattern, MAX_VIEWS};
+use crate::geometry::{
+    MultiViewDisplay, PanelNumber, Rounded, Screen, Units, ViewPattern, MAX_VIEWS,
+};
 
 /// The largest panel side, in pixels.
 const MAX_SIDE: u32 = 16384;
@@ -88,7 +90,11 @@ impl MultiViewDisplay {
                     if x.is_finite() {
                         Ok(x)
                     } else {
-                        Err(ctx.at(v, field.into(), format!("must be a finite number, got {x}")))
+                        Err(ctx.at(
+                            v,
+                            field.into(),
+                            format!("must be a finite number, got {}", Rounded(x)),
+                        ))
                     }
                 };
                 ViewPattern::lens(
@@ -181,7 +187,7 @@ impl MultiViewDisplay {
             return Err(ctx.at(
                 value,
                 field.into(),
-                format!("{must}, got {:?}", value.get_ref()),
+                format!("{must}, got {}", Rounded(*value.get_ref())),
             ));
         }
         Ok(display)

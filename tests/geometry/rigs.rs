@@ -295,26 +295,28 @@ fn wrong_types_are_named() {
 
 #[test]
 fn invalid_walls_are_named() {
+    // Distances computed from corners are shown without float tails
+    // (-0.9 - -1 is 0.09999999999999998).
     expect_error(
         "ul = [-1, 0, -1]",
-        "ul = [-1, 0.1, -1]",
+        "ul = [-0.9, 0, -1]",
         20,
         "walls[1].ul",
-        "not a planar rectangle",
+        "not a planar rectangle: UL is 0.1 away from LL + (UR - LR)",
     );
     expect_error(
         "ur = [1, 2, -1]",
         "ur = [1.5, 2, -1]",
         12,
         "walls[0].ur",
-        "not a rectangle",
+        "not a rectangle: edges LL-LR and LR-UR meet at 75.9638 degrees, not 90",
     );
     expect_error(
         "lr = [1, 0, -1]",
         "lr = [-1, 0, -1]",
         11,
         "walls[0].lr",
-        "zero area",
+        "zero area: width 0, height 2.82843",
     );
     expect_error(
         "ur = [1, 2, -1]",
