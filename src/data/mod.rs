@@ -1,14 +1,17 @@
 //! Where volumes and transfer functions come from: raw files, the
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
-//! color maps.
+//! color maps; and the formats with headers that are recognised, to be
+//! refused by name rather than read as raw.
 
 pub mod files;
+mod format;
 mod manifest;
 mod paraview;
 mod presets;
 mod procedural;
 mod raw;
 
+pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};
 pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};

@@ -10,3 +10,4 @@ mod deps;
 mod inspect;
 mod render;
 mod replay;
+mod volumes;
