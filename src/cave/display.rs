@@ -58,10 +58,7 @@ impl MultiViewDisplay {
     /// Parses display TOML; `file` names the source in error messages.
     pub fn from_toml(text: &str, file: &str) -> Result<Self, ConfigError> {
         let ctx = Ctx { text, file };
-        let raw: RawDisplay = toml::from_str(text).map_err(|e| {
-            let span = e.span().unwrap_or(0..0);
-            ctx.error(span, None, e.message().to_string())
-        })?;
+        let raw: RawDisplay = ctx.parse()?;
         let views = *raw.views.get_ref();
         if !(1..=i64::from(MAX_VIEWS)).contains(&views) {
             return Err(ctx.at(

@@ -10,6 +10,7 @@ mod paraview;
 mod presets;
 mod procedural;
 mod raw;
+pub mod toml_syntax;
 
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};

@@ -10,4 +10,5 @@ mod deps;
 mod inspect;
 mod render;
 mod replay;
+mod rig_syntax;
 mod volumes;
