@@ -11,7 +11,7 @@ use std::sync::Mutex;
 use anari_library_caveray::capi::entry_points::*;
 use anari_library_caveray::capi::sys;
 use anari_library_caveray::cave::{MultiViewDisplay, Rig};
-use anari_library_caveray::data::{parse_paraview, parse_raw, Manifest, VoxelType};
+use anari_library_caveray::data::{parse_paraview, parse_raw, sniff, Manifest, VoxelType};
 use anari_library_caveray::device::info::SUBTYPES;
 use anari_library_caveray::device::DataType;
 use glam::{UVec3, Vec3};
@@ -53,10 +53,14 @@ pub fn paraview(data: &[u8]) {
 }
 
 /// A manifest (the text before the first NUL) and a raw volume (the
-/// bytes after it) read as the manifest's first entry describes it.
+/// bytes after it) read as the manifest's first entry describes it; the
+/// volume's bytes are also sniffed for a header format, as the tool does
+/// before reading a file as raw.
 pub fn raw_manifest(data: &[u8]) {
     let split = data.iter().position(|&b| b == 0).unwrap_or(data.len());
     let (text, bytes) = (&data[..split], data.get(split + 1..).unwrap_or(&[]));
+    let _ = sniff("fuzz.raw", bytes);
+    let _ = sniff("fuzz", bytes);
     let Ok(text) = std::str::from_utf8(text) else {
         return;
     };

@@ -6,6 +6,7 @@ use std::ops::Range;
 use std::path::Path;
 
 use glam::{DVec3, UVec2};
+use serde::de::DeserializeOwned;
 use serde::Deserialize;
 use thiserror::Error;
 use toml::Spanned;
@@ -14,7 +15,8 @@ use super::head::{HeadFrame, HeadPose, PathKey};
 use super::placement::ScenePlacement;
 use super::rig::{Eye, Rig, Viewer, Wall};
 use super::source_map::locate;
-use crate::geometry::{GeometryError, Screen, Units, VolumeAxis};
+use crate::data::toml_syntax::syntax_error;
+use crate::geometry::{GeometryError, Rounded, Screen, Units, VolumeAxis};
 
 /// Clip planes for rigs that do not set them, in metres.
 const DEFAULT_NEAR_M: f64 = 0.01;
@@ -30,6 +32,14 @@ pub enum ConfigError {
         what: &'static str,
         source: std::io::Error,
     },
+    /// Text that is not TOML: it names the place, not a field.
+    #[error("{file}:{line}:{column}: {message}")]
+    Syntax {
+        file: String,
+        line: usize,
+        column: usize,
+        message: String,
+    },
     #[error("{file}:{line}:{column}: {field}: {message}")]
     Invalid {
         file: String,
@@ -41,16 +51,25 @@ pub enum ConfigError {
 }
 
 impl ConfigError {
-    /// The dotted path of the offending field, e.g. `walls[1].ul`.
+    /// The dotted path of the offending field, e.g. `walls[1].ul`; none
+    /// for a syntax error.
     pub fn field(&self) -> Option<&str> {
         match self {
             ConfigError::Invalid { field, .. } => Some(field),
-            ConfigError::Io { .. } => None,
+            ConfigError::Syntax { .. } | ConfigError::Io { .. } => None,
         }
     }
     pub fn line(&self) -> Option<usize> {
         match self {
-            ConfigError::Invalid { line, .. } => Some(*line),
+            ConfigError::Invalid { line, .. } | ConfigError::Syntax { line, .. } => Some(*line),
+            ConfigError::Io { .. } => None,
+        }
+    }
+    pub fn column(&self) -> Option<usize> {
+        match self {
+            ConfigError::Invalid { column, .. } | ConfigError::Syntax { column, .. } => {
+                Some(*column)
+            }
             ConfigError::Io { .. } => None,
         }
     }
@@ -152,6 +171,20 @@ pub(super) struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
+    /// The text as `T`: text that is not TOML is reported where its
+    /// cause is, without a field; TOML that is not a `T`, with the field.
+    pub(super) fn parse<T: DeserializeOwned>(&self) -> Result<T, ConfigError> {
+        toml::from_str(self.text).map_err(|e| match syntax_error(self.text) {
+            Some(s) => ConfigError::Syntax {
+                file: self.file.to_string(),
+                line: s.line,
+                column: s.column,
+                message: s.message,
+            },
+            None => self.error(e.span().unwrap_or(0..0), None, e.message().to_string()),
+        })
+    }
+
     /// An error at `span`; `field` overrides the path found from the text
     /// (which at a table header only names the table).
     pub(super) fn error(
@@ -221,7 +254,7 @@ impl Ctx<'_> {
             Err(self.at(
                 v,
                 field.into(),
-                format!("must be a finite number {want}, got {x}"),
+                format!("must be a finite number {want}, got {}", Rounded(x)),
             ))
         }
     }
@@ -246,7 +279,11 @@ impl Ctx<'_> {
             return Err(self.error(
                 span,
                 Some("far".into()),
-                format!("far ({far}) must be greater than near ({near})"),
+                format!(
+                    "far ({}) must be greater than near ({})",
+                    Rounded(far),
+                    Rounded(near)
+                ),
             ));
         }
         let viewer = self.viewer(&raw.viewer, per_m)?;
@@ -322,10 +359,10 @@ impl Ctx<'_> {
                         culprit,
                         "viewer".into(),
                         format!(
-                            "the {eye} eye lies at [{:e}, {:e}, {:e}]: {}",
-                            at.x,
-                            at.y,
-                            at.z,
+                            "the {eye} eye lies at [{}, {}, {}]: {}",
+                            Rounded(at.x),
+                            Rounded(at.y),
+                            Rounded(at.z),
                             beyond_f32(x)
                         ),
                     ));
@@ -428,7 +465,7 @@ impl Ctx<'_> {
                 return Err(self.at(
                     &k.t,
                     format!("{field}.t"),
-                    format!("times must be finite and increasing, got {time}"),
+                    format!("times must be finite and increasing, got {}", Rounded(time)),
                 ));
             }
             path.push(PathKey {
@@ -511,8 +548,9 @@ fn fits_f32(x: f64) -> bool {
 
 fn beyond_f32(x: f64) -> String {
     format!(
-        "{x:e} is beyond single precision (at most {:e} in size), which caveray renders in",
-        f32::MAX
+        "{} is beyond single precision (at most {} in size), which caveray renders in",
+        Rounded(x),
+        Rounded::from(f32::MAX)
     )
 }
 
@@ -575,10 +613,7 @@ impl Rig {
                 ),
             ));
         }
-        let raw: RawRig = toml::from_str(text).map_err(|e| {
-            let span = e.span().unwrap_or(0..0);
-            ctx.error(span, None, e.message().to_string())
-        })?;
+        let raw: RawRig = ctx.parse()?;
         ctx.validate(raw)
     }
 
@@ -592,10 +627,7 @@ impl Rig {
     /// A head path from TOML text; `file` names it in error messages.
     pub fn head_path_from_toml(&self, text: &str, file: &str) -> Result<Vec<PathKey>, ConfigError> {
         let ctx = Ctx { text, file };
-        let raw: RawHeadPath = toml::from_str(text).map_err(|e| {
-            let span = e.span().unwrap_or(0..0);
-            ctx.error(span, None, e.message().to_string())
-        })?;
+        let raw: RawHeadPath = ctx.parse()?;
         if raw.pose.is_empty() {
             return Err(ctx.error(
                 0..0,

@@ -9,7 +9,9 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::config::{read, ConfigError, Ctx, Vec3};
-use crate::geometry::{MultiViewDisplay, PanelNumber, Screen, Units, ViewPattern, MAX_VIEWS};
+use crate::geometry::{
+    MultiViewDisplay, PanelNumber, Rounded, Screen, Units, ViewPattern, MAX_VIEWS,
+};
 
 /// The largest panel side, in pixels.
 const MAX_SIDE: u32 = 16384;
@@ -56,10 +58,7 @@ impl MultiViewDisplay {
     /// Parses display TOML; `file` names the source in error messages.
     pub fn from_toml(text: &str, file: &str) -> Result<Self, ConfigError> {
         let ctx = Ctx { text, file };
-        let raw: RawDisplay = toml::from_str(text).map_err(|e| {
-            let span = e.span().unwrap_or(0..0);
-            ctx.error(span, None, e.message().to_string())
-        })?;
+        let raw: RawDisplay = ctx.parse()?;
         let views = *raw.views.get_ref();
         if !(1..=i64::from(MAX_VIEWS)).contains(&views) {
             return Err(ctx.at(
@@ -88,7 +87,11 @@ impl MultiViewDisplay {
                     if x.is_finite() {
                         Ok(x)
                     } else {
-                        Err(ctx.at(v, field.into(), format!("must be a finite number, got {x}")))
+                        Err(ctx.at(
+                            v,
+                            field.into(),
+                            format!("must be a finite number, got {}", Rounded(x)),
+                        ))
                     }
                 };
                 ViewPattern::lens(
@@ -181,7 +184,7 @@ impl MultiViewDisplay {
             return Err(ctx.at(
                 value,
                 field.into(),
-                format!("{must}, got {:?}", value.get_ref()),
+                format!("{must}, got {}", Rounded(*value.get_ref())),
             ));
         }
         Ok(display)

@@ -1,6 +1,8 @@
 //! Turns byte offsets in a TOML file into `line:column` and the dotted
 //! path of the field there, so errors can point at what to fix.
 
+use crate::data::toml_syntax::{floor_boundary, line_column};
+
 pub(crate) struct Location {
     pub line: usize,
     pub column: usize,
@@ -11,10 +13,8 @@ pub(crate) struct Location {
 pub(crate) fn locate(text: &str, offset: usize) -> Location {
     // Parsers report byte offsets, which may fall inside a character.
     let offset = floor_boundary(text, offset);
-    let before = &text[..offset];
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = before[line_start..].chars().count() + 1;
+    let (line, column) = line_column(text, offset);
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
     let this_line = text[line_start..].lines().next().unwrap_or("");
 
     // The table the error is in; an error on a header line concerns that
@@ -75,15 +75,6 @@ fn key_at(line: &str, column: usize) -> String {
         .find(|&(_, c)| !is_key(c))
         .map_or(0, |(i, c)| i + c.len_utf8());
     head[start..].to_string()
-}
-
-/// The largest character boundary of `text` at or before `offset`.
-fn floor_boundary(text: &str, offset: usize) -> usize {
-    let mut offset = offset.min(text.len());
-    while !text.is_char_boundary(offset) {
-        offset -= 1;
-    }
-    offset
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use sha2::{Digest, Sha256};
 use super::files;
 use super::orientation::{known_orientation, Orientation};
 use super::raw::{decode_raw, read_raw};
+use super::toml_syntax::{line_column, syntax_error};
 use super::{DataError, VoxelType};
 use crate::geometry::VolumeAxis;
 use crate::scene::StructuredVolume;
@@ -69,9 +70,20 @@ impl Manifest {
 
     /// A manifest from its text; `path` names it and anchors its files.
     pub fn parse(text: &str, path: &Path) -> Result<Self, DataError> {
-        let raw: RawManifest = toml::from_str(text).map_err(|e| DataError::Manifest {
-            file: path.display().to_string(),
-            message: e.message().to_string(),
+        let raw: RawManifest = toml::from_str(text).map_err(|e| {
+            // Text that is not TOML is placed at its cause; TOML that is
+            // not a manifest, where toml found the wrong field.
+            let (line, column, message) = match syntax_error(text) {
+                Some(s) => (s.line, s.column, s.message),
+                None => {
+                    let (line, column) = line_column(text, e.span().map_or(0, |s| s.start));
+                    (line, column, e.message().to_string())
+                }
+            };
+            DataError::Manifest {
+                file: format!("{}:{line}:{column}", path.display()),
+                message,
+            }
         })?;
         Ok(Self {
             path: path.to_path_buf(),

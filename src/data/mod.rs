@@ -1,15 +1,19 @@
 //! Where volumes and transfer functions come from: raw files, the
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
-//! color maps.
+//! color maps; and the formats with headers that are recognised, to be
+//! refused by name rather than read as raw.
 
 pub mod files;
+mod format;
 mod manifest;
 mod orientation;
 mod paraview;
 mod presets;
 mod procedural;
 mod raw;
+pub mod toml_syntax;
 
+pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};
 pub use orientation::{known_orientation, Orientation};
 pub use paraview::{load_paraview, parse_paraview};

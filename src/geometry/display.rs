@@ -7,7 +7,7 @@
 
 use glam::{DVec3, UVec2};
 
-use super::{OffAxisCamera, PrimaryRays, RayGen, Result, Screen, Units};
+use super::{OffAxisCamera, PrimaryRays, RayGen, Result, Rounded, Screen, Units};
 
 /// The most views a display may have.
 pub const MAX_VIEWS: u32 = 64;
@@ -150,8 +150,8 @@ impl MultiViewDisplay {
                 PanelNumber::ViewingDistance,
                 format!(
                     "must be from {lo} to {hi} panel widths ({} to {} for this panel)",
-                    lo * width,
-                    hi * width
+                    Rounded(lo * width),
+                    Rounded(hi * width)
                 ),
             ));
         }
@@ -160,7 +160,7 @@ impl MultiViewDisplay {
                 PanelNumber::ViewSpacing,
                 format!(
                     "times views - 1 (the line of eyes) must be at most {hi} panel widths ({} for this panel)",
-                    hi * width
+                    Rounded(hi * width)
                 ),
             ));
         }

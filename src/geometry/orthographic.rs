@@ -7,7 +7,7 @@ use glam::{DVec2, DVec3};
 use super::error::check_finite;
 use super::pinhole::{placed_basis, ImageRegion};
 use super::ray::{PrimaryRays, Ray};
-use super::{GeometryError, Result};
+use super::{GeometryError, Result, Rounded};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OrthographicCamera {
@@ -33,7 +33,9 @@ impl OrthographicCamera {
         if height <= 0.0 || aspect <= 0.0 {
             return Err(GeometryError::InvalidPinhole {
                 reason: format!(
-                    "orthographic height and aspect must be positive, got {height} and {aspect}"
+                    "orthographic height and aspect must be positive, got {} and {}",
+                    Rounded(height),
+                    Rounded(aspect)
                 ),
             });
         }

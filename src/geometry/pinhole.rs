@@ -1,7 +1,7 @@
 use glam::{DVec2, DVec3};
 
 use super::error::check_finite;
-use super::{GeometryError, PrimaryRays, Ray, Result, Screen};
+use super::{GeometryError, PrimaryRays, Ray, Result, Rounded, Screen};
 
 /// The part of a camera's image that is actually rendered, in [0, 1]^2
 /// image coordinates (ANARI's `imageRegion`, a FLOAT32_BOX2).
@@ -91,10 +91,13 @@ impl PinholeCamera {
         check_finite("fovy, aspect or image region", &[fovy, aspect])?;
         let invalid = |reason: String| Err(GeometryError::InvalidPinhole { reason });
         if !(fovy > 0.0 && fovy < std::f64::consts::PI) {
-            return invalid(format!("fovy must be in (0, pi) radians, got {fovy}"));
+            return invalid(format!(
+                "fovy must be in (0, pi) radians, got {}",
+                Rounded(fovy)
+            ));
         }
         if aspect <= 0.0 {
-            return invalid(format!("aspect must be positive, got {aspect}"));
+            return invalid(format!("aspect must be positive, got {}", Rounded(aspect)));
         }
         let (forward, right) = placed_basis(position, direction, up, image_region)?;
         let tan_half = (0.5 * fovy).tan();

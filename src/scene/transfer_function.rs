@@ -1,6 +1,8 @@
 use glam::Vec4;
 use thiserror::Error;
 
+use crate::geometry::Rounded;
+
 /// Entries of the resampled RGBA table that both renderers look up with
 /// linear interpolation.
 pub const TABLE_SIZE: usize = 256;
@@ -11,9 +13,16 @@ pub enum TransferFunctionError {
     Empty,
     #[error("{what}[{index}] is not a finite number in [0, 1]")]
     OutOfRange { what: &'static str, index: usize },
-    #[error("value range [{lo}, {hi}] is empty or not finite")]
+    #[error(
+        "value range [{}, {}] is empty or not finite",
+        Rounded::from(*.lo),
+        Rounded::from(*.hi)
+    )]
     EmptyRange { lo: f32, hi: f32 },
-    #[error("unit distance must be finite and positive, got {0}")]
+    #[error(
+        "unit distance must be finite and positive, got {}",
+        Rounded::from(*.0)
+    )]
     UnitDistance(f32),
 }
 

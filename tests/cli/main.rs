@@ -11,3 +11,5 @@ mod examples;
 mod inspect;
 mod render;
 mod replay;
+mod rig_syntax;
+mod volumes;

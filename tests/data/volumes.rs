@@ -344,6 +344,38 @@ fn manifest_volumes_are_checked_before_use() {
     assert!(err.contains("none.toml"), "{err}");
 }
 
+#[test]
+fn manifest_errors_name_the_line_and_column() {
+    let m = Path::new("data/volumes.toml");
+    let entry = "[[volume]]\nname = \"tiny\"\nfile = \"tiny.raw\"\ndims = [2, 2, 2]\n\
+                 dtype = \"uint16\"\nspacing = [1, 1, 3]\n";
+    assert!(Manifest::parse(entry, m).is_ok());
+    for (from, to, message) in [
+        // Syntax: placed at the cause, not where the parser gave up.
+        (
+            "dims = [2, 2, 2]",
+            "dims = [2, 2, 2",
+            "data/volumes.toml:4:8: unclosed '[': the array opened here is not closed before line 5 (expected `]`)",
+        ),
+        (
+            "name = \"tiny\"",
+            "name = \"tiny",
+            "data/volumes.toml:2:8: unclosed string: the \" here is not closed on its line",
+        ),
+        // Schema: where the wrong value is.
+        (
+            "dims = [2, 2, 2]",
+            "dims = [2, 2]",
+            "data/volumes.toml:4:8: invalid length 2, expected an array of length 3",
+        ),
+    ] {
+        let text = entry.replacen(from, to, 1);
+        let err = Manifest::parse(&text, m).unwrap_err();
+        assert!(matches!(err, DataError::Manifest { .. }), "{err}");
+        assert_eq!(err.to_string(), message, "{text}");
+    }
+}
+
 /// SHA-256 through the system's sha256sum, as an independent check.
 fn sha256_hex(bytes: &[u8]) -> String {
     use std::io::Write;

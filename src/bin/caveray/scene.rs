@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
     concentric_shells, load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box,
-    Manifest, Orientation, VoxelType,
+    DataError, Manifest, Orientation, VolumeFormat, VoxelType,
 };
 use anari_library_caveray::geometry::VolumeAxis;
 use anari_library_caveray::scene::{
@@ -166,6 +166,8 @@ impl VolumeArgs {
                 "phantom"
             };
             (name, volume, tf, Orientation::UNKNOWN)
+        } else if let Some(format) = VolumeFormat::of(Path::new(spec)) {
+            return Err(Failure::Usage(not_raw(spec, format, self.dims.is_some())));
         } else if self.dims.is_some() || Path::new(spec).is_file() {
             let dims = self.dims.ok_or_else(|| {
                 Failure::Usage(format!(
@@ -179,8 +181,8 @@ impl VolumeArgs {
         } else {
             let manifest =
                 Manifest::locate(self.manifest.as_deref(), &[PathBuf::from(SHARED_MANIFEST)])
-                    .map_err(|e| usage(&e))?;
-            let entry = manifest.find(spec).map_err(|e| usage(&e))?;
+                    .map_err(|e| unknown_volume(spec, &e))?;
+            let entry = manifest.find(spec).map_err(|e| unknown_volume(spec, &e))?;
             let tf = match entry.category.as_str() {
                 "CT" => "ct-skin-bone",
                 "MRI" => "mri",
@@ -313,4 +315,58 @@ pub fn protocol_frame() -> HeadFrame {
         up: DVec3::Y,
         right: DVec3::X,
     })
+}
+
+/// What to do about a `--volume` that is neither procedural nor a file
+/// in a known format: a missing file, no manifest, or a name the manifest
+/// lacks.
+fn unknown_volume(spec: &str, e: &DataError) -> Failure {
+    let kinds = "phantom[:N], shells[:N], marschner-lobb[:N], box[:N]";
+    let path = Path::new(spec);
+    Failure::Usage(match e {
+        _ if path.is_dir() => format!(
+            "{spec} is a folder without DICOM slices, not a volume (--volume takes {kinds}, \
+             a name from volumes.toml or a raw file)"
+        ),
+        _ if path.exists() => format!("{spec} is not a regular file"),
+        // Names in a manifest are words, never paths.
+        _ if spec.contains(['/', std::path::MAIN_SEPARATOR]) => format!("{spec}: no such file"),
+        DataError::NoManifest { tried } => format!(
+            "no volume manifest found to look '{spec}' up in (tried {tried}): pass \
+             --manifest FILE or set CAVERAY_DATA=DIR, the folder holding volumes.toml \
+             (docs/data.md says where the data sets come from)"
+        ),
+        DataError::UnknownVolume { .. } => {
+            format!("{e}, nor is there such a file; --volume also takes {kinds} or a raw file")
+        }
+        other => other.to_string(),
+    })
+}
+
+/// Why a file in a format with a header is not loaded, and how to
+/// convert it to a raw file that is.
+fn not_raw(spec: &str, format: VolumeFormat, dims_given: bool) -> String {
+    let name = format.name();
+    let dims = if dims_given {
+        " (--dims, --dtype and --spacing describe raw files only)"
+    } else {
+        ""
+    };
+    let raw = format.raw_name(Path::new(spec)).display().to_string();
+    let Some(command) = format.conversion(spec, &raw) else {
+        return format!(
+            "{spec} is gzip-compressed{dims}; caveray reads raw volumes uncompressed: \
+             decompress it (gunzip -k {spec}) and load the file it holds"
+        );
+    };
+    let what = match format {
+        VolumeFormat::DicomSeries => "a folder of DICOM slices".to_string(),
+        VolumeFormat::Dicom => "a DICOM file (one slice of a series)".to_string(),
+        _ => format!("a {name} file"),
+    };
+    format!(
+        "{spec} is {what}{dims}; caveray does not read {name} yet: convert it to raw \
+         (headerless, little-endian, x fastest), e.g. {command}, then load {raw} with the \
+         --dims, --dtype and --spacing that prints (docs/data.md)"
+    )
 }

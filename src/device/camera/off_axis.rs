@@ -9,7 +9,7 @@ use crate::device::table::{
     p, DefaultValue, ParamInfo, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, VEC3,
 };
 use crate::device::types::DataType as T;
-use crate::geometry::{OffAxisCamera, Screen};
+use crate::geometry::{OffAxisCamera, Rounded, Screen};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::CAMERA,
@@ -92,7 +92,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     if !(0.0..=screen.width()).contains(&f64::from(ipd)) {
         return Err(format!(
             "interpupillaryDistance must be from 0 to the wall's width ({}), got {ipd:?}",
-            screen.width()
+            Rounded(screen.width())
         ));
     }
     CameraModel::OffAxis {

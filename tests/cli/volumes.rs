@@ -1,0 +1,269 @@
+//! `--volume` from anywhere: manifests found or not, names known or not,
+//! and files in formats caveray recognises but does not read.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh folder two levels down, so that `../shared` beside it (where
+/// the tool looks for the project's data) does not exist.
+fn scratch(test: &str) -> PathBuf {
+    let top = std::env::temp_dir().join(format!("caveray-volumes-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&top);
+    let dir = top.join("elsewhere").join("work");
+    std::fs::create_dir_all(&dir).unwrap();
+    assert!(!dir.join("../shared").exists());
+    dir
+}
+
+fn remove(dir: &Path) {
+    std::fs::remove_dir_all(dir.parent().unwrap().parent().unwrap()).unwrap();
+}
+
+/// `caveray render` of the Cologne rig at 32x32, run in `dir` with
+/// `CAVERAY_DATA` as given (unset if `None`).
+fn render_in(dir: &Path, data: Option<&Path>, extra: &[&str]) -> Output {
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/cologne_5wall.toml");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_caveray"));
+    command
+        .args(["render", "--config", config.to_str().unwrap()])
+        .args([
+            "--out",
+            dir.join("out").to_str().unwrap(),
+            "--scale",
+            "0.02",
+        ])
+        .args(extra)
+        .current_dir(dir)
+        .env_remove("CAVERAY_DATA");
+    if let Some(data) = data {
+        command.env("CAVERAY_DATA", data);
+    }
+    command.output().expect("caveray runs")
+}
+
+/// Runs and expects a one-line usage error (exit 2); returns its text.
+fn usage_error(dir: &Path, data: Option<&Path>, extra: &[&str]) -> String {
+    let result = render_in(dir, data, extra);
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert_eq!(result.status.code(), Some(2), "{extra:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "{extra:?}: {err}");
+    assert!(err.starts_with("caveray: "), "{extra:?}: {err}");
+    err.trim_end().to_string()
+}
+
+/// A manifest of one 8^3 uint8 volume, `tiny`, with only the fields a
+/// manifest needs, and a second entry naming a file that is not there.
+fn own_manifest(dir: &Path, sha256: Option<&str>) -> PathBuf {
+    let ramp: Vec<u8> = (0..512).map(|i| (i % 256) as u8).collect();
+    std::fs::write(dir.join("tiny_8x8x8_uint8.raw"), ramp).unwrap();
+    let sha = sha256.map_or(String::new(), |s| format!("sha256 = \"{s}\"\n"));
+    let text = format!(
+        "[[volume]]\nname = \"tiny\"\nfile = \"tiny_8x8x8_uint8.raw\"\ndims = [8, 8, 8]\n\
+         dtype = \"uint8\"\nspacing = [1, 1, 2]\n{sha}\n\
+         [[volume]]\nname = \"absent\"\nfile = \"absent.raw\"\ndims = [2, 2, 2]\n\
+         dtype = \"uint16\"\nspacing = [1, 1, 1]\n"
+    );
+    let manifest = dir.join("volumes.toml");
+    std::fs::write(&manifest, text).unwrap();
+    manifest
+}
+
+#[test]
+fn without_a_manifest_the_error_says_how_to_name_one() {
+    let dir = scratch("no-manifest");
+    let err = usage_error(&dir, None, &["--volume", "cthead"]);
+    assert_eq!(
+        err,
+        "caveray: no volume manifest found to look 'cthead' up in \
+         (tried ../shared/data/volumes/volumes.toml): pass --manifest FILE or set \
+         CAVERAY_DATA=DIR, the folder holding volumes.toml \
+         (docs/data.md says where the data sets come from)"
+    );
+    // A CAVERAY_DATA without a manifest is named among the places tried.
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let err = usage_error(&dir, Some(&empty), &["--volume", "cthead"]);
+    let tried = format!(
+        "(tried {}, ../shared/data/volumes/volumes.toml)",
+        empty.join("volumes.toml").display()
+    );
+    assert!(err.contains(&tried), "{err}");
+    // A path that is not there is not looked up as a name.
+    let err = usage_error(&dir, None, &["--volume", "scans/head.raw"]);
+    assert_eq!(err, "caveray: scans/head.raw: no such file");
+    remove(&dir);
+}
+
+#[test]
+fn an_unknown_name_lists_the_known_ones() {
+    let dir = scratch("unknown");
+    let manifest = own_manifest(&dir, None);
+    let m = manifest.to_str().unwrap();
+    let err = usage_error(&dir, None, &["--manifest", m, "--volume", "cthaed"]);
+    assert_eq!(
+        err,
+        format!(
+            "caveray: no volume named 'cthaed' in {m} (known: tiny, absent), nor is there \
+             such a file; --volume also takes phantom[:N], shells[:N], marschner-lobb[:N], \
+             box[:N] or a raw file"
+        )
+    );
+    remove(&dir);
+}
+
+#[test]
+fn a_manifest_of_ones_own_is_found_by_flag_or_by_caveray_data() {
+    let dir = scratch("own");
+    let manifest = own_manifest(&dir, None);
+    let ok = |result: Output| {
+        let err = String::from_utf8_lossy(&result.stderr).into_owned();
+        assert!(result.status.success(), "{err}");
+        assert!(dir.join("out/front_left.png").is_file());
+        std::fs::remove_dir_all(dir.join("out")).unwrap();
+    };
+    let m = manifest.to_str().unwrap();
+    ok(render_in(
+        &dir,
+        None,
+        &["--manifest", m, "--volume", "tiny"],
+    ));
+    // Names are matched without regard to case.
+    ok(render_in(&dir, Some(&dir), &["--volume", "TINY"]));
+    // A listed file that is missing is the tool's failure (exit 1), named.
+    let result = render_in(&dir, Some(&dir), &["--volume", "absent"]);
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert_eq!(result.status.code(), Some(1), "{err}");
+    assert!(err.contains("absent.raw: No such file"), "{err}");
+    // A checksum that does not match is refused before the volume is used.
+    own_manifest(&dir, Some(&"0".repeat(64)));
+    let result = render_in(&dir, Some(&dir), &["--volume", "tiny"]);
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert_eq!(result.status.code(), Some(1), "{err}");
+    assert!(err.contains("checksum mismatch: sha256 is "), "{err}");
+    remove(&dir);
+}
+
+/// The first bytes of a NIfTI-1 single file: `sizeof_hdr` 348, magic
+/// `n+1` at byte 344, then a little data.
+fn nifti() -> Vec<u8> {
+    let mut bytes = vec![0u8; 352 + 512];
+    bytes[..4].copy_from_slice(&348i32.to_le_bytes());
+    bytes[344..348].copy_from_slice(b"n+1\0");
+    bytes
+}
+
+fn dicom() -> Vec<u8> {
+    let mut bytes = vec![0u8; 128 + 4 + 512];
+    bytes[128..132].copy_from_slice(b"DICM");
+    bytes
+}
+
+#[test]
+fn files_with_headers_are_refused_by_format_with_a_conversion() {
+    let dir = scratch("formats");
+    let vti = "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"1.0\">\n";
+    // Named as raw where the content tells; by name where it does not.
+    let files: Vec<(&str, Vec<u8>, &str)> = vec![
+        ("ct.raw", b"NRRD0004\ntype: short\n".to_vec(), "a NRRD file"),
+        ("ct.nhdr", b"NRRD0005\n".to_vec(), "a NRRD file"),
+        ("brain.nii", nifti(), "a NIfTI file"),
+        ("brain.dat", nifti(), "a NIfTI file"),
+        (
+            "brain.nii.gz",
+            vec![0x1f, 0x8b, 8, 0, 0, 0, 0, 0],
+            "a NIfTI file",
+        ),
+        (
+            "ct.mha",
+            b"ObjectType = Image\nNDims = 3\n".to_vec(),
+            "a MetaImage file",
+        ),
+        (
+            "ct.mhd",
+            b"NDims = 3\nDimSize = 8 8 8\n".to_vec(),
+            "a MetaImage file",
+        ),
+        (
+            "ct.vtk",
+            b"# vtk DataFile Version 3.0\n".to_vec(),
+            "a legacy VTK file",
+        ),
+        ("ct.vti", vti.as_bytes().to_vec(), "a VTK XML file"),
+        ("IM0001", dicom(), "a DICOM file (one slice of a series)"),
+        (
+            "slice.dcm",
+            vec![0u8; 16],
+            "a DICOM file (one slice of a series)",
+        ),
+    ];
+    for (name, bytes, what) in files {
+        let path = dir.join(name);
+        std::fs::write(&path, &bytes).unwrap();
+        let p = path.to_str().unwrap();
+        let format = what
+            .trim_start_matches("a ")
+            .trim_end_matches(" file (one slice of a series)")
+            .trim_end_matches(" file");
+        let err = usage_error(&dir, None, &["--volume", p]);
+        let start = format!(
+            "caveray: {p} is {what}; caveray does not read {format} yet: convert it to raw \
+             (headerless, little-endian, x fastest), e.g. python3 -c \""
+        );
+        assert!(err.starts_with(&start), "{err}\nlacks {start}");
+        assert!(
+            err.ends_with("with the --dims, --dtype and --spacing that prints (docs/data.md)"),
+            "{err}"
+        );
+        assert!(err.contains("--dims %d,%d,%d --dtype f32"), "{err}");
+        // --dims does not make such a file raw.
+        let err = usage_error(&dir, None, &["--volume", p, "--dims", "8,8,8"]);
+        let start = format!(
+            "caveray: {p} is {what} (--dims, --dtype and --spacing describe raw files only); \
+             caveray does not read {format} yet"
+        );
+        assert!(err.starts_with(&start), "{err}\nlacks {start}");
+    }
+    // A folder of slices, which are often named without an extension.
+    let series = dir.join("series");
+    std::fs::create_dir_all(&series).unwrap();
+    std::fs::write(series.join("IM0001"), dicom()).unwrap();
+    let s = series.to_str().unwrap();
+    let err = usage_error(&dir, None, &["--volume", s]);
+    assert!(
+        err.starts_with(&format!(
+            "caveray: {s} is a folder of DICOM slices; caveray does not read DICOM yet"
+        )),
+        "{err}"
+    );
+    let expected = format!("GetGDCMSeriesFileNames('{s}')");
+    assert!(err.contains(&expected), "{err}");
+    assert!(
+        err.contains(&format!("then load {s}_f32.raw with the")),
+        "{err}"
+    );
+    // Compressed data: decompress it first.
+    let gz = dir.join("ct.raw.gz");
+    std::fs::write(&gz, [0x1f, 0x8b, 8, 0, 0, 0, 0, 0]).unwrap();
+    let g = gz.to_str().unwrap();
+    assert_eq!(
+        usage_error(&dir, None, &["--volume", g]),
+        format!(
+            "caveray: {g} is gzip-compressed; caveray reads raw volumes uncompressed: \
+             decompress it (gunzip -k {g}) and load the file it holds"
+        )
+    );
+    // A folder without slices is neither a volume nor a name.
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let err = usage_error(&dir, None, &["--volume", empty.to_str().unwrap()]);
+    assert!(err.contains("is a folder without DICOM slices"), "{err}");
+    // Raw files are still raw: their size is asked for.
+    let raw = dir.join("ct.raw");
+    std::fs::write(&raw, [0u8; 512]).unwrap();
+    let err = usage_error(&dir, None, &["--volume", raw.to_str().unwrap()]);
+    assert!(
+        err.contains("is a raw file: give its size with --dims"),
+        "{err}"
+    );
+    remove(&dir);
+}
