@@ -181,22 +181,30 @@ fn cave_wall_example_renders_both_eyes() {
         .output()
         .unwrap();
     assert!(output.status.success(), "cave_wall: {}", describe(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let mut images = Vec::new();
     for eye in ["left", "right"] {
-        let ppm = std::fs::read(dir.join(format!("cave_wall_{eye}.ppm"))).unwrap();
-        assert!(ppm.starts_with(b"P6\n"), "{eye} image is not a PPM");
-        let pixels = &ppm[ppm.len() - 3 * 64 * 64..];
-        let lit = pixels
-            .chunks(3)
-            .filter(|p| p.iter().any(|&c| c > 20))
+        let file = format!("cave_wall_{eye}.png");
+        let image = image::open(dir.join(&file))
+            .unwrap_or_else(|e| panic!("{file} is not a PNG: {e}"))
+            .to_rgb8();
+        assert_eq!(image.dimensions(), (256, 256));
+        let lit = image
+            .pixels()
+            .filter(|p| p.0.iter().any(|&c| c > 20))
             .count();
         assert!(
-            lit > 200,
+            lit > 3000,
             "{eye} image shows almost no volume ({lit} lit pixels)"
         );
+        let line = format!("wrote {file}: 256x256, the volume on {lit} pixels");
+        assert!(stdout.contains(&line), "{stdout} lacks {line:?}");
+        images.push(image);
     }
-    let left = std::fs::read(dir.join("cave_wall_left.ppm")).unwrap();
-    let right = std::fs::read(dir.join("cave_wall_right.ppm")).unwrap();
-    assert_ne!(left, right, "the two eyes see the wall from the same place");
+    assert_ne!(
+        images[0], images[1],
+        "the two eyes see the wall from the same place"
+    );
 }
 
 /// The benchmark host of examples/c/ runs small, writes its JSON with the

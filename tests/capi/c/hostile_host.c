@@ -112,6 +112,14 @@ static void set_deadline(Scene *s, float ms, const char *warp)
   anariCommitParameters(s->dev, s->frame);
 }
 
+static int wait_flag(volatile int *flag, double ms)
+{
+  double until = now_ms() + ms;
+  while (!*flag && now_ms() < until)
+    usleep(1000);
+  return *flag;
+}
+
 static void release_scene(Scene *s)
 {
   anariRelease(s->dev, s->frame);
@@ -135,20 +143,18 @@ static int has_image(Scene *s)
 
 static volatile int callback_done = 0;
 
+/* Set once the host has dropped its scene handles: until then the device
+ * is the host's to use, so the callback's release waits for it. */
+static volatile int host_released = 0;
+
 static void release_device(const void *user, ANARIDevice dev, ANARIFrame frame)
 {
   (void)user, (void)frame;
+  wait_flag(&host_released, 10000);
   anariRelease(dev, dev);
   callback_done = 1;
 }
 
-static int wait_flag(volatile int *flag, double ms)
-{
-  double until = now_ms() + ms;
-  while (!*flag && now_ms() < until)
-    usleep(1000);
-  return *flag;
-}
 
 /* The host hands its last reference to the frame's completion callback,
  * which releases the device on the render thread or, for a deadline frame,
@@ -165,9 +171,11 @@ static void callback_releases(ANARILibrary lib, float deadline)
   anariCommitParameters(dev, s.frame);
   callback_done = 0;
   errors_seen = 0;
+  host_released = 0;
   anariRenderFrame(dev, s.frame);
   release_scene(&s);
   reset();
+  host_released = 1;
   check("the callback ran and released the device", wait_flag(&callback_done, 60000));
   usleep(200000);
   check("releasing the device from a callback reports no error", errors_seen == 0);
