@@ -223,6 +223,16 @@ impl VolumeArgs {
 }
 
 impl Loaded {
+    /// The volume with its axes as stored unless the command line turns
+    /// it: for benchmark protocols, whose views are fixed, so that what is
+    /// known about a data set's orientation cannot change a measurement.
+    pub fn with_stored_axes(self) -> Self {
+        Self {
+            orientation: Orientation::UNKNOWN,
+            ..self
+        }
+    }
+
     /// Where the volume goes: `default`, less what the command line says.
     pub fn placement(&self, default: ScenePlacement) -> Result<ScenePlacement, Failure> {
         self.placement.over(default, self.orientation)

@@ -144,7 +144,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         "volume", "views", "naive ms", "per-px ms", "g+s ms", "naive", "per-px", "g+s", "differ"
     );
     for spec in args.volume.volume_list("cthead,engine") {
-        let loaded = args.volume.with_volume(&spec).load()?;
+        let loaded = args.volume.with_volume(&spec).load()?.with_stored_axes();
         // Behind the panel, a third of its width across.
         let panel = &base.screen;
         let size = (panel.width() / 3.0) as f32;

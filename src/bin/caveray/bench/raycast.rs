@@ -242,7 +242,7 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
 
     let mut volumes = Vec::new();
     for name in &names {
-        let loaded = args.volume.with_volume(name).load()?;
+        let loaded = args.volume.with_volume(name).load()?.with_stored_axes();
         // Longest side such that the bounding sphere has the protocol's radius.
         let (lo, hi) = loaded.volume.bounds();
         let extent = hi - lo;

@@ -29,7 +29,7 @@ use super::{mean, runtime, GPU};
 use crate::options::shading;
 use crate::progress::Progress;
 use crate::report::{write_json, Adapter, Machine, RendererInfo};
-use crate::scene::{at, protocol_frame, VolumeArgs};
+use crate::scene::{at, protocol_frame, Loaded, VolumeArgs};
 use crate::Failure;
 
 /// Buchacher & Erdt's data sets, as named in volumes.toml.
@@ -149,7 +149,12 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
     // not surface an hour into a run.
     let volumes = names
         .iter()
-        .map(|name| args.volume.with_volume(name).load())
+        .map(|name| {
+            args.volume
+                .with_volume(name)
+                .load()
+                .map(Loaded::with_stored_axes)
+        })
         .collect::<Result<Vec<_>, _>>()?;
     FrameDesc::new(glam::UVec2::splat(args.size))
         .validate()
