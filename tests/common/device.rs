@@ -31,8 +31,13 @@ impl Host {
     /// A host whose render thread's messages (which do not wait for the
     /// device's own list) go to `report`.
     pub fn reporting_to(report: anari_library_caveray::device::Reporter) -> Self {
+        Self::on_backend("cpu", report)
+    }
+
+    /// A host of a device on `backend` ("cpu" or "gpu").
+    pub fn on_backend(backend: &str, report: anari_library_caveray::device::Reporter) -> Self {
         let mut d = Device::new(report);
-        d.set_param(Subject::Device, "backend", Input::String("cpu".into()));
+        d.set_param(Subject::Device, "backend", Input::String(backend.into()));
         d.commit(Subject::Device);
         Self {
             d,

@@ -199,3 +199,37 @@ fn the_legacy_field_name_and_every_filter_value() {
         "nearest rendered as linear"
     );
 }
+
+/// A colour array with alpha and no opacity array: the alphas are the
+/// opacities, as the other ANARI devices read it (pynari's samples send
+/// their maps so), on both renderers.
+#[test]
+fn a_color_alpha_without_an_opacity_array_is_the_opacity() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        let field = h.field(|x| x as f32 / 3.0, None);
+        let mut image = |colors: &[f32], opacity: Option<f32>| {
+            let v = h.volume(field);
+            let a = h.array(
+                DataType::ARRAY1D,
+                DataType::FLOAT32_VEC4,
+                [2, 1, 1],
+                &bytes(colors),
+            );
+            h.set_object(v, "color", DataType::ARRAY1D, a);
+            if let Some(o) = opacity {
+                h.set(v, "opacity", DataType::FLOAT32, bytes(&[o]));
+            }
+            h.d.release(a);
+            let img = h.render(v);
+            let errors = h.messages(Severity::Error);
+            assert!(errors.is_empty(), "{backend}: {errors:?}");
+            img
+        };
+        let from_alpha = image(&[0.2, 0.4, 1.0, 0.3, 1.0, 0.5, 0.0, 0.3], None);
+        let from_opacity = image(&[0.2, 0.4, 1.0, 1.0, 1.0, 0.5, 0.0, 1.0], Some(0.3));
+        same(&from_alpha, &from_opacity).unwrap_or_else(|e| panic!("{backend}: {e}"));
+        let opaque = image(&[0.2, 0.4, 1.0, 1.0, 1.0, 0.5, 0.0, 1.0], None);
+        assert_ne!(from_alpha, opaque, "{backend}: the alpha changed nothing");
+    }
+}
