@@ -677,6 +677,11 @@ fn options_that_would_do_nothing_are_refused() {
         ),
         (
             cologne,
+            &["--iso", "0.3", "--iso-filter", "tricubic"][..],
+            "--iso and --iso-filter apply to multi-view displays only",
+        ),
+        (
+            cologne,
             &["--layer-format", "rgba32f"][..],
             "--layer-format applies to --stereo reprojection only",
         ),

@@ -122,22 +122,21 @@ impl Given {
         )
     }
 
-    /// Those of `names` (long names, `--` included) that were given.
-    pub fn among(&self, names: &[&str]) -> Vec<String> {
-        names
+    /// A usage error naming those of `names` (long names, `--` included)
+    /// that were given, with `verb` for one or several of them, then
+    /// `rest`; none given, nothing.
+    pub fn refuse(&self, names: &[&str], verb: [&str; 2], rest: &str) -> Result<(), Failure> {
+        let given: Vec<&str> = names
             .iter()
-            .filter(|n| self.0.iter().any(|g| g == *n))
-            .map(|n| n.to_string())
-            .collect()
-    }
-}
-
-/// "--a", "--a and --b", "--a, --b and --c".
-pub fn listed(names: &[String]) -> String {
-    match names {
-        [] => String::new(),
-        [one] => one.clone(),
-        [init @ .., last] => format!("{} and {last}", init.join(", ")),
+            .copied()
+            .filter(|n| self.0.iter().any(|g| g == n))
+            .collect();
+        let (list, verb) = match given[..] {
+            [] => return Ok(()),
+            [one] => (one.to_string(), verb[0]),
+            [ref init @ .., last] => (format!("{} and {last}", init.join(", ")), verb[1]),
+        };
+        Err(Failure::Usage(format!("{list} {verb} {rest}")))
     }
 }
 

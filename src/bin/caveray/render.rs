@@ -23,7 +23,7 @@ use crate::options::{RenderOptions, Strategy};
 use crate::progress::Progress;
 use crate::report::{write_json, RendererInfo, VolumeInfo};
 use crate::scene::VolumeArgs;
-use crate::{listed, Failure, Given, HeadArgs};
+use crate::{Failure, Given, HeadArgs};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -196,55 +196,39 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
         )));
     }
     let display = crate::render_display::is_display(&args.config);
-    let unused = if display {
-        given.among(&[
-            "--strategy",
-            "--shading",
-            "--backend",
-            "--step-factor",
-            "--gpu-sampling",
-            "--stereo",
-            "--layers",
-            "--layer-format",
-            "--head",
-            "--head-ypr",
-            "--time",
-        ])
+    if display {
+        given.refuse(
+            &[
+                "--strategy",
+                "--shading",
+                "--backend",
+                "--step-factor",
+                "--gpu-sampling",
+                "--stereo",
+                "--layers",
+                "--layer-format",
+                "--head",
+                "--head-ypr",
+                "--time",
+            ],
+            ["does", "do"],
+            "not apply to a multi-view display, which renders an isosurface per view on the CPU \
+             from the display's own eye line (its options: --iso, --iso-filter, --scale and the \
+             volume options)",
+        )?;
     } else {
-        given.among(&["--iso", "--iso-filter"])
-    };
-    if !unused.is_empty() {
-        let (does, what) = if display {
-            (
-                "does",
-                "a multi-view display, which renders an isosurface per view on the CPU from the \
-                 display's own eye line (its options: --iso, --iso-filter, --scale and the \
-                 volume options)",
-            )
-        } else {
-            ("applies", "multi-view displays only, not to a rig")
-        };
-        let verb = if unused.len() == 1 { does } else { "do" };
-        let verb = if display {
-            format!("{verb} not apply to")
-        } else {
-            format!("{verb} to")
-        };
-        return Err(Failure::Usage(format!("{} {verb} {what}", listed(&unused))));
+        given.refuse(
+            &["--iso", "--iso-filter"],
+            ["applies", "apply"],
+            "to multi-view displays only, not to a rig",
+        )?;
     }
     if args.stereo.stereo == StereoMethod::TwoPass {
-        let unused = given.among(&["--layers", "--layer-format"]);
-        if !unused.is_empty() {
-            let verb = if unused.len() == 1 {
-                "applies"
-            } else {
-                "apply"
-            };
-            return Err(Failure::Usage(format!(
-                "{} {verb} to --stereo reprojection only",
-                listed(&unused)
-            )));
-        }
+        given.refuse(
+            &["--layers", "--layer-format"],
+            ["applies", "apply"],
+            "to --stereo reprojection only",
+        )?;
     }
     if display {
         return crate::render_display::run(

@@ -320,11 +320,11 @@ pub fn panel_frame(panel: &anari_library_caveray::geometry::Screen) -> HeadFrame
 
 /// The benchmark protocols' first view: looking down -z, y up.
 pub fn protocol_frame() -> HeadFrame {
-    HeadFrame::new(DVec3::NEG_Z, DVec3::Y).unwrap_or(HeadFrame {
+    HeadFrame {
         forward: DVec3::NEG_Z,
         up: DVec3::Y,
         right: DVec3::X,
-    })
+    }
 }
 
 /// What to do about a `--volume` that is neither procedural nor a file
