@@ -141,7 +141,13 @@ impl MarchPlan {
             clip_planes: settings.clip_planes.as_slice().to_vec(),
             background: settings.background,
             light: settings.light.normalize(),
-            light_color: settings.light_color,
+            // Emission-absorption alone is the transfer function's colour, as
+            // the reference device draws it: a light scales only what it lights.
+            light_color: if settings.shading.lights() {
+                settings.light_color
+            } else {
+                Vec3::ONE
+            },
             has_background_image: settings.background_image.is_some(),
             shading: settings.shading,
             directions,

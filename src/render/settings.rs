@@ -98,6 +98,13 @@ impl Shading {
         }
     }
 
+    /// Whether samples are lit, so that a light's colour and strength
+    /// scale them (`None` and `directional:0` show the transfer function's
+    /// colour as it is).
+    pub fn lights(self) -> bool {
+        !matches!(self, Shading::None | Shading::Directional(0))
+    }
+
     /// Extra volume samples per shaded sample.
     pub fn extra_samples(self) -> u32 {
         match self {
@@ -262,8 +269,9 @@ pub struct RenderSettings {
     /// (0 takes the first sample that contributes anything).
     pub depth_threshold: f32,
     pub clip_planes: ClipPlanes,
-    /// Color times strength of the light, multiplying every shaded sample
-    /// (a host's directional light; 1 without one).
+    /// Color times strength of the light, multiplying every lit sample
+    /// (a host's directional light; 1 without one; unused unless
+    /// [`Shading::lights`]).
     pub light_color: Vec3,
     /// Leap over bricks the transfer function leaves clear
     /// (render::empty_space). Exact: the image does not change.

@@ -1,6 +1,7 @@
 //! ANARI's `directional` light: parallel light from far away. The first
 //! one in a world's `light` array gives the shading its light direction
-//! and multiplies every shaded sample by `color` times `irradiance`.
+//! and multiplies every lit sample by `color` times `irradiance` (a renderer
+//! whose `shading` is `none` lights nothing).
 
 use glam::Vec3;
 
@@ -34,7 +35,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             F32,
             false,
             DefaultValue::Floats(&[1.0]),
-            "strength: shaded samples are multiplied by color times irradiance",
+            "strength: lit samples (shading other than none) are multiplied by color times irradiance",
         )
         .range(0.0, 10.0),
     ],
