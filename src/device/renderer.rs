@@ -25,10 +25,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     params: &[
         p(
             "background",
-            &[T::FLOAT32_VEC4, T::ARRAY2D],
+            &[T::FLOAT32_VEC4, T::ARRAY2D, T::ARRAY1D],
             false,
             DefaultValue::Floats(&[0.0, 0.0, 0.0, 1.0]),
-            "color behind the volume, straight alpha; or an ARRAY2D of FLOAT32_VEC4 stretched over the frame (1 x N: a vertical gradient, bottom first)",
+            "color behind the volume, straight alpha; or an ARRAY2D of FLOAT32_VEC4 stretched over the frame (1 x N: a vertical gradient, bottom first); an ARRAY1D of N FLOAT32_VEC4 is that 1 x N gradient",
         )
         .elements(&[T::FLOAT32_VEC4]),
         p(
@@ -161,8 +161,11 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
 
 /// `background` as an image, if it is an array.
 fn background_image(r: &Read<'_>) -> Result<Option<Arc<BackgroundImage>>, String> {
+    // pynari's samples give a gradient as a list of colours, bottom first.
+    let column = r.object("background").is_some_and(|o| o.kind == T::ARRAY1D);
     r.array_of("background", T::FLOAT32_VEC4, |a| {
         let [w, h, _] = a.dims();
+        let (w, h) = if column { (1, w) } else { (w, h) };
         let pixels: Vec<Vec4> = a.f32s().chunks_exact(4).map(Vec4::from_slice).collect();
         let size = glam::UVec2::new(
             u32::try_from(w).map_err(|_| format!("'background' is {w} wide"))?,

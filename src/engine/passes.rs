@@ -270,14 +270,21 @@ pub fn render_surface_views(r: &mut Renderer, job: &RenderJob) -> Result<Frame, 
         .filter(|v| v.size.min_element() > 0)
     {
         stop_check(job)?;
+        let image = inputs.settings.background_image.as_deref();
+        // Where the rays miss, the image shows: depth tells where.
         let desc = FrameDesc {
             size: view.size,
+            depth: inputs.desc.depth || image.is_some(),
             ..inputs.desc
         };
-        parts.push((
-            view.offset,
-            r.cast_surfaces(&inputs.surfaces, &view.rays, &desc, &job.slot.stop)?,
-        ));
+        let mut frame = r.cast_surfaces(&inputs.surfaces, &view.rays, &desc, &job.slot.stop)?;
+        if let Some(image) = image {
+            frame.show_background_where_missed(image);
+            if !inputs.desc.depth {
+                frame.depth = None;
+            }
+        }
+        parts.push((view.offset, frame));
     }
     match parts.as_slice() {
         [(_, one)] if one.size == inputs.desc.size => Ok(parts.remove(0).1),

@@ -1,5 +1,6 @@
 use glam::{UVec2, Vec4};
 
+use super::settings::BackgroundImage;
 use super::RenderError;
 
 /// Pixel formats of ANARI's `channel.color`.
@@ -139,6 +140,25 @@ impl Frame {
         }
     }
 
+    /// What a frame of `desc` shows where nothing is in front: the
+    /// background image stretched over it, else the color.
+    pub fn background(
+        desc: &FrameDesc,
+        color: Vec4,
+        image: Option<&BackgroundImage>,
+    ) -> Result<Self, RenderError> {
+        let Some(image) = image else {
+            return Ok(Self::cleared(desc, color));
+        };
+        let mut linear = filled(4 * desc.pixels(), 0.0f32, "the background")?;
+        for (i, px) in linear.chunks_exact_mut(4).enumerate() {
+            let (x, y) = (i as u32 % desc.size.x, i as u32 / desc.size.x);
+            px.copy_from_slice(&image.at(x, y, desc.size).to_array());
+        }
+        let depth = desc.depth.then(|| vec![f32::INFINITY; desc.pixels()]);
+        Self::from_linear(desc, linear, depth)
+    }
+
     /// One frame of `desc` made of `parts`, each placed with its lower
     /// left corner at its offset (a stereo pair side by side or one above
     /// the other); pixels no part covers stay zero.
@@ -248,6 +268,28 @@ impl Frame {
                 )
             }
             ColorData::Rgba32F(f) => Vec4::from_slice(&f[4 * i..4 * i + 4]),
+        }
+    }
+
+    /// Shows `image` (stretched over this frame) in every pixel whose depth
+    /// is infinite: where the rays met nothing. Needs depth.
+    pub fn show_background_where_missed(&mut self, image: &BackgroundImage) {
+        let Some(depth) = &self.depth else { return };
+        let w = self.size.x;
+        for (i, _) in depth.iter().enumerate().filter(|(_, d)| d.is_infinite()) {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            let c = image.at(x, y, self.size);
+            match &mut self.color {
+                ColorData::Rgba8(b) => {
+                    b[4 * i..4 * i + 4].copy_from_slice(&c.to_array().map(to_unorm8));
+                }
+                ColorData::Srgba8(b) => {
+                    let rgb = c.truncate().to_array().map(linear_to_srgb);
+                    b[4 * i..4 * i + 4]
+                        .copy_from_slice(&[rgb[0], rgb[1], rgb[2], c.w].map(to_unorm8));
+                }
+                ColorData::Rgba32F(f) => f[4 * i..4 * i + 4].copy_from_slice(&c.to_array()),
+            }
         }
     }
 

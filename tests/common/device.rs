@@ -163,10 +163,15 @@ impl Host {
     /// Renders `frame`, `w` x `h`, and returns its RGBA8 pixels.
     pub fn pixels_sized(&mut self, frame: u64, w: u32, h: u32) -> Vec<u8> {
         self.d.render_frame(frame, None);
-        let mapped = self
-            .d
-            .map_frame(frame, "channel.color")
-            .expect("the frame renders");
+        let Some(mapped) = self.d.map_frame(frame, "channel.color") else {
+            let said: Vec<String> = self
+                .d
+                .take_statuses()
+                .into_iter()
+                .map(|s| s.message)
+                .collect();
+            panic!("the frame did not render: {said:?}");
+        };
         assert_eq!(mapped.size, glam::UVec2::new(w, h));
         // SAFETY: a mapped RGBA8 frame of w x h pixels, valid until unmap.
         let pixels =

@@ -5,8 +5,9 @@
 
 use crate::common;
 
-use anari_library_caveray::device::{DataType, Property, Severity, StatusCode, Subject};
+use anari_library_caveray::device::{DataType, Property, Severity, Status, StatusCode, Subject};
 use common::device::{bytes, same, Host};
+use std::sync::Arc;
 
 fn property(h: &mut Host, frame: u64, name: &str) -> Option<Property> {
     h.d.property(Subject::Object(frame), name, true)
@@ -407,16 +408,24 @@ fn the_first_directional_light_sets_the_shading_light() {
         h.d.commit(Subject::Object(l));
         l
     };
-    let unlit = image(&mut h, &[], "none");
     let half = light(&mut h, [0.0, 0.0, -1.0], 0.5);
     // A point light (not implemented) first: skipped for the directional one.
     let point = h.d.new_object(DataType::LIGHT, "point");
-    let dimmed = image(&mut h, &[point, half], "none");
     let centre = 4 * (12 * 24 + 12);
-    let (a, b) = (f32::from(unlit[centre]), f32::from(dimmed[centre]));
+    // Lit samples (ambient occlusion ignores the direction) take the
+    // light's strength; unlit ones show the transfer function as it is.
+    let lit = image(&mut h, &[], "ao");
+    let dimmed = image(&mut h, &[point, half], "ao");
+    let (a, b) = (f32::from(lit[centre]), f32::from(dimmed[centre]));
     assert!(
         a > 40.0 && (b - 0.5 * a).abs() <= 2.0,
         "irradiance 0.5: {a} -> {b}"
+    );
+    let unlit = image(&mut h, &[], "none");
+    assert_eq!(
+        unlit,
+        image(&mut h, &[point, half], "none"),
+        "a light changed an unlit image"
     );
     // Shadows follow the light's direction.
     let from_left = light(&mut h, [1.0, 0.0, 0.0], 1.0);
@@ -484,23 +493,93 @@ fn a_background_gradient_through_the_device() {
     let volume = h.volume(field);
     h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.0f32]));
     let (frame, _camera) = h.frame(volume, 3.0);
-    let r = h.d.new_object(DataType::RENDERER, "scivis");
-    // VTK's gradient: 1 x N of FLOAT32_VEC4, bottom color first.
-    let gradient = h.array(
-        DataType::ARRAY2D,
-        DataType::FLOAT32_VEC4,
-        [1, 2, 1],
-        &bytes(&[1.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]),
-    );
-    h.set_object(r, "background", DataType::ARRAY2D, gradient);
-    h.d.release(gradient);
-    h.d.commit(Subject::Object(r));
-    h.set_object(frame, "renderer", DataType::RENDERER, r);
-    h.d.commit(Subject::Object(frame));
-    let pixels = h.pixels(frame);
-    let size = common::device::SIZE as usize;
-    let at = |y: usize| &pixels[4 * y * size..4 * y * size + 3];
-    assert_eq!(at(0), [255, 0, 0], "bottom row");
-    assert_eq!(at(size - 1), [0, 0, 255], "top row");
-    assert!(h.messages(Severity::Error).is_empty());
+    // VTK's gradient: 1 x N of FLOAT32_VEC4, bottom color first; pynari's
+    // samples give the same N colors as an ARRAY1D.
+    for (kind, dims) in [
+        (DataType::ARRAY2D, [1, 2, 1]),
+        (DataType::ARRAY1D, [2, 1, 1]),
+    ] {
+        let r = h.d.new_object(DataType::RENDERER, "scivis");
+        let gradient = h.array(
+            kind,
+            DataType::FLOAT32_VEC4,
+            dims,
+            &bytes(&[1.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]),
+        );
+        h.set_object(r, "background", kind, gradient);
+        h.d.release(gradient);
+        h.d.commit(Subject::Object(r));
+        h.set_object(frame, "renderer", DataType::RENDERER, r);
+        h.d.commit(Subject::Object(frame));
+        h.d.release(r);
+        let pixels = h.pixels(frame);
+        let size = common::device::SIZE as usize;
+        let at = |y: usize| &pixels[4 * y * size..4 * y * size + 3];
+        assert_eq!(at(0), [255, 0, 0], "{kind}: bottom row");
+        assert_eq!(at(size - 1), [0, 0, 255], "{kind}: top row");
+        assert!(h.messages(Severity::Error).is_empty(), "{kind}");
+    }
+}
+
+/// A background image shows behind an empty world as it does behind a
+/// volume that covers nothing, on both renderers: stretched over the frame
+/// and sampled as `BackgroundImage::at` says.
+#[test]
+fn a_background_image_shows_behind_an_empty_world() {
+    use anari_library_caveray::render::BackgroundImage;
+    // A 2 x 2 checker of four colors, lower left first.
+    let texels = [
+        [1.0f32, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0, 1.0],
+        [1.0, 1.0, 0.0, 1.0],
+    ];
+    let image = BackgroundImage::new(
+        glam::UVec2::new(2, 2),
+        texels.iter().map(|t| glam::Vec4::from_array(*t)).collect(),
+    )
+    .unwrap();
+    let size = common::device::SIZE;
+    let expected: Vec<u8> = (0..size * size)
+        .flat_map(|i| {
+            let c = image.at(i % size, i / size, glam::UVec2::splat(size));
+            c.to_array().map(|x| (x * 255.0).round() as u8)
+        })
+        .collect();
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, Arc::new(|_s: Status| {}));
+        let field = h.field(|_| 0.0, None);
+        let volume = h.volume(field);
+        h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.0f32]));
+        let (frame, _camera) = h.frame(volume, 3.0);
+        let r = h.d.new_object(DataType::RENDERER, "default");
+        let flat: Vec<f32> = texels.iter().flatten().copied().collect();
+        let array = h.array(
+            DataType::ARRAY2D,
+            DataType::FLOAT32_VEC4,
+            [2, 2, 1],
+            &bytes(&flat),
+        );
+        h.set_object(r, "background", DataType::ARRAY2D, array);
+        h.d.release(array);
+        h.d.commit(Subject::Object(r));
+        h.set_object(frame, "renderer", DataType::RENDERER, r);
+        h.d.commit(Subject::Object(frame));
+        let behind_volume = h.pixels(frame);
+        let empty = h.d.new_object(DataType::WORLD, "");
+        h.d.commit(Subject::Object(empty));
+        h.set_object(frame, "world", DataType::WORLD, empty);
+        h.d.commit(Subject::Object(frame));
+        let behind_nothing = h.pixels(frame);
+        let worst = |a: &[u8]| {
+            a.iter()
+                .zip(&expected)
+                .map(|(&x, &y)| x.abs_diff(y))
+                .max()
+                .unwrap()
+        };
+        assert!(worst(&behind_nothing) <= 1, "{backend}: empty world");
+        assert!(worst(&behind_volume) <= 1, "{backend}: a clear volume");
+        assert!(h.messages(Severity::Error).is_empty(), "{backend}");
+    }
 }
