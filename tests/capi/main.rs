@@ -13,3 +13,4 @@ mod host_patterns;
 mod hostile_host;
 mod hosts;
 mod info;
+mod python_host;

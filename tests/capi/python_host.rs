@@ -1,0 +1,176 @@
+//! A Python host through pynari (PyPI) and the SDK loader it bundles: the
+//! scene of `python/volume_host.py` on each backend against the Rust API's
+//! image of the same numbers. scripts/deps makes the virtual environment
+//! (target/pynari); CAVERAY_PYTHON may name another interpreter with
+//! pynari and numpy.
+
+use std::path::PathBuf;
+
+use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays};
+use anari_library_caveray::render::{
+    ssim, BackgroundImage, CpuRenderer, FrameDesc, Render as _, RenderSettings,
+};
+use anari_library_caveray::scene::{Scene, StructuredVolume, TransferFunction, Voxels};
+use glam::{DVec3, UVec2, UVec3, Vec3, Vec4};
+use serde_json::json;
+
+use crate::common;
+use crate::common::c::{describe, host_command, read_rgba, root, scratch};
+
+fn python() -> Option<PathBuf> {
+    let path = std::env::var_os("CAVERAY_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("target/pynari/bin/python"));
+    path.exists().then_some(path)
+}
+
+/// Two interlocking tori on [-1, 1]^3: 1 on the rings, 0 beyond `minor`.
+fn tori(n: u32) -> Vec<f32> {
+    let at = |i: u32| -1.0 + 2.0 * i as f32 / (n - 1) as f32;
+    let (major, minor) = (0.5f32, 0.2f32);
+    let mut v = Vec::with_capacity((n * n * n) as usize);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let (x, y, z) = (at(x), at(y), at(z));
+                let a = (((x + 0.25).hypot(y) - major).hypot(z)).min(1.0);
+                let b = (((x - 0.25).hypot(z) - major).hypot(y)).min(1.0);
+                v.push((1.0 - a.min(b) / minor).clamp(0.0, 1.0));
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn a_pynari_host_renders_what_the_rust_api_renders_on_each_backend() {
+    let Some(python) = python() else {
+        common::missing("pynari's virtual environment (target/pynari, made by scripts/deps)");
+        return;
+    };
+    let dir = scratch("python_host");
+    let n = 32;
+    let voxels = tori(n);
+    let raw = dir.join("tori.f32");
+    std::fs::write(
+        &raw,
+        voxels
+            .iter()
+            .flat_map(|v| v.to_ne_bytes())
+            .collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    let size = UVec2::new(96, 72);
+    let colors = [
+        [0.1f32, 0.2, 0.6, 0.0],
+        [0.2, 0.6, 1.0, 0.3],
+        [1.0, 0.7, 0.2, 1.0],
+    ];
+    let gradient = [[0.9f32, 0.9, 0.9, 1.0], [0.15, 0.25, 0.8, 1.0]];
+    let (position, fovy, unit) = ([0.4f32, 0.8, 2.6], 0.8f32, 0.05f32);
+    let spacing = 2.0 / (n - 1) as f32;
+    let scene = json!({
+        "voxels": raw,
+        "dims": [n, n, n],
+        "origin": [-1.0, -1.0, -1.0],
+        "spacing": [spacing, spacing, spacing],
+        "colors": colors,
+        "unit_distance": unit,
+        "position": position,
+        "direction": position.map(|x| -x),
+        "up": [0.0, 1.0, 0.0],
+        "fovy": fovy,
+        "size": [size.x, size.y],
+        "gradient": gradient,
+    });
+    let scene_file = dir.join("scene.json");
+    std::fs::write(&scene_file, scene.to_string()).unwrap();
+
+    // The same numbers through the Rust API, on the CPU reference.
+    let volume = StructuredVolume::new(
+        UVec3::splat(n),
+        Voxels::F32(voxels),
+        Vec3::splat(-1.0),
+        Vec3::splat(spacing),
+    )
+    .unwrap();
+    let tf = TransferFunction::new(
+        colors.iter().map(|c| Vec4::from_array(*c)).collect(),
+        vec![1.0],
+        (0.0, 1.0),
+        unit,
+    )
+    .unwrap();
+    let eye = DVec3::from_array(position.map(f64::from));
+    let camera = PinholeCamera::new(
+        eye,
+        -eye,
+        DVec3::Y,
+        f64::from(fovy),
+        f64::from(size.x) / f64::from(size.y),
+        ImageRegion::FULL,
+    )
+    .unwrap();
+    let settings = RenderSettings {
+        background_image: Some(std::sync::Arc::new(
+            BackgroundImage::new(
+                UVec2::new(1, 2),
+                gradient.iter().map(|c| Vec4::from_array(*c)).collect(),
+            )
+            .unwrap(),
+        )),
+        ..RenderSettings::default()
+    };
+    let reference = CpuRenderer::new()
+        .render(
+            &Scene::new(volume, tf),
+            &camera.ray_gen(size),
+            &settings,
+            &FrameDesc::new(size),
+        )
+        .unwrap();
+
+    for backend in ["cpu", "gpu"] {
+        let out = dir.join(format!("{backend}.rgba"));
+        let output = host_command(&python)
+            .arg(root().join("tests/capi/python/volume_host.py"))
+            .arg(&scene_file)
+            .arg(&out)
+            .env("ANARI_LIBRARY", "caveray")
+            .env("CAVERAY_BACKEND", backend)
+            .env("PYTHONDONTWRITEBYTECODE", "1")
+            .output()
+            .expect("python runs");
+        let text = describe(&output);
+        assert!(output.status.success(), "{backend}: {text}");
+        // caveray's status messages reach the host's callback, which
+        // pynari prints as "caveray: <severity>: ...".
+        for severity in ["Error", "Warning", "Fatal"] {
+            assert!(
+                !text.contains(&format!("caveray: {severity}")),
+                "{backend}: {text}"
+            );
+        }
+        let image = read_rgba(&out, size);
+        let s = ssim(&image, &reference).unwrap();
+        println!("{backend}: SSIM {s:.4} against the Rust API's image");
+        assert!(
+            s >= 0.99,
+            "{backend}: SSIM {s:.4} against the Rust API's image"
+        );
+        // Not the background alone: the tori cover part of the frame.
+        let differs = (0..size.x * size.y)
+            .filter(|i| {
+                let (x, y) = (i % size.x, i / size.x);
+                (image.pixel(x, y) - settings.background_image.as_ref().unwrap().at(x, y, size))
+                    .abs()
+                    .max_element()
+                    > 0.1
+            })
+            .count();
+        assert!(
+            differs > 500,
+            "{backend}: the volume shows on {differs} pixels"
+        );
+    }
+}
