@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod c;
+pub mod cts;
 pub mod device;
 pub mod iso;
 pub mod render;

@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod cts_volume;
 mod deadline;
 mod frames;
 mod isosurface;
