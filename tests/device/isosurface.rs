@@ -727,3 +727,41 @@ fn a_matte_color_by_attribute_name_is_drawn_in_the_default_color_with_a_warning(
     let [r, g, b] = at(&image, W / 2, H / 2);
     assert!(r > 50 && r == g && g == b, "{r} {g} {b}");
 }
+
+/// Where the rays miss an isosurface, a background image shows (here a
+/// bottom-to-top gradient), on both renderers; the surface stays as it was.
+#[test]
+fn a_background_image_shows_around_an_isosurface() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_s| {}));
+        let f = field(&mut h);
+        let m = matte(&mut h, [0.2, 0.6, 0.9]);
+        let (s, _) = surface(&mut h, f, &[0.5], m);
+        let world = world_of(&mut h, DataType::SURFACE, "surface", &[s]);
+        let camera = off_axis(&mut h, [0.05, 0.02, 2.0]);
+        let fr = frame(&mut h, world, camera, false);
+        let plain = h.pixels_sized(fr, W, H);
+        let r = h.d.new_object(DataType::RENDERER, "default");
+        let gradient = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32_VEC4,
+            [2, 1, 1],
+            &bytes(&[1.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]),
+        );
+        h.set_object(r, "background", DataType::ARRAY1D, gradient);
+        h.d.commit(Subject::Object(r));
+        h.set_object(fr, "renderer", DataType::RENDERER, r);
+        h.d.commit(Subject::Object(fr));
+        let over = h.pixels_sized(fr, W, H);
+        assert!(h.messages(Severity::Error).is_empty(), "{backend}");
+        let centre = (H / 2 * W + W / 2) as usize;
+        assert_eq!(
+            &over[4 * centre..4 * centre + 4],
+            &plain[4 * centre..4 * centre + 4],
+            "{backend}: the surface changed"
+        );
+        assert_eq!(at(&over, 0, 0), [255, 0, 0], "{backend}: bottom corner");
+        assert_eq!(at(&over, 0, H - 1), [0, 0, 255], "{backend}: top corner");
+        h.d.release(gradient);
+    }
+}
