@@ -45,12 +45,6 @@ pub(super) enum Kind {
 }
 
 impl Kind {
-    pub const fn uniform(wgsl: &'static str) -> Self {
-        Kind::Uniform {
-            wgsl,
-            dynamic: None,
-        }
-    }
     /// A uniform read at a dynamic offset, `size` bytes of it.
     pub const fn dynamic_uniform(wgsl: &'static str, size: u64) -> Self {
         Kind::Uniform {
@@ -253,7 +247,7 @@ impl GroupLayout {
 ///     /// What the group is for.
 ///     Resources / Layout = "module_name" imports ["struct_module"] (param: Type) {
 ///         /// What the binding holds.
-///         name: Kind::uniform("Struct"),
+///         name: Kind::storage("Struct"),
 ///         ...
 ///     }
 /// }
@@ -448,7 +442,7 @@ mod tests {
         /// A group with one binding of each kind.
         Every / EveryLayout = "every" imports [] (filterable: bool, format: wgpu::TextureFormat) {
             /// A struct from another module.
-            thing: Kind::uniform("Thing"),
+            thing: Kind::storage("Thing"),
             band: Kind::dynamic_uniform("vec4u", 16),
             source: Kind::storage("array<vec4f>"),
             counts: Kind::storage_rw("array<atomic<u32>>"),
@@ -510,7 +504,7 @@ mod tests {
         assert_eq!(
             lines,
             [
-                "@group(2) @binding(0) var<uniform> thing: Thing;",
+                "@group(2) @binding(0) var<storage, read> thing: Thing;",
                 "@group(2) @binding(1) var<uniform> band: vec4u;",
                 "@group(2) @binding(2) var<storage, read> source: array<vec4f>;",
                 "@group(2) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;",
@@ -546,7 +540,7 @@ mod tests {
             imports: &["ray_uniforms", "volume_slot"],
             bindings: vec![Binding {
                 name: "params",
-                kind: Kind::uniform("RayUniforms"),
+                kind: Kind::storage("RayUniforms"),
             }],
         };
         assert!(table

@@ -21,7 +21,7 @@ binding_table! {
         /// pixel.
         layer_out: Kind::storage_rw("array<vec4f>"),
         /// x: the layer count a pixel.
-        capture: Kind::uniform("vec4u"),
+        capture: Kind::storage("vec4u"),
     }
 }
 
@@ -51,7 +51,7 @@ impl CapturePass {
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("capture"),
             size: 16,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         Ok(Self {

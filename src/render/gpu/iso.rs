@@ -21,7 +21,7 @@ use crate::scene::PlacedVolume;
 binding_table! {
     /// Group 0 of every isosurface pass.
     IsoResources / IsoLayout = "iso_bindings" imports ["iso_uniforms"] (filterable: bool) {
-        iso: Kind::uniform("Iso"),
+        iso: Kind::storage("Iso"),
         volume: Kind::texture(Dim::D3, filterable),
         color_out: Kind::storage_rw("array<u32>"),
         depth_out: Kind::storage_rw("array<f32>"),
@@ -117,7 +117,7 @@ impl IsoPass {
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("iso"),
             size: size_of::<Iso>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         Ok(Self {

@@ -26,7 +26,7 @@ binding_table! {
     ReprojectResources / ReprojectLayout = "reproject_bindings" imports ["stereo_uniforms"]
         (format: wgpu::TextureFormat)
     {
-        stereo: Kind::uniform("Stereo"),
+        stereo: Kind::storage("Stereo"),
         layers: Kind::write_texture(Dim::D2Array, format),
         spans: Kind::storage_rw("array<vec4i>"),
         depths: Kind::write_texture(Dim::D2Array, wgpu::TextureFormat::Rgba32Float),
@@ -36,7 +36,7 @@ binding_table! {
 binding_table! {
     /// The compositing pass's only group.
     CompositeResources / CompositeLayout = "composite_bindings" imports ["stereo_uniforms"] () {
-        stereo: Kind::uniform("Stereo"),
+        stereo: Kind::storage("Stereo"),
         layers: Kind::texture(Dim::D2Array, false),
         spans: Kind::storage("array<vec4i>"),
         color_out: Kind::storage_rw("array<u32>"),
@@ -249,7 +249,7 @@ impl LayerTarget {
             ctx,
             "stereo",
             size_of::<Stereo>() as u64,
-            U::UNIFORM | U::COPY_DST,
+            U::STORAGE | U::COPY_DST,
         );
         let pixels = shape.pixels;
         let color_bytes = pixels * shape.color.bytes_per_pixel();

@@ -24,7 +24,7 @@ use crate::scene::Scene;
 binding_table! {
     /// Group 0 of the passes that march volumes.
     VolumeResources / VolumeLayout = "volume_bindings" imports ["ray_uniforms"] (filterable: bool) {
-        params: Kind::uniform("RayUniforms"),
+        params: Kind::storage("RayUniforms"),
         /// Volume v's values; volumes 1 to 7 are bound after the other
         /// resources (a 1x1x1 stand-in where the scene has fewer), so WGSL
         /// needs no binding arrays, which not every adapter offers.
@@ -215,7 +215,7 @@ impl RaycastPass {
         let params = uniform(
             "params",
             size_of::<RayUniforms>() as u64,
-            wgpu::BufferUsages::UNIFORM,
+            wgpu::BufferUsages::STORAGE,
         );
         let directions = uniform(
             "directions",

@@ -4,6 +4,13 @@
 //! and one module per struct, listed by [`modules`] (the WGSL structs are
 //! generated from the Rust ones; a test parses them and checks that WGSL
 //! lays them out as Rust does).
+//!
+//! The passes bind these structs as read-only storage buffers, not
+//! uniforms: Mesa's lavapipe folds uniform values that decide branches and
+//! loop bounds into the shader it compiles, and compiles again (seconds
+//! for the march) whenever they change, as they do with every head pose.
+//! It does not fold storage values, and hardware drivers read both alike,
+//! so no pass compiles a shader while it renders.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec2, Vec3};

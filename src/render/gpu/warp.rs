@@ -22,7 +22,7 @@ const TRIANGLES_PER_GROUP: u32 = 64;
 binding_table! {
     /// The warp passes' only group.
     WarpResources / WarpLayout = "warp_bindings" imports ["warp_uniforms"] () {
-        w: Kind::uniform("Warp"),
+        w: Kind::storage("Warp"),
         /// The source: premultiplied color, first-hit depth, and
         /// `w.layers` layers a pixel as two vec4s each (color; start, end).
         color: Kind::storage("array<vec4f>"),
@@ -85,7 +85,7 @@ impl WarpPass {
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("warp uniform"),
             size: size_of::<Warp>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         Ok(Self {
