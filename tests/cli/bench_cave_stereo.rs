@@ -36,6 +36,13 @@ fn the_shipped_head_path_runs_on_every_wall_and_reports_everything() {
     assert_eq!(report["benchmark"], "cave-stereo");
     assert_eq!(report["path"], "cave_configs/head_paths/cologne_walk.toml");
     assert_eq!(report["duration_s"], 15.0);
+    // Timed without Mesa's on-disk shader cache, and saying so.
+    assert_eq!(report["renderer"]["backend"], "gpu");
+    assert_eq!(
+        report["renderer"]["shader_cache"], "disabled",
+        "{}",
+        report["renderer"]
+    );
     let timeline = report["timeline"].as_array().unwrap();
     assert_eq!(timeline.len(), 4);
     assert_eq!(report["wall_frames"], 4 * 5);

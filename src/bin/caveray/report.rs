@@ -48,7 +48,13 @@ pub struct Adapter {
     pub driver: String,
     pub device_type: String,
     pub pass_clock: PassClock,
+    /// Mesa's on-disk shader cache during the run: "disabled" (the
+    /// benches' default), or the caller's MESA_SHADER_CACHE_DISABLE value.
+    pub shader_cache: String,
 }
+
+/// The environment variable that turns Mesa's on-disk shader cache off.
+pub const SHADER_CACHE_VAR: &str = "MESA_SHADER_CACHE_DISABLE";
 
 impl Adapter {
     pub fn of(gpu: &anari_library_caveray::render::GpuRenderer) -> Self {
@@ -59,6 +65,11 @@ impl Adapter {
             driver: format!("{} {}", info.driver, info.driver_info),
             device_type: format!("{:?}", info.device_type),
             pass_clock: gpu.pass_clock(),
+            shader_cache: match std::env::var(SHADER_CACHE_VAR).as_deref() {
+                Ok("true") | Ok("1") => "disabled".into(),
+                Ok(other) => format!("{SHADER_CACHE_VAR}={other}"),
+                Err(_) => "on-disk cache on".into(),
+            },
         }
     }
 }

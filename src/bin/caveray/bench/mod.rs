@@ -11,7 +11,7 @@ mod stereo;
 use anari_library_caveray::render::stereo::RenderFacts;
 use clap::Subcommand;
 
-use crate::Failure;
+use crate::{report, Failure};
 
 #[derive(Subcommand)]
 pub enum BenchCommand {
@@ -32,11 +32,23 @@ pub enum BenchCommand {
 }
 
 pub fn run(command: BenchCommand) -> Result<(), Failure> {
+    without_shader_cache();
     match command {
         BenchCommand::Raycast(args) => raycast::run(args),
         BenchCommand::Stereo(args) => stereo::run(args),
         BenchCommand::CaveStereo(args) => cave_stereo::run(args),
         BenchCommand::Autostereo(args) => autostereo::run(args),
+    }
+}
+
+/// Times shaders as a fresh machine compiles them: Mesa's on-disk shader
+/// cache would hand a run what an earlier run compiled, so that lavapipe's
+/// figures would depend on the runs before. The caller's own setting wins;
+/// other drivers ignore the variable. Set before any GPU is opened, while
+/// the tool runs one thread.
+fn without_shader_cache() {
+    if std::env::var_os(report::SHADER_CACHE_VAR).is_none() {
+        std::env::set_var(report::SHADER_CACHE_VAR, "true");
     }
 }
 
