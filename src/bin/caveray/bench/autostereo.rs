@@ -23,7 +23,7 @@ use glam::{UVec2, Vec3};
 use serde::Serialize;
 
 use super::runtime;
-use crate::report::{write_json, Machine};
+use crate::report::{write_json, Adapter, Machine, RendererInfo};
 use crate::scene::{at, panel_frame, VolumeArgs};
 use crate::Failure;
 
@@ -70,6 +70,7 @@ struct Report {
     filter: &'static str,
     /// "cpu" (wall clock) or the GPU's adapter and pass clock.
     timed_on: String,
+    renderer: RendererInfo,
     /// Each time is the median of this many.
     repeat: u32,
     rows: Vec<Row>,
@@ -137,6 +138,12 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
     let timed_on = match &gpu {
         Some(g) => format!("GPU {} ({})", g.adapter().name, g.pass_clock().name()),
         None => "cpu".to_string(),
+    };
+    let renderer = match &gpu {
+        Some(g) => RendererInfo::Gpu(Adapter::of(g)),
+        None => RendererInfo::Cpu {
+            threads: rayon::current_num_threads(),
+        },
     };
     let mut rows = Vec::new();
     println!(
@@ -279,6 +286,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         resolution: resolution.to_array(),
         filter: args.filter.name(),
         timed_on,
+        renderer,
         repeat: args.repeat,
         rows,
     };
