@@ -180,6 +180,20 @@ impl Host {
         pixels
     }
 
+    /// The depth channel of rendered frame `frame`, `w` x `h`.
+    pub fn depth_sized(&mut self, frame: u64, w: u32, h: u32) -> Vec<f32> {
+        let mapped = self
+            .d
+            .map_frame(frame, "channel.depth")
+            .expect("a depth channel");
+        assert_eq!(mapped.size, glam::UVec2::new(w, h));
+        // SAFETY: a mapped FLOAT32 channel of w x h values, valid until unmap.
+        let d = unsafe { std::slice::from_raw_parts(mapped.ptr.cast::<f32>(), (w * h) as usize) }
+            .to_vec();
+        self.d.unmap_frame(frame, "channel.depth");
+        d
+    }
+
     /// Renders `volume` head-on and returns RGBA8 pixels.
     pub fn render(&mut self, volume: u64) -> Vec<u8> {
         let (frame, camera) = self.frame(volume, 3.0);

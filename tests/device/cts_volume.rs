@@ -206,14 +206,7 @@ fn render(backend: &str, case: Case) -> Images {
     h.set_object(frame, "renderer", DataType::RENDERER, renderer);
     h.d.commit(Subject::Object(frame));
     let color = h.pixels_sized(frame, SIZE, SIZE);
-    let mapped =
-        h.d.map_frame(frame, "channel.depth")
-            .expect("a depth channel");
-    // SAFETY: SIZE x SIZE FLOAT32 values, valid until unmap.
-    let raw_depth =
-        unsafe { std::slice::from_raw_parts(mapped.ptr.cast::<f32>(), (SIZE * SIZE) as usize) }
-            .to_vec();
-    h.d.unmap_frame(frame, "channel.depth");
+    let raw_depth = h.depth_sized(frame, SIZE, SIZE);
     let scale = 2.0 * size.length();
     let depth = raw_depth
         .iter()

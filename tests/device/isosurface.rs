@@ -187,12 +187,7 @@ fn frame(h: &mut Host, world: u64, camera: u64, depth: bool) -> u64 {
 
 /// The depth channel of a rendered frame.
 fn depth(h: &mut Host, f: u64) -> Vec<f32> {
-    let mapped = h.d.map_frame(f, "channel.depth").expect("a depth channel");
-    // SAFETY: W x H FLOAT32 values, valid until unmap.
-    let d =
-        unsafe { std::slice::from_raw_parts(mapped.ptr.cast::<f32>(), (W * H) as usize) }.to_vec();
-    h.d.unmap_frame(f, "channel.depth");
-    d
+    h.depth_sized(f, W, H)
 }
 
 /// The world's `bounds` property, to single precision.
