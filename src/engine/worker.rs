@@ -225,12 +225,11 @@ fn run(
     // A panic must neither kill the thread nor leave the host waiting.
     let result = catch_unwind(AssertUnwindSafe(|| -> Result<Frame, String> {
         if inputs.scene.is_none() && inputs.surfaces.is_empty() {
-            return Frame::background(
+            return Ok(Frame::background(
                 &inputs.desc,
                 inputs.settings.background,
                 inputs.settings.background_image.as_deref(),
-            )
-            .map_err(|e| e.to_string());
+            ));
         }
         let r = renderer_for(renderer, inputs.backend, &|severity, message| {
             report(note(severity, StatusCode::NoError, message))

@@ -142,21 +142,12 @@ impl Frame {
 
     /// What a frame of `desc` shows where nothing is in front: the
     /// background image stretched over it, else the color.
-    pub fn background(
-        desc: &FrameDesc,
-        color: Vec4,
-        image: Option<&BackgroundImage>,
-    ) -> Result<Self, RenderError> {
-        let Some(image) = image else {
-            return Ok(Self::cleared(desc, color));
-        };
-        let mut linear = filled(4 * desc.pixels(), 0.0f32, "the background")?;
-        for (i, px) in linear.chunks_exact_mut(4).enumerate() {
-            let (x, y) = (i as u32 % desc.size.x, i as u32 / desc.size.x);
-            px.copy_from_slice(&image.at(x, y, desc.size).to_array());
+    pub fn background(desc: &FrameDesc, color: Vec4, image: Option<&BackgroundImage>) -> Self {
+        let mut frame = Self::cleared(desc, color);
+        if let Some(image) = image {
+            frame.show_background_where_missed(image);
         }
-        let depth = desc.depth.then(|| vec![f32::INFINITY; desc.pixels()]);
-        Self::from_linear(desc, linear, depth)
+        frame
     }
 
     /// One frame of `desc` made of `parts`, each placed with its lower
@@ -271,14 +262,16 @@ impl Frame {
         }
     }
 
-    /// Shows `image` (stretched over this frame) in every pixel whose depth
-    /// is infinite: where the rays met nothing. Needs depth.
+    /// Shows `image` (stretched over this frame) in every pixel whose
+    /// depth is infinite, where the rays met nothing; in every pixel of a
+    /// frame without depth.
     pub fn show_background_where_missed(&mut self, image: &BackgroundImage) {
-        let Some(depth) = &self.depth else { return };
         let w = self.size.x;
-        for (i, _) in depth.iter().enumerate().filter(|(_, d)| d.is_infinite()) {
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            let c = image.at(x, y, self.size);
+        for i in 0..self.size.x as usize * self.size.y as usize {
+            if self.depth.as_ref().is_some_and(|d| d[i].is_finite()) {
+                continue;
+            }
+            let c = image.at(i as u32 % w, i as u32 / w, self.size);
             match &mut self.color {
                 ColorData::Rgba8(b) => {
                     b[4 * i..4 * i + 4].copy_from_slice(&c.to_array().map(to_unorm8));

@@ -71,7 +71,7 @@ pub(super) fn march(
         Some((o, space)) => space.region(o.go + o.gd * t, &o.along, o.hi),
         None => field.region(&spans, origin + dir * t, dir, t),
     };
-    let unlit = matches!(plan.shading, Shading::None | Shading::Directional(0));
+    let unlit = !plan.shading.lights();
     if let Some((t0, t1)) = range {
         let len = t1 - t0;
         // `as` saturates; the cap holds where t has lost its precision.

@@ -18,11 +18,11 @@ const VISIBILITY: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 /// What a binding holds: the wgpu binding type and the WGSL type together.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum Kind {
-    /// `var<uniform> name: wgsl;`, at a dynamic offset into a buffer of
-    /// `dynamic` bytes per entry where given.
+    /// `var<uniform> name: wgsl;`, `size` bytes read at a dynamic offset
+    /// (per-frame parameters are storage buffers: see uniforms.rs).
     Uniform {
         wgsl: &'static str,
-        dynamic: Option<u64>,
+        size: u64,
     },
     /// `var<storage, read> name: wgsl;` or `read_write`.
     Storage {
@@ -47,10 +47,7 @@ pub(super) enum Kind {
 impl Kind {
     /// A uniform read at a dynamic offset, `size` bytes of it.
     pub const fn dynamic_uniform(wgsl: &'static str, size: u64) -> Self {
-        Kind::Uniform {
-            wgsl,
-            dynamic: Some(size),
-        }
+        Kind::Uniform { wgsl, size }
     }
     pub const fn storage(wgsl: &'static str) -> Self {
         Kind::Storage {
@@ -76,10 +73,10 @@ impl Kind {
 
     fn binding_type(self) -> wgpu::BindingType {
         match self {
-            Kind::Uniform { dynamic, .. } => wgpu::BindingType::Buffer {
+            Kind::Uniform { size, .. } => wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: dynamic.is_some(),
-                min_binding_size: dynamic.and_then(wgpu::BufferSize::new),
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(size),
             },
             Kind::Storage { read_only, .. } => wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Storage { read_only },
