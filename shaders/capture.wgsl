@@ -5,20 +5,17 @@
 
 const MAX_KEPT: u32 = 8u;
 
-var<private> ray_o: vec3f;
-var<private> ray_d: vec3f;
 var<private> current: u32;
 var<private> total: f32;
 var<private> kept: array<vec4f, 16>;
 
-fn on_sample(p: vec3f, lit: vec3f, a: f32) {
+fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
     let k = min(capture.x, MAX_KEPT);
     if k == 0u {
         return;
     }
     // Every segment is taken as a full step (the last one of a ray is
     // shorter on the CPU).
-    let t = dot(p - ray_o, ray_d);
     let seg = params.step;
     var c = kept[2u * current];
     var span = kept[2u * current + 1u];
@@ -42,16 +39,12 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     if pixel.x >= size.x || pixel.y >= size.y {
         return;
     }
-    let fx = f32(pixel.x);
-    let fy = f32(pixel.y);
-    ray_o = params.ray_origin + fx * params.ray_origin_dx + fy * params.ray_origin_dy;
-    ray_d = normalize(params.ray_dir + fx * params.ray_dir_dx + fy * params.ray_dir_dy);
     current = 0u;
     total = 0.0;
     for (var k = 0u; k < 2u * MAX_KEPT; k++) {
         kept[k] = vec4f(0.0);
     }
-    let m = march(fx, fy);
+    let m = march(primary_ray(f32(pixel.x), f32(pixel.y)));
     let i = pixel.y * size.x + pixel.x;
     depth_out[i] = m.depth;
     samples_out[i] = samples;

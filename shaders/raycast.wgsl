@@ -1,7 +1,7 @@
 // #import volume, color, band_bindings
 // One eye, one invocation per pixel.
 
-fn on_sample(p: vec3f, lit: vec3f, a: f32) {}
+fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {}
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
@@ -10,7 +10,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     if pixel.x >= size.x || pixel.y >= size.y {
         return;
     }
-    let m = march(f32(pixel.x), f32(pixel.y));
+    let m = march(primary_ray(f32(pixel.x), f32(pixel.y)));
     let i = pixel.y * size.x + pixel.x;
     depth_out[i] = m.depth;
     samples_out[i] = samples;

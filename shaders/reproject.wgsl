@@ -6,6 +6,11 @@
 const NO_PIXEL: i32 = -2147483647;
 const INFINITY: f32 = 3.4028235e38;
 
+// Set where the plan uses both families of lines. Where it uses one, the
+// state of a second stays out of the march: kept live across the loop,
+// it costs software Vulkan about a quarter of the pass.
+override BOTH_FAMILIES: bool = true;
+
 // One family's open segment.
 struct Open {
     // Whether this ray writes the family at all.
@@ -13,22 +18,45 @@ struct Open {
     // The right pixel the segment is in, and the first the ray wrote.
     pixel: i32,
     first: i32,
-    // Premultiplied color; the right eye's distance to the segment's
-    // first sample, to its last, and to where its own opacity reaches the
-    // depth threshold.
-    color: vec4f,
-    depth: vec3f,
     // +1 or -1: the way the right pixel moves as the ray goes deeper.
     dir: i32,
+    // Premultiplied color.
+    color: vec4f,
+    // t along the left ray of the segment's first sample, and where its
+    // own opacity reaches the depth threshold (INFINITY until then).
+    // Right-eye distances are taken from t only where a segment is written.
+    first_t: f32,
+    crossed_t: f32,
     // The offsets (right minus left) the ray's samples may have.
-    lo: i32,
-    hi: i32,
+    lo: f32,
+    hi: f32,
+    // The sample at t is (x + t y) / (z + t w) right pixels from the left
+    // pixel along the family: the projection is linear in t before its
+    // divide, so each sample pays one divide and two multiply-adds.
+    line: vec4f,
 }
 
 var<private> left: vec2i;
-var<private> open: array<Open, 2>;
+// The ray's origin seen from the right eye, and its direction.
+var<private> from_right: vec3f;
+var<private> ray_d: vec3f;
+// The t of the ray's last contributing sample: the end of every open
+// segment.
+var<private> last_t: f32;
+// Columns, or the rows where they are the only family (`major_axis`); the
+// rows where both are in use. Not an array: indexing private arrays by a
+// variable sends them to memory on some compilers (lavapipe among them).
+var<private> major: Open;
+var<private> major_axis: u32;
+var<private> rows: Open;
 
-fn emit(axis: u32, at: i32, value: vec4f, depth: vec3f) {
+fn right_distance(t: f32) -> f32 {
+    return length(from_right + ray_d * t);
+}
+
+// Writes a segment of the ray, from t.x to t.y, crossing the depth
+// threshold at t.z, into right pixel `at` of family `axis`.
+fn emit(axis: u32, at: i32, value: vec4f, t: vec3f) {
     let size = select(i32(stereo.width), i32(stereo.height), axis == 1u);
     if at < 0 || at >= size {
         return;
@@ -37,64 +65,102 @@ fn emit(axis: u32, at: i32, value: vec4f, depth: vec3f) {
     let layer = layer_of(left, axis);
     textureStore(layers, texel, layer, value);
     if stereo.has_depth != 0u {
-        textureStore(depths, texel, layer, vec4f(depth, 0.0));
+        let crossed = select(INFINITY, right_distance(t.z), t.z < INFINITY);
+        textureStore(depths, texel, layer, vec4f(right_distance(t.x), right_distance(t.y), crossed, 0.0));
     }
 }
 
-fn on_sample(p: vec3f, lit: vec3f, a: f32) {
-    let h = vec4f(p, 1.0);
-    let right = vec2f(dot(stereo.right_x, h), dot(stereo.right_y, h)) / dot(stereo.right_w, h);
-    for (var axis = 0u; axis < 2u; axis++) {
-        if !open[axis].on {
-            continue;
-        }
-        let own = along(left, axis);
-        // Clamped in float first: converting an out-of-range float is undefined.
-        let offset = clamp(alongf(right, axis) - f32(own), f32(open[axis].lo), f32(open[axis].hi));
-        var pixel = own + i32(round(offset));
-        let dir = open[axis].dir;
-        // The sample stands for the stretch of ray since the last one; where
-        // that stretch crosses several right pixels (the volume near the
-        // eyes), each gets the opacity of its share of the stretch rather
-        // than one getting all and the others none.
-        var share = a;
-        let distance = length(p - stereo.right_eye);
-        if open[axis].first == NO_PIXEL {
-            open[axis].first = pixel;
-            open[axis].pixel = pixel;
-        } else {
-            // Rounding noise must not step back into a written pixel.
-            pixel = select(min(pixel, open[axis].pixel), max(pixel, open[axis].pixel), dir > 0);
-            if pixel != open[axis].pixel {
-                emit(axis, open[axis].pixel, open[axis].color, open[axis].depth);
-                let gap = abs(pixel - open[axis].pixel);
-                if gap > 1 {
-                    share = 1.0 - pow(1.0 - min(a, 1.0), 1.0 / f32(gap));
-                }
-                let crossed = select(INFINITY, distance, share >= stereo.depth_threshold);
+fn advance(s: ptr<private, Open>, axis: u32, t: f32, lit: vec3f, a: f32) {
+    if !(*s).on {
+        return;
+    }
+    let line = (*s).line;
+    // Clamped in float first: converting an out-of-range float is undefined.
+    let offset = clamp((line.x + t * line.y) / (line.z + t * line.w), (*s).lo, (*s).hi);
+    var pixel = along(left, axis) + i32(round(offset));
+    let dir = (*s).dir;
+    // The sample stands for the stretch of ray since the last one; where
+    // that stretch crosses several right pixels (the volume near the
+    // eyes), each gets the opacity of its share of the stretch rather
+    // than one getting all and the others none.
+    var share = a;
+    if (*s).first == NO_PIXEL {
+        (*s).first = pixel;
+        (*s).pixel = pixel;
+        (*s).first_t = t;
+    } else {
+        // Rounding noise must not step back into a written pixel.
+        pixel = select(min(pixel, (*s).pixel), max(pixel, (*s).pixel), dir > 0);
+        if pixel != (*s).pixel {
+            emit(axis, (*s).pixel, (*s).color, vec3f((*s).first_t, last_t, (*s).crossed_t));
+            let gap = abs(pixel - (*s).pixel);
+            if gap > 1 {
+                share = 1.0 - pow(1.0 - min(a, 1.0), 1.0 / f32(gap));
                 // Every texel inside the span is this frame's: the pixels
                 // stepped over get their share.
+                let crossed = select(INFINITY, t, share >= stereo.depth_threshold);
                 for (var k = 1; k < gap; k++) {
-                    emit(axis, open[axis].pixel + k * dir, vec4f(lit * share, share), vec3f(distance, distance, crossed));
+                    emit(axis, (*s).pixel + k * dir, vec4f(lit * share, share), vec3f(t, t, crossed));
                 }
-                open[axis].color = vec4f(0.0);
-                open[axis].depth = vec3f(INFINITY);
-                open[axis].pixel = pixel;
             }
-        }
-        if open[axis].depth.x == INFINITY {
-            open[axis].depth.x = distance;
-        }
-        open[axis].depth.y = distance;
-        // The same arithmetic as the left eye's accumulation, so a single
-        // segment (e = 0) equals the left pixel exactly.
-        let s = open[axis].color;
-        let weight = (1.0 - s.a) * share;
-        open[axis].color = vec4f(s.rgb + lit * weight, s.a + weight);
-        if open[axis].depth.z == INFINITY && open[axis].color.a >= stereo.depth_threshold {
-            open[axis].depth.z = distance;
+            (*s).color = vec4f(0.0);
+            (*s).first_t = t;
+            (*s).crossed_t = INFINITY;
+            (*s).pixel = pixel;
         }
     }
+    // The same arithmetic as the left eye's accumulation, so a single
+    // segment (e = 0) equals the left pixel exactly.
+    let c = (*s).color;
+    let weight = (1.0 - c.a) * share;
+    (*s).color = vec4f(c.rgb + lit * weight, c.a + weight);
+    if (*s).crossed_t == INFINITY && (*s).color.a >= stereo.depth_threshold {
+        (*s).crossed_t = t;
+    }
+}
+
+fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
+    advance(&major, major_axis, t, lit, a);
+    if BOTH_FAMILIES {
+        advance(&rows, 1u, t, lit, a);
+    }
+    last_t = t;
+}
+
+// Family `axis`'s segment state for the ray (o, d) of left pixel `left`.
+fn open_family(axis: u32, o: vec3f, d: vec3f) -> Open {
+    let g = g_of(left);
+    let along_g = alongf(g, axis);
+    let across_g = acrossf(g, axis);
+    let near = round(stereo.lambda_near * along_g);
+    let far = round(stereo.lambda_far * along_g);
+    let spread = stereo.lambda_far - stereo.lambda_near;
+    let row = select(stereo.right_x, stereo.right_y, axis == 1u);
+    let own = f32(along(left, axis));
+    let w = vec2f(dot(stereo.right_w, vec4f(o, 1.0)), dot(stereo.right_w.xyz, d));
+    let x = vec2f(dot(row, vec4f(o, 1.0)), dot(row.xyz, d)) - own * w;
+    return Open(
+        (stereo.families & (1u << axis)) != 0u && abs(along_g) >= abs(across_g) - abs(stereo.epipole.z),
+        NO_PIXEL,
+        NO_PIXEL,
+        select(-1, 1, spread * along_g >= 0.0),
+        vec4f(0.0),
+        INFINITY,
+        INFINITY,
+        min(near, far),
+        max(near, far),
+        vec4f(x, w),
+    );
+}
+
+// Writes the family's last segment; the right coordinates the ray wrote,
+// first > last if none.
+fn close_family(s: ptr<private, Open>, axis: u32) -> vec2i {
+    if !(*s).on || (*s).first == NO_PIXEL {
+        return vec2i(1, 0);
+    }
+    emit(axis, (*s).pixel, (*s).color, vec3f((*s).first_t, last_t, (*s).crossed_t));
+    return vec2i(min((*s).first, (*s).pixel), max((*s).first, (*s).pixel));
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
@@ -104,38 +170,19 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
         return;
     }
     left = vec2i(id.xy) + stereo.first;
-    let g = g_of(left);
-    let spread = stereo.lambda_far - stereo.lambda_near;
-    for (var axis = 0u; axis < 2u; axis++) {
-        let major = alongf(g, axis);
-        let minor = acrossf(g, axis);
-        let near = i32(round(stereo.lambda_near * major));
-        let far = i32(round(stereo.lambda_far * major));
-        open[axis] = Open(
-            (stereo.families & (1u << axis)) != 0u && abs(major) >= abs(minor) - abs(stereo.epipole.z),
-            NO_PIXEL,
-            NO_PIXEL,
-            vec4f(0.0),
-            vec3f(INFINITY),
-            select(-1, 1, spread * major >= 0.0),
-            min(near, far),
-            max(near, far),
-        );
+    let ray = primary_ray(f32(left.x), f32(left.y));
+    from_right = ray.o - stereo.right_eye;
+    ray_d = ray.d;
+    major_axis = select(0u, 1u, stereo.families == 2u);
+    major = open_family(major_axis, ray.o, ray.d);
+    if BOTH_FAMILIES {
+        rows = open_family(1u, ray.o, ray.d);
     }
-    let m = march(f32(left.x), f32(left.y));
-    var span = vec4i(1, 0, 1, 0);
-    for (var axis = 0u; axis < 2u; axis++) {
-        if !open[axis].on || open[axis].first == NO_PIXEL {
-            continue;
-        }
-        emit(axis, open[axis].pixel, open[axis].color, open[axis].depth);
-        let lo = min(open[axis].first, open[axis].pixel);
-        let hi = max(open[axis].first, open[axis].pixel);
-        if axis == 0u {
-            span = vec4i(lo, hi, span.z, span.w);
-        } else {
-            span = vec4i(span.x, span.y, lo, hi);
-        }
+    let m = march(ray);
+    let major_span = close_family(&major, major_axis);
+    var span = select(vec4i(major_span, 1, 0), vec4i(1, 0, major_span), major_axis == 1u);
+    if BOTH_FAMILIES {
+        span = vec4i(span.xy, close_family(&rows, 1u));
     }
     spans[span_index(left)] = span;
 

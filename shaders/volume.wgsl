@@ -7,8 +7,9 @@
 // the bindings (`params`, `volume0`, `table`, ...) from the ray caster's
 // table in src/render/gpu/raycast.rs.
 // Entry points live in raycast.wgsl, capture.wgsl and reproject.wgsl; each
-// defines `on_sample`, which sees every sample that contributes (the
-// re-projection path splits the ray into right-eye segments there).
+// defines `on_sample(p, t, lit, a)`, which sees every sample that
+// contributes, at p = o + t d along its ray (the re-projection path splits
+// the ray into right-eye segments there).
 
 // Filtered sampling (RenderSettings::sampling): one hardware-filtered fetch
 // per volume sample, and for primary samples one filtered fetch of the
@@ -359,7 +360,19 @@ fn region(spans: ptr<function, array<vec2f, MAX_VOLUMES>>, p: vec3f, d: vec3f, t
     return vec2f(1.0, clear);
 }
 
+// A primary ray o + t d, d of unit length.
+struct Ray {
+    o: vec3f,
+    d: vec3f,
+}
+
 // The ray of pixel (fx, fy); columns outside the image are allowed.
+fn primary_ray(fx: f32, fy: f32) -> Ray {
+    let o = params.ray_origin + fx * params.ray_origin_dx + fy * params.ray_origin_dy;
+    return Ray(o, normalize(params.ray_dir + fx * params.ray_dir_dx + fy * params.ray_dir_dy));
+}
+
+// What one ray gathered.
 struct Marched {
     // Premultiplied color and opacity accumulated front to back.
     color: vec4f,
@@ -378,9 +391,9 @@ fn enter_exit(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f) -> vec2f {
     return vec2f(max(max(max(tn.x, tn.y), tn.z), params.t_near), min(min(min(tf.x, tf.y), tf.z), params.t_far));
 }
 
-fn march(fx: f32, fy: f32) -> Marched {
-    let o = params.ray_origin + fx * params.ray_origin_dx + fy * params.ray_origin_dy;
-    let d = normalize(params.ray_dir + fx * params.ray_dir_dx + fy * params.ray_dir_dy);
+fn march(ray: Ray) -> Marched {
+    let o = ray.o;
+    let d = ray.d;
 
     let step = params.step;
     var acc = vec4f(0.0);
@@ -466,7 +479,7 @@ fn march(fx: f32, fy: f32) -> Marched {
 fn composite(acc: ptr<function, vec4f>, depth: ptr<function, f32>, m: Mixture, p: vec3f, t: f32) -> bool {
     let lit = m.emitted / m.weight * shade(p) * params.light_color;
     let a = m.alpha;
-    on_sample(p, lit, a);
+    on_sample(p, t, lit, a);
     let weight = (1.0 - (*acc).a) * a;
     *acc = vec4f((*acc).rgb + lit * weight, (*acc).a + weight);
     if *depth == bitcast<f32>(0x7f800000u) && (*acc).a >= params.depth_threshold {

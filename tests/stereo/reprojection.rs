@@ -107,6 +107,8 @@ fn hmd_right_eye_matches_two_pass_and_left_eye_is_unchanged() {
             LayerFormat::Rgba16F,
         );
         assert_eq!(stereo.left.color, left.color, "left eye at {angle}");
+        // The same samples, so the same leaps over empty space.
+        assert_eq!(stereo.left.samples, left.samples, "left samples at {angle}");
         assert_ne!(left.color, right.color, "the eyes must differ at {angle}");
         let d = dssim(&stereo.right, &right).unwrap();
         assert!(d < 0.02, "DSSIM {d} at angle {angle}, {shading}");
@@ -469,6 +471,7 @@ fn every_wall_and_head_pose_reprojects_like_two_pass_with_depth() {
         let what = format!("{wall_name} at {ypr} (swapped: {swapped})");
         assert_eq!(stereo.left.color, l.color, "{what}: left eye");
         assert_eq!(stereo.left.depth, l.depth, "{what}: left depth");
+        assert_eq!(stereo.left.samples, l.samples, "{what}: left samples");
         let d = dssim(&stereo.right, &r).unwrap();
         let unmoved = dssim(&l, &r).unwrap();
         eprintln!("{what}: DSSIM {d:.4}, left image as the right one {unmoved:.4}");

@@ -48,8 +48,9 @@ binding_table! {
 /// Pipelines for one layer format, and the resources of the last shape.
 pub(super) struct LayersPass {
     format: LayerFormat,
-    /// The left eye's march, for one volume and for several.
-    reproject: Variants,
+    /// The left eye's march, for one volume and for several: writing one
+    /// family of lines, and both.
+    reproject: [Variants; 2],
     clear: wgpu::ComputePipeline,
     composite: wgpu::ComputePipeline,
     writer_layout: ReprojectLayout,
@@ -150,12 +151,20 @@ impl LayersPass {
         let pipeline = |label, entry, constants: &[(&str, f64)]| {
             compute_pipeline(device, label, "reproject", entry, &writer, constants)
         };
+        let families = |count: u32| -> Result<Variants, RenderError> {
+            let both = if count == 2 { 1.0 } else { 0.0 };
+            Ok(Variants {
+                one: pipeline(
+                    "re-projection",
+                    "main",
+                    &[("ONE_VOLUME", 1.0), ("BOTH_FAMILIES", both)],
+                )?,
+                several: pipeline("re-projection", "main", &[("BOTH_FAMILIES", both)])?,
+            })
+        };
         Ok(Self {
             format,
-            reproject: Variants {
-                one: pipeline("re-projection", "main", &[("ONE_VOLUME", 1.0)])?,
-                several: pipeline("re-projection", "main", &[])?,
-            },
+            reproject: [families(1)?, families(2)?],
             clear: pipeline("layer clear", "clear", &[])?,
             composite: compute_pipeline(
                 device,
@@ -413,7 +422,7 @@ impl LayersPass {
             .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = raycast.group()?;
         let march = Pass {
-            pipeline: self.reproject.for_scene(scene),
+            pipeline: self.reproject[usize::from(plan.family_count() == 2)].for_scene(scene),
             groups: &[volume, &target.writer],
             band: Some(&raycast.band_group),
         };
