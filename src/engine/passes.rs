@@ -14,8 +14,8 @@ use super::status::{Note, Notify, Severity};
 use crate::geometry::MultiViewDisplay;
 use crate::render::iso::{interleave, Panel};
 use crate::render::stereo::{
-    decide, Bounds, Eyes, LayerFormat, LayerRequest, RenderFacts, Reprojection, StereoFrames,
-    TwoPasses,
+    decide, Bounds, Eyes, LayerFormat, LayerRequest, PairChoice, PairCosts, PairPath, RenderFacts,
+    Reprojection, StereoFrames, TwoPasses,
 };
 use crate::render::Render as _;
 use crate::render::{ColorFormat, Frame, FrameDesc, RenderError, Renderer};
@@ -38,21 +38,32 @@ fn stop_check(job: &RenderJob) -> Result<(), RenderError> {
 /// a single view, one per eye (stitched) for a stereo camera, and one
 /// pass for both eyes where re-projection applies: the two eyes of a
 /// stereo camera, or the frame's view and its partner frame's, whose share
-/// of the pass goes to `handed`.
+/// of the pass goes to `handed`. Where the pair could re-project, `costs`
+/// says whether it pays on this view and learns what the path taken cost.
 pub fn render_views(
     r: &mut Renderer,
     scene: &Scene,
     job: &RenderJob,
     report: &Notify,
     handed: &mut Duration,
+    costs: &mut PairCosts,
 ) -> Result<Frame, RenderError> {
     let info = |message: String| report(Note::frame(Severity::Info, job.frame, message));
     let inputs = &job.inputs;
+    // The pose class and the eyes' share of a pair rendered in two passes
+    // on cost: the passes' times go to `costs` once they are rendered.
+    let mut two_passes: Option<(u32, f64)> = None;
+    let mut refused = |costs: &mut PairCosts, class: u32, choice: &PairChoice, eyes: f64| {
+        if choice.refuses_reprojection() && costs.first_refusal(job.frame) {
+            info(refusal(choice));
+        }
+        two_passes = Some((class, eyes));
+    };
     match (&inputs.views, &job.partner) {
         (Views::StereoPair([left, right]), _) => {
             stop_check(job)?;
-            match stereo_camera(r, scene, job, left, right) {
-                Ok((pair, layers)) => {
+            match stereo_camera(r, scene, job, left, right, costs) {
+                Ok(Paired::Reprojected(pair, layers)) => {
                     info(format!(
                         "stereo frame: both eyes in one re-projection pass ({layers} layers)"
                     ));
@@ -61,6 +72,7 @@ pub fn render_views(
                         &[(left.offset, pair.left), (right.offset, pair.right)],
                     );
                 }
+                Ok(Paired::OnCost(class, choice)) => refused(costs, class, &choice, 1.0),
                 Err(why) => {
                     stop_check(job)?;
                     info(format!("stereo frame: two passes ({why})"))
@@ -69,8 +81,10 @@ pub fn render_views(
         }
         (Views::Mono(one), Some(partner)) => {
             stop_check(job)?;
-            match with_partner(r, scene, job, one, partner) {
-                Ok(pair) => {
+            match with_partner(r, scene, job, one, partner, costs) {
+                // The partner renders its own eye, as costly as this one.
+                Ok(Paired::OnCost(class, choice)) => refused(costs, class, &choice, 2.0),
+                Ok(Paired::Reprojected(pair, _)) => {
                     let share = Duration::from_secs_f64(pair.times.composite_ms.max(0.0) / 1e3);
                     partner.slot.keep(Kept {
                         inputs: Arc::clone(&partner.inputs),
@@ -103,16 +117,73 @@ pub fn render_views(
         };
         r.render_until(scene, &view.rays, &inputs.settings, &desc, &job.slot.stop)
     };
-    match inputs.views.all() {
-        [one] if one.size == inputs.desc.size => render(r, one),
+    let mut pass_ms = 0.0;
+    let mut timed = |r: &mut Renderer, view: &EyeView| {
+        let frame = render(r, view);
+        if let Renderer::Gpu(gpu) = r {
+            pass_ms += gpu.last_pass_ms();
+        }
+        frame
+    };
+    let frame = match inputs.views.all() {
+        [one] if one.size == inputs.desc.size => timed(r, one),
         views => {
             let mut parts = Vec::with_capacity(views.len());
             for view in views.iter().filter(|v| v.size.min_element() > 0) {
-                parts.push((view.offset, render(r, view)?));
+                parts.push((view.offset, timed(r, view)?));
             }
             Frame::stitched(&inputs.desc, &parts)
         }
+    };
+    if let (Ok(_), Some((class, eyes))) = (&frame, two_passes) {
+        costs.record_two_passes(job.frame, class, eyes * pass_ms);
     }
+    frame
+}
+
+/// What a host hears, once per view, when its pairs take two passes
+/// because re-projection measured dearer there.
+fn refusal(choice: &PairChoice) -> String {
+    let ms = |v: Option<f64>| v.map_or("?".into(), |v| format!("{v:.1}"));
+    format!(
+        "stereo: two passes on this view, where re-projection measured {} ms a pair against {} ms for two passes; re-projection is measured again every {} frames",
+        ms(choice.reprojected_ms),
+        ms(choice.two_passes_ms),
+        PairCosts::PROBE_AFTER
+    )
+}
+
+/// A pair that could re-project: re-projected (with its layer count), or
+/// left to two passes on cost (its pose class, and the choice).
+enum Paired {
+    Reprojected(StereoFrames, u32),
+    OnCost(u32, PairChoice),
+}
+
+/// Runs `plan` unless `costs` says two passes are cheaper on this view;
+/// a re-projected pair's time goes to `costs`.
+fn paid(
+    r: &mut Renderer,
+    scene: &Scene,
+    job: &RenderJob,
+    left: &EyeView,
+    plan: &Reprojection,
+    costs: &mut PairCosts,
+) -> Result<Paired, String> {
+    let class = plan.plan.family_count();
+    let choice = costs.choose(job.frame, class);
+    if choice.path == PairPath::TwoPasses {
+        return Ok(Paired::OnCost(class, choice));
+    }
+    let pair = reproject(r, scene, job, left, plan)?;
+    let times = pair.times;
+    costs.record_reprojected(
+        job.frame,
+        class,
+        times.left_ms + times.composite_ms,
+        times.left_ms,
+    );
+    Ok(Paired::Reprojected(pair, plan.layers))
 }
 
 /// What the job's renderer brings to the stereo decision.
@@ -133,7 +204,8 @@ fn stereo_camera(
     job: &RenderJob,
     left: &EyeView,
     right: &EyeView,
-) -> Result<(StereoFrames, u32), String> {
+    costs: &mut PairCosts,
+) -> Result<Paired, String> {
     let not_perspective = || "an eye is not a perspective camera".to_owned();
     let eyes = Eyes {
         left: left.matrix.ok_or_else(not_perspective),
@@ -147,8 +219,7 @@ fn stereo_camera(
         Some(facts(r, job)),
     )
     .map_err(|e| e.to_string())?;
-    let pair = reproject(r, scene, job, left, &plan)?;
-    Ok((pair, plan.layers))
+    paid(r, scene, job, left, &plan, costs)
 }
 
 /// The frame's view and its partner's from the pass planned when the
@@ -159,9 +230,10 @@ fn with_partner(
     job: &RenderJob,
     one: &EyeView,
     partner: &Partner,
-) -> Result<StereoFrames, String> {
+    costs: &mut PairCosts,
+) -> Result<Paired, String> {
     facts(r, job).admit().map_err(|e| e.to_string())?;
-    reproject(r, scene, job, one, &partner.plan)
+    paid(r, scene, job, one, &partner.plan, costs)
 }
 
 fn reproject(

@@ -14,6 +14,7 @@ use super::passes::{render_panel, render_surface_views, render_views, KeptPanel}
 use super::slot::{FrameSlot, DISCARDED};
 use super::status::{panic_message, About, Note, Notify, Severity, StatusCode};
 use super::threads::join_unless_current;
+use crate::render::stereo::PairCosts;
 use crate::render::warp::{Source, WarpMode};
 use crate::render::{AutoChoice, Backend, Frame, Renderer};
 
@@ -45,10 +46,11 @@ impl Worker {
                 .spawn(move || {
                     let mut renderer = None;
                     let mut kept = KeptPanel::default();
+                    let mut costs = PairCosts::new();
                     for job in rx {
                         match job.background {
                             Some(_) => run_background(job, &mut renderer, &report),
-                            None => run(job, &mut renderer, &mut kept, &report),
+                            None => run(job, &mut renderer, (&mut kept, &mut costs), &report),
                         }
                     }
                 });
@@ -188,7 +190,7 @@ fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, re
 fn run(
     job: RenderJob,
     renderer: &mut Option<(Backend, Renderer)>,
-    kept: &mut KeptPanel,
+    (kept, costs): (&mut KeptPanel, &mut PairCosts),
     report: &Notify,
 ) {
     let started = Instant::now();
@@ -243,7 +245,7 @@ fn run(
         }
         match (&inputs.views, &inputs.scene) {
             (Views::Panel(panel), _) => render_panel(r, &job, panel, kept),
-            (_, Some(scene)) => render_views(r, scene, &job, report, &mut handed),
+            (_, Some(scene)) => render_views(r, scene, &job, report, &mut handed, costs),
             (_, None) => render_surface_views(r, &job),
         }
         .map_err(|e| e.to_string())

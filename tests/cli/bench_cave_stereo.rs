@@ -1,7 +1,8 @@
 //! `caveray bench cave-stereo` end to end on a tiny rig-sized run: the
 //! shipped head path by default, every wall and frame in the JSON with
-//! its path and reason, the share of wall-frames re-projected, plots over
-//! time and the worst heat map; bad arguments and head paths are
+//! its path and reason, the share of wall-frames re-projected, the cost
+//! planner's path, estimate and error per wall-frame and its summary,
+//! plots over time and the worst heat map; bad arguments and head paths are
 //! one-line errors naming the file.
 
 use crate::common;
@@ -46,7 +47,8 @@ fn the_shipped_head_path_runs_on_every_wall_and_reports_everything() {
     let timeline = report["timeline"].as_array().unwrap();
     assert_eq!(timeline.len(), 4);
     assert_eq!(report["wall_frames"], 4 * 5);
-    let (mut visible, mut reprojected) = (0, 0);
+    let (mut visible, mut reprojected, mut planned_two) = (0, 0, 0);
+    let (mut planned_sum, mut t_l_sum, mut t_r_sum, mut estimated) = (0.0, 0.0, 0.0, 0);
     for frame in timeline {
         let walls = frame["walls"].as_array().unwrap();
         let names: Vec<&str> = walls.iter().map(|w| w["wall"].as_str().unwrap()).collect();
@@ -64,6 +66,29 @@ fn the_shipped_head_path_runs_on_every_wall_and_reports_everything() {
                     assert!((f("speedup_v") - v).abs() < 1e-12);
                     assert!(f("dssim") < 0.05, "{w}");
                     assert!(w["layers"].as_u64().unwrap() >= 1);
+                    assert!(f("composite_ms") > 0.0 && f("composite_ms") < f("t_lr_ms"));
+                    // The planner's path is timed as that path: T_l+r, or
+                    // both eyes' own passes.
+                    let planned = match w["planned"].as_str().unwrap() {
+                        "reprojected" => f("t_lr_ms"),
+                        "two-pass" => {
+                            planned_two += 1;
+                            f("t_l_ms") + f("t_r_ms")
+                        }
+                        other => panic!("unknown planned path {other}"),
+                    };
+                    assert_eq!(f("t_planned_ms"), planned, "{w}");
+                    // A wall the warm-up measured has an estimate, and
+                    // its error.
+                    if let Some(expected) = w["expected_ms"].as_f64() {
+                        let error = f("t_planned_ms") / expected - 1.0;
+                        assert!((f("estimate_error") - error).abs() < 1e-9, "{w}");
+                        estimated += 1;
+                    }
+                    assert!(w["probe"].is_boolean());
+                    planned_sum += planned;
+                    t_l_sum += f("t_l_ms");
+                    t_r_sum += f("t_r_ms");
                 }
                 "two-pass" => {
                     visible += 1;
@@ -76,6 +101,20 @@ fn the_shipped_head_path_runs_on_every_wall_and_reports_everything() {
     }
     assert_eq!(report["visible_wall_frames"], visible);
     assert_eq!(report["reprojected_wall_frames"], reprojected);
+    let planner = &report["planner"];
+    assert_eq!(planner["planned_two_passes"], planned_two);
+    assert!(estimated > 0);
+    assert_eq!(planner["probe_after"], 120);
+    assert!(
+        planner["estimate_error_mean"].as_f64().unwrap()
+            <= planner["estimate_error_max"].as_f64().unwrap()
+    );
+    let v_planned = 1.0 - (planned_sum - t_l_sum) / t_r_sum;
+    let reported = report["speedup_v_planned"].as_f64().unwrap();
+    assert!(
+        (reported - v_planned).abs() < 1e-9,
+        "{reported} vs {v_planned}"
+    );
     let share = report["reprojected_share"].as_f64().unwrap();
     assert!((share - f64::from(reprojected) / f64::from(visible)).abs() < 1e-12);
     // Every head pose of the walk re-projects every wall that sees the
@@ -95,6 +134,10 @@ fn the_shipped_head_path_runs_on_every_wall_and_reports_everything() {
     assert_eq!(heatmap.height(), 32);
     assert!(
         stdout.contains("visible wall-frames re-projected"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("planned (re-projection or two passes"),
         "{stdout}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

@@ -2,9 +2,11 @@
 //! every wall of a CAVE, along a head path (walking, turning, rolling,
 //! looking down). Per frame and wall: whether the wall's two eyes could be
 //! re-projected (and why not), the pass times of the left eye, the right
-//! eye and the re-projection (V = 1 - (T_l+r - T_l) / T_r), and the DSSIM
-//! of the re-projected right eye against its own pass. Writes JSON, two
-//! plots over time and the worst wall-frame's DSSIM heat map.
+//! eye and the re-projection (V = 1 - (T_l+r - T_l) / T_r), the DSSIM
+//! of the re-projected right eye against its own pass, and the path the
+//! cost planner (`PairCosts`) would take from the times of the paths it
+//! took on the wall's earlier frames, with its estimate's error. Writes
+//! JSON, two plots over time and the worst wall-frame's DSSIM heat map.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -13,8 +15,8 @@ use anari_library_caveray::cave::{pose_along, Eye, HeadPose, PathKey, Rig, Scene
 use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
 use anari_library_caveray::output::{Chart, Series, XAxis};
 use anari_library_caveray::render::stereo::{
-    decide, Bounds, Eyes, LayerFormat, LayerRequest, NotEpipolar, Reprojection, ReprojectionError,
-    TwoPasses,
+    decide, Bounds, Eyes, LayerFormat, LayerRequest, NotEpipolar, PairCosts, PairPath,
+    Reprojection, ReprojectionError, TwoPasses,
 };
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
@@ -96,6 +98,10 @@ struct CaveStereoReport {
     dssim_max: f64,
     /// 1 - (sum T_l+r - sum T_l) / sum T_r over the re-projected wall-frames.
     speedup_v: f64,
+    /// The same with the planner's path's time for T_l+r (T_l + T_r where
+    /// it took two passes).
+    speedup_v_planned: f64,
+    planner: PlannerSummary,
     walls: Vec<WallSummary>,
     /// Why visible wall-frames rendered in two passes, most frequent first.
     fallbacks: Vec<Fallback>,
@@ -117,12 +123,34 @@ struct WallSummary {
     t_r_ms: f64,
     t_lr_ms: f64,
     speedup_v: f64,
+    speedup_v_planned: f64,
+    /// Wall-frames the planner gave two passes, and the probes among all.
+    planned_two_passes: usize,
+    probes: usize,
     dssim_mean: f64,
     dssim_max: f64,
     layers_max: u32,
     /// Share of the re-projected frames whose epipolar lines run along
     /// both rows and columns (an epipole on or near the wall).
     radial_share: f64,
+}
+
+/// How the cost planner did over the re-projectable wall-frames.
+#[derive(Serialize)]
+struct PlannerSummary {
+    /// Frames of a pose class on one path before the other is measured again.
+    probe_after: u32,
+    planned_two_passes: usize,
+    /// Wall-frames whose path was taken to measure it (the warm-up seeds
+    /// both paths of every wall, as a session's first frames would).
+    probes: usize,
+    /// |measured / expected - 1| of the chosen path, where it had an estimate.
+    estimate_error_mean: f64,
+    estimate_error_max: f64,
+    /// Wall-frames (probes aside) whose chosen path measured dearer than
+    /// the other, and the milliseconds that cost in all.
+    wrong_choices: usize,
+    wrong_choice_ms: f64,
 }
 
 #[derive(Serialize)]
@@ -159,8 +187,28 @@ struct Measured {
     t_l_ms: f64,
     t_r_ms: f64,
     t_lr_ms: f64,
+    /// The compositing's share of T_l+r.
+    composite_ms: f64,
     speedup_v: f64,
     dssim: f64,
+    /// The planner's path, whether it was a probe, what it expected the
+    /// path to take and the relative error of that (measured / expected - 1).
+    planned: &'static str,
+    probe: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    expected_ms: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    estimate_error: Option<f64>,
+    /// The planned path's time: T_l+r, or T_l + T_r.
+    t_planned_ms: f64,
+}
+
+impl Measured {
+    /// The other path's time measured less than the chosen one's.
+    fn wrong_choice_ms(&self) -> f64 {
+        let two = self.t_l_ms + self.t_r_ms;
+        (self.t_planned_ms - two.min(self.t_lr_ms)).max(0.0)
+    }
 }
 
 pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
@@ -230,12 +278,21 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
         settings: &settings,
         format: args.layer_format,
         worst: None,
+        costs: PairCosts::new(),
+        phase: Phase::Warming,
     };
-    // Compiles and warms every pipeline before anything is timed.
+    // Compiles and warms every pipeline and fills every buffer before
+    // anything is timed (a first frame's times are a first frame's), then
+    // gives the planner both paths' times of every wall, as the first
+    // frames of a session would.
     let first = pose(&keys, start);
-    for (wall, size) in rig.walls.iter().zip(&sizes) {
-        bench.wall(wall, *size, &first)?;
+    for phase in [Phase::Warming, Phase::Seeding] {
+        bench.phase = phase;
+        for (wall, size) in rig.walls.iter().zip(&sizes) {
+            bench.wall(wall, *size, &first)?;
+        }
     }
+    bench.phase = Phase::Timed;
     let mut progress = Progress::new(times.len());
     let mut timeline = Vec::with_capacity(times.len());
     for &t in &times {
@@ -317,6 +374,20 @@ struct Bench<'a> {
     format: LayerFormat,
     /// The highest DSSIM so far: (DSSIM, two-pass right, re-projected right).
     worst: Option<(f64, Frame, Frame)>,
+    /// The planner, fed only the times of the paths it chose.
+    costs: PairCosts,
+    phase: Phase,
+}
+
+/// What a wall-frame's times are for.
+#[derive(Clone, Copy, PartialEq)]
+enum Phase {
+    /// Nothing: pipelines and buffers are being made.
+    Warming,
+    /// The planner, both paths.
+    Seeding,
+    /// The report, and the planner the chosen path.
+    Timed,
 }
 
 impl Bench<'_> {
@@ -357,9 +428,45 @@ impl Bench<'_> {
             Err(e) => return Ok(record("two-pass", Some(e.to_string()), None)),
         };
         match self.measure(&left, &right, &plan)? {
-            Ok(measured) => Ok(record("reprojected", None, Some(measured))),
+            Ok(mut measured) => {
+                let view = self.rig.walls.iter().position(|w| w.name == wall.name);
+                self.plan(view.unwrap_or(0) as u64, &mut measured);
+                Ok(record("reprojected", None, Some(measured)))
+            }
             Err(why) => Ok(record("two-pass", Some(why), None)),
         }
+    }
+
+    /// The planner's path for the wall-frame, from what it measured on the
+    /// wall's earlier frames; then the path's time goes to it.
+    fn plan(&mut self, view: u64, m: &mut Measured) {
+        let class = m.families;
+        let choice = self.costs.choose(view, class);
+        let ms = |path| match path {
+            PairPath::Reprojected => m.t_lr_ms,
+            PairPath::TwoPasses => m.t_l_ms + m.t_r_ms,
+        };
+        if self.phase == Phase::Warming {
+            return;
+        }
+        let left_ms = m.t_lr_ms - m.composite_ms;
+        let record = |costs: &mut PairCosts, path| match path {
+            PairPath::Reprojected => costs.record_reprojected(view, class, ms(path), left_ms),
+            PairPath::TwoPasses => costs.record_two_passes(view, class, ms(path)),
+        };
+        if self.phase == Phase::Seeding {
+            for path in [PairPath::Reprojected, PairPath::TwoPasses] {
+                record(&mut self.costs, path);
+            }
+        }
+        m.estimate_error = record(&mut self.costs, choice.path);
+        m.planned = match choice.path {
+            PairPath::Reprojected => "reprojected",
+            PairPath::TwoPasses => "two-pass",
+        };
+        m.probe = choice.probe;
+        m.expected_ms = choice.expected_ms();
+        m.t_planned_ms = ms(choice.path);
     }
 
     /// Both ways of rendering the wall; the outer error is a failure of
@@ -402,20 +509,29 @@ impl Bench<'_> {
             t_l_ms: t_l,
             t_r_ms: t_r,
             t_lr_ms: t_lr,
+            composite_ms: stereo.times.composite_ms,
             speedup_v: 1.0 - (t_lr - t_l) / t_r,
             dssim: d,
+            planned: "reprojected",
+            probe: false,
+            expected_ms: None,
+            estimate_error: None,
+            t_planned_ms: t_lr,
         }))
     }
 }
 
-/// V over a set of measurements: sums, not a mean of ratios.
-fn speedup(m: &[Measured]) -> f64 {
-    let sum = |f: fn(&Measured) -> f64| m.iter().map(f).sum::<f64>();
-    let (l, r, lr) = (sum(|m| m.t_l_ms), sum(|m| m.t_r_ms), sum(|m| m.t_lr_ms));
-    if r > 0.0 {
-        1.0 - (lr - l) / r
-    } else {
+/// V over a set of measurements, with `pair` as the pair's time: sums,
+/// not a mean of ratios.
+fn speedup(m: &[Measured], pair: fn(&Measured) -> f64) -> f64 {
+    let sum = |f: &dyn Fn(&Measured) -> f64| m.iter().map(f).sum::<f64>();
+    let (l, r, lr) = (sum(&|m| m.t_l_ms), sum(&|m| m.t_r_ms), sum(&|m| pair(m)));
+    // Sums of the same terms cancel to a rounding error, not to 0.
+    let v = if r > 0.0 { 1.0 - (lr - l) / r } else { 0.0 };
+    if v.abs() < 1e-9 {
         0.0
+    } else {
+        v
     }
 }
 
@@ -469,7 +585,10 @@ fn summarise(
                 t_l_ms: mean(m.iter().map(|m| m.t_l_ms)),
                 t_r_ms: mean(m.iter().map(|m| m.t_r_ms)),
                 t_lr_ms: mean(m.iter().map(|m| m.t_lr_ms)),
-                speedup_v: speedup(&m),
+                speedup_v: speedup(&m, |m| m.t_lr_ms),
+                speedup_v_planned: speedup(&m, |m| m.t_planned_ms),
+                planned_two_passes: m.iter().filter(|m| m.planned == "two-pass").count(),
+                probes: m.iter().filter(|m| m.probe).count(),
                 dssim_mean: mean(m.iter().map(|m| m.dssim)),
                 dssim_max: m.iter().map(|m| m.dssim).fold(0.0, f64::max),
                 layers_max: m.iter().map(|m| m.layers).max().unwrap_or(0),
@@ -526,13 +645,38 @@ fn summarise(
         reprojected_share: share(m.len(), seen),
         dssim_mean: mean(m.iter().map(|m| m.dssim)),
         dssim_max: m.iter().map(|m| m.dssim).fold(0.0, f64::max),
-        speedup_v: speedup(&m),
+        speedup_v: speedup(&m, |m| m.t_lr_ms),
+        speedup_v_planned: speedup(&m, |m| m.t_planned_ms),
+        planner: planner_summary(&m),
         walls,
         fallbacks,
         timeline,
         dssim_plot: stem("dssim.svg"),
         speedup_plot: stem("speedup.svg"),
         heatmap,
+    }
+}
+
+fn planner_summary(m: &[Measured]) -> PlannerSummary {
+    let errors: Vec<f64> = m
+        .iter()
+        .filter_map(|m| m.estimate_error)
+        .map(f64::abs)
+        .collect();
+    let wrong: Vec<f64> = m
+        .iter()
+        .filter(|m| !m.probe)
+        .map(Measured::wrong_choice_ms)
+        .filter(|&ms| ms > 0.0)
+        .collect();
+    PlannerSummary {
+        probe_after: PairCosts::PROBE_AFTER,
+        planned_two_passes: m.iter().filter(|m| m.planned == "two-pass").count(),
+        probes: m.iter().filter(|m| m.probe).count(),
+        estimate_error_mean: mean(errors.iter().copied()),
+        estimate_error_max: errors.iter().copied().fold(0.0, f64::max),
+        wrong_choices: wrong.len(),
+        wrong_choice_ms: wrong.iter().sum(),
     }
 }
 
@@ -601,7 +745,7 @@ fn print_table(report: &CaveStereoReport) {
         report.renderer.adapter().map_or("", |a| &a.name)
     );
     println!(
-        "{:<10} {:>9} {:>8} {:>12} {:>7} {:>8} {:>8} {:>8} {:>7} {:>8} {:>8}",
+        "{:<10} {:>9} {:>8} {:>12} {:>7} {:>8} {:>8} {:>8} {:>7} {:>9} {:>8} {:>8}",
         "wall",
         "size",
         "visible",
@@ -611,12 +755,13 @@ fn print_table(report: &CaveStereoReport) {
         "T_r ms",
         "T_l+r ms",
         "V %",
+        "planned %",
         "DSSIM",
         "max"
     );
     for w in &report.walls {
         println!(
-            "{:<10} {:>9} {:>8} {:>7} {:>3.0}% {:>6.0}% {:>8.1} {:>8.1} {:>8.1} {:>7.1} {:>8.4} {:>8.4}",
+            "{:<10} {:>9} {:>8} {:>7} {:>3.0}% {:>6.0}% {:>8.1} {:>8.1} {:>8.1} {:>7.1} {:>9.1} {:>8.4} {:>8.4}",
             w.name,
             format!("{}x{}", w.size[0], w.size[1]),
             w.visible,
@@ -627,6 +772,7 @@ fn print_table(report: &CaveStereoReport) {
             w.t_r_ms,
             w.t_lr_ms,
             100.0 * w.speedup_v,
+            100.0 * w.speedup_v_planned,
             w.dssim_mean,
             w.dssim_max
         );
@@ -639,6 +785,17 @@ fn print_table(report: &CaveStereoReport) {
         100.0 * report.speedup_v,
         report.dssim_mean,
         report.dssim_max
+    );
+    let p = &report.planner;
+    println!(
+        "planned (re-projection or two passes by the wall's earlier times): V {:.1}%, {} wall-frames in two passes, {} probes, estimate error {:.1}% mean, {:.1}% max, {} wrong choices ({:.1} ms)",
+        100.0 * report.speedup_v_planned,
+        p.planned_two_passes,
+        p.probes,
+        100.0 * p.estimate_error_mean,
+        100.0 * p.estimate_error_max,
+        p.wrong_choices,
+        p.wrong_choice_ms
     );
     for f in &report.fallbacks {
         println!(

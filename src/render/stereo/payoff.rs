@@ -1,0 +1,399 @@
+//! Whether re-projection pays for a view pair, judged from what the last
+//! frames of the same view measured. A re-projected pair costs its left
+//! pass (the march plus the segment writes) and the compositing; on a wall
+//! that sees only a faint edge of the volume that can exceed two plain
+//! passes. Costs are kept per view (a wall, a stereo camera, a frame and
+//! its partner) and per pose class (one family of epipolar lines or both,
+//! which run different pipelines), and where a class has not been
+//! measured yet the view's other classes stand in for it.
+//!
+//! A path is measured only when it is rendered. Until two passes have
+//! been, their cost is estimated from the re-projection's left pass (it
+//! marches what the left eye marches, and writes segments besides), so a
+//! view that pays keeps re-projecting from its first frame; the path not
+//! taken is tried again after [`PairCosts::PROBE_AFTER`] frames of a
+//! class, to notice a view whose content changed its costs.
+
+use std::collections::{HashMap, HashSet};
+
+/// The two ways to render a pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairPath {
+    Reprojected,
+    TwoPasses,
+}
+
+impl PairPath {
+    fn other(self) -> Self {
+        match self {
+            Self::Reprojected => Self::TwoPasses,
+            Self::TwoPasses => Self::Reprojected,
+        }
+    }
+}
+
+/// The path chosen for a pair, and what each path is expected to cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PairChoice {
+    pub path: PairPath,
+    /// Milliseconds each path is expected to take; `None` until measured.
+    pub reprojected_ms: Option<f64>,
+    pub two_passes_ms: Option<f64>,
+    /// The path is rendered to measure it, not because it is expected to
+    /// be cheaper.
+    pub probe: bool,
+}
+
+impl PairChoice {
+    /// The expected milliseconds of the chosen path.
+    pub fn expected_ms(&self) -> Option<f64> {
+        match self.path {
+            PairPath::Reprojected => self.reprojected_ms,
+            PairPath::TwoPasses => self.two_passes_ms,
+        }
+    }
+
+    /// Two passes because re-projection measured dearer.
+    pub fn refuses_reprojection(&self) -> bool {
+        self.path == PairPath::TwoPasses && !self.probe
+    }
+}
+
+/// The last few measurements of one cost. The fastest of them is the
+/// estimate: on a shared machine a pass takes up to twice as long in
+/// frames where others hold the cores (lavapipe at 80², two frames in
+/// five), and contention only ever slows a pass, so the fastest recent
+/// time is the path's own cost and the two paths compare fairly.
+#[derive(Clone, Copy, Default, Debug)]
+struct Recent {
+    ms: [f64; Recent::KEPT],
+    len: usize,
+    next: usize,
+}
+
+impl Recent {
+    const KEPT: usize = 7;
+
+    fn push(&mut self, ms: f64) {
+        self.ms[self.next] = ms;
+        self.next = (self.next + 1) % Self::KEPT;
+        self.len = (self.len + 1).min(Self::KEPT);
+    }
+
+    fn fastest(&self) -> Option<f64> {
+        self.ms[..self.len].iter().copied().reduce(f64::min)
+    }
+}
+
+#[derive(Clone, Copy, Default, Debug)]
+struct Costs {
+    /// Each path's milliseconds, as [`PairPath`] orders them.
+    ms: [Recent; 2],
+    /// The re-projection's left pass's milliseconds.
+    left_ms: Recent,
+    /// Frames since each path was last measured.
+    since: [u32; 2],
+}
+
+fn index(path: PairPath) -> usize {
+    match path {
+        PairPath::Reprojected => 0,
+        PairPath::TwoPasses => 1,
+    }
+}
+
+/// Measured pair costs per view and pose class.
+#[derive(Default)]
+pub struct PairCosts {
+    /// (view, Some(class)) per class; (view, None) over all classes.
+    costs: HashMap<(u64, Option<u32>), Costs>,
+    told: HashSet<u64>,
+}
+
+impl PairCosts {
+    /// Frames of a class on one path after which the other is measured
+    /// again (about 1.3 s at 90 Hz).
+    pub const PROBE_AFTER: u32 = 120;
+    /// Views kept: a host that makes frames without end starts afresh
+    /// here rather than growing the table.
+    const MAX_VIEWS: usize = 4096;
+    /// One eye's pass over the re-projection's left pass, for the
+    /// estimate of two passes none were measured for: segment writes add
+    /// 5 to 15% to the march on lavapipe (`bench stereo`, 256², no
+    /// shading), less where shading adds samples.
+    const EYE_SHARE: f64 = 0.9;
+    /// Re-projection must be expected this much cheaper to be chosen: a
+    /// close call goes to two passes, which are never slower than
+    /// themselves, and on small views the passes' noise from frame to
+    /// frame (20% and more on lavapipe) exceeds what re-projection saves.
+    const MARGIN: f64 = 0.1;
+
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn get(&self, view: u64, class: Option<u32>) -> Costs {
+        self.costs.get(&(view, class)).copied().unwrap_or_default()
+    }
+
+    /// The path for view `view`'s pair of pose class `class` (the plan's
+    /// family count): re-projection until it has been measured, then the
+    /// cheaper one (re-projection only by [`Self::MARGIN`]), and the other
+    /// after [`Self::PROBE_AFTER`] frames.
+    pub fn choose(&self, view: u64, class: u32) -> PairChoice {
+        let own = self.get(view, Some(class));
+        let all = self.get(view, None);
+        let ms = |path: PairPath| {
+            own.ms[index(path)]
+                .fastest()
+                .or(all.ms[index(path)].fastest())
+        };
+        let reprojected_ms = ms(PairPath::Reprojected);
+        let two_passes_ms = ms(PairPath::TwoPasses).or_else(|| {
+            own.left_ms
+                .fastest()
+                .or(all.left_ms.fastest())
+                .map(|left| 2.0 * Self::EYE_SHARE * left)
+        });
+        let choice = |path, probe| PairChoice {
+            path,
+            reprojected_ms,
+            two_passes_ms,
+            probe,
+        };
+        match (reprojected_ms, two_passes_ms) {
+            (None, _) => choice(PairPath::Reprojected, true),
+            // Re-projection was measured without its left pass's time.
+            (Some(_), None) => choice(PairPath::TwoPasses, true),
+            (Some(r), Some(t)) => {
+                let cheaper = if r <= (1.0 - Self::MARGIN) * t {
+                    PairPath::Reprojected
+                } else {
+                    PairPath::TwoPasses
+                };
+                let other = cheaper.other();
+                if own.since[index(other)] >= Self::PROBE_AFTER {
+                    choice(other, true)
+                } else {
+                    choice(cheaper, false)
+                }
+            }
+        }
+    }
+
+    /// Records that a re-projected pair of the view's class `class` took
+    /// `ms`, `left_ms` of it in the left pass; returns the relative error
+    /// of the estimate it had (measured over expected, minus 1), if any.
+    pub fn record_reprojected(
+        &mut self,
+        view: u64,
+        class: u32,
+        ms: f64,
+        left_ms: f64,
+    ) -> Option<f64> {
+        let error = self.record(view, class, PairPath::Reprojected, ms);
+        let valid = |v: f64| v.is_finite() && v >= 0.0;
+        if valid(ms) && valid(left_ms) {
+            for key in [(view, Some(class)), (view, None)] {
+                self.costs.entry(key).or_default().left_ms.push(left_ms);
+            }
+        }
+        error
+    }
+
+    /// Records that a pair of the view's class `class` took `ms` in two
+    /// passes; returns the estimate's relative error, as
+    /// [`Self::record_reprojected`] does.
+    pub fn record_two_passes(&mut self, view: u64, class: u32, ms: f64) -> Option<f64> {
+        self.record(view, class, PairPath::TwoPasses, ms)
+    }
+
+    fn record(&mut self, view: u64, class: u32, path: PairPath, ms: f64) -> Option<f64> {
+        if !ms.is_finite() || ms < 0.0 {
+            return None;
+        }
+        let expected = self.choose(view, class);
+        let expected = match path {
+            PairPath::Reprojected => expected.reprojected_ms,
+            PairPath::TwoPasses => expected.two_passes_ms,
+        };
+        if self.costs.len() >= 3 * Self::MAX_VIEWS && !self.costs.contains_key(&(view, None)) {
+            self.costs.clear();
+            self.told.clear();
+        }
+        for key in [(view, Some(class)), (view, None)] {
+            let costs = self.costs.entry(key).or_default();
+            // Costs last measured a probe interval ago are dropped: the
+            // view may have changed since.
+            let recent = &mut costs.ms[index(path)];
+            if costs.since[index(path)] >= Self::PROBE_AFTER {
+                *recent = Recent::default();
+            }
+            recent.push(ms);
+            costs.since[index(path)] = 0;
+            let other = &mut costs.since[index(path.other())];
+            *other = other.saturating_add(1);
+        }
+        expected.filter(|&e| e > 0.0).map(|e| ms / e - 1.0)
+    }
+
+    /// True the first time view `view` is told its pairs take two passes
+    /// on cost, so that a host hears it once.
+    pub fn first_refusal(&mut self, view: u64) -> bool {
+        self.told.insert(view)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Renders the chosen path at the given costs, as a host would.
+    fn frame(
+        costs: &mut PairCosts,
+        view: u64,
+        class: u32,
+        reprojected: (f64, f64),
+        two: f64,
+    ) -> PairChoice {
+        let choice = costs.choose(view, class);
+        match choice.path {
+            PairPath::Reprojected => {
+                costs.record_reprojected(view, class, reprojected.0, reprojected.1);
+            }
+            PairPath::TwoPasses => {
+                costs.record_two_passes(view, class, two);
+            }
+        }
+        choice
+    }
+
+    #[test]
+    fn a_view_that_pays_keeps_reprojecting_from_its_first_frame() {
+        let mut costs = PairCosts::new();
+        let first = costs.choose(1, 1);
+        assert_eq!((first.path, first.probe), (PairPath::Reprojected, true));
+        assert_eq!(first.expected_ms(), None);
+        // 12 ms a pair, 9 of them the left pass: two passes would take
+        // about 2 x 0.9 x 9 = 16.2 ms.
+        assert_eq!(costs.record_reprojected(1, 1, 12.0, 9.0), None);
+        let second = costs.choose(1, 1);
+        assert_eq!((second.path, second.probe), (PairPath::Reprojected, false));
+        assert!((second.two_passes_ms.unwrap() - 16.2).abs() < 1e-9);
+        // The estimate's error, as measured over expected, minus 1.
+        let error = costs.record_reprojected(1, 1, 13.2, 9.0).unwrap();
+        assert!((error - 0.1).abs() < 1e-9, "{error}");
+        // The fastest of what was measured.
+        assert_eq!(costs.choose(1, 1).reprojected_ms, Some(12.0));
+        for _ in 0..PairCosts::PROBE_AFTER - 2 {
+            assert!(!frame(&mut costs, 1, 1, (12.0, 9.0), 15.0).probe);
+        }
+        // Then two passes are measured once, and lose.
+        let probe = frame(&mut costs, 1, 1, (12.0, 9.0), 15.0);
+        assert_eq!((probe.path, probe.probe), (PairPath::TwoPasses, true));
+        let after = costs.choose(1, 1);
+        assert_eq!(
+            (after.path, after.two_passes_ms),
+            (PairPath::Reprojected, Some(15.0))
+        );
+    }
+
+    #[test]
+    fn a_view_where_compositing_outweighs_the_saving_takes_two_passes() {
+        let mut costs = PairCosts::new();
+        // A faint edge of the volume: a 2 ms left pass, 2 ms compositing.
+        costs.record_reprojected(5, 2, 4.0, 2.0);
+        let choice = costs.choose(5, 2);
+        assert_eq!(choice.path, PairPath::TwoPasses);
+        assert!(choice.refuses_reprojection());
+        let error = costs.record_two_passes(5, 2, 3.96).unwrap();
+        assert!((error - 0.1).abs() < 1e-9, "{error}");
+        assert_eq!(costs.choose(5, 2).two_passes_ms, Some(3.96));
+    }
+
+    #[test]
+    fn a_close_call_goes_to_two_passes() {
+        let mut costs = PairCosts::new();
+        costs.record_reprojected(6, 1, 9.7, 8.0);
+        costs.record_two_passes(6, 1, 10.0);
+        assert!(costs.choose(6, 1).refuses_reprojection());
+        let mut costs = PairCosts::new();
+        costs.record_reprojected(6, 1, 8.9, 8.0);
+        costs.record_two_passes(6, 1, 10.0);
+        assert_eq!(costs.choose(6, 1).path, PairPath::Reprojected);
+    }
+
+    #[test]
+    fn views_are_apart_and_a_new_class_borrows_its_views_costs() {
+        let mut costs = PairCosts::new();
+        costs.record_reprojected(1, 1, 5.0, 4.0);
+        costs.record_two_passes(1, 1, 9.0);
+        assert_eq!(costs.choose(2, 1).expected_ms(), None);
+        let borrowed = costs.choose(1, 2);
+        assert_eq!(borrowed.path, PairPath::Reprojected);
+        assert!(!borrowed.probe);
+        assert_eq!(borrowed.reprojected_ms, Some(5.0));
+        // Its own measurement then counts for it.
+        costs.record_reprojected(1, 2, 20.0, 4.0);
+        assert_eq!(costs.choose(1, 2).path, PairPath::TwoPasses);
+        assert_eq!(costs.choose(1, 1).path, PairPath::Reprojected);
+    }
+
+    #[test]
+    fn a_host_making_views_without_end_does_not_grow_the_table() {
+        let mut costs = PairCosts::new();
+        for view in 0..3 * PairCosts::MAX_VIEWS as u64 {
+            costs.record_reprojected(view, 1 + (view % 2) as u32, 1.0, 1.0);
+        }
+        assert!(costs.costs.len() <= 3 * PairCosts::MAX_VIEWS);
+        let last = 3 * PairCosts::MAX_VIEWS as u64 - 1;
+        assert!(costs.choose(last, 2).reprojected_ms.is_some());
+    }
+
+    #[test]
+    fn the_path_not_taken_is_measured_again_and_can_win_back() {
+        let mut costs = PairCosts::new();
+        costs.record_reprojected(7, 1, 30.0, 20.0);
+        costs.record_two_passes(7, 1, 20.0);
+        let mut frames = 0;
+        // The content changed: re-projection now costs 10 ms.
+        while !frame(&mut costs, 7, 1, (10.0, 8.0), 20.0).probe {
+            frames += 1;
+            assert!(frames <= PairCosts::PROBE_AFTER, "never measured again");
+        }
+        assert_eq!(frames, PairCosts::PROBE_AFTER - 1);
+        // The probe's 10 ms replace the stale 30 ms: re-projection wins.
+        let now = costs.choose(7, 1);
+        assert_eq!(now.reprojected_ms, Some(10.0));
+        assert_eq!((now.path, now.probe), (PairPath::Reprojected, false));
+    }
+
+    #[test]
+    fn one_slow_frame_does_not_flip_the_choice() {
+        let mut costs = PairCosts::new();
+        costs.record_reprojected(8, 1, 6.0, 5.0);
+        costs.record_two_passes(8, 1, 9.0);
+        for _ in 0..5 {
+            frame(&mut costs, 8, 1, (6.0, 5.0), 9.0);
+        }
+        // A pass twice as slow as the others, as a busy machine gives.
+        costs.record_reprojected(8, 1, 12.0, 10.0);
+        let choice = costs.choose(8, 1);
+        assert_eq!(
+            (choice.path, choice.reprojected_ms),
+            (PairPath::Reprojected, Some(6.0))
+        );
+    }
+
+    #[test]
+    fn bad_times_are_ignored_and_refusals_are_told_once() {
+        let mut costs = PairCosts::new();
+        assert_eq!(costs.record_reprojected(3, 1, f64::NAN, 1.0), None);
+        assert_eq!(costs.record_reprojected(3, 1, -1.0, 1.0), None);
+        assert_eq!(costs.record_two_passes(3, 1, f64::INFINITY), None);
+        assert_eq!(costs.choose(3, 1).expected_ms(), None);
+        assert!(costs.first_refusal(3));
+        assert!(!costs.first_refusal(3));
+        assert!(costs.first_refusal(4));
+    }
+}
