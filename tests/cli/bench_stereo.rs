@@ -47,7 +47,14 @@ fn the_paper_protocol_runs_and_reports_everything() {
         assert_eq!(runs[1]["extra_samples_per_sample"], 4);
         for r in runs {
             let f = |k: &str| r[k].as_f64().unwrap();
-            for k in ["t_l_ms", "t_r_ms", "t_lr_ms", "composite_ms", "clear_ms"] {
+            for k in [
+                "t_l_ms",
+                "t_r_ms",
+                "t_lr_ms",
+                "composite_ms",
+                "composite_every_offset_ms",
+                "clear_ms",
+            ] {
                 assert!(f(k) > 0.0, "{k} in {r}");
             }
             let v = 1.0 - (f("t_lr_ms") - f("t_l_ms")) / f("t_r_ms");

@@ -1,7 +1,8 @@
 //! The re-projection stereo path on the GPU against two-pass rendering:
 //! the left eye unchanged, the right eye within DSSIM 0.02 for the HMD
 //! setup and a CAVE front wall and 0.03 on every wall and head pose (with
-//! its depth channel), exact for e = 0, no stale layer data, and clear
+//! its depth channel), exact for e = 0, no stale layer data, the same
+//! pixels whether compositing skips blocks or reads every ray, and clear
 //! errors for geometry and layer counts it cannot serve.
 
 use crate::common;
@@ -469,6 +470,11 @@ fn every_wall_and_head_pose_reprojects_like_two_pass_with_depth() {
             LayerFormat::Rgba16F,
         );
         let what = format!("{wall_name} at {ypr} (swapped: {swapped})");
+        // Reading only the blocks of left rays that wrote a pixel's
+        // coordinate changes no pixel.
+        let (every, _) = gpu.composite_every_offset().unwrap();
+        assert_eq!(every.color, stereo.right.color, "{what}: block summary");
+        assert_eq!(every.depth, stereo.right.depth, "{what}: block summary");
         assert_eq!(stereo.left.color, l.color, "{what}: left eye");
         assert_eq!(stereo.left.depth, l.depth, "{what}: left depth");
         assert_eq!(stereo.left.samples, l.samples, "{what}: left samples");

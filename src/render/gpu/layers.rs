@@ -39,6 +39,7 @@ binding_table! {
         stereo: Kind::storage("Stereo"),
         layers: Kind::texture(Dim::D2Array, false),
         spans: Kind::storage("array<vec4i>"),
+        blocks: Kind::storage_rw("array<vec4i>"),
         color_out: Kind::storage_rw("array<u32>"),
         depths: Kind::texture(Dim::D2Array, false),
         depth_out: Kind::storage_rw("array<f32>"),
@@ -52,7 +53,10 @@ pub(super) struct LayersPass {
     /// family of lines, and both.
     reproject: [Variants; 2],
     clear: wgpu::ComputePipeline,
+    summarise: wgpu::ComputePipeline,
     composite: wgpu::ComputePipeline,
+    /// The compositing without the block summary, to measure and check it.
+    composite_every_offset: wgpu::ComputePipeline,
     writer_layout: ReprojectLayout,
     composite_layout: CompositeLayout,
     target: Option<LayerTarget>,
@@ -112,6 +116,8 @@ struct LayerTarget {
     res: Resources,
     writer: wgpu::BindGroup,
     composite: wgpu::BindGroup,
+    /// The last frame's right eye and left pixels cast, if one was made.
+    last: Option<(FrameDesc, UVec2)>,
 }
 
 /// Everything of a target but the spans and the bind groups.
@@ -151,6 +157,16 @@ impl LayersPass {
         let pipeline = |label, entry, constants: &[(&str, f64)]| {
             compute_pipeline(device, label, "reproject", entry, &writer, constants)
         };
+        let compositing = |label, entry, constants: &[(&str, f64)]| {
+            compute_pipeline(
+                device,
+                label,
+                "composite",
+                entry,
+                &[composite_layout.group()],
+                constants,
+            )
+        };
         let families = |count: u32| -> Result<Variants, RenderError> {
             let both = if count == 2 { 1.0 } else { 0.0 };
             Ok(Variants {
@@ -166,13 +182,12 @@ impl LayersPass {
             format,
             reproject: [families(1)?, families(2)?],
             clear: pipeline("layer clear", "clear", &[])?,
-            composite: compute_pipeline(
-                device,
-                "compositing",
-                "composite",
+            summarise: compositing("span blocks", "summarise", &[])?,
+            composite: compositing("compositing", "main", &[])?,
+            composite_every_offset: compositing(
+                "compositing every offset",
                 "main",
-                &[composite_layout.group()],
-                &[],
+                &[("EVERY_OFFSET", 1.0)],
             )?,
             writer_layout,
             composite_layout,
@@ -286,23 +301,25 @@ impl LayerTarget {
             depth,
             depth_read,
         };
-        let (writer, composite) = bind_groups(gpu, ctx, &res, &spans_buffer(ctx, cast));
+        let (writer, composite) = bind_groups(gpu, ctx, &res, &Spans::new(ctx, cast));
         Self {
             shape,
             cast,
             res,
             writer,
             composite,
+            last: None,
         }
     }
 
     /// The same layers with a spans buffer for `cast` left pixels.
     fn with_spans(self, gpu: &LayersPass, ctx: &Context, cast: u64) -> Self {
-        let (writer, composite) = bind_groups(gpu, ctx, &self.res, &spans_buffer(ctx, cast));
+        let (writer, composite) = bind_groups(gpu, ctx, &self.res, &Spans::new(ctx, cast));
         Self {
             cast,
             writer,
             composite,
+            last: None,
             ..self
         }
     }
@@ -313,20 +330,21 @@ fn bind_groups(
     gpu: &LayersPass,
     ctx: &Context,
     res: &Resources,
-    spans: &wgpu::Buffer,
+    spans: &Spans,
 ) -> (wgpu::BindGroup, wgpu::BindGroup) {
     let device = &ctx.device;
     let writer = ReprojectResources {
         stereo: res.uniform.as_entire_binding(),
         layers: wgpu::BindingResource::TextureView(&res.layers),
-        spans: spans.as_entire_binding(),
+        spans: spans.rays.as_entire_binding(),
         depths: wgpu::BindingResource::TextureView(&res.depths),
     }
     .bind(device, &gpu.writer_layout);
     let composite = CompositeResources {
         stereo: res.uniform.as_entire_binding(),
         layers: wgpu::BindingResource::TextureView(&res.layers),
-        spans: spans.as_entire_binding(),
+        spans: spans.rays.as_entire_binding(),
+        blocks: spans.blocks.as_entire_binding(),
         color_out: res.color.as_entire_binding(),
         depths: wgpu::BindingResource::TextureView(&res.depths),
         depth_out: res.depth.as_entire_binding(),
@@ -347,8 +365,28 @@ fn buffer(ctx: &Context, label: &str, size: u64, usage: wgpu::BufferUsages) -> w
 /// Four i32 per left pixel cast: the columns and the rows it wrote.
 const SPAN_BYTES: u64 = 16;
 
-fn spans_buffer(ctx: &Context, cast: u64) -> wgpu::Buffer {
-    buffer(ctx, "spans", SPAN_BYTES * cast, wgpu::BufferUsages::STORAGE)
+/// What each left ray wrote, and the union over each block of
+/// WORKGROUP x WORKGROUP rays (shaders/composite.wgsl).
+struct Spans {
+    rays: wgpu::Buffer,
+    blocks: wgpu::Buffer,
+}
+
+impl Spans {
+    /// Room for `cast` left pixels in any shape: an a x b image has at
+    /// most (a + 7)(b + 7) / 64 <= ab / 8 + 1 blocks of 8 x 8.
+    fn new(ctx: &Context, cast: u64) -> Self {
+        let blocks = cast / u64::from(WORKGROUP) + 1;
+        Self {
+            rays: buffer(ctx, "spans", SPAN_BYTES * cast, wgpu::BufferUsages::STORAGE),
+            blocks: buffer(
+                ctx,
+                "span blocks",
+                SPAN_BYTES * blocks,
+                wgpu::BufferUsages::STORAGE,
+            ),
+        }
+    }
 }
 
 impl LayersPass {
@@ -432,8 +470,45 @@ impl LayersPass {
         if watch.stopped() {
             return Err(RenderError::Stopped);
         }
+        let (right, composite_ms) = self.composite_right(ctx, desc, cast, false)?;
+        watch.advance(1);
+        Ok((
+            right,
+            StereoTimes {
+                left_ms,
+                composite_ms,
+            },
+        ))
+    }
+
+    /// The right eye from the layers the march left, and its milliseconds
+    /// (with the block summary's).
+    fn composite_right(
+        &mut self,
+        ctx: &Context,
+        desc: &FrameDesc,
+        cast: UVec2,
+        every_offset: bool,
+    ) -> Result<(Frame, f64), RenderError> {
+        let target = self.target.as_mut().ok_or_else(unprepared)?;
+        target.last = Some((*desc, cast));
+        let res = &target.res;
+        let summarise_ms = ctx.dispatch(
+            &self.summarise,
+            &[&target.composite],
+            [
+                cast.x.div_ceil(WORKGROUP * WORKGROUP),
+                cast.y.div_ceil(WORKGROUP * WORKGROUP),
+                1,
+            ],
+        )?;
+        let pipeline = if every_offset {
+            &self.composite_every_offset
+        } else {
+            &self.composite
+        };
         let composite_ms = ctx.dispatch(
-            &self.composite,
+            pipeline,
             &[&target.composite],
             [
                 desc.size.x.div_ceil(WORKGROUP),
@@ -441,7 +516,7 @@ impl LayersPass {
                 1,
             ],
         )?;
-        watch.advance(1);
+        let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
         let (color_bytes, depth_bytes) = (pixels * desc.color.bytes_per_pixel(), 4 * pixels);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&res.color, 0, &res.color_read, 0, color_bytes);
@@ -461,13 +536,16 @@ impl LayersPass {
             depth,
             samples: 0,
         };
-        Ok((
-            right,
-            StereoTimes {
-                left_ms,
-                composite_ms,
-            },
-        ))
+        Ok((right, summarise_ms + composite_ms))
+    }
+
+    /// The last right eye composited again, reading every left ray of the
+    /// bounding depth range: what the block summary spares, for the
+    /// benchmark to measure and the tests to check it changes nothing.
+    pub fn composite_every_offset(&mut self, ctx: &Context) -> Result<(Frame, f64), RenderError> {
+        let target = self.target.as_ref().ok_or_else(no_layers)?;
+        let (desc, cast) = target.last.ok_or_else(no_layers)?;
+        self.composite_right(ctx, &desc, cast, true)
     }
 
     /// Milliseconds a full clear of the last frame's layers takes: the

@@ -253,6 +253,15 @@ impl GpuRenderer {
         stereo.time_clear(&self.ctx, &self.raycast)
     }
 
+    /// The last re-projected right eye composited again reading every
+    /// left ray of the bounding depth range, and its milliseconds: what
+    /// the compositing's block summary spares, to measure it and to check
+    /// it changes no pixel.
+    pub fn composite_every_offset(&mut self) -> Result<(Frame, f64), RenderError> {
+        let stereo = self.stereo.as_mut().ok_or_else(no_layers)?;
+        stereo.composite_every_offset(&self.ctx)
+    }
+
     /// `rays` cast for an image of `size` keeping `layers` layers a pixel
     /// (0: none), the background left out: what
     /// [`crate::render::CpuRenderer::capture`] makes, from the GPU. Returns
