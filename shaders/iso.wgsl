@@ -297,9 +297,16 @@ fn refine(go: vec3f, gd: vec3f, a: f32, fa: f32, b: f32, fb: f32) -> f32 {
     return 0.5 * (ta + tb);
 }
 
-// Blinn-Phong at grid point `g` seen along `d`; `mt` is the transpose of
+// The surface at a hit: its unit normal, facing the ray it was found
+// along, and its principal curvatures as that ray sees them.
+struct Surface {
+    n: vec3f,
+    k: vec2f,
+}
+
+// The surface at grid point `g` found along `d`; `mt` is the transpose of
 // the world-to-grid map's linear part.
-fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
+fn surface_at(g: vec3f, d: vec3f, mt: mat3x3f) -> Surface {
     let hessian = iso.filtering == 1u || iso.curvature == 1u;
     let dv = derivatives(g, hessian);
     let grad = mt * dv.gradient;
@@ -313,9 +320,14 @@ fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
         n = -n;
         k = vec2f(-k.y, -k.x);
     }
+    return Surface(n, k);
+}
+
+// Blinn-Phong on surface `s` seen along `d`.
+fn shade_surface(s: Surface, d: vec3f) -> vec4f {
     var base = iso.color.rgb;
     if iso.curvature == 1u {
-        base = curvature_color(0.5 * (k.x + k.y));
+        base = curvature_color(0.5 * (s.k.x + s.k.y));
     }
     var l = -d;
     if iso.light.w != 0.0 {
@@ -326,10 +338,15 @@ fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
     if length(half) > 0.0 {
         h = normalize(half);
     }
-    let diffuse = max(dot(n, l), 0.0);
-    let specular = pow(max(dot(n, h), 0.0), iso.shading.w);
+    let diffuse = max(dot(s.n, l), 0.0);
+    let specular = pow(max(dot(s.n, h), 0.0), iso.shading.w);
     let rgb = base * (iso.shading.x + iso.shading.y * diffuse) + vec3f(iso.shading.z * specular);
     return vec4f(min(rgb, vec3f(1.0)), 1.0);
+}
+
+// Blinn-Phong at grid point `g` seen along `d`.
+fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
+    return shade_surface(surface_at(g, d, mt), d);
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)

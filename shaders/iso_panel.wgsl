@@ -1,7 +1,8 @@
 // #import iso, iso_constants, iso_panel_bindings
 // A multi-view panel's image, every subpixel from its own view
 // (src/render/iso/multiview.rs): one ray a subpixel, or the geometric
-// pass (each pixel's green ray) then the spectral one.
+// pass (each pixel's green ray) then the spectral one, which finds red's
+// and blue's own hits or shades green's.
 
 fn view_ray(v: u32, fx: f32, fy: f32) -> Ray {
     let r = 7u * v;
@@ -32,9 +33,14 @@ fn geometric(@builtin(global_invocation_id) invocation: vec3u) {
     green_t[i] = cast_ray(r.o, r.d, r.eye).t;
 }
 
+// Red and blue shade green's hit, each seen along its own view's ray,
+// instead of finding their own: one view's march, and the colour of a
+// point the channel's eye does not see there (MultiViewMethod::GreenGeometry).
+override GREEN_GEOMETRY: bool = false;
+
 // The spectral pass (src/render/iso/multiview.rs): green from its t, red
 // and blue searched from where their own views' samples in the geometric
-// pass met the surface (search_window).
+// pass met the surface (search_window), or shading green's hit.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn spectral(@builtin(global_invocation_id) invocation: vec3u) {
     let id = vec3u(invocation.x, invocation.y + band.x, 0u);
@@ -46,6 +52,10 @@ fn spectral(@builtin(global_invocation_id) invocation: vec3u) {
     let fy = f32(id.y);
     let packed = pixel_views[i];
     let tg = green_t[i];
+    if GREEN_GEOMETRY {
+        shade_green_hit(i, fx, fy, packed, tg);
+        return;
+    }
     let margin = SEARCH_MARGIN_STEPS * iso.step;
     // Green's hit, shaded once: any channel of green's view sees it so.
     let vg = view_of(packed, 1u);
@@ -68,6 +78,28 @@ fn spectral(@builtin(global_invocation_id) invocation: vec3u) {
             hit = cast_window(r.o, r.d, r.eye, w.x, w.y);
         }
         rgb[c] = hit.color[c];
+    }
+    store_color(i, vec4f(rgb, 1.0), iso.color_format);
+}
+
+// Pixel i's three channels from green's hit (none: the background), each
+// shaded as its own view's ray sees it.
+fn shade_green_hit(i: u32, fx: f32, fy: f32, packed: u32, tg: f32) {
+    let rg = view_ray(view_of(packed, 1u), fx, fy);
+    if tg < 0.0 {
+        depth_out[i] = missed().depth;
+        store_color(i, vec4f(missed().color.rgb, 1.0), iso.color_format);
+        return;
+    }
+    let sp = span(rg.o, rg.d);
+    let p = rg.o + rg.d * tg;
+    depth_out[i] = select(tg, length(p - rg.eye.xyz), rg.eye.w != 0.0);
+    // As hit_at shades it, with the derivatives taken once for all three.
+    let surface = surface_at(sp.go + sp.gd * tg, rg.d, grid_to_world());
+    var rgb = shade_surface(surface, rg.d).rgb;
+    for (var c = 0u; c < 3u; c += 2u) {
+        let r = view_ray(view_of(packed, c), fx, fy);
+        rgb[c] = shade_surface(surface, r.d)[c];
     }
     store_color(i, vec4f(rgb, 1.0), iso.color_format);
 }

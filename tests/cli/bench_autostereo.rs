@@ -1,7 +1,8 @@
 //! `caveray bench autostereo` end to end on a tiny panel: one JSON row per
-//! view count with the three methods' times, the evaluations that grow
+//! view count with the four methods' times, the evaluations that grow
 //! with the views only for the naive method, and the share of subpixels
-//! the passes leave off the exact image; bad arguments are usage errors.
+//! the passes and green's shared hit leave off the exact image; bad
+//! arguments are usage errors.
 
 use crate::common;
 
@@ -41,7 +42,12 @@ fn rows_for_each_view_count_and_the_naive_cost_grows_with_them() {
     assert_eq!(rows.len(), 3);
     for (row, views) in rows.iter().zip([1.0, 8.0, 24.0]) {
         assert_eq!(row["views"].as_f64(), Some(views));
-        for key in ["naive_ms", "per_pixel_ms", "geometric_spectral_ms"] {
+        for key in [
+            "naive_ms",
+            "per_pixel_ms",
+            "geometric_spectral_ms",
+            "green_geometry_ms",
+        ] {
             assert!(row[key].as_f64().unwrap() > 0.0, "{key}");
         }
         assert!((row["naive_views"].as_f64().unwrap() - views).abs() < 1e-9);
@@ -53,6 +59,16 @@ fn rows_for_each_view_count_and_the_naive_cost_grows_with_them() {
         let passes = row["geometric_spectral_views"].as_f64().unwrap();
         assert!(passes < per_pixel, "{passes} vs {per_pixel}");
         assert!(row["geometric_spectral_differing"].as_f64().unwrap() < 0.05);
+        // Green's rays alone; red and blue shade its hits, exactly where
+        // they share green's eye (one view).
+        let green = row["green_geometry_views"].as_f64().unwrap();
+        assert!((green - 1.0).abs() < 0.1, "{green}");
+        let off = row["green_geometry_differing"].as_f64().unwrap();
+        if views == 1.0 {
+            assert_eq!(off, 0.0);
+        } else {
+            assert!(off > 0.0 && off < 0.5, "{off}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -152,6 +168,14 @@ fn the_gpu_backend_times_the_gpu_passes() {
         assert!(row["naive_views"].is_null(), "evaluations are the CPU's");
         assert!(row["per_pixel_ms"].as_f64().unwrap() >= 0.0);
         assert!(row["geometric_spectral_differing"].as_f64().unwrap() < 0.05);
+        assert!(row["green_geometry_ms"].as_f64().unwrap() >= 0.0);
+        assert!(row["green_geometry_views"].is_null());
+        let off = row["green_geometry_differing"].as_f64().unwrap();
+        if row["views"] == 1 {
+            assert_eq!(off, 0.0);
+        } else {
+            assert!(off < 0.5, "{off}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,7 +3,8 @@
 //! of separately rendered views, at any number of views; the geometric +
 //! spectral passes match it but for a stated share of subpixels, for
 //! little more than one view's field evaluations, while the naive cost
-//! grows with the number of views (counted, not timed).
+//! grows with the number of views (counted, not timed); shading green's
+//! hit for red and blue costs one view and leaves more subpixels off.
 
 use crate::common;
 
@@ -84,4 +85,41 @@ fn the_spectral_pass_matches_all_but_a_few_subpixels_whatever_the_view_count() {
         spectral_views[1] <= 1.15 * spectral_views[0],
         "{spectral_views:?} views' evaluations at 8 and 24 views"
     );
+}
+
+#[test]
+fn shading_greens_hit_for_every_channel_costs_one_view_and_is_exact_only_for_one_view() {
+    // One view: every channel's eye is green's, so green's hit is theirs.
+    let (naive, _) = render(1, MultiViewMethod::Naive);
+    let (green, _) = render(1, MultiViewMethod::GreenGeometry);
+    assert_eq!(green.color, naive.color);
+    for views in [8, 24] {
+        let (naive, naive_samples) = render(views, MultiViewMethod::Naive);
+        let (spectral, _) = render(views, MultiViewMethod::GeometricSpectral);
+        let (green, green_samples) = render(views, MultiViewMethod::GreenGeometry);
+        let one_view = naive_samples as f64 / f64::from(views);
+        let (exact, reused) = (
+            subpixels_differing(&spectral, &naive, 2),
+            subpixels_differing(&green, &naive, 2),
+        );
+        println!(
+            "{views} views: green's geometry {:.2} views' evaluations, {:.3}% of subpixels differ (the passes {:.3}%)",
+            green_samples as f64 / one_view,
+            100.0 * reused,
+            100.0 * exact
+        );
+        // Only green's rays are cast; each pixel's from its own view, so
+        // about, not exactly, one view's image.
+        assert!(
+            (green_samples as f64 - one_view).abs() <= 0.1 * one_view,
+            "{views} views: {green_samples} evaluations, one view {one_view}"
+        );
+        // Red and blue show green's point, not their own: off on the balls'
+        // shaded surfaces, where the passes are right.
+        assert!(
+            reused > 2.0 * exact && reused > 0.01,
+            "{views} views: {reused} vs {exact}"
+        );
+        assert!(reused < 0.5, "{views} views: {reused}");
+    }
 }

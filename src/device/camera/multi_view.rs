@@ -52,8 +52,8 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         p("view", &[T::INT32], false, DefaultValue::None,
           "one view's image alone (0 to views - 1); unset or -1: the interleaved panel image"),
         p("method", &[T::STRING], false, DefaultValue::Text("passes"),
-          "passes (geometric + spectral: one view's cost), perSubpixel (one ray a subpixel) or naive (every view, then interleaved)")
-            .names(&["passes", "perSubpixel", "naive"]),
+          "passes (geometric + spectral: each subpixel's own hit, about one view's cost and a half), greenGeometry (red and blue shade green's hit: one view's cost, colours off where the eyes see different points), perSubpixel (one ray a subpixel) or naive (every view, then interleaved)")
+            .names(&["passes", "greenGeometry", "perSubpixel", "naive"]),
     ],
     commit: Some(commit),
 };
@@ -146,10 +146,11 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     let method = match r.string("method") {
         Some("perSubpixel") => MultiViewMethod::PerSubpixel,
         Some("naive") => MultiViewMethod::Naive,
+        Some("greenGeometry") => MultiViewMethod::GreenGeometry,
         Some("passes") | None => MultiViewMethod::GeometricSpectral,
         Some(other) => {
             warn(format!(
-                "method '{other}' is not one of passes, perSubpixel, naive; rendering by passes"
+                "method '{other}' is not one of passes, greenGeometry, perSubpixel, naive; rendering by passes"
             ));
             MultiViewMethod::GeometricSpectral
         }

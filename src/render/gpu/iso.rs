@@ -58,6 +58,8 @@ pub(super) struct IsoPass {
     per_subpixel: wgpu::ComputePipeline,
     geometric: wgpu::ComputePipeline,
     spectral: wgpu::ComputePipeline,
+    /// The spectral pass shading green's hit for red and blue.
+    green_geometry: wgpu::ComputePipeline,
     uniform: wgpu::Buffer,
     target: Option<OutputBuffers>,
     /// The last panel's buffers (put back after each cast).
@@ -101,19 +103,20 @@ impl IsoPass {
         let pipeline =
             compute_pipeline(device, "iso", "iso", "main", &[layout.group(), bands], &[])?;
         let panel_layout = PanelLayout::new(device);
-        let panel_pipeline = |entry: &str| {
+        let panel_pipeline = |entry: &str, constants: &[(&str, f64)]| {
             compute_pipeline(
                 device,
                 "iso panel",
                 "iso_panel",
                 entry,
                 &[layout.group(), panel_layout.group(), bands],
-                &[],
+                constants,
             )
         };
-        let per_subpixel = panel_pipeline("per_subpixel")?;
-        let geometric = panel_pipeline("geometric")?;
-        let spectral = panel_pipeline("spectral")?;
+        let per_subpixel = panel_pipeline("per_subpixel", &[])?;
+        let geometric = panel_pipeline("geometric", &[])?;
+        let spectral = panel_pipeline("spectral", &[])?;
+        let green_geometry = panel_pipeline("spectral", &[("GREEN_GEOMETRY", 1.0)])?;
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("iso"),
             size: size_of::<Iso>() as u64,
@@ -127,6 +130,7 @@ impl IsoPass {
             per_subpixel,
             geometric,
             spectral,
+            green_geometry,
             uniform,
             target: None,
             panel: None,
@@ -137,7 +141,7 @@ impl IsoPass {
     /// A multi-view panel's image from its views' rays (`rays`, seven
     /// vec4s a view, `first` the first view) and each pixel's three views
     /// (`packed`): one ray a subpixel (`PerSubpixel`) or the geometric and
-    /// spectral passes. Returns the frame and the passes' milliseconds.
+    /// spectral passes (`GeometricSpectral`, `GreenGeometry`). Returns the frame and the passes' milliseconds.
     #[allow(clippy::too_many_arguments)]
     pub fn cast_display(
         &mut self,
@@ -264,8 +268,9 @@ impl IsoPass {
         .bind(&ctx.device, &self.layout);
         let bands = raycast.write_bands(ctx, desc.size);
         let passes = match &panel {
-            Some(p) if p.method == MultiViewMethod::GeometricSpectral => 2,
-            _ => 1,
+            // Naive panels are cast a view at a time, never here.
+            Some(p) => p.method.passes(1) as u64,
+            None => 1,
         };
         watch.expect(passes * bands.len() as u64);
         let banded = |pipeline, groups| Pass {
@@ -286,9 +291,13 @@ impl IsoPass {
                 match p.method {
                     // Every band's green first: the spectral pass reads
                     // it about each pixel, across band edges.
-                    MultiViewMethod::GeometricSpectral => {
+                    MultiViewMethod::GeometricSpectral | MultiViewMethod::GreenGeometry => {
+                        let second = match p.method {
+                            MultiViewMethod::GreenGeometry => &self.green_geometry,
+                            _ => &self.spectral,
+                        };
                         ctx.dispatch_bands(&banded(&self.geometric, &groups), &bands, watch)?
-                            + ctx.dispatch_bands(&banded(&self.spectral, &groups), &bands, watch)?
+                            + ctx.dispatch_bands(&banded(second, &groups), &bands, watch)?
                     }
                     _ => ctx.dispatch_bands(&banded(&self.per_subpixel, &groups), &bands, watch)?,
                 }

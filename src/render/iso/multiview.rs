@@ -4,7 +4,7 @@
 //! image, whatever the number of views), and a geometric pass plus a
 //! spectral pass, which casts one channel's ray in full and finds the
 //! other channels' hits near it, casting them in full only where their
-//! eyes may see another surface.
+//! eyes may see another surface, or shades its hit for them.
 
 use std::sync::Arc;
 
@@ -29,6 +29,10 @@ pub enum MultiViewMethod {
     /// a little before green's hit, and cast in full only where a crossing
     /// may lie before that, or near an edge of the surface.
     GeometricSpectral,
+    /// The geometric pass, then red and blue shade green's hit as their own
+    /// views' rays see it: one view's march, but a channel shows the colour
+    /// of a point its eye does not see through that pixel.
+    GreenGeometry,
 }
 
 impl MultiViewMethod {
@@ -37,6 +41,16 @@ impl MultiViewMethod {
             MultiViewMethod::Naive => "naive",
             MultiViewMethod::PerSubpixel => "per-subpixel",
             MultiViewMethod::GeometricSpectral => "geometric+spectral",
+            MultiViewMethod::GreenGeometry => "green-geometry",
+        }
+    }
+
+    /// Passes over the panel's rows, with `views` views.
+    pub fn passes(self, views: usize) -> usize {
+        match self {
+            MultiViewMethod::Naive => views,
+            MultiViewMethod::PerSubpixel => 1,
+            MultiViewMethod::GeometricSpectral | MultiViewMethod::GreenGeometry => 2,
         }
     }
 }
@@ -171,12 +185,7 @@ pub fn render_display_by(
     let mut rgb = filled(desc.pixels(), [0.0f32; 3], "the display image")?;
     // Every pass's rows before the first starts, so that the fraction
     // done never falls back.
-    let passes = match method {
-        MultiViewMethod::Naive => rays.len(),
-        MultiViewMethod::PerSubpixel => 1,
-        MultiViewMethod::GeometricSpectral => 2,
-    };
-    caster.expect(passes as u64 * u64::from(size.y));
+    caster.expect(method.passes(rays.len()) as u64 * u64::from(size.y));
     let samples = match method {
         MultiViewMethod::Naive => {
             let mut total = 0;
@@ -216,6 +225,7 @@ pub fn render_display_by(
         MultiViewMethod::GeometricSpectral => {
             geometric_spectral(caster, table, rays, size, &mut rgb)?
         }
+        MultiViewMethod::GreenGeometry => green_geometry(caster, table, rays, size, &mut rgb)?,
     };
     caster.check_stop()?;
     // A panel shows no alpha.
@@ -255,18 +265,17 @@ fn view_image(
     Ok((out, n))
 }
 
-/// The geometric pass (green, in full) and the spectral pass (red and
-/// blue, searched from where their own views' samples met the surface).
-fn geometric_spectral(
+/// The geometric pass: each pixel's green ray in full, its hit and the
+/// field evaluations.
+fn geometric_pass(
     caster: &Caster,
     table: &[[u32; 3]],
     rays: &[RayGen],
     size: UVec2,
-    rgb: &mut [[f32; 3]],
-) -> Result<u64, RenderError> {
+) -> Result<(Vec<Option<IsoHit>>, u64), RenderError> {
     let w = size.x as usize;
-    let mut geometric: Vec<Option<IsoHit>> = filled(rgb.len(), None, "the geometric pass")?;
-    let n_geometric: u64 = geometric
+    let mut geometric: Vec<Option<IsoHit>> = filled(table.len(), None, "the geometric pass")?;
+    let n = geometric
         .par_chunks_mut(w)
         .enumerate()
         .map(|(y, row)| {
@@ -283,6 +292,48 @@ fn geometric_spectral(
             n
         })
         .sum();
+    Ok((geometric, n))
+}
+
+/// The geometric pass, then every channel shading green's hit as its own
+/// view's ray through the pixel sees it (the normal still faces green's
+/// eye, as the hit was found).
+fn green_geometry(
+    caster: &Caster,
+    table: &[[u32; 3]],
+    rays: &[RayGen],
+    size: UVec2,
+    rgb: &mut [[f32; 3]],
+) -> Result<u64, RenderError> {
+    let w = size.x as usize;
+    let (geometric, n) = geometric_pass(caster, table, rays, size)?;
+    rgb.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        if caster.stopped() {
+            return;
+        }
+        for (x, px) in row.iter_mut().enumerate() {
+            let i = y * w + x;
+            for (c, out) in px.iter_mut().enumerate() {
+                let (_, d) = rays[table[i][c] as usize].pixel_ray(x as u32, y as u32);
+                *out = caster.color(geometric[i].as_ref(), d)[c];
+            }
+        }
+        caster.row_done();
+    });
+    Ok(n)
+}
+
+/// The geometric pass (green, in full) and the spectral pass (red and
+/// blue, searched from where their own views' samples met the surface).
+fn geometric_spectral(
+    caster: &Caster,
+    table: &[[u32; 3]],
+    rays: &[RayGen],
+    size: UVec2,
+    rgb: &mut [[f32; 3]],
+) -> Result<u64, RenderError> {
+    let w = size.x as usize;
+    let (geometric, n_geometric) = geometric_pass(caster, table, rays, size)?;
     let h = size.y as usize;
     let margin = SEARCH_MARGIN_STEPS * caster.step;
     let offsets = same_view_offsets();

@@ -107,6 +107,7 @@ fn the_gpu_gives_every_subpixel_its_own_eye_as_the_cpu_does() {
         for method in [
             MultiViewMethod::PerSubpixel,
             MultiViewMethod::GeometricSpectral,
+            MultiViewMethod::GreenGeometry,
         ] {
             let (cpu, _) = render_display(&placed, &panel, &settings, method).unwrap();
             let on_gpu = g

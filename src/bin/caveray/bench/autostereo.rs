@@ -1,7 +1,8 @@
 //! `caveray bench autostereo`: a multi-view display's image, each subpixel
 //! from its own eye, made naively (every view rendered, then interleaved)
-//! and per subpixel (one ray a subpixel, and the geometric + spectral
-//! passes), for several view counts and volumes' isosurfaces. Writes one
+//! and per subpixel (one ray a subpixel, the geometric + spectral passes,
+//! and the geometric pass with green's hit shaded for red and blue), for
+//! several view counts and volumes' isosurfaces. Writes one
 //! JSON row per volume and view count: CPU wall clock with the field
 //! evaluations counted, or with `--backend gpu` the GPU's pass clock. The
 //! times are frame times: the field's f32 copy and crossing box, and each
@@ -83,13 +84,17 @@ struct Row {
     naive_ms: f64,
     per_pixel_ms: f64,
     geometric_spectral_ms: f64,
+    green_geometry_ms: f64,
     /// Field evaluations, in units of one view's image (CPU only).
     naive_views: Option<f64>,
     per_pixel_views: Option<f64>,
     geometric_spectral_views: Option<f64>,
+    green_geometry_views: Option<f64>,
     /// Share of subpixels the geometric + spectral image has off the naive
     /// one by more than 2 of 255.
     geometric_spectral_differing: f64,
+    /// The same for green's hit shaded for red and blue.
+    green_geometry_differing: f64,
 }
 
 /// The middle of `times` (the upper middle of an even count).
@@ -147,8 +152,19 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
     };
     let mut rows = Vec::new();
     println!(
-        "{:<12} {:>5} {:>10} {:>10} {:>10}  {:>8} {:>8} {:>8}  {:>8}",
-        "volume", "views", "naive ms", "per-px ms", "g+s ms", "naive", "per-px", "g+s", "differ"
+        "{:<12} {:>5} {:>10} {:>10} {:>10} {:>10}  {:>8} {:>8} {:>8} {:>8}  {:>8} {:>8}",
+        "volume",
+        "views",
+        "naive ms",
+        "per-px ms",
+        "g+s ms",
+        "green ms",
+        "naive",
+        "per-px",
+        "g+s",
+        "green",
+        "g+s off",
+        "green off"
     );
     for spec in args.volume.volume_list("cthead,engine") {
         let loaded = args.volume.with_volume(&spec).load()?.with_stored_axes();
@@ -196,6 +212,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                     let (naive, naive_evals, naive_ms) = time(MultiViewMethod::Naive)?;
                     let (_, per_evals, per_ms) = time(MultiViewMethod::PerSubpixel)?;
                     let (gs, gs_evals, gs_ms) = time(MultiViewMethod::GeometricSpectral)?;
+                    let (green, green_evals, green_ms) = time(MultiViewMethod::GreenGeometry)?;
                     let one = naive_evals as f64 / f64::from(d.views);
                     Row {
                         volume: loaded.name.clone(),
@@ -203,10 +220,13 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                         naive_ms,
                         per_pixel_ms: per_ms,
                         geometric_spectral_ms: gs_ms,
+                        green_geometry_ms: green_ms,
                         naive_views: Some(naive_evals as f64 / one),
                         per_pixel_views: Some(per_evals as f64 / one),
                         geometric_spectral_views: Some(gs_evals as f64 / one),
+                        green_geometry_views: Some(green_evals as f64 / one),
                         geometric_spectral_differing: subpixels_differing(&gs, &naive, 2),
+                        green_geometry_differing: subpixels_differing(&green, &naive, 2),
                     }
                 }
                 Some(g) => {
@@ -250,31 +270,38 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
                     };
                     let (_, per_ms) = method(g, MultiViewMethod::PerSubpixel)?;
                     let (gs, gs_ms) = method(g, MultiViewMethod::GeometricSpectral)?;
+                    let (green, green_ms) = method(g, MultiViewMethod::GreenGeometry)?;
                     Row {
                         volume: loaded.name.clone(),
                         views: d.views,
                         naive_ms,
                         per_pixel_ms: per_ms,
                         geometric_spectral_ms: gs_ms,
+                        green_geometry_ms: green_ms,
                         naive_views: None,
                         per_pixel_views: None,
                         geometric_spectral_views: None,
+                        green_geometry_views: None,
                         geometric_spectral_differing: subpixels_differing(&gs, &naive, 2),
+                        green_geometry_differing: subpixels_differing(&green, &naive, 2),
                     }
                 }
             };
             let evals = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.2}"));
             println!(
-                "{:<12} {:>5} {:>10.1} {:>10.1} {:>10.1}  {:>8} {:>8} {:>8}  {:>7.3}%",
+                "{:<12} {:>5} {:>10.1} {:>10.1} {:>10.1} {:>10.1}  {:>8} {:>8} {:>8} {:>8}  {:>7.3}% {:>7.3}%",
                 row.volume,
                 row.views,
                 row.naive_ms,
                 row.per_pixel_ms,
                 row.geometric_spectral_ms,
+                row.green_geometry_ms,
                 evals(row.naive_views),
                 evals(row.per_pixel_views),
                 evals(row.geometric_spectral_views),
-                100.0 * row.geometric_spectral_differing
+                evals(row.green_geometry_views),
+                100.0 * row.geometric_spectral_differing,
+                100.0 * row.green_geometry_differing
             );
             rows.push(row);
         }
