@@ -105,6 +105,7 @@ fn the_shipped_head_path_runs_on_every_wall_and_reports_everything() {
     assert_eq!(planner["planned_two_passes"], planned_two);
     assert!(estimated > 0);
     assert_eq!(planner["probe_after"], 120);
+    assert_eq!(planner["first_probe"], 8);
     assert!(
         planner["estimate_error_mean"].as_f64().unwrap()
             <= planner["estimate_error_max"].as_f64().unwrap()

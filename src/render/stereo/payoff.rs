@@ -10,9 +10,13 @@
 //! A path is measured only when it is rendered. Until two passes have
 //! been, their cost is estimated from the re-projection's left pass (it
 //! marches what the left eye marches, and writes segments besides), so a
-//! view that pays keeps re-projecting from its first frame; the path not
-//! taken is tried again after [`PairCosts::PROBE_AFTER`] frames of a
-//! class, to notice a view whose content changed its costs.
+//! view that pays keeps re-projecting from its first frame. The estimate
+//! misses where the left pass casts well beyond the image or writes many
+//! segments a ray (on a CAVE floor seen at a grazing angle it costs twice
+//! a plain pass), so two passes are measured once after
+//! [`PairCosts::FIRST_PROBE`] frames of a view; then the path not taken
+//! is tried again after [`PairCosts::PROBE_AFTER`] frames of a class, to
+//! notice a view whose content changed its costs.
 
 use std::collections::{HashMap, HashSet};
 
@@ -114,6 +118,9 @@ impl PairCosts {
     /// Frames of a class on one path after which the other is measured
     /// again (about 1.3 s at 90 Hz).
     pub const PROBE_AFTER: u32 = 120;
+    /// Re-projected frames of a view after which two passes are measured,
+    /// if they never were.
+    pub const FIRST_PROBE: u32 = 8;
     /// Views kept: a host that makes frames without end starts afresh
     /// here rather than growing the table.
     const MAX_VIEWS: usize = 4096;
@@ -149,7 +156,8 @@ impl PairCosts {
                 .or(all.ms[index(path)].fastest())
         };
         let reprojected_ms = ms(PairPath::Reprojected);
-        let two_passes_ms = ms(PairPath::TwoPasses).or_else(|| {
+        let two_passes_measured = ms(PairPath::TwoPasses);
+        let two_passes_ms = two_passes_measured.or_else(|| {
             own.left_ms
                 .fastest()
                 .or(all.left_ms.fastest())
@@ -165,6 +173,11 @@ impl PairCosts {
             (None, _) => choice(PairPath::Reprojected, true),
             // Re-projection was measured without its left pass's time.
             (Some(_), None) => choice(PairPath::TwoPasses, true),
+            _ if two_passes_measured.is_none()
+                && all.since[index(PairPath::TwoPasses)] >= Self::FIRST_PROBE =>
+            {
+                choice(PairPath::TwoPasses, true)
+            }
             (Some(r), Some(t)) => {
                 let cheaper = if r <= (1.0 - Self::MARGIN) * t {
                     PairPath::Reprojected
@@ -285,7 +298,7 @@ mod tests {
         assert!((error - 0.1).abs() < 1e-9, "{error}");
         // The fastest of what was measured.
         assert_eq!(costs.choose(1, 1).reprojected_ms, Some(12.0));
-        for _ in 0..PairCosts::PROBE_AFTER - 2 {
+        for _ in 0..PairCosts::FIRST_PROBE - 2 {
             assert!(!frame(&mut costs, 1, 1, (12.0, 9.0), 15.0).probe);
         }
         // Then two passes are measured once, and lose.
@@ -296,6 +309,29 @@ mod tests {
             (after.path, after.two_passes_ms),
             (PairPath::Reprojected, Some(15.0))
         );
+        // And again a probe interval later.
+        for _ in 0..PairCosts::PROBE_AFTER {
+            assert!(!frame(&mut costs, 1, 1, (12.0, 9.0), 15.0).probe);
+        }
+        let again = frame(&mut costs, 1, 1, (12.0, 9.0), 15.0);
+        assert_eq!((again.path, again.probe), (PairPath::TwoPasses, true));
+    }
+
+    #[test]
+    fn two_passes_are_measured_early_where_the_estimate_flatters_reprojection() {
+        let mut costs = PairCosts::new();
+        // A left pass that costs twice a plain one: the estimate of two
+        // passes (2 x 0.9 x 16 = 28.8 ms) hides that they take 17.
+        let mut paths = Vec::new();
+        for _ in 0..12 {
+            paths.push(frame(&mut costs, 9, 1, (18.0, 16.0), 17.0).path);
+        }
+        let first_two = paths.iter().position(|&p| p == PairPath::TwoPasses);
+        assert_eq!(first_two, Some(PairCosts::FIRST_PROBE as usize));
+        assert!(paths[PairCosts::FIRST_PROBE as usize..]
+            .iter()
+            .all(|&p| p == PairPath::TwoPasses));
+        assert!(costs.choose(9, 1).refuses_reprojection());
     }
 
     #[test]

@@ -140,6 +140,9 @@ struct WallSummary {
 struct PlannerSummary {
     /// Frames of a pose class on one path before the other is measured again.
     probe_after: u32,
+    /// Re-projected frames of a wall after which two passes are measured,
+    /// if they never were (the warm-up measures them here).
+    first_probe: u32,
     planned_two_passes: usize,
     /// Wall-frames whose path was taken to measure it (the warm-up seeds
     /// both paths of every wall, as a session's first frames would).
@@ -184,6 +187,9 @@ struct Measured {
     layers: u32,
     families: u32,
     span_px: f64,
+    /// Left pixels the re-projection casts, over the image's: the share
+    /// of its left pass spent beyond the image's borders.
+    cast_share: f64,
     t_l_ms: f64,
     t_r_ms: f64,
     t_lr_ms: f64,
@@ -502,10 +508,12 @@ impl Bench<'_> {
         if self.worst.as_ref().is_none_or(|w| d > w.0) {
             self.worst = Some((d, two_pass, stereo.right));
         }
+        let pixels = |s: UVec2| f64::from(s.x) * f64::from(s.y);
         Ok(Ok(Measured {
             layers: plan.layers,
             families: plan.plan.family_count(),
             span_px: plan.plan.span_px,
+            cast_share: pixels(plan.plan.cast) / pixels(plan.size),
             t_l_ms: t_l,
             t_r_ms: t_r,
             t_lr_ms: t_lr,
@@ -671,6 +679,7 @@ fn planner_summary(m: &[Measured]) -> PlannerSummary {
         .collect();
     PlannerSummary {
         probe_after: PairCosts::PROBE_AFTER,
+        first_probe: PairCosts::FIRST_PROBE,
         planned_two_passes: m.iter().filter(|m| m.planned == "two-pass").count(),
         probes: m.iter().filter(|m| m.probe).count(),
         estimate_error_mean: mean(errors.iter().copied()),
