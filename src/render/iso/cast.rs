@@ -109,6 +109,29 @@ impl<'a> Caster<'a> {
         }
     }
 
+    /// `f(y, row)` over the rows of `data` (`width` items a row) in
+    /// parallel, each row counted done; rows not yet started once the
+    /// cast is stopped are skipped. Returns the sum of what `f` returns
+    /// (field evaluations).
+    pub(crate) fn rows<T: Send>(
+        &self,
+        data: &mut [T],
+        width: usize,
+        f: impl Fn(usize, &mut [T]) -> u64 + Sync,
+    ) -> u64 {
+        data.par_chunks_mut(width)
+            .enumerate()
+            .map(|(y, row)| {
+                if self.stopped() {
+                    return 0;
+                }
+                let n = f(y, row);
+                self.row_done();
+                n
+            })
+            .sum()
+    }
+
     /// `Err(Stopped)` once the cast was asked to stop.
     pub fn check_stop(&self) -> Result<(), RenderError> {
         match self.stopped() {
@@ -259,16 +282,13 @@ pub fn cast_by(
     let (w, n) = (desc.size.x as usize, desc.pixels());
     let mut hits = filled(n, None, "the hits")?;
     caster.expect(u64::from(desc.size.y));
-    hits.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        if caster.stopped() {
-            return;
-        }
+    caster.rows(&mut hits, w, |y, row| {
         let mut samples = 0;
         for (x, hit) in row.iter_mut().enumerate() {
             let (o, d) = rays.pixel_ray(x as u32, y as u32);
             *hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut samples);
         }
-        caster.row_done();
+        samples
     });
     caster.check_stop()?;
     let mut color = filled(4 * n, 0.0f32, "the frame's color")?;

@@ -202,26 +202,18 @@ pub fn render_display_by(
             }
             total
         }
-        MultiViewMethod::PerSubpixel => rgb
-            .par_chunks_mut(w)
-            .enumerate()
-            .map(|(y, row)| {
-                if caster.stopped() {
-                    return 0;
+        MultiViewMethod::PerSubpixel => caster.rows(&mut rgb, w, |y, row| {
+            let mut n = 0;
+            for (x, px) in row.iter_mut().enumerate() {
+                for (c, out) in px.iter_mut().enumerate() {
+                    let r = &rays[table[y * w + x][c] as usize];
+                    let (o, d) = r.pixel_ray(x as u32, y as u32);
+                    let hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
+                    *out = caster.color(hit.as_ref(), d)[c];
                 }
-                let mut n = 0;
-                for (x, px) in row.iter_mut().enumerate() {
-                    for (c, out) in px.iter_mut().enumerate() {
-                        let r = &rays[table[y * w + x][c] as usize];
-                        let (o, d) = r.pixel_ray(x as u32, y as u32);
-                        let hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
-                        *out = caster.color(hit.as_ref(), d)[c];
-                    }
-                }
-                caster.row_done();
-                n
-            })
-            .sum(),
+            }
+            n
+        }),
         MultiViewMethod::GeometricSpectral => {
             geometric_spectral(caster, table, rays, size, &mut rgb)?
         }
@@ -244,24 +236,16 @@ fn view_image(
 ) -> Result<(Vec<[f32; 3]>, u64), RenderError> {
     let w = size.x as usize;
     let mut out = filled(w * size.y as usize, [0.0f32; 3], "a view's image")?;
-    let n = out
-        .par_chunks_mut(w)
-        .enumerate()
-        .map(|(y, row)| {
-            if caster.stopped() {
-                return 0;
-            }
-            let mut n = 0;
-            for (x, px) in row.iter_mut().enumerate() {
-                let (o, d) = rays.pixel_ray(x as u32, y as u32);
-                let hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut n);
-                let c = caster.color(hit.as_ref(), d);
-                *px = [c.x, c.y, c.z];
-            }
-            caster.row_done();
-            n
-        })
-        .sum();
+    let n = caster.rows(&mut out, w, |y, row| {
+        let mut n = 0;
+        for (x, px) in row.iter_mut().enumerate() {
+            let (o, d) = rays.pixel_ray(x as u32, y as u32);
+            let hit = caster.first_hit(o, d, (rays.t_near, rays.t_far), &mut n);
+            let c = caster.color(hit.as_ref(), d);
+            *px = [c.x, c.y, c.z];
+        }
+        n
+    });
     Ok((out, n))
 }
 
@@ -275,23 +259,15 @@ fn geometric_pass(
 ) -> Result<(Vec<Option<IsoHit>>, u64), RenderError> {
     let w = size.x as usize;
     let mut geometric: Vec<Option<IsoHit>> = filled(table.len(), None, "the geometric pass")?;
-    let n = geometric
-        .par_chunks_mut(w)
-        .enumerate()
-        .map(|(y, row)| {
-            if caster.stopped() {
-                return 0;
-            }
-            let mut n = 0;
-            for (x, hit) in row.iter_mut().enumerate() {
-                let r = &rays[table[y * w + x][1] as usize];
-                let (o, d) = r.pixel_ray(x as u32, y as u32);
-                *hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
-            }
-            caster.row_done();
-            n
-        })
-        .sum();
+    let n = caster.rows(&mut geometric, w, |y, row| {
+        let mut n = 0;
+        for (x, hit) in row.iter_mut().enumerate() {
+            let r = &rays[table[y * w + x][1] as usize];
+            let (o, d) = r.pixel_ray(x as u32, y as u32);
+            *hit = caster.first_hit(o, d, (r.t_near, r.t_far), &mut n);
+        }
+        n
+    });
     Ok((geometric, n))
 }
 
@@ -307,10 +283,7 @@ fn green_geometry(
 ) -> Result<u64, RenderError> {
     let w = size.x as usize;
     let (geometric, n) = geometric_pass(caster, table, rays, size)?;
-    rgb.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        if caster.stopped() {
-            return;
-        }
+    caster.rows(rgb, w, |y, row| {
         for (x, px) in row.iter_mut().enumerate() {
             let i = y * w + x;
             for (c, out) in px.iter_mut().enumerate() {
@@ -318,7 +291,7 @@ fn green_geometry(
                 *out = caster.color(geometric[i].as_ref(), d)[c];
             }
         }
-        caster.row_done();
+        0
     });
     Ok(n)
 }
@@ -343,53 +316,45 @@ fn geometric_spectral(
         true => near_surface(&geometric, (w, h), SAME_VIEW_RADIUS as usize)?,
         false => Vec::new(),
     };
-    let n_spectral: u64 = rgb
-        .par_chunks_mut(w)
-        .enumerate()
-        .map(|(y, row)| {
-            if caster.stopped() {
-                return 0;
-            }
-            let mut n = 0;
-            for (x, px) in row.iter_mut().enumerate() {
-                let i = y * w + x;
-                let views = table[i];
-                let (_, green_d) = rays[views[1] as usize].pixel_ray(x as u32, y as u32);
-                // Green's ray, and any channel of green's view, shade the
-                // geometric pass's very hit, seen the same way.
-                let green = caster.color(geometric[i].as_ref(), green_d);
-                for (c, out) in px.iter_mut().enumerate() {
-                    if views[c] == views[1] {
-                        *out = green[c];
-                        continue;
-                    }
-                    let r = &rays[views[c] as usize];
-                    let (o, d) = r.pixel_ray(x as u32, y as u32);
-                    let clip = (r.t_near, r.t_far);
-                    let hit = if !near[i] {
-                        // No green hit within the samples' reach: every
-                        // window below would be empty.
-                        None
-                    } else {
-                        let samples =
-                            SameView::around(&geometric, table, (w, h), (x, y), views[c], &offsets);
-                        samples
-                            .window(geometric[i].map(|g| g.t), margin)
-                            .or_else(|| fallback_window(&geometric, (w, h), (x, y), margin))
-                            .flatten()
-                            .and_then(|window| {
-                                caster
-                                    .hit_between(o, d, clip, window, &mut n)
-                                    .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n))
-                            })
-                    };
-                    *out = caster.color(hit.as_ref(), d)[c];
+    let n_spectral: u64 = caster.rows(rgb, w, |y, row| {
+        let mut n = 0;
+        for (x, px) in row.iter_mut().enumerate() {
+            let i = y * w + x;
+            let views = table[i];
+            let (_, green_d) = rays[views[1] as usize].pixel_ray(x as u32, y as u32);
+            // Green's ray, and any channel of green's view, shade the
+            // geometric pass's very hit, seen the same way.
+            let green = caster.color(geometric[i].as_ref(), green_d);
+            for (c, out) in px.iter_mut().enumerate() {
+                if views[c] == views[1] {
+                    *out = green[c];
+                    continue;
                 }
+                let r = &rays[views[c] as usize];
+                let (o, d) = r.pixel_ray(x as u32, y as u32);
+                let clip = (r.t_near, r.t_far);
+                let hit = if !near[i] {
+                    // No green hit within the samples' reach: every
+                    // window below would be empty.
+                    None
+                } else {
+                    let samples =
+                        SameView::around(&geometric, table, (w, h), (x, y), views[c], &offsets);
+                    samples
+                        .window(geometric[i].map(|g| g.t), margin)
+                        .or_else(|| fallback_window(&geometric, (w, h), (x, y), margin))
+                        .flatten()
+                        .and_then(|window| {
+                            caster
+                                .hit_between(o, d, clip, window, &mut n)
+                                .unwrap_or_else(|| caster.first_hit(o, d, clip, &mut n))
+                        })
+                };
+                *out = caster.color(hit.as_ref(), d)[c];
             }
-            caster.row_done();
-            n
-        })
-        .sum();
+        }
+        n
+    });
     Ok(n_geometric + n_spectral)
 }
 
