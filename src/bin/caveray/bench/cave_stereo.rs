@@ -139,10 +139,10 @@ struct WallSummary {
 #[derive(Serialize)]
 struct PlannerSummary {
     /// Frames of a pose class on one path before the other is measured again.
-    probe_after: u32,
+    probe_after: u64,
     /// Re-projected frames of a wall after which two passes are measured,
     /// if they never were (the warm-up measures them here).
-    first_probe: u32,
+    first_probe: u64,
     planned_two_passes: usize,
     /// Wall-frames whose path was taken to measure it (the warm-up seeds
     /// both paths of every wall, as a session's first frames would).
@@ -289,10 +289,11 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
     };
     // Compiles and warms every pipeline and fills every buffer before
     // anything is timed (a first frame's times are a first frame's), then
-    // gives the planner both paths' times of every wall, as the first
-    // frames of a session would.
+    // gives the planner both paths' times of every wall, a run of frames
+    // each, as the first frames of a session would.
     let first = pose(&keys, start);
-    for phase in [Phase::Warming, Phase::Seeding] {
+    let seeding = std::iter::repeat_n(Phase::Seeding, PairCosts::RUN);
+    for phase in std::iter::once(Phase::Warming).chain(seeding) {
         bench.phase = phase;
         for (wall, size) in rig.walls.iter().zip(&sizes) {
             bench.wall(wall, *size, &first)?;
@@ -464,6 +465,7 @@ impl Bench<'_> {
             for path in [PairPath::Reprojected, PairPath::TwoPasses] {
                 record(&mut self.costs, path);
             }
+            return;
         }
         m.estimate_error = record(&mut self.costs, choice.path);
         m.planned = match choice.path {
