@@ -6,18 +6,18 @@ use std::sync::Arc;
 
 use super::camera::CameraModel;
 use super::frame::state::FrameState;
-use super::geometry::IsoGeometry;
+use super::geometry::GeometryModel;
 use super::group::GroupModel;
 use super::instance::InstanceModel;
 use super::light::DirectionalLight;
-use super::material::Coloring;
+use super::material::MaterialModel;
 use super::object::State;
 use super::surface::SurfaceModel;
 use super::table::{
-    ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_COMPLETION,
-    EXT_CURVATURE, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR, EXT_ISOSURFACE, EXT_MATRIX,
-    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_SHADING,
-    EXT_STEREO,
+    ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE,
+    EXT_COMPLETION, EXT_CURVATURE, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR, EXT_ISOSURFACE, EXT_MATRIX,
+    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_QUAD,
+    EXT_SHADING, EXT_SPHERE, EXT_STEREO, EXT_TRIANGLE,
 };
 use super::types::DataType as T;
 use super::volume::VolumeModel;
@@ -49,6 +49,10 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_FRAME_PAIR,
     EXT_FRAME_DEADLINE,
     EXT_ISOSURFACE,
+    EXT_TRIANGLE,
+    EXT_QUAD,
+    EXT_SPHERE,
+    EXT_AMBIENT,
     EXT_MATTE,
     EXT_CURVATURE,
     EXT_MULTI_VIEW,
@@ -79,6 +83,9 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &volume::transfer_function_1d::INFO,
     &light::directional::INFO,
     &geometry::isosurface::INFO,
+    &geometry::triangle::INFO,
+    &geometry::quad::INFO,
+    &geometry::sphere::INFO,
     &material::matte::INFO,
     &material::curvature::INFO,
     &surface::INFO,
@@ -100,8 +107,8 @@ pub fn initial_state(kind: T, implemented: bool) -> State {
         T::VOLUME => State::uncommitted::<VolumeModel>(),
         T::WORLD => State::uncommitted::<WorldModel>(),
         T::GROUP => State::uncommitted::<GroupModel>(),
-        T::GEOMETRY => State::uncommitted::<IsoGeometry>(),
-        T::MATERIAL => State::uncommitted::<Coloring>(),
+        T::GEOMETRY => State::uncommitted::<GeometryModel>(),
+        T::MATERIAL => State::uncommitted::<MaterialModel>(),
         T::SURFACE => State::uncommitted::<SurfaceModel>(),
         T::INSTANCE => State::uncommitted::<InstanceModel>(),
         T::LIGHT => State::uncommitted::<DirectionalLight>(),
@@ -233,7 +240,10 @@ mod tests {
                 "multiView"
             ]
         );
-        assert_eq!(subtypes(T::GEOMETRY), ["isosurface"]);
+        assert_eq!(
+            subtypes(T::GEOMETRY),
+            ["isosurface", "triangle", "quad", "sphere"]
+        );
         assert_eq!(subtypes(T::MATERIAL), ["matte", "curvature"]);
     }
 

@@ -5,7 +5,8 @@
 use super::object::State;
 use super::table::Read;
 use super::table::{
-    p, DefaultValue, SubtypeInfo, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_SHADING, F32, VEC3,
+    p, DefaultValue, SubtypeInfo, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_SHADING,
+    F32, VEC3,
 };
 use super::types::DataType as T;
 use glam::Vec4;
@@ -21,7 +22,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::RENDERER,
     subtype: "default",
     description: "emission-absorption ray casting with optional shadows and ambient occlusion",
-    extensions: &[EXT_SHADING, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE],
+    extensions: &[EXT_SHADING, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_AMBIENT],
     params: &[
         p(
             "background",
@@ -47,6 +48,21 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "directional:4",
             "directional:16",
         ]),
+        p(
+            "ambientColor",
+            VEC3,
+            false,
+            DefaultValue::Floats(&[1.0, 1.0, 1.0]),
+            "color of the ambient light on surfaces (linear RGB)",
+        ),
+        p(
+            "ambientRadiance",
+            F32,
+            false,
+            DefaultValue::Floats(&[1.0]),
+            "strength of the ambient light on surfaces: 1 lights a surface to a tenth of its color, as the reference device does",
+        )
+        .range(0.0, 1e6),
         p(
             "lightDirection",
             VEC3,
@@ -138,6 +154,9 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         light: light
             .try_normalize()
             .ok_or_else(|| format!("lightDirection {light} has no direction"))?,
+        ambient: r.vec3("ambientColor")?
+            * r.f32_in_range("ambientRadiance")?
+            * crate::render::shapes::AMBIENT_SCALE,
         step_factor: r.f32_in_range("stepFactor")?,
         sampling_rate: r.f32_in_range("volumeSamplingRate")?,
         termination: r.f32("terminationThreshold")?,

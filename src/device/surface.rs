@@ -9,7 +9,7 @@ use super::types::DataType as T;
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::SURFACE,
     subtype: "",
-    description: "a geometry (isosurface) drawn in a material (matte, curvature)",
+    description: "a geometry (triangle, quad, sphere, isosurface) drawn in a material (matte; curvature for isosurfaces)",
     extensions: &[],
     params: &[
         p(
@@ -26,6 +26,13 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             DefaultValue::None,
             "how it is colored",
         ),
+        p(
+            "id",
+            &[T::UINT32],
+            false,
+            DefaultValue::None,
+            "the surface's number, for hosts that tell surfaces apart (default: none, UINT32 max)",
+        ),
     ],
     commit: Some(commit),
 };
@@ -35,6 +42,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 pub struct SurfaceModel {
     pub geometry: ObjectRef,
     pub material: ObjectRef,
+    pub id: u32,
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
@@ -47,5 +55,10 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     Ok(Some(State::ready(SurfaceModel {
         geometry: object("geometry", T::GEOMETRY)?,
         material: object("material", T::MATERIAL)?,
+        id: r
+            .set("id")
+            .and_then(|v| v.u32s())
+            .and_then(|v| v.first().copied())
+            .unwrap_or(u32::MAX),
     })))
 }

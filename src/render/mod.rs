@@ -11,6 +11,7 @@ pub mod iso;
 mod march_plan;
 mod progress;
 mod settings;
+pub mod shapes;
 pub mod stereo;
 pub mod warp;
 

@@ -273,6 +273,11 @@ pub struct RenderSettings {
     /// (a host's directional light; 1 without one; unused unless
     /// [`Shading::lights`]).
     pub light_color: Vec3,
+    /// Surfaces' ambient light: the renderer's `ambientColor` times
+    /// `ambientRadiance`, scaled as the reference device scales it.
+    pub ambient: Vec3,
+    /// Surfaces lit from the eye, where the world has no light.
+    pub headlight: bool,
     /// Leap over bricks the transfer function leaves clear
     /// (render::empty_space). Exact: the image does not change.
     pub skipping: bool,
@@ -298,6 +303,8 @@ impl Default for RenderSettings {
             depth_threshold: 0.5,
             clip_planes: ClipPlanes::default(),
             light_color: Vec3::ONE,
+            ambient: Vec3::splat(super::shapes::AMBIENT_SCALE),
+            headlight: true,
             skipping: true,
             sampling: Sampling::Exact,
             level_of_detail: 0.0,
@@ -356,6 +363,12 @@ impl RenderSettings {
             return Err(RenderError::Settings(format!(
                 "termination threshold must be finite and positive, got {}",
                 self.termination
+            )));
+        }
+        if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
+            return Err(RenderError::Settings(format!(
+                "ambient light must be finite and not negative, got {}",
+                self.ambient
             )));
         }
         if !self.light.is_finite() || self.light.length_squared() < 1e-12 {

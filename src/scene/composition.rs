@@ -4,10 +4,11 @@
 
 use std::sync::Arc;
 
-use glam::{DMat4, Mat4, Vec3, Vec4};
+use glam::{DMat4, Mat4, Vec3};
 use thiserror::Error;
 
-use super::{StructuredVolume, TransferFunction};
+use super::placement::{check_affine, transformed_box};
+use super::{PlacedShape, ShapeError, StructuredVolume, TransferFunction};
 
 /// The most volumes one scene composites. The shaders bind one 3D texture
 /// per volume, and eight plus the other textures stay inside the sixteen
@@ -16,8 +17,10 @@ pub const MAX_VOLUMES: usize = 8;
 
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum SceneError {
-    #[error("a scene needs at least one volume")]
+    #[error("a scene needs at least one volume or surface")]
     Empty,
+    #[error("surface {index}: {error}")]
+    BadShape { index: usize, error: ShapeError },
     #[error("{count} volumes in one scene; caveray composites up to {MAX_VOLUMES}")]
     TooManyVolumes { count: usize },
     #[error("volume {index}: transform {transform} {reason}")]
@@ -41,23 +44,7 @@ pub struct PlacedVolume {
 impl PlacedVolume {
     /// Why `transform` cannot place a volume, if it cannot.
     pub fn check_transform(transform: Mat4) -> Result<(), &'static str> {
-        if !transform.is_finite() {
-            return Err("is not finite");
-        }
-        let bottom = transform.row(3) - Vec4::W;
-        if bottom.abs().max_element() > 1e-6 {
-            return Err("is projective; a volume's transform must be affine");
-        }
-        let linear = transform.as_dmat4();
-        let scale = [linear.x_axis, linear.y_axis, linear.z_axis]
-            .iter()
-            .map(|c| c.truncate().length())
-            .fold(0.0, f64::max);
-        let det = glam::DMat3::from_mat4(linear).determinant();
-        if det.abs() <= 1e-9 * scale.powi(3) || scale == 0.0 {
-            return Err("is singular: it flattens the volume");
-        }
-        Ok(())
+        check_affine(transform)
     }
 
     /// World coordinates to grid coordinates (vertex i at i), computed in
@@ -85,27 +72,14 @@ impl PlacedVolume {
     }
 }
 
-/// The box around box `(lo, hi)`'s corners under affine `transform`.
-pub fn transformed_box(transform: Mat4, (lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
-    (0..8)
-        .map(|i| {
-            let pick = |bit: u32, a: f32, b: f32| if i & bit == 0 { a } else { b };
-            transform.transform_point3(Vec3::new(
-                pick(1, lo.x, hi.x),
-                pick(2, lo.y, hi.y),
-                pick(4, lo.z, hi.z),
-            ))
-        })
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
-            (l.min(p), h.max(p))
-        })
-}
-
 /// What a renderer draws. Volumes and tables are shared so a renderer can
 /// keep them uploaded and tell, by identity, when they were replaced.
 #[derive(Clone, Debug)]
 pub struct Scene {
     volumes: Vec<PlacedVolume>,
+    /// Surfaces beside the volumes, marched with them: a ray stops at the
+    /// nearest one.
+    shapes: Vec<PlacedShape>,
 }
 
 impl Scene {
@@ -122,6 +96,7 @@ impl Scene {
                 transfer_function,
                 transform: Mat4::IDENTITY,
             }],
+            shapes: Vec::new(),
         }
     }
 
@@ -144,19 +119,51 @@ impl Scene {
                 }
             })?;
         }
-        Ok(Self { volumes })
+        Ok(Self {
+            volumes,
+            shapes: Vec::new(),
+        })
     }
 
-    /// One or more, in the order given.
+    /// Surfaces alone, no volume.
+    pub fn of_shapes(shapes: Vec<PlacedShape>) -> Result<Self, SceneError> {
+        if shapes.is_empty() {
+            return Err(SceneError::Empty);
+        }
+        Self {
+            volumes: Vec::new(),
+            shapes: Vec::new(),
+        }
+        .with_shapes(shapes)
+    }
+
+    /// This scene with `shapes` beside its volumes.
+    pub fn with_shapes(mut self, shapes: Vec<PlacedShape>) -> Result<Self, SceneError> {
+        for (index, shape) in shapes.iter().enumerate() {
+            shape
+                .check()
+                .map_err(|error| SceneError::BadShape { index, error })?;
+        }
+        self.shapes = shapes;
+        Ok(self)
+    }
+
+    /// In the order given; none in a scene of surfaces alone.
     pub fn volumes(&self) -> &[PlacedVolume] {
         &self.volumes
     }
 
-    /// The world-space box around every volume.
+    pub fn shapes(&self) -> &[PlacedShape] {
+        &self.shapes
+    }
+
+    /// The world-space box around every volume and surface.
     pub fn bounds(&self) -> (Vec3, Vec3) {
+        let shapes = self.shapes.iter().map(PlacedShape::bounds);
         self.volumes
             .iter()
             .map(PlacedVolume::bounds)
+            .chain(shapes)
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), (a, b)| {
                 (l.min(a), h.max(b))
             })
@@ -171,6 +178,12 @@ impl Scene {
                     && Arc::ptr_eq(&a.transfer_function, &b.transfer_function)
                     && a.transform == b.transform
             })
+            && self.shapes.len() == other.shapes.len()
+            && self
+                .shapes
+                .iter()
+                .zip(&other.shapes)
+                .all(|(a, b)| a.same(b))
     }
 }
 
@@ -188,8 +201,8 @@ mod tests {
             Vec3::new(0.5, 0.25, 2.0),
         )
         .unwrap();
-        let tf =
-            TransferFunction::new(vec![Vec4::ONE; 2], vec![0.0, 1.0], (0.0, 1.0), 1.0).unwrap();
+        let tf = TransferFunction::new(vec![glam::Vec4::ONE; 2], vec![0.0, 1.0], (0.0, 1.0), 1.0)
+            .unwrap();
         PlacedVolume {
             volume: Arc::new(volume),
             transfer_function: Arc::new(tf),

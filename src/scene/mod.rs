@@ -4,9 +4,16 @@
 //! volume the same way and none of them depends on another's room.
 
 mod composition;
+mod placement;
+mod shapes;
 mod transfer_function;
 mod volume;
 
-pub use composition::{transformed_box, PlacedVolume, Scene, SceneError, MAX_VOLUMES};
+pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
+pub use placement::transformed_box;
+pub use shapes::{
+    Attribute, ColorSource, Made, PlacedShape, Primitives, Shape, ShapeError, ShapeInput,
+    SurfaceMaterial, ATTRIBUTE_NAMES, MAX_PRIMITIVES,
+};
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 pub use volume::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

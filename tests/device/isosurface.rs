@@ -403,7 +403,8 @@ fn bad_surfaces_are_reported_and_leave_the_device_usable() {
     assert!(h.d.map_frame(fr, "channel.color").is_none());
     let e = h.messages(Severity::Error);
     assert!(
-        e.iter().any(|m| m.contains("holds volumes and surfaces")),
+        e.iter()
+            .any(|m| m.contains("holds isosurfaces beside volumes")),
         "{e:?}"
     );
 
@@ -711,7 +712,7 @@ fn bad_multi_view_cameras_are_reported_by_name() {
 }
 
 #[test]
-fn a_matte_color_by_attribute_name_is_drawn_in_the_default_color_with_a_warning() {
+fn a_matte_color_by_attribute_name_is_drawn_in_the_default_color() {
     // The conformance tests' matte materials name the `color` attribute;
     // an isosurface has none.
     let mut h = Host::new();
@@ -719,11 +720,7 @@ fn a_matte_color_by_attribute_name_is_drawn_in_the_default_color_with_a_warning(
     let m = h.d.new_object(DataType::MATERIAL, "matte");
     h.d.set_param(Subject::Object(m), "color", Input::String("color".into()));
     h.d.commit(Subject::Object(m));
-    let w = h.messages(Severity::Warning);
-    assert!(
-        w.iter().any(|m| m.contains("names the attribute 'color'")),
-        "{w:?}"
-    );
+    assert!(h.messages(Severity::Error).is_empty());
     let (s, _) = surface(&mut h, f, &[0.25, 0.5, 0.75], m);
     let world = world_of(&mut h, DataType::SURFACE, "surface", &[s]);
     let camera = off_axis(&mut h, [0.0, 0.0, 2.0]);

@@ -12,4 +12,5 @@ mod params;
 mod scene_graph;
 mod stereo;
 mod stereo_pairs;
+mod surfaces;
 mod volumes;

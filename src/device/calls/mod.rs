@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
-use super::geometry::IsoGeometry;
+use super::geometry::GeometryModel;
 use super::info;
 use super::object::{ObjectCell, ObjectRef, State};
 use super::object::{Params, Value};
@@ -443,17 +443,20 @@ impl Device {
 
 /// The box around a world's volumes and surfaces, if any is ready.
 fn world_bounds(world: &WorldModel) -> Option<Property> {
-    let field_of = |o: &ObjectRef| -> Option<ObjectRef> {
+    let grid_of = |field: ObjectRef| Some(field.usable::<Arc<StructuredVolume>>()?.bounds());
+    let box_of = |o: &ObjectRef| -> Option<(glam::Vec3, glam::Vec3)> {
         if let Some(volume) = o.usable::<VolumeModel>() {
-            return Some(volume.field);
+            return grid_of(volume.field);
         }
         let geometry = o.usable::<SurfaceModel>()?.geometry;
-        Some(geometry.usable::<IsoGeometry>()?.field)
+        match geometry.usable::<GeometryModel>()? {
+            GeometryModel::Iso(iso) => grid_of(iso.field),
+            GeometryModel::Shape(shape) => Some(shape.bounds()).filter(|_| !shape.is_empty()),
+        }
     };
     let placed = world.volumes.iter().chain(&world.surfaces);
     let mut boxes = placed.filter_map(|(v, transform)| {
-        let field = field_of(v)?;
-        let grid = field.usable::<Arc<StructuredVolume>>()?.bounds();
+        let grid = box_of(v)?;
         Some(match transform {
             None => grid,
             Some(m) => crate::scene::transformed_box(*m, grid),

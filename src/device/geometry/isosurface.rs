@@ -84,9 +84,9 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
             IsoFilter::Trilinear
         }
     };
-    Ok(Some(State::ready(IsoGeometry {
+    Ok(Some(State::ready(super::GeometryModel::Iso(IsoGeometry {
         field,
         isovalues,
         filter,
-    })))
+    }))))
 }

@@ -1,6 +1,33 @@
-//! Geometries: one module per subtype. caveray draws surfaces of fields,
-//! so its one geometry is the isosurface.
+//! Geometries: one module per subtype. Surfaces of a field (`isosurface`)
+//! are ray cast in the field; surfaces of primitives (`triangle`, `quad`,
+//! `sphere`) become a scene shape the renderers trace through a BVH.
 
+pub(crate) mod attributes;
 pub mod isosurface;
+pub mod quad;
+pub mod sphere;
+pub mod triangle;
+
+use std::sync::Arc;
 
 pub use isosurface::IsoGeometry;
+
+use super::object::State;
+use crate::scene::{Made, Shape};
+
+/// A geometry after commit.
+#[derive(Clone)]
+pub enum GeometryModel {
+    Iso(IsoGeometry),
+    Shape(Arc<Shape>),
+}
+
+/// The state of a shape as made, warning of what was dropped.
+fn made(made: Made, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    if let Some(why) = made.dropped {
+        warn(format!("{why}: they would not show"));
+    }
+    Ok(Some(State::ready(GeometryModel::Shape(Arc::new(
+        made.shape,
+    )))))
+}

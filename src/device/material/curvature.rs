@@ -2,6 +2,7 @@
 //! curvature from the field's Hessian (blue concave, white flat, orange
 //! convex), the coloring that shows shape on a display without shadows.
 
+use super::MaterialModel;
 use crate::device::object::State;
 use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_CURVATURE, F32};
@@ -28,5 +29,8 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     if !(radius.is_finite() && radius > 0.0) {
         return Err(format!("radius must be positive and finite, got {radius}"));
     }
-    Ok(Some(State::ready(Coloring::Curvature { radius })))
+    Ok(Some(State::ready(MaterialModel {
+        coloring: Coloring::Curvature { radius },
+        surface: None,
+    })))
 }

@@ -1,11 +1,18 @@
-//! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color.
+//! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color, or a
+//! geometry attribute named as the color (`color`, `attribute0..3`).
 //! Surfaces are opaque here; an opacity below 1 is drawn opaque, said so.
 
 use crate::device::object::State;
 use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_MATTE, F32};
 use crate::device::types::DataType as T;
+use glam::Vec3;
+
+use super::MaterialModel;
 use crate::render::iso::Coloring;
+use crate::scene::{ColorSource, SurfaceMaterial, ATTRIBUTE_NAMES};
+
+const DEFAULT_COLOR: Vec3 = Vec3::splat(0.8);
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::MATERIAL,
@@ -18,7 +25,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING],
             false,
             DefaultValue::Floats(&[0.8, 0.8, 0.8]),
-            "the surface's color, linear RGB in [0, 1] (a fourth component is ignored); an attribute name is drawn in the default color, as an isosurface has no attributes",
+            "the surface's color, linear RGB in [0, 1] (a fourth component is ignored), or the name of the geometry attribute that colors it: color, attribute0 to attribute3 (an isosurface, having none, shows the default color)",
         ),
         p(
             "opacity",
@@ -33,25 +40,45 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    if let Some(name) = r.set("color").and_then(|v| v.string()) {
+    let mut surface = SurfaceMaterial::default();
+    let named = r.set("color").and_then(|v| v.string());
+    let flat = match named {
+        Some(name) => {
+            match ATTRIBUTE_NAMES.iter().position(|n| *n == name) {
+                Some(slot) => surface.color = ColorSource::Attribute(slot),
+                None => warn(format!(
+                    "color names '{name}'; caveray colors by {}: drawn in the default color",
+                    ATTRIBUTE_NAMES.join(", ")
+                )),
+            }
+            DEFAULT_COLOR
+        }
+        None => {
+            let color = match r.set("color").and_then(|v| v.f32s()) {
+                Some(f) if f.len() == 4 => Vec3::from_slice(&f),
+                _ => r.vec3("color")?,
+            };
+            if !color.is_finite() {
+                return Err(format!("color {color} must be finite"));
+            }
+            let clamped = color.clamp(Vec3::ZERO, Vec3::ONE);
+            if clamped != color {
+                warn(format!("color {color} lies outside [0, 1]; clamped"));
+            }
+            surface.color = ColorSource::Constant(clamped);
+            clamped
+        }
+    };
+    surface.opacity = r.f32("opacity")?;
+    if surface.opacity < 1.0 {
         warn(format!(
-            "color names the attribute '{name}'; isosurfaces have no attributes, so the surface is drawn in the default color"
+            "opacity {}: caveray draws surfaces opaque",
+            surface.opacity
         ));
     }
-    let color = match r.set("color").and_then(|v| v.f32s()) {
-        Some(f) if f.len() == 4 => glam::Vec3::from_slice(&f),
-        _ => r.vec3("color")?,
-    };
-    if !color.is_finite() {
-        return Err(format!("color {color} must be finite"));
-    }
-    let clamped = color.clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
-    if clamped != color {
-        warn(format!("color {color} lies outside [0, 1]; clamped"));
-    }
-    let opacity = r.f32("opacity")?;
-    if opacity < 1.0 {
-        warn(format!("opacity {opacity}: caveray draws surfaces opaque"));
-    }
-    Ok(Some(State::ready(Coloring::Flat(clamped))))
+    Ok(Some(State::ready(MaterialModel {
+        // An isosurface has no attributes: a named one is the default color.
+        coloring: Coloring::Flat(flat),
+        surface: Some(surface),
+    })))
 }

@@ -81,6 +81,7 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
         settings.light = light.towards;
         settings.light_color = light.color;
     }
+    settings.headlight = light.is_none();
     let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
     let mut placed = Vec::with_capacity(world_model.volumes.len());
     for (v, transform) in &world_model.volumes {
@@ -92,12 +93,18 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
             transform: transform.unwrap_or(Mat4::IDENTITY),
         });
     }
-    let scene = if placed.is_empty() {
-        None
-    } else {
-        Some(Scene::placed(placed).map_err(|e| format!("{}: {e}", world.describe()))?)
+    let surfaces = surfaces::surfaces(&world_model.surfaces, &settings, light)?;
+    let in_world = |e: crate::scene::SceneError| format!("{}: {e}", world.describe());
+    let scene = match (placed.is_empty(), surfaces.shapes.is_empty()) {
+        (true, true) => None,
+        (true, false) => Some(Scene::of_shapes(surfaces.shapes).map_err(in_world)?),
+        (false, _) => Some(
+            Scene::placed(placed)
+                .and_then(|s| s.with_shapes(surfaces.shapes))
+                .map_err(in_world)?,
+        ),
     };
-    let surfaces = surfaces::iso_surfaces(&world_model.surfaces, &settings, light)?;
+    let surfaces = surfaces.iso;
     let mut desc =
         FrameDesc::new(size).with_color(color_type.and_then(color_format).unwrap_or_default());
     desc.depth = depth;
@@ -111,7 +118,7 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
     };
     inputs.check().map_err(|e| match e {
         Unrenderable::VolumesAndSurfaces => format!(
-            "{} holds volumes and surfaces; caveray draws one or the other in a frame (a volume composited with isosurfaces is not implemented)",
+            "{} holds isosurfaces beside volumes or surfaces of primitives; caveray draws isosurfaces alone in a frame (an isosurface composited with a volume is not implemented)",
             world.describe()
         ),
         Unrenderable::PanelDepth => "a multi-view panel image has no depth channel (each subpixel has its own eye): unset 'channel.depth', or set the camera's 'view'".into(),

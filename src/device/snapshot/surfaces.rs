@@ -1,20 +1,21 @@
-//! A world's surfaces as a frame renders them: each surface's geometry,
-//! field and material resolved, one `IsoSurface` per iso-value, shaded by
-//! the renderer's settings and the world's light (its direction: the
-//! isosurface shading's light is white).
+//! A world's surfaces as a frame renders them: each surface's geometry
+//! and material resolved; an isosurface becomes one `IsoSurface` per
+//! iso-value, shaded by the renderer's settings and the world's light (its
+//! direction: the isosurface shading's light is white); a surface of
+//! primitives becomes a placed shape beside the volumes.
 
 use std::sync::{Arc, OnceLock};
 
 use glam::Mat4;
 
-use crate::device::geometry::IsoGeometry;
+use crate::device::geometry::GeometryModel;
 use crate::device::light::DirectionalLight;
-use crate::device::material::Coloring;
+use crate::device::material::MaterialModel;
 use crate::device::object::{ObjectCell, ObjectRef};
 use crate::device::surface::SurfaceModel;
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
-use crate::scene::{PlacedVolume, StructuredVolume, TransferFunction};
+use crate::scene::{PlacedShape, PlacedVolume, StructuredVolume, TransferFunction};
 
 /// The transfer function a surface's field is placed with: the caster
 /// reads the field alone and never evaluates it. One for all, so the GPU
@@ -30,20 +31,45 @@ fn unclassified() -> Result<Arc<TransferFunction>, String> {
     .ok_or_else(|| "internal: no transfer function for an isosurface's field".to_string())
 }
 
-/// The isosurfaces of `surfaces` (each with the transform of the instance
-/// that placed it), or why one cannot be drawn.
-pub fn iso_surfaces(
+/// A world's surfaces as the renderers take them.
+#[derive(Default)]
+pub struct Surfaces {
+    pub iso: Vec<IsoSurface>,
+    pub shapes: Vec<PlacedShape>,
+}
+
+/// The isosurfaces and shapes of `surfaces` (each with the transform of
+/// the instance that placed it), or why one cannot be drawn.
+pub fn surfaces(
     surfaces: &[(ObjectRef, Option<Mat4>)],
     renderer: &RenderSettings,
     light: Option<DirectionalLight>,
-) -> Result<Vec<IsoSurface>, String> {
-    let mut out = Vec::new();
+) -> Result<Surfaces, String> {
+    let mut out = Surfaces::default();
     for (surface, transform) in surfaces {
         let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
         let model = surface.ready::<SurfaceModel>(not_ours)?;
         let (geometry, material) = (&model.geometry, &model.material);
-        let geometry_model = geometry.ready::<IsoGeometry>(not_ours)?;
-        let coloring = material.ready::<Coloring>(not_ours)?;
+        let geometry_model = geometry.ready::<GeometryModel>(not_ours)?;
+        let material_model = material.ready::<MaterialModel>(not_ours)?;
+        let geometry_model = match geometry_model {
+            GeometryModel::Iso(iso) => iso,
+            GeometryModel::Shape(shape) => {
+                let drawn = material_model.surface.ok_or_else(|| {
+                    format!(
+                        "{}: {} colors isosurfaces only (it needs a field's curvature)",
+                        surface.describe(),
+                        material.describe()
+                    )
+                })?;
+                let mut placed =
+                    PlacedShape::new(shape, drawn, transform.unwrap_or(Mat4::IDENTITY));
+                placed.id = model.id;
+                out.shapes.push(placed);
+                continue;
+            }
+        };
+        let coloring = material_model.coloring;
         let volume = geometry_model
             .field
             .ready::<Arc<StructuredVolume>>(not_ours)?;
@@ -65,7 +91,7 @@ pub fn iso_surfaces(
             settings
                 .validate()
                 .map_err(|e| format!("{}: {e}", surface.describe()))?;
-            out.push(IsoSurface {
+            out.iso.push(IsoSurface {
                 placed: placed.clone(),
                 settings,
             });

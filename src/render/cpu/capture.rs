@@ -52,7 +52,14 @@ impl CpuRenderer {
                     }
                     let (o, dir) = rays.pixel_ray(x as u32, y as u32);
                     let mut builder = LayerBuilder::new(per);
-                    let ray = march::march(&field, rays, o, dir, Vec4::ZERO, Some(&mut builder));
+                    let ray = march::march(
+                        &field,
+                        rays,
+                        o,
+                        dir,
+                        (Vec4::ZERO, f32::INFINITY),
+                        Some(&mut builder),
+                    );
                     c[x] = ray.color;
                     d[x] = ray.depth;
                     if layers > 0 {

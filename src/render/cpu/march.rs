@@ -22,13 +22,14 @@ pub(super) struct RayResult {
 /// every volume at once: one step sequence over the union of their spans,
 /// each sample mixing the volumes whose span holds it. With `layers`, every
 /// contributing sample is also recorded there (the scalar path only: a
-/// field without packets).
+/// field without packets). The march ends at `stop`, where an opaque
+/// surface of color `bg` hides what lies behind.
 pub(super) fn march(
     field: &Field,
     rays: &RayGen,
     origin: Vec3,
     dir: Vec3,
-    bg: Vec4,
+    (bg, stop): (Vec4, f32),
     mut layers: Option<&mut LayerBuilder>,
 ) -> RayResult {
     let mut samples = 0;
@@ -37,7 +38,7 @@ pub(super) fn march(
         color: Vec4::ZERO,
         depth: f32::INFINITY,
     };
-    let clip = (rays.t_near, rays.t_far);
+    let clip = (rays.t_near, rays.t_far.min(stop));
     // Each volume's span along the ray, found in its grid, where the
     // affine map keeps the ray's parameter t.
     // On the stack: this runs once per primary ray.

@@ -18,7 +18,8 @@ use super::march_plan::MarchPlan;
 use super::{Render, RenderError, RenderSettings, Watch};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
-use crate::scene::{PlacedVolume, Scene, StructuredVolume, TransferFunction};
+use crate::render::shapes::ShapeSet;
+use crate::scene::{PlacedShape, PlacedVolume, Scene, StructuredVolume, TransferFunction};
 use packet::Channels;
 use sample::Converted;
 
@@ -43,6 +44,8 @@ struct Prepared {
     values: Vec<(Arc<StructuredVolume>, Arc<Vec<f32>>)>,
     tables: Vec<(Arc<TransferFunction>, Arc<Vec<Vec4>>)>,
     spaces: SpaceCache,
+    /// The last scene's surfaces, and their BVH.
+    shapes: Option<(Vec<PlacedShape>, Arc<ShapeSet>)>,
     /// The isosurfaces' fields as f32, and their crossing boxes by
     /// iso-value and filter, kept while frames bring the same volumes.
     iso: Vec<IsoPrepared>,
@@ -150,6 +153,7 @@ impl CpuRenderer {
         let mut next = Prepared {
             spaces: std::mem::take(&mut cache.spaces),
             iso: std::mem::take(&mut cache.iso),
+            shapes: cache.shapes.take(),
             ..Prepared::default()
         };
         let mut converted = Vec::new();
@@ -181,6 +185,26 @@ impl CpuRenderer {
     }
 }
 
+impl CpuRenderer {
+    /// The BVH of `scene`'s surfaces, built only when they are new; `None`
+    /// for a scene of volumes alone.
+    pub fn shape_set(&self, scene: &Scene) -> Result<Option<Arc<ShapeSet>>, RenderError> {
+        let shapes = scene.shapes();
+        if shapes.is_empty() {
+            return Ok(None);
+        }
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((kept, set)) = &cache.shapes {
+            if kept.len() == shapes.len() && kept.iter().zip(shapes).all(|(a, b)| a.same(b)) {
+                return Ok(Some(Arc::clone(set)));
+            }
+        }
+        let set = Arc::new(ShapeSet::build(shapes)?);
+        cache.shapes = Some((shapes.to_vec(), Arc::clone(&set)));
+        Ok(Some(set))
+    }
+}
+
 impl Render for &CpuRenderer {
     /// Casts no further pixel once the stop flag is set; counts tiles of
     /// 16 x 16 pixels.
@@ -209,6 +233,7 @@ impl CpuRenderer {
     ) -> Result<Frame, RenderError> {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
+        let shapes = self.shape_set(scene)?;
         let data = self.prepare(scene, &plan)?;
         let channels = match &data[..] {
             [one] if self.packets && packet::available() => Some(Channels::new(&one.table)),
@@ -240,9 +265,19 @@ impl CpuRenderer {
                             Some(image) => image.at(x as u32, y as u32, desc.size),
                             None => plan.background,
                         };
-                        let ray = march::march(&field, rays, o, dir, bg, None);
+                        let hit = shapes
+                            .as_ref()
+                            .and_then(|s| Some((s, s.hit(o, dir, rays.t_near, rays.t_far)?)));
+                        let behind = match hit {
+                            Some((s, h)) => (s.shade(&h, dir, settings).extend(1.0), h.t),
+                            None => (bg, f32::INFINITY),
+                        };
+                        let ray = march::march(&field, rays, o, dir, behind, None);
                         c.extend_from_slice(&ray.color.to_array());
-                        d.push(ray.depth);
+                        // The nearer of the volume's depth and the surface.
+                        let surface =
+                            hit.map_or(f32::INFINITY, |(_, h)| rays.depth_at(o + dir * h.t, h.t));
+                        d.push(ray.depth.min(surface));
                         samples += u64::from(ray.samples);
                     }
                 }

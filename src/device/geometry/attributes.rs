@@ -1,0 +1,137 @@
+//! What every surface geometry reads the same way: vertex positions,
+//! index arrays, and the attributes a material may color by, per vertex
+//! (`vertex.color`, `vertex.attribute0..3`) or per primitive
+//! (`primitive.*`, which win where both are set), with `primitive.id`.
+
+use glam::{Vec3, Vec4};
+
+use crate::device::array::Array;
+use crate::device::table::Read;
+use crate::device::types::{words, DataType as T};
+use crate::scene::{Attribute, ShapeInput, ATTRIBUTE_NAMES};
+
+/// Element types an attribute array may hold; missing components read as
+/// ANARI's (x, 0, 0, 1).
+pub const ATTRIBUTE_ELEMENTS: &[T] = &[
+    T::FLOAT32,
+    T::FLOAT32_VEC2,
+    T::FLOAT32_VEC3,
+    T::FLOAT32_VEC4,
+    T::UFIXED8,
+    T::UFIXED8_VEC2,
+    T::UFIXED8_VEC3,
+    T::UFIXED8_VEC4,
+];
+
+/// The parameter-table entries of the attributes, for a subtype's table.
+macro_rules! attribute_params {
+    () => {
+        $crate::device::geometry::attributes::attribute_params!(@each
+            "vertex.color", "vertex.attribute0", "vertex.attribute1",
+            "vertex.attribute2", "vertex.attribute3",
+            "primitive.color", "primitive.attribute0", "primitive.attribute1",
+            "primitive.attribute2", "primitive.attribute3")
+    };
+    (@each $($name:literal),*) => {
+        [$(
+            $crate::device::table::p(
+                $name,
+                &[$crate::device::types::DataType::ARRAY1D],
+                false,
+                $crate::device::table::DefaultValue::None,
+                "per vertex (interpolated) or per primitive: what a material's color may name (FLOAT32 to FLOAT32_VEC4, UFIXED8 to UFIXED8_VEC4)",
+            )
+            .elements($crate::device::geometry::attributes::ATTRIBUTE_ELEMENTS),
+        )*
+        $crate::device::table::p(
+            "primitive.id",
+            &[$crate::device::types::DataType::ARRAY1D],
+            false,
+            $crate::device::table::DefaultValue::None,
+            "UINT32 per primitive: the primitiveId channel's value (default: the primitive's index)",
+        )
+        .elements(&[$crate::device::types::DataType::UINT32])]
+    };
+}
+pub(crate) use attribute_params;
+
+/// An attribute array's elements as Vec4s.
+fn vec4s(name: &str, a: &Array) -> Result<Vec<Vec4>, String> {
+    let (n, float) = match a.element() {
+        T::FLOAT32 => (1, true),
+        T::FLOAT32_VEC2 => (2, true),
+        T::FLOAT32_VEC3 => (3, true),
+        T::FLOAT32_VEC4 => (4, true),
+        T::UFIXED8 => (1, false),
+        T::UFIXED8_VEC2 => (2, false),
+        T::UFIXED8_VEC3 => (3, false),
+        T::UFIXED8_VEC4 => (4, false),
+        other => {
+            return Err(format!(
+                "'{name}' array holds {other}; attributes are FLOAT32 or UFIXED8 vectors"
+            ))
+        }
+    };
+    let values: Vec<f32> = if float {
+        a.f32s()
+    } else {
+        a.bytes().iter().map(|&b| f32::from(b) / 255.0).collect()
+    };
+    Ok(values
+        .chunks_exact(n)
+        .map(|c| {
+            let mut v = Vec4::new(0.0, 0.0, 0.0, 1.0);
+            for (k, &x) in c.iter().enumerate() {
+                v[k] = x;
+            }
+            v
+        })
+        .collect())
+}
+
+/// The FLOAT32_VEC3 array `name`, if set.
+pub fn vec3s(r: &Read<'_>, name: &str) -> Result<Option<Vec<Vec3>>, String> {
+    r.array_of(name, T::FLOAT32_VEC3, |a| {
+        Ok(a.f32s().chunks_exact(3).map(Vec3::from_slice).collect())
+    })
+}
+
+/// The FLOAT32 array `name`, if set.
+pub fn f32s(r: &Read<'_>, name: &str) -> Result<Option<Vec<f32>>, String> {
+    r.array_of(name, T::FLOAT32, |a| Ok(a.f32s()))
+}
+
+/// The array `name` of UINT32 tuples of `element`, if set.
+pub fn indices(r: &Read<'_>, name: &str, element: T) -> Result<Option<Vec<u32>>, String> {
+    r.array_of(name, element, |a| {
+        Ok(words::<4>(a.bytes()).map(u32::from_ne_bytes).collect())
+    })
+}
+
+/// `vertex.position`: required.
+pub fn positions(r: &Read<'_>) -> Result<Vec<Vec3>, String> {
+    vec3s(r, "vertex.position")?
+        .ok_or_else(|| "parameter 'vertex.position' (ARRAY1D of FLOAT32_VEC3) is required".into())
+}
+
+/// The attributes and ids of a geometry of `vertices` vertices and
+/// `primitives` host primitives, ready for the shape's checks.
+pub fn input(r: &Read<'_>, vertices: usize, primitives: usize) -> Result<ShapeInput, String> {
+    let mut attributes: [Option<Attribute>; 5] = Default::default();
+    for (slot, name) in ATTRIBUTE_NAMES.iter().enumerate() {
+        let vertex = format!("vertex.{name}");
+        let primitive = format!("primitive.{name}");
+        attributes[slot] = match r.array(&primitive, |a| vec4s(&primitive, a))? {
+            Some(v) => Some(Attribute::PerPrimitive(v)),
+            None => r
+                .array(&vertex, |a| vec4s(&vertex, a))?
+                .map(Attribute::PerVertex),
+        };
+    }
+    Ok(ShapeInput {
+        vertices,
+        primitives,
+        attributes,
+        ids: indices(r, "primitive.id", T::UINT32)?,
+    })
+}

@@ -1,0 +1,88 @@
+//! ANARI's `sphere` geometry (ANARI_KHR_GEOMETRY_SPHERE): a sphere per
+//! vertex, or per entry of `primitive.index`, of the vertex's radius or
+//! the geometry's.
+
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_SPHERE, F32};
+use crate::device::types::DataType as T;
+
+use super::attributes::{self, attribute_params};
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::GEOMETRY,
+    subtype: "sphere",
+    description: "spheres: one per vertex, or per entry of primitive.index",
+    extensions: &[EXT_SPHERE],
+    params: &{
+        let [c, a0, a1, a2, a3, pc, p0, p1, p2, p3, id] = attribute_params!();
+        [
+            p(
+                "vertex.position",
+                &[T::ARRAY1D],
+                true,
+                DefaultValue::None,
+                "FLOAT32_VEC3 per vertex: the centers",
+            )
+            .elements(&[T::FLOAT32_VEC3]),
+            p(
+                "vertex.radius",
+                &[T::ARRAY1D],
+                false,
+                DefaultValue::None,
+                "FLOAT32 per vertex (default: 'radius' for every sphere)",
+            )
+            .elements(&[T::FLOAT32]),
+            p(
+                "radius",
+                F32,
+                false,
+                DefaultValue::Floats(&[0.01]),
+                "every sphere's radius where vertex.radius is unset",
+            ),
+            p(
+                "primitive.index",
+                &[T::ARRAY1D],
+                false,
+                DefaultValue::None,
+                "UINT32 per sphere: its vertex (default: every vertex)",
+            )
+            .elements(&[T::UINT32]),
+            c,
+            a0,
+            a1,
+            a2,
+            a3,
+            pc,
+            p0,
+            p1,
+            p2,
+            p3,
+            id,
+        ]
+    },
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let positions = attributes::positions(r)?;
+    let radii = match attributes::f32s(r, "vertex.radius")? {
+        Some(radii) if radii.len() < positions.len() => {
+            return Err(format!(
+                "vertex.radius has {} values for {} vertices",
+                radii.len(),
+                positions.len()
+            ))
+        }
+        Some(radii) => radii,
+        None => vec![r.f32("radius")?; positions.len()],
+    };
+    let index = match attributes::indices(r, "primitive.index", T::UINT32)? {
+        Some(i) => i,
+        None => (0..positions.len() as u32).collect(),
+    };
+    let input = attributes::input(r, positions.len(), index.len())?;
+    let made =
+        crate::scene::Shape::spheres(positions, radii, index, input).map_err(|e| e.to_string())?;
+    super::made(made, warn)
+}

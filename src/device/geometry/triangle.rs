@@ -1,0 +1,75 @@
+//! ANARI's `triangle` geometry (ANARI_KHR_GEOMETRY_TRIANGLE): a soup of
+//! vertex triples, or triangles indexed by `primitive.index`.
+
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_TRIANGLE};
+use crate::device::types::DataType as T;
+
+use super::attributes::{self, attribute_params};
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::GEOMETRY,
+    subtype: "triangle",
+    description: "triangles: consecutive vertex triples, or indexed by primitive.index",
+    extensions: &[EXT_TRIANGLE],
+    params: &{
+        let [c, a0, a1, a2, a3, pc, p0, p1, p2, p3, id] = attribute_params!();
+        [
+            p(
+                "vertex.position",
+                &[T::ARRAY1D],
+                true,
+                DefaultValue::None,
+                "FLOAT32_VEC3 per vertex",
+            )
+            .elements(&[T::FLOAT32_VEC3]),
+            p(
+                "vertex.normal",
+                &[T::ARRAY1D],
+                false,
+                DefaultValue::None,
+                "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
+            )
+            .elements(&[T::FLOAT32_VEC3]),
+            p(
+                "primitive.index",
+                &[T::ARRAY1D],
+                false,
+                DefaultValue::None,
+                "UINT32_VEC3 per triangle: its vertices (default: vertices 3i, 3i+1, 3i+2)",
+            )
+            .elements(&[T::UINT32_VEC3]),
+            c,
+            a0,
+            a1,
+            a2,
+            a3,
+            pc,
+            p0,
+            p1,
+            p2,
+            p3,
+            id,
+        ]
+    },
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let positions = attributes::positions(r)?;
+    let corners = match attributes::indices(r, "primitive.index", T::UINT32_VEC3)? {
+        Some(i) => i,
+        None => (0..(positions.len() / 3 * 3) as u32).collect(),
+    };
+    let triangles: Vec<[u32; 3]> = corners
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    let source = (0..triangles.len() as u32).collect();
+    let normals = attributes::vec3s(r, "vertex.normal")?;
+    let input = attributes::input(r, positions.len(), triangles.len())?;
+    let made = crate::scene::Shape::triangles(positions, triangles, source, normals, input)
+        .map_err(|e| e.to_string())?;
+    super::made(made, warn)
+}

@@ -1,0 +1,323 @@
+//! Surfaces of triangles and spheres as the renderers trace them: every
+//! placed shape's primitives in one BVH, built once for a scene's shapes
+//! and kept while frames bring the same ones, the nearest hit along a ray,
+//! and its color under the world's light. The volume march stops at that
+//! hit and composites over its color (cpu/march.rs), so one ray sees both.
+//!
+//! The BVH comes from obvhs: its PLOC builder (parallel, on the glam we
+//! use) makes good trees for a million triangles in well under a second,
+//! and its binary nodes (a box, a first index, a count) are plain enough
+//! to hand to a GPU as they are. Triangles are placed in world space once;
+//! spheres are tested in object space, so an instance's shear or uneven
+//! scale makes the ellipsoid it should.
+
+mod intersect;
+
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::Boundable;
+
+use super::frame::filled;
+use super::{RenderError, RenderSettings};
+use crate::scene::{Attribute, ColorSource, PlacedShape, Primitives};
+use intersect::{sphere, triangle};
+
+/// The reference device's scale of `ambientRadiance`: a radiance of 1
+/// lights a surface to a tenth of its color, so hosts tuned on it look
+/// the same here.
+pub const AMBIENT_SCALE: f32 = 0.1;
+
+/// ANARI's value of an attribute a geometry does not have.
+const MISSING_ATTRIBUTE: Vec4 = Vec4::new(0.0, 0.0, 0.0, 1.0);
+
+/// One placed shape as traced: its world-space triangle corners, the maps
+/// that spheres and normals need.
+struct Traced {
+    placed: PlacedShape,
+    /// Triangle vertices in world space (empty for spheres).
+    world: Vec<Vec3>,
+    to_object: Mat4,
+    /// Object-space normals to world space (the inverse transpose).
+    normal_to_world: Mat3,
+}
+
+/// A BVH primitive: the kept primitive `index` of placed shape `shape`.
+#[derive(Clone, Copy)]
+struct Prim {
+    shape: u32,
+    index: u32,
+}
+
+struct Boxed(Aabb);
+
+impl Boundable for Boxed {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// The nearest surface along a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    /// Placed shape, and kept primitive within it.
+    pub shape: u32,
+    pub index: u32,
+    /// Weights of a triangle's second and third corner.
+    pub bary: Vec2,
+    /// World space, unit length, facing the ray.
+    pub normal: Vec3,
+}
+
+/// A scene's shapes, ready to trace.
+pub struct ShapeSet {
+    traced: Vec<Traced>,
+    prims: Vec<Prim>,
+    bvh: Bvh2,
+}
+
+impl std::fmt::Debug for ShapeSet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShapeSet")
+            .field("shapes", &self.traced.len())
+            .field("primitives", &self.prims.len())
+            .field("nodes", &self.bvh.nodes.len())
+            .finish()
+    }
+}
+
+impl ShapeSet {
+    /// The BVH over every kept primitive of `shapes`.
+    pub fn build(shapes: &[PlacedShape]) -> Result<Self, RenderError> {
+        let total: usize = shapes.iter().map(|s| s.shape.len()).sum();
+        let mut prims = filled(total, Prim { shape: 0, index: 0 }, "the BVH's primitives")?;
+        prims.clear();
+        let mut boxes = Vec::new();
+        boxes
+            .try_reserve_exact(total)
+            .map_err(|_| RenderError::OutOfMemory {
+                bytes: (total * std::mem::size_of::<Boxed>()) as u64,
+                what: "the BVH's boxes".into(),
+            })?;
+        let mut traced = Vec::with_capacity(shapes.len());
+        for (s, placed) in shapes.iter().enumerate() {
+            let m = placed.transform;
+            let to_object = m.inverse();
+            let normal_to_world = Mat3::from_mat4(to_object).transpose();
+            let shape = &placed.shape;
+            let mut world = Vec::new();
+            match &shape.primitives {
+                Primitives::Triangles {
+                    positions,
+                    triangles,
+                    ..
+                } => {
+                    world = filled(
+                        positions.len(),
+                        Vec3::ZERO,
+                        "the triangles' world positions",
+                    )?;
+                    for (w, p) in world.iter_mut().zip(positions) {
+                        *w = m.transform_point3(*p);
+                    }
+                    for tri in triangles {
+                        let [a, b, c] = tri.map(|v| world[v as usize]);
+                        boxes.push(Boxed(Aabb::new(
+                            a.min(b).min(c).into(),
+                            a.max(b).max(c).into(),
+                        )));
+                    }
+                }
+                Primitives::Spheres {
+                    positions,
+                    radii,
+                    spheres,
+                } => {
+                    for &v in spheres {
+                        let (c, r) = (positions[v as usize], radii[v as usize]);
+                        let (lo, hi) = crate::scene::transformed_box(m, (c - r, c + r));
+                        boxes.push(Boxed(Aabb::new(lo.into(), hi.into())));
+                    }
+                }
+            }
+            prims.extend((0..shape.len() as u32).map(|index| Prim {
+                shape: s as u32,
+                index,
+            }));
+            traced.push(Traced {
+                placed: placed.clone(),
+                world,
+                to_object,
+                normal_to_world,
+            });
+        }
+        let bvh = if boxes.is_empty() {
+            Bvh2::default()
+        } else {
+            let mut took = std::time::Duration::ZERO;
+            obvhs::bvh2::builder::build_bvh2(&boxes, obvhs::BvhBuildParams::fast_build(), &mut took)
+        };
+        Ok(Self { traced, prims, bvh })
+    }
+
+    /// Primitives traced.
+    pub fn len(&self) -> usize {
+        self.prims.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.prims.is_empty()
+    }
+
+    /// The nearest hit with `t` in `(t_min, t_max)` along `o + t d`.
+    pub fn hit(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+        if self.prims.is_empty() || t_max.partial_cmp(&t_min) != Some(std::cmp::Ordering::Greater) {
+            return None;
+        }
+        let ray = Ray::new(o.into(), d.into(), t_min, t_max);
+        let mut found = RayHit::none();
+        let indices = &self.bvh.primitive_indices;
+        let hit = self.bvh.ray_traverse(ray, &mut found, |ray, id| {
+            let prim = self.prims[indices[id] as usize];
+            self.distance(prim, o, d, ray.tmin, ray.tmax)
+                .map_or(f32::INFINITY, |(t, _)| t)
+        });
+        if !hit {
+            return None;
+        }
+        let prim = self.prims[indices[found.primitive_id as usize] as usize];
+        let (t, bary) = self.distance(prim, o, d, t_min, t_max)?;
+        let normal = self.normal(prim, o + d * t, bary, d);
+        Some(Hit {
+            t,
+            shape: prim.shape,
+            index: prim.index,
+            bary,
+            normal,
+        })
+    }
+
+    /// Where `prim` is hit in `(t_min, t_max)`, with its barycentrics.
+    fn distance(
+        &self,
+        prim: Prim,
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(f32, Vec2)> {
+        let traced = &self.traced[prim.shape as usize];
+        let t = match &traced.placed.shape.primitives {
+            Primitives::Triangles { triangles, .. } => {
+                let [a, b, c] = triangles[prim.index as usize].map(|v| traced.world[v as usize]);
+                return triangle(o, d, a, b, c).filter(|(t, _)| *t > t_min && *t < t_max);
+            }
+            Primitives::Spheres {
+                positions,
+                radii,
+                spheres,
+            } => {
+                let v = spheres[prim.index as usize] as usize;
+                let (oo, od) = (
+                    traced.to_object.transform_point3(o),
+                    traced.to_object.transform_vector3(d),
+                );
+                sphere(oo, od, positions[v], radii[v], t_min, t_max)?
+            }
+        };
+        Some((t, Vec2::ZERO))
+    }
+
+    /// The world-space unit normal at `p` on `prim`, facing against `d`.
+    fn normal(&self, prim: Prim, p: Vec3, bary: Vec2, d: Vec3) -> Vec3 {
+        let traced = &self.traced[prim.shape as usize];
+        let n = match &traced.placed.shape.primitives {
+            Primitives::Triangles {
+                triangles, normals, ..
+            } => {
+                let tri = triangles[prim.index as usize];
+                match normals {
+                    Some(n) => {
+                        let [a, b, c] = tri.map(|v| n[v as usize]);
+                        let object = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
+                        traced.normal_to_world * object
+                    }
+                    None => {
+                        let [a, b, c] = tri.map(|v| traced.world[v as usize]);
+                        (b - a).cross(c - a)
+                    }
+                }
+            }
+            Primitives::Spheres {
+                positions, spheres, ..
+            } => {
+                let c = positions[spheres[prim.index as usize] as usize];
+                traced.normal_to_world * (traced.to_object.transform_point3(p) - c)
+            }
+        };
+        // A normal the host gave may be zero: fall back to facing the ray.
+        let n = n.try_normalize().unwrap_or(-d.normalize_or_zero());
+        if n.dot(d) > 0.0 {
+            -n
+        } else {
+            n
+        }
+    }
+
+    /// Attribute `slot` at `hit`: interpolated per vertex, or the host
+    /// primitive's.
+    pub fn attribute(&self, hit: &Hit, slot: usize) -> Vec4 {
+        let traced = &self.traced[hit.shape as usize];
+        let shape = &traced.placed.shape;
+        let index = hit.index as usize;
+        match shape.attributes.get(slot).and_then(Option::as_ref) {
+            None => MISSING_ATTRIBUTE,
+            Some(Attribute::PerPrimitive(values)) => values[shape.source[index] as usize],
+            Some(Attribute::PerVertex(values)) => match &shape.primitives {
+                Primitives::Triangles { triangles, .. } => {
+                    let [a, b, c] = triangles[index].map(|v| values[v as usize]);
+                    a * (1.0 - hit.bary.x - hit.bary.y) + b * hit.bary.x + c * hit.bary.y
+                }
+                Primitives::Spheres { spheres, .. } => values[spheres[index] as usize],
+            },
+        }
+    }
+
+    /// The material's color at `hit`, before lighting.
+    pub fn albedo(&self, hit: &Hit) -> Vec3 {
+        match self.traced[hit.shape as usize].placed.material.color {
+            ColorSource::Constant(c) => c,
+            ColorSource::Attribute(slot) => self.attribute(hit, slot).truncate(),
+        }
+    }
+
+    /// The surface's `id` at `hit` and the host's primitive id.
+    pub fn ids(&self, hit: &Hit) -> (u32, u32) {
+        let placed = &self.traced[hit.shape as usize].placed;
+        let host = placed.shape.source[hit.index as usize];
+        let primitive = placed
+            .shape
+            .ids
+            .as_ref()
+            .map_or(host, |ids| ids[host as usize]);
+        (placed.id, primitive)
+    }
+
+    /// The lit color at `hit` seen along `d`: Lambertian under the world's
+    /// directional light (or a light at the eye where the world has none),
+    /// plus the renderer's ambient light.
+    pub fn shade(&self, hit: &Hit, d: Vec3, settings: &RenderSettings) -> Vec3 {
+        let albedo = self.albedo(hit);
+        let direct = if settings.headlight {
+            Vec3::splat(hit.normal.dot(-d.normalize_or_zero()).max(0.0))
+        } else {
+            settings.light_color * hit.normal.dot(settings.light).max(0.0)
+        };
+        albedo * (direct + settings.ambient)
+    }
+}
+
+#[cfg(test)]
+mod tests;

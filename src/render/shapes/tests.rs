@@ -1,0 +1,296 @@
+use std::sync::Arc;
+
+use glam::{DVec3, Mat4, UVec2, UVec3, Vec3, Vec4};
+
+use super::*;
+use crate::geometry::{ImageRegion, OrthographicCamera, PrimaryRays};
+use crate::render::{ColorFormat, CpuRenderer, Frame, FrameDesc, Render};
+use crate::scene::{
+    Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
+};
+
+const N: u32 = 32;
+
+/// Looking down -z from z = 5 at the square [-2, 2]^2.
+fn camera() -> RayGenOf {
+    let c = OrthographicCamera::new(
+        DVec3::new(0.0, 0.0, 5.0),
+        DVec3::NEG_Z,
+        DVec3::Y,
+        4.0,
+        1.0,
+        ImageRegion::FULL,
+    )
+    .unwrap();
+    RayGenOf(c.ray_gen(UVec2::splat(N)))
+}
+
+struct RayGenOf(crate::geometry::RayGen);
+
+/// Pixel (x, y)'s centre in world x, y.
+fn centre(x: u32, y: u32) -> (f32, f32) {
+    let s = 4.0 / N as f32;
+    (-2.0 + (x as f32 + 0.5) * s, -2.0 + (y as f32 + 0.5) * s)
+}
+
+fn input(vertices: usize, primitives: usize) -> ShapeInput {
+    ShapeInput {
+        vertices,
+        primitives,
+        attributes: Default::default(),
+        ids: None,
+    }
+}
+
+fn unit_sphere(color: ColorSource, transform: Mat4) -> PlacedShape {
+    let made = Shape::spheres(vec![Vec3::ZERO], vec![1.0], vec![0], input(1, 1)).unwrap();
+    PlacedShape::new(
+        Arc::new(made.shape),
+        SurfaceMaterial {
+            color,
+            opacity: 1.0,
+        },
+        transform,
+    )
+}
+
+fn render(scene: &Scene, settings: &RenderSettings) -> Frame {
+    let desc = FrameDesc::new(UVec2::splat(N))
+        .with_color(ColorFormat::Rgba32F)
+        .with_depth();
+    CpuRenderer::reference()
+        .render(scene, &camera().0, settings, &desc)
+        .unwrap()
+}
+
+fn unlit_ambient() -> RenderSettings {
+    RenderSettings {
+        ambient: Vec3::ZERO,
+        ..RenderSettings::default()
+    }
+}
+
+#[test]
+fn a_sphere_shows_its_silhouette_depth_and_headlit_shading() {
+    let red = ColorSource::Constant(Vec3::new(1.0, 0.0, 0.0));
+    let scene = Scene::of_shapes(vec![unit_sphere(red, Mat4::IDENTITY)]).unwrap();
+    let frame = render(&scene, &unlit_ambient());
+    let depth = frame.depth.clone().unwrap();
+    let half_pixel = 2.0 / N as f32;
+    for y in 0..N {
+        for x in 0..N {
+            let (px, py) = centre(x, y);
+            let r = (px * px + py * py).sqrt();
+            let (c, d) = (frame.pixel(x, y), depth[(y * N + x) as usize]);
+            if r < 1.0 - half_pixel {
+                let z = (1.0 - r * r).sqrt();
+                assert!((d - (5.0 - z)).abs() < 1e-4, "depth at {x},{y}: {d}");
+                // Lit from the eye: the cosine is the normal's z.
+                assert!(
+                    (c.x - z).abs() < 1e-4 && c.y == 0.0,
+                    "color at {x},{y}: {c}"
+                );
+            } else if r > 1.0 + half_pixel {
+                assert_eq!(d, f32::INFINITY);
+                assert_eq!(c, RenderSettings::default().background);
+            }
+        }
+    }
+}
+
+#[test]
+fn an_instance_stretches_a_sphere_into_an_ellipsoid() {
+    let white = ColorSource::Constant(Vec3::ONE);
+    let stretch = Mat4::from_scale(Vec3::new(1.8, 0.5, 1.0));
+    let scene = Scene::of_shapes(vec![unit_sphere(white, stretch)]).unwrap();
+    let frame = render(&scene, &unlit_ambient());
+    let depth = frame.depth.unwrap();
+    for y in 0..N {
+        for x in 0..N {
+            let (px, py) = centre(x, y);
+            let e = (px / 1.8).powi(2) + (py / 0.5).powi(2);
+            let d = depth[(y * N + x) as usize];
+            if e < 0.8 {
+                assert!((d - (5.0 - (1.0 - e).sqrt())).abs() < 1e-4, "{x},{y}: {d}");
+            } else if e > 1.25 {
+                assert_eq!(d, f32::INFINITY, "{x},{y}");
+            }
+        }
+    }
+}
+
+/// A triangle over most of the image, red, green and blue at its corners.
+fn rgb_triangle(z: f32) -> PlacedShape {
+    let p = vec![
+        Vec3::new(-1.9, -1.9, z),
+        Vec3::new(1.9, -1.9, z),
+        Vec3::new(-1.9, 1.9, z),
+    ];
+    let mut inp = input(3, 1);
+    inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Y, Vec4::Z]));
+    let made = Shape::triangles(p, vec![[0, 1, 2]], vec![0], None, inp).unwrap();
+    PlacedShape::new(
+        Arc::new(made.shape),
+        SurfaceMaterial {
+            color: ColorSource::Attribute(0),
+            opacity: 1.0,
+        },
+        Mat4::IDENTITY,
+    )
+}
+
+#[test]
+fn a_triangle_interpolates_its_vertex_colors_barycentrically() {
+    let scene = Scene::of_shapes(vec![rgb_triangle(0.0)]).unwrap();
+    let frame = render(&scene, &unlit_ambient());
+    let mut inside = 0;
+    for y in 0..N {
+        for x in 0..N {
+            let (px, py) = centre(x, y);
+            let (u, v) = ((px + 1.9) / 3.8, (py + 1.9) / 3.8);
+            if u < 0.01 || v < 0.01 || u + v > 0.98 {
+                continue;
+            }
+            inside += 1;
+            let want = Vec3::new(1.0 - u - v, u, v);
+            let got = frame.pixel(x, y).truncate();
+            assert!(
+                (got - want).abs().max_element() < 1e-4,
+                "{x},{y}: {got} vs {want}"
+            );
+        }
+    }
+    assert!(inside > 400);
+}
+
+/// A slab of constant density filling z in [-1, 1] over the image.
+fn slab() -> Scene {
+    let volume = StructuredVolume::new(
+        UVec3::new(4, 4, 4),
+        Voxels::F32(vec![1.0; 64]),
+        Vec3::new(-2.0, -2.0, -1.0),
+        Vec3::new(4.0 / 3.0, 4.0 / 3.0, 2.0 / 3.0),
+    )
+    .unwrap();
+    let tf = TransferFunction::new(
+        vec![Vec4::new(0.2, 0.4, 1.0, 1.0)],
+        vec![0.3],
+        (0.0, 1.0),
+        1.0,
+    )
+    .unwrap();
+    Scene::new(volume, tf)
+}
+
+#[test]
+fn a_surface_in_a_volume_ends_the_march_and_the_nearer_depth_is_reported() {
+    let settings = unlit_ambient();
+    let alone = render(&slab(), &settings);
+    // In front of the volume the surface hides it.
+    let front = slab().with_shapes(vec![rgb_triangle(1.5)]).unwrap();
+    let surface_only = render(
+        &Scene::of_shapes(vec![rgb_triangle(1.5)]).unwrap(),
+        &settings,
+    );
+    let f = render(&front, &settings);
+    // Inside, the volume in front of the surface is composited over it:
+    // the same as the volume cut at the surface by a clip plane, over a
+    // background of the surface's color.
+    let inside = slab().with_shapes(vec![rgb_triangle(0.0)]).unwrap();
+    let i = render(&inside, &settings);
+    let mut clipped = settings.clone();
+    clipped.clip_planes =
+        crate::render::ClipPlanes::new(&[Vec4::new(0.0, 0.0, -1.0, 0.0)]).unwrap();
+    let (x, y) = (8, 8);
+    let behind = render(
+        &Scene::of_shapes(vec![rgb_triangle(0.0)]).unwrap(),
+        &settings,
+    )
+    .pixel(x, y);
+    clipped.background = behind;
+    let want = render(&slab(), &clipped).pixel(x, y);
+    let fd = f.depth.as_ref().unwrap();
+    let at = (y * N + x) as usize;
+    assert_eq!(f.pixel(x, y), surface_only.pixel(x, y));
+    assert!((fd[at] - 3.5).abs() < 1e-4);
+    assert!(
+        (i.pixel(x, y) - want).abs().max_element() < 1e-5,
+        "{} vs {want}",
+        i.pixel(x, y)
+    );
+    // The nearer of the surface and the volume's depth is the frame's:
+    // the volume turns half opaque past z = 0 here, before z = -0.95.
+    let volume_depth = alone.depth.as_ref().unwrap()[at];
+    assert!(volume_depth > 5.0 && volume_depth < 5.95, "{volume_depth}");
+    assert!((i.depth.as_ref().unwrap()[at] - 5.0).abs() < 1e-4);
+    let back = slab().with_shapes(vec![rgb_triangle(-0.95)]).unwrap();
+    // Within the last, shortened step before the surface.
+    let d = render(&back, &settings).depth.unwrap()[at];
+    assert!(
+        (d - volume_depth).abs() < 0.1 && d < 5.95,
+        "{d} vs {volume_depth}"
+    );
+    // Outside the triangle the volume shows as it does alone.
+    assert_eq!(i.pixel(N - 1, N - 1), alone.pixel(N - 1, N - 1));
+}
+
+#[test]
+fn the_bvh_finds_the_nearest_of_many_primitives() {
+    // A cloud of small triangles and spheres, each ray's answer checked
+    // against testing every primitive.
+    let mut seed = 7u32;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed as f32 / u32::MAX as f32
+    };
+    let mut p = Vec::new();
+    let mut tris = Vec::new();
+    for k in 0..300u32 {
+        let c = Vec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0;
+        for _ in 0..3 {
+            p.push(c + Vec3::new(rnd(), rnd(), rnd()) * 0.6 - 0.3);
+        }
+        tris.push([3 * k, 3 * k + 1, 3 * k + 2]);
+    }
+    let n = tris.len();
+    let mesh = Shape::triangles(p, tris, (0..n as u32).collect(), None, input(3 * n, n)).unwrap();
+    let centers: Vec<Vec3> = (0..100)
+        .map(|_| Vec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0)
+        .collect();
+    let radii = (0..100).map(|_| 0.05 + 0.1 * rnd()).collect();
+    let balls = Shape::spheres(centers, radii, (0..100).collect(), input(100, 100)).unwrap();
+    let placed = [mesh.shape, balls.shape].map(|s| {
+        PlacedShape::new(
+            Arc::new(s),
+            SurfaceMaterial::default(),
+            Mat4::from_rotation_y(0.3),
+        )
+    });
+    let set = ShapeSet::build(&placed).unwrap();
+    assert!(set.len() > 390 && set.len() <= 400);
+    let mut hits = 0;
+    for _ in 0..2000 {
+        let o = Vec3::new(rnd(), rnd(), rnd()) * 8.0 - 4.0;
+        let d = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize();
+        let got = set.hit(o, d, 0.0, f32::INFINITY);
+        let mut best: Option<(f32, u32, u32)> = None;
+        for prim in &set.prims {
+            if let Some((t, _)) = set.distance(*prim, o, d, 0.0, f32::INFINITY) {
+                if best.is_none_or(|b| t < b.0) {
+                    best = Some((t, prim.shape, prim.index));
+                }
+            }
+        }
+        match (got, best) {
+            (None, None) => {}
+            (Some(h), Some((t, _, _))) => {
+                hits += 1;
+                assert!((h.t - t).abs() < 1e-5, "{} vs {t}", h.t);
+            }
+            _ => panic!("BVH {got:?} against every primitive {best:?}"),
+        }
+    }
+    assert!(hits > 100, "{hits} rays hit");
+}

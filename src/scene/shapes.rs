@@ -1,0 +1,445 @@
+//! Surfaces given by primitives (triangles, spheres) beside the volumes:
+//! the geometry as the host described it, checked once when it is made,
+//! the material that colors it, and where an instance places it. The
+//! renderers build their acceleration structures from these.
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3, Vec4};
+use thiserror::Error;
+
+use super::placement::{check_affine, transformed_box};
+
+/// The most primitives one shape holds: a primitive's index must fit the
+/// 32 bits the renderers' BVH leaves store.
+pub const MAX_PRIMITIVES: usize = 1 << 30;
+
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ShapeError {
+    #[error("{what} {index} refers to vertex {vertex}; there are {count} vertices")]
+    IndexOutOfRange {
+        what: &'static str,
+        index: usize,
+        vertex: u32,
+        count: usize,
+    },
+    #[error("vertex {index} is used and has a position that is not finite ({position})")]
+    NotFinite { index: usize, position: Vec3 },
+    #[error("{name} has {len} values for {count} {of}")]
+    AttributeLength {
+        name: String,
+        len: usize,
+        count: usize,
+        of: &'static str,
+    },
+    #[error("{count} primitives; one geometry holds up to {MAX_PRIMITIVES}")]
+    TooMany { count: usize },
+    #[error("transform {0} is not finite or is singular")]
+    BadTransform(String),
+}
+
+/// The attribute slots a material may name: `color` and `attribute0..3`.
+pub const ATTRIBUTE_NAMES: [&str; 5] = [
+    "color",
+    "attribute0",
+    "attribute1",
+    "attribute2",
+    "attribute3",
+];
+
+/// An attribute's values, one per vertex (interpolated across each
+/// primitive) or one per primitive (as the host numbered its primitives).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Attribute {
+    PerVertex(Vec<Vec4>),
+    PerPrimitive(Vec<Vec4>),
+}
+
+/// What a shape is made of. Primitives that cannot show (zero area, zero
+/// radius) are dropped when the shape is made; `source` numbers each kept
+/// one as the host did, so per-primitive attributes and ids stay right.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Primitives {
+    Triangles {
+        positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+        /// Per vertex, if the host gave them; else each face's own.
+        normals: Option<Vec<Vec3>>,
+    },
+    Spheres {
+        positions: Vec<Vec3>,
+        /// Per vertex.
+        radii: Vec<f32>,
+        /// The vertex of each kept sphere.
+        spheres: Vec<u32>,
+    },
+}
+
+/// One geometry: its primitives and attributes, in object space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shape {
+    pub primitives: Primitives,
+    /// Host primitive index of each kept primitive.
+    pub source: Vec<u32>,
+    /// By slot of [`ATTRIBUTE_NAMES`].
+    pub attributes: [Option<Attribute>; 5],
+    /// The host's `primitive.id`, by host primitive index.
+    pub ids: Option<Vec<u32>>,
+}
+
+/// A shape as made, and what was dropped from it.
+pub struct Made {
+    pub shape: Shape,
+    /// Why some primitives were dropped, if any were (for a warning).
+    pub dropped: Option<String>,
+}
+
+/// What every shape checks beside its primitives.
+pub struct ShapeInput {
+    /// Vertices the host gave (for per-vertex attributes).
+    pub vertices: usize,
+    /// Primitives the host gave (for per-primitive attributes).
+    pub primitives: usize,
+    pub attributes: [Option<Attribute>; 5],
+    pub ids: Option<Vec<u32>>,
+}
+
+impl ShapeInput {
+    fn check(&self) -> Result<(), ShapeError> {
+        if self.primitives > MAX_PRIMITIVES {
+            return Err(ShapeError::TooMany {
+                count: self.primitives,
+            });
+        }
+        for (slot, a) in self.attributes.iter().enumerate() {
+            let (len, count, of, scope) = match a {
+                None => continue,
+                Some(Attribute::PerVertex(v)) => (v.len(), self.vertices, "vertices", "vertex"),
+                Some(Attribute::PerPrimitive(v)) => {
+                    (v.len(), self.primitives, "primitives", "primitive")
+                }
+            };
+            if len < count {
+                return Err(ShapeError::AttributeLength {
+                    name: format!("{scope}.{}", ATTRIBUTE_NAMES[slot]),
+                    len,
+                    count,
+                    of,
+                });
+            }
+        }
+        if let Some(ids) = &self.ids {
+            if ids.len() < self.primitives {
+                return Err(ShapeError::AttributeLength {
+                    name: "primitive.id".into(),
+                    len: ids.len(),
+                    count: self.primitives,
+                    of: "primitives",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+fn dropped(count: usize, what: &str) -> Option<String> {
+    (count > 0).then(|| format!("{count} {what} dropped"))
+}
+
+impl Shape {
+    /// Triangles over `positions`, each a triple of vertex indices (host
+    /// primitive `source[i]` for triangle i, so quads split in two keep
+    /// their number). Indices must lie in range and the vertices they use
+    /// must be finite; triangles of zero area are dropped.
+    pub fn triangles(
+        positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+        source: Vec<u32>,
+        normals: Option<Vec<Vec3>>,
+        input: ShapeInput,
+    ) -> Result<Made, ShapeError> {
+        input.check()?;
+        let count = positions.len();
+        if let Some(n) = &normals {
+            if n.len() < count {
+                return Err(ShapeError::AttributeLength {
+                    name: "vertex.normal".into(),
+                    len: n.len(),
+                    count,
+                    of: "vertices",
+                });
+            }
+        }
+        let mut kept = Vec::with_capacity(triangles.len());
+        let mut kept_source = Vec::with_capacity(triangles.len());
+        let mut flat = 0;
+        for (tri, &host) in triangles.iter().zip(&source) {
+            for &v in tri {
+                let Some(&p) = positions.get(v as usize) else {
+                    return Err(ShapeError::IndexOutOfRange {
+                        what: "primitive",
+                        index: host as usize,
+                        vertex: v,
+                        count,
+                    });
+                };
+                if !p.is_finite() {
+                    return Err(ShapeError::NotFinite {
+                        index: v as usize,
+                        position: p,
+                    });
+                }
+            }
+            let [a, b, c] = tri.map(|v| positions[v as usize]);
+            let area2 = (b - a).cross(c - a).length();
+            // Relative to the edges: a sliver of a huge mesh still shows.
+            let scale = (b - a).length_squared().max((c - a).length_squared());
+            if area2.is_nan() || area2 <= 1e-12 * scale {
+                flat += 1;
+                continue;
+            }
+            kept.push(*tri);
+            kept_source.push(host);
+        }
+        Ok(Made {
+            shape: Shape {
+                primitives: Primitives::Triangles {
+                    positions,
+                    triangles: kept,
+                    normals,
+                },
+                source: kept_source,
+                attributes: input.attributes,
+                ids: input.ids,
+            },
+            dropped: dropped(flat, "triangles of zero area"),
+        })
+    }
+
+    /// Spheres, one per host primitive: `index[i]` is the vertex whose
+    /// position and radius sphere i takes. Indices must lie in range and
+    /// the centers they use must be finite; spheres of zero, negative or
+    /// non-finite radius are dropped.
+    pub fn spheres(
+        positions: Vec<Vec3>,
+        radii: Vec<f32>,
+        index: Vec<u32>,
+        input: ShapeInput,
+    ) -> Result<Made, ShapeError> {
+        input.check()?;
+        let count = positions.len().min(radii.len());
+        let mut spheres = Vec::with_capacity(index.len());
+        let mut source = Vec::with_capacity(index.len());
+        let mut thin = 0;
+        for (i, &v) in index.iter().enumerate() {
+            if v as usize >= count {
+                return Err(ShapeError::IndexOutOfRange {
+                    what: "sphere",
+                    index: i,
+                    vertex: v,
+                    count,
+                });
+            }
+            let (c, r) = (positions[v as usize], radii[v as usize]);
+            if !c.is_finite() {
+                return Err(ShapeError::NotFinite {
+                    index: v as usize,
+                    position: c,
+                });
+            }
+            if !(r.is_finite() && r > 0.0) {
+                thin += 1;
+                continue;
+            }
+            spheres.push(v);
+            source.push(i as u32);
+        }
+        Ok(Made {
+            shape: Shape {
+                primitives: Primitives::Spheres {
+                    positions,
+                    radii,
+                    spheres,
+                },
+                source,
+                attributes: input.attributes,
+                ids: input.ids,
+            },
+            dropped: dropped(thin, "spheres of zero or invalid radius"),
+        })
+    }
+
+    /// Primitives kept.
+    pub fn len(&self) -> usize {
+        self.source.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.source.is_empty()
+    }
+
+    /// The object-space box around every kept primitive.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::INFINITY;
+        let mut hi = Vec3::NEG_INFINITY;
+        match &self.primitives {
+            Primitives::Triangles {
+                positions,
+                triangles,
+                ..
+            } => {
+                for &v in triangles.iter().flatten() {
+                    let p = positions[v as usize];
+                    (lo, hi) = (lo.min(p), hi.max(p));
+                }
+            }
+            Primitives::Spheres {
+                positions,
+                radii,
+                spheres,
+            } => {
+                for &v in spheres {
+                    let (c, r) = (positions[v as usize], radii[v as usize]);
+                    (lo, hi) = (lo.min(c - r), hi.max(c + r));
+                }
+            }
+        }
+        (lo, hi)
+    }
+}
+
+/// Where a surface's color comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ColorSource {
+    /// Linear RGB.
+    Constant(Vec3),
+    /// An attribute slot of [`ATTRIBUTE_NAMES`]; a shape without it gives
+    /// ANARI's default attribute value (0, 0, 0, 1).
+    Attribute(usize),
+}
+
+/// ANARI's matte material: diffuse color and opacity. Surfaces are drawn
+/// opaque here; the opacity is kept for the hosts that read it back.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceMaterial {
+    pub color: ColorSource,
+    pub opacity: f32,
+}
+
+impl Default for SurfaceMaterial {
+    fn default() -> Self {
+        Self {
+            color: ColorSource::Constant(Vec3::splat(0.8)),
+            opacity: 1.0,
+        }
+    }
+}
+
+/// A shape in its material, placed in the world.
+#[derive(Clone, Debug)]
+pub struct PlacedShape {
+    pub shape: Arc<Shape>,
+    pub material: SurfaceMaterial,
+    /// Object to world: affine and invertible, as a volume's.
+    pub transform: Mat4,
+    /// The surface's `id` (the objectId channel's value).
+    pub id: u32,
+}
+
+impl PlacedShape {
+    pub fn new(shape: Arc<Shape>, material: SurfaceMaterial, transform: Mat4) -> Self {
+        Self {
+            shape,
+            material,
+            transform,
+            id: u32::MAX,
+        }
+    }
+
+    /// Why this shape cannot be placed, if it cannot.
+    pub fn check(&self) -> Result<(), ShapeError> {
+        check_affine(self.transform)
+            .map_err(|_| ShapeError::BadTransform(format!("{}", self.transform)))
+    }
+
+    /// The world-space box around it.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        transformed_box(self.transform, self.shape.bounds())
+    }
+
+    /// The same shape (by identity) drawn and placed the same way.
+    pub fn same(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.shape, &other.shape)
+            && self.material == other.material
+            && self.transform == other.transform
+            && self.id == other.id
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(vertices: usize, primitives: usize) -> ShapeInput {
+        ShapeInput {
+            vertices,
+            primitives,
+            attributes: Default::default(),
+            ids: None,
+        }
+    }
+
+    #[test]
+    fn triangles_report_bad_indices_and_positions_and_drop_flat_ones() {
+        let p = vec![
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::Y,
+            Vec3::splat(f32::NAN),
+            Vec3::X * 2.0,
+        ];
+        let bad = Shape::triangles(p.clone(), vec![[0, 1, 7]], vec![0], None, input(5, 1));
+        assert_eq!(
+            bad.err().unwrap().to_string(),
+            "primitive 0 refers to vertex 7; there are 5 vertices"
+        );
+        let nan = Shape::triangles(p.clone(), vec![[0, 1, 3]], vec![0], None, input(5, 1));
+        assert!(nan
+            .err()
+            .unwrap()
+            .to_string()
+            .starts_with("vertex 3 is used"));
+        // The NaN vertex is unused here; the second triangle is a line.
+        let made =
+            Shape::triangles(p, vec![[0, 1, 2], [0, 1, 4]], vec![0, 1], None, input(5, 2)).unwrap();
+        assert_eq!(made.shape.source, vec![0]);
+        assert_eq!(
+            made.dropped.as_deref(),
+            Some("1 triangles of zero area dropped")
+        );
+        assert_eq!(made.shape.bounds(), (Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
+    }
+
+    #[test]
+    fn spheres_drop_zero_radii_and_check_attribute_lengths() {
+        let made = Shape::spheres(
+            vec![Vec3::ZERO, Vec3::X],
+            vec![0.0, 0.5],
+            vec![0, 1],
+            input(2, 2),
+        )
+        .unwrap();
+        assert_eq!(made.shape.source, vec![1]);
+        assert_eq!(
+            made.shape.bounds(),
+            (Vec3::new(0.5, -0.5, -0.5), Vec3::splat(0.5) + Vec3::X)
+        );
+        let mut short = input(2, 2);
+        short.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::ONE]));
+        let e = Shape::spheres(vec![Vec3::ZERO, Vec3::X], vec![1.0, 1.0], vec![0, 1], short);
+        assert_eq!(
+            e.err().unwrap().to_string(),
+            "vertex.color has 1 values for 2 vertices"
+        );
+    }
+}

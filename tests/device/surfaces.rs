@@ -1,0 +1,305 @@
+//! Surfaces of primitives through ANARI (ANARI_KHR_GEOMETRY_TRIANGLE,
+//! _QUAD, _SPHERE): geometries as hosts build them, colored by a matte
+//! material's constant or by attributes, alone or inside a volume, with
+//! degenerate input reported at commit.
+
+use crate::common;
+
+use anari_library_caveray::device::{DataType, Input, Severity, StatusCode, Subject};
+use common::device::{bytes, Host, SIZE};
+
+/// A perspective frame from (0, 0, 3) of `surfaces` (and `volume`, if
+/// any), its renderer without ambient light, depth kept.
+fn frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>) -> u64 {
+    let world = h.d.new_object(DataType::WORLD, "");
+    let handles: Vec<usize> = surfaces.iter().map(|&s| s as usize).collect();
+    let list = h.array(
+        DataType::ARRAY1D,
+        DataType::SURFACE,
+        [surfaces.len() as u64, 1, 1],
+        &bytes(&handles),
+    );
+    h.set_object(world, "surface", DataType::ARRAY1D, list);
+    h.d.release(list);
+    if let Some(v) = volume {
+        h.d.commit(Subject::Object(v));
+        let list = h.array(
+            DataType::ARRAY1D,
+            DataType::VOLUME,
+            [1, 1, 1],
+            &bytes(&[v as usize]),
+        );
+        h.set_object(world, "volume", DataType::ARRAY1D, list);
+        h.d.release(list);
+    }
+    h.d.commit(Subject::Object(world));
+    let renderer = h.d.new_object(DataType::RENDERER, "default");
+    h.set(
+        renderer,
+        "ambientRadiance",
+        DataType::FLOAT32,
+        bytes(&[0.0f32]),
+    );
+    h.d.commit(Subject::Object(renderer));
+    let camera = h.d.new_object(DataType::CAMERA, "perspective");
+    h.set(
+        camera,
+        "position",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.0f32, 0.0, 3.0]),
+    );
+    h.d.commit(Subject::Object(camera));
+    let frame = h.d.new_object(DataType::FRAME, "");
+    h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[SIZE, SIZE]));
+    h.set(
+        frame,
+        "channel.color",
+        DataType::DATA_TYPE,
+        bytes(&[DataType::UFIXED8_VEC4 as i32]),
+    );
+    h.set(
+        frame,
+        "channel.depth",
+        DataType::DATA_TYPE,
+        bytes(&[DataType::FLOAT32 as i32]),
+    );
+    h.set_object(frame, "world", DataType::WORLD, world);
+    h.set_object(frame, "renderer", DataType::RENDERER, renderer);
+    h.set_object(frame, "camera", DataType::CAMERA, camera);
+    h.d.commit(Subject::Object(frame));
+    for o in [world, renderer, camera] {
+        h.d.release(o);
+    }
+    frame
+}
+
+fn matte(h: &mut Host, color: Input) -> u64 {
+    let m = h.d.new_object(DataType::MATERIAL, "matte");
+    h.d.set_param(Subject::Object(m), "color", color);
+    h.d.commit(Subject::Object(m));
+    m
+}
+
+fn surface(h: &mut Host, geometry: u64, material: u64) -> u64 {
+    let s = h.d.new_object(DataType::SURFACE, "");
+    h.set_object(s, "geometry", DataType::GEOMETRY, geometry);
+    h.set_object(s, "material", DataType::MATERIAL, material);
+    h.d.commit(Subject::Object(s));
+    s
+}
+
+fn vec3_array(h: &mut Host, name: &str, geometry: u64, values: &[[f32; 3]]) {
+    let a = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32_VEC3,
+        [values.len() as u64, 1, 1],
+        &bytes(values),
+    );
+    h.set_object(geometry, name, DataType::ARRAY1D, a);
+    h.d.release(a);
+}
+
+fn pixel(p: &[u8], x: u32, y: u32) -> [u8; 4] {
+    let i = (4 * (y * SIZE + x)) as usize;
+    [p[i], p[i + 1], p[i + 2], p[i + 3]]
+}
+
+/// A sphere of radius 0.5 at the origin.
+fn sphere(h: &mut Host) -> u64 {
+    let g = h.d.new_object(DataType::GEOMETRY, "sphere");
+    vec3_array(h, "vertex.position", g, &[[0.0, 0.0, 0.0]]);
+    h.set(g, "radius", DataType::FLOAT32, bytes(&[0.5f32]));
+    h.d.commit(Subject::Object(g));
+    g
+}
+
+#[test]
+fn a_sphere_shows_its_material_color_facing_the_eye_and_its_depth() {
+    let mut h = Host::new();
+    let g = sphere(&mut h);
+    let m = matte(
+        &mut h,
+        Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 0.0, 0.0])),
+    );
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], None);
+    let p = h.pixels(f);
+    let depth = h.depth_sized(f, SIZE, SIZE);
+    assert!(h.errors().is_empty());
+    let c = SIZE / 2;
+    // Lit from the eye (the world has no light): full color head-on.
+    let centre = pixel(&p, c, c);
+    assert!(
+        centre[0] >= 250 && centre[1] == 0 && centre[2] == 0,
+        "{centre:?}"
+    );
+    // The eye is 3 from the centre; the ray through the pixel just off
+    // the axis meets the sphere a little past 2.5.
+    let d = depth[(c * SIZE + c) as usize];
+    assert!((d - 2.5).abs() < 0.01, "{d}");
+    assert_eq!(pixel(&p, 0, 0), [0, 0, 0, 255]);
+    assert_eq!(depth[0], f32::INFINITY);
+}
+
+#[test]
+fn quads_take_per_primitive_colors_and_triangles_per_vertex_ones() {
+    let mut h = Host::new();
+    // Two quads side by side at z = 0: left red, right blue.
+    let g = h.d.new_object(DataType::GEOMETRY, "quad");
+    let corners = [
+        [-2.0, -2.0, 0.0],
+        [0.0, -2.0, 0.0],
+        [0.0, 2.0, 0.0],
+        [-2.0, 2.0, 0.0],
+        [2.0, -2.0, 0.0],
+        [2.0, 2.0, 0.0],
+    ];
+    vec3_array(&mut h, "vertex.position", g, &corners);
+    let index = h.array(
+        DataType::ARRAY1D,
+        DataType::UINT32_VEC4,
+        [2, 1, 1],
+        &bytes(&[0u32, 1, 2, 3, 1, 4, 5, 2]),
+    );
+    h.set_object(g, "primitive.index", DataType::ARRAY1D, index);
+    let colors = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32_VEC4,
+        [2, 1, 1],
+        &bytes(&[1.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]),
+    );
+    h.set_object(g, "primitive.color", DataType::ARRAY1D, colors);
+    h.d.commit(Subject::Object(g));
+    let m = matte(&mut h, Input::String("color".into()));
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], None);
+    let p = h.pixels(f);
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    let (left, right) = (pixel(&p, 3, SIZE / 2), pixel(&p, SIZE - 4, SIZE / 2));
+    assert!(left[0] > 200 && left[2] == 0, "{left:?}");
+    assert!(right[2] > 200 && right[0] == 0, "{right:?}");
+
+    // One triangle soup, green at every corner but the top's white.
+    let t = h.d.new_object(DataType::GEOMETRY, "triangle");
+    vec3_array(
+        &mut h,
+        "vertex.position",
+        t,
+        &[[-3.0, -3.0, 0.0], [3.0, -3.0, 0.0], [0.0, 3.0, 0.0]],
+    );
+    let colors = h.array(
+        DataType::ARRAY1D,
+        DataType::UFIXED8_VEC4,
+        [3, 1, 1],
+        &[0u8, 255, 0, 255, 0, 255, 0, 255, 255, 255, 255, 255],
+    );
+    h.set_object(t, "vertex.color", DataType::ARRAY1D, colors);
+    h.d.commit(Subject::Object(t));
+    let s2 = surface(&mut h, t, m);
+    let f2 = frame(&mut h, &[s2], None);
+    let p = h.pixels(f2);
+    // Red grows from the bottom row to the top.
+    let (low, high) = (pixel(&p, SIZE / 2, 1), pixel(&p, SIZE / 2, SIZE - 2));
+    assert!(low[1] > 200 && high[1] > 200, "{low:?} {high:?}");
+    assert!(high[0] > low[0] + 40, "{low:?} {high:?}");
+    for o in [g, m, s, f, index, colors, t, s2, f2] {
+        h.d.release(o);
+    }
+}
+
+#[test]
+fn bad_geometry_is_an_error_at_commit_and_flat_triangles_a_warning() {
+    let mut h = Host::new();
+    let t = h.d.new_object(DataType::GEOMETRY, "triangle");
+    vec3_array(
+        &mut h,
+        "vertex.position",
+        t,
+        &[
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.0, 0.0],
+        ],
+    );
+    let index = h.array(
+        DataType::ARRAY1D,
+        DataType::UINT32_VEC3,
+        [2, 1, 1],
+        &bytes(&[0u32, 1, 2, 0, 1, 9]),
+    );
+    h.set_object(t, "primitive.index", DataType::ARRAY1D, index);
+    h.d.commit(Subject::Object(t));
+    let errors = h.errors();
+    assert!(
+        errors
+            .iter()
+            .any(|(code, m)| *code == StatusCode::InvalidArgument
+                && m.contains("primitive 1 refers to vertex 9; there are 4 vertices")),
+        "{errors:?}"
+    );
+    // A line is no triangle: it is dropped, and the host hears so.
+    let line = h.array(
+        DataType::ARRAY1D,
+        DataType::UINT32_VEC3,
+        [2, 1, 1],
+        &bytes(&[0u32, 1, 2, 0, 1, 3]),
+    );
+    h.set_object(t, "primitive.index", DataType::ARRAY1D, line);
+    h.d.commit(Subject::Object(t));
+    assert!(h.errors().is_empty());
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|m| m.contains("1 triangles of zero area dropped")),
+        "{warnings:?}"
+    );
+    // Curvature needs a field.
+    let g = sphere(&mut h);
+    let c = h.d.new_object(DataType::MATERIAL, "curvature");
+    h.set(c, "radius", DataType::FLOAT32, bytes(&[1.0f32]));
+    h.d.commit(Subject::Object(c));
+    let s = surface(&mut h, g, c);
+    let f = frame(&mut h, &[s], None);
+    h.d.render_frame(f, None);
+    h.d.frame_ready(f);
+    let said: Vec<String> = h.errors().into_iter().map(|(_, m)| m).collect();
+    assert!(
+        said.iter().any(|m| m.contains("colors isosurfaces only")),
+        "{said:?}"
+    );
+}
+
+#[test]
+fn a_sphere_inside_a_volume_hides_what_lies_behind_it() {
+    let mut h = Host::new();
+    let field = h.field(|_| 0.5, None);
+    let volume = h.volume(field);
+    let alone = {
+        let (f, _) = h.frame(volume, 3.0);
+        let p = h.pixels(f);
+        h.d.release(f);
+        p
+    };
+    let g = sphere(&mut h);
+    let m = matte(
+        &mut h,
+        Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 1.0, 0.0])),
+    );
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], Some(volume));
+    let p = h.pixels(f);
+    let depth = h.depth_sized(f, SIZE, SIZE);
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    let c = SIZE / 2;
+    let (with, without) = (pixel(&p, c, c), pixel(&alone, c, c));
+    // The yellow sphere shows through the volume in front of it.
+    assert!(
+        with[0] > without[0] + 30 && with[1] > without[1] + 30,
+        "{with:?} vs {without:?}"
+    );
+    assert!(depth[(c * SIZE + c) as usize] <= 2.5 + 0.01);
+    // Beside the sphere the volume is as it is alone.
+    assert_eq!(pixel(&p, 2, c), pixel(&alone, 2, c));
+}
