@@ -100,6 +100,36 @@ fn misuse_is_clean_under_valgrind() {
     misuse(true);
 }
 
+/// Surfaces beside a volume as visualization hosts send them.
+fn mesh_host(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_mesh_host_valgrind"
+    } else {
+        "c_mesh_host"
+    });
+    let program = dir.join("mesh_host");
+    compile(&["tests/capi/c/mesh_host.c"], &program, false, true);
+    let output = run(&program, &[], valgrind);
+    let text = describe(&output);
+    assert!(output.status.success(), "mesh host: {text}");
+    assert!(!text.contains("FAIL"), "mesh host: {text}");
+    assert!(text.matches("PASS").count() >= 10, "mesh host: {text}");
+}
+
+#[test]
+fn a_host_sees_its_meshes_and_glyphs_through_its_volume() {
+    mesh_host(false);
+}
+
+#[test]
+fn meshes_and_glyphs_are_clean_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    mesh_host(true);
+}
+
 /// Test (c): a C++ host that, like the SDK's libanari, dlopens the library,
 /// calls `anari_library_caveray_new_library` and drives the returned
 /// objects through their virtual tables only.
