@@ -15,9 +15,9 @@ use super::object::State;
 use super::surface::SurfaceModel;
 use super::table::{
     ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE,
-    EXT_COMPLETION, EXT_CURVATURE, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR, EXT_ISOSURFACE, EXT_MATRIX,
-    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_QUAD,
-    EXT_SHADING, EXT_SPHERE, EXT_STEREO, EXT_TRIANGLE,
+    EXT_COMPLETION, EXT_CURVATURE, EXT_CYLINDER, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR,
+    EXT_ISOSURFACE, EXT_MATRIX, EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS,
+    EXT_ORTHOGRAPHIC, EXT_QUAD, EXT_SHADING, EXT_SPHERE, EXT_STEREO, EXT_TRIANGLE,
 };
 use super::types::DataType as T;
 use super::volume::VolumeModel;
@@ -52,6 +52,7 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_TRIANGLE,
     EXT_QUAD,
     EXT_SPHERE,
+    EXT_CYLINDER,
     EXT_AMBIENT,
     EXT_MATTE,
     EXT_CURVATURE,
@@ -86,6 +87,7 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &geometry::triangle::INFO,
     &geometry::quad::INFO,
     &geometry::sphere::INFO,
+    &geometry::cylinder::INFO,
     &material::matte::INFO,
     &material::curvature::INFO,
     &surface::INFO,
@@ -242,7 +244,7 @@ mod tests {
         );
         assert_eq!(
             subtypes(T::GEOMETRY),
-            ["isosurface", "triangle", "quad", "sphere"]
+            ["isosurface", "triangle", "quad", "sphere", "cylinder"]
         );
         assert_eq!(subtypes(T::MATERIAL), ["matte", "curvature"]);
     }

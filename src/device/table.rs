@@ -161,6 +161,7 @@ pub const EXT_ISOSURFACE: &str = "ANARI_KHR_GEOMETRY_ISOSURFACE";
 pub const EXT_TRIANGLE: &str = "ANARI_KHR_GEOMETRY_TRIANGLE";
 pub const EXT_QUAD: &str = "ANARI_KHR_GEOMETRY_QUAD";
 pub const EXT_SPHERE: &str = "ANARI_KHR_GEOMETRY_SPHERE";
+pub const EXT_CYLINDER: &str = "ANARI_KHR_GEOMETRY_CYLINDER";
 pub const EXT_AMBIENT: &str = "ANARI_KHR_RENDERER_AMBIENT_LIGHT";
 pub const EXT_MATTE: &str = "ANARI_KHR_MATERIAL_MATTE";
 /// Surfaces colored by curvature (material `curvature`).

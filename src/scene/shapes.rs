@@ -73,6 +73,15 @@ pub enum Primitives {
         /// The vertex of each kept sphere.
         spheres: Vec<u32>,
     },
+    Cylinders {
+        positions: Vec<Vec3>,
+        /// The two end vertices of each kept cylinder.
+        cylinders: Vec<[u32; 2]>,
+        /// One per kept cylinder.
+        radii: Vec<f32>,
+        /// Closed by a disc at the first end, and at the second.
+        caps: [bool; 2],
+    },
 }
 
 /// One geometry: its primitives and attributes, in object space.
@@ -269,6 +278,65 @@ impl Shape {
         })
     }
 
+    /// Cylinders between vertex pairs `ends` (host primitive i is pair
+    /// i), of radius `radii[i]`, with the caps asked for. Indices must lie
+    /// in range and the ends they use must be finite; cylinders of zero
+    /// length or of zero, negative or non-finite radius are dropped.
+    pub fn cylinders(
+        positions: Vec<Vec3>,
+        ends: Vec<[u32; 2]>,
+        radii: Vec<f32>,
+        caps: [bool; 2],
+        input: ShapeInput,
+    ) -> Result<Made, ShapeError> {
+        input.check()?;
+        let count = positions.len();
+        let mut cylinders = Vec::with_capacity(ends.len());
+        let mut kept_radii = Vec::with_capacity(ends.len());
+        let mut source = Vec::with_capacity(ends.len());
+        let mut thin = 0;
+        for (i, (pair, &r)) in ends.iter().zip(&radii).enumerate() {
+            for &v in pair {
+                let Some(&p) = positions.get(v as usize) else {
+                    return Err(ShapeError::IndexOutOfRange {
+                        what: "cylinder",
+                        index: i,
+                        vertex: v,
+                        count,
+                    });
+                };
+                if !p.is_finite() {
+                    return Err(ShapeError::NotFinite {
+                        index: v as usize,
+                        position: p,
+                    });
+                }
+            }
+            let length = positions[pair[0] as usize].distance(positions[pair[1] as usize]);
+            if !(r.is_finite() && r > 0.0 && length > 0.0) {
+                thin += 1;
+                continue;
+            }
+            cylinders.push(*pair);
+            kept_radii.push(r);
+            source.push(i as u32);
+        }
+        Ok(Made {
+            shape: Shape {
+                primitives: Primitives::Cylinders {
+                    positions,
+                    cylinders,
+                    radii: kept_radii,
+                    caps,
+                },
+                source,
+                attributes: input.attributes,
+                ids: input.ids,
+            },
+            dropped: dropped(thin, "cylinders of zero length or invalid radius"),
+        })
+    }
+
     /// Primitives kept.
     pub fn len(&self) -> usize {
         self.source.len()
@@ -301,6 +369,19 @@ impl Shape {
                 for &v in spheres {
                     let (c, r) = (positions[v as usize], radii[v as usize]);
                     (lo, hi) = (lo.min(c - r), hi.max(c + r));
+                }
+            }
+            Primitives::Cylinders {
+                positions,
+                cylinders,
+                radii,
+                ..
+            } => {
+                for (pair, &r) in cylinders.iter().zip(radii) {
+                    for &v in pair {
+                        let p = positions[v as usize];
+                        (lo, hi) = (lo.min(p - r), hi.max(p + r));
+                    }
                 }
             }
         }

@@ -325,7 +325,7 @@ fn device_and_world_properties() {
         .unwrap();
     assert_eq!(
         unsafe { strings(geometries as *const *const c_char) },
-        ["isosurface", "triangle", "quad", "sphere"]
+        ["isosurface", "triangle", "quad", "sphere", "cylinder"]
     );
     let minor: i32 = s.property(dev, "version.minor", ANARI_INT32).unwrap();
     assert_eq!(

@@ -303,3 +303,61 @@ fn a_sphere_inside_a_volume_hides_what_lies_behind_it() {
     // Beside the sphere the volume is as it is alone.
     assert_eq!(pixel(&p, 2, c), pixel(&alone, 2, c));
 }
+
+#[test]
+fn cylinders_take_per_primitive_radii_and_warn_of_unknown_caps() {
+    let mut h = Host::new();
+    let g = h.d.new_object(DataType::GEOMETRY, "cylinder");
+    // A thick one across the centre, a thin one above, one of zero length.
+    vec3_array(
+        &mut h,
+        "vertex.position",
+        g,
+        &[
+            [-2.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [-2.0, 0.8, 0.0],
+            [2.0, 0.8, 0.0],
+            [0.0, -0.8, 0.0],
+            [0.0, -0.8, 0.0],
+        ],
+    );
+    let radii = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32,
+        [3, 1, 1],
+        &bytes(&[0.3f32, 0.02, 0.5]),
+    );
+    h.set_object(g, "primitive.radius", DataType::ARRAY1D, radii);
+    h.d.set_param(Subject::Object(g), "caps", Input::String("lids".into()));
+    h.d.commit(Subject::Object(g));
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|m| m.contains("caps 'lids' is not one of")),
+        "{warnings:?}"
+    );
+    assert!(
+        warnings
+            .iter()
+            .any(|m| m.contains("1 cylinders of zero length or invalid radius dropped")),
+        "{warnings:?}"
+    );
+    let m = matte(
+        &mut h,
+        Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[0.0f32, 0.0, 1.0])),
+    );
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], None);
+    let p = h.pixels(f);
+    let depth = h.depth_sized(f, SIZE, SIZE);
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    let c = SIZE / 2;
+    assert!(pixel(&p, c, c)[2] > 240, "{:?}", pixel(&p, c, c));
+    // The eye is 3 from the axis, the radius 0.3.
+    let d = depth[(c * SIZE + c) as usize];
+    assert!((d - 2.7).abs() < 0.02, "{d}");
+    // The zero-length one at y = -0.8 draws nothing.
+    assert_eq!(pixel(&p, c, 6), [0, 0, 0, 255]);
+}

@@ -1,8 +1,9 @@
 //! Geometries: one module per subtype. Surfaces of a field (`isosurface`)
 //! are ray cast in the field; surfaces of primitives (`triangle`, `quad`,
-//! `sphere`) become a scene shape the renderers trace through a BVH.
+//! `sphere`, `cylinder`) become a scene shape the renderers trace through a BVH.
 
 pub(crate) mod attributes;
+pub mod cylinder;
 pub mod isosurface;
 pub mod quad;
 pub mod sphere;

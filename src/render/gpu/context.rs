@@ -299,7 +299,7 @@ impl Context {
     pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
         if !scene.shapes().is_empty() || scene.volumes().is_empty() {
             return Err(RenderError::Settings(
-                "the GPU ray caster draws volumes; a world with triangle, quad or sphere surfaces renders on the CPU (the device parameter backend \"cpu\", or CAVERAY_BACKEND=cpu)".into(),
+                "the GPU ray caster draws volumes; a world with triangle, quad, sphere or cylinder surfaces renders on the CPU (the device parameter backend \"cpu\", or CAVERAY_BACKEND=cpu)".into(),
             ));
         }
         let limits = &self.limits;

@@ -48,6 +48,57 @@ pub fn sphere(o: Vec3, d: Vec3, c: Vec3, r: f32, t_min: f32, t_max: f32) -> Opti
     [near, far].into_iter().find(|&t| t > t_min && t < t_max)
 }
 
+/// The first `t` in `(t_min, t_max)` where `o + t d` meets the cylinder
+/// of radius `r` from `a` to `b`, with the discs that close it where
+/// `caps` says, and how far along the axis (0 at a, 1 at b) it is met.
+pub fn cylinder(
+    o: Vec3,
+    d: Vec3,
+    (a, b, r): (Vec3, Vec3, f32),
+    caps: [bool; 2],
+    (t_min, t_max): (f32, f32),
+) -> Option<(f32, f32)> {
+    let length = a.distance(b);
+    let axis = (b - a) / length;
+    let oc = o - a;
+    let (along_d, along_o) = (d.dot(axis), oc.dot(axis));
+    let (dp, op) = (d - axis * along_d, oc - axis * along_o);
+    let mut best: Option<(f32, f32)> = None;
+    let mut consider = |t: f32, s: f32| {
+        if t > t_min && t < t_max && best.is_none_or(|(bt, _)| t < bt) {
+            best = Some((t, s));
+        }
+    };
+    let qa = dp.length_squared();
+    if qa > 0.0 {
+        let qb = op.dot(dp);
+        // From the perpendicular part, as the sphere's: stable far away.
+        let closest = op - dp * (qb / qa);
+        let disc = r * r - closest.length_squared();
+        if disc >= 0.0 {
+            let h = (qa * disc).sqrt();
+            for t in [(-qb - h) / qa, (-qb + h) / qa] {
+                let s = along_o + t * along_d;
+                if (0.0..=length).contains(&s) {
+                    consider(t, s / length);
+                }
+            }
+        }
+    }
+    if along_d != 0.0 {
+        for (end, closed, s) in [(a, caps[0], 0.0), (b, caps[1], 1.0)] {
+            if !closed {
+                continue;
+            }
+            let t = (end - o).dot(axis) / along_d;
+            if (o + d * t - end).length_squared() <= r * r {
+                consider(t, s);
+            }
+        }
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -61,6 +112,38 @@ mod tests {
         assert!((t - 3.0).abs() < 1e-6);
         assert!(triangle(Vec3::new(0.75, 0.75, 2.0), -Vec3::Z, a, b, c).is_none());
         assert!(triangle(Vec3::new(0.25, 0.5, 2.0), Vec3::X, a, b, c).is_none());
+    }
+
+    #[test]
+    fn cylinder_gives_side_caps_and_axis_position() {
+        let (a, b) = (Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0));
+        let span = (0.0, 100.0);
+        // From the side, at a quarter of the length.
+        let (t, s) = cylinder(
+            Vec3::new(5.0, 0.0, 0.5),
+            -Vec3::X,
+            (a, b, 1.0),
+            [false; 2],
+            span,
+        )
+        .unwrap();
+        assert!((t - 4.0).abs() < 1e-5 && (s - 0.25).abs() < 1e-6);
+        // Along the axis: only a cap stops the ray; an open tube lets it through to nothing.
+        let down = (Vec3::new(0.2, 0.0, 5.0), -Vec3::Z);
+        assert!(cylinder(down.0, down.1, (a, b, 1.0), [false; 2], span).is_none());
+        let (t, s) = cylinder(down.0, down.1, (a, b, 1.0), [false, true], span).unwrap();
+        assert!((t - 3.0).abs() < 1e-5 && s == 1.0);
+        let (t, s) = cylinder(down.0, down.1, (a, b, 1.0), [true, false], span).unwrap();
+        assert!((t - 5.0).abs() < 1e-5 && s == 0.0);
+        // Past the ends the side is not there.
+        assert!(cylinder(
+            Vec3::new(5.0, 0.0, 2.5),
+            -Vec3::X,
+            (a, b, 1.0),
+            [true; 2],
+            span
+        )
+        .is_none());
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! Surfaces of triangles and spheres as the renderers trace them: every
+//! Surfaces of triangles, spheres and cylinders as the renderers trace them: every
 //! placed shape's primitives in one BVH, built once for a scene's shapes
 //! and kept while frames bring the same ones, the nearest hit along a ray,
 //! and its color under the world's light. The volume march stops at that
@@ -8,8 +8,8 @@
 //! use) makes good trees for a million triangles in well under a second,
 //! and its binary nodes (a box, a first index, a count) are plain enough
 //! to hand to a GPU as they are. Triangles are placed in world space once;
-//! spheres are tested in object space, so an instance's shear or uneven
-//! scale makes the ellipsoid it should.
+//! spheres and cylinders are tested in object space, so an instance's
+//! shear or uneven scale makes the ellipsoid it should.
 
 mod intersect;
 
@@ -22,7 +22,7 @@ use obvhs::Boundable;
 use super::frame::filled;
 use super::{RenderError, RenderSettings};
 use crate::scene::{Attribute, ColorSource, PlacedShape, Primitives};
-use intersect::{sphere, triangle};
+use intersect::{cylinder, sphere, triangle};
 
 /// The reference device's scale of `ambientRadiance`: a radiance of 1
 /// lights a surface to a tenth of its color, so hosts tuned on it look
@@ -141,6 +141,19 @@ impl ShapeSet {
                         boxes.push(Boxed(Aabb::new(lo.into(), hi.into())));
                     }
                 }
+                Primitives::Cylinders {
+                    positions,
+                    cylinders,
+                    radii,
+                    ..
+                } => {
+                    for (pair, &r) in cylinders.iter().zip(radii) {
+                        let [p, q] = pair.map(|v| positions[v as usize]);
+                        let object = (p.min(q) - r, p.max(q) + r);
+                        let (lo, hi) = crate::scene::transformed_box(m, object);
+                        boxes.push(Boxed(Aabb::new(lo.into(), hi.into())));
+                    }
+                }
             }
             prims.extend((0..shape.len() as u32).map(|index| Prim {
                 shape: s as u32,
@@ -226,6 +239,23 @@ impl ShapeSet {
                 );
                 sphere(oo, od, positions[v], radii[v], t_min, t_max)?
             }
+            Primitives::Cylinders {
+                positions,
+                cylinders,
+                radii,
+                caps,
+            } => {
+                let [a, b] = cylinders[prim.index as usize].map(|v| positions[v as usize]);
+                let (oo, od) = (
+                    traced.to_object.transform_point3(o),
+                    traced.to_object.transform_vector3(d),
+                );
+                let r = radii[prim.index as usize];
+                let (t, s) = cylinder(oo, od, (a, b, r), *caps, (t_min, t_max))?;
+                // Along the axis: the second end's weight, as a
+                // triangle's barycentric.
+                return Some((t, Vec2::new(s, 0.0)));
+            }
         };
         Some((t, Vec2::ZERO))
     }
@@ -256,6 +286,29 @@ impl ShapeSet {
                 let c = positions[spheres[prim.index as usize] as usize];
                 traced.normal_to_world * (traced.to_object.transform_point3(p) - c)
             }
+            Primitives::Cylinders {
+                positions,
+                cylinders,
+                radii,
+                ..
+            } => {
+                let [a, b] = cylinders[prim.index as usize].map(|v| positions[v as usize]);
+                let axis = (b - a).normalize();
+                let q = traced.to_object.transform_point3(p) - a;
+                let radial = q - axis * q.dot(axis);
+                let r = radii[prim.index as usize];
+                // Inside the rim: a cap, facing out of its end.
+                let object = if radial.length() < r * (1.0 - 1e-4) {
+                    if bary.x < 0.5 {
+                        -axis
+                    } else {
+                        axis
+                    }
+                } else {
+                    radial
+                };
+                traced.normal_to_world * object
+            }
         };
         // A normal the host gave may be zero: fall back to facing the ray.
         let n = n.try_normalize().unwrap_or(-d.normalize_or_zero());
@@ -281,6 +334,10 @@ impl ShapeSet {
                     a * (1.0 - hit.bary.x - hit.bary.y) + b * hit.bary.x + c * hit.bary.y
                 }
                 Primitives::Spheres { spheres, .. } => values[spheres[index] as usize],
+                Primitives::Cylinders { cylinders, .. } => {
+                    let [a, b] = cylinders[index].map(|v| values[v as usize]);
+                    a.lerp(b, hit.bary.x)
+                }
             },
         }
     }

@@ -294,3 +294,44 @@ fn the_bvh_finds_the_nearest_of_many_primitives() {
     }
     assert!(hits > 100, "{hits} rays hit");
 }
+
+#[test]
+fn a_cylinder_shows_its_silhouette_depth_and_colors_along_its_axis() {
+    let p = vec![Vec3::new(-1.5, 0.0, 0.0), Vec3::new(1.5, 0.0, 0.0)];
+    let mut inp = input(2, 1);
+    inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Z]));
+    let made = Shape::cylinders(p, vec![[0, 1]], vec![0.5], [true; 2], inp).unwrap();
+    let placed = PlacedShape::new(
+        Arc::new(made.shape),
+        SurfaceMaterial {
+            color: ColorSource::Attribute(0),
+            opacity: 1.0,
+        },
+        Mat4::IDENTITY,
+    );
+    let frame = render(&Scene::of_shapes(vec![placed]).unwrap(), &unlit_ambient());
+    let depth = frame.depth.clone().unwrap();
+    let half_pixel = 2.0 / N as f32;
+    for y in 0..N {
+        for x in 0..N {
+            let (px, py) = centre(x, y);
+            let d = depth[(y * N + x) as usize];
+            let inside = px.abs() < 1.5 - half_pixel && py.abs() < 0.5 - half_pixel;
+            if inside {
+                let z = (0.25 - py * py).sqrt();
+                assert!((d - (5.0 - z)).abs() < 1e-4, "depth at {x},{y}: {d}");
+                // Red at the first end, blue at the second, lit by the
+                // normal's z.
+                let s = (px + 1.5) / 3.0;
+                let want = Vec3::new(1.0 - s, 0.0, s) * (z / 0.5);
+                let got = frame.pixel(x, y).truncate();
+                assert!(
+                    (got - want).abs().max_element() < 1e-3,
+                    "{x},{y}: {got} vs {want}"
+                );
+            } else if px.abs() > 1.5 + half_pixel || py.abs() > 0.5 + half_pixel {
+                assert_eq!(d, f32::INFINITY, "{x},{y}");
+            }
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! ANARI's `cylinder` geometry (ANARI_KHR_GEOMETRY_CYLINDER): a cylinder
+//! between each pair of consecutive vertices, or each pair of
+//! `primitive.index`, of `primitive.radius` or the geometry's `radius`,
+//! closed by discs where `caps` says.
+
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_CYLINDER, F32};
+use crate::device::types::DataType as T;
+
+use super::attributes::{self, attribute_params};
+
+const CAPS: [&str; 4] = ["none", "first", "second", "both"];
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::GEOMETRY,
+    subtype: "cylinder",
+    description: "cylinders: between consecutive vertex pairs, or pairs of primitive.index",
+    extensions: &[EXT_CYLINDER],
+    params: &{
+        let [c, a0, a1, a2, a3, pc, p0, p1, p2, p3, id] = attribute_params!();
+        [
+            p(
+                "vertex.position",
+                &[T::ARRAY1D],
+                true,
+                DefaultValue::None,
+                "FLOAT32_VEC3 per vertex: the cylinders' ends",
+            )
+            .elements(&[T::FLOAT32_VEC3]),
+            p(
+                "primitive.index",
+                &[T::ARRAY1D],
+                false,
+                DefaultValue::None,
+                "UINT32_VEC2 per cylinder: its two ends (default: vertices 2i, 2i+1)",
+            )
+            .elements(&[T::UINT32_VEC2]),
+            p(
+                "primitive.radius",
+                &[T::ARRAY1D],
+                false,
+                DefaultValue::None,
+                "FLOAT32 per cylinder (default: 'radius' for every one)",
+            )
+            .elements(&[T::FLOAT32]),
+            p(
+                "radius",
+                F32,
+                false,
+                DefaultValue::Floats(&[1.0]),
+                "every cylinder's radius where primitive.radius is unset",
+            ),
+            p(
+                "caps",
+                &[T::STRING],
+                false,
+                DefaultValue::Text("none"),
+                "which ends are closed by a disc: none, first, second or both",
+            )
+            .names(&CAPS),
+            c,
+            a0,
+            a1,
+            a2,
+            a3,
+            pc,
+            p0,
+            p1,
+            p2,
+            p3,
+            id,
+        ]
+    },
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let positions = attributes::positions(r)?;
+    let ends = match attributes::indices(r, "primitive.index", T::UINT32_VEC2)? {
+        Some(i) => i,
+        None => (0..(positions.len() / 2 * 2) as u32).collect(),
+    };
+    let ends: Vec<[u32; 2]> = ends.chunks_exact(2).map(|e| [e[0], e[1]]).collect();
+    let radii = match attributes::f32s(r, "primitive.radius")? {
+        Some(radii) if radii.len() < ends.len() => {
+            return Err(format!(
+                "primitive.radius has {} values for {} cylinders",
+                radii.len(),
+                ends.len()
+            ))
+        }
+        Some(radii) => radii,
+        None => vec![r.f32("radius")?; ends.len()],
+    };
+    // Unknown enumeration values fall back to the default (the spec's rule).
+    let caps = match r.string("caps").unwrap_or("none") {
+        "none" => [false, false],
+        "first" => [true, false],
+        "second" => [false, true],
+        "both" => [true, true],
+        other => {
+            warn(format!(
+                "caps '{other}' is not one of {}; the cylinders are open",
+                CAPS.join(", ")
+            ));
+            [false, false]
+        }
+    };
+    let input = attributes::input(r, positions.len(), ends.len())?;
+    let made = crate::scene::Shape::cylinders(positions, ends, radii, caps, input)
+        .map_err(|e| e.to_string())?;
+    super::made(made, warn)
+}
