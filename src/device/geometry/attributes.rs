@@ -23,17 +23,28 @@ pub const ATTRIBUTE_ELEMENTS: &[T] = &[
     T::UFIXED8_VEC4,
 ];
 
-/// The parameter-table entries of the attributes, for a subtype's table.
-macro_rules! attribute_params {
-    () => {
-        $crate::device::geometry::attributes::attribute_params!(@each
+/// A surface geometry's parameter table: `vertex.position`, the entries
+/// given, then the attributes and `primitive.id`.
+macro_rules! shape_params {
+    ($($entry:expr),* $(,)?) => {
+        $crate::device::geometry::attributes::shape_params!(@each [$($entry),*]
             "vertex.color", "vertex.attribute0", "vertex.attribute1",
             "vertex.attribute2", "vertex.attribute3",
             "primitive.color", "primitive.attribute0", "primitive.attribute1",
             "primitive.attribute2", "primitive.attribute3")
     };
-    (@each $($name:literal),*) => {
-        [$(
+    (@each [$($entry:expr),*] $($name:literal),*) => {
+        [
+        $crate::device::table::p(
+            "vertex.position",
+            &[$crate::device::types::DataType::ARRAY1D],
+            true,
+            $crate::device::table::DefaultValue::None,
+            "FLOAT32_VEC3 per vertex",
+        )
+        .elements(&[$crate::device::types::DataType::FLOAT32_VEC3]),
+        $($entry,)*
+        $(
             $crate::device::table::p(
                 $name,
                 &[$crate::device::types::DataType::ARRAY1D],
@@ -53,7 +64,7 @@ macro_rules! attribute_params {
         .elements(&[$crate::device::types::DataType::UINT32])]
     };
 }
-pub(crate) use attribute_params;
+pub(crate) use shape_params;
 
 /// An attribute array's elements as Vec4s.
 fn vec4s(name: &str, a: &Array) -> Result<Vec<Vec4>, String> {

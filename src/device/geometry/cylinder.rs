@@ -8,7 +8,7 @@ use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_CYLINDER, F32};
 use crate::device::types::DataType as T;
 
-use super::attributes::{self, attribute_params};
+use super::attributes::{self, shape_params};
 
 const CAPS: [&str; 4] = ["none", "first", "second", "both"];
 
@@ -17,61 +17,39 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     subtype: "cylinder",
     description: "cylinders: between consecutive vertex pairs, or pairs of primitive.index",
     extensions: &[EXT_CYLINDER],
-    params: &{
-        let [c, a0, a1, a2, a3, pc, p0, p1, p2, p3, id] = attribute_params!();
-        [
-            p(
-                "vertex.position",
-                &[T::ARRAY1D],
-                true,
-                DefaultValue::None,
-                "FLOAT32_VEC3 per vertex: the cylinders' ends",
-            )
-            .elements(&[T::FLOAT32_VEC3]),
-            p(
-                "primitive.index",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "UINT32_VEC2 per cylinder: its two ends (default: vertices 2i, 2i+1)",
-            )
-            .elements(&[T::UINT32_VEC2]),
-            p(
-                "primitive.radius",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "FLOAT32 per cylinder (default: 'radius' for every one)",
-            )
-            .elements(&[T::FLOAT32]),
-            p(
-                "radius",
-                F32,
-                false,
-                DefaultValue::Floats(&[1.0]),
-                "every cylinder's radius where primitive.radius is unset",
-            ),
-            p(
-                "caps",
-                &[T::STRING],
-                false,
-                DefaultValue::Text("none"),
-                "which ends are closed by a disc: none, first, second or both",
-            )
-            .names(&CAPS),
-            c,
-            a0,
-            a1,
-            a2,
-            a3,
-            pc,
-            p0,
-            p1,
-            p2,
-            p3,
-            id,
-        ]
-    },
+    params: &shape_params!(
+        p(
+            "primitive.index",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "UINT32_VEC2 per cylinder: its two ends (default: vertices 2i, 2i+1)",
+        )
+        .elements(&[T::UINT32_VEC2]),
+        p(
+            "primitive.radius",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "FLOAT32 per cylinder (default: 'radius' for every one)",
+        )
+        .elements(&[T::FLOAT32]),
+        p(
+            "radius",
+            F32,
+            false,
+            DefaultValue::Floats(&[1.0]),
+            "every cylinder's radius where primitive.radius is unset",
+        ),
+        p(
+            "caps",
+            &[T::STRING],
+            false,
+            DefaultValue::Text("none"),
+            "which ends are closed by a disc: none, first, second or both",
+        )
+        .names(&CAPS),
+    ),
     commit: Some(commit),
 };
 

@@ -9,53 +9,31 @@ use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_QUAD};
 use crate::device::types::DataType as T;
 
-use super::attributes::{self, attribute_params};
+use super::attributes::{self, shape_params};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::GEOMETRY,
     subtype: "quad",
     description: "quads: consecutive vertex quadruples, or indexed by primitive.index; drawn as two triangles each",
     extensions: &[EXT_QUAD],
-    params: &{
-        let [c, a0, a1, a2, a3, pc, p0, p1, p2, p3, id] = attribute_params!();
-        [
-            p(
-                "vertex.position",
-                &[T::ARRAY1D],
-                true,
-                DefaultValue::None,
-                "FLOAT32_VEC3 per vertex",
-            )
-            .elements(&[T::FLOAT32_VEC3]),
-            p(
-                "vertex.normal",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
-            )
-            .elements(&[T::FLOAT32_VEC3]),
-            p(
-                "primitive.index",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "UINT32_VEC4 per quad: its vertices in order around it (default: vertices 4i to 4i+3)",
-            )
-            .elements(&[T::UINT32_VEC4]),
-            c,
-            a0,
-            a1,
-            a2,
-            a3,
-            pc,
-            p0,
-            p1,
-            p2,
-            p3,
-            id,
-        ]
-    },
+    params: &shape_params!(
+        p(
+            "vertex.normal",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
+        )
+        .elements(&[T::FLOAT32_VEC3]),
+        p(
+            "primitive.index",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "UINT32_VEC4 per quad: its vertices in order around it (default: vertices 4i to 4i+3)",
+        )
+        .elements(&[T::UINT32_VEC4]),
+    ),
     commit: Some(commit),
 };
 

@@ -7,60 +7,38 @@ use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_SPHERE, F32};
 use crate::device::types::DataType as T;
 
-use super::attributes::{self, attribute_params};
+use super::attributes::{self, shape_params};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::GEOMETRY,
     subtype: "sphere",
     description: "spheres: one per vertex, or per entry of primitive.index",
     extensions: &[EXT_SPHERE],
-    params: &{
-        let [c, a0, a1, a2, a3, pc, p0, p1, p2, p3, id] = attribute_params!();
-        [
-            p(
-                "vertex.position",
-                &[T::ARRAY1D],
-                true,
-                DefaultValue::None,
-                "FLOAT32_VEC3 per vertex: the centers",
-            )
-            .elements(&[T::FLOAT32_VEC3]),
-            p(
-                "vertex.radius",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "FLOAT32 per vertex (default: 'radius' for every sphere)",
-            )
-            .elements(&[T::FLOAT32]),
-            p(
-                "radius",
-                F32,
-                false,
-                DefaultValue::Floats(&[0.01]),
-                "every sphere's radius where vertex.radius is unset",
-            ),
-            p(
-                "primitive.index",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "UINT32 per sphere: its vertex (default: every vertex)",
-            )
-            .elements(&[T::UINT32]),
-            c,
-            a0,
-            a1,
-            a2,
-            a3,
-            pc,
-            p0,
-            p1,
-            p2,
-            p3,
-            id,
-        ]
-    },
+    params: &shape_params!(
+        p(
+            "vertex.radius",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "FLOAT32 per vertex (default: 'radius' for every sphere)",
+        )
+        .elements(&[T::FLOAT32]),
+        p(
+            "radius",
+            F32,
+            false,
+            DefaultValue::Floats(&[0.01]),
+            "every sphere's radius where vertex.radius is unset",
+        ),
+        p(
+            "primitive.index",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "UINT32 per sphere: its vertex (default: every vertex)",
+        )
+        .elements(&[T::UINT32]),
+    ),
     commit: Some(commit),
 };
 

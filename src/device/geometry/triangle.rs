@@ -6,53 +6,31 @@ use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_TRIANGLE};
 use crate::device::types::DataType as T;
 
-use super::attributes::{self, attribute_params};
+use super::attributes::{self, shape_params};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::GEOMETRY,
     subtype: "triangle",
     description: "triangles: consecutive vertex triples, or indexed by primitive.index",
     extensions: &[EXT_TRIANGLE],
-    params: &{
-        let [c, a0, a1, a2, a3, pc, p0, p1, p2, p3, id] = attribute_params!();
-        [
-            p(
-                "vertex.position",
-                &[T::ARRAY1D],
-                true,
-                DefaultValue::None,
-                "FLOAT32_VEC3 per vertex",
-            )
-            .elements(&[T::FLOAT32_VEC3]),
-            p(
-                "vertex.normal",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
-            )
-            .elements(&[T::FLOAT32_VEC3]),
-            p(
-                "primitive.index",
-                &[T::ARRAY1D],
-                false,
-                DefaultValue::None,
-                "UINT32_VEC3 per triangle: its vertices (default: vertices 3i, 3i+1, 3i+2)",
-            )
-            .elements(&[T::UINT32_VEC3]),
-            c,
-            a0,
-            a1,
-            a2,
-            a3,
-            pc,
-            p0,
-            p1,
-            p2,
-            p3,
-            id,
-        ]
-    },
+    params: &shape_params!(
+        p(
+            "vertex.normal",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
+        )
+        .elements(&[T::FLOAT32_VEC3]),
+        p(
+            "primitive.index",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "UINT32_VEC3 per triangle: its vertices (default: vertices 3i, 3i+1, 3i+2)",
+        )
+        .elements(&[T::UINT32_VEC3]),
+    ),
     commit: Some(commit),
 };
 
