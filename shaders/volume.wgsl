@@ -50,6 +50,9 @@ fn background_at(pixel: vec2u) -> vec4f {
 }
 
 var<private> samples: u32;
+// Where an opaque surface ends every primary ray's march (set by an
+// entry point that traces surfaces before it marches).
+var<private> march_stop: f32 = 3.4e38;
 
 fn voxel(v: u32, i: vec3i) -> f32 {
     if ONE_VOLUME {
@@ -388,7 +391,8 @@ fn enter_exit(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f) -> vec2f {
     let tb = (hi - o) * inv;
     let tn = min(ta, tb);
     let tf = max(ta, tb);
-    return vec2f(max(max(max(tn.x, tn.y), tn.z), params.t_near), min(min(min(tf.x, tf.y), tf.z), params.t_far));
+    let far = min(params.t_far, march_stop);
+    return vec2f(max(max(max(tn.x, tn.y), tn.z), params.t_near), min(min(min(tf.x, tf.y), tf.z), far));
 }
 
 fn march(ray: Ray) -> Marched {
@@ -473,6 +477,14 @@ fn march(ray: Ray) -> Marched {
     return Marched(acc, depth);
 }
 
+// The depth of point p, t along its ray, as RayGen::depth_at measures it.
+fn depth_along(p: vec3f, t: f32) -> f32 {
+    if params.has_eye != 0u {
+        return length(p - params.eye);
+    }
+    return t;
+}
+
 // Shades the mixture m sampled at p, t along the ray, and composites it
 // behind `acc` front to back, taking the depth where the opacity first
 // reaches the depth threshold; true once the ray may stop.
@@ -483,10 +495,7 @@ fn composite(acc: ptr<function, vec4f>, depth: ptr<function, f32>, m: Mixture, p
     let weight = (1.0 - (*acc).a) * a;
     *acc = vec4f((*acc).rgb + lit * weight, (*acc).a + weight);
     if *depth == bitcast<f32>(0x7f800000u) && (*acc).a >= params.depth_threshold {
-        *depth = t;
-        if params.has_eye != 0u {
-            *depth = length(p - params.eye);
-        }
+        *depth = depth_along(p, t);
     }
     return (*acc).a >= params.termination;
 }

@@ -1,7 +1,7 @@
 //! Surfaces of primitives through ANARI (ANARI_KHR_GEOMETRY_TRIANGLE,
-//! _QUAD, _SPHERE): geometries as hosts build them, colored by a matte
+//! _QUAD, _SPHERE, _CYLINDER): geometries as hosts build them, colored by a matte
 //! material's constant or by attributes, alone or inside a volume, with
-//! degenerate input reported at commit.
+//! degenerate input reported at commit, on either backend.
 
 use crate::common;
 
@@ -360,4 +360,36 @@ fn cylinders_take_per_primitive_radii_and_warn_of_unknown_caps() {
     assert!((d - 2.7).abs() < 0.02, "{d}");
     // The zero-length one at y = -0.8 draws nothing.
     assert_eq!(pixel(&p, c, 6), [0, 0, 0, 255]);
+}
+
+#[test]
+fn the_gpu_backend_draws_surfaces_in_a_volume_as_the_cpu_does() {
+    let draw = |backend: &str| {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        let field = h.field(|x| 0.3 + 0.1 * x as f32, None);
+        let volume = h.volume(field);
+        let g = sphere(&mut h);
+        let m = matte(
+            &mut h,
+            Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[0.2f32, 0.6, 1.0])),
+        );
+        let s = surface(&mut h, g, m);
+        let f = frame(&mut h, &[s], Some(volume));
+        let p = h.pixels(f);
+        let depth = h.depth_sized(f, SIZE, SIZE);
+        assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
+        (p, depth)
+    };
+    let (gpu, gpu_depth) = draw("gpu");
+    let (cpu, cpu_depth) = draw("cpu");
+    let worst = gpu
+        .iter()
+        .zip(&cpu)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    assert!(worst <= 2, "colors differ by up to {worst}");
+    for (g, c) in gpu_depth.iter().zip(&cpu_depth) {
+        assert!(g == c || (g - c).abs() < 1e-4 * c.abs(), "depth {g} vs {c}");
+    }
 }

@@ -1,6 +1,6 @@
 //! The renderers, GPU and CPU reference: known answers, the GPU held to
 //! the CPU, several volumes, empty-space skipping, filtered sampling,
-//! isosurfaces and multi-view display images.
+//! surfaces beside volumes, isosurfaces and multi-view display images.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -15,3 +15,4 @@ mod known_answers;
 mod progress;
 mod ray_casting;
 mod several_volumes;
+mod surfaces;

@@ -507,6 +507,7 @@ fn stereo_pair<'v>(
     let facts = RenderFacts {
         reprojects: renderer.backend() == Backend::Gpu,
         background_image: settings.background_image.is_some(),
+        surfaces: !scene.shapes().is_empty(),
     };
     let layers = LayerRequest {
         count: args.layers,

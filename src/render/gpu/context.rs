@@ -297,11 +297,6 @@ impl Context {
     /// Fails, before touching the GPU, if the scene or frame exceeds what
     /// this adapter allows.
     pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
-        if !scene.shapes().is_empty() || scene.volumes().is_empty() {
-            return Err(RenderError::Settings(
-                "the GPU ray caster draws volumes; a world with triangle, quad, sphere or cylinder surfaces renders on the CPU (the device parameter backend \"cpu\", or CAVERAY_BACKEND=cpu)".into(),
-            ));
-        }
         let limits = &self.limits;
         let max = limits.max_texture_dimension_3d;
         for placed in scene.volumes() {

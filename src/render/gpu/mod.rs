@@ -155,14 +155,19 @@ impl GpuRenderer {
             self.scene.use_mips();
         }
         self.scene.upload(ctx, scene);
+        self.scene.upload_surfaces(ctx, scene)?;
         self.scene
             .set_background(ctx, settings.background_image.as_ref());
         self.raycast.bind(ctx, &self.scene, desc.size, desc.color);
         if filtered {
             self.scene.write_stepped_tables(ctx, scene, &plan);
         }
-        let bricks = self.scene.brick_slots(plan.skipping);
-        self.raycast.write_uniforms(ctx, rays, &plan, bricks, desc);
+        let slots = (
+            self.scene.brick_slots(plan.skipping),
+            self.scene.surface_slot(),
+        );
+        self.raycast
+            .write_uniforms(ctx, rays, (&plan, settings), slots, desc);
         Ok(())
     }
 
@@ -220,6 +225,7 @@ impl GpuRenderer {
             )));
         }
         LayersPass::check(&self.ctx, reprojection)?;
+        volumes_only(scene, "re-projection stereo")?;
         if settings.background_image.is_some() {
             return Err(RenderError::Settings(
                 "re-projection composites over a flat background only; render background images in two passes".into(),
@@ -278,6 +284,7 @@ impl GpuRenderer {
     ) -> Result<(Source, f64), RenderError> {
         let watch = watch.into();
         check_layers(layers)?;
+        volumes_only(scene, "a capture for warps")?;
         let desc = FrameDesc::new(size)
             .with_color(ColorFormat::Rgba32F)
             .with_depth();
@@ -446,6 +453,22 @@ impl GpuRenderer {
         }
         Ok(())
     }
+}
+
+/// Refuses, for the passes that march volumes alone (`what`), a scene
+/// with surfaces or without volumes.
+fn volumes_only(scene: &Scene, what: &str) -> Result<(), RenderError> {
+    if !scene.shapes().is_empty() {
+        return Err(RenderError::Settings(format!(
+            "{what} takes volumes only; this world holds surfaces of primitives (render each view in its own pass)"
+        )));
+    }
+    if scene.volumes().is_empty() {
+        return Err(RenderError::Settings(format!(
+            "{what} needs a volume; this world has none"
+        )));
+    }
+    Ok(())
 }
 
 impl Render for &mut GpuRenderer {

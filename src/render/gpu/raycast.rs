@@ -10,7 +10,7 @@ use wgpu::TextureViewDimension as Dim;
 
 use super::bindings::{binding_table, Kind};
 use super::context::{unprepared, Context, Pass, BAND_STRIDE, WORKGROUP};
-use super::resources::{color_data, floats, BrickSlot, OutputBuffers};
+use super::resources::{color_data, floats, BrickSlot, OutputBuffers, SurfaceSlot};
 use super::scene::GpuScene;
 use super::shaders::compute_pipeline;
 use super::uniforms::{self, RayUniforms};
@@ -55,6 +55,9 @@ binding_table! {
         linear: Kind::sampler(filterable),
         /// The same, blending between mip levels (level of detail).
         linear_mips: Kind::sampler(filterable),
+        /// The world's surfaces: their BVH, primitives, shapes and shading
+        /// data (render/shapes/packed.rs), where params.surface_* say.
+        surfaces: Kind::storage("array<vec4f>"),
     }
 }
 
@@ -292,21 +295,23 @@ impl RaycastPass {
             bricks: scene.bricks().as_entire_binding(),
             linear: wgpu::BindingResource::Sampler(&self.sampler),
             linear_mips: wgpu::BindingResource::Sampler(&self.mip_sampler),
+            surfaces: scene.surfaces().as_entire_binding(),
         }
         .bind(&ctx.device, &self.volume_layout);
         self.group = Some((scene.generation(), group));
     }
 
-    /// Writes the uniforms for ray casting `rays` as `plan` says.
+    /// Writes the uniforms for ray casting `rays` as `plan` and
+    /// `settings` say.
     pub fn write_uniforms(
         &self,
         ctx: &Context,
         rays: &RayGen,
-        plan: &MarchPlan,
-        bricks: &[BrickSlot],
+        (plan, settings): (&MarchPlan, &RenderSettings),
+        slots: (&[BrickSlot], SurfaceSlot),
         desc: &FrameDesc,
     ) {
-        let params = RayUniforms::new(rays, plan, bricks, desc.size, desc.color);
+        let params = RayUniforms::new(rays, plan, slots, settings, desc.size, desc.color);
         ctx.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         ctx.queue.write_buffer(

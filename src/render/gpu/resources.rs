@@ -1,6 +1,6 @@
 //! What the passes upload and read back: volume textures with their mip
 //! chains, transfer function tables, background images, clear-brick
-//! distances, and the frame's output buffers.
+//! distances, surfaces, and the frame's output buffers.
 
 use glam::{UVec2, UVec3};
 
@@ -9,7 +9,8 @@ use wgpu::util::DeviceExt;
 use super::context::Context;
 use crate::render::empty_space::EmptySpace;
 use crate::render::frame::{ColorData, ColorFormat};
-use crate::render::BackgroundImage;
+use crate::render::shapes::packed::Packed;
+use crate::render::{BackgroundImage, RenderError};
 use crate::scene::{StructuredVolume, TransferFunction, MAX_VOLUMES, TABLE_SIZE};
 
 /// Slices per write when uploading a volume, so staging memory stays
@@ -179,6 +180,59 @@ pub(super) fn bricks_buffer(
             usage: wgpu::BufferUsages::STORAGE,
         });
     (buffer, slots)
+}
+
+/// Where the parts of the surfaces buffer begin (render/shapes/packed.rs),
+/// as the uniforms tell the shaders.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct SurfaceSlot {
+    /// BVH nodes; 0: the world has no surfaces.
+    pub nodes: u32,
+    pub prims: u32,
+    pub shapes: u32,
+}
+
+/// A world's surfaces as one storage buffer of vec4 words, and where its
+/// parts begin; refused if it exceeds what one binding holds.
+pub(super) fn surfaces_buffer(
+    ctx: &Context,
+    packed: &Packed,
+) -> Result<(wgpu::Buffer, SurfaceSlot), RenderError> {
+    let bytes = 16 * packed.words.len() as u64;
+    let max = ctx
+        .limits
+        .max_storage_buffer_binding_size
+        .min(ctx.limits.max_buffer_size);
+    if bytes > max {
+        return Err(RenderError::Settings(format!(
+            "the world's surfaces take {bytes} bytes on the GPU, more than one buffer of {} holds ({max} bytes); render it on the CPU",
+            ctx.info.name
+        )));
+    }
+    let buffer = words_buffer(ctx, &packed.words);
+    let slot = SurfaceSlot {
+        nodes: packed.nodes,
+        prims: packed.prims,
+        shapes: packed.shapes,
+    };
+    Ok((buffer, slot))
+}
+
+/// A storage buffer of vec4 words (one zero word where there are none:
+/// storage bindings cannot be empty).
+pub(super) fn words_buffer(ctx: &Context, words: &[[f32; 4]]) -> wgpu::Buffer {
+    let stand_in = [[0.0f32; 4]];
+    let words = if words.is_empty() {
+        &stand_in[..]
+    } else {
+        words
+    };
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("surfaces"),
+            contents: bytemuck::cast_slice(words),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
 }
 
 /// A background image as an RGBA32Float texture; a 1 x 1 black one stands

@@ -1,17 +1,19 @@
 //! The scene on the GPU: its volumes as textures, its transfer functions
 //! as rows of one table texture, the background image and the clear-brick
-//! distances, uploaded when a scene brings new ones and kept otherwise.
+//! distances and the surfaces' BVH, uploaded when a scene brings new ones
+//! and kept otherwise.
 //! Passes bind these; `generation` tells them when a bind group made
 //! before binds something no longer current.
 
 use std::sync::Arc;
 
 use super::context::Context;
-use super::resources::{self, BrickSlot};
+use super::resources::{self, BrickSlot, SurfaceSlot};
 use crate::render::empty_space::{EmptySpace, SpaceCache};
 use crate::render::march_plan::MarchPlan;
+use crate::render::shapes::ShapeSet;
 use crate::render::{BackgroundImage, RenderError};
-use crate::scene::{Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
+use crate::scene::{PlacedShape, Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
 
 /// How often data went to the GPU; lets tests (and curious users) check
 /// that unchanged scenes are not uploaded again.
@@ -19,6 +21,8 @@ use crate::scene::{Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
 pub struct Uploads {
     pub volumes: u32,
     pub transfer_functions: u32,
+    /// BVHs of the world's surfaces built and uploaded.
+    pub surfaces: u32,
 }
 
 pub(super) struct GpuScene {
@@ -45,9 +49,14 @@ pub(super) struct GpuScene {
     space_cache: SpaceCache,
     bricks: wgpu::Buffer,
     brick_slots: Vec<BrickSlot>,
+    /// The placed shapes the surfaces buffer holds, in the scene's order.
+    shapes: Vec<PlacedShape>,
+    surfaces: wgpu::Buffer,
+    surface_slot: SurfaceSlot,
     uploads: Uploads,
     /// Counts changes of what is bound: the volume textures, the
-    /// background and the bricks buffer (tables are rewritten in place).
+    /// background, the bricks and the surfaces buffers (tables are
+    /// rewritten in place).
     generation: u64,
 }
 
@@ -58,6 +67,7 @@ impl GpuScene {
         let table = resources::table_texture(ctx);
         let table_view = table.create_view(&Default::default());
         let (bricks, _) = resources::bricks_buffer(ctx, &[]);
+        let surfaces = resources::words_buffer(ctx, &[]);
         Self {
             mips: false,
             volumes: Vec::new(),
@@ -71,6 +81,9 @@ impl GpuScene {
             space_cache: SpaceCache::default(),
             bricks,
             brick_slots: Vec::new(),
+            shapes: Vec::new(),
+            surfaces,
+            surface_slot: SurfaceSlot::default(),
             uploads: Uploads::default(),
             generation: 0,
         }
@@ -106,6 +119,31 @@ impl GpuScene {
 
     pub fn bricks(&self) -> &wgpu::Buffer {
         &self.bricks
+    }
+
+    pub fn surfaces(&self) -> &wgpu::Buffer {
+        &self.surfaces
+    }
+
+    pub fn surface_slot(&self) -> SurfaceSlot {
+        self.surface_slot
+    }
+
+    /// Builds the BVH of the scene's surfaces and uploads it, unless the
+    /// buffer holds these shapes already.
+    pub fn upload_surfaces(&mut self, ctx: &Context, scene: &Scene) -> Result<(), RenderError> {
+        let shapes = scene.shapes();
+        let same = self.shapes.len() == shapes.len()
+            && self.shapes.iter().zip(shapes).all(|(a, b)| a.same(b));
+        if same {
+            return Ok(());
+        }
+        let packed = ShapeSet::build(shapes)?.pack()?;
+        (self.surfaces, self.surface_slot) = resources::surfaces_buffer(ctx, &packed)?;
+        self.shapes = shapes.to_vec();
+        self.uploads.surfaces += u32::from(!shapes.is_empty());
+        self.generation += 1;
+        Ok(())
     }
 
     /// Each volume's place in the bricks buffer, when primary rays skip.

@@ -10,8 +10,9 @@ use super::modules::{ComposeError, Library};
 use super::uniforms;
 use crate::render::RenderError;
 
-const FILES: [(&str, &str); 10] = [
+const FILES: [(&str, &str); 11] = [
     ("volume", include_str!("../../../shaders/volume.wgsl")),
+    ("surface", include_str!("../../../shaders/surface.wgsl")),
     ("color", include_str!("../../../shaders/color.wgsl")),
     ("stereo", include_str!("../../../shaders/stereo.wgsl")),
     ("raycast", include_str!("../../../shaders/raycast.wgsl")),

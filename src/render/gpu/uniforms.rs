@@ -16,7 +16,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{UVec2, Vec3};
 
 use super::context::WORKGROUP;
-use super::resources::{BrickSlot, LOD_LEVELS};
+use super::resources::{BrickSlot, SurfaceSlot, LOD_LEVELS};
 use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::ColorFormat;
@@ -24,6 +24,9 @@ use crate::render::iso::{same_view_offsets, SAME_VIEW_SAMPLES, SEARCH_MARGIN_STE
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
+};
+use crate::render::shapes::packed::{
+    FLAG_ALBEDO, FLAG_NORMALS, KIND_CYLINDER, KIND_SPHERE, KIND_TRIANGLE, TRAVERSAL_STACK,
 };
 use crate::render::stereo::Reprojection;
 use crate::render::RenderSettings;
@@ -175,6 +178,20 @@ uniform! {
         /// (world units), at the image's centre.
         ray_width: f32,
         ray_spread: f32,
+        /// Towards the surfaces' directional light; where the surfaces
+        /// buffer's BVH nodes (none: 0), primitives and shapes begin
+        /// (render/shapes/packed.rs).
+        surface_light: [f32; 3],
+        surface_nodes: u32,
+        /// Color times strength of the surfaces' light.
+        surface_light_color: [f32; 3],
+        surface_prims: u32,
+        /// Lights every surface (the renderer's ambient light).
+        ambient: [f32; 3],
+        surface_shapes: u32,
+        /// 1: surfaces are lit from the eye (the world has no light).
+        headlight: u32,
+        _surface_pad: [u32; 3],
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
@@ -337,11 +354,13 @@ impl VolumeSlot {
 
 impl RayUniforms {
     /// `bricks`: each volume's place in the bricks buffer, when `plan`
-    /// skips.
+    /// skips; `surfaces`: the surfaces buffer's parts, lit as `settings`
+    /// say.
     pub fn new(
         rays: &RayGen,
         plan: &MarchPlan,
-        bricks: &[BrickSlot],
+        (bricks, surfaces): (&[BrickSlot], SurfaceSlot),
+        settings: &RenderSettings,
         size: UVec2,
         format: ColorFormat,
     ) -> Self {
@@ -387,6 +406,14 @@ impl RayUniforms {
             lod: plan.level_of_detail,
             ray_width: rays.pixel_width(),
             ray_spread: rays.pixel_spread(size),
+            surface_light: v(settings.light),
+            surface_nodes: surfaces.nodes,
+            surface_light_color: v(settings.light_color),
+            surface_prims: surfaces.prims,
+            ambient: v(settings.ambient),
+            surface_shapes: surfaces.shapes,
+            headlight: u32::from(settings.headlight),
+            _surface_pad: [0; 3],
             clip,
             volumes,
         }
@@ -469,6 +496,12 @@ fn constants() -> String {
         ("FILTER_NEAREST", Filter::Nearest.code()),
         ("BRICK", BRICK),
         ("LOD_LEVELS", LOD_LEVELS),
+        ("KIND_TRIANGLE", KIND_TRIANGLE),
+        ("KIND_SPHERE", KIND_SPHERE),
+        ("KIND_CYLINDER", KIND_CYLINDER),
+        ("FLAG_ALBEDO", FLAG_ALBEDO),
+        ("FLAG_NORMALS", FLAG_NORMALS),
+        ("TRAVERSAL_STACK", TRAVERSAL_STACK),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {

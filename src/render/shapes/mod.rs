@@ -12,6 +12,7 @@
 //! shear or uneven scale makes the ellipsoid it should.
 
 mod intersect;
+pub mod packed;
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use obvhs::aabb::Aabb;

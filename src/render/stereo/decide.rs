@@ -37,6 +37,9 @@ pub struct RenderFacts {
     /// The frame's background is an image; the pass composites over a
     /// color only.
     pub background_image: bool,
+    /// The world holds surfaces of primitives; the layers hold volume
+    /// samples only.
+    pub surfaces: bool,
 }
 
 /// Why a pair is rendered in two passes.
@@ -50,6 +53,8 @@ pub enum TwoPasses {
     UnevenEyes(UVec2, UVec2),
     #[error("re-projection takes a background color, not an image")]
     BackgroundImage,
+    #[error("re-projection layers hold volume samples; a world with surfaces of primitives renders each eye in its own pass")]
+    Surfaces,
     #[error(transparent)]
     Plan(#[from] ReprojectionError),
 }
@@ -62,6 +67,9 @@ impl RenderFacts {
         }
         if self.background_image {
             return Err(TwoPasses::BackgroundImage);
+        }
+        if self.surfaces {
+            return Err(TwoPasses::Surfaces);
         }
         Ok(())
     }
@@ -89,6 +97,9 @@ pub fn decide(
     }
     if facts.is_some_and(|f| f.background_image) {
         return Err(TwoPasses::BackgroundImage);
+    }
+    if facts.is_some_and(|f| f.surfaces) {
+        return Err(TwoPasses::Surfaces);
     }
     Ok(Reprojection::new(
         &left,
@@ -134,6 +145,7 @@ mod tests {
         let facts = RenderFacts {
             reprojects: true,
             background_image: false,
+            surfaces: false,
         };
         let early = decide(eyes(), bounds(), LAYERS, None).unwrap();
         facts.admit().unwrap();
@@ -148,6 +160,7 @@ mod tests {
         let cpu = RenderFacts {
             reprojects: false,
             background_image: true,
+            surfaces: false,
         };
         let no_matrices = Eyes {
             left: Err("no matrices".into()),
@@ -160,6 +173,7 @@ mod tests {
         let gpu_over_image = RenderFacts {
             reprojects: true,
             background_image: true,
+            surfaces: false,
         };
         assert_eq!(
             decide(no_matrices, bounds(), LAYERS, Some(gpu_over_image)),
@@ -179,5 +193,14 @@ mod tests {
         );
         assert_eq!(gpu_over_image.admit(), Err(TwoPasses::BackgroundImage));
         assert_eq!(cpu.admit(), Err(TwoPasses::NotOnThisRenderer));
+        let with_surfaces = RenderFacts {
+            reprojects: true,
+            background_image: false,
+            surfaces: true,
+        };
+        let err = decide(eyes(), bounds(), LAYERS, Some(with_surfaces)).unwrap_err();
+        assert_eq!(err, TwoPasses::Surfaces);
+        assert!(err.to_string().contains("each eye in its own pass"));
+        assert_eq!(with_surfaces.admit(), Err(TwoPasses::Surfaces));
     }
 }

@@ -57,6 +57,7 @@ fn without_shader_cache() {
 const GPU: RenderFacts = RenderFacts {
     reprojects: true,
     background_image: false,
+    surfaces: false,
 };
 
 fn mean(v: impl IntoIterator<Item = f64>) -> f64 {

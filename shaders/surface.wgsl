@@ -1,0 +1,323 @@
+// #import constants, volume_bindings, volume
+// The world's triangles, spheres and cylinders: the nearest hit along a
+// ray in their BVH and its lit color, as src/render/shapes/ finds and
+// shades it on the CPU (the reference), operation for operation. The
+// words of `surfaces` are laid out by src/render/shapes/packed.rs, which
+// documents them; params.surface_nodes is 0 where the world has none.
+
+const NO_SLOT: u32 = 0xffffffffu;
+
+struct SurfaceHit {
+    // Along the ray; infinite where nothing was hit.
+    t: f32,
+    // The leaf slot of the primitive hit, and the weights of its second
+    // and third corner there.
+    slot: u32,
+    bary: vec2f,
+}
+
+fn infinite() -> f32 {
+    return bitcast<f32>(0x7f800000u);
+}
+
+// Where o + t d enters box [lo, hi] within (t_min, t_max), or infinity.
+fn box_entry(o: vec3f, inv: vec3f, lo: vec3f, hi: vec3f, t_min: f32, t_max: f32) -> f32 {
+    let ta = (lo - o) * inv;
+    let tb = (hi - o) * inv;
+    let tn = min(ta, tb);
+    let tf = max(ta, tb);
+    let near = max(max(max(tn.x, tn.y), tn.z), t_min);
+    let far = min(min(min(tf.x, tf.y), tf.z), t_max);
+    if near <= far {
+        return near;
+    }
+    return infinite();
+}
+
+fn surface_word(i: u32) -> vec4f {
+    return surfaces[i];
+}
+
+fn prim_word(slot: u32, k: u32) -> vec4f {
+    return surfaces[params.surface_prims + 3u * slot + k];
+}
+
+fn shape_word(shape: u32, k: u32) -> vec4f {
+    return surfaces[params.surface_shapes + 8u * shape + k];
+}
+
+// Point p (w 1) or direction (w 0) into shape's object space.
+fn to_object(shape: u32, v: vec4f) -> vec3f {
+    return vec3f(dot(shape_word(shape, 0u), v), dot(shape_word(shape, 1u), v), dot(shape_word(shape, 2u), v));
+}
+
+fn normal_to_world(shape: u32, n: vec3f) -> vec3f {
+    return vec3f(dot(shape_word(shape, 3u).xyz, n), dot(shape_word(shape, 4u).xyz, n), dot(shape_word(shape, 5u).xyz, n));
+}
+
+// Möller and Trumbore's test from either side: (t, weights of b and c),
+// t infinite on a miss.
+fn hit_triangle(o: vec3f, d: vec3f, a: vec3f, b: vec3f, c: vec3f) -> vec3f {
+    let miss = vec3f(infinite(), 0.0, 0.0);
+    let e1 = b - a;
+    let e2 = c - a;
+    let p = cross(d, e2);
+    let det = dot(e1, p);
+    if det == 0.0 || !(abs(det) < infinite()) {
+        return miss;
+    }
+    let inv = 1.0 / det;
+    let s = o - a;
+    let u = dot(s, p) * inv;
+    if !(u >= 0.0 && u <= 1.0) {
+        return miss;
+    }
+    let q = cross(s, e1);
+    let v = dot(d, q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return miss;
+    }
+    return vec3f(dot(e2, q) * inv, u, v);
+}
+
+// The first t in (t_min, t_max) on the sphere at c of radius r, d of
+// any length; infinite on a miss.
+fn hit_sphere(o: vec3f, d: vec3f, c: vec3f, r: f32, t_min: f32, t_max: f32) -> f32 {
+    let a = dot(d, d);
+    if a == 0.0 {
+        return infinite();
+    }
+    let oc = o - c;
+    let b = dot(oc, d);
+    let perp = oc - d * (b / a);
+    let disc = r * r - dot(perp, perp);
+    if disc < 0.0 {
+        return infinite();
+    }
+    let h = sqrt(a * disc);
+    let near = (-b - h) / a;
+    if near > t_min && near < t_max {
+        return near;
+    }
+    let far = (-b + h) / a;
+    if far > t_min && far < t_max {
+        return far;
+    }
+    return infinite();
+}
+
+// The first t in (t_min, t_max) on the cylinder of radius r from a to b,
+// with the caps bits 0 (at a) and 1 (at b) close, and how far along the
+// axis it is met: (t, s), t infinite on a miss.
+fn hit_cylinder(o: vec3f, d: vec3f, a: vec3f, b: vec3f, r: f32, caps: u32, t_min: f32, t_max: f32) -> vec2f {
+    let len = distance(a, b);
+    let axis = (b - a) / len;
+    let oc = o - a;
+    let along_d = dot(d, axis);
+    let along_o = dot(oc, axis);
+    let dp = d - axis * along_d;
+    let op = oc - axis * along_o;
+    var best = vec2f(infinite(), 0.0);
+    let qa = dot(dp, dp);
+    if qa > 0.0 {
+        let qb = dot(op, dp);
+        let closest = op - dp * (qb / qa);
+        let disc = r * r - dot(closest, closest);
+        if disc >= 0.0 {
+            let h = sqrt(qa * disc);
+            for (var k = 0u; k < 2u; k++) {
+                let t = (-qb + select(-h, h, k == 1u)) / qa;
+                let s = along_o + t * along_d;
+                if s >= 0.0 && s <= len && t > t_min && t < t_max && t < best.x {
+                    best = vec2f(t, s / len);
+                }
+            }
+        }
+    }
+    if along_d != 0.0 {
+        for (var k = 0u; k < 2u; k++) {
+            if (caps & (1u << k)) == 0u {
+                continue;
+            }
+            let end = select(a, b, k == 1u);
+            let t = dot(end - o, axis) / along_d;
+            let off = o + d * t - end;
+            if dot(off, off) <= r * r && t > t_min && t < t_max && t < best.x {
+                best = vec2f(t, f32(k));
+            }
+        }
+    }
+    return best;
+}
+
+// Slot `slot`'s primitive along o + t d: (t, bary), t infinite on a miss.
+fn hit_slot(slot: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> vec3f {
+    let w0 = prim_word(slot, 0u);
+    let w1 = prim_word(slot, 1u);
+    let header = bitcast<u32>(w1.w);
+    let shape = header >> 4u;
+    switch header & 3u {
+        case KIND_TRIANGLE: {
+            let h = hit_triangle(o, d, w0.xyz, w1.xyz, prim_word(slot, 2u).xyz);
+            if h.x > t_min && h.x < t_max {
+                return h;
+            }
+            return vec3f(infinite(), 0.0, 0.0);
+        }
+        case KIND_SPHERE: {
+            let oo = to_object(shape, vec4f(o, 1.0));
+            let od = to_object(shape, vec4f(d, 0.0));
+            return vec3f(hit_sphere(oo, od, w0.xyz, w0.w, t_min, t_max), 0.0, 0.0);
+        }
+        default: {
+            let oo = to_object(shape, vec4f(o, 1.0));
+            let od = to_object(shape, vec4f(d, 0.0));
+            let h = hit_cylinder(oo, od, w0.xyz, w1.xyz, w0.w, (header >> 2u) & 3u, t_min, t_max);
+            return vec3f(h.x, h.y, 0.0);
+        }
+    }
+}
+
+// The nearest surface with t in (t_min, t_max) along o + t d.
+fn nearest_surface(o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> SurfaceHit {
+    var best = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
+    if params.surface_nodes == 0u || !(t_max > t_min) {
+        return best;
+    }
+    let inv = vec3f(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+    var limit = t_max;
+    // Nodes to visit later, with where the ray enters them.
+    var stack: array<u32, TRAVERSAL_STACK>;
+    var entries: array<f32, TRAVERSAL_STACK>;
+    var depth = 0u;
+    var node = 0u;
+    if box_entry(o, inv, surface_word(0u).xyz, surface_word(1u).xyz, t_min, limit) == infinite() {
+        return best;
+    }
+    loop {
+        let lo = surface_word(2u * node);
+        let hi = surface_word(2u * node + 1u);
+        let count = bitcast<u32>(lo.w);
+        let first = bitcast<u32>(hi.w);
+        var descend = false;
+        if count > 0u {
+            for (var j = first; j < first + count; j++) {
+                let h = hit_slot(j, o, d, t_min, limit);
+                if h.x < limit {
+                    limit = h.x;
+                    best = SurfaceHit(h.x, j, h.yz);
+                }
+            }
+        } else {
+            let ta = box_entry(o, inv, surface_word(2u * first).xyz, surface_word(2u * first + 1u).xyz, t_min, limit);
+            let tb = box_entry(o, inv, surface_word(2u * first + 2u).xyz, surface_word(2u * first + 3u).xyz, t_min, limit);
+            let b_first = tb < ta;
+            let near = min(ta, tb);
+            let far = max(ta, tb);
+            if near < infinite() {
+                if far < infinite() && depth < TRAVERSAL_STACK {
+                    stack[depth] = select(first + 1u, first, b_first);
+                    entries[depth] = far;
+                    depth++;
+                }
+                node = select(first, first + 1u, b_first);
+                descend = true;
+            }
+        }
+        if descend {
+            continue;
+        }
+        // The next node kept that a nearer hit has not ruled out.
+        var next = NO_SLOT;
+        while depth > 0u {
+            depth--;
+            if entries[depth] < limit {
+                next = stack[depth];
+                break;
+            }
+        }
+        if next == NO_SLOT {
+            break;
+        }
+        node = next;
+    }
+    return best;
+}
+
+// The world-space unit normal at hit h (point p) facing against d.
+fn surface_normal(h: SurfaceHit, p: vec3f, d: vec3f) -> vec3f {
+    let w0 = prim_word(h.slot, 0u);
+    let w1 = prim_word(h.slot, 1u);
+    let w2 = prim_word(h.slot, 2u);
+    let header = bitcast<u32>(w1.w);
+    let shape = header >> 4u;
+    var n: vec3f;
+    switch header & 3u {
+        case KIND_TRIANGLE: {
+            let flags = bitcast<u32>(shape_word(shape, 7u).x);
+            if (flags & FLAG_NORMALS) != 0u {
+                let at = shading_at(shape, bitcast<u32>(w2.w)) + select(0u, 3u, (flags & FLAG_ALBEDO) != 0u);
+                let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
+                n = surfaces[at].xyz * weights.x + surfaces[at + 1u].xyz * weights.y + surfaces[at + 2u].xyz * weights.z;
+            } else {
+                n = cross(w1.xyz - w0.xyz, w2.xyz - w0.xyz);
+            }
+        }
+        case KIND_SPHERE: {
+            n = normal_to_world(shape, to_object(shape, vec4f(p, 1.0)) - w0.xyz);
+        }
+        default: {
+            let axis = normalize(w1.xyz - w0.xyz);
+            let q = to_object(shape, vec4f(p, 1.0)) - w0.xyz;
+            let radial = q - axis * dot(q, axis);
+            // Inside the rim: a cap, facing out of its end.
+            var object = radial;
+            if length(radial) < w0.w * (1.0 - 1e-4) {
+                object = select(axis, -axis, h.bary.x < 0.5);
+            }
+            n = normal_to_world(shape, object);
+        }
+    }
+    // A normal the host gave may be zero: then face the ray.
+    let len = length(n);
+    if !(len > 0.0) || !(len < infinite()) {
+        return -d;
+    }
+    n = n / len;
+    if dot(n, d) > 0.0 {
+        return -n;
+    }
+    return n;
+}
+
+// Where shape's shading data for kept primitive `index` begins.
+fn shading_at(shape: u32, index: u32) -> u32 {
+    let flags = bitcast<u32>(shape_word(shape, 7u).x);
+    let stride = select(0u, 3u, (flags & FLAG_ALBEDO) != 0u) + select(0u, 3u, (flags & FLAG_NORMALS) != 0u);
+    return bitcast<u32>(shape_word(shape, 6u).w) + stride * index;
+}
+
+fn surface_albedo(h: SurfaceHit) -> vec3f {
+    let w1 = prim_word(h.slot, 1u);
+    let shape = bitcast<u32>(w1.w) >> 4u;
+    let flags = bitcast<u32>(shape_word(shape, 7u).x);
+    if (flags & FLAG_ALBEDO) == 0u {
+        return shape_word(shape, 6u).xyz;
+    }
+    let at = shading_at(shape, bitcast<u32>(prim_word(h.slot, 2u).w));
+    let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
+    return surfaces[at].xyz * weights.x + surfaces[at + 1u].xyz * weights.y + surfaces[at + 2u].xyz * weights.z;
+}
+
+// Hit h seen along d, lit: Lambertian under the world's directional light
+// (or a light at the eye where it has none), plus the ambient light.
+fn surface_color(h: SurfaceHit, o: vec3f, d: vec3f) -> vec3f {
+    let n = surface_normal(h, o + d * h.t, d);
+    var direct: vec3f;
+    if params.headlight != 0u {
+        direct = vec3f(max(dot(n, -d), 0.0));
+    } else {
+        direct = params.surface_light_color * max(dot(n, params.surface_light), 0.0);
+    }
+    return surface_albedo(h) * (direct + params.ambient);
+}

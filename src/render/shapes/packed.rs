@@ -1,0 +1,240 @@
+//! A shape set laid out for a GPU: one array of vec4 words that
+//! shaders/surface.wgsl traverses, holding the BVH's nodes, each leaf
+//! slot's primitive, each placed shape's maps and color, and the
+//! per-primitive shading data only those shapes that need it carry.
+//!
+//! The layout, in vec4 words (`u` a u32 stored by its bits):
+//! - node i at `2 i`: (box min, u prim_count), (box max, u first_index),
+//!   as obvhs keeps them: an inner node (count 0) has its children at
+//!   first_index and first_index + 1, a leaf its primitives in slots
+//!   first_index up to first_index + count.
+//! - slot j's primitive at `prims + 3 j`: a triangle (a, -), (b, u header),
+//!   (c, u index); a sphere (centre, radius), (-, u header), (-, u index);
+//!   a cylinder (a, radius), (b, u header), (-, u index). The header is
+//!   kind | caps << 2 | shape << 4; index is the kept primitive within its
+//!   shape. Triangles are in world space, spheres and cylinders in object
+//!   space, as the CPU traces them.
+//! - shape s at `shapes + 8 s`: rows of world-to-object (3 words), of
+//!   object-to-world for normals (3), (constant albedo, u shading base),
+//!   (u flags, -, -, -). Flags: bit 0 per-corner albedo, bit 1 the host's
+//!   normals.
+//! - a shape's shading at `shading base + stride k` for kept primitive
+//!   k: the albedo at each corner (3 words) if it varies, then each
+//!   corner's normal in world space (3 words) if the host gave normals.
+
+use glam::{Vec2, Vec3};
+
+use super::{Hit, ShapeSet};
+use crate::render::RenderError;
+use crate::scene::{ColorSource, Primitives};
+
+pub const KIND_TRIANGLE: u32 = 0;
+pub const KIND_SPHERE: u32 = 1;
+pub const KIND_CYLINDER: u32 = 2;
+pub const FLAG_ALBEDO: u32 = 1;
+pub const FLAG_NORMALS: u32 = 2;
+/// Node boxes a traversal keeps to visit later, and the most levels of a
+/// tree a GPU traverses.
+pub const TRAVERSAL_STACK: u32 = 64;
+
+const NODE_WORDS: usize = 2;
+const PRIM_WORDS: usize = 3;
+const SHAPE_WORDS: usize = 8;
+
+/// The words and where each part begins.
+#[derive(Debug, Default)]
+pub struct Packed {
+    pub words: Vec<[f32; 4]>,
+    /// Nodes (0: no surfaces).
+    pub nodes: u32,
+    pub prims: u32,
+    pub shapes: u32,
+}
+
+fn bits(u: u32) -> f32 {
+    f32::from_bits(u)
+}
+
+fn word(v: Vec3, w: f32) -> [f32; 4] {
+    v.extend(w).to_array()
+}
+
+impl ShapeSet {
+    /// The layout above, or why a GPU cannot take it.
+    pub fn pack(&self) -> Result<Packed, RenderError> {
+        if self.prims.is_empty() {
+            return Ok(Packed::default());
+        }
+        let depth = self.depth();
+        if depth > TRAVERSAL_STACK {
+            return Err(RenderError::Settings(format!(
+                "the surfaces' BVH is {depth} levels deep; the GPU traverses {TRAVERSAL_STACK} (render this world on the CPU)"
+            )));
+        }
+        let nodes = self.bvh.nodes.len();
+        let slots = self.bvh.primitive_indices.len();
+        let shading: usize = self
+            .traced
+            .iter()
+            .map(|t| Self::stride(self.flags(t)) * t.placed.shape.len())
+            .sum();
+        let total = nodes * NODE_WORDS + slots * PRIM_WORDS + self.traced.len() * SHAPE_WORDS;
+        let total = total + shading;
+        let mut words = Vec::new();
+        words
+            .try_reserve_exact(total)
+            .map_err(|_| RenderError::OutOfMemory {
+                bytes: (total * 16) as u64,
+                what: "the surfaces for the GPU".into(),
+            })?;
+        for n in &self.bvh.nodes {
+            let (lo, hi) = (Vec3::from(n.aabb.min), Vec3::from(n.aabb.max));
+            words.push(word(lo, bits(n.prim_count)));
+            words.push(word(hi, bits(n.first_index)));
+        }
+        for &id in &self.bvh.primitive_indices {
+            let prim = self.prims[id as usize];
+            let traced = &self.traced[prim.shape as usize];
+            let i = prim.index as usize;
+            let header = |kind: u32, caps: [bool; 2]| {
+                bits(kind | u32::from(caps[0]) << 2 | u32::from(caps[1]) << 3 | prim.shape << 4)
+            };
+            let index = bits(prim.index);
+            match &traced.placed.shape.primitives {
+                Primitives::Triangles { triangles, .. } => {
+                    let [a, b, c] = triangles[i].map(|v| traced.world[v as usize]);
+                    words.push(word(a, 0.0));
+                    words.push(word(b, header(KIND_TRIANGLE, [false; 2])));
+                    words.push(word(c, index));
+                }
+                Primitives::Spheres {
+                    positions,
+                    radii,
+                    spheres,
+                } => {
+                    let v = spheres[i] as usize;
+                    words.push(word(positions[v], radii[v]));
+                    words.push(word(Vec3::ZERO, header(KIND_SPHERE, [false; 2])));
+                    words.push(word(Vec3::ZERO, index));
+                }
+                Primitives::Cylinders {
+                    positions,
+                    cylinders,
+                    radii,
+                    caps,
+                } => {
+                    let [a, b] = cylinders[i].map(|v| positions[v as usize]);
+                    words.push(word(a, radii[i]));
+                    words.push(word(b, header(KIND_CYLINDER, *caps)));
+                    words.push(word(Vec3::ZERO, index));
+                }
+            }
+        }
+        let shapes = words.len();
+        let mut base = shapes + self.traced.len() * SHAPE_WORDS;
+        for (s, traced) in self.traced.iter().enumerate() {
+            let flags = self.flags(traced);
+            let rows = traced.to_object.transpose();
+            for r in 0..3 {
+                words.push(rows.col(r).to_array());
+            }
+            let normals = traced.normal_to_world.transpose();
+            for r in 0..3 {
+                words.push(word(normals.col(r), 0.0));
+            }
+            // Where the albedo does not vary, any hit's is the shape's.
+            let constant = self.albedo(&Self::corner_hit(s as u32, 0, Vec2::ZERO));
+            words.push(word(constant, bits(base as u32)));
+            words.push([bits(flags), 0.0, 0.0, 0.0]);
+            base += Self::stride(flags) * traced.placed.shape.len();
+        }
+        for (s, traced) in self.traced.iter().enumerate() {
+            let flags = self.flags(traced);
+            for index in 0..traced.placed.shape.len() as u32 {
+                if flags & FLAG_ALBEDO != 0 {
+                    for bary in self.corners(s) {
+                        let hit = Self::corner_hit(s as u32, index, bary);
+                        words.push(self.albedo(&hit).extend(1.0).to_array());
+                    }
+                }
+                if flags & FLAG_NORMALS != 0 {
+                    let Primitives::Triangles {
+                        triangles,
+                        normals: Some(n),
+                        ..
+                    } = &traced.placed.shape.primitives
+                    else {
+                        unreachable!("FLAG_NORMALS is set on triangles with normals only");
+                    };
+                    for v in triangles[index as usize] {
+                        words.push(word(traced.normal_to_world * n[v as usize], 0.0));
+                    }
+                }
+            }
+        }
+        Ok(Packed {
+            words,
+            nodes: nodes as u32,
+            prims: (nodes * NODE_WORDS) as u32,
+            shapes: shapes as u32,
+        })
+    }
+
+    /// Levels from the root to the deepest leaf, the root's counted.
+    fn depth(&self) -> u32 {
+        let nodes = &self.bvh.nodes;
+        let mut deepest = 0;
+        let mut stack = vec![(0usize, 1u32)];
+        while let Some((i, level)) = stack.pop() {
+            deepest = deepest.max(level);
+            let n = &nodes[i];
+            if n.prim_count == 0 {
+                let first = n.first_index as usize;
+                stack.push((first, level + 1));
+                stack.push((first + 1, level + 1));
+            }
+        }
+        deepest
+    }
+
+    fn flags(&self, traced: &super::Traced) -> u32 {
+        let shape = &traced.placed.shape;
+        let varies = match traced.placed.material.color {
+            ColorSource::Constant(_) => false,
+            ColorSource::Attribute(slot) => shape.attributes.get(slot).is_some_and(Option::is_some),
+        };
+        let normals = matches!(
+            &shape.primitives,
+            Primitives::Triangles {
+                normals: Some(_),
+                ..
+            }
+        );
+        (u32::from(varies) * FLAG_ALBEDO) | (u32::from(normals) * FLAG_NORMALS)
+    }
+
+    fn stride(flags: u32) -> usize {
+        3 * (flags & FLAG_ALBEDO != 0) as usize + 3 * (flags & FLAG_NORMALS != 0) as usize
+    }
+
+    /// The weights a primitive's corners have in [`Hit::bary`]: a
+    /// triangle's three, a cylinder's two ends (and the second again), a
+    /// sphere's one.
+    fn corners(&self, shape: usize) -> [Vec2; 3] {
+        match &self.traced[shape].placed.shape.primitives {
+            Primitives::Triangles { .. } => [Vec2::ZERO, Vec2::X, Vec2::Y],
+            Primitives::Cylinders { .. } => [Vec2::ZERO, Vec2::X, Vec2::X],
+            Primitives::Spheres { .. } => [Vec2::ZERO; 3],
+        }
+    }
+
+    fn corner_hit(shape: u32, index: u32, bary: Vec2) -> Hit {
+        Hit {
+            t: 0.0,
+            shape,
+            index,
+            bary,
+            normal: Vec3::Z,
+        }
+    }
+}
