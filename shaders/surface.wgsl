@@ -43,7 +43,7 @@ fn prim_word(slot: u32, k: u32) -> vec4f {
 }
 
 fn shape_word(shape: u32, k: u32) -> vec4f {
-    return surfaces[params.surface_shapes + 8u * shape + k];
+    return surfaces[params.surface_shapes + 16u * shape + k];
 }
 
 // Point p (w 1) or direction (w 0) into shape's object space.
@@ -256,7 +256,7 @@ fn surface_normal(h: SurfaceHit, p: vec3f, d: vec3f) -> vec3f {
         case KIND_TRIANGLE: {
             let flags = bitcast<u32>(shape_word(shape, 7u).x);
             if (flags & FLAG_NORMALS) != 0u {
-                let at = shading_at(shape, bitcast<u32>(w2.w)) + select(0u, 3u, (flags & FLAG_ALBEDO) != 0u);
+                let at = shading_at(shape, bitcast<u32>(w2.w)) + select(0u, 3u, (flags & (FLAG_ALBEDO | FLAG_IMAGE)) != 0u);
                 let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
                 n = surfaces[at].xyz * weights.x + surfaces[at + 1u].xyz * weights.y + surfaces[at + 2u].xyz * weights.z;
             } else {
@@ -293,7 +293,7 @@ fn surface_normal(h: SurfaceHit, p: vec3f, d: vec3f) -> vec3f {
 // Where shape's shading data for kept primitive `index` begins.
 fn shading_at(shape: u32, index: u32) -> u32 {
     let flags = bitcast<u32>(shape_word(shape, 7u).x);
-    let stride = select(0u, 3u, (flags & FLAG_ALBEDO) != 0u) + select(0u, 3u, (flags & FLAG_NORMALS) != 0u);
+    let stride = select(0u, 3u, (flags & (FLAG_ALBEDO | FLAG_IMAGE)) != 0u) + select(0u, 3u, (flags & FLAG_NORMALS) != 0u);
     return bitcast<u32>(shape_word(shape, 6u).w) + stride * index;
 }
 
@@ -301,12 +301,72 @@ fn surface_albedo(h: SurfaceHit) -> vec3f {
     let w1 = prim_word(h.slot, 1u);
     let shape = bitcast<u32>(w1.w) >> 4u;
     let flags = bitcast<u32>(shape_word(shape, 7u).x);
-    if (flags & FLAG_ALBEDO) == 0u {
+    if (flags & (FLAG_ALBEDO | FLAG_IMAGE)) == 0u {
         return shape_word(shape, 6u).xyz;
     }
     let at = shading_at(shape, bitcast<u32>(prim_word(h.slot, 2u).w));
     let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
-    return surfaces[at].xyz * weights.x + surfaces[at + 1u].xyz * weights.y + surfaces[at + 2u].xyz * weights.z;
+    let v = surfaces[at] * weights.x + surfaces[at + 1u] * weights.y + surfaces[at + 2u] * weights.z;
+    if (flags & FLAG_IMAGE) == 0u {
+        return v.xyz;
+    }
+    return image_sample(shape, v).xyz;
+}
+
+// Texel i of n after the wrap mode (Wrap::index).
+fn wrap_index(mode: u32, i: i32, n: i32) -> i32 {
+    switch mode {
+        case 1u: {
+            return ((i % n) + n) % n;
+        }
+        case 2u: {
+            let m = ((i % (2 * n)) + 2 * n) % (2 * n);
+            return select(m, 2 * n - 1 - m, m >= n);
+        }
+        default: {
+            return clamp(i, 0, n - 1);
+        }
+    }
+}
+
+// Shape's image sampler at coordinates c, out-transformed (Image::at,
+// Sampler::sample).
+fn image_sample(shape: u32, c: vec4f) -> vec4f {
+    let info = shape_word(shape, 8u);
+    let dims = vec3i(vec3u(bitcast<u32>(info.x), bitcast<u32>(info.y), bitcast<u32>(info.z)));
+    let base = bitcast<u32>(info.w);
+    let mode = shape_word(shape, 9u);
+    let linear = bitcast<u32>(mode.x) != 0u;
+    let wraps = vec3u(bitcast<u32>(mode.y), bitcast<u32>(mode.z), bitcast<u32>(mode.w));
+    var lower: vec3i;
+    var frac: vec3f;
+    for (var k = 0u; k < 3u; k++) {
+        // Texel centres at (i + 0.5) / n; far outside, an edge.
+        let x = clamp(c[k] * f32(dims[k]) - 0.5, -16777216.0, 16777216.0);
+        let f = floor(x);
+        lower[k] = i32(f);
+        frac[k] = x - f;
+    }
+    var sum = vec4f(0.0);
+    for (var corner = 0u; corner < 8u; corner++) {
+        var weight = 1.0;
+        var index: vec3i;
+        for (var k = 0u; k < 3u; k++) {
+            let upper = ((corner >> k) & 1u) == 1u;
+            if linear {
+                weight *= select(1.0 - frac[k], frac[k], upper);
+            } else if upper != (frac[k] >= 0.5) {
+                weight = 0.0;
+            }
+            index[k] = wrap_index(wraps[k], lower[k] + select(0, 1, upper), dims[k]);
+        }
+        if weight != 0.0 {
+            let i = u32(index.x + dims.x * (index.y + dims.y * index.z));
+            sum += surfaces[base + i] * weight;
+        }
+    }
+    let v = vec4f(dot(shape_word(shape, 10u), sum), dot(shape_word(shape, 11u), sum), dot(shape_word(shape, 12u), sum), dot(shape_word(shape, 13u), sum));
+    return v + shape_word(shape, 14u);
 }
 
 // Hit h seen along d, lit: Lambertian under the world's directional light

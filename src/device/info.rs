@@ -12,18 +12,20 @@ use super::instance::InstanceModel;
 use super::light::DirectionalLight;
 use super::material::MaterialModel;
 use super::object::State;
+use super::sampler::SamplerModel;
 use super::surface::SurfaceModel;
 use super::table::{
     ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE,
-    EXT_COMPLETION, EXT_CURVATURE, EXT_CYLINDER, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR,
-    EXT_ISOSURFACE, EXT_MATRIX, EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS,
-    EXT_ORTHOGRAPHIC, EXT_QUAD, EXT_SHADING, EXT_SPHERE, EXT_STEREO, EXT_TRIANGLE,
+    EXT_COMPLETION, EXT_CURVATURE, EXT_CYLINDER, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR, EXT_IMAGE1D,
+    EXT_IMAGE2D, EXT_IMAGE3D, EXT_ISOSURFACE, EXT_MATRIX, EXT_MATRIX_VSNRAY, EXT_MATTE,
+    EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_PRIMITIVE_SAMPLER, EXT_QUAD, EXT_SHADING,
+    EXT_SPHERE, EXT_STEREO, EXT_TRANSFORM_SAMPLER, EXT_TRIANGLE,
 };
 use super::types::DataType as T;
 use super::volume::VolumeModel;
 use super::world::WorldModel;
 use super::{
-    camera, device_object, frame, geometry, group, instance, light, material, renderer,
+    camera, device_object, frame, geometry, group, instance, light, material, renderer, sampler,
     spatial_field, surface, volume, world,
 };
 use crate::render::RenderSettings;
@@ -55,6 +57,11 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_CYLINDER,
     EXT_AMBIENT,
     EXT_MATTE,
+    EXT_IMAGE1D,
+    EXT_IMAGE2D,
+    EXT_IMAGE3D,
+    EXT_PRIMITIVE_SAMPLER,
+    EXT_TRANSFORM_SAMPLER,
     EXT_CURVATURE,
     EXT_MULTI_VIEW,
 ];
@@ -90,6 +97,11 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &geometry::cylinder::INFO,
     &material::matte::INFO,
     &material::curvature::INFO,
+    &sampler::image::INFO_1D,
+    &sampler::image::INFO_2D,
+    &sampler::image::INFO_3D,
+    &sampler::primitive::INFO,
+    &sampler::transform::INFO,
     &surface::INFO,
     &group::INFO,
     &instance::transform::INFO,
@@ -111,6 +123,7 @@ pub fn initial_state(kind: T, implemented: bool) -> State {
         T::GROUP => State::uncommitted::<GroupModel>(),
         T::GEOMETRY => State::uncommitted::<GeometryModel>(),
         T::MATERIAL => State::uncommitted::<MaterialModel>(),
+        T::SAMPLER => State::uncommitted::<SamplerModel>(),
         T::SURFACE => State::uncommitted::<SurfaceModel>(),
         T::INSTANCE => State::uncommitted::<InstanceModel>(),
         T::LIGHT => State::uncommitted::<DirectionalLight>(),
@@ -247,6 +260,10 @@ mod tests {
             ["isosurface", "triangle", "quad", "sphere", "cylinder"]
         );
         assert_eq!(subtypes(T::MATERIAL), ["matte", "curvature"]);
+        assert_eq!(
+            subtypes(T::SAMPLER),
+            ["image1D", "image2D", "image3D", "primitive", "transform"]
+        );
     }
 
     #[test]

@@ -23,6 +23,7 @@ mod object;
 pub mod table;
 
 mod renderer;
+mod sampler;
 mod snapshot;
 mod spatial_field;
 mod surface;

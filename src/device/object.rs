@@ -199,6 +199,23 @@ impl Value {
         }
     }
 
+    /// A UINT64 or UINT32 value.
+    pub fn u64(&self) -> Option<u64> {
+        match self {
+            Value::Bytes {
+                ty: DataType::UINT64,
+                bytes,
+            } => words(bytes).next().map(u64::from_ne_bytes),
+            Value::Bytes {
+                ty: DataType::UINT32,
+                bytes,
+            } => words(bytes)
+                .next()
+                .map(|w| u64::from(u32::from_ne_bytes(w))),
+            _ => None,
+        }
+    }
+
     /// An INT32 or DATA_TYPE value.
     pub fn i32(&self) -> Option<i32> {
         match self {

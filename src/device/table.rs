@@ -164,6 +164,11 @@ pub const EXT_SPHERE: &str = "ANARI_KHR_GEOMETRY_SPHERE";
 pub const EXT_CYLINDER: &str = "ANARI_KHR_GEOMETRY_CYLINDER";
 pub const EXT_AMBIENT: &str = "ANARI_KHR_RENDERER_AMBIENT_LIGHT";
 pub const EXT_MATTE: &str = "ANARI_KHR_MATERIAL_MATTE";
+pub const EXT_IMAGE1D: &str = "ANARI_KHR_SAMPLER_IMAGE1D";
+pub const EXT_IMAGE2D: &str = "ANARI_KHR_SAMPLER_IMAGE2D";
+pub const EXT_IMAGE3D: &str = "ANARI_KHR_SAMPLER_IMAGE3D";
+pub const EXT_PRIMITIVE_SAMPLER: &str = "ANARI_KHR_SAMPLER_PRIMITIVE";
+pub const EXT_TRANSFORM_SAMPLER: &str = "ANARI_KHR_SAMPLER_TRANSFORM";
 /// Surfaces colored by curvature (material `curvature`).
 pub const EXT_CURVATURE: &str = "ANARI_CAVERAY_MATERIAL_CURVATURE";
 /// Multi-view autostereoscopic panels, each subpixel from its own eye

@@ -1,16 +1,18 @@
-//! What is rendered: volumes, transfer functions and the scene that places
-//! and pairs them. Below the renderers and the ANARI object model alike,
+//! What is rendered: volumes, transfer functions, surfaces with their
+//! materials and samplers, and the scene that places and pairs them. Below the renderers and the ANARI object model alike,
 //! so the renderers, the data readers and the device all describe a
 //! volume the same way and none of them depends on another's room.
 
 mod composition;
 mod placement;
+mod sampler;
 mod shapes;
 mod transfer_function;
 mod volume;
 
 pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use placement::transformed_box;
+pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};
 pub use shapes::{
     Attribute, ColorSource, Made, PlacedShape, Primitives, Shape, ShapeError, ShapeInput,
     SurfaceMaterial, ATTRIBUTE_NAMES, MAX_PRIMITIVES,

@@ -9,6 +9,7 @@ use glam::{Mat4, Vec3, Vec4};
 use thiserror::Error;
 
 use super::placement::{check_affine, transformed_box};
+use super::sampler::Sampler;
 
 /// The most primitives one shape holds: a primitive's index must fit the
 /// 32 bits the renderers' BVH leaves store.
@@ -390,18 +391,32 @@ impl Shape {
 }
 
 /// Where a surface's color comes from.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum ColorSource {
     /// Linear RGB.
     Constant(Vec3),
     /// An attribute slot of [`ATTRIBUTE_NAMES`]; a shape without it gives
     /// ANARI's default attribute value (0, 0, 0, 1).
     Attribute(usize),
+    /// A sampler of an attribute (or of the primitive).
+    Sampler(Arc<Sampler>),
+}
+
+impl PartialEq for ColorSource {
+    /// Samplers by identity: a commit makes a new one.
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Self::Constant(a), Self::Constant(b)) => a == b,
+            (Self::Attribute(a), Self::Attribute(b)) => a == b,
+            (Self::Sampler(a), Self::Sampler(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
 }
 
 /// ANARI's matte material: diffuse color and opacity. Surfaces are drawn
 /// opaque here; the opacity is kept for the hosts that read it back.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceMaterial {
     pub color: ColorSource,
     pub opacity: f32,

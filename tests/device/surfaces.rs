@@ -393,3 +393,161 @@ fn the_gpu_backend_draws_surfaces_in_a_volume_as_the_cpu_does() {
         assert!(g == c || (g - c).abs() < 1e-4 * c.abs(), "depth {g} vs {c}");
     }
 }
+
+/// A square x, y in [-2, 2] at z = 0 whose vertex.attribute0 is
+/// (x + 2) / 4: a scalar from 0 at the left edge to 1 at the right.
+fn scalar_square(h: &mut Host) -> u64 {
+    let g = h.d.new_object(DataType::GEOMETRY, "quad");
+    vec3_array(
+        h,
+        "vertex.position",
+        g,
+        &[
+            [-2.0, -2.0, 0.0],
+            [2.0, -2.0, 0.0],
+            [2.0, 2.0, 0.0],
+            [-2.0, 2.0, 0.0],
+        ],
+    );
+    let scalars = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32,
+        [4, 1, 1],
+        &bytes(&[0.0f32, 1.0, 1.0, 0.0]),
+    );
+    h.set_object(g, "vertex.attribute0", DataType::ARRAY1D, scalars);
+    h.d.release(scalars);
+    h.d.commit(Subject::Object(g));
+    g
+}
+
+#[test]
+fn a_color_map_sampler_colors_scalars_as_vtk_sends_them_on_either_backend() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        let g = scalar_square(&mut h);
+        // Blue to red, nearest: the left half blue, the right half red.
+        let sampler = h.d.new_object(DataType::SAMPLER, "image1D");
+        let map = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32_VEC3,
+            [2, 1, 1],
+            &bytes(&[0.0f32, 0.0, 1.0, 1.0, 0.0, 0.0]),
+        );
+        h.set_object(sampler, "image", DataType::ARRAY1D, map);
+        h.d.set_param(
+            Subject::Object(sampler),
+            "filter",
+            Input::String("nearest".into()),
+        );
+        h.d.commit(Subject::Object(sampler));
+        let m = matte(&mut h, Input::Object(DataType::SAMPLER, sampler));
+        let s = surface(&mut h, g, m);
+        let f = frame(&mut h, &[s], None);
+        let p = h.pixels(f);
+        assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
+        let (left, right) = (
+            pixel(&p, SIZE / 4, SIZE / 2),
+            pixel(&p, 3 * SIZE / 4, SIZE / 2),
+        );
+        assert!(left[2] > 200 && left[0] == 0, "{backend}: {left:?}");
+        assert!(right[0] > 200 && right[2] == 0, "{backend}: {right:?}");
+        // The sampler committed again (linear now) shows in the next frame:
+        // the middle is half of each.
+        h.d.set_param(
+            Subject::Object(sampler),
+            "filter",
+            Input::String("linear".into()),
+        );
+        h.d.commit(Subject::Object(sampler));
+        let p = h.pixels(f);
+        let middle = pixel(&p, SIZE / 2, SIZE / 2);
+        assert!(
+            middle[0].abs_diff(middle[2]) < 30 && middle[0] > 80,
+            "{backend}: {middle:?}"
+        );
+        // Without its image the sampler fails its commit, and the frame
+        // says which sampler its material could not use.
+        let broken = h.d.new_object(DataType::SAMPLER, "image1D");
+        h.d.commit(Subject::Object(broken));
+        let said: Vec<String> = h.errors().into_iter().map(|(_, m)| m).collect();
+        assert!(
+            said.iter()
+                .any(|m| m.contains("'image'") && m.contains("required")),
+            "{said:?}"
+        );
+        let m2 = matte(&mut h, Input::Object(DataType::SAMPLER, broken));
+        let s2 = surface(&mut h, g, m2);
+        let f2 = frame(&mut h, &[s2], None);
+        h.d.render_frame(f2, None);
+        h.d.frame_ready(f2);
+        let said: Vec<String> = h.errors().into_iter().map(|(_, m)| m).collect();
+        assert!(
+            said.iter()
+                .any(|m| m.contains("colors by sampler 'image1D'")),
+            "{backend}: {said:?}"
+        );
+        for o in [g, sampler, map, m, s, f, broken, m2, s2, f2] {
+            h.d.release(o);
+        }
+    }
+}
+
+#[test]
+fn primitive_and_transform_samplers_and_unknown_names() {
+    let mut h = Host::new();
+    let g = scalar_square(&mut h);
+    // One value per quad: the quad's two triangles both read entry 1.
+    let sampler = h.d.new_object(DataType::SAMPLER, "primitive");
+    let values = h.array(
+        DataType::ARRAY1D,
+        DataType::UFIXED8_VEC4,
+        [2, 1, 1],
+        &[255u8, 0, 0, 255, 0, 255, 0, 255],
+    );
+    h.set_object(sampler, "array", DataType::ARRAY1D, values);
+    h.set(sampler, "inOffset", DataType::UINT64, bytes(&[1u64]));
+    h.d.commit(Subject::Object(sampler));
+    let m = matte(&mut h, Input::Object(DataType::SAMPLER, sampler));
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], None);
+    let p = h.pixels(f);
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    for x in [2, SIZE / 2, SIZE - 3] {
+        let c = pixel(&p, x, SIZE / 2);
+        assert!(c[1] > 200 && c[0] == 0, "{c:?}");
+    }
+    // The scalar into green through a transform: dark at the left, green
+    // at the right; an unknown attribute name is warned about.
+    let t = h.d.new_object(DataType::SAMPLER, "transform");
+    let to_green: [f32; 16] = [
+        0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ];
+    h.set(t, "outTransform", DataType::FLOAT32_MAT4, bytes(&to_green));
+    h.d.commit(Subject::Object(t));
+    let m2 = matte(&mut h, Input::Object(DataType::SAMPLER, t));
+    let s2 = surface(&mut h, g, m2);
+    let f2 = frame(&mut h, &[s2], None);
+    let p = h.pixels(f2);
+    let (left, right) = (pixel(&p, 1, SIZE / 2), pixel(&p, SIZE - 2, SIZE / 2));
+    assert!(
+        left[1] < 40 && right[1] > 150 && left[0] == 0,
+        "{left:?} {right:?}"
+    );
+    h.d.set_param(
+        Subject::Object(t),
+        "inAttribute",
+        Input::String("worldPosition".into()),
+    );
+    h.d.commit(Subject::Object(t));
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|m| m.contains("inAttribute 'worldPosition'")),
+        "{warnings:?}"
+    );
+    for o in [g, sampler, values, m, s, f, t, m2, s2, f2] {
+        h.d.release(o);
+    }
+}

@@ -8,13 +8,15 @@ use crate::common;
 use std::sync::Arc;
 
 use anari_library_caveray::data::{preset, shepp_logan};
+use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera, PrimaryRays};
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{ssim, ColorFormat, CpuRenderer, FrameDesc, RenderSettings};
 use anari_library_caveray::scene::{
-    Attribute, ColorSource, PlacedShape, Scene, Shape, ShapeInput, SurfaceMaterial,
+    Attribute, ColorSource, Image, PlacedShape, Sampler, SamplerKind, Scene, Shape, ShapeInput,
+    SurfaceMaterial, Wrap,
 };
 use common::render::{four_cameras, gpu, off_axis_wall};
-use glam::{Mat4, UVec2, Vec3, Vec4};
+use glam::{DVec3, Mat4, UVec2, UVec3, Vec3, Vec4};
 
 fn input(vertices: usize, primitives: usize, slot: usize, a: Option<Attribute>) -> ShapeInput {
     let mut attributes: [Option<Attribute>; 5] = Default::default();
@@ -37,6 +39,22 @@ fn material(color: ColorSource) -> SurfaceMaterial {
 /// A bent sheet of 2 n^2 triangles through the volume behind its
 /// centre, its vertex colors a gradient and its normals the host's.
 fn sheet(n: u32) -> PlacedShape {
+    sheet_colored(
+        n,
+        0,
+        |u, v| Vec4::new(u, 0.3 + 0.5 * v, 1.0 - u, 1.0),
+        ColorSource::Attribute(0),
+    )
+}
+
+/// The sheet with `attribute(u, v)` per vertex in attribute slot `slot`,
+/// in `color`.
+fn sheet_colored(
+    n: u32,
+    slot: usize,
+    attribute: impl Fn(f32, f32) -> Vec4,
+    color: ColorSource,
+) -> PlacedShape {
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut colors = Vec::new();
@@ -48,7 +66,7 @@ fn sheet(n: u32) -> PlacedShape {
             let z = -0.4 + 0.3 * (2.0 * x).sin();
             positions.push(Vec3::new(x, y, z));
             normals.push(Vec3::new(-0.6 * (2.0 * x).cos(), 0.0, 1.0));
-            colors.push(Vec4::new(u, 0.3 + 0.5 * v, 1.0 - u, 1.0));
+            colors.push(attribute(u, v));
         }
     }
     let mut triangles = Vec::new();
@@ -67,18 +85,18 @@ fn sheet(n: u32) -> PlacedShape {
         triangles,
         (0..count as u32).collect(),
         Some(normals),
-        input(vertices, count, 0, Some(Attribute::PerVertex(colors))),
+        input(vertices, count, slot, Some(Attribute::PerVertex(colors))),
     )
     .unwrap();
-    PlacedShape::new(
-        Arc::new(made.shape),
-        material(ColorSource::Attribute(0)),
-        Mat4::IDENTITY,
-    )
+    PlacedShape::new(Arc::new(made.shape), material(color), Mat4::IDENTITY)
 }
 
 /// Spheres of several radii, sheared into ellipsoids.
 fn glyphs() -> PlacedShape {
+    glyphs_in(ColorSource::Constant(Vec3::new(0.9, 0.8, 0.2)))
+}
+
+fn glyphs_in(color: ColorSource) -> PlacedShape {
     let positions = vec![
         Vec3::new(0.6, 0.5, 0.3),
         Vec3::new(-0.5, 0.6, -0.2),
@@ -93,15 +111,15 @@ fn glyphs() -> PlacedShape {
         Vec4::new(0.0, 0.0, 1.2, 0.0),
         Vec4::new(0.1, 0.0, 0.0, 1.0),
     );
-    PlacedShape::new(
-        Arc::new(made.shape),
-        material(ColorSource::Constant(Vec3::new(0.9, 0.8, 0.2))),
-        shear,
-    )
+    PlacedShape::new(Arc::new(made.shape), material(color), shear)
 }
 
 /// Three tubes, one cap each, colored per primitive through attribute1.
 fn tubes() -> PlacedShape {
+    tubes_in(ColorSource::Attribute(2))
+}
+
+fn tubes_in(color: ColorSource) -> PlacedShape {
     let positions = vec![
         Vec3::new(-1.0, 0.9, 0.0),
         Vec3::new(1.0, 0.9, 0.4),
@@ -125,7 +143,7 @@ fn tubes() -> PlacedShape {
     .unwrap();
     PlacedShape::new(
         Arc::new(made.shape),
-        material(ColorSource::Attribute(2)),
+        material(color),
         Mat4::from_rotation_y(0.3),
     )
 }
@@ -221,4 +239,177 @@ fn surfaces_without_a_volume_render_on_the_gpu_as_on_the_cpu() {
     let s = ssim(&g, &c).unwrap();
     assert!(s >= 0.99, "GPU vs CPU SSIM {s}");
     assert_eq!(g.samples, 0);
+}
+
+/// A color map of `n` texels from blue through green to red.
+fn color_map(n: u32, linear: bool) -> Image {
+    let texels = (0..n)
+        .map(|i| {
+            let t = i as f32 / (n - 1) as f32;
+            Vec4::new(t, 1.0 - (2.0 * t - 1.0).abs(), 1.0 - t, 1.0)
+        })
+        .collect();
+    Image::new(UVec3::new(n, 1, 1), texels, linear, [Wrap::ClampToEdge; 3]).unwrap()
+}
+
+fn sampler(kind: SamplerKind) -> ColorSource {
+    ColorSource::Sampler(Arc::new(Sampler::new(kind)))
+}
+
+#[test]
+fn every_sampler_on_the_gpu_matches_the_cpu_reference() {
+    // A scalar through a color map, as VTK colors by scalars, the range
+    // stretched so that both ends clamp; a repeating checkerboard on
+    // (u, v); per-primitive values; channels swapped by a transform.
+    let mut scalars = Sampler::new(SamplerKind::Image(color_map(7, true)));
+    scalars.in_transform = Mat4::from_scale(Vec3::splat(1.4));
+    scalars.in_offset = Vec4::new(-0.2, 0.0, 0.0, 0.0);
+    let checker: Vec<Vec4> = (0..16)
+        .map(|i| {
+            if (i % 4 + i / 4) % 2 == 0 {
+                Vec4::ONE
+            } else {
+                Vec4::new(0.8, 0.2, 0.1, 1.0)
+            }
+        })
+        .collect();
+    let mut checkers = Sampler::new(SamplerKind::Image(
+        Image::new(
+            UVec3::new(4, 4, 1),
+            checker,
+            false,
+            [Wrap::Repeat, Wrap::MirrorRepeat, Wrap::Repeat],
+        )
+        .unwrap(),
+    ));
+    checkers.in_transform = Mat4::from_scale(Vec3::splat(3.0));
+    checkers.out_transform = Mat4::from_scale(Vec3::splat(0.9));
+    checkers.out_offset = Vec4::new(0.05, 0.05, 0.05, 0.0);
+    let per_primitive = sampler(SamplerKind::Primitive {
+        values: vec![
+            Vec4::new(0.2, 0.9, 0.9, 1.0),
+            Vec4::new(0.9, 0.2, 0.9, 1.0),
+            Vec4::new(0.9, 0.9, 0.2, 1.0),
+            Vec4::ONE,
+        ],
+        offset: 0,
+    });
+    let mut swap = Sampler::new(SamplerKind::Transform);
+    swap.in_attribute = Some(2);
+    swap.out_transform = Mat4::from_cols(Vec4::Z, Vec4::X, Vec4::Y, Vec4::W);
+    let scalar_sheet = sheet_colored(
+        10,
+        1,
+        |u, _| Vec4::new(u, 0.0, 0.0, 1.0),
+        ColorSource::Sampler(Arc::new(scalars)),
+    );
+    let mut checker_sheet = sheet_colored(4, 2, |u, v| Vec4::new(u, v, 0.0, 1.0), {
+        let mut c = checkers;
+        c.in_attribute = Some(2);
+        ColorSource::Sampler(Arc::new(c))
+    });
+    checker_sheet.transform =
+        Mat4::from_translation(Vec3::new(0.3, 0.2, 0.9)) * Mat4::from_scale(Vec3::splat(0.4));
+    let scene = Scene::new(shepp_logan(16), preset("phantom").unwrap())
+        .with_shapes(vec![
+            scalar_sheet,
+            checker_sheet,
+            glyphs_in(per_primitive),
+            tubes_in(ColorSource::Sampler(Arc::new(swap))),
+        ])
+        .unwrap();
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(48, 48);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
+    let settings = RenderSettings::default();
+    let g = gpu().render(&scene, &rays, &settings, &desc).unwrap();
+    let c = CpuRenderer::new()
+        .render(&scene, &rays, &settings, &desc)
+        .unwrap();
+    let s = ssim(&g, &c).unwrap();
+    assert!(s >= 0.99, "GPU vs CPU SSIM {s}");
+}
+
+#[test]
+fn a_color_map_colors_a_ramp_texel_by_texel() {
+    // A square facing the camera, attribute0 = x across it, seen head-on
+    // under the headlight without ambient light: each pixel shows the
+    // texel its x falls in (nearest), or the blend of the two nearest
+    // centres (linear).
+    let square = |color: ColorSource| {
+        let positions = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
+        let u = vec![
+            Vec4::new(0.0, 0.0, 0.0, 1.0),
+            Vec4::new(1.0, 0.0, 0.0, 1.0),
+            Vec4::new(1.0, 0.0, 0.0, 1.0),
+            Vec4::new(0.0, 0.0, 0.0, 1.0),
+        ];
+        let made = Shape::triangles(
+            positions,
+            vec![[0, 1, 2], [0, 2, 3]],
+            vec![0, 0],
+            None,
+            input(4, 1, 1, Some(Attribute::PerVertex(u))),
+        )
+        .unwrap();
+        Scene::of_shapes(vec![PlacedShape::new(
+            Arc::new(made.shape),
+            material(color),
+            Mat4::IDENTITY,
+        )])
+        .unwrap()
+    };
+    let n = 32;
+    let camera = OrthographicCamera::new(
+        DVec3::new(0.0, 0.0, 3.0),
+        DVec3::NEG_Z,
+        DVec3::Y,
+        2.0,
+        1.0,
+        ImageRegion::FULL,
+    )
+    .unwrap()
+    .ray_gen(UVec2::splat(n));
+    let settings = RenderSettings {
+        ambient: Vec3::ZERO,
+        ..Default::default()
+    };
+    let desc = FrameDesc::new(UVec2::splat(n)).with_color(ColorFormat::Rgba32F);
+    for linear in [false, true] {
+        let map = color_map(4, linear);
+        let scene = square(sampler(SamplerKind::Image(map.clone())));
+        let mut gpu = gpu();
+        for (name, frame) in [
+            (
+                "cpu",
+                CpuRenderer::new()
+                    .render(&scene, &camera, &settings, &desc)
+                    .unwrap(),
+            ),
+            (
+                "gpu",
+                gpu.render(&scene, &camera, &settings, &desc).unwrap(),
+            ),
+        ] {
+            let anari_library_caveray::render::ColorData::Rgba32F(rgba) = &frame.color else {
+                panic!("asked for RGBA32F");
+            };
+            for x in 0..n {
+                let u = (x as f32 + 0.5) / n as f32;
+                let expected = map.at(Vec4::new(u, 0.0, 0.0, 1.0));
+                let i = 4 * (n / 2 * n + x) as usize;
+                let got = Vec3::from_slice(&rgba[i..i + 3]);
+                assert!(
+                    (got - expected.truncate()).abs().max_element() < 2e-3,
+                    "{name} linear {linear} x {x}: {got} vs {expected}"
+                );
+            }
+        }
+    }
 }

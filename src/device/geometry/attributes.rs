@@ -67,7 +67,7 @@ macro_rules! shape_params {
 pub(crate) use shape_params;
 
 /// An attribute array's elements as Vec4s.
-fn vec4s(name: &str, a: &Array) -> Result<Vec<Vec4>, String> {
+pub fn vec4s(name: &str, a: &Array) -> Result<Vec<Vec4>, String> {
     let (n, float) = match a.element() {
         T::FLOAT32 => (1, true),
         T::FLOAT32_VEC2 => (2, true),

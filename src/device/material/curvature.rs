@@ -30,6 +30,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         return Err(format!("radius must be positive and finite, got {radius}"));
     }
     Ok(Some(State::ready(MaterialModel {
+        color_sampler: None,
         coloring: Coloring::Curvature { radius },
         surface: None,
     })))

@@ -1,5 +1,6 @@
-//! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color, or a
-//! geometry attribute named as the color (`color`, `attribute0..3`).
+//! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color, a
+//! geometry attribute named as the color (`color`, `attribute0..3`), or a
+//! sampler of one.
 //! Surfaces are opaque here; an opacity below 1 is drawn opaque, said so.
 
 use crate::device::object::State;
@@ -22,10 +23,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     params: &[
         p(
             "color",
-            &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING],
+            &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING, T::SAMPLER],
             false,
             DefaultValue::Floats(&[0.8, 0.8, 0.8]),
-            "the surface's color, linear RGB in [0, 1] (a fourth component is ignored), or the name of the geometry attribute that colors it: color, attribute0 to attribute3 (an isosurface, having none, shows the default color)",
+            "the surface's color, linear RGB in [0, 1] (a fourth component is ignored), the name of the geometry attribute that colors it (color, attribute0 to attribute3), or a sampler (its x, y, z); an isosurface, having no attributes, shows the default color for the last two",
         ),
         p(
             "opacity",
@@ -42,7 +43,9 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let mut surface = SurfaceMaterial::default();
     let named = r.set("color").and_then(|v| v.string());
+    let color_sampler = r.object("color").filter(|o| o.kind == T::SAMPLER).cloned();
     let flat = match named {
+        _ if color_sampler.is_some() => DEFAULT_COLOR,
         Some(name) => {
             match ATTRIBUTE_NAMES.iter().position(|n| *n == name) {
                 Some(slot) => surface.color = ColorSource::Attribute(slot),
@@ -77,6 +80,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         ));
     }
     Ok(Some(State::ready(MaterialModel {
+        color_sampler,
         // An isosurface has no attributes: a named one is the default color.
         coloring: Coloring::Flat(flat),
         surface: Some(surface),

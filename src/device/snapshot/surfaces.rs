@@ -12,10 +12,11 @@ use crate::device::geometry::GeometryModel;
 use crate::device::light::DirectionalLight;
 use crate::device::material::MaterialModel;
 use crate::device::object::{ObjectCell, ObjectRef};
+use crate::device::sampler::SamplerModel;
 use crate::device::surface::SurfaceModel;
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
-use crate::scene::{PlacedShape, PlacedVolume, StructuredVolume, TransferFunction};
+use crate::scene::{ColorSource, PlacedShape, PlacedVolume, StructuredVolume, TransferFunction};
 
 /// The transfer function a surface's field is placed with: the caster
 /// reads the field alone and never evaluates it. One for all, so the GPU
@@ -55,13 +56,23 @@ pub fn surfaces(
         let geometry_model = match geometry_model {
             GeometryModel::Iso(iso) => iso,
             GeometryModel::Shape(shape) => {
-                let drawn = material_model.surface.ok_or_else(|| {
+                let mut drawn = material_model.surface.clone().ok_or_else(|| {
                     format!(
                         "{}: {} colors isosurfaces only (it needs a field's curvature)",
                         surface.describe(),
                         material.describe()
                     )
                 })?;
+                if let Some(sampler) = &material_model.color_sampler {
+                    let sampler = sampler.ready::<SamplerModel>(not_ours).map_err(|e| {
+                        format!(
+                            "{}: {} colors by {e}",
+                            surface.describe(),
+                            material.describe()
+                        )
+                    })?;
+                    drawn.color = ColorSource::Sampler(sampler);
+                }
                 let mut placed =
                     PlacedShape::new(shape, drawn, transform.unwrap_or(Mat4::IDENTITY));
                 placed.id = model.id;

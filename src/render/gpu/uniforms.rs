@@ -26,7 +26,8 @@ use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
 };
 use crate::render::shapes::packed::{
-    FLAG_ALBEDO, FLAG_NORMALS, KIND_CYLINDER, KIND_SPHERE, KIND_TRIANGLE, TRAVERSAL_STACK,
+    FLAG_ALBEDO, FLAG_IMAGE, FLAG_NORMALS, KIND_CYLINDER, KIND_SPHERE, KIND_TRIANGLE,
+    TRAVERSAL_STACK,
 };
 use crate::render::stereo::Reprojection;
 use crate::render::RenderSettings;
@@ -501,6 +502,7 @@ fn constants() -> String {
         ("KIND_CYLINDER", KIND_CYLINDER),
         ("FLAG_ALBEDO", FLAG_ALBEDO),
         ("FLAG_NORMALS", FLAG_NORMALS),
+        ("FLAG_IMAGE", FLAG_IMAGE),
         ("TRAVERSAL_STACK", TRAVERSAL_STACK),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");

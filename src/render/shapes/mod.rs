@@ -22,16 +22,13 @@ use obvhs::Boundable;
 
 use super::frame::filled;
 use super::{RenderError, RenderSettings};
-use crate::scene::{Attribute, ColorSource, PlacedShape, Primitives};
+use crate::scene::{Attribute, ColorSource, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
 use intersect::{cylinder, sphere, triangle};
 
 /// The reference device's scale of `ambientRadiance`: a radiance of 1
 /// lights a surface to a tenth of its color, so hosts tuned on it look
 /// the same here.
 pub const AMBIENT_SCALE: f32 = 0.1;
-
-/// ANARI's value of an attribute a geometry does not have.
-const MISSING_ATTRIBUTE: Vec4 = Vec4::new(0.0, 0.0, 0.0, 1.0);
 
 /// One placed shape as traced: its world-space triangle corners, the maps
 /// that spheres and normals need.
@@ -327,7 +324,7 @@ impl ShapeSet {
         let shape = &traced.placed.shape;
         let index = hit.index as usize;
         match shape.attributes.get(slot).and_then(Option::as_ref) {
-            None => MISSING_ATTRIBUTE,
+            None => DEFAULT_ATTRIBUTE,
             Some(Attribute::PerPrimitive(values)) => values[shape.source[index] as usize],
             Some(Attribute::PerVertex(values)) => match &shape.primitives {
                 Primitives::Triangles { triangles, .. } => {
@@ -345,9 +342,17 @@ impl ShapeSet {
 
     /// The material's color at `hit`, before lighting.
     pub fn albedo(&self, hit: &Hit) -> Vec3 {
-        match self.traced[hit.shape as usize].placed.material.color {
-            ColorSource::Constant(c) => c,
-            ColorSource::Attribute(slot) => self.attribute(hit, slot).truncate(),
+        let placed = &self.traced[hit.shape as usize].placed;
+        match &placed.material.color {
+            ColorSource::Constant(c) => *c,
+            ColorSource::Attribute(slot) => self.attribute(hit, *slot).truncate(),
+            ColorSource::Sampler(s) => {
+                let input = s
+                    .in_attribute
+                    .map_or(DEFAULT_ATTRIBUTE, |slot| self.attribute(hit, slot));
+                let host = placed.shape.source[hit.index as usize];
+                s.sample(input, host).truncate()
+            }
         }
     }
 

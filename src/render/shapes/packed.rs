@@ -14,32 +14,44 @@
 //!   kind | caps << 2 | shape << 4; index is the kept primitive within its
 //!   shape. Triangles are in world space, spheres and cylinders in object
 //!   space, as the CPU traces them.
-//! - shape s at `shapes + 8 s`: rows of world-to-object (3 words), of
+//! - shape s at `shapes + 16 s`: rows of world-to-object (3 words), of
 //!   object-to-world for normals (3), (constant albedo, u shading base),
-//!   (u flags, -, -, -). Flags: bit 0 per-corner albedo, bit 1 the host's
-//!   normals.
+//!   (u flags, -, -, -); for an image sampler (u dims, u texel base),
+//!   (u linear, u wrap per axis), the rows of its out-transform (4) and
+//!   its out-offset; unused words are zero. Flags: bit 0 per-corner
+//!   albedo, bit 1 the host's normals, bit 2 per-corner image
+//!   coordinates.
 //! - a shape's shading at `shading base + stride k` for kept primitive
-//!   k: the albedo at each corner (3 words) if it varies, then each
+//!   k: the albedo at each corner (3 words) if it varies, or the image
+//!   coordinates there (the sampler's in-transform applied), then each
 //!   corner's normal in world space (3 words) if the host gave normals.
+//!   Samplers that are affine in the attribute (transform, primitive) are
+//!   sampled at the corners: interpolating those is sampling the
+//!   interpolated attribute. Images are read per pixel.
+//! - each image sampler's texels (x fastest), once however many shapes
+//!   use it.
 
 use glam::{Vec2, Vec3};
 
+use std::sync::Arc;
+
 use super::{Hit, ShapeSet};
 use crate::render::RenderError;
-use crate::scene::{ColorSource, Primitives};
+use crate::scene::{ColorSource, Primitives, Sampler, SamplerKind, DEFAULT_ATTRIBUTE};
 
 pub const KIND_TRIANGLE: u32 = 0;
 pub const KIND_SPHERE: u32 = 1;
 pub const KIND_CYLINDER: u32 = 2;
 pub const FLAG_ALBEDO: u32 = 1;
 pub const FLAG_NORMALS: u32 = 2;
+pub const FLAG_IMAGE: u32 = 4;
 /// Node boxes a traversal keeps to visit later, and the most levels of a
 /// tree a GPU traverses.
 pub const TRAVERSAL_STACK: u32 = 64;
 
 const NODE_WORDS: usize = 2;
 const PRIM_WORDS: usize = 3;
-const SHAPE_WORDS: usize = 8;
+const SHAPE_WORDS: usize = 16;
 
 /// The words and where each part begins.
 #[derive(Debug, Default)]
@@ -78,8 +90,10 @@ impl ShapeSet {
             .iter()
             .map(|t| Self::stride(self.flags(t)) * t.placed.shape.len())
             .sum();
+        let images = self.images();
+        let texels: usize = images.iter().map(|(_, texels)| texels.len()).sum();
         let total = nodes * NODE_WORDS + slots * PRIM_WORDS + self.traced.len() * SHAPE_WORDS;
-        let total = total + shading;
+        let total = total + shading + texels;
         let mut words = Vec::new();
         words
             .try_reserve_exact(total)
@@ -132,6 +146,13 @@ impl ShapeSet {
         }
         let shapes = words.len();
         let mut base = shapes + self.traced.len() * SHAPE_WORDS;
+        // The texels follow all shading data.
+        let mut texel_bases = Vec::with_capacity(images.len());
+        let mut next = base + shading;
+        for (_, texels) in &images {
+            texel_bases.push(next);
+            next += texels.len();
+        }
         for (s, traced) in self.traced.iter().enumerate() {
             let flags = self.flags(traced);
             let rows = traced.to_object.transpose();
@@ -147,6 +168,28 @@ impl ShapeSet {
             words.push(word(constant, bits(base as u32)));
             words.push([bits(flags), 0.0, 0.0, 0.0]);
             base += Self::stride(flags) * traced.placed.shape.len();
+            match Self::image_sampler(traced) {
+                Some(sampler) => {
+                    let SamplerKind::Image(image) = &sampler.kind else {
+                        unreachable!("image_sampler gives image samplers only");
+                    };
+                    let at = images
+                        .iter()
+                        .position(|(s, _)| Arc::ptr_eq(s, sampler))
+                        .map_or(0, |i| texel_bases[i]);
+                    let d = image.dims;
+                    words.push([bits(d.x), bits(d.y), bits(d.z), bits(at as u32)]);
+                    let w = image.wrap.map(|w| bits(w.code()));
+                    words.push([bits(u32::from(image.linear)), w[0], w[1], w[2]]);
+                    let rows = sampler.out_transform.transpose();
+                    for r in 0..4 {
+                        words.push(rows.col(r).to_array());
+                    }
+                    words.push(sampler.out_offset.to_array());
+                    words.push([0.0; 4]);
+                }
+                None => words.extend([[0.0; 4]; SHAPE_WORDS - 8]),
+            }
         }
         for (s, traced) in self.traced.iter().enumerate() {
             let flags = self.flags(traced);
@@ -155,6 +198,15 @@ impl ShapeSet {
                     for bary in self.corners(s) {
                         let hit = Self::corner_hit(s as u32, index, bary);
                         words.push(self.albedo(&hit).extend(1.0).to_array());
+                    }
+                }
+                if let Some(sampler) = Self::image_sampler(traced) {
+                    for bary in self.corners(s) {
+                        let hit = Self::corner_hit(s as u32, index, bary);
+                        let input = sampler
+                            .in_attribute
+                            .map_or(DEFAULT_ATTRIBUTE, |slot| self.attribute(&hit, slot));
+                        words.push(sampler.coordinates(input).to_array());
                     }
                 }
                 if flags & FLAG_NORMALS != 0 {
@@ -171,6 +223,9 @@ impl ShapeSet {
                     }
                 }
             }
+        }
+        for (_, texels) in &images {
+            words.extend(texels.iter().map(|t| t.to_array()));
         }
         Ok(Packed {
             words,
@@ -197,12 +252,38 @@ impl ShapeSet {
         deepest
     }
 
+    /// The image samplers the shapes use, each once, with their texels.
+    fn images(&self) -> Vec<(&Arc<Sampler>, &[glam::Vec4])> {
+        let mut out: Vec<(&Arc<Sampler>, &[glam::Vec4])> = Vec::new();
+        for traced in &self.traced {
+            if let Some(sampler) = Self::image_sampler(traced) {
+                if let SamplerKind::Image(image) = &sampler.kind {
+                    if !out.iter().any(|(s, _)| Arc::ptr_eq(s, sampler)) {
+                        out.push((sampler, &image.texels));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    fn image_sampler(traced: &super::Traced) -> Option<&Arc<Sampler>> {
+        match &traced.placed.material.color {
+            ColorSource::Sampler(s) if !s.is_affine() => Some(s),
+            _ => None,
+        }
+    }
+
     fn flags(&self, traced: &super::Traced) -> u32 {
         let shape = &traced.placed.shape;
-        let varies = match traced.placed.material.color {
+        let varies = match &traced.placed.material.color {
             ColorSource::Constant(_) => false,
-            ColorSource::Attribute(slot) => shape.attributes.get(slot).is_some_and(Option::is_some),
+            ColorSource::Attribute(slot) => {
+                shape.attributes.get(*slot).is_some_and(Option::is_some)
+            }
+            ColorSource::Sampler(s) => s.is_affine(),
         };
+        let image = Self::image_sampler(traced).is_some();
         let normals = matches!(
             &shape.primitives,
             Primitives::Triangles {
@@ -210,11 +291,14 @@ impl ShapeSet {
                 ..
             }
         );
-        (u32::from(varies) * FLAG_ALBEDO) | (u32::from(normals) * FLAG_NORMALS)
+        (u32::from(varies) * FLAG_ALBEDO)
+            | (u32::from(normals) * FLAG_NORMALS)
+            | (u32::from(image) * FLAG_IMAGE)
     }
 
     fn stride(flags: u32) -> usize {
-        3 * (flags & FLAG_ALBEDO != 0) as usize + 3 * (flags & FLAG_NORMALS != 0) as usize
+        3 * (flags & (FLAG_ALBEDO | FLAG_IMAGE) != 0) as usize
+            + 3 * (flags & FLAG_NORMALS != 0) as usize
     }
 
     /// The weights a primitive's corners have in [`Hit::bary`]: a
