@@ -369,6 +369,11 @@ fn image_sample(shape: u32, c: vec4f) -> vec4f {
     return v + shape_word(shape, 14u);
 }
 
+// The opacity of the surface hit (1: opaque).
+fn surface_alpha(h: SurfaceHit) -> f32 {
+    return shape_word(bitcast<u32>(prim_word(h.slot, 1u).w) >> 4u, 7u).y;
+}
+
 // Hit h seen along d, lit: Lambertian under the world's directional light
 // (or a light at the eye where it has none), plus the ambient light.
 fn surface_color(h: SurfaceHit, o: vec3f, d: vec3f) -> vec3f {

@@ -50,9 +50,6 @@ fn background_at(pixel: vec2u) -> vec4f {
 }
 
 var<private> samples: u32;
-// Where an opaque surface ends every primary ray's march (set by an
-// entry point that traces surfaces before it marches).
-var<private> march_stop: f32 = 3.4e38;
 
 fn voxel(v: u32, i: vec3i) -> f32 {
     if ONE_VOLUME {
@@ -383,25 +380,36 @@ struct Marched {
     depth: f32,
 }
 
-// Where the ray o + t d enters and leaves the box [lo, hi], clipped to the
-// camera's range: (t0, t1), empty unless t1 > t0.
-fn enter_exit(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f) -> vec2f {
+// Where the ray o + t d enters and leaves the box [lo, hi], clipped to
+// (near, far): (t0, t1), empty unless t1 > t0.
+fn enter_exit(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f, near: f32, far: f32) -> vec2f {
     let inv = vec3f(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
     let ta = (lo - o) * inv;
     let tb = (hi - o) * inv;
     let tn = min(ta, tb);
     let tf = max(ta, tb);
-    let far = min(params.t_far, march_stop);
-    return vec2f(max(max(max(tn.x, tn.y), tn.z), params.t_near), min(min(min(tf.x, tf.y), tf.z), far));
+    return vec2f(max(max(max(tn.x, tn.y), tn.z), near), min(min(min(tf.x, tf.y), tf.z), far));
 }
 
 fn march(ray: Ray) -> Marched {
+    return march_segment(ray, params.t_near, params.t_far, Marched(vec4f(0.0), bitcast<f32>(0x7f800000u)));
+}
+
+// The march of the stretch (start, stop) of the ray, composited behind
+// what `carried` holds (a translucent surface's segments follow one
+// another), as march::march_segment.
+fn march_segment(ray: Ray, start: f32, stop: f32, carried: Marched) -> Marched {
     let o = ray.o;
     let d = ray.d;
+    if carried.color.a >= params.termination {
+        return carried;
+    }
+    let near = max(start, params.t_near);
+    let far = min(stop, params.t_far);
 
     let step = params.step;
-    var acc = vec4f(0.0);
-    var depth = bitcast<f32>(0x7f800000u);
+    var acc = carried.color;
+    var depth = carried.depth;
 
     // Each volume's span along the ray, found in its grid (the affine map
     // keeps t), and their union, which the march covers.
@@ -409,7 +417,7 @@ fn march(ray: Ray) -> Marched {
     var t0 = bitcast<f32>(0x7f800000u);
     var t1 = -t0;
     for (var v = 0u; v < volume_count(); v++) {
-        spans[v] = enter_exit(grid_of(v, o), grid_direction(v, d), vec3f(0.0), last_vertex(v));
+        spans[v] = enter_exit(grid_of(v, o), grid_direction(v, d), vec3f(0.0), last_vertex(v), near, far);
         if spans[v].y > spans[v].x {
             t0 = min(t0, spans[v].x);
             t1 = max(t1, spans[v].y);
@@ -429,7 +437,7 @@ fn march(ray: Ray) -> Marched {
         }
     }
     if FILTERED && params.lod > 0.0 && t1 > t0 {
-        return march_lod(o, d, &spans, t0, t1);
+        return march_lod(o, d, &spans, t0, t1, carried);
     }
     if t1 > t0 {
         let len = t1 - t0;
@@ -512,9 +520,10 @@ fn march_lod(
     spans: ptr<function, array<vec2f, MAX_VOLUMES>>,
     t0: f32,
     t1: f32,
+    carried: Marched,
 ) -> Marched {
-    var acc = vec4f(0.0);
-    var depth = bitcast<f32>(0x7f800000u);
+    var acc = carried.color;
+    var depth = carried.depth;
     var busy_until = -bitcast<f32>(0x7f800000u);
     var t = t0;
     for (var k = 0u; k < params.max_steps && t < t1; k++) {

@@ -414,12 +414,38 @@ impl PartialEq for ColorSource {
     }
 }
 
-/// ANARI's matte material: diffuse color and opacity. Surfaces are drawn
-/// opaque here; the opacity is kept for the hosts that read it back.
+/// How a material's opacity shows (ANARI's `alphaMode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    /// Opacity ignored.
+    #[default]
+    Opaque,
+    /// Composited with what lies behind, in depth order.
+    Blend,
+    /// Drawn opaque where the opacity reaches the cutoff, else not at all.
+    Mask(f32),
+}
+
+impl AlphaMode {
+    pub const NAMES: [&'static str; 3] = ["opaque", "blend", "mask"];
+}
+
+/// What a material lets through.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Coverage {
+    Opaque,
+    /// Of this opacity, in (0, 1).
+    Translucent(f32),
+    /// Not drawn.
+    Hidden,
+}
+
+/// ANARI's matte material: diffuse color, opacity and how it shows.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceMaterial {
     pub color: ColorSource,
     pub opacity: f32,
+    pub alpha: AlphaMode,
 }
 
 impl Default for SurfaceMaterial {
@@ -427,6 +453,21 @@ impl Default for SurfaceMaterial {
         Self {
             color: ColorSource::Constant(Vec3::splat(0.8)),
             opacity: 1.0,
+            alpha: AlphaMode::Opaque,
+        }
+    }
+}
+
+impl SurfaceMaterial {
+    pub fn coverage(&self) -> Coverage {
+        let a = self.opacity;
+        match self.alpha {
+            AlphaMode::Opaque => Coverage::Opaque,
+            AlphaMode::Blend if a >= 1.0 => Coverage::Opaque,
+            AlphaMode::Blend if a > 0.0 => Coverage::Translucent(a),
+            AlphaMode::Blend => Coverage::Hidden,
+            AlphaMode::Mask(cutoff) if a >= cutoff => Coverage::Opaque,
+            AlphaMode::Mask(_) => Coverage::Hidden,
         }
     }
 }

@@ -551,3 +551,72 @@ fn primitive_and_transform_samplers_and_unknown_names() {
         h.d.release(o);
     }
 }
+
+#[test]
+fn alpha_modes_blend_mask_and_warn() {
+    let mut h = Host::new();
+    let g = sphere(&mut h);
+    let draw = |h: &mut Host, params: Vec<(&str, Input)>| {
+        let m = h.d.new_object(DataType::MATERIAL, "matte");
+        h.d.set_param(
+            Subject::Object(m),
+            "color",
+            Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 1.0, 0.0])),
+        );
+        for (name, value) in params {
+            h.d.set_param(Subject::Object(m), name, value);
+        }
+        h.d.commit(Subject::Object(m));
+        let s = surface(h, g, m);
+        let f = frame(h, &[s], None);
+        let p = h.pixels(f);
+        for o in [m, s, f] {
+            h.d.release(o);
+        }
+        (pixel(&p, SIZE / 2, SIZE / 2), pixel(&p, 0, 0))
+    };
+    let half = || Input::Bytes(DataType::FLOAT32, bytes(&[0.5f32]));
+    let opaque = draw(&mut h, vec![]);
+    let blended = draw(
+        &mut h,
+        vec![
+            ("opacity", half()),
+            ("alphaMode", Input::String("blend".into())),
+        ],
+    );
+    let masked = draw(
+        &mut h,
+        vec![
+            ("opacity", half()),
+            ("alphaMode", Input::String("mask".into())),
+            (
+                "alphaCutoff",
+                Input::Bytes(DataType::FLOAT32, bytes(&[0.6f32])),
+            ),
+        ],
+    );
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    // Blended: between the opaque sphere and the background; masked out
+    // below its cutoff: the background.
+    let (opaque, background) = opaque;
+    let (blended, masked) = (blended.0, masked.0);
+    assert!(
+        blended[0] < opaque[0] - 40 && blended[0] > background[0] + 40,
+        "{blended:?} {opaque:?} {background:?}"
+    );
+    assert_eq!(masked, background);
+    // Opacity under alphaMode opaque, and an unknown mode, are warned about.
+    draw(&mut h, vec![("opacity", half())]);
+    draw(&mut h, vec![("alphaMode", Input::String("dither".into()))]);
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|m| m.contains("under alphaMode opaque is drawn opaque")),
+        "{warnings:?}"
+    );
+    assert!(
+        warnings.iter().any(|m| m.contains("alphaMode 'dither'")),
+        "{warnings:?}"
+    );
+}

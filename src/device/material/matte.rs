@@ -1,7 +1,7 @@
 //! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color, a
 //! geometry attribute named as the color (`color`, `attribute0..3`), or a
-//! sampler of one.
-//! Surfaces are opaque here; an opacity below 1 is drawn opaque, said so.
+//! sampler of one; `opacity` as `alphaMode` says: ignored (`opaque`),
+//! composited in depth order (`blend`), or a cutoff (`mask`).
 
 use crate::device::object::State;
 use crate::device::table::Read;
@@ -11,7 +11,7 @@ use glam::Vec3;
 
 use super::MaterialModel;
 use crate::render::iso::Coloring;
-use crate::scene::{ColorSource, SurfaceMaterial, ATTRIBUTE_NAMES};
+use crate::scene::{AlphaMode, ColorSource, SurfaceMaterial, ATTRIBUTE_NAMES};
 
 const DEFAULT_COLOR: Vec3 = Vec3::splat(0.8);
 
@@ -33,7 +33,23 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             F32,
             false,
             DefaultValue::Floats(&[1.0]),
-            "surfaces are drawn opaque; below 1 is warned about",
+            "how much of what lies behind the surface it hides, under alphaMode blend or mask",
+        )
+        .range(0.0, 1.0),
+        p(
+            "alphaMode",
+            &[T::STRING],
+            false,
+            DefaultValue::Text("opaque"),
+            "opaque: opacity ignored; blend: composited with the volumes and surfaces behind in depth order (up to 8 translucent surfaces a ray); mask: opaque where opacity reaches alphaCutoff, else not drawn",
+        )
+        .names(&AlphaMode::NAMES),
+        p(
+            "alphaCutoff",
+            F32,
+            false,
+            DefaultValue::Floats(&[0.5]),
+            "the opacity from which a masked surface shows",
         )
         .range(0.0, 1.0),
     ],
@@ -72,10 +88,30 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
             clamped
         }
     };
-    surface.opacity = r.f32("opacity")?;
-    if surface.opacity < 1.0 {
+    let opacity = r.f32("opacity")?;
+    if !opacity.is_finite() {
+        return Err(format!("opacity {opacity} must be finite"));
+    }
+    surface.opacity = opacity.clamp(0.0, 1.0);
+    if surface.opacity != opacity {
+        warn(format!("opacity {opacity} lies outside [0, 1]; clamped"));
+    }
+    let mode = r.string("alphaMode").unwrap_or("opaque");
+    surface.alpha = match mode {
+        "opaque" => AlphaMode::Opaque,
+        "blend" => AlphaMode::Blend,
+        "mask" => AlphaMode::Mask(r.f32_in_range("alphaCutoff")?),
+        other => {
+            warn(format!(
+                "alphaMode '{other}' is not one of {}: opaque",
+                AlphaMode::NAMES.join(", ")
+            ));
+            AlphaMode::Opaque
+        }
+    };
+    if surface.alpha == AlphaMode::Opaque && surface.opacity < 1.0 {
         warn(format!(
-            "opacity {}: caveray draws surfaces opaque",
+            "opacity {} under alphaMode opaque is drawn opaque (alphaMode blend composites it)",
             surface.opacity
         ));
     }

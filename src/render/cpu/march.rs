@@ -30,15 +30,42 @@ pub(super) fn march(
     origin: Vec3,
     dir: Vec3,
     (bg, stop): (Vec4, f32),
-    mut layers: Option<&mut LayerBuilder>,
+    layers: Option<&mut LayerBuilder>,
 ) -> RayResult {
+    let mut acc = Accumulator::new();
+    let samples = march_segment(
+        field,
+        rays,
+        (origin, dir),
+        (rays.t_near, stop),
+        &mut acc,
+        layers,
+    );
+    RayResult {
+        color: acc.over(bg),
+        depth: acc.depth,
+        samples,
+    }
+}
+
+/// The march of one stretch `(start, stop)` of the ray `origin + t dir`,
+/// composited behind what `acc` holds (a translucent surface's segments
+/// follow one another); returns the samples taken. The stretch's steps
+/// begin where its volumes do, as a march from `start` would.
+pub(super) fn march_segment(
+    field: &Field,
+    rays: &RayGen,
+    (origin, dir): (Vec3, Vec3),
+    (start, stop): (f32, f32),
+    acc: &mut Accumulator,
+    mut layers: Option<&mut LayerBuilder>,
+) -> u32 {
     let mut samples = 0;
     let plan = field.plan;
-    let mut acc = Accumulator {
-        color: Vec4::ZERO,
-        depth: f32::INFINITY,
-    };
-    let clip = (rays.t_near, rays.t_far.min(stop));
+    if acc.color.w >= plan.termination {
+        return 0;
+    }
+    let clip = (start.max(rays.t_near), rays.t_far.min(stop));
     // Each volume's span along the ray, found in its grid, where the
     // affine map keeps the ray's parameter t.
     // On the stack: this runs once per primary ray.
@@ -193,27 +220,42 @@ pub(super) fn march(
             }
         }
     }
-    let Accumulator { color, depth } = acc;
-    let rgb = color.truncate() + (1.0 - color.w) * bg.truncate();
-    RayResult {
-        color: rgb.extend(color.w + (1.0 - color.w) * bg.w),
-        depth,
-        samples,
-    }
+    samples
 }
 
 /// Front-to-back compositing of one ray, and where it became opaque
 /// enough for its depth.
-struct Accumulator {
+pub(super) struct Accumulator {
     /// Premultiplied.
-    color: Vec4,
-    depth: f32,
+    pub color: Vec4,
+    pub depth: f32,
 }
 
 impl Accumulator {
+    pub fn new() -> Self {
+        Self {
+            color: Vec4::ZERO,
+            depth: f32::INFINITY,
+        }
+    }
+
+    /// What it holds over the straight color `bg`.
+    pub fn over(&self, bg: Vec4) -> Vec4 {
+        let c = self.color;
+        (c.truncate() + (1.0 - c.w) * bg.truncate()).extend(c.w + (1.0 - c.w) * bg.w)
+    }
+
     /// Adds a sample at `p` (`t` along the ray) of shaded color `lit` and
     /// opacity `a`; true once the ray is opaque enough to stop.
-    fn add(&mut self, plan: &MarchPlan, rays: &RayGen, p: Vec3, t: f32, lit: Vec3, a: f32) -> bool {
+    pub fn add(
+        &mut self,
+        plan: &MarchPlan,
+        rays: &RayGen,
+        p: Vec3,
+        t: f32,
+        lit: Vec3,
+        a: f32,
+    ) -> bool {
         let acc = self.color;
         let weight = (1.0 - acc.w) * a;
         self.color = (acc.truncate() + lit * weight).extend(acc.w + weight);

@@ -18,7 +18,8 @@ use super::march_plan::MarchPlan;
 use super::{Render, RenderError, RenderSettings, Watch};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
-use crate::render::shapes::ShapeSet;
+use crate::render::shapes::{ShapeSet, MAX_TRANSLUCENT, SURFACE_PASSES};
+use crate::scene::Coverage;
 use crate::scene::{PlacedShape, PlacedVolume, Scene, StructuredVolume, TransferFunction};
 use packet::Channels;
 use sample::Converted;
@@ -265,20 +266,17 @@ impl CpuRenderer {
                             Some(image) => image.at(x as u32, y as u32, desc.size),
                             None => plan.background,
                         };
-                        let hit = shapes
-                            .as_ref()
-                            .and_then(|s| Some((s, s.hit(o, dir, rays.t_near, rays.t_far)?)));
-                        let behind = match hit {
-                            Some((s, h)) => (s.shade(&h, dir, settings).extend(1.0), h.t),
-                            None => (bg, f32::INFINITY),
+                        let (color, depth, n) = match shapes.as_deref() {
+                            None => {
+                                let ray =
+                                    march::march(&field, rays, o, dir, (bg, f32::INFINITY), None);
+                                (ray.color, ray.depth, ray.samples)
+                            }
+                            Some(s) => through_surfaces(s, &field, rays, (o, dir), bg, settings),
                         };
-                        let ray = march::march(&field, rays, o, dir, behind, None);
-                        c.extend_from_slice(&ray.color.to_array());
-                        // The nearer of the volume's depth and the surface.
-                        let surface =
-                            hit.map_or(f32::INFINITY, |(_, h)| rays.depth_at(o + dir * h.t, h.t));
-                        d.push(ray.depth.min(surface));
-                        samples += u64::from(ray.samples);
+                        c.extend_from_slice(&color.to_array());
+                        d.push(depth);
+                        samples += u64::from(n);
                     }
                 }
                 watch.advance(1);
@@ -318,4 +316,55 @@ fn reuse<K, V>(cache: &[(Arc<K>, Arc<V>)], key: &Arc<K>) -> Option<Arc<V>> {
         .iter()
         .find(|(k, _)| Arc::ptr_eq(k, key))
         .map(|(_, v)| Arc::clone(v))
+}
+
+/// One pixel's ray `(o, dir)` through the volumes and `shapes`: marched
+/// up to each surface it meets, a translucent one composited in its turn
+/// (up to MAX_TRANSLUCENT, the rest passed through), and ended by the
+/// first opaque one, whose lit color hides `bg`. Returns the color, the depth (the nearer of the
+/// opaque surface and where the accumulated opacity reached the
+/// threshold) and the volume samples taken.
+fn through_surfaces(
+    shapes: &ShapeSet,
+    field: &sample::Field,
+    rays: &RayGen,
+    (o, dir): (glam::Vec3, glam::Vec3),
+    bg: glam::Vec4,
+    settings: &RenderSettings,
+) -> (glam::Vec4, f32, u32) {
+    let plan = field.plan;
+    let mut acc = march::Accumulator::new();
+    let mut samples = 0;
+    let mut from = rays.t_near;
+    let mut composited = 0;
+    for _ in 0..SURFACE_PASSES {
+        let hit = shapes.hit(o, dir, from, rays.t_far);
+        let stop = hit.map_or(f32::INFINITY, |h| h.t);
+        samples += march::march_segment(field, rays, (o, dir), (from, stop), &mut acc, None);
+        let Some(h) = hit else {
+            return (acc.over(bg), acc.depth, samples);
+        };
+        match shapes.coverage(&h) {
+            Coverage::Translucent(a) => {
+                if composited < MAX_TRANSLUCENT {
+                    let lit = shapes.shade(&h, dir, settings);
+                    let p = o + dir * h.t;
+                    if acc.add(plan, rays, p, h.t, lit, a) {
+                        return (acc.over(bg), acc.depth, samples);
+                    }
+                    composited += 1;
+                }
+                from = h.t;
+            }
+            // Hidden surfaces are not in the BVH.
+            Coverage::Opaque | Coverage::Hidden => {
+                let lit = shapes.shade(&h, dir, settings).extend(1.0);
+                let surface = rays.depth_at(o + dir * h.t, h.t);
+                return (acc.over(lit), acc.depth.min(surface), samples);
+            }
+        }
+    }
+    // Past that many translucent surfaces, the ray goes on through any.
+    samples += march::march_segment(field, rays, (o, dir), (from, f32::INFINITY), &mut acc, None);
+    (acc.over(bg), acc.depth, samples)
 }

@@ -29,6 +29,7 @@ use crate::render::shapes::packed::{
     FLAG_ALBEDO, FLAG_IMAGE, FLAG_NORMALS, KIND_CYLINDER, KIND_SPHERE, KIND_TRIANGLE,
     TRAVERSAL_STACK,
 };
+use crate::render::shapes::{MAX_TRANSLUCENT, SURFACE_PASSES};
 use crate::render::stereo::Reprojection;
 use crate::render::RenderSettings;
 use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
@@ -504,6 +505,8 @@ fn constants() -> String {
         ("FLAG_NORMALS", FLAG_NORMALS),
         ("FLAG_IMAGE", FLAG_IMAGE),
         ("TRAVERSAL_STACK", TRAVERSAL_STACK),
+        ("MAX_TRANSLUCENT", MAX_TRANSLUCENT),
+        ("SURFACE_PASSES", SURFACE_PASSES),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {

@@ -22,8 +22,16 @@ use obvhs::Boundable;
 
 use super::frame::filled;
 use super::{RenderError, RenderSettings};
-use crate::scene::{Attribute, ColorSource, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
+use crate::scene::{Attribute, ColorSource, Coverage, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
 use intersect::{cylinder, sphere, triangle};
+
+/// The most translucent surfaces one ray composites; those behind them
+/// are passed through.
+pub const MAX_TRANSLUCENT: u32 = 8;
+
+/// Surfaces a ray looks for before it goes on through whatever is left
+/// (translucent ones past MAX_TRANSLUCENT cost a traversal each).
+pub const SURFACE_PASSES: u32 = 8 * MAX_TRANSLUCENT;
 
 /// The reference device's scale of `ambientRadiance`: a radiance of 1
 /// lights a surface to a tenth of its color, so hosts tuned on it look
@@ -102,6 +110,7 @@ impl ShapeSet {
         let mut traced = Vec::with_capacity(shapes.len());
         for (s, placed) in shapes.iter().enumerate() {
             let m = placed.transform;
+            let hidden = placed.material.coverage() == Coverage::Hidden;
             let to_object = m.inverse();
             let normal_to_world = Mat3::from_mat4(to_object).transpose();
             let shape = &placed.shape;
@@ -153,10 +162,16 @@ impl ShapeSet {
                     }
                 }
             }
-            prims.extend((0..shape.len() as u32).map(|index| Prim {
-                shape: s as u32,
-                index,
-            }));
+            if hidden {
+                // Kept in `traced`, so that shape numbers stay the
+                // scene's, but never hit.
+                boxes.truncate(prims.len());
+            } else {
+                prims.extend((0..shape.len() as u32).map(|index| Prim {
+                    shape: s as u32,
+                    index,
+                }));
+            }
             traced.push(Traced {
                 placed: placed.clone(),
                 world,
@@ -354,6 +369,11 @@ impl ShapeSet {
                 s.sample(input, host).truncate()
             }
         }
+    }
+
+    /// What the surface at `hit` lets through.
+    pub fn coverage(&self, hit: &Hit) -> Coverage {
+        self.traced[hit.shape as usize].placed.material.coverage()
     }
 
     /// The surface's `id` at `hit` and the host's primitive id.

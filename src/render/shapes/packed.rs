@@ -16,7 +16,7 @@
 //!   space, as the CPU traces them.
 //! - shape s at `shapes + 16 s`: rows of world-to-object (3 words), of
 //!   object-to-world for normals (3), (constant albedo, u shading base),
-//!   (u flags, -, -, -); for an image sampler (u dims, u texel base),
+//!   (u flags, opacity (1: opaque), -, -); for an image sampler (u dims, u texel base),
 //!   (u linear, u wrap per axis), the rows of its out-transform (4) and
 //!   its out-offset; unused words are zero. Flags: bit 0 per-corner
 //!   albedo, bit 1 the host's normals, bit 2 per-corner image
@@ -37,7 +37,7 @@ use std::sync::Arc;
 
 use super::{Hit, ShapeSet};
 use crate::render::RenderError;
-use crate::scene::{ColorSource, Primitives, Sampler, SamplerKind, DEFAULT_ATTRIBUTE};
+use crate::scene::{ColorSource, Coverage, Primitives, Sampler, SamplerKind, DEFAULT_ATTRIBUTE};
 
 pub const KIND_TRIANGLE: u32 = 0;
 pub const KIND_SPHERE: u32 = 1;
@@ -166,7 +166,12 @@ impl ShapeSet {
             // Where the albedo does not vary, any hit's is the shape's.
             let constant = self.albedo(&Self::corner_hit(s as u32, 0, Vec2::ZERO));
             words.push(word(constant, bits(base as u32)));
-            words.push([bits(flags), 0.0, 0.0, 0.0]);
+            let alpha = match traced.placed.material.coverage() {
+                Coverage::Opaque => 1.0,
+                Coverage::Translucent(a) => a,
+                Coverage::Hidden => 0.0,
+            };
+            words.push([bits(flags), alpha, 0.0, 0.0]);
             base += Self::stride(flags) * traced.placed.shape.len();
             match Self::image_sampler(traced) {
                 Some(sampler) => {

@@ -6,7 +6,8 @@ use super::*;
 use crate::geometry::{ImageRegion, OrthographicCamera, PrimaryRays};
 use crate::render::{ColorFormat, CpuRenderer, Frame, FrameDesc, Render};
 use crate::scene::{
-    Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
+    AlphaMode, Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction,
+    Voxels,
 };
 
 const N: u32 = 32;
@@ -49,6 +50,7 @@ fn unit_sphere(color: ColorSource, transform: Mat4) -> PlacedShape {
         SurfaceMaterial {
             color,
             opacity: 1.0,
+            alpha: AlphaMode::Opaque,
         },
         transform,
     )
@@ -134,6 +136,7 @@ fn rgb_triangle(z: f32) -> PlacedShape {
         SurfaceMaterial {
             color: ColorSource::Attribute(0),
             opacity: 1.0,
+            alpha: AlphaMode::Opaque,
         },
         Mat4::IDENTITY,
     )
@@ -306,6 +309,7 @@ fn a_cylinder_shows_its_silhouette_depth_and_colors_along_its_axis() {
         SurfaceMaterial {
             color: ColorSource::Attribute(0),
             opacity: 1.0,
+            alpha: AlphaMode::Opaque,
         },
         Mat4::IDENTITY,
     );
