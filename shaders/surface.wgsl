@@ -2,8 +2,8 @@
 // The world's triangles, spheres and cylinders: the nearest hit along a
 // ray in their BVH and its lit color, as src/render/shapes/ finds and
 // shades it on the CPU (the reference), operation for operation. The
-// words of `surfaces` are laid out by src/render/shapes/packed.rs, which
-// documents them; params.surface_nodes is 0 where the world has none.
+// words of `surfaces` and `surface_shading` are laid out by
+// src/render/shapes/packed.rs, which documents them; params.surface_nodes is 0 where the world has none.
 
 const NO_SLOT: u32 = 0xffffffffu;
 
@@ -258,7 +258,7 @@ fn surface_normal(h: SurfaceHit, p: vec3f, d: vec3f) -> vec3f {
             if (flags & FLAG_NORMALS) != 0u {
                 let at = shading_at(shape, bitcast<u32>(w2.w)) + select(0u, 3u, (flags & (FLAG_ALBEDO | FLAG_IMAGE)) != 0u);
                 let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
-                n = surfaces[at].xyz * weights.x + surfaces[at + 1u].xyz * weights.y + surfaces[at + 2u].xyz * weights.z;
+                n = surface_shading[at].xyz * weights.x + surface_shading[at + 1u].xyz * weights.y + surface_shading[at + 2u].xyz * weights.z;
             } else {
                 n = cross(w1.xyz - w0.xyz, w2.xyz - w0.xyz);
             }
@@ -306,7 +306,7 @@ fn surface_albedo(h: SurfaceHit) -> vec3f {
     }
     let at = shading_at(shape, bitcast<u32>(prim_word(h.slot, 2u).w));
     let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
-    let v = surfaces[at] * weights.x + surfaces[at + 1u] * weights.y + surfaces[at + 2u] * weights.z;
+    let v = surface_shading[at] * weights.x + surface_shading[at + 1u] * weights.y + surface_shading[at + 2u] * weights.z;
     if (flags & FLAG_IMAGE) == 0u {
         return v.xyz;
     }
@@ -362,7 +362,7 @@ fn image_sample(shape: u32, c: vec4f) -> vec4f {
         }
         if weight != 0.0 {
             let i = u32(index.x + dims.x * (index.y + dims.y * index.z));
-            sum += surfaces[base + i] * weight;
+            sum += surface_shading[base + i] * weight;
         }
     }
     let v = vec4f(dot(shape_word(shape, 10u), sum), dot(shape_word(shape, 11u), sum), dot(shape_word(shape, 12u), sum), dot(shape_word(shape, 13u), sum));

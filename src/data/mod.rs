@@ -1,11 +1,12 @@
 //! Where volumes and transfer functions come from: raw files, the
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
-//! color maps; and the formats with headers that are recognised, to be
+//! color maps; triangle meshes of volumes' isosurfaces; and the formats with headers that are recognised, to be
 //! refused by name rather than read as raw.
 
 pub mod files;
 mod format;
 mod manifest;
+mod mesh;
 mod orientation;
 mod paraview;
 mod presets;
@@ -15,6 +16,7 @@ pub mod toml_syntax;
 
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};
+pub use mesh::{isosurface_mesh, Mesh, MeshError};
 pub use orientation::{known_orientation, Orientation};
 pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};

@@ -347,6 +347,15 @@ impl Shape {
         self.source.is_empty()
     }
 
+    /// Vertices the host gave.
+    pub fn vertices(&self) -> usize {
+        match &self.primitives {
+            Primitives::Triangles { positions, .. }
+            | Primitives::Spheres { positions, .. }
+            | Primitives::Cylinders { positions, .. } => positions.len(),
+        }
+    }
+
     /// The object-space box around every kept primitive.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::INFINITY;

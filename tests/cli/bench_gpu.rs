@@ -33,6 +33,7 @@ fn the_gpu_benchmark_script_writes_every_report_with_its_adapter() {
         "raycast lod 4",
         "cave-stereo",
         "autostereo",
+        "surfaces",
     ] {
         assert!(
             summary.contains(&format!("== {name}: caveray bench")),
@@ -47,6 +48,7 @@ fn the_gpu_benchmark_script_writes_every_report_with_its_adapter() {
         "raycast_lod4",
         "cave_stereo",
         "autostereo",
+        "surfaces",
     ] {
         let path = out.join(format!("{file}.json"));
         let text =

@@ -716,3 +716,70 @@ fn options_that_would_do_nothing_are_refused() {
         String::from_utf8_lossy(&ok.stderr)
     );
 }
+
+#[test]
+fn a_mesh_of_the_volume_s_isosurface_shows_on_every_wall_alike_on_both_backends() {
+    // The phantom's isosurface as triangles inside it, on the GPU and the
+    // CPU, pair by pair re-projection refused with its reason: the mesh
+    // changes the picture, and the backends agree.
+    let base = scratch("mesh");
+    let common = ["--scale", "0.04", "--volume", "phantom:24"];
+    let run = |name: &str, extra: &[&str]| {
+        let out = base.join(name);
+        let mut args = common.to_vec();
+        args.extend_from_slice(extra);
+        render(&out, &args);
+        out
+    };
+    let plain = run("plain", &[]);
+    let mesh = ["--mesh", "0.4", "--mesh-color", "0.2,0.9,0.3"];
+    let gpu = run("gpu", &[&mesh[..], &["--backend", "gpu"]].concat());
+    let cpu = run("cpu", &[&mesh[..], &["--backend", "cpu"]].concat());
+    let file = "front_left.png";
+    let changed = mean_difference(&png(&plain.join(file)), &png(&gpu.join(file)));
+    assert!(
+        changed > 2.0,
+        "the mesh changed {file} by {changed} levels only"
+    );
+    for file in ["front_left.png", "floor_right.png", "cave_left.png"] {
+        let d = mean_difference(&png(&gpu.join(file)), &png(&cpu.join(file)));
+        assert!(
+            d < 0.5,
+            "{file}: GPU and CPU differ by {d} levels on average"
+        );
+    }
+    let out = base.join("reprojected");
+    let result = caveray(&[
+        "render",
+        "--config",
+        "cave_configs/cologne_5wall.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--scale",
+        "0.04",
+        "--volume",
+        "phantom:24",
+        "--mesh",
+        "0.4",
+        "--stereo",
+        "reprojection",
+        "--backend",
+        "gpu",
+    ]);
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&result.stdout),
+        String::from_utf8_lossy(&result.stderr)
+    );
+    assert!(said.contains("surfaces of primitives"), "{said}");
+    let bad = caveray(&[
+        "render",
+        "--config",
+        "cave_configs/cologne_5wall.toml",
+        "--mesh",
+        "1.5",
+    ]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("from 0 to 1"));
+    std::fs::remove_dir_all(&base).unwrap();
+}

@@ -4,12 +4,13 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
-    concentric_shells, load_paraview, load_raw, marschner_lobb, preset, shepp_logan, solid_box,
-    DataError, Manifest, Orientation, VolumeFormat, VoxelType,
+    concentric_shells, isosurface_mesh, load_paraview, load_raw, marschner_lobb, preset,
+    shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat, VoxelType,
 };
 use anari_library_caveray::geometry::VolumeAxis;
 use anari_library_caveray::scene::{
-    PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
+    AlphaMode, ColorSource, PlacedShape, PlacedVolume, Scene, Shape, ShapeInput, StructuredVolume,
+    SurfaceMaterial, TransferFunction, Voxels,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -47,6 +48,38 @@ pub struct VolumeArgs {
     tf: Option<String>,
     #[command(flatten)]
     placement: PlacementArgs,
+    #[command(flatten)]
+    mesh: MeshArgs,
+}
+
+/// A triangle mesh beside the volume: its own isosurface, as a host that
+/// extracts one would send it.
+#[derive(Args, Clone, Copy)]
+pub struct MeshArgs {
+    /// Also draw the volume's isosurface at this fraction of its value
+    /// range (0: its smallest value, 1: its largest) as a triangle mesh.
+    #[arg(long, value_parser = fraction)]
+    mesh: Option<f32>,
+    /// The mesh's cells, in voxels per side (2: about a quarter of the
+    /// triangles).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    mesh_stride: u32,
+    /// The mesh's color R,G,B (linear, 0 to 1).
+    #[arg(long, default_value = "0.9,0.85,0.75", value_parser = triple)]
+    mesh_color: glam::DVec3,
+    /// The mesh's opacity: below 1 it is composited with the volume behind.
+    #[arg(long, default_value_t = 1.0, value_parser = fraction)]
+    mesh_opacity: f32,
+}
+
+/// The most triangles `--mesh` extracts.
+const MAX_MESH_TRIANGLES: usize = 1 << 24;
+
+fn fraction(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if (0.0..=1.0).contains(&x) => Ok(x),
+        _ => Err(format!("expected a number from 0 to 1, got '{s}'")),
+    }
 }
 
 /// Where the volume goes and which way up; each unset part is the
@@ -132,6 +165,7 @@ pub struct Loaded {
     placement: PlacementArgs,
     /// Which way up the data set says it is.
     orientation: Orientation,
+    mesh: MeshArgs,
 }
 
 impl VolumeArgs {
@@ -144,6 +178,11 @@ impl VolumeArgs {
             .map(|v| v.trim().to_string())
             .filter(|v| !v.is_empty())
             .collect()
+    }
+
+    /// Whether `--mesh` asks for a mesh beside the volume.
+    pub fn has_mesh(&self) -> bool {
+        self.mesh.mesh.is_some()
     }
 
     /// These arguments with another volume (for commands that sweep several).
@@ -218,6 +257,7 @@ impl VolumeArgs {
             stretch_tf,
             placement: self.placement,
             orientation,
+            mesh: self.mesh,
         })
     }
 }
@@ -259,12 +299,70 @@ impl Loaded {
                 tf = tf.with_value_range(lo, hi).map_err(|e| runtime(&e))?;
             }
         }
-        Scene::placed(vec![PlacedVolume {
+        let transform = placement.transform(frame).as_mat4();
+        let mesh = self.mesh.shape(&volume, transform)?;
+        let scene = Scene::placed(vec![PlacedVolume {
             volume: volume.into(),
             transfer_function: tf.into(),
-            transform: placement.transform(frame).as_mat4(),
+            transform,
         }])
-        .map_err(|e| runtime(&e))
+        .map_err(|e| runtime(&e))?;
+        match mesh {
+            Some(shape) => scene.with_shapes(vec![shape]).map_err(|e| runtime(&e)),
+            None => Ok(scene),
+        }
+    }
+}
+
+impl MeshArgs {
+    /// The mesh `--mesh` asks for, of `volume` as placed by `transform`.
+    pub fn shape(
+        &self,
+        volume: &StructuredVolume,
+        transform: glam::Mat4,
+    ) -> Result<Option<PlacedShape>, Failure> {
+        let Some(fraction) = self.mesh else {
+            return Ok(None);
+        };
+        let runtime = |e: &dyn std::fmt::Display| Failure::Runtime(e.to_string());
+        let (lo, hi) = volume.value_range();
+        let mesh = isosurface_mesh(
+            volume,
+            lo + fraction * (hi - lo),
+            self.mesh_stride,
+            MAX_MESH_TRIANGLES,
+        )
+        .map_err(|e| runtime(&e))?;
+        let count = mesh.triangles.len();
+        let input = ShapeInput {
+            vertices: mesh.positions.len(),
+            primitives: count,
+            attributes: Default::default(),
+            ids: None,
+        };
+        let made = Shape::triangles(
+            mesh.positions,
+            mesh.triangles,
+            (0..count as u32).collect(),
+            Some(mesh.normals),
+            input,
+        )
+        .map_err(|e| runtime(&e))?;
+        let alpha = if self.mesh_opacity < 1.0 {
+            AlphaMode::Blend
+        } else {
+            AlphaMode::Opaque
+        };
+        let material = SurfaceMaterial {
+            color: ColorSource::Constant(self.mesh_color.as_vec3()),
+            opacity: self.mesh_opacity,
+            alpha,
+        };
+        Ok(Some(PlacedShape::new(
+            std::sync::Arc::new(made.shape),
+            material,
+            transform,
+        )))
     }
 }
 

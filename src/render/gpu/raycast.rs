@@ -55,9 +55,11 @@ binding_table! {
         linear: Kind::sampler(filterable),
         /// The same, blending between mip levels (level of detail).
         linear_mips: Kind::sampler(filterable),
-        /// The world's surfaces: their BVH, primitives, shapes and shading
-        /// data (render/shapes/packed.rs), where params.surface_* say.
+        /// The world's surfaces: their BVH, primitives and shapes
+        /// (render/shapes/packed.rs), where params.surface_* say.
         surfaces: Kind::storage("array<vec4f>"),
+        /// Their per-primitive shading data and image texels.
+        surface_shading: Kind::storage("array<vec4f>"),
     }
 }
 
@@ -295,7 +297,8 @@ impl RaycastPass {
             bricks: scene.bricks().as_entire_binding(),
             linear: wgpu::BindingResource::Sampler(&self.sampler),
             linear_mips: wgpu::BindingResource::Sampler(&self.mip_sampler),
-            surfaces: scene.surfaces().as_entire_binding(),
+            surfaces: scene.surfaces()[0].as_entire_binding(),
+            surface_shading: scene.surfaces()[1].as_entire_binding(),
         }
         .bind(&ctx.device, &self.volume_layout);
         self.group = Some((scene.generation(), group));

@@ -192,24 +192,33 @@ pub(super) struct SurfaceSlot {
     pub shapes: u32,
 }
 
-/// A world's surfaces as one storage buffer of vec4 words, and where its
-/// parts begin; refused if it exceeds what one binding holds.
-pub(super) fn surfaces_buffer(
+/// A world's surfaces as two storage buffers of vec4 words (the traced
+/// part, the shading part), and where the first's parts begin; refused if
+/// either exceeds what one binding holds.
+pub(super) fn surfaces_buffers(
     ctx: &Context,
     packed: &Packed,
-) -> Result<(wgpu::Buffer, SurfaceSlot), RenderError> {
-    let bytes = 16 * packed.words.len() as u64;
+) -> Result<([wgpu::Buffer; 2], SurfaceSlot), RenderError> {
     let max = ctx
         .limits
         .max_storage_buffer_binding_size
         .min(ctx.limits.max_buffer_size);
-    if bytes > max {
-        return Err(RenderError::Settings(format!(
-            "the world's surfaces take {bytes} bytes on the GPU, more than one buffer of {} holds ({max} bytes); render it on the CPU",
-            ctx.info.name
-        )));
+    for (part, words) in [
+        ("BVH and primitives", &packed.words),
+        ("shading", &packed.shading),
+    ] {
+        let bytes = 16 * words.len() as u64;
+        if bytes > max {
+            return Err(RenderError::Settings(format!(
+                "the world's surfaces' {part} take {bytes} bytes on the GPU, more than one buffer of {} holds ({max} bytes); render it on the CPU",
+                ctx.info.name
+            )));
+        }
     }
-    let buffer = words_buffer(ctx, &packed.words);
+    let buffer = [
+        words_buffer(ctx, &packed.words),
+        words_buffer(ctx, &packed.shading),
+    ];
     let slot = SurfaceSlot {
         nodes: packed.nodes,
         prims: packed.prims,

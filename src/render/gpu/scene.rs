@@ -51,7 +51,8 @@ pub(super) struct GpuScene {
     brick_slots: Vec<BrickSlot>,
     /// The placed shapes the surfaces buffer holds, in the scene's order.
     shapes: Vec<PlacedShape>,
-    surfaces: wgpu::Buffer,
+    /// The traced words and the shading words (render/shapes/packed.rs).
+    surfaces: [wgpu::Buffer; 2],
     surface_slot: SurfaceSlot,
     uploads: Uploads,
     /// Counts changes of what is bound: the volume textures, the
@@ -67,7 +68,10 @@ impl GpuScene {
         let table = resources::table_texture(ctx);
         let table_view = table.create_view(&Default::default());
         let (bricks, _) = resources::bricks_buffer(ctx, &[]);
-        let surfaces = resources::words_buffer(ctx, &[]);
+        let surfaces = [
+            resources::words_buffer(ctx, &[]),
+            resources::words_buffer(ctx, &[]),
+        ];
         Self {
             mips: false,
             volumes: Vec::new(),
@@ -121,7 +125,7 @@ impl GpuScene {
         &self.bricks
     }
 
-    pub fn surfaces(&self) -> &wgpu::Buffer {
+    pub fn surfaces(&self) -> &[wgpu::Buffer; 2] {
         &self.surfaces
     }
 
@@ -139,7 +143,7 @@ impl GpuScene {
             return Ok(());
         }
         let packed = ShapeSet::build(shapes)?.pack()?;
-        (self.surfaces, self.surface_slot) = resources::surfaces_buffer(ctx, &packed)?;
+        (self.surfaces, self.surface_slot) = resources::surfaces_buffers(ctx, &packed)?;
         self.shapes = shapes.to_vec();
         self.uploads.surfaces += u32::from(!shapes.is_empty());
         self.generation += 1;

@@ -1,7 +1,10 @@
-//! A shape set laid out for a GPU: one array of vec4 words that
-//! shaders/surface.wgsl traverses, holding the BVH's nodes, each leaf
-//! slot's primitive, each placed shape's maps and color, and the
-//! per-primitive shading data only those shapes that need it carry.
+//! A shape set laid out for a GPU: two arrays of vec4 words that
+//! shaders/surface.wgsl reads. The first, which the traversal reads,
+//! holds the BVH's nodes, each leaf slot's primitive and each placed
+//! shape's maps and color; the second the per-primitive shading data only
+//! those shapes that need it carry, and the image samplers' texels (two
+//! buffers, so that each stays within what one binding holds for twice
+//! the triangles).
 //!
 //! The layout, in vec4 words (`u` a u32 stored by its bits):
 //! - node i at `2 i`: (box min, u prim_count), (box max, u first_index),
@@ -21,15 +24,16 @@
 //!   its out-offset; unused words are zero. Flags: bit 0 per-corner
 //!   albedo, bit 1 the host's normals, bit 2 per-corner image
 //!   coordinates.
-//! - a shape's shading at `shading base + stride k` for kept primitive
+//! - in the second array, a shape's shading at `shading base + stride k`
+//!   for kept primitive
 //!   k: the albedo at each corner (3 words) if it varies, or the image
 //!   coordinates there (the sampler's in-transform applied), then each
 //!   corner's normal in world space (3 words) if the host gave normals.
 //!   Samplers that are affine in the attribute (transform, primitive) are
 //!   sampled at the corners: interpolating those is sampling the
 //!   interpolated attribute. Images are read per pixel.
-//! - each image sampler's texels (x fastest), once however many shapes
-//!   use it.
+//! - after all shading, each image sampler's texels (x fastest), once
+//!   however many shapes use it.
 
 use glam::{Vec2, Vec3};
 
@@ -57,6 +61,8 @@ const SHAPE_WORDS: usize = 16;
 #[derive(Debug, Default)]
 pub struct Packed {
     pub words: Vec<[f32; 4]>,
+    /// The shading data and texels.
+    pub shading: Vec<[f32; 4]>,
     /// Nodes (0: no surfaces).
     pub nodes: u32,
     pub prims: u32,
@@ -93,14 +99,17 @@ impl ShapeSet {
         let images = self.images();
         let texels: usize = images.iter().map(|(_, texels)| texels.len()).sum();
         let total = nodes * NODE_WORDS + slots * PRIM_WORDS + self.traced.len() * SHAPE_WORDS;
-        let total = total + shading + texels;
-        let mut words = Vec::new();
-        words
-            .try_reserve_exact(total)
-            .map_err(|_| RenderError::OutOfMemory {
-                bytes: (total * 16) as u64,
-                what: "the surfaces for the GPU".into(),
-            })?;
+        let reserve = |n: usize| {
+            let mut v: Vec<[f32; 4]> = Vec::new();
+            v.try_reserve_exact(n)
+                .map_err(|_| RenderError::OutOfMemory {
+                    bytes: (n * 16) as u64,
+                    what: "the surfaces for the GPU".into(),
+                })
+                .map(|_| v)
+        };
+        let mut words = reserve(total)?;
+        let mut shaded = reserve(shading + texels)?;
         for n in &self.bvh.nodes {
             let (lo, hi) = (Vec3::from(n.aabb.min), Vec3::from(n.aabb.max));
             words.push(word(lo, bits(n.prim_count)));
@@ -145,10 +154,10 @@ impl ShapeSet {
             }
         }
         let shapes = words.len();
-        let mut base = shapes + self.traced.len() * SHAPE_WORDS;
+        let mut base = 0;
         // The texels follow all shading data.
         let mut texel_bases = Vec::with_capacity(images.len());
-        let mut next = base + shading;
+        let mut next = shading;
         for (_, texels) in &images {
             texel_bases.push(next);
             next += texels.len();
@@ -202,7 +211,7 @@ impl ShapeSet {
                 if flags & FLAG_ALBEDO != 0 {
                     for bary in self.corners(s) {
                         let hit = Self::corner_hit(s as u32, index, bary);
-                        words.push(self.albedo(&hit).extend(1.0).to_array());
+                        shaded.push(self.albedo(&hit).extend(1.0).to_array());
                     }
                 }
                 if let Some(sampler) = Self::image_sampler(traced) {
@@ -211,7 +220,7 @@ impl ShapeSet {
                         let input = sampler
                             .in_attribute
                             .map_or(DEFAULT_ATTRIBUTE, |slot| self.attribute(&hit, slot));
-                        words.push(sampler.coordinates(input).to_array());
+                        shaded.push(sampler.coordinates(input).to_array());
                     }
                 }
                 if flags & FLAG_NORMALS != 0 {
@@ -224,16 +233,17 @@ impl ShapeSet {
                         unreachable!("FLAG_NORMALS is set on triangles with normals only");
                     };
                     for v in triangles[index as usize] {
-                        words.push(word(traced.normal_to_world * n[v as usize], 0.0));
+                        shaded.push(word(traced.normal_to_world * n[v as usize], 0.0));
                     }
                 }
             }
         }
         for (_, texels) in &images {
-            words.extend(texels.iter().map(|t| t.to_array()));
+            shaded.extend(texels.iter().map(|t| t.to_array()));
         }
         Ok(Packed {
             words,
+            shading: shaded,
             nodes: nodes as u32,
             prims: (nodes * NODE_WORDS) as u32,
             shapes: shapes as u32,

@@ -7,6 +7,7 @@ mod cave_stereo;
 mod charts;
 mod raycast;
 mod stereo;
+mod surfaces;
 
 use anari_library_caveray::render::stereo::RenderFacts;
 use clap::Subcommand;
@@ -29,6 +30,10 @@ pub enum BenchCommand {
     /// naive (every view, then interleaved) against per subpixel, for
     /// several view counts (writes JSON, prints a table).
     Autostereo(autostereo::AutostereoArgs),
+    /// A triangle mesh (a volume's isosurface, --mesh) alone and inside
+    /// its volume on the GPU and the CPU: BVH build, first and later
+    /// frames, GPU against CPU (writes JSON, prints a table).
+    Surfaces(surfaces::SurfacesArgs),
 }
 
 pub fn run(command: BenchCommand) -> Result<(), Failure> {
@@ -38,6 +43,7 @@ pub fn run(command: BenchCommand) -> Result<(), Failure> {
         BenchCommand::Stereo(args) => stereo::run(args),
         BenchCommand::CaveStereo(args) => cave_stereo::run(args),
         BenchCommand::Autostereo(args) => autostereo::run(args),
+        BenchCommand::Surfaces(args) => surfaces::run(args),
     }
 }
 

@@ -421,7 +421,13 @@ fn skipping_gains(
 
 /// View `i` of `n` around the y axis: the eye at distance h + r from the
 /// volume's centre, so the bounding sphere's near point is h away.
-fn camera(i: u32, n: u32, setup: &HmdStereo, radius: f64, image: UVec2) -> Result<RayGen, Failure> {
+pub(super) fn camera(
+    i: u32,
+    n: u32,
+    setup: &HmdStereo,
+    radius: f64,
+    image: UVec2,
+) -> Result<RayGen, Failure> {
     let angle = std::f64::consts::TAU * f64::from(i) / f64::from(n);
     let position = (setup.focal + radius) * DVec3::new(angle.sin(), 0.0, angle.cos());
     PinholeCamera::new(

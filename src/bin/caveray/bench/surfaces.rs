@@ -1,0 +1,204 @@
+//! `caveray bench surfaces`: a triangle mesh (a volume's isosurface, from
+//! `--mesh`) alone and inside its volume, on the GPU and the CPU, by the
+//! ray-casting benchmark's protocol views: the BVH's build, the first
+//! frame (build, upload and pipelines included), the mean of the frames
+//! after it, and the GPU's image against the CPU's.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anari_library_caveray::render::shapes::ShapeSet;
+use anari_library_caveray::render::stereo::{paper, HmdStereo};
+use anari_library_caveray::render::Render as _;
+use anari_library_caveray::render::{
+    ssim, Backend, CpuRenderer, Frame, FrameDesc, RenderSettings, Renderer,
+};
+use anari_library_caveray::scene::Scene;
+use clap::Args;
+use glam::{UVec2, Vec3};
+use serde::Serialize;
+
+use super::mean;
+use super::raycast::camera;
+use crate::progress::Progress;
+use crate::report::{write_json, Machine, RendererInfo};
+use crate::scene::{at, protocol_frame, VolumeArgs};
+use crate::Failure;
+
+#[derive(Args)]
+pub struct SurfacesArgs {
+    /// The volume, and with --mesh the isosurface drawn as triangles
+    /// (required; --mesh-stride sets the triangle count).
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// Image width and height in pixels.
+    #[arg(long, default_value_t = paper::WIDTH)]
+    size: u32,
+    /// Views around the mesh, each timed after the first.
+    #[arg(long, default_value_t = 4)]
+    views: u32,
+    /// Skip the GPU.
+    #[arg(long)]
+    no_gpu: bool,
+    /// Skip the CPU.
+    #[arg(long)]
+    no_cpu: bool,
+    /// Where to write the results.
+    #[arg(long, default_value = "out/bench/surfaces.json")]
+    json: PathBuf,
+}
+
+#[derive(Serialize)]
+struct SurfacesReport {
+    benchmark: &'static str,
+    machine: Machine,
+    image: [u32; 2],
+    volume: String,
+    triangles: usize,
+    vertices: usize,
+    /// The BVH over the mesh, built on the CPU (both renderers build it).
+    bvh_build_ms: f64,
+    runs: Vec<Run>,
+    /// The first view of the mesh in its volume, GPU against CPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gpu_cpu_ssim: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct Run {
+    renderer: RendererInfo,
+    /// The mesh alone, then inside its volume.
+    mesh: Timing,
+    mixed: Timing,
+}
+
+#[derive(Serialize)]
+struct Timing {
+    /// The first frame of the scene: BVH, upload and pipelines included.
+    first_ms: f64,
+    /// Each later view, and their mean.
+    ms: Vec<f64>,
+    mean_ms: f64,
+}
+
+pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
+    if args.size == 0 || args.views < 2 {
+        return Err(Failure::Usage(format!(
+            "need --size > 0 and --views >= 2 (got {}, {})",
+            args.size, args.views
+        )));
+    }
+    if !args.volume.has_mesh() {
+        return Err(Failure::Usage(
+            "give the mesh with --mesh FRACTION (the volume's isosurface there)".into(),
+        ));
+    }
+    let image = UVec2::splat(args.size);
+    FrameDesc::new(image)
+        .validate()
+        .map_err(|e| Failure::Usage(format!("--size {}: {e}", args.size)))?;
+    let setup = HmdStereo::protocol(args.size, paper::SPAN_PX);
+    let radius = setup.radius.unwrap_or(paper::RADIUS_M);
+    let cameras = (0..args.views)
+        .map(|i| camera(i, args.views, &setup, radius, image))
+        .collect::<Result<Vec<_>, _>>()?;
+    let loaded = args.volume.load()?.with_stored_axes();
+    let (lo, hi) = loaded.volume.bounds();
+    let extent = hi - lo;
+    let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
+    let mixed = loaded.placed(at(Vec3::ZERO, size), &protocol_frame())?;
+    let shapes = mixed.shapes().to_vec();
+    let mesh = Scene::of_shapes(shapes.clone()).map_err(|e| Failure::Runtime(e.to_string()))?;
+    let (triangles, vertices) = shapes
+        .first()
+        .map_or((0, 0), |s| (s.shape.len(), s.shape.vertices()));
+    let t = Instant::now();
+    ShapeSet::build(&shapes).map_err(|e| Failure::Runtime(e.to_string()))?;
+    let bvh_build_ms = t.elapsed().as_secs_f64() * 1e3;
+
+    let mut renderers: Vec<Renderer> = Vec::new();
+    if !args.no_gpu {
+        renderers.push(
+            Renderer::new(Backend::Gpu).map_err(|e| {
+                Failure::Runtime(format!("{e} (use --no-gpu to time the CPU alone)"))
+            })?,
+        );
+    }
+    if !args.no_cpu {
+        renderers.push(Renderer::Cpu(CpuRenderer::new()));
+    }
+    let settings = RenderSettings::default();
+    let mut progress = Progress::new(renderers.len() * 2 * cameras.len());
+    let mut runs = Vec::new();
+    let mut firsts: Vec<Frame> = Vec::new();
+    for renderer in &mut renderers {
+        let name = match renderer {
+            Renderer::Gpu(_) => "gpu",
+            Renderer::Cpu(_) => "cpu",
+        };
+        let mut timing = |scene: &Scene, what: &str, keep: &mut Vec<Frame>| {
+            let mut ms = Vec::new();
+            for (i, rays) in cameras.iter().enumerate() {
+                let t = Instant::now();
+                let frame = renderer
+                    .render(scene, rays, &settings, &FrameDesc::new(image))
+                    .map_err(|e| Failure::Runtime(e.to_string()))?;
+                let took = t.elapsed().as_secs_f64() * 1e3;
+                progress.step(&format!("{name} {what} view {i} {took:.1} ms"));
+                if i == 0 && what == "mixed" {
+                    keep.push(frame);
+                }
+                ms.push(took);
+            }
+            let first_ms = ms.remove(0);
+            Ok::<_, Failure>(Timing {
+                first_ms,
+                mean_ms: mean(ms.iter().copied()),
+                ms,
+            })
+        };
+        let mesh_timing = timing(&mesh, "mesh", &mut firsts)?;
+        let mixed_timing = timing(&mixed, "mixed", &mut firsts)?;
+        runs.push(Run {
+            renderer: RendererInfo::of(renderer),
+            mesh: mesh_timing,
+            mixed: mixed_timing,
+        });
+    }
+    let gpu_cpu_ssim = match firsts.as_slice() {
+        [g, c] => ssim(g, c).ok(),
+        _ => None,
+    };
+    let report = SurfacesReport {
+        benchmark: "surfaces",
+        machine: Machine::this(),
+        image: image.to_array(),
+        volume: loaded.name.clone(),
+        triangles,
+        vertices,
+        bvh_build_ms,
+        runs,
+        gpu_cpu_ssim,
+    };
+    write_json(&report, &args.json)?;
+    println!(
+        "{} triangles ({} vertices) of {} at {}x{}: BVH built in {:.0} ms",
+        report.triangles, report.vertices, report.volume, args.size, args.size, report.bvh_build_ms
+    );
+    println!("renderer   first mesh ms   mesh ms   first mixed ms   mixed ms");
+    for (run, renderer) in report.runs.iter().zip(&renderers) {
+        let name = match renderer {
+            Renderer::Gpu(g) => g.adapter().name.clone(),
+            Renderer::Cpu(_) => "cpu".to_string(),
+        };
+        println!(
+            "{name:<10} {:>14.1} {:>9.1} {:>16.1} {:>10.1}",
+            run.mesh.first_ms, run.mesh.mean_ms, run.mixed.first_ms, run.mixed.mean_ms
+        );
+    }
+    if let Some(s) = report.gpu_cpu_ssim {
+        println!("GPU against CPU, first view in the volume: SSIM {s:.4}");
+    }
+    println!("written to {}", args.json.display());
+    Ok(())
+}
