@@ -374,15 +374,40 @@ fn surface_alpha(h: SurfaceHit) -> f32 {
     return shape_word(bitcast<u32>(prim_word(h.slot, 1u).w) >> 4u, 7u).y;
 }
 
-// Hit h seen along d, lit: Lambertian under the world's directional light
-// (or a light at the eye where it has none), plus the ambient light.
+// Hit h of ray o + t d, lit: Lambertian under the world's directional
+// light (or a light at the eye where it has none) and its point and spot
+// lights, plus the ambient light.
 fn surface_color(h: SurfaceHit, o: vec3f, d: vec3f) -> vec3f {
-    let n = surface_normal(h, o + d * h.t, d);
-    var direct: vec3f;
-    if params.headlight != 0u {
+    let p = o + d * h.t;
+    let n = surface_normal(h, p, d);
+    var direct = vec3f(0.0);
+    if params.headlight == 1u {
         direct = vec3f(max(dot(n, -d), 0.0));
-    } else {
+    } else if params.headlight == 0u {
         direct = params.surface_light_color * max(dot(n, params.surface_light), 0.0);
     }
+    for (var i = 0u; i < params.lamp_count; i++) {
+        let lamp = params.lamps[i];
+        let offset = lamp.position - p;
+        let d2 = max(dot(offset, offset), 1e-12);
+        let towards = offset / sqrt(d2);
+        var strength = 1.0 / d2;
+        if lamp.spot != 0u {
+            strength *= cone(lamp, -towards);
+        }
+        direct += lamp.color * strength * max(dot(n, towards), 0.0);
+    }
     return surface_albedo(h) * (direct + params.ambient);
+}
+
+// How much of a spot's light leaves along unit vector `out` (settings::cone).
+fn cone(lamp: LampSlot, out: vec3f) -> f32 {
+    let c = dot(out, lamp.direction);
+    let lo = lamp.cos_outer;
+    let hi = lamp.cos_inner;
+    if hi <= lo {
+        return select(0.0, 1.0, c >= lo);
+    }
+    let t = clamp((c - lo) / (hi - lo), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
 }

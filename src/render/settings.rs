@@ -13,6 +13,55 @@ pub const MAX_DIRECTIONS: u32 = 64;
 /// Most clip planes a renderer takes.
 pub const MAX_CLIP_PLANES: usize = 8;
 
+/// The most point and spot lights that light surfaces.
+pub const MAX_LAMPS: usize = 8;
+
+/// A point or spot light on the surfaces: radiant intensity `color` from
+/// `position`, falling off with the square of the distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lamp {
+    pub position: Vec3,
+    /// Color times intensity.
+    pub color: Vec3,
+    pub spot: Option<Spot>,
+}
+
+/// A spot light's cone: full intensity within `cos_inner` of `direction`
+/// (the way the light travels, unit length), none past `cos_outer`, a
+/// smooth step between.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spot {
+    pub direction: Vec3,
+    pub cos_outer: f32,
+    pub cos_inner: f32,
+}
+
+impl Lamp {
+    /// The light arriving at `p` along unit vector `towards` (to the lamp),
+    /// per unit of cos(normal, towards).
+    pub fn at(&self, p: Vec3) -> (Vec3, Vec3) {
+        let offset = self.position - p;
+        let d2 = offset.length_squared().max(1e-12);
+        let towards = offset / d2.sqrt();
+        let mut strength = 1.0 / d2;
+        if let Some(spot) = self.spot {
+            strength *= cone(spot, -towards);
+        }
+        (towards, self.color * strength)
+    }
+}
+
+/// How much of a spot's light leaves along unit vector `out`.
+pub fn cone(spot: Spot, out: Vec3) -> f32 {
+    let c = out.dot(spot.direction);
+    let (lo, hi) = (spot.cos_outer, spot.cos_inner);
+    if hi <= lo {
+        return if c >= lo { 1.0 } else { 0.0 };
+    }
+    let t = ((c - lo) / (hi - lo)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
 /// The step factors caveray takes (ANARI's `stepFactor`, the renderer
 /// table's `minimum` and `maximum`): at the default sampling rate, from
 /// 1/64 of a half voxel (128 samples per voxel) to 64 (one every 32
@@ -278,6 +327,11 @@ pub struct RenderSettings {
     pub ambient: Vec3,
     /// Surfaces lit from the eye, where the world has no light.
     pub headlight: bool,
+    /// Whether `light` and `light_color` light the surfaces (not where a
+    /// world has point or spot lights only).
+    pub directional: bool,
+    /// Point and spot lights on the surfaces (up to MAX_LAMPS).
+    pub lamps: Vec<Lamp>,
     /// Leap over bricks the transfer function leaves clear
     /// (render::empty_space). Exact: the image does not change.
     pub skipping: bool,
@@ -305,6 +359,8 @@ impl Default for RenderSettings {
             light_color: Vec3::ONE,
             ambient: Vec3::splat(super::shapes::AMBIENT_SCALE),
             headlight: true,
+            directional: true,
+            lamps: Vec::new(),
             skipping: true,
             sampling: Sampling::Exact,
             level_of_detail: 0.0,
@@ -370,6 +426,26 @@ impl RenderSettings {
                 "ambient light must be finite and not negative, got {}",
                 self.ambient
             )));
+        }
+        if self.lamps.len() > MAX_LAMPS {
+            return Err(RenderError::Settings(format!(
+                "{} point and spot lights; surfaces take up to {MAX_LAMPS}",
+                self.lamps.len()
+            )));
+        }
+        for lamp in &self.lamps {
+            let spot_ok = lamp.spot.is_none_or(|s| {
+                s.direction.is_finite() && s.cos_outer.is_finite() && s.cos_inner.is_finite()
+            });
+            if !(lamp.position.is_finite()
+                && lamp.color.is_finite()
+                && lamp.color.min_element() >= 0.0
+                && spot_ok)
+            {
+                return Err(RenderError::Settings(format!(
+                    "a point or spot light must be finite, its color not negative: {lamp:?}"
+                )));
+            }
         }
         if !self.light.is_finite() || self.light.length_squared() < 1e-12 {
             return Err(RenderError::Settings(format!(

@@ -409,13 +409,14 @@ fn the_first_directional_light_sets_the_shading_light() {
         l
     };
     let half = light(&mut h, [0.0, 0.0, -1.0], 0.5);
-    // A point light (not implemented) first: skipped for the directional one.
-    let point = h.d.new_object(DataType::LIGHT, "point");
+    // An environment light (not implemented) first: skipped for the
+    // directional one.
+    let hdri = h.d.new_object(DataType::LIGHT, "hdri");
     let centre = 4 * (12 * 24 + 12);
     // Lit samples (ambient occlusion ignores the direction) take the
     // light's strength; unlit ones show the transfer function as it is.
     let lit = image(&mut h, &[], "ao");
-    let dimmed = image(&mut h, &[point, half], "ao");
+    let dimmed = image(&mut h, &[hdri, half], "ao");
     let (a, b) = (f32::from(lit[centre]), f32::from(dimmed[centre]));
     assert!(
         a > 40.0 && (b - 0.5 * a).abs() <= 2.0,
@@ -424,7 +425,7 @@ fn the_first_directional_light_sets_the_shading_light() {
     let unlit = image(&mut h, &[], "none");
     assert_eq!(
         unlit,
-        image(&mut h, &[point, half], "none"),
+        image(&mut h, &[hdri, half], "none"),
         "a light changed an unlit image"
     );
     // Shadows follow the light's direction.
@@ -438,7 +439,7 @@ fn the_first_directional_light_sets_the_shading_light() {
     );
     let warnings = h.messages(Severity::Warning);
     assert!(
-        warnings.len() == 1 && warnings[0].contains("does not implement light 'point'"),
+        warnings.len() == 1 && warnings[0].contains("does not implement light 'hdri'"),
         "{warnings:?}"
     );
     assert!(h.messages(Severity::Error).is_empty());

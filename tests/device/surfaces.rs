@@ -11,7 +11,23 @@ use common::device::{bytes, Host, SIZE};
 /// A perspective frame from (0, 0, 3) of `surfaces` (and `volume`, if
 /// any), its renderer without ambient light, depth kept.
 fn frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>) -> u64 {
+    lit_frame(h, surfaces, volume, &[])
+}
+
+/// `frame`, its world lit by `lights`.
+fn lit_frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>, lights: &[u64]) -> u64 {
     let world = h.d.new_object(DataType::WORLD, "");
+    if !lights.is_empty() {
+        let handles: Vec<usize> = lights.iter().map(|&l| l as usize).collect();
+        let list = h.array(
+            DataType::ARRAY1D,
+            DataType::LIGHT,
+            [lights.len() as u64, 1, 1],
+            &bytes(&handles),
+        );
+        h.set_object(world, "light", DataType::ARRAY1D, list);
+        h.d.release(list);
+    }
     let handles: Vec<usize> = surfaces.iter().map(|&s| s as usize).collect();
     let list = h.array(
         DataType::ARRAY1D,
@@ -619,4 +635,69 @@ fn alpha_modes_blend_mask_and_warn() {
         warnings.iter().any(|m| m.contains("alphaMode 'dither'")),
         "{warnings:?}"
     );
+}
+
+#[test]
+fn point_and_spot_lights_light_surfaces_through_the_world() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        let g = scalar_square(&mut h);
+        let m = matte(
+            &mut h,
+            Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 1.0, 1.0])),
+        );
+        let s = surface(&mut h, g, m);
+        // A point light 1 in front of the square's centre: bright there,
+        // dimmer towards the edges.
+        let point = h.d.new_object(DataType::LIGHT, "point");
+        h.set(
+            point,
+            "position",
+            DataType::FLOAT32_VEC3,
+            bytes(&[0.0f32, 0.0, 1.0]),
+        );
+        h.set(point, "intensity", DataType::FLOAT32, bytes(&[0.8f32]));
+        h.d.commit(Subject::Object(point));
+        let f = lit_frame(&mut h, &[s], None, &[point]);
+        let p = h.pixels(f);
+        assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
+        let (centre, edge) = (pixel(&p, SIZE / 2, SIZE / 2), pixel(&p, 1, SIZE / 2));
+        assert!(
+            centre[0] > 150 && edge[0] + 60 < centre[0],
+            "{backend}: {centre:?} {edge:?}"
+        );
+        // A narrow spot aimed at the centre leaves the edge dark.
+        let spot = h.d.new_object(DataType::LIGHT, "spot");
+        h.set(
+            spot,
+            "position",
+            DataType::FLOAT32_VEC3,
+            bytes(&[0.0f32, 0.0, 1.0]),
+        );
+        h.set(spot, "openingAngle", DataType::FLOAT32, bytes(&[0.6f32]));
+        h.d.commit(Subject::Object(spot));
+        let f2 = lit_frame(&mut h, &[s], None, &[spot]);
+        let p = h.pixels(f2);
+        let (centre, edge) = (pixel(&p, SIZE / 2, SIZE / 2), pixel(&p, 1, SIZE / 2));
+        assert!(
+            centre[0] > 150 && edge[0] == 0,
+            "{backend}: {centre:?} {edge:?}"
+        );
+        // A bad direction fails the spot's commit.
+        h.set(
+            spot,
+            "direction",
+            DataType::FLOAT32_VEC3,
+            bytes(&[0.0f32, 0.0, 0.0]),
+        );
+        h.d.commit(Subject::Object(spot));
+        let said: Vec<String> = h.errors().into_iter().map(|(_, m)| m).collect();
+        assert!(
+            said.iter().any(|m| m.contains("has no direction")),
+            "{said:?}"
+        );
+        for o in [g, m, s, point, f, spot, f2] {
+            h.d.release(o);
+        }
+    }
 }

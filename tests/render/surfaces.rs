@@ -10,7 +10,9 @@ use std::sync::Arc;
 use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera, PrimaryRays};
 use anari_library_caveray::render::Render as _;
-use anari_library_caveray::render::{ssim, ColorFormat, CpuRenderer, FrameDesc, RenderSettings};
+use anari_library_caveray::render::{
+    ssim, ColorFormat, CpuRenderer, FrameDesc, Lamp, RenderSettings, Spot,
+};
 use anari_library_caveray::scene::{
     AlphaMode, Attribute, ColorSource, Image, PlacedShape, Sampler, SamplerKind, Scene, Shape,
     ShapeInput, SurfaceMaterial, Wrap,
@@ -159,12 +161,28 @@ fn lights() -> [(&'static str, RenderSettings); 2] {
     [
         ("headlight", RenderSettings::default()),
         (
-            "directional",
+            "directional, point and spot",
             RenderSettings {
                 headlight: false,
                 light: Vec3::new(-0.4, 0.8, 0.5).normalize(),
                 light_color: Vec3::new(1.0, 0.9, 0.8) * 1.5,
                 ambient: Vec3::splat(0.2),
+                lamps: vec![
+                    Lamp {
+                        position: Vec3::new(1.5, 1.0, 2.0),
+                        color: Vec3::new(2.0, 1.5, 1.0),
+                        spot: None,
+                    },
+                    Lamp {
+                        position: Vec3::new(-1.0, 2.0, 1.5),
+                        color: Vec3::new(0.5, 1.0, 3.0),
+                        spot: Some(Spot {
+                            direction: Vec3::new(0.4, -0.9, -0.5).normalize(),
+                            cos_outer: 0.6f32.cos(),
+                            cos_inner: 0.4f32.cos(),
+                        }),
+                    },
+                ],
                 ..Default::default()
             },
         ),
@@ -543,5 +561,88 @@ fn translucent_surfaces_inside_a_volume_on_the_gpu_match_the_cpu_reference() {
         assert!(s >= 0.99, "{light}: GPU vs CPU SSIM {s}");
         let ratio = g.samples as f64 / c.samples as f64;
         assert!((ratio - 1.0).abs() < 0.02, "{light}: samples {ratio}");
+    }
+}
+
+#[test]
+fn point_and_spot_lights_fall_off_with_distance_and_cone() {
+    // A white square at z = 0.5 seen head-on, lit only by a point light
+    // 2 in front of its centre: the centre receives I / 4, a corner I
+    // cos(a) / r^2. A narrow spot at the same place lights the centre
+    // alone.
+    let n = 17;
+    let camera = OrthographicCamera::new(
+        DVec3::new(0.0, 0.0, 3.0),
+        DVec3::NEG_Z,
+        DVec3::Y,
+        2.0,
+        1.0,
+        ImageRegion::FULL,
+    )
+    .unwrap()
+    .ray_gen(UVec2::splat(n));
+    let scene = Scene::of_shapes(vec![square_at(0.5, Vec3::ONE, 1.0, AlphaMode::Opaque)]).unwrap();
+    let point = Lamp {
+        position: Vec3::new(0.0, 0.0, 2.5),
+        color: Vec3::new(2.0, 1.0, 0.5),
+        spot: None,
+    };
+    let spot = Lamp {
+        spot: Some(Spot {
+            direction: Vec3::NEG_Z,
+            cos_outer: 0.3f32.cos(),
+            cos_inner: 0.2f32.cos(),
+        }),
+        ..point
+    };
+    let desc = FrameDesc::new(UVec2::splat(n)).with_color(ColorFormat::Rgba32F);
+    let mut gpu = gpu();
+    for lamp in [point, spot] {
+        let settings = RenderSettings {
+            ambient: Vec3::ZERO,
+            headlight: false,
+            directional: false,
+            lamps: vec![lamp],
+            ..Default::default()
+        };
+        for (name, frame) in [
+            (
+                "cpu",
+                CpuRenderer::new()
+                    .render(&scene, &camera, &settings, &desc)
+                    .unwrap(),
+            ),
+            (
+                "gpu",
+                gpu.render(&scene, &camera, &settings, &desc).unwrap(),
+            ),
+        ] {
+            let anari_library_caveray::render::ColorData::Rgba32F(rgba) = &frame.color else {
+                panic!("asked for RGBA32F");
+            };
+            let at = |x: u32, y: u32| {
+                let i = 4 * (y * n + x) as usize;
+                Vec3::from_slice(&rgba[i..i + 3])
+            };
+            let centre = at(n / 2, n / 2);
+            assert!(
+                (centre - lamp.color / 4.0).abs().max_element() < 1e-3,
+                "{name}: centre {centre}"
+            );
+            // The corner pixel's centre on the square, and what reaches it.
+            let s = 2.0 / n as f32;
+            let p = Vec3::new(-1.0 + 0.5 * s, -1.0 + 0.5 * s, 0.5);
+            let offset = lamp.position - p;
+            let cos = offset.normalize().z;
+            let expected = match lamp.spot {
+                None => lamp.color * cos / offset.length_squared(),
+                Some(_) => Vec3::ZERO,
+            };
+            let corner = at(0, 0);
+            assert!(
+                (corner - expected).abs().max_element() < 1e-3,
+                "{name}: corner {corner}, expected {expected}"
+            );
+        }
     }
 }

@@ -21,6 +21,7 @@ use super::volume::VolumeModel;
 use super::world::WorldModel;
 use crate::engine::{Deadline, Inputs, Unrenderable};
 use crate::render::{Backend, FrameDesc, RenderSettings};
+use crate::render::{Lamp, MAX_LAMPS};
 use crate::scene::{PlacedVolume, Scene, StructuredVolume};
 
 /// The device's count of changes: a snapshot taken at one epoch stands
@@ -81,7 +82,15 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
         settings.light = light.towards;
         settings.light_color = light.color;
     }
-    settings.headlight = light.is_none();
+    // Surfaces also take the point and spot lights, the first MAX_LAMPS.
+    settings.lamps = world_model
+        .lights
+        .iter()
+        .filter_map(|l| l.usable::<Lamp>())
+        .take(MAX_LAMPS)
+        .collect();
+    settings.headlight = light.is_none() && settings.lamps.is_empty();
+    settings.directional = light.is_some();
     let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
     let mut placed = Vec::with_capacity(world_model.volumes.len());
     for (v, transform) in &world_model.volumes {

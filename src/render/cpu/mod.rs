@@ -347,7 +347,7 @@ fn through_surfaces(
         match shapes.coverage(&h) {
             Coverage::Translucent(a) => {
                 if composited < MAX_TRANSLUCENT {
-                    let lit = shapes.shade(&h, dir, settings);
+                    let lit = shapes.shade(&h, (o, dir), settings);
                     let p = o + dir * h.t;
                     if acc.add(plan, rays, p, h.t, lit, a) {
                         return (acc.over(bg), acc.depth, samples);
@@ -358,7 +358,7 @@ fn through_surfaces(
             }
             // Hidden surfaces are not in the BVH.
             Coverage::Opaque | Coverage::Hidden => {
-                let lit = shapes.shade(&h, dir, settings).extend(1.0);
+                let lit = shapes.shade(&h, (o, dir), settings).extend(1.0);
                 let surface = rays.depth_at(o + dir * h.t, h.t);
                 return (acc.over(lit), acc.depth.min(surface), samples);
             }

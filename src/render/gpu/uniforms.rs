@@ -31,7 +31,7 @@ use crate::render::shapes::packed::{
 };
 use crate::render::shapes::{MAX_TRANSLUCENT, SURFACE_PASSES};
 use crate::render::stereo::Reprojection;
-use crate::render::RenderSettings;
+use crate::render::{Lamp, RenderSettings, Spot, MAX_LAMPS};
 use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
 
 /// The WGSL type of a uniform field's Rust type.
@@ -46,7 +46,7 @@ macro_rules! wgsl_types {
 }
 
 // The WGSL types of the clip planes and volumes below name the counts.
-const _: () = assert!(MAX_CLIP_PLANES == 8 && MAX_VOLUMES == 8);
+const _: () = assert!(MAX_CLIP_PLANES == 8 && MAX_VOLUMES == 8 && MAX_LAMPS == 8);
 
 wgsl_types! {
     f32 => "f32", u32 => "u32", i32 => "i32",
@@ -55,6 +55,7 @@ wgsl_types! {
     [i32; 2] => "vec2i",
     [[f32; 4]; MAX_CLIP_PLANES] => "array<vec4f, 8>",
     [VolumeSlot; MAX_VOLUMES] => "array<VolumeSlot, 8>",
+    [LampSlot; MAX_LAMPS] => "array<LampSlot, 8>",
 }
 
 /// Defines a uniform struct, its WGSL declaration (module `$module`,
@@ -127,7 +128,7 @@ uniform! {
 uniform! {
     /// `RayUniforms` in shaders/volume.wgsl (`params`): one eye's rays and
     /// the march plan.
-    RayUniforms = "ray_uniforms" imports ["volume_slot"] {
+    RayUniforms = "ray_uniforms" imports ["volume_slot", "lamp_slot"] {
         /// The ray of pixel (0, 0) and its change per pixel.
         ray_origin: [f32; 3],
         /// Primary step length, world units.
@@ -191,12 +192,33 @@ uniform! {
         /// Lights every surface (the renderer's ambient light).
         ambient: [f32; 3],
         surface_shapes: u32,
-        /// 1: surfaces are lit from the eye (the world has no light).
+        /// 1: surfaces are lit from the eye (the world has no light);
+        /// 2: by its point and spot lights alone.
         headlight: u32,
-        _surface_pad: [u32; 3],
+        /// Entries of `lamps` in use.
+        lamp_count: u32,
+        _surface_pad: [u32; 2],
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
+        /// The surfaces' point and spot lights.
+        lamps: [LampSlot; MAX_LAMPS],
+    }
+}
+
+uniform! {
+    /// `LampSlot` in shaders/surface.wgsl: a point or spot light
+    /// (render::Lamp).
+    LampSlot = "lamp_slot" imports [] {
+        position: [f32; 3],
+        /// 1: a spot light.
+        spot: u32,
+        /// Color times intensity.
+        color: [f32; 3],
+        cos_outer: f32,
+        /// The way a spot's light travels.
+        direction: [f32; 3],
+        cos_inner: f32,
     }
 }
 
@@ -414,10 +436,18 @@ impl RayUniforms {
             surface_prims: surfaces.prims,
             ambient: v(settings.ambient),
             surface_shapes: surfaces.shapes,
-            headlight: u32::from(settings.headlight),
-            _surface_pad: [0; 3],
+            headlight: if settings.headlight {
+                1
+            } else if settings.directional {
+                0
+            } else {
+                2
+            },
+            lamp_count: settings.lamps.len().min(MAX_LAMPS) as u32,
+            _surface_pad: [0; 2],
             clip,
             volumes,
+            lamps: lamp_slots(&settings.lamps),
         }
     }
 }
@@ -454,6 +484,26 @@ impl Stereo {
     }
 }
 
+fn lamp_slots(lamps: &[Lamp]) -> [LampSlot; MAX_LAMPS] {
+    let mut slots = [LampSlot::default(); MAX_LAMPS];
+    for (slot, lamp) in slots.iter_mut().zip(lamps) {
+        let spot = lamp.spot.unwrap_or(Spot {
+            direction: Vec3::NEG_Z,
+            cos_outer: -1.0,
+            cos_inner: -1.0,
+        });
+        *slot = LampSlot {
+            position: lamp.position.to_array(),
+            spot: u32::from(lamp.spot.is_some()),
+            color: lamp.color.to_array(),
+            cos_outer: spot.cos_outer,
+            direction: spot.direction.to_array(),
+            cos_inner: spot.cos_inner,
+        };
+    }
+    slots
+}
+
 /// The directions storage buffer: vec4 per direction, at least one entry
 /// because WGSL storage arrays cannot be bound empty.
 pub(super) fn directions(dirs: &[Vec3]) -> Vec<[f32; 4]> {
@@ -471,6 +521,7 @@ pub(super) fn modules() -> Vec<(&'static str, String)> {
         ("constants", constants()),
         ("iso_constants", iso_constants()),
         (VolumeSlot::MODULE, VolumeSlot::wgsl()),
+        (LampSlot::MODULE, LampSlot::wgsl()),
         (RayUniforms::MODULE, RayUniforms::wgsl()),
         (Stereo::MODULE, Stereo::wgsl()),
         (Warp::MODULE, Warp::wgsl()),
@@ -594,6 +645,7 @@ mod tests {
             &rays,
             "RayUniforms",
         );
+        same_layout(LampSlot::FIELDS, size_of::<LampSlot>(), &rays, "LampSlot");
         same_layout(
             VolumeSlot::FIELDS,
             size_of::<VolumeSlot>(),

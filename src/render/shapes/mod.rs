@@ -388,16 +388,25 @@ impl ShapeSet {
         (placed.id, primitive)
     }
 
-    /// The lit color at `hit` seen along `d`: Lambertian under the world's
-    /// directional light (or a light at the eye where the world has none),
-    /// plus the renderer's ambient light.
-    pub fn shade(&self, hit: &Hit, d: Vec3, settings: &RenderSettings) -> Vec3 {
+    /// The lit color at `hit` of ray `o + t d`: Lambertian under the
+    /// world's directional light (or a light at the eye where the world
+    /// has none) and its point and spot lights, plus the renderer's
+    /// ambient light.
+    pub fn shade(&self, hit: &Hit, (o, d): (Vec3, Vec3), settings: &RenderSettings) -> Vec3 {
         let albedo = self.albedo(hit);
-        let direct = if settings.headlight {
-            Vec3::splat(hit.normal.dot(-d.normalize_or_zero()).max(0.0))
+        let n = hit.normal;
+        let mut direct = if settings.headlight {
+            Vec3::splat(n.dot(-d.normalize_or_zero()).max(0.0))
+        } else if settings.directional {
+            settings.light_color * n.dot(settings.light).max(0.0)
         } else {
-            settings.light_color * hit.normal.dot(settings.light).max(0.0)
+            Vec3::ZERO
         };
+        let p = o + d * hit.t;
+        for lamp in &settings.lamps {
+            let (towards, light) = lamp.at(p);
+            direct += light * n.dot(towards).max(0.0);
+        }
         albedo * (direct + settings.ambient)
     }
 }
