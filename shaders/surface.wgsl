@@ -381,9 +381,9 @@ fn surface_color(h: SurfaceHit, o: vec3f, d: vec3f) -> vec3f {
     let p = o + d * h.t;
     let n = surface_normal(h, p, d);
     var direct = vec3f(0.0);
-    if params.headlight == 1u {
+    if params.surface_lighting == SURFACE_LIT_FROM_EYE {
         direct = vec3f(max(dot(n, -d), 0.0));
-    } else if params.headlight == 0u {
+    } else if params.surface_lighting == SURFACE_LIT_DIRECTIONAL {
         direct = params.surface_light_color * max(dot(n, params.surface_light), 0.0);
     }
     for (var i = 0u; i < params.lamp_count; i++) {

@@ -133,11 +133,22 @@ pub fn isosurface_mesh(
                     continue;
                 }
                 for tet in TETRAHEDRA {
-                    let (inside, outside): (Vec<usize>, Vec<usize>) =
-                        tet.iter().partition(|&&c| values[c] >= value);
+                    // The corners on each side of the value, without
+                    // allocating: this runs for every crossed cell.
+                    let (mut inside, mut outside) = ([0usize; 4], [0usize; 4]);
+                    let (mut ni, mut no) = (0, 0);
+                    for c in tet {
+                        if values[c] >= value {
+                            inside[ni] = c;
+                            ni += 1;
+                        } else {
+                            outside[no] = c;
+                            no += 1;
+                        }
+                    }
                     let mut edge =
                         |mesh: &mut Mesh, a: usize, b: usize| vertex(mesh, points[a], points[b]);
-                    match (inside.as_slice(), outside.as_slice()) {
+                    match (&inside[..ni], &outside[..no]) {
                         ([a], [b, c, d]) | ([b, c, d], [a]) => {
                             let t = [
                                 edge(&mut mesh, *a, *b),

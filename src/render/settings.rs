@@ -37,8 +37,8 @@ pub struct Spot {
 }
 
 impl Lamp {
-    /// The light arriving at `p` along unit vector `towards` (to the lamp),
-    /// per unit of cos(normal, towards).
+    /// The unit vector from `p` to the lamp, and the light that arrives at
+    /// `p` from it before the cosine with a surface's normal.
     pub fn at(&self, p: Vec3) -> (Vec3, Vec3) {
         let offset = self.position - p;
         let d2 = offset.length_squared().max(1e-12);

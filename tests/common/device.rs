@@ -104,6 +104,20 @@ impl Host {
         self.lit_frame(volume, camera_z, &[])
     }
 
+    /// Sets `name` of `object` to an ARRAY1D of the `kind` objects
+    /// `handles`, released again (the object keeps it).
+    pub fn set_objects(&mut self, object: u64, name: &str, kind: DataType, handles: &[u64]) {
+        let handles: Vec<usize> = handles.iter().map(|&h| h as usize).collect();
+        let list = self.array(
+            DataType::ARRAY1D,
+            kind,
+            [handles.len() as u64, 1, 1],
+            &bytes(&handles),
+        );
+        self.set_object(object, name, DataType::ARRAY1D, list);
+        self.d.release(list);
+    }
+
     /// `frame`, with `lights` in the world's `light` array.
     pub fn lit_frame(&mut self, volume: u64, camera_z: f32, lights: &[u64]) -> (u64, u64) {
         self.d.commit(Subject::Object(volume));
@@ -116,15 +130,7 @@ impl Host {
         let world = self.d.new_object(DataType::WORLD, "");
         self.set_object(world, "volume", DataType::ARRAY1D, list);
         if !lights.is_empty() {
-            let handles: Vec<usize> = lights.iter().map(|&l| l as usize).collect();
-            let array = self.array(
-                DataType::ARRAY1D,
-                DataType::LIGHT,
-                [lights.len() as u64, 1, 1],
-                &bytes(&handles),
-            );
-            self.set_object(world, "light", DataType::ARRAY1D, array);
-            self.d.release(array);
+            self.set_objects(world, "light", DataType::LIGHT, lights);
         }
         self.d.commit(Subject::Object(world));
         let renderer = self.d.new_object(DataType::RENDERER, "default");

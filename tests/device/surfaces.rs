@@ -18,35 +18,12 @@ fn frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>) -> u64 {
 fn lit_frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>, lights: &[u64]) -> u64 {
     let world = h.d.new_object(DataType::WORLD, "");
     if !lights.is_empty() {
-        let handles: Vec<usize> = lights.iter().map(|&l| l as usize).collect();
-        let list = h.array(
-            DataType::ARRAY1D,
-            DataType::LIGHT,
-            [lights.len() as u64, 1, 1],
-            &bytes(&handles),
-        );
-        h.set_object(world, "light", DataType::ARRAY1D, list);
-        h.d.release(list);
+        h.set_objects(world, "light", DataType::LIGHT, lights);
     }
-    let handles: Vec<usize> = surfaces.iter().map(|&s| s as usize).collect();
-    let list = h.array(
-        DataType::ARRAY1D,
-        DataType::SURFACE,
-        [surfaces.len() as u64, 1, 1],
-        &bytes(&handles),
-    );
-    h.set_object(world, "surface", DataType::ARRAY1D, list);
-    h.d.release(list);
+    h.set_objects(world, "surface", DataType::SURFACE, surfaces);
     if let Some(v) = volume {
         h.d.commit(Subject::Object(v));
-        let list = h.array(
-            DataType::ARRAY1D,
-            DataType::VOLUME,
-            [1, 1, 1],
-            &bytes(&[v as usize]),
-        );
-        h.set_object(world, "volume", DataType::ARRAY1D, list);
-        h.d.release(list);
+        h.set_objects(world, "volume", DataType::VOLUME, &[v]);
     }
     h.d.commit(Subject::Object(world));
     let renderer = h.d.new_object(DataType::RENDERER, "default");

@@ -385,40 +385,16 @@ fn a_color_map_colors_a_ramp_texel_by_texel() {
         .unwrap()
     };
     let n = 32;
-    let camera = OrthographicCamera::new(
-        DVec3::new(0.0, 0.0, 3.0),
-        DVec3::NEG_Z,
-        DVec3::Y,
-        2.0,
-        1.0,
-        ImageRegion::FULL,
-    )
-    .unwrap()
-    .ray_gen(UVec2::splat(n));
+    let camera = head_on(n, 2.0);
     let settings = RenderSettings {
         ambient: Vec3::ZERO,
         ..Default::default()
     };
-    let desc = FrameDesc::new(UVec2::splat(n)).with_color(ColorFormat::Rgba32F);
+    let mut gpu = gpu();
     for linear in [false, true] {
         let map = color_map(4, linear);
         let scene = square(sampler(SamplerKind::Image(map.clone())));
-        let mut gpu = gpu();
-        for (name, frame) in [
-            (
-                "cpu",
-                CpuRenderer::new()
-                    .render(&scene, &camera, &settings, &desc)
-                    .unwrap(),
-            ),
-            (
-                "gpu",
-                gpu.render(&scene, &camera, &settings, &desc).unwrap(),
-            ),
-        ] {
-            let anari_library_caveray::render::ColorData::Rgba32F(rgba) = &frame.color else {
-                panic!("asked for RGBA32F");
-            };
+        for (name, rgba) in both(&mut gpu, &scene, (&camera, n), &settings) {
             for x in 0..n {
                 let u = (x as f32 + 0.5) / n as f32;
                 let expected = map.at(Vec4::new(u, 0.0, 0.0, 1.0));
@@ -467,16 +443,7 @@ fn translucent_and_masked_surfaces_composite_in_depth_order() {
     // there, above it it is opaque; in front of nothing it is half red
     // over the background.
     let n = 16;
-    let camera = OrthographicCamera::new(
-        DVec3::new(0.0, 0.0, 3.0),
-        DVec3::NEG_Z,
-        DVec3::Y,
-        4.0,
-        1.0,
-        ImageRegion::FULL,
-    )
-    .unwrap()
-    .ray_gen(UVec2::splat(n));
+    let camera = head_on(n, 4.0);
     let settings = RenderSettings {
         ambient: Vec3::ZERO,
         background: Vec4::new(0.0, 0.0, 0.0, 1.0),
@@ -497,21 +464,7 @@ fn translucent_and_masked_surfaces_composite_in_depth_order() {
     for (alpha, opacity, expected) in cases {
         let red = square_at(0.5, Vec3::X, opacity, alpha);
         let scene = Scene::of_shapes(vec![red, blue.clone()]).unwrap();
-        for (name, frame) in [
-            (
-                "cpu",
-                CpuRenderer::new()
-                    .render(&scene, &camera, &settings, &desc)
-                    .unwrap(),
-            ),
-            (
-                "gpu",
-                gpu.render(&scene, &camera, &settings, &desc).unwrap(),
-            ),
-        ] {
-            let anari_library_caveray::render::ColorData::Rgba32F(rgba) = &frame.color else {
-                panic!("asked for RGBA32F");
-            };
+        for (name, rgba) in both(&mut gpu, &scene, (&camera, n), &settings) {
             let i = 4 * (n / 2 * n + n / 2) as usize;
             let got = Vec3::from_slice(&rgba[i..i + 3]);
             assert!(
@@ -571,16 +524,7 @@ fn point_and_spot_lights_fall_off_with_distance_and_cone() {
     // cos(a) / r^2. A narrow spot at the same place lights the centre
     // alone.
     let n = 17;
-    let camera = OrthographicCamera::new(
-        DVec3::new(0.0, 0.0, 3.0),
-        DVec3::NEG_Z,
-        DVec3::Y,
-        2.0,
-        1.0,
-        ImageRegion::FULL,
-    )
-    .unwrap()
-    .ray_gen(UVec2::splat(n));
+    let camera = head_on(n, 2.0);
     let scene = Scene::of_shapes(vec![square_at(0.5, Vec3::ONE, 1.0, AlphaMode::Opaque)]).unwrap();
     let point = Lamp {
         position: Vec3::new(0.0, 0.0, 2.5),
@@ -595,7 +539,6 @@ fn point_and_spot_lights_fall_off_with_distance_and_cone() {
         }),
         ..point
     };
-    let desc = FrameDesc::new(UVec2::splat(n)).with_color(ColorFormat::Rgba32F);
     let mut gpu = gpu();
     for lamp in [point, spot] {
         let settings = RenderSettings {
@@ -605,21 +548,7 @@ fn point_and_spot_lights_fall_off_with_distance_and_cone() {
             lamps: vec![lamp],
             ..Default::default()
         };
-        for (name, frame) in [
-            (
-                "cpu",
-                CpuRenderer::new()
-                    .render(&scene, &camera, &settings, &desc)
-                    .unwrap(),
-            ),
-            (
-                "gpu",
-                gpu.render(&scene, &camera, &settings, &desc).unwrap(),
-            ),
-        ] {
-            let anari_library_caveray::render::ColorData::Rgba32F(rgba) = &frame.color else {
-                panic!("asked for RGBA32F");
-            };
+        for (name, rgba) in both(&mut gpu, &scene, (&camera, n), &settings) {
             let at = |x: u32, y: u32| {
                 let i = 4 * (y * n + x) as usize;
                 Vec3::from_slice(&rgba[i..i + 3])
@@ -645,4 +574,48 @@ fn point_and_spot_lights_fall_off_with_distance_and_cone() {
             );
         }
     }
+}
+
+/// A parallel view down -z from z = 3 of the square [-w/2, w/2]^2, n x n
+/// pixels: pixel centres land on known points of a surface facing it.
+fn head_on(n: u32, width: f64) -> anari_library_caveray::geometry::RayGen {
+    OrthographicCamera::new(
+        DVec3::new(0.0, 0.0, 3.0),
+        DVec3::NEG_Z,
+        DVec3::Y,
+        width,
+        1.0,
+        ImageRegion::FULL,
+    )
+    .unwrap()
+    .ray_gen(UVec2::splat(n))
+}
+
+/// `scene` through `camera` (n x n) on the CPU and on `gpu`, as RGBA32F
+/// pixels.
+fn both(
+    gpu: &mut anari_library_caveray::render::GpuRenderer,
+    scene: &Scene,
+    (camera, n): (&anari_library_caveray::geometry::RayGen, u32),
+    settings: &RenderSettings,
+) -> [(&'static str, Vec<f32>); 2] {
+    let desc = FrameDesc::new(UVec2::splat(n)).with_color(ColorFormat::Rgba32F);
+    let rgba = |frame: anari_library_caveray::render::Frame| match frame.color {
+        anari_library_caveray::render::ColorData::Rgba32F(c) => c,
+        _ => panic!("asked for RGBA32F"),
+    };
+    [
+        (
+            "cpu",
+            rgba(
+                CpuRenderer::new()
+                    .render(scene, camera, settings, &desc)
+                    .unwrap(),
+            ),
+        ),
+        (
+            "gpu",
+            rgba(gpu.render(scene, camera, settings, &desc).unwrap()),
+        ),
+    ]
 }

@@ -23,6 +23,16 @@ pub const ATTRIBUTE_ELEMENTS: &[T] = &[
     T::UFIXED8_VEC4,
 ];
 
+/// Triangles' and quads' normals.
+pub const VERTEX_NORMAL: crate::device::table::ParamInfo = crate::device::table::p(
+    "vertex.normal",
+    &[T::ARRAY1D],
+    false,
+    crate::device::table::DefaultValue::None,
+    "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
+)
+.elements(&[T::FLOAT32_VEC3]);
+
 /// A surface geometry's parameter table: `vertex.position`, the entries
 /// given, then the attributes and `primitive.id`.
 macro_rules! shape_params {

@@ -17,14 +17,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "quads: consecutive vertex quadruples, or indexed by primitive.index; drawn as two triangles each",
     extensions: &[EXT_QUAD],
     params: &shape_params!(
-        p(
-            "vertex.normal",
-            &[T::ARRAY1D],
-            false,
-            DefaultValue::None,
-            "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
-        )
-        .elements(&[T::FLOAT32_VEC3]),
+        attributes::VERTEX_NORMAL,
         p(
             "primitive.index",
             &[T::ARRAY1D],

@@ -14,14 +14,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     description: "triangles: consecutive vertex triples, or indexed by primitive.index",
     extensions: &[EXT_TRIANGLE],
     params: &shape_params!(
-        p(
-            "vertex.normal",
-            &[T::ARRAY1D],
-            false,
-            DefaultValue::None,
-            "FLOAT32_VEC3 per vertex, interpolated for shading (default: each face's own)",
-        )
-        .elements(&[T::FLOAT32_VEC3]),
+        attributes::VERTEX_NORMAL,
         p(
             "primitive.index",
             &[T::ARRAY1D],

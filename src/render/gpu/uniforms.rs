@@ -192,9 +192,9 @@ uniform! {
         /// Lights every surface (the renderer's ambient light).
         ambient: [f32; 3],
         surface_shapes: u32,
-        /// 1: surfaces are lit from the eye (the world has no light);
-        /// 2: by its point and spot lights alone.
-        headlight: u32,
+        /// One of the SURFACE_LIT_ codes: which lights the surfaces see
+        /// beside the point and spot lights.
+        surface_lighting: u32,
         /// Entries of `lamps` in use.
         lamp_count: u32,
         _surface_pad: [u32; 2],
@@ -436,12 +436,12 @@ impl RayUniforms {
             surface_prims: surfaces.prims,
             ambient: v(settings.ambient),
             surface_shapes: surfaces.shapes,
-            headlight: if settings.headlight {
-                1
+            surface_lighting: if settings.headlight {
+                SURFACE_LIT_FROM_EYE
             } else if settings.directional {
-                0
+                SURFACE_LIT_DIRECTIONAL
             } else {
-                2
+                SURFACE_LIT_BY_LAMPS
             },
             lamp_count: settings.lamps.len().min(MAX_LAMPS) as u32,
             _surface_pad: [0; 2],
@@ -504,6 +504,12 @@ fn lamp_slots(lamps: &[Lamp]) -> [LampSlot; MAX_LAMPS] {
     slots
 }
 
+/// Which lights the surfaces see besides the point and spot lights: the
+/// directional light, a light at the eye (the world has none), or none.
+const SURFACE_LIT_DIRECTIONAL: u32 = 0;
+const SURFACE_LIT_FROM_EYE: u32 = 1;
+const SURFACE_LIT_BY_LAMPS: u32 = 2;
+
 /// The directions storage buffer: vec4 per direction, at least one entry
 /// because WGSL storage arrays cannot be bound empty.
 pub(super) fn directions(dirs: &[Vec3]) -> Vec<[f32; 4]> {
@@ -558,6 +564,9 @@ fn constants() -> String {
         ("TRAVERSAL_STACK", TRAVERSAL_STACK),
         ("MAX_TRANSLUCENT", MAX_TRANSLUCENT),
         ("SURFACE_PASSES", SURFACE_PASSES),
+        ("SURFACE_LIT_DIRECTIONAL", SURFACE_LIT_DIRECTIONAL),
+        ("SURFACE_LIT_FROM_EYE", SURFACE_LIT_FROM_EYE),
+        ("SURFACE_LIT_BY_LAMPS", SURFACE_LIT_BY_LAMPS),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {
