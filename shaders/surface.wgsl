@@ -1,5 +1,5 @@
 // #import constants, volume_bindings, volume
-// The world's triangles, spheres and cylinders: the nearest hit along a
+// The world's triangles, spheres, cones (cylinders among them) and curves: the nearest hit along a
 // ray in their BVH and its lit color, as src/render/shapes/ finds and
 // shades it on the CPU (the reference), operation for operation. The
 // words of `surfaces` and `surface_shading` are laid out by
@@ -106,31 +106,40 @@ fn hit_sphere(o: vec3f, d: vec3f, c: vec3f, r: f32, t_min: f32, t_max: f32) -> f
     return infinite();
 }
 
-// The first t in (t_min, t_max) on the cylinder of radius r from a to b,
-// with the caps bits 0 (at a) and 1 (at b) close, and how far along the
-// axis it is met: (t, s), t infinite on a miss.
-fn hit_cylinder(o: vec3f, d: vec3f, a: vec3f, b: vec3f, r: f32, caps: u32, t_min: f32, t_max: f32) -> vec2f {
-    let len = distance(a, b);
-    let axis = (b - a) / len;
-    let oc = o - a;
+// The first t in (t_min, t_max) on the cone from a (radius ra) to b
+// (radius rb), with the caps bits 0 (at a) and 1 (at b) closed, and how
+// far along the axis it is met: (t, s), t infinite on a miss (cone() in
+// src/render/shapes/intersect.rs).
+fn hit_cone(o: vec3f, d: vec3f, a: vec4f, b: vec4f, caps: u32, t_min: f32, t_max: f32) -> vec2f {
+    var best = vec2f(infinite(), 0.0);
+    let dd = dot(d, d);
+    if dd == 0.0 {
+        return best;
+    }
+    let len = distance(a.xyz, b.xyz);
+    let axis = (b.xyz - a.xyz) / len;
+    let shift = dot((a.xyz + b.xyz) * 0.5 - o, d) / dd;
+    let oc = o + d * shift - a.xyz;
+    let slope = (b.w - a.w) / len;
     let along_d = dot(d, axis);
     let along_o = dot(oc, axis);
     let dp = d - axis * along_d;
     let op = oc - axis * along_o;
-    var best = vec2f(infinite(), 0.0);
-    let qa = dot(dp, dp);
-    if qa > 0.0 {
-        let qb = dot(op, dp);
-        let closest = op - dp * (qb / qa);
-        let disc = r * r - dot(closest, closest);
-        if disc >= 0.0 {
-            let h = sqrt(qa * disc);
-            for (var k = 0u; k < 2u; k++) {
-                let t = (-qb + select(-h, h, k == 1u)) / qa;
-                let s = along_o + t * along_d;
-                if s >= 0.0 && s <= len && t > t_min && t < t_max && t < best.x {
-                    best = vec2f(t, s / len);
-                }
+    let r0 = a.w + slope * along_o;
+    let rd = slope * along_d;
+    let qa = dot(dp, dp) - rd * rd;
+    let qb = dot(op, dp) - r0 * rd;
+    let qc = dot(op, op) - r0 * r0;
+    let disc = qb * qb - qa * qc;
+    if disc >= 0.0 {
+        let root = sqrt(disc);
+        let q = -(qb + select(root, -root, qb < 0.0));
+        for (var k = 0u; k < 2u; k++) {
+            let local = select(q / qa, qc / q, k == 1u);
+            let s = along_o + local * along_d;
+            let t = local + shift;
+            if abs(local) < infinite() && s >= 0.0 && s <= len && t > t_min && t < t_max && t < best.x {
+                best = vec2f(t, s / len);
             }
         }
     }
@@ -140,14 +149,91 @@ fn hit_cylinder(o: vec3f, d: vec3f, a: vec3f, b: vec3f, r: f32, caps: u32, t_min
                 continue;
             }
             let end = select(a, b, k == 1u);
-            let t = dot(end - o, axis) / along_d;
-            let off = o + d * t - end;
-            if dot(off, off) <= r * r && t > t_min && t < t_max && t < best.x {
+            let local = dot(end.xyz - a.xyz - oc, axis) / along_d;
+            let off = oc + d * local - (end.xyz - a.xyz);
+            let t = local + shift;
+            if dot(off, off) <= end.w * end.w && t > t_min && t < t_max && t < best.x {
                 best = vec2f(t, f32(k));
             }
         }
     }
     return best;
+}
+
+// The cone joining the spheres a and b tangentially, as its two ends
+// (radius in w); a zero-length axis where one sphere holds the other
+// (tangent_cone()).
+fn tangent_cone(a: vec4f, b: vec4f) -> array<vec4f, 2> {
+    let len = distance(a.xyz, b.xyz);
+    let along = (a.w - b.w) / len;
+    if !(abs(along) < 1.0) {
+        return array<vec4f, 2>(a, a);
+    }
+    let across = sqrt(1.0 - along * along);
+    let axis = (b.xyz - a.xyz) / len;
+    return array<vec4f, 2>(vec4f(a.xyz + axis * (a.w * along), a.w * across), vec4f(b.xyz + axis * (b.w * along), b.w * across));
+}
+
+// The first t in (t_min, t_max) on the round curve segment from sphere a
+// to sphere b, and how far along it the hit lies (curve()).
+fn hit_curve(o: vec3f, d: vec3f, a: vec4f, b: vec4f, t_min: f32, t_max: f32) -> vec2f {
+    var best = vec2f(infinite(), 0.0);
+    let ta = hit_sphere(o, d, a.xyz, a.w, t_min, t_max);
+    if ta < best.x {
+        best = vec2f(ta, 0.0);
+    }
+    let tb = hit_sphere(o, d, b.xyz, b.w, t_min, min(t_max, best.x));
+    if tb < best.x {
+        best = vec2f(tb, 1.0);
+    }
+    let side = tangent_cone(a, b);
+    if any(side[0].xyz != side[1].xyz) {
+        let h = hit_cone(o, d, side[0], side[1], 0u, t_min, min(t_max, best.x));
+        if h.x < best.x {
+            let axis = b.xyz - a.xyz;
+            best = vec2f(h.x, clamp(dot(o + d * h.x - a.xyz, axis) / dot(axis, axis), 0.0, 1.0));
+        }
+    }
+    return best;
+}
+
+// The outward normal at q on the cone from a to b; a point inside the
+// rim of an end is on that end's disc (cone_normal()).
+fn cone_normal(a: vec4f, b: vec4f, q: vec3f, caps: bool) -> vec3f {
+    let len = distance(a.xyz, b.xyz);
+    let axis = (b.xyz - a.xyz) / len;
+    let p = q - a.xyz;
+    let s = dot(p, axis);
+    let radial = p - axis * s;
+    let slope = (b.w - a.w) / len;
+    let r = a.w + slope * clamp(s, 0.0, len);
+    let rl = length(radial);
+    if caps && rl < r * (1.0 - 1e-4) {
+        return select(axis, -axis, s < 0.5 * len);
+    }
+    var unit = vec3f(0.0);
+    if rl > 0.0 {
+        unit = radial / rl;
+    }
+    return unit - axis * slope;
+}
+
+// The outward normal at q on the round curve segment a to b
+// (curve_normal()).
+fn curve_normal(a: vec4f, b: vec4f, q: vec3f) -> vec3f {
+    let side = tangent_cone(a, b);
+    if all(side[0].xyz == side[1].xyz) {
+        return q - select(b.xyz, a.xyz, a.w >= b.w);
+    }
+    let axis = b.xyz - a.xyz;
+    let s = dot(q - a.xyz, axis);
+    if s <= dot(side[0].xyz - a.xyz, axis) {
+        return q - a.xyz;
+    }
+    if s >= dot(side[1].xyz - a.xyz, axis) {
+        return q - b.xyz;
+    }
+    return cone_normal(side[0], side[1], q, false);
 }
 
 // Slot `slot`'s primitive along o + t d: (t, bary), t infinite on a miss.
@@ -169,10 +255,17 @@ fn hit_slot(slot: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> vec3f {
             let od = to_object(shape, vec4f(d, 0.0));
             return vec3f(hit_sphere(oo, od, w0.xyz, w0.w, t_min, t_max), 0.0, 0.0);
         }
+        case KIND_CONE: {
+            let oo = to_object(shape, vec4f(o, 1.0));
+            let od = to_object(shape, vec4f(d, 0.0));
+            let b = vec4f(w1.xyz, prim_word(slot, 2u).x);
+            let h = hit_cone(oo, od, w0, b, (header >> 2u) & 3u, t_min, t_max);
+            return vec3f(h.x, h.y, 0.0);
+        }
         default: {
             let oo = to_object(shape, vec4f(o, 1.0));
             let od = to_object(shape, vec4f(d, 0.0));
-            let h = hit_cylinder(oo, od, w0.xyz, w1.xyz, w0.w, (header >> 2u) & 3u, t_min, t_max);
+            let h = hit_curve(oo, od, w0, vec4f(w1.xyz, prim_word(slot, 2u).x), t_min, t_max);
             return vec3f(h.x, h.y, 0.0);
         }
     }
@@ -266,16 +359,13 @@ fn surface_normal(h: SurfaceHit, p: vec3f, d: vec3f) -> vec3f {
         case KIND_SPHERE: {
             n = normal_to_world(shape, to_object(shape, vec4f(p, 1.0)) - w0.xyz);
         }
+        case KIND_CONE: {
+            let q = to_object(shape, vec4f(p, 1.0));
+            n = normal_to_world(shape, cone_normal(w0, vec4f(w1.xyz, w2.x), q, true));
+        }
         default: {
-            let axis = normalize(w1.xyz - w0.xyz);
-            let q = to_object(shape, vec4f(p, 1.0)) - w0.xyz;
-            let radial = q - axis * dot(q, axis);
-            // Inside the rim: a cap, facing out of its end.
-            var object = radial;
-            if length(radial) < w0.w * (1.0 - 1e-4) {
-                object = select(axis, -axis, h.bary.x < 0.5);
-            }
-            n = normal_to_world(shape, object);
+            let q = to_object(shape, vec4f(p, 1.0));
+            n = normal_to_world(shape, curve_normal(w0, vec4f(w1.xyz, w2.x), q));
         }
     }
     // A normal the host gave may be zero: then face the ray.

@@ -16,10 +16,11 @@ use super::sampler::SamplerModel;
 use super::surface::SurfaceModel;
 use super::table::{
     ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE,
-    EXT_COMPLETION, EXT_CURVATURE, EXT_CYLINDER, EXT_FRAME_DEADLINE, EXT_FRAME_PAIR, EXT_IMAGE1D,
-    EXT_IMAGE2D, EXT_IMAGE3D, EXT_ISOSURFACE, EXT_MATRIX, EXT_MATRIX_VSNRAY, EXT_MATTE,
-    EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_PRIMITIVE_SAMPLER, EXT_QUAD, EXT_SHADING,
-    EXT_SPHERE, EXT_STEREO, EXT_TRANSFORM_SAMPLER, EXT_TRIANGLE,
+    EXT_COMPLETION, EXT_CONE, EXT_CURVATURE, EXT_CURVE, EXT_CYLINDER, EXT_FRAME_DEADLINE,
+    EXT_FRAME_PAIR, EXT_IMAGE1D, EXT_IMAGE2D, EXT_IMAGE3D, EXT_ISOSURFACE, EXT_MATRIX,
+    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC,
+    EXT_PRIMITIVE_SAMPLER, EXT_QUAD, EXT_SHADING, EXT_SPHERE, EXT_STEREO, EXT_TRANSFORM_SAMPLER,
+    EXT_TRIANGLE,
 };
 use super::types::DataType as T;
 use super::volume::VolumeModel;
@@ -55,6 +56,8 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_QUAD,
     EXT_SPHERE,
     EXT_CYLINDER,
+    EXT_CONE,
+    EXT_CURVE,
     EXT_AMBIENT,
     EXT_MATTE,
     "ANARI_KHR_LIGHT_POINT",
@@ -99,6 +102,8 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &geometry::quad::INFO,
     &geometry::sphere::INFO,
     &geometry::cylinder::INFO,
+    &geometry::cone::INFO,
+    &geometry::curve::INFO,
     &material::matte::INFO,
     &material::curvature::INFO,
     &sampler::image::INFO_1D,
@@ -261,7 +266,15 @@ mod tests {
         );
         assert_eq!(
             subtypes(T::GEOMETRY),
-            ["isosurface", "triangle", "quad", "sphere", "cylinder"]
+            [
+                "isosurface",
+                "triangle",
+                "quad",
+                "sphere",
+                "cylinder",
+                "cone",
+                "curve"
+            ]
         );
         assert_eq!(subtypes(T::MATERIAL), ["matte", "curvature"]);
         assert_eq!(

@@ -74,14 +74,24 @@ pub enum Primitives {
         /// The vertex of each kept sphere.
         spheres: Vec<u32>,
     },
-    Cylinders {
+    /// Cylinders are cones of one radius.
+    Cones {
         positions: Vec<Vec3>,
-        /// The two end vertices of each kept cylinder.
-        cylinders: Vec<[u32; 2]>,
-        /// One per kept cylinder.
-        radii: Vec<f32>,
+        /// The two end vertices of each kept cone.
+        cones: Vec<[u32; 2]>,
+        /// Its radius at each end.
+        radii: Vec<[f32; 2]>,
         /// Closed by a disc at the first end, and at the second.
-        caps: [bool; 2],
+        caps: Vec<[bool; 2]>,
+    },
+    /// Round linear curves: each segment the hull of the spheres at its
+    /// two vertices, so that consecutive segments join smoothly.
+    Curves {
+        positions: Vec<Vec3>,
+        /// Per vertex.
+        radii: Vec<f32>,
+        /// The first vertex of each kept segment; the second follows it.
+        segments: Vec<u32>,
     },
 }
 
@@ -150,6 +160,33 @@ impl ShapeInput {
         }
         Ok(())
     }
+}
+
+/// That the vertices `pair` of host primitive `index` exist and are
+/// finite.
+fn check_used(
+    positions: &[Vec3],
+    pair: &[u32; 2],
+    what: &'static str,
+    index: usize,
+) -> Result<(), ShapeError> {
+    for &v in pair {
+        let Some(&p) = positions.get(v as usize) else {
+            return Err(ShapeError::IndexOutOfRange {
+                what,
+                index,
+                vertex: v,
+                count: positions.len(),
+            });
+        };
+        if !p.is_finite() {
+            return Err(ShapeError::NotFinite {
+                index: v as usize,
+                position: p,
+            });
+        }
+    }
+    Ok(())
 }
 
 fn dropped(count: usize, what: &str) -> Option<String> {
@@ -279,62 +316,93 @@ impl Shape {
         })
     }
 
-    /// Cylinders between vertex pairs `ends` (host primitive i is pair
-    /// i), of radius `radii[i]`, with the caps asked for. Indices must lie
-    /// in range and the ends they use must be finite; cylinders of zero
-    /// length or of zero, negative or non-finite radius are dropped.
-    pub fn cylinders(
+    /// Cones between vertex pairs `ends` (host primitive i is pair i),
+    /// of radii `radii[i]` at its two ends, with the caps asked for.
+    /// Indices must lie in range and the ends they use must be finite;
+    /// cones of zero length, of a negative or non-finite radius, or of
+    /// zero radius at both ends are dropped. `noun` names one in
+    /// messages: "cylinder" where the host sent cylinders.
+    pub fn cones(
+        noun: &'static str,
         positions: Vec<Vec3>,
         ends: Vec<[u32; 2]>,
-        radii: Vec<f32>,
-        caps: [bool; 2],
+        radii: Vec<[f32; 2]>,
+        caps: Vec<[bool; 2]>,
         input: ShapeInput,
     ) -> Result<Made, ShapeError> {
         input.check()?;
-        let count = positions.len();
-        let mut cylinders = Vec::with_capacity(ends.len());
+        let mut cones = Vec::with_capacity(ends.len());
         let mut kept_radii = Vec::with_capacity(ends.len());
+        let mut kept_caps = Vec::with_capacity(ends.len());
         let mut source = Vec::with_capacity(ends.len());
         let mut thin = 0;
-        for (i, (pair, &r)) in ends.iter().zip(&radii).enumerate() {
-            for &v in pair {
-                let Some(&p) = positions.get(v as usize) else {
-                    return Err(ShapeError::IndexOutOfRange {
-                        what: "cylinder",
-                        index: i,
-                        vertex: v,
-                        count,
-                    });
-                };
-                if !p.is_finite() {
-                    return Err(ShapeError::NotFinite {
-                        index: v as usize,
-                        position: p,
-                    });
-                }
-            }
+        for (i, ((pair, r), cap)) in ends.iter().zip(&radii).zip(&caps).enumerate() {
+            check_used(&positions, pair, noun, i)?;
             let length = positions[pair[0] as usize].distance(positions[pair[1] as usize]);
-            if !(r.is_finite() && r > 0.0 && length > 0.0) {
+            let valid = r.iter().all(|r| r.is_finite() && *r >= 0.0);
+            if !(valid && r[0].max(r[1]) > 0.0 && length > 0.0) {
                 thin += 1;
                 continue;
             }
-            cylinders.push(*pair);
-            kept_radii.push(r);
+            cones.push(*pair);
+            kept_radii.push(*r);
+            kept_caps.push(*cap);
             source.push(i as u32);
         }
         Ok(Made {
             shape: Shape {
-                primitives: Primitives::Cylinders {
+                primitives: Primitives::Cones {
                     positions,
-                    cylinders,
+                    cones,
                     radii: kept_radii,
-                    caps,
+                    caps: kept_caps,
                 },
                 source,
                 attributes: input.attributes,
                 ids: input.ids,
             },
-            dropped: dropped(thin, "cylinders of zero length or invalid radius"),
+            dropped: dropped(thin, &format!("{noun}s of zero length or invalid radius")),
+        })
+    }
+
+    /// Round linear curves: host segment i runs from vertex `first[i]` to
+    /// the next, of the radii at its two vertices. Both vertices must
+    /// exist and be finite; segments of a negative or non-finite radius,
+    /// or of zero radius at both ends, are dropped.
+    pub fn curves(
+        positions: Vec<Vec3>,
+        radii: Vec<f32>,
+        first: Vec<u32>,
+        input: ShapeInput,
+    ) -> Result<Made, ShapeError> {
+        input.check()?;
+        let count = positions.len().min(radii.len());
+        let mut segments = Vec::with_capacity(first.len());
+        let mut source = Vec::with_capacity(first.len());
+        let mut thin = 0;
+        for (i, &v) in first.iter().enumerate() {
+            let pair = [v, v.saturating_add(1)];
+            check_used(&positions[..count], &pair, "curve segment", i)?;
+            let r = pair.map(|v| radii[v as usize]);
+            if !(r.iter().all(|r| r.is_finite() && *r >= 0.0) && r[0].max(r[1]) > 0.0) {
+                thin += 1;
+                continue;
+            }
+            segments.push(v);
+            source.push(i as u32);
+        }
+        Ok(Made {
+            shape: Shape {
+                primitives: Primitives::Curves {
+                    positions,
+                    radii,
+                    segments,
+                },
+                source,
+                attributes: input.attributes,
+                ids: input.ids,
+            },
+            dropped: dropped(thin, "curve segments of invalid radius"),
         })
     }
 
@@ -352,7 +420,8 @@ impl Shape {
         match &self.primitives {
             Primitives::Triangles { positions, .. }
             | Primitives::Spheres { positions, .. }
-            | Primitives::Cylinders { positions, .. } => positions.len(),
+            | Primitives::Cones { positions, .. }
+            | Primitives::Curves { positions, .. } => positions.len(),
         }
     }
 
@@ -381,15 +450,28 @@ impl Shape {
                     (lo, hi) = (lo.min(c - r), hi.max(c + r));
                 }
             }
-            Primitives::Cylinders {
+            Primitives::Cones {
                 positions,
-                cylinders,
+                cones,
                 radii,
                 ..
             } => {
-                for (pair, &r) in cylinders.iter().zip(radii) {
+                for (pair, r) in cones.iter().zip(radii) {
+                    let r = r[0].max(r[1]);
                     for &v in pair {
                         let p = positions[v as usize];
+                        (lo, hi) = (lo.min(p - r), hi.max(p + r));
+                    }
+                }
+            }
+            Primitives::Curves {
+                positions,
+                radii,
+                segments,
+            } => {
+                for &v in segments {
+                    for v in [v as usize, v as usize + 1] {
+                        let (p, r) = (positions[v], radii[v]);
                         (lo, hi) = (lo.min(p - r), hi.max(p + r));
                     }
                 }

@@ -325,7 +325,15 @@ fn device_and_world_properties() {
         .unwrap();
     assert_eq!(
         unsafe { strings(geometries as *const *const c_char) },
-        ["isosurface", "triangle", "quad", "sphere", "cylinder"]
+        [
+            "isosurface",
+            "triangle",
+            "quad",
+            "sphere",
+            "cylinder",
+            "cone",
+            "curve"
+        ]
     );
     let minor: i32 = s.property(dev, "version.minor", ANARI_INT32).unwrap();
     assert_eq!(

@@ -1,5 +1,5 @@
 //! Surfaces of primitives through ANARI (ANARI_KHR_GEOMETRY_TRIANGLE,
-//! _QUAD, _SPHERE, _CYLINDER): geometries as hosts build them, colored by a matte
+//! _QUAD, _SPHERE, _CYLINDER, _CONE, _CURVE): geometries as hosts build them, colored by a matte
 //! material's constant or by attributes, alone or inside a volume, with
 //! degenerate input reported at commit, on either backend.
 
@@ -353,6 +353,149 @@ fn cylinders_take_per_primitive_radii_and_warn_of_unknown_caps() {
     assert!((d - 2.7).abs() < 0.02, "{d}");
     // The zero-length one at y = -0.8 draws nothing.
     assert_eq!(pixel(&p, c, 6), [0, 0, 0, 255]);
+}
+
+fn f32_array(h: &mut Host, name: &str, geometry: u64, values: &[f32]) {
+    let a = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32,
+        [values.len() as u64, 1, 1],
+        &bytes(values),
+    );
+    h.set_object(geometry, name, DataType::ARRAY1D, a);
+    h.d.release(a);
+}
+
+fn u8_array(h: &mut Host, name: &str, geometry: u64, values: &[u8]) {
+    let a = h.array(
+        DataType::ARRAY1D,
+        DataType::UINT8,
+        [values.len() as u64, 1, 1],
+        values,
+    );
+    h.set_object(geometry, name, DataType::ARRAY1D, a);
+    h.d.release(a);
+}
+
+/// The depth at the centre of a frame of `geometry` in blue.
+fn centre_depth(h: &mut Host, geometry: u64) -> f32 {
+    let m = matte(
+        h,
+        Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[0.0f32, 0.0, 1.0])),
+    );
+    let s = surface(h, geometry, m);
+    let f = frame(h, &[s], None);
+    h.pixels(f);
+    let depth = h.depth_sized(f, SIZE, SIZE);
+    let c = SIZE / 2;
+    depth[(c * SIZE + c) as usize]
+}
+
+#[test]
+fn cones_take_radii_per_vertex_and_caps_per_vertex_over_the_global_caps() {
+    let mut h = Host::new();
+    // Down the view axis: wide (0.5) at z = 0.5, narrower (0.3) at z = -0.5.
+    let g = h.d.new_object(DataType::GEOMETRY, "cone");
+    vec3_array(
+        &mut h,
+        "vertex.position",
+        g,
+        &[[0.0, 0.0, 0.5], [0.0, 0.0, -0.5]],
+    );
+    f32_array(&mut h, "vertex.radius", g, &[0.5, 0.3]);
+    h.d.set_param(Subject::Object(g), "caps", Input::String("first".into()));
+    h.d.commit(Subject::Object(g));
+    // The near disc faces the eye at 3.
+    let d = centre_depth(&mut h, g);
+    assert!((d - 2.5).abs() < 0.01, "{d}");
+    // vertex.cap wins over caps: open at the near end, the eye looks in
+    // through it at the far disc.
+    u8_array(&mut h, "vertex.cap", g, &[0, 1]);
+    h.d.commit(Subject::Object(g));
+    let d = centre_depth(&mut h, g);
+    assert!((d - 3.5).abs() < 0.01, "{d}");
+    // Open at both ends, the ray leaves through the narrow end.
+    u8_array(&mut h, "vertex.cap", g, &[0, 0]);
+    h.d.commit(Subject::Object(g));
+    assert_eq!(centre_depth(&mut h, g), f32::INFINITY);
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    // Too few caps, or an end past the vertices: errors at commit.
+    u8_array(&mut h, "vertex.cap", g, &[1]);
+    h.d.commit(Subject::Object(g));
+    let errors = h.errors();
+    assert!(
+        errors
+            .iter()
+            .any(|(code, m)| *code == StatusCode::InvalidArgument
+                && m.contains("vertex.cap has 1 values for 2 vertices")),
+        "{errors:?}"
+    );
+    let index = h.array(
+        DataType::ARRAY1D,
+        DataType::UINT32_VEC2,
+        [1, 1, 1],
+        &bytes(&[0u32, 5]),
+    );
+    h.set_object(g, "primitive.index", DataType::ARRAY1D, index);
+    h.d.release(index);
+    u8_array(&mut h, "vertex.cap", g, &[1, 1]);
+    h.d.commit(Subject::Object(g));
+    let errors = h.errors();
+    assert!(
+        errors
+            .iter()
+            .any(|(_, m)| m.contains("cone 0 refers to vertex 5; there are 2 vertices")),
+        "{errors:?}"
+    );
+}
+
+#[test]
+fn curves_join_their_segments_and_report_a_segment_past_the_end() {
+    let mut h = Host::new();
+    let g = h.d.new_object(DataType::GEOMETRY, "curve");
+    // A polyline across the view; no index: every vertex but the last
+    // starts a segment. The middle vertex's radius is the one seen.
+    vec3_array(
+        &mut h,
+        "vertex.position",
+        g,
+        &[[-2.0, 0.0, 0.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+    );
+    f32_array(&mut h, "vertex.radius", g, &[0.1, 0.4, 0.1]);
+    h.d.commit(Subject::Object(g));
+    // The pixel is a little off the axis, where the sphere curves away.
+    let d = centre_depth(&mut h, g);
+    assert!((d - 2.6).abs() < 0.02, "{d}");
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    // A global radius where none is given per vertex.
+    let g2 = h.d.new_object(DataType::GEOMETRY, "curve");
+    vec3_array(
+        &mut h,
+        "vertex.position",
+        g2,
+        &[[-2.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+    );
+    h.set(g2, "radius", DataType::FLOAT32, bytes(&[0.25f32]));
+    h.d.commit(Subject::Object(g2));
+    let d = centre_depth(&mut h, g2);
+    assert!((d - 2.75).abs() < 0.02, "{d}");
+    let index = h.array(
+        DataType::ARRAY1D,
+        DataType::UINT32,
+        [2, 1, 1],
+        &bytes(&[0u32, 1]),
+    );
+    h.set_object(g2, "primitive.index", DataType::ARRAY1D, index);
+    h.d.release(index);
+    h.d.commit(Subject::Object(g2));
+    let errors = h.errors();
+    assert!(
+        errors
+            .iter()
+            .any(|(code, m)| *code == StatusCode::InvalidArgument
+                && m.contains("curve segment 1 refers to vertex 2; there are 2 vertices")),
+        "{errors:?}"
+    );
 }
 
 #[test]

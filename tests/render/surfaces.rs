@@ -1,4 +1,4 @@
-//! Triangles, spheres and cylinders beside a volume on the GPU, held to
+//! Triangles, spheres, cones and curves beside a volume on the GPU, held to
 //! the CPU reference: one march that stops at the nearest surface, its
 //! color by attribute or constant, lit by a directional light or from the
 //! eye, under any affine transform, and the BVH uploaded once.
@@ -117,7 +117,9 @@ fn glyphs_in(color: ColorSource) -> PlacedShape {
     PlacedShape::new(Arc::new(made.shape), material(color), shear)
 }
 
-/// Three tubes, one cap each, colored per primitive through attribute1.
+/// Three tubes: a cylinder capped at its first end, a cone tapering to a
+/// point and one capped at both ends, colored per primitive through
+/// attribute1.
 fn tubes() -> PlacedShape {
     tubes_in(ColorSource::Attribute(2))
 }
@@ -136,11 +138,12 @@ fn tubes_in(color: ColorSource) -> PlacedShape {
         Vec4::new(0.2, 1.0, 0.3, 1.0),
         Vec4::new(0.3, 0.4, 1.0, 1.0),
     ];
-    let made = Shape::cylinders(
+    let made = Shape::cones(
+        "cone",
         positions,
         vec![[0, 1], [2, 3], [4, 5]],
-        vec![0.12, 0.1, 0.15],
-        [true, false],
+        vec![[0.12, 0.12], [0.18, 0.0], [0.15, 0.06]],
+        vec![[true, false], [true, true], [true, true]],
         input(6, 3, 2, Some(Attribute::PerPrimitive(colors))),
     )
     .unwrap();
@@ -151,9 +154,39 @@ fn tubes_in(color: ColorSource) -> PlacedShape {
     )
 }
 
+/// A streamline: a helix of round curve segments whose radius swells and
+/// shrinks, colored along it per vertex.
+fn streamline() -> PlacedShape {
+    let n = 14;
+    let (mut positions, mut radii, mut colors) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        let u = i as f32 / (n - 1) as f32;
+        let a = u * 9.0;
+        positions.push(Vec3::new(
+            0.7 * a.cos(),
+            -1.0 + 2.0 * u,
+            0.5 + 0.4 * a.sin(),
+        ));
+        radii.push(0.04 + 0.08 * (u * std::f32::consts::PI).sin());
+        colors.push(Vec4::new(u, 1.0 - u, 0.5, 1.0));
+    }
+    let made = Shape::curves(
+        positions,
+        radii,
+        (0..n as u32 - 1).collect(),
+        input(n, n - 1, 0, Some(Attribute::PerVertex(colors))),
+    )
+    .unwrap();
+    PlacedShape::new(
+        Arc::new(made.shape),
+        material(ColorSource::Attribute(0)),
+        Mat4::from_rotation_x(0.2),
+    )
+}
+
 fn mixed() -> Scene {
     Scene::new(shepp_logan(24), preset("phantom").unwrap())
-        .with_shapes(vec![sheet(12), glyphs(), tubes()])
+        .with_shapes(vec![sheet(12), glyphs(), tubes(), streamline()])
         .unwrap()
 }
 
@@ -245,7 +278,7 @@ fn surfaces_inside_a_volume_on_the_gpu_match_the_cpu_reference() {
 
 #[test]
 fn surfaces_without_a_volume_render_on_the_gpu_as_on_the_cpu() {
-    let scene = Scene::of_shapes(vec![sheet(6), glyphs(), tubes()]).unwrap();
+    let scene = Scene::of_shapes(vec![sheet(6), glyphs(), tubes(), streamline()]).unwrap();
     let (screen, eye) = off_axis_wall();
     let size = UVec2::new(32, 32);
     let rays = four_cameras(&screen, eye, size)[0].1;

@@ -129,6 +129,48 @@ pub fn indices(r: &Read<'_>, name: &str, element: T) -> Result<Option<Vec<u32>>,
     })
 }
 
+/// `primitive.index` as vertex pairs, else vertices 2i and 2i + 1.
+pub fn pairs(r: &Read<'_>, vertices: usize) -> Result<Vec<[u32; 2]>, String> {
+    let flat = match indices(r, "primitive.index", T::UINT32_VEC2)? {
+        Some(i) => i,
+        None => (0..(vertices / 2 * 2) as u32).collect(),
+    };
+    Ok(flat.chunks_exact(2).map(|e| [e[0], e[1]]).collect())
+}
+
+/// The cap modes cones and cylinders take, by name.
+pub const CAPS: [&str; 4] = ["none", "first", "second", "both"];
+
+/// `caps`: which ends are closed. An unknown name falls back to the
+/// default (the spec's rule for enumerations), with a warning.
+pub fn caps(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> [bool; 2] {
+    match r.string("caps").unwrap_or("none") {
+        "none" => [false, false],
+        "first" => [true, false],
+        "second" => [false, true],
+        "both" => [true, true],
+        other => {
+            warn(format!(
+                "caps '{other}' is not one of {}; the ends are open",
+                CAPS.join(", ")
+            ));
+            [false, false]
+        }
+    }
+}
+
+/// `vertex.radius`, one per vertex, else `radius` for every vertex.
+pub fn vertex_radii(r: &Read<'_>, vertices: usize) -> Result<Vec<f32>, String> {
+    match f32s(r, "vertex.radius")? {
+        Some(radii) if radii.len() < vertices => Err(format!(
+            "vertex.radius has {} values for {vertices} vertices",
+            radii.len()
+        )),
+        Some(radii) => Ok(radii),
+        None => Ok(vec![r.f32("radius")?; vertices]),
+    }
+}
+
 /// `vertex.position`: required.
 pub fn positions(r: &Read<'_>) -> Result<Vec<Vec3>, String> {
     vec3s(r, "vertex.position")?

@@ -10,8 +10,6 @@ use crate::device::types::DataType as T;
 
 use super::attributes::{self, shape_params};
 
-const CAPS: [&str; 4] = ["none", "first", "second", "both"];
-
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::GEOMETRY,
     subtype: "cylinder",
@@ -48,18 +46,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             DefaultValue::Text("none"),
             "which ends are closed by a disc: none, first, second or both",
         )
-        .names(&CAPS),
+        .names(&attributes::CAPS),
     ),
     commit: Some(commit),
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let positions = attributes::positions(r)?;
-    let ends = match attributes::indices(r, "primitive.index", T::UINT32_VEC2)? {
-        Some(i) => i,
-        None => (0..(positions.len() / 2 * 2) as u32).collect(),
-    };
-    let ends: Vec<[u32; 2]> = ends.chunks_exact(2).map(|e| [e[0], e[1]]).collect();
+    let ends = attributes::pairs(r, positions.len())?;
     let radii = match attributes::f32s(r, "primitive.radius")? {
         Some(radii) if radii.len() < ends.len() => {
             return Err(format!(
@@ -71,22 +65,17 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         Some(radii) => radii,
         None => vec![r.f32("radius")?; ends.len()],
     };
-    // Unknown enumeration values fall back to the default (the spec's rule).
-    let caps = match r.string("caps").unwrap_or("none") {
-        "none" => [false, false],
-        "first" => [true, false],
-        "second" => [false, true],
-        "both" => [true, true],
-        other => {
-            warn(format!(
-                "caps '{other}' is not one of {}; the cylinders are open",
-                CAPS.join(", ")
-            ));
-            [false, false]
-        }
-    };
+    let caps = attributes::caps(r, warn);
     let input = attributes::input(r, positions.len(), ends.len())?;
-    let made = crate::scene::Shape::cylinders(positions, ends, radii, caps, input)
-        .map_err(|e| e.to_string())?;
+    let count = ends.len();
+    let made = crate::scene::Shape::cones(
+        "cylinder",
+        positions,
+        ends,
+        radii.iter().map(|&r| [r, r]).collect(),
+        vec![caps; count],
+        input,
+    )
+    .map_err(|e| e.to_string())?;
     super::made(made, warn)
 }

@@ -1,8 +1,11 @@
 //! Geometries: one module per subtype. Surfaces of a field (`isosurface`)
 //! are ray cast in the field; surfaces of primitives (`triangle`, `quad`,
-//! `sphere`, `cylinder`) become a scene shape the renderers trace through a BVH.
+//! `sphere`, `cylinder`, `cone`, `curve`) become a scene shape the
+//! renderers trace through a BVH.
 
 pub(crate) mod attributes;
+pub mod cone;
+pub mod curve;
 pub mod cylinder;
 pub mod isosurface;
 pub mod quad;

@@ -44,17 +44,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let positions = attributes::positions(r)?;
-    let radii = match attributes::f32s(r, "vertex.radius")? {
-        Some(radii) if radii.len() < positions.len() => {
-            return Err(format!(
-                "vertex.radius has {} values for {} vertices",
-                radii.len(),
-                positions.len()
-            ))
-        }
-        Some(radii) => radii,
-        None => vec![r.f32("radius")?; positions.len()],
-    };
+    let radii = attributes::vertex_radii(r, positions.len())?;
     let index = match attributes::indices(r, "primitive.index", T::UINT32)? {
         Some(i) => i,
         None => (0..positions.len() as u32).collect(),

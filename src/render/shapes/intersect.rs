@@ -48,52 +48,104 @@ pub fn sphere(o: Vec3, d: Vec3, c: Vec3, r: f32, t_min: f32, t_max: f32) -> Opti
     [near, far].into_iter().find(|&t| t > t_min && t < t_max)
 }
 
-/// The first `t` in `(t_min, t_max)` where `o + t d` meets the cylinder
-/// of radius `r` from `a` to `b`, with the discs that close it where
-/// `caps` says, and how far along the axis (0 at a, 1 at b) it is met.
-pub fn cylinder(
+/// An end of a cone or curve segment: its centre and radius.
+pub type End = (Vec3, f32);
+
+/// The first `t` in `(t_min, t_max)` where `o + t d` meets the cone from
+/// `a` to `b` (of the radii they give there; a cylinder where the two
+/// agree), with the discs that close it where `caps` says, and how far
+/// along the axis (0 at a, 1 at b) it is met.
+pub fn cone(
     o: Vec3,
     d: Vec3,
-    (a, b, r): (Vec3, Vec3, f32),
+    (a, b): (End, End),
     caps: [bool; 2],
     (t_min, t_max): (f32, f32),
 ) -> Option<(f32, f32)> {
-    let length = a.distance(b);
-    let axis = (b - a) / length;
-    let oc = o - a;
+    let length = a.0.distance(b.0);
+    let axis = (b.0 - a.0) / length;
+    let dd = d.length_squared();
+    if dd == 0.0 {
+        return None;
+    }
+    // Solved from the ray's point nearest the middle of the axis, so that
+    // a far eye loses no precision to the quadratic's cancellation.
+    let shift = ((a.0 + b.0) * 0.5 - o).dot(d) / dd;
+    let oc = o + d * shift - a.0;
+    let slope = (b.1 - a.1) / length;
     let (along_d, along_o) = (d.dot(axis), oc.dot(axis));
     let (dp, op) = (d - axis * along_d, oc - axis * along_o);
+    // The radius along the ray: r0 + rd t.
+    let (r0, rd) = (a.1 + slope * along_o, slope * along_d);
     let mut best: Option<(f32, f32)> = None;
     let mut consider = |t: f32, s: f32| {
         if t > t_min && t < t_max && best.is_none_or(|(bt, _)| t < bt) {
             best = Some((t, s));
         }
     };
-    let qa = dp.length_squared();
-    if qa > 0.0 {
-        let qb = op.dot(dp);
-        // From the perpendicular part, as the sphere's: stable far away.
-        let closest = op - dp * (qb / qa);
-        let disc = r * r - closest.length_squared();
-        if disc >= 0.0 {
-            let h = (qa * disc).sqrt();
-            for t in [(-qb - h) / qa, (-qb + h) / qa] {
-                let s = along_o + t * along_d;
-                if (0.0..=length).contains(&s) {
-                    consider(t, s / length);
-                }
+    let qa = dp.length_squared() - rd * rd;
+    let qb = op.dot(dp) - r0 * rd;
+    let qc = op.length_squared() - r0 * r0;
+    let disc = qb * qb - qa * qc;
+    if disc >= 0.0 {
+        // The stable pair of roots, which stays finite as qa goes to 0
+        // (a ray along the cone's slant).
+        let q = -(qb + disc.sqrt().copysign(qb));
+        for local in [q / qa, qc / q] {
+            let s = along_o + local * along_d;
+            if local.is_finite() && (0.0..=length).contains(&s) {
+                consider(local + shift, s / length);
             }
         }
     }
     if along_d != 0.0 {
-        for (end, closed, s) in [(a, caps[0], 0.0), (b, caps[1], 1.0)] {
+        for ((end, r), closed, s) in [(a, caps[0], 0.0), (b, caps[1], 1.0)] {
             if !closed {
                 continue;
             }
-            let t = (end - o).dot(axis) / along_d;
-            if (o + d * t - end).length_squared() <= r * r {
-                consider(t, s);
+            let local = (end - a.0 - oc).dot(axis) / along_d;
+            if (oc + d * local - (end - a.0)).length_squared() <= r * r {
+                consider(local + shift, s);
             }
+        }
+    }
+    best
+}
+
+/// The cone that joins the spheres at `a` and `b` tangentially (the
+/// side of their hull), as two ends, or none where one sphere holds the
+/// other.
+pub fn tangent_cone(a: End, b: End) -> Option<(End, End)> {
+    let length = a.0.distance(b.0);
+    // The hull's normal in a plane through the axis: (along, across).
+    let along = (a.1 - b.1) / length;
+    if along.is_nan() || along.abs() >= 1.0 {
+        return None;
+    }
+    let across = (1.0 - along * along).sqrt();
+    let axis = (b.0 - a.0) / length;
+    Some((
+        (a.0 + axis * (a.1 * along), a.1 * across),
+        (b.0 + axis * (b.1 * along), b.1 * across),
+    ))
+}
+
+/// The first `t` in `(t_min, t_max)` where `o + t d` meets the round
+/// curve segment from `a` to `b` (the hull of the spheres there), and how
+/// far along it (0 at a, 1 at b) the point nearest the hit lies.
+pub fn curve(o: Vec3, d: Vec3, (a, b): (End, End), span: (f32, f32)) -> Option<(f32, f32)> {
+    let mut best: Option<(f32, f32)> = None;
+    for (end, s) in [(a, 0.0), (b, 1.0)] {
+        if let Some(t) = sphere(o, d, end.0, end.1, span.0, best.map_or(span.1, |b| b.0)) {
+            best = Some((t, s));
+        }
+    }
+    if let Some(side) = tangent_cone(a, b) {
+        let limit = best.map_or(span.1, |b| b.0);
+        if let Some((t, _)) = cone(o, d, side, [false; 2], (span.0, limit)) {
+            let axis = b.0 - a.0;
+            let s = ((o + d * t - a.0).dot(axis) / axis.length_squared()).clamp(0.0, 1.0);
+            best = Some((t, s));
         }
     }
     best
@@ -116,34 +168,95 @@ mod tests {
 
     #[test]
     fn cylinder_gives_side_caps_and_axis_position() {
-        let (a, b) = (Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0));
+        let (a, b) = ((Vec3::ZERO, 1.0), (Vec3::new(0.0, 0.0, 2.0), 1.0));
         let span = (0.0, 100.0);
         // From the side, at a quarter of the length.
-        let (t, s) = cylinder(
-            Vec3::new(5.0, 0.0, 0.5),
-            -Vec3::X,
-            (a, b, 1.0),
-            [false; 2],
-            span,
-        )
-        .unwrap();
+        let (t, s) = cone(Vec3::new(5.0, 0.0, 0.5), -Vec3::X, (a, b), [false; 2], span).unwrap();
         assert!((t - 4.0).abs() < 1e-5 && (s - 0.25).abs() < 1e-6);
         // Along the axis: only a cap stops the ray; an open tube lets it through to nothing.
         let down = (Vec3::new(0.2, 0.0, 5.0), -Vec3::Z);
-        assert!(cylinder(down.0, down.1, (a, b, 1.0), [false; 2], span).is_none());
-        let (t, s) = cylinder(down.0, down.1, (a, b, 1.0), [false, true], span).unwrap();
+        assert!(cone(down.0, down.1, (a, b), [false; 2], span).is_none());
+        let (t, s) = cone(down.0, down.1, (a, b), [false, true], span).unwrap();
         assert!((t - 3.0).abs() < 1e-5 && s == 1.0);
-        let (t, s) = cylinder(down.0, down.1, (a, b, 1.0), [true, false], span).unwrap();
+        let (t, s) = cone(down.0, down.1, (a, b), [true, false], span).unwrap();
         assert!((t - 5.0).abs() < 1e-5 && s == 0.0);
         // Past the ends the side is not there.
-        assert!(cylinder(
-            Vec3::new(5.0, 0.0, 2.5),
+        assert!(cone(Vec3::new(5.0, 0.0, 2.5), -Vec3::X, (a, b), [true; 2], span).is_none());
+        // Far away, as a CAVE's far wall may be, the side stays exact.
+        let (t, _) = cone(
+            Vec3::new(1e5, 0.0, 1.0),
             -Vec3::X,
-            (a, b, 1.0),
-            [true; 2],
-            span
+            (a, b),
+            [false; 2],
+            (0.0, 1e6),
         )
-        .is_none());
+        .unwrap();
+        assert!((t - (1e5 - 1.0)).abs() < 0.02, "{t}");
+    }
+
+    #[test]
+    fn cone_side_follows_the_radius_and_its_caps_are_sized_by_their_end() {
+        // Radius 1 at z = 0 to 0 at z = 2: at z = 1 the radius is 0.5.
+        let (a, b) = ((Vec3::ZERO, 1.0), (Vec3::new(0.0, 0.0, 2.0), 0.0));
+        let span = (0.0, 100.0);
+        let (t, s) = cone(Vec3::new(5.0, 0.0, 1.0), -Vec3::X, (a, b), [true; 2], span).unwrap();
+        assert!((t - 4.5).abs() < 1e-5 && (s - 0.5).abs() < 1e-6, "{t} {s}");
+        // Down the axis at 0.8 from it: through the side where the radius is 0.8 (z = 0.4).
+        let (t, s) = cone(Vec3::new(0.8, 0.0, 5.0), -Vec3::Z, (a, b), [false; 2], span).unwrap();
+        assert!((t - 4.6).abs() < 1e-5 && (s - 0.2).abs() < 1e-5, "{t} {s}");
+        // Up from below: the first end's disc, of radius 1.
+        let (t, s) = cone(
+            Vec3::new(0.8, 0.0, -1.0),
+            Vec3::Z,
+            (a, b),
+            [true, false],
+            span,
+        )
+        .unwrap();
+        assert!((t - 1.0).abs() < 1e-5 && s == 0.0);
+        assert!(cone(Vec3::new(1.2, 0.0, -1.0), Vec3::Z, (a, b), [true; 2], span).is_none());
+        // A ray along the slant (parallel to a generator line) still meets the cone once.
+        let slant = Vec3::new(-0.5, 0.0, 1.0);
+        let (t, _) = cone(Vec3::new(0.5, 0.0, -1.0), slant, (a, b), [false; 2], span).unwrap();
+        let p = Vec3::new(0.5, 0.0, -1.0) + slant * t;
+        assert!((p.x.abs() - (1.0 - p.z * 0.5)).abs() < 1e-4, "{p}");
+    }
+
+    #[test]
+    fn curve_is_the_hull_of_its_end_spheres() {
+        let (a, b) = ((Vec3::ZERO, 1.0), (Vec3::new(4.0, 0.0, 0.0), 0.5));
+        let span = (0.0, 100.0);
+        // Beyond the first end: its sphere.
+        let (t, s) = curve(Vec3::new(-0.5, 0.0, 5.0), -Vec3::Z, (a, b), span).unwrap();
+        assert!(
+            (t - (5.0 - 0.75f32.sqrt())).abs() < 1e-4 && s == 0.0,
+            "{t} {s}"
+        );
+        // Beyond the second end: its sphere.
+        let (t, s) = curve(Vec3::new(4.25, 0.0, 5.0), -Vec3::Z, (a, b), span).unwrap();
+        assert!(
+            (t - (5.0 - 0.1875f32.sqrt())).abs() < 1e-4 && s == 1.0,
+            "{t} {s}"
+        );
+        // In the middle: the tangent cone, whose distance from the axis
+        // at x = 2 is its hull radius there.
+        let (t, s) = curve(Vec3::new(2.0, 0.0, 5.0), -Vec3::Z, (a, b), span).unwrap();
+        let along = (1.0f32 - 0.5) / 4.0;
+        let across = (1.0 - along * along).sqrt();
+        let (lo, hi) = (
+            (1.0 * along, 1.0 * across),
+            (4.0 + 0.5 * along, 0.5 * across),
+        );
+        let expect = lo.1 + (hi.1 - lo.1) * (2.0 - lo.0) / (hi.0 - lo.0);
+        assert!(
+            (t - (5.0 - expect)).abs() < 1e-4 && (s - 0.5).abs() < 1e-3,
+            "{t} {s}"
+        );
+        // One sphere inside the other: the larger alone.
+        let inside = ((Vec3::ZERO, 2.0), (Vec3::X, 0.5));
+        assert!(tangent_cone(inside.0, inside.1).is_none());
+        let (t, _) = curve(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, inside, span).unwrap();
+        assert!((t - 3.0).abs() < 1e-5);
     }
 
     #[test]

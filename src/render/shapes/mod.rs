@@ -23,7 +23,7 @@ use obvhs::Boundable;
 use super::frame::filled;
 use super::{RenderError, RenderSettings};
 use crate::scene::{Attribute, ColorSource, Coverage, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
-use intersect::{cylinder, sphere, triangle};
+use intersect::{cone, curve, sphere, tangent_cone, triangle, End};
 
 /// The most translucent surfaces one ray composites; those behind them
 /// are passed through.
@@ -148,14 +148,10 @@ impl ShapeSet {
                         boxes.push(Boxed(Aabb::new(lo.into(), hi.into())));
                     }
                 }
-                Primitives::Cylinders {
-                    positions,
-                    cylinders,
-                    radii,
-                    ..
-                } => {
-                    for (pair, &r) in cylinders.iter().zip(radii) {
-                        let [p, q] = pair.map(|v| positions[v as usize]);
+                Primitives::Cones { .. } | Primitives::Curves { .. } => {
+                    for index in 0..shape.len() {
+                        let [(p, rp), (q, rq)] = Self::ends(&shape.primitives, index);
+                        let r = rp.max(rq);
                         let object = (p.min(q) - r, p.max(q) + r);
                         let (lo, hi) = crate::scene::transformed_box(m, object);
                         boxes.push(Boxed(Aabb::new(lo.into(), hi.into())));
@@ -252,25 +248,49 @@ impl ShapeSet {
                 );
                 sphere(oo, od, positions[v], radii[v], t_min, t_max)?
             }
-            Primitives::Cylinders {
-                positions,
-                cylinders,
-                radii,
-                caps,
-            } => {
-                let [a, b] = cylinders[prim.index as usize].map(|v| positions[v as usize]);
+            primitives @ (Primitives::Cones { .. } | Primitives::Curves { .. }) => {
+                let [a, b] = Self::ends(primitives, prim.index as usize);
                 let (oo, od) = (
                     traced.to_object.transform_point3(o),
                     traced.to_object.transform_vector3(d),
                 );
-                let r = radii[prim.index as usize];
-                let (t, s) = cylinder(oo, od, (a, b, r), *caps, (t_min, t_max))?;
+                let (t, s) = match primitives {
+                    Primitives::Cones { caps, .. } => {
+                        cone(oo, od, (a, b), caps[prim.index as usize], (t_min, t_max))?
+                    }
+                    _ => curve(oo, od, (a, b), (t_min, t_max))?,
+                };
                 // Along the axis: the second end's weight, as a
                 // triangle's barycentric.
                 return Some((t, Vec2::new(s, 0.0)));
             }
         };
         Some((t, Vec2::ZERO))
+    }
+
+    /// Kept cone or curve segment `index`'s two ends, in object space.
+    fn ends(primitives: &Primitives, index: usize) -> [End; 2] {
+        match primitives {
+            Primitives::Cones {
+                positions,
+                cones,
+                radii,
+                ..
+            } => {
+                let [a, b] = cones[index].map(|v| positions[v as usize]);
+                let [ra, rb] = radii[index];
+                [(a, ra), (b, rb)]
+            }
+            Primitives::Curves {
+                positions,
+                radii,
+                segments,
+            } => {
+                let v = segments[index] as usize;
+                [(positions[v], radii[v]), (positions[v + 1], radii[v + 1])]
+            }
+            _ => unreachable!("only cones and curves have two ends"),
+        }
     }
 
     /// The world-space unit normal at `p` on `prim`, facing against `d`.
@@ -299,26 +319,12 @@ impl ShapeSet {
                 let c = positions[spheres[prim.index as usize] as usize];
                 traced.normal_to_world * (traced.to_object.transform_point3(p) - c)
             }
-            Primitives::Cylinders {
-                positions,
-                cylinders,
-                radii,
-                ..
-            } => {
-                let [a, b] = cylinders[prim.index as usize].map(|v| positions[v as usize]);
-                let axis = (b - a).normalize();
-                let q = traced.to_object.transform_point3(p) - a;
-                let radial = q - axis * q.dot(axis);
-                let r = radii[prim.index as usize];
-                // Inside the rim: a cap, facing out of its end.
-                let object = if radial.length() < r * (1.0 - 1e-4) {
-                    if bary.x < 0.5 {
-                        -axis
-                    } else {
-                        axis
-                    }
-                } else {
-                    radial
+            primitives @ (Primitives::Cones { .. } | Primitives::Curves { .. }) => {
+                let [a, b] = Self::ends(primitives, prim.index as usize);
+                let q = traced.to_object.transform_point3(p);
+                let object = match primitives {
+                    Primitives::Cones { .. } => cone_normal(a, b, q, true),
+                    _ => curve_normal(a, b, q),
                 };
                 traced.normal_to_world * object
             }
@@ -347,9 +353,13 @@ impl ShapeSet {
                     a * (1.0 - hit.bary.x - hit.bary.y) + b * hit.bary.x + c * hit.bary.y
                 }
                 Primitives::Spheres { spheres, .. } => values[spheres[index] as usize],
-                Primitives::Cylinders { cylinders, .. } => {
-                    let [a, b] = cylinders[index].map(|v| values[v as usize]);
+                Primitives::Cones { cones, .. } => {
+                    let [a, b] = cones[index].map(|v| values[v as usize]);
                     a.lerp(b, hit.bary.x)
+                }
+                Primitives::Curves { segments, .. } => {
+                    let v = segments[index] as usize;
+                    values[v].lerp(values[v + 1], hit.bary.x)
                 }
             },
         }
@@ -408,6 +418,39 @@ impl ShapeSet {
             direct += light * n.dot(towards).max(0.0);
         }
         albedo * (direct + settings.ambient)
+    }
+}
+
+/// The outward normal at `q` on the cone from `a` to `b`; with `caps`, a
+/// point inside the rim of an end is on that end's disc.
+fn cone_normal(a: End, b: End, q: Vec3, caps: bool) -> Vec3 {
+    let length = a.0.distance(b.0);
+    let axis = (b.0 - a.0) / length;
+    let q = q - a.0;
+    let s = q.dot(axis);
+    let radial = q - axis * s;
+    let slope = (b.1 - a.1) / length;
+    let r = a.1 + slope * s.clamp(0.0, length);
+    if caps && radial.length() < r * (1.0 - 1e-4) {
+        return if s < 0.5 * length { -axis } else { axis };
+    }
+    radial.normalize_or_zero() - axis * slope
+}
+
+/// The outward normal at `q` on the round curve segment from `a` to `b`:
+/// from the centre of the end sphere it lies on, or the tangent cone's.
+fn curve_normal(a: End, b: End, q: Vec3) -> Vec3 {
+    let Some((lo, hi)) = tangent_cone(a, b) else {
+        return q - if a.1 >= b.1 { a.0 } else { b.0 };
+    };
+    let axis = b.0 - a.0;
+    let s = (q - a.0).dot(axis);
+    if s <= (lo.0 - a.0).dot(axis) {
+        q - a.0
+    } else if s >= (hi.0 - a.0).dot(axis) {
+        q - b.0
+    } else {
+        cone_normal(lo, hi, q, false)
     }
 }
 

@@ -13,10 +13,11 @@
 //!   first_index up to first_index + count.
 //! - slot j's primitive at `prims + 3 j`: a triangle (a, -), (b, u header),
 //!   (c, u index); a sphere (centre, radius), (-, u header), (-, u index);
-//!   a cylinder (a, radius), (b, u header), (-, u index). The header is
-//!   kind | caps << 2 | shape << 4; index is the kept primitive within its
-//!   shape. Triangles are in world space, spheres and cylinders in object
-//!   space, as the CPU traces them.
+//!   a cone or cylinder, or a curve segment, (a, radius at a), (b, u
+//!   header), (radius at b, -, -, u index). The header is kind | caps << 2
+//!   | shape << 4; index is the kept primitive within its shape. Triangles
+//!   are in world space, the others in object space, as the CPU traces
+//!   them.
 //! - shape s at `shapes + 16 s`: rows of world-to-object (3 words), of
 //!   object-to-world for normals (3), (constant albedo, u shading base),
 //!   (u flags, opacity (1: opaque), -, -); for an image sampler (u dims, u texel base),
@@ -45,7 +46,8 @@ use crate::scene::{ColorSource, Coverage, Primitives, Sampler, SamplerKind, DEFA
 
 pub const KIND_TRIANGLE: u32 = 0;
 pub const KIND_SPHERE: u32 = 1;
-pub const KIND_CYLINDER: u32 = 2;
+pub const KIND_CONE: u32 = 2;
+pub const KIND_CURVE: u32 = 3;
 pub const FLAG_ALBEDO: u32 = 1;
 pub const FLAG_NORMALS: u32 = 2;
 pub const FLAG_IMAGE: u32 = 4;
@@ -140,16 +142,15 @@ impl ShapeSet {
                     words.push(word(Vec3::ZERO, header(KIND_SPHERE, [false; 2])));
                     words.push(word(Vec3::ZERO, index));
                 }
-                Primitives::Cylinders {
-                    positions,
-                    cylinders,
-                    radii,
-                    caps,
-                } => {
-                    let [a, b] = cylinders[i].map(|v| positions[v as usize]);
-                    words.push(word(a, radii[i]));
-                    words.push(word(b, header(KIND_CYLINDER, *caps)));
-                    words.push(word(Vec3::ZERO, index));
+                primitives @ (Primitives::Cones { .. } | Primitives::Curves { .. }) => {
+                    let [(a, ra), (b, rb)] = Self::ends(primitives, i);
+                    let kind = match primitives {
+                        Primitives::Cones { caps, .. } => header(KIND_CONE, caps[i]),
+                        _ => header(KIND_CURVE, [false; 2]),
+                    };
+                    words.push(word(a, ra));
+                    words.push(word(b, kind));
+                    words.push([rb, 0.0, 0.0, index]);
                 }
             }
         }
@@ -317,12 +318,12 @@ impl ShapeSet {
     }
 
     /// The weights a primitive's corners have in [`Hit::bary`]: a
-    /// triangle's three, a cylinder's two ends (and the second again), a
-    /// sphere's one.
+    /// triangle's three, a cone's or curve segment's two ends (and the
+    /// second again), a sphere's one.
     fn corners(&self, shape: usize) -> [Vec2; 3] {
         match &self.traced[shape].placed.shape.primitives {
             Primitives::Triangles { .. } => [Vec2::ZERO, Vec2::X, Vec2::Y],
-            Primitives::Cylinders { .. } => [Vec2::ZERO, Vec2::X, Vec2::X],
+            Primitives::Cones { .. } | Primitives::Curves { .. } => [Vec2::ZERO, Vec2::X, Vec2::X],
             Primitives::Spheres { .. } => [Vec2::ZERO; 3],
         }
     }

@@ -303,7 +303,15 @@ fn a_cylinder_shows_its_silhouette_depth_and_colors_along_its_axis() {
     let p = vec![Vec3::new(-1.5, 0.0, 0.0), Vec3::new(1.5, 0.0, 0.0)];
     let mut inp = input(2, 1);
     inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Z]));
-    let made = Shape::cylinders(p, vec![[0, 1]], vec![0.5], [true; 2], inp).unwrap();
+    let made = Shape::cones(
+        "cone",
+        p,
+        vec![[0, 1]],
+        vec![[0.5, 0.5]],
+        vec![[true; 2]],
+        inp,
+    )
+    .unwrap();
     let placed = PlacedShape::new(
         Arc::new(made.shape),
         SurfaceMaterial {
@@ -338,4 +346,137 @@ fn a_cylinder_shows_its_silhouette_depth_and_colors_along_its_axis() {
             }
         }
     }
+}
+
+/// Checks every pixel of the orthographic view down -z that `expect`
+/// has an answer for: nothing there (`Some(None)`) or a surface at height
+/// z of color c (`Some(Some((z, c)))`); silhouette pixels, which may go
+/// either way, it skips (`None`). Returns the pixels of surface checked.
+fn check_view(
+    frame: &Frame,
+    expect: impl Fn(f32, f32) -> Option<Option<(f32, Vec3)>>,
+    tolerance: f32,
+) -> u32 {
+    let depth = frame.depth.clone().unwrap();
+    let mut checked = 0;
+    for y in 0..N {
+        for x in 0..N {
+            let (px, py) = centre(x, y);
+            let d = depth[(y * N + x) as usize];
+            match expect(px, py) {
+                None => {}
+                Some(None) => assert_eq!(d, f32::INFINITY, "{x},{y}"),
+                Some(Some((z, want))) => {
+                    checked += 1;
+                    assert!((d - (5.0 - z)).abs() < tolerance, "depth at {x},{y}: {d}");
+                    let got = frame.pixel(x, y).truncate();
+                    assert!(
+                        (got - want).abs().max_element() < 1e-3,
+                        "{x},{y}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+    checked
+}
+
+fn attribute_material() -> SurfaceMaterial {
+    SurfaceMaterial {
+        color: ColorSource::Attribute(0),
+        opacity: 1.0,
+        alpha: AlphaMode::Opaque,
+    }
+}
+
+/// Half a pixel's width, the band around a silhouette left unchecked.
+const HALF_PIXEL: f32 = 2.0 / N as f32;
+
+#[test]
+fn a_cone_narrows_linearly_and_tilts_its_normal() {
+    let p = vec![Vec3::new(-1.5, 0.0, 0.0), Vec3::new(1.5, 0.0, 0.0)];
+    let mut inp = input(2, 1);
+    inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Z]));
+    let made = Shape::cones(
+        "cone",
+        p,
+        vec![[0, 1]],
+        vec![[0.8, 0.2]],
+        vec![[true; 2]],
+        inp,
+    )
+    .unwrap();
+    let placed = PlacedShape::new(Arc::new(made.shape), attribute_material(), Mat4::IDENTITY);
+    let frame = render(&Scene::of_shapes(vec![placed]).unwrap(), &unlit_ambient());
+    let slope = (0.2f32 - 0.8) / 3.0;
+    let checked = check_view(
+        &frame,
+        |px, py| {
+            let r = 0.8 + slope * (px + 1.5);
+            if px.abs() > 1.5 + HALF_PIXEL || py.abs() > r + HALF_PIXEL {
+                return Some(None);
+            }
+            if px.abs() > 1.5 - HALF_PIXEL || py.abs() > r - HALF_PIXEL {
+                return None;
+            }
+            let z = (r * r - py * py).sqrt();
+            let s = (px + 1.5) / 3.0;
+            // The normal (radial - slope axis) normalized: its z.
+            let nz = (z / r) / (1.0 + slope * slope).sqrt();
+            Some(Some((z, Vec3::new(1.0 - s, 0.0, s) * nz)))
+        },
+        1e-4,
+    );
+    assert!(checked > 100, "{checked}");
+}
+
+#[test]
+fn a_straight_curve_is_a_capsule_colored_along_its_vertices() {
+    // Three vertices on x, one radius: two segments that read as one
+    // capsule, red to green to blue.
+    let p = vec![
+        Vec3::new(-1.2, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.2, 0.0, 0.0),
+    ];
+    let mut inp = input(3, 2);
+    inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Y, Vec4::Z]));
+    let made = Shape::curves(p, vec![0.5; 3], vec![0, 1], inp).unwrap();
+    let placed = PlacedShape::new(Arc::new(made.shape), attribute_material(), Mat4::IDENTITY);
+    let frame = render(&Scene::of_shapes(vec![placed]).unwrap(), &unlit_ambient());
+    let checked = check_view(
+        &frame,
+        |px, py| {
+            // Distance from the axis segment [-1.2, 1.2] on x.
+            let along = px.clamp(-1.2, 1.2);
+            let off = ((px - along).powi(2) + py * py).sqrt();
+            if off > 0.5 + HALF_PIXEL {
+                return Some(None);
+            }
+            if off > 0.5 - HALF_PIXEL {
+                return None;
+            }
+            let z = (0.25 - off * off).sqrt();
+            let s = (along + 1.2) / 1.2;
+            let color = if s <= 1.0 {
+                Vec3::X.lerp(Vec3::Y, s)
+            } else {
+                Vec3::Y.lerp(Vec3::Z, s - 1.0)
+            };
+            Some(Some((z, color * (z / 0.5))))
+        },
+        1e-4,
+    );
+    assert!(checked > 100, "{checked}");
+    // Out-of-range segments are reported, not rendered.
+    let e = Shape::curves(
+        vec![Vec3::ZERO, Vec3::X],
+        vec![1.0; 2],
+        vec![1],
+        input(2, 1),
+    );
+    assert_eq!(
+        e.err().unwrap().to_string(),
+        "curve segment 0 refers to vertex 2; there are 2 vertices"
+    );
 }

@@ -1,0 +1,89 @@
+//! ANARI's `cone` geometry (ANARI_KHR_GEOMETRY_CONE): a cone between each
+//! pair of consecutive vertices, or each pair of `primitive.index`, of
+//! the radii at its two vertices, closed by discs where `vertex.cap` (or,
+//! without it, `caps`) says.
+
+use crate::device::object::State;
+use crate::device::table::Read;
+use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_CONE, F32};
+use crate::device::types::DataType as T;
+
+use super::attributes::{self, shape_params};
+
+pub static INFO: SubtypeInfo = SubtypeInfo {
+    kind: T::GEOMETRY,
+    subtype: "cone",
+    description: "cones: between consecutive vertex pairs, or pairs of primitive.index",
+    extensions: &[EXT_CONE],
+    params: &shape_params!(
+        p(
+            "primitive.index",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "UINT32_VEC2 per cone: its two ends (default: vertices 2i, 2i+1)",
+        )
+        .elements(&[T::UINT32_VEC2]),
+        p(
+            "vertex.radius",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "FLOAT32 per vertex: the cone's radius at that end (default: 'radius')",
+        )
+        .elements(&[T::FLOAT32]),
+        p(
+            "radius",
+            F32,
+            false,
+            DefaultValue::Floats(&[1.0]),
+            "every end's radius where vertex.radius is unset",
+        ),
+        p(
+            "vertex.cap",
+            &[T::ARRAY1D],
+            false,
+            DefaultValue::None,
+            "UINT8 per vertex: a disc closes the cone at that end where it is not 0 (default: 'caps')",
+        )
+        .elements(&[T::UINT8]),
+        p(
+            "caps",
+            &[T::STRING],
+            false,
+            DefaultValue::Text("none"),
+            "where vertex.cap is unset, which ends are closed: none, first, second or both",
+        )
+        .names(&attributes::CAPS),
+    ),
+    commit: Some(commit),
+};
+
+fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let positions = attributes::positions(r)?;
+    let ends = attributes::pairs(r, positions.len())?;
+    let radii = attributes::vertex_radii(r, positions.len())?;
+    let vertex_caps = r.array_of("vertex.cap", T::UINT8, |a| Ok(a.bytes().to_vec()))?;
+    if let Some(c) = &vertex_caps {
+        if c.len() < positions.len() {
+            return Err(format!(
+                "vertex.cap has {} values for {} vertices",
+                c.len(),
+                positions.len()
+            ));
+        }
+    }
+    let global = attributes::caps(r, warn);
+    // Out-of-range ends are the shape's to report: read them as 0 here.
+    let at = |v: u32| radii.get(v as usize).copied().unwrap_or(0.0);
+    let cap = |v: u32, k: usize| match &vertex_caps {
+        Some(c) => c.get(v as usize).is_some_and(|&c| c != 0),
+        None => global[k],
+    };
+    let cone_radii = ends.iter().map(|e| [at(e[0]), at(e[1])]).collect();
+    let caps = ends.iter().map(|e| [cap(e[0], 0), cap(e[1], 1)]).collect();
+    let input = attributes::input(r, positions.len(), ends.len())?;
+    let made = crate::scene::Shape::cones("cone", positions, ends, cone_radii, caps, input)
+        .map_err(|e| e.to_string())?;
+    super::made(made, warn)
+}
