@@ -464,12 +464,17 @@ fn surface_alpha(h: SurfaceHit) -> f32 {
     return shape_word(bitcast<u32>(prim_word(h.slot, 1u).w) >> 4u, 7u).y;
 }
 
-// Hit h of ray o + t d, lit: Lambertian under the world's directional
-// light (or a light at the eye where it has none) and its point and spot
-// lights, plus the ambient light.
+// Hit h of ray o + t d, shaded (ShapeSet::shade): the reference device's
+// eye light blended with the color, or Lambertian under the world's
+// directional light (or a light at the eye where it has none) and its
+// point and spot lights, plus the ambient light.
 fn surface_color(h: SurfaceHit, o: vec3f, d: vec3f) -> vec3f {
     let p = o + d * h.t;
     let n = surface_normal(h, p, d);
+    if params.surface_lighting == SURFACE_LIT_EYE_BLEND {
+        let facing = min(abs(dot(n, -normalize(d))), 1.0);
+        return surface_albedo(h) * (params.eye_blend * facing + 1.0 - params.eye_blend);
+    }
     var direct = vec3f(0.0);
     if params.surface_lighting == SURFACE_LIT_FROM_EYE {
         direct = vec3f(max(dot(n, -d), 0.0));

@@ -116,6 +116,7 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &instance::transform::INFO,
     &world::INFO,
     &renderer::INFO,
+    &renderer::DIRECT_LIGHT,
     &frame::INFO,
 ];
 

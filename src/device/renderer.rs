@@ -1,12 +1,16 @@
-//! The `default` renderer: emission-absorption ray casting with caveray's
-//! shading modes. Its table holds the defaults of `RenderSettings`; a test
-//! keeps the two equal.
+//! The renderers: emission-absorption ray casting with caveray's shading
+//! modes. `default` shades surfaces as the reference device does (an eye
+//! light blended with their color), so that hosts and the conformance
+//! tool tuned on it see what they expect; `directLight` lights them by the
+//! world's directional, point and spot lights and the ambient light.
+//! Both read one table, which holds the defaults of `RenderSettings`; a
+//! test keeps the two equal.
 
 use super::object::State;
 use super::table::Read;
 use super::table::{
-    p, DefaultValue, SubtypeInfo, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_SHADING,
-    F32, VEC3,
+    p, DefaultValue, ParamInfo, SubtypeInfo, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE,
+    EXT_SHADING, F32, VEC3,
 };
 use super::types::DataType as T;
 use glam::Vec4;
@@ -14,16 +18,29 @@ use glam::Vec4;
 use std::sync::Arc;
 
 use crate::render::{
-    BackgroundImage, ClipPlanes, RenderSettings, Sampling, Shading, MAX_CLIP_PLANES,
-    STEP_FACTOR_RANGE,
+    BackgroundImage, ClipPlanes, RenderSettings, Sampling, Shading, SurfaceShading,
+    MAX_CLIP_PLANES, STEP_FACTOR_RANGE,
 };
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::RENDERER,
     subtype: "default",
-    description: "emission-absorption ray casting with optional shadows and ambient occlusion",
+    description: "emission-absorption ray casting with optional shadows and ambient occlusion; surfaces in an eye light, as the reference device shades them",
     extensions: &[EXT_SHADING, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_AMBIENT],
-    params: &[
+    params: PARAMS,
+    commit: Some(commit),
+};
+
+pub static DIRECT_LIGHT: SubtypeInfo = SubtypeInfo {
+    kind: T::RENDERER,
+    subtype: "directLight",
+    description: "as default, with surfaces lit by the world's directional, point and spot lights and the ambient light",
+    extensions: &[EXT_SHADING, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE, EXT_AMBIENT],
+    params: PARAMS,
+    commit: Some(commit_direct_light),
+};
+
+const PARAMS: &[ParamInfo] = &[
         p(
             "background",
             &[T::FLOAT32_VEC4, T::ARRAY2D, T::ARRAY1D],
@@ -60,9 +77,17 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             F32,
             false,
             DefaultValue::Floats(&[1.0]),
-            "strength of the ambient light on surfaces: 1 lights a surface to a tenth of its color, as the reference device does",
+            "strength of the ambient light on surfaces under directLight: 1 adds a tenth of a surface's color, a fill that keeps the lights' shading",
         )
         .range(0.0, 1e6),
+        p(
+            "eyeLightBlendRatio",
+            F32,
+            false,
+            DefaultValue::Floats(&[0.5]),
+            "under default: the share of a surface's color that faces the eye, color x (ratio |n . v| + 1 - ratio)",
+        )
+        .range(0.0, 1.0),
         p(
             "lightDirection",
             VEC3,
@@ -133,12 +158,19 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             "0: full detail; F > 0, with gpuSampling filtered: the volume's mip level log2(F x pixel footprint / voxel) and a step 2^level longer where a pixel covers more than 1/F voxels (GPU only)",
         )
         .range(0.0, 16.0),
-    ],
-    commit: Some(commit),
-};
+];
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     settings(r).map(|s| Some(State::ready(s)))
+}
+
+fn commit_direct_light(
+    r: &Read<'_>,
+    _warn: &mut dyn FnMut(String),
+) -> Result<Option<State>, String> {
+    let mut s = settings(r)?;
+    s.surface_shading = SurfaceShading::Lights;
+    Ok(Some(State::ready(s)))
 }
 
 /// The settings the committed parameters describe.
@@ -165,6 +197,9 @@ pub fn settings(r: &Read<'_>) -> Result<RenderSettings, String> {
         background_image: background_image(r)?,
         skipping: r.bool("emptySpaceSkipping")?,
         level_of_detail: r.f32("levelOfDetail")?,
+        surface_shading: SurfaceShading::EyeLight {
+            blend: r.f32_in_range("eyeLightBlendRatio")?,
+        },
         sampling: r
             .string("gpuSampling")
             .unwrap_or_default()

@@ -26,7 +26,8 @@ pub use gpu::{GpuRenderer, PassClock, Uploads};
 pub use progress::{Done, Progress, Watch};
 pub use settings::{
     check_step_factor, BackgroundImage, ClipPlanes, Lamp, RenderSettings, Sampling, Shading, Spot,
-    LOD_MAX, MAX_CLIP_PLANES, MAX_DIRECTIONS, MAX_LAMPS, MAX_STEPS_PER_RAY, STEP_FACTOR_RANGE,
+    SurfaceShading, LOD_MAX, MAX_CLIP_PLANES, MAX_DIRECTIONS, MAX_LAMPS, MAX_STEPS_PER_RAY,
+    STEP_FACTOR_RANGE,
 };
 
 use crate::geometry::RayGen;

@@ -119,6 +119,24 @@ fn unit_normal(plane: Vec4) -> Vec4 {
         .as_vec4()
 }
 
+/// How surfaces are shaded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SurfaceShading {
+    /// The reference device's look, which hosts and the conformance tool
+    /// are tuned on: color x (blend |n . v| + 1 - blend), v towards the
+    /// eye; the world's lights and the ambient light are not used.
+    EyeLight { blend: f32 },
+    /// Lambertian under the world's lights (a light at the eye where it
+    /// has none), plus the ambient light.
+    Lights,
+}
+
+impl Default for SurfaceShading {
+    fn default() -> Self {
+        Self::EyeLight { blend: 0.5 }
+    }
+}
+
 /// How each sample is lit, as in Buchacher & Erdt's benchmark ladder.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Shading {
@@ -325,7 +343,9 @@ pub struct RenderSettings {
     /// Surfaces' ambient light: the renderer's `ambientColor` times
     /// `ambientRadiance`, scaled as the reference device scales it.
     pub ambient: Vec3,
-    /// Surfaces lit from the eye, where the world has no light.
+    pub surface_shading: SurfaceShading,
+    /// Under [`SurfaceShading::Lights`]: surfaces lit from the eye, where
+    /// the world has no light.
     pub headlight: bool,
     /// Whether `light` and `light_color` light the surfaces (not where a
     /// world has point or spot lights only).
@@ -358,6 +378,7 @@ impl Default for RenderSettings {
             clip_planes: ClipPlanes::default(),
             light_color: Vec3::ONE,
             ambient: Vec3::splat(super::shapes::AMBIENT_SCALE),
+            surface_shading: SurfaceShading::default(),
             headlight: true,
             directional: true,
             lamps: Vec::new(),
@@ -426,6 +447,13 @@ impl RenderSettings {
                 "ambient light must be finite and not negative, got {}",
                 self.ambient
             )));
+        }
+        if let SurfaceShading::EyeLight { blend } = self.surface_shading {
+            if !(0.0..=1.0).contains(&blend) {
+                return Err(RenderError::Settings(format!(
+                    "the eye light's blend must be from 0 to 1, got {blend}"
+                )));
+            }
         }
         if self.lamps.len() > MAX_LAMPS {
             return Err(RenderError::Settings(format!(

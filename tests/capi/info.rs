@@ -305,7 +305,7 @@ fn device_and_world_properties() {
         .unwrap();
     assert_eq!(
         unsafe { strings(renderers as *const *const c_char) },
-        ["default"]
+        ["default", "directLight"]
     );
     let cameras: usize = s
         .property(dev, "subtypes.camera", ANARI_STRING_LIST)

@@ -11,11 +11,23 @@ use common::device::{bytes, Host, SIZE};
 /// A perspective frame from (0, 0, 3) of `surfaces` (and `volume`, if
 /// any), its renderer without ambient light, depth kept.
 fn frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>) -> u64 {
-    lit_frame(h, surfaces, volume, &[])
+    frame_of(h, "default", surfaces, volume, &[])
 }
 
-/// `frame`, its world lit by `lights`.
+/// `frame`, its world lit by `lights` under the `directLight` renderer.
 fn lit_frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>, lights: &[u64]) -> u64 {
+    frame_of(h, "directLight", surfaces, volume, lights)
+}
+
+/// A frame by renderer `subtype` of `surfaces` (and `volume`) in a world
+/// of `lights`.
+fn frame_of(
+    h: &mut Host,
+    subtype: &str,
+    surfaces: &[u64],
+    volume: Option<u64>,
+    lights: &[u64],
+) -> u64 {
     let world = h.d.new_object(DataType::WORLD, "");
     if !lights.is_empty() {
         h.set_objects(world, "light", DataType::LIGHT, lights);
@@ -26,7 +38,7 @@ fn lit_frame(h: &mut Host, surfaces: &[u64], volume: Option<u64>, lights: &[u64]
         h.set_objects(world, "volume", DataType::VOLUME, &[v]);
     }
     h.d.commit(Subject::Object(world));
-    let renderer = h.d.new_object(DataType::RENDERER, "default");
+    let renderer = h.d.new_object(DataType::RENDERER, subtype);
     h.set(
         renderer,
         "ambientRadiance",
@@ -803,6 +815,15 @@ fn point_and_spot_lights_light_surfaces_through_the_world() {
             centre[0] > 150 && edge[0] == 0,
             "{backend}: {centre:?} {edge:?}"
         );
+        // The default renderer shades as the reference device does, in
+        // an eye light that leaves no part of the square dark.
+        let f3 = frame_of(&mut h, "default", &[s], None, &[spot]);
+        let p = h.pixels(f3);
+        let (centre, edge) = (pixel(&p, SIZE / 2, SIZE / 2), pixel(&p, 1, SIZE / 2));
+        assert!(
+            centre[0] == 255 && edge[0] > 200,
+            "{backend}: {centre:?} {edge:?}"
+        );
         // A bad direction fails the spot's commit.
         h.set(
             spot,
@@ -816,7 +837,7 @@ fn point_and_spot_lights_light_surfaces_through_the_world() {
             said.iter().any(|m| m.contains("has no direction")),
             "{said:?}"
         );
-        for o in [g, m, s, point, f, spot, f2] {
+        for o in [g, m, s, point, f, spot, f2, f3] {
             h.d.release(o);
         }
     }

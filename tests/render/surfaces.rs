@@ -11,7 +11,7 @@ use anari_library_caveray::data::{preset, shepp_logan};
 use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera, PrimaryRays};
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
-    ssim, ColorFormat, CpuRenderer, FrameDesc, Lamp, RenderSettings, Spot,
+    ssim, ColorFormat, CpuRenderer, FrameDesc, Lamp, RenderSettings, Spot, SurfaceShading,
 };
 use anari_library_caveray::scene::{
     AlphaMode, Attribute, ColorSource, Image, PlacedShape, Sampler, SamplerKind, Scene, Shape,
@@ -190,12 +190,20 @@ fn mixed() -> Scene {
         .unwrap()
 }
 
-fn lights() -> [(&'static str, RenderSettings); 2] {
+fn lights() -> [(&'static str, RenderSettings); 3] {
     [
-        ("headlight", RenderSettings::default()),
+        ("eye light", RenderSettings::default()),
+        (
+            "headlight",
+            RenderSettings {
+                surface_shading: SurfaceShading::Lights,
+                ..Default::default()
+            },
+        ),
         (
             "directional, point and spot",
             RenderSettings {
+                surface_shading: SurfaceShading::Lights,
                 headlight: false,
                 light: Vec3::new(-0.4, 0.8, 0.5).normalize(),
                 light_color: Vec3::new(1.0, 0.9, 0.8) * 1.5,
@@ -575,6 +583,7 @@ fn point_and_spot_lights_fall_off_with_distance_and_cone() {
     let mut gpu = gpu();
     for lamp in [point, spot] {
         let settings = RenderSettings {
+            surface_shading: SurfaceShading::Lights,
             ambient: Vec3::ZERO,
             headlight: false,
             directional: false,

@@ -31,7 +31,7 @@ use crate::render::shapes::packed::{
 };
 use crate::render::shapes::{MAX_TRANSLUCENT, SURFACE_PASSES};
 use crate::render::stereo::Reprojection;
-use crate::render::{Lamp, RenderSettings, Spot, MAX_LAMPS};
+use crate::render::{Lamp, RenderSettings, Spot, SurfaceShading, MAX_LAMPS};
 use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
 
 /// The WGSL type of a uniform field's Rust type.
@@ -197,7 +197,9 @@ uniform! {
         surface_lighting: u32,
         /// Entries of `lamps` in use.
         lamp_count: u32,
-        _surface_pad: [u32; 2],
+        /// Under SURFACE_LIT_EYE_BLEND, the eye light's share.
+        eye_blend: f32,
+        _surface_pad: u32,
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
@@ -436,7 +438,9 @@ impl RayUniforms {
             surface_prims: surfaces.prims,
             ambient: v(settings.ambient),
             surface_shapes: surfaces.shapes,
-            surface_lighting: if settings.headlight {
+            surface_lighting: if let SurfaceShading::EyeLight { .. } = settings.surface_shading {
+                SURFACE_LIT_EYE_BLEND
+            } else if settings.headlight {
                 SURFACE_LIT_FROM_EYE
             } else if settings.directional {
                 SURFACE_LIT_DIRECTIONAL
@@ -444,7 +448,11 @@ impl RayUniforms {
                 SURFACE_LIT_BY_LAMPS
             },
             lamp_count: settings.lamps.len().min(MAX_LAMPS) as u32,
-            _surface_pad: [0; 2],
+            eye_blend: match settings.surface_shading {
+                SurfaceShading::EyeLight { blend } => blend,
+                SurfaceShading::Lights => 0.0,
+            },
+            _surface_pad: 0,
             clip,
             volumes,
             lamps: lamp_slots(&settings.lamps),
@@ -509,6 +517,7 @@ fn lamp_slots(lamps: &[Lamp]) -> [LampSlot; MAX_LAMPS] {
 const SURFACE_LIT_DIRECTIONAL: u32 = 0;
 const SURFACE_LIT_FROM_EYE: u32 = 1;
 const SURFACE_LIT_BY_LAMPS: u32 = 2;
+const SURFACE_LIT_EYE_BLEND: u32 = 3;
 
 /// The directions storage buffer: vec4 per direction, at least one entry
 /// because WGSL storage arrays cannot be bound empty.
@@ -568,6 +577,7 @@ fn constants() -> String {
         ("SURFACE_LIT_DIRECTIONAL", SURFACE_LIT_DIRECTIONAL),
         ("SURFACE_LIT_FROM_EYE", SURFACE_LIT_FROM_EYE),
         ("SURFACE_LIT_BY_LAMPS", SURFACE_LIT_BY_LAMPS),
+        ("SURFACE_LIT_EYE_BLEND", SURFACE_LIT_EYE_BLEND),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {

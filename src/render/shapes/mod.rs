@@ -21,7 +21,7 @@ use obvhs::ray::{Ray, RayHit};
 use obvhs::Boundable;
 
 use super::frame::filled;
-use super::{RenderError, RenderSettings};
+use super::{RenderError, RenderSettings, SurfaceShading};
 use crate::scene::{Attribute, ColorSource, Coverage, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
 use intersect::{cone, curve, sphere, tangent_cone, triangle, End};
 
@@ -398,13 +398,18 @@ impl ShapeSet {
         (placed.id, primitive)
     }
 
-    /// The lit color at `hit` of ray `o + t d`: Lambertian under the
-    /// world's directional light (or a light at the eye where the world
-    /// has none) and its point and spot lights, plus the renderer's
-    /// ambient light.
+    /// The shaded color at `hit` of ray `o + t d`: as the reference
+    /// device shades (an eye light blended with the color), or Lambertian
+    /// under the world's directional light (or a light at the eye where
+    /// the world has none) and its point and spot lights, plus the
+    /// renderer's ambient light.
     pub fn shade(&self, hit: &Hit, (o, d): (Vec3, Vec3), settings: &RenderSettings) -> Vec3 {
         let albedo = self.albedo(hit);
         let n = hit.normal;
+        if let SurfaceShading::EyeLight { blend } = settings.surface_shading {
+            let facing = n.dot(-d.normalize_or_zero()).abs().min(1.0);
+            return albedo * (blend * facing + 1.0 - blend);
+        }
         let mut direct = if settings.headlight {
             Vec3::splat(n.dot(-d.normalize_or_zero()).max(0.0))
         } else if settings.directional {

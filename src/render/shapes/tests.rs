@@ -65,9 +65,12 @@ fn render(scene: &Scene, settings: &RenderSettings) -> Frame {
         .unwrap()
 }
 
+/// Lambertian in a light at the eye (the world has none), without the
+/// ambient light: a pixel's shade is its normal's z.
 fn unlit_ambient() -> RenderSettings {
     RenderSettings {
         ambient: Vec3::ZERO,
+        surface_shading: crate::render::SurfaceShading::Lights,
         ..RenderSettings::default()
     }
 }
@@ -76,7 +79,22 @@ fn unlit_ambient() -> RenderSettings {
 fn a_sphere_shows_its_silhouette_depth_and_headlit_shading() {
     let red = ColorSource::Constant(Vec3::new(1.0, 0.0, 0.0));
     let scene = Scene::of_shapes(vec![unit_sphere(red, Mat4::IDENTITY)]).unwrap();
-    let frame = render(&scene, &unlit_ambient());
+    // The reference device's eye light blends the cosine with the color.
+    let blend = 0.3;
+    let eye = RenderSettings {
+        surface_shading: crate::render::SurfaceShading::EyeLight { blend },
+        ..RenderSettings::default()
+    };
+    for (settings, shade) in [
+        (unlit_ambient(), &(|z: f32| z) as &dyn Fn(f32) -> f32),
+        (eye, &|z: f32| blend * z + 1.0 - blend),
+    ] {
+        sphere_check(&scene, &settings, shade);
+    }
+}
+
+fn sphere_check(scene: &Scene, settings: &RenderSettings, shade: &dyn Fn(f32) -> f32) {
+    let frame = render(scene, settings);
     let depth = frame.depth.clone().unwrap();
     let half_pixel = 2.0 / N as f32;
     for y in 0..N {
@@ -89,7 +107,7 @@ fn a_sphere_shows_its_silhouette_depth_and_headlit_shading() {
                 assert!((d - (5.0 - z)).abs() < 1e-4, "depth at {x},{y}: {d}");
                 // Lit from the eye: the cosine is the normal's z.
                 assert!(
-                    (c.x - z).abs() < 1e-4 && c.y == 0.0,
+                    (c.x - shade(z)).abs() < 1e-4 && c.y == 0.0,
                     "color at {x},{y}: {c}"
                 );
             } else if r > 1.0 + half_pixel {
