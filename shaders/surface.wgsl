@@ -464,22 +464,59 @@ fn surface_alpha(h: SurfaceHit) -> f32 {
     return shape_word(bitcast<u32>(prim_word(h.slot, 1u).w) >> 4u, 7u).y;
 }
 
+// Light reflected towards v per unit arriving from l, the cosine
+// included: Lambertian, or where `pbr` the metallic-roughness model
+// (brdf::reflected, operation for operation).
+fn reflected(n: vec3f, v: vec3f, l: vec3f, albedo: vec3f, pbr: bool, metallic: f32, roughness: f32) -> vec3f {
+    let nl = dot(n, l);
+    if nl <= 0.0 {
+        return vec3f(0.0);
+    }
+    if !pbr {
+        return albedo * nl;
+    }
+    let nv = max(dot(n, v), 1e-4);
+    let hl = length(l + v);
+    var h = vec3f(0.0);
+    if hl > 0.0 {
+        h = (l + v) / hl;
+    }
+    let nh = max(dot(n, h), 0.0);
+    let vh = clamp(dot(v, h), 0.0, 1.0);
+    let r = max(roughness, MIN_ROUGHNESS);
+    let a2 = (r * r) * (r * r);
+    let x = nh * nh * (a2 - 1.0) + 1.0;
+    let dist = a2 / (PI * x * x);
+    let k = r * r / 2.0;
+    let g = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
+    let f0 = mix(vec3f(0.04), albedo, metallic);
+    let f = f0 + (vec3f(1.0) - f0) * pow(1.0 - vh, 5.0);
+    let specular = f * (PI * dist * g / (4.0 * nv));
+    return albedo * (1.0 - metallic) * nl + specular;
+}
+
 // Hit h of ray o + t d, shaded (ShapeSet::shade): the reference device's
-// eye light blended with the color, or Lambertian under the world's
-// directional light (or a light at the eye where it has none) and its
-// point and spot lights, plus the ambient light.
+// eye light blended with the color, or the world's directional light (or
+// a light at the eye where it has none) and its point and spot lights
+// reflected, plus the ambient light; and what the surface emits.
 fn surface_color(h: SurfaceHit, o: vec3f, d: vec3f) -> vec3f {
     let p = o + d * h.t;
     let n = surface_normal(h, p, d);
+    let v = -normalize(d);
+    let albedo = surface_albedo(h);
+    let shape = bitcast<u32>(prim_word(h.slot, 1u).w) >> 4u;
+    let material = shape_word(shape, 7u);
+    let pbr = (bitcast<u32>(material.x) & FLAG_PBR) != 0u;
+    let emitted = shape_word(shape, 15u).xyz;
     if params.surface_lighting == SURFACE_LIT_EYE_BLEND {
-        let facing = min(abs(dot(n, -normalize(d))), 1.0);
-        return surface_albedo(h) * (params.eye_blend * facing + 1.0 - params.eye_blend);
+        let facing = min(abs(dot(n, v)), 1.0);
+        return albedo * (params.eye_blend * facing + 1.0 - params.eye_blend) + emitted;
     }
-    var direct = vec3f(0.0);
+    var light = vec3f(0.0);
     if params.surface_lighting == SURFACE_LIT_FROM_EYE {
-        direct = vec3f(max(dot(n, -d), 0.0));
+        light = reflected(n, v, v, albedo, pbr, material.z, material.w);
     } else if params.surface_lighting == SURFACE_LIT_DIRECTIONAL {
-        direct = params.surface_light_color * max(dot(n, params.surface_light), 0.0);
+        light = params.surface_light_color * reflected(n, v, params.surface_light, albedo, pbr, material.z, material.w);
     }
     for (var i = 0u; i < params.lamp_count; i++) {
         let lamp = params.lamps[i];
@@ -490,9 +527,9 @@ fn surface_color(h: SurfaceHit, o: vec3f, d: vec3f) -> vec3f {
         if lamp.spot != 0u {
             strength *= cone(lamp, -towards);
         }
-        direct += lamp.color * strength * max(dot(n, towards), 0.0);
+        light += lamp.color * strength * reflected(n, v, towards, albedo, pbr, material.z, material.w);
     }
-    return surface_albedo(h) * (direct + params.ambient);
+    return light + albedo * params.ambient + emitted;
 }
 
 // How much of a spot's light leaves along unit vector `out` (settings::cone).

@@ -18,7 +18,7 @@ use super::table::{
     ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE,
     EXT_COMPLETION, EXT_CONE, EXT_CURVATURE, EXT_CURVE, EXT_CYLINDER, EXT_FRAME_DEADLINE,
     EXT_FRAME_PAIR, EXT_IMAGE1D, EXT_IMAGE2D, EXT_IMAGE3D, EXT_ISOSURFACE, EXT_MATRIX,
-    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC,
+    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_PBR,
     EXT_PRIMITIVE_SAMPLER, EXT_QUAD, EXT_SHADING, EXT_SPHERE, EXT_STEREO, EXT_TRANSFORM_SAMPLER,
     EXT_TRIANGLE,
 };
@@ -60,6 +60,7 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_CURVE,
     EXT_AMBIENT,
     EXT_MATTE,
+    EXT_PBR,
     "ANARI_KHR_LIGHT_POINT",
     "ANARI_KHR_LIGHT_SPOT",
     EXT_IMAGE1D,
@@ -105,6 +106,7 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &geometry::cone::INFO,
     &geometry::curve::INFO,
     &material::matte::INFO,
+    &material::physically_based::INFO,
     &material::curvature::INFO,
     &sampler::image::INFO_1D,
     &sampler::image::INFO_2D,
@@ -277,7 +279,10 @@ mod tests {
                 "curve"
             ]
         );
-        assert_eq!(subtypes(T::MATERIAL), ["matte", "curvature"]);
+        assert_eq!(
+            subtypes(T::MATERIAL),
+            ["matte", "physicallyBased", "curvature"]
+        );
         assert_eq!(
             subtypes(T::SAMPLER),
             ["image1D", "image2D", "image3D", "primitive", "transform"]

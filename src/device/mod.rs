@@ -12,6 +12,7 @@ mod array;
 mod calls;
 pub mod camera;
 mod device_object;
+mod elements;
 pub mod frame;
 mod geometry;
 mod group;

@@ -531,12 +531,29 @@ pub enum Coverage {
     Hidden,
 }
 
-/// ANARI's matte material: diffuse color, opacity and how it shows.
+/// What ANARI's physicallyBased material adds to a color: a metal's
+/// tint of its highlights, how rough the surface is and the light it
+/// gives off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pbr {
+    /// 0 dielectric, 1 metal.
+    pub metallic: f32,
+    /// 0 mirror-like, 1 fully rough.
+    pub roughness: f32,
+    /// Linear RGB radiance, added to whatever light the surface reflects.
+    pub emissive: Vec3,
+}
+
+/// A surface's material: its color (a matte's, or a physically based
+/// material's base color), opacity and how it shows, and for a
+/// physically based one what it adds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceMaterial {
     pub color: ColorSource,
     pub opacity: f32,
     pub alpha: AlphaMode,
+    /// None: matte (Lambertian).
+    pub pbr: Option<Pbr>,
 }
 
 impl Default for SurfaceMaterial {
@@ -545,6 +562,7 @@ impl Default for SurfaceMaterial {
             color: ColorSource::Constant(Vec3::splat(0.8)),
             opacity: 1.0,
             alpha: AlphaMode::Opaque,
+            pbr: None,
         }
     }
 }

@@ -462,6 +462,29 @@ fn cones_take_radii_per_vertex_and_caps_per_vertex_over_the_global_caps() {
 }
 
 #[test]
+fn cylinders_take_caps_per_vertex_too() {
+    let mut h = Host::new();
+    let g = h.d.new_object(DataType::GEOMETRY, "cylinder");
+    vec3_array(
+        &mut h,
+        "vertex.position",
+        g,
+        &[[0.0, 0.0, 0.5], [0.0, 0.0, -0.5]],
+    );
+    h.set(g, "radius", DataType::FLOAT32, bytes(&[0.4f32]));
+    u8_array(&mut h, "vertex.cap", g, &[0, 1]);
+    h.d.commit(Subject::Object(g));
+    // Open towards the eye: it sees the far disc through the tube.
+    let d = centre_depth(&mut h, g);
+    assert!((d - 3.5).abs() < 0.01, "{d}");
+    u8_array(&mut h, "vertex.cap", g, &[1, 0]);
+    h.d.commit(Subject::Object(g));
+    let d = centre_depth(&mut h, g);
+    assert!((d - 2.5).abs() < 0.01, "{d}");
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+}
+
+#[test]
 fn curves_join_their_segments_and_report_a_segment_past_the_end() {
     let mut h = Host::new();
     let g = h.d.new_object(DataType::GEOMETRY, "curve");
@@ -841,4 +864,81 @@ fn point_and_spot_lights_light_surfaces_through_the_world() {
             h.d.release(o);
         }
     }
+}
+
+#[test]
+fn physically_based_shows_its_base_color_and_emission_and_takes_its_whole_table() {
+    let mut h = Host::new();
+    let g = sphere(&mut h);
+    let m = h.d.new_object(DataType::MATERIAL, "physicallyBased");
+    h.set(
+        m,
+        "baseColor",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.5f32, 0.0, 0.0]),
+    );
+    h.set(
+        m,
+        "emissive",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.0f32, 0.0, 1.0]),
+    );
+    h.set(m, "metallic", DataType::FLOAT32, bytes(&[0.2f32]));
+    // glTF's layers beyond metallic-roughness are accepted quietly.
+    h.set(m, "clearcoat", DataType::FLOAT32, bytes(&[0.5f32]));
+    h.set(m, "ior", DataType::FLOAT32, bytes(&[1.4f32]));
+    h.d.commit(Subject::Object(m));
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], None);
+    let p = h.pixels(f);
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    assert!(
+        h.messages(Severity::Warning).is_empty(),
+        "{:?}",
+        h.messages(Severity::Warning)
+    );
+    // Head-on in the eye light: the base color plus the blue it emits.
+    let c = pixel(&p, SIZE / 2, SIZE / 2);
+    assert!(
+        (c[0] as i32 - 127).abs() <= 3 && c[1] == 0 && c[2] == 255,
+        "{c:?}"
+    );
+    // A metallic from a sampler is not modelled, and the host hears so.
+    h.d.set_param(
+        Subject::Object(m),
+        "metallic",
+        Input::String("attribute0".into()),
+    );
+    h.d.commit(Subject::Object(m));
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("metallic from a sampler or an attribute is not modelled")),
+        "{warnings:?}"
+    );
+}
+
+#[test]
+fn a_material_never_committed_draws_with_its_defaults() {
+    let mut h = Host::new();
+    let g = sphere(&mut h);
+    let m = h.d.new_object(DataType::MATERIAL, "matte");
+    // Set and never committed: it does not take effect.
+    h.set(
+        m,
+        "color",
+        DataType::FLOAT32_VEC3,
+        bytes(&[1.0f32, 0.0, 0.0]),
+    );
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], None);
+    let p = h.pixels(f);
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    // The default 0.8 grey, head-on.
+    let c = pixel(&p, SIZE / 2, SIZE / 2);
+    assert!(
+        c[0] == c[1] && c[1] == c[2] && (c[0] as i32 - 204).abs() <= 3,
+        "{c:?}"
+    );
 }

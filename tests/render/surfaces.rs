@@ -14,7 +14,7 @@ use anari_library_caveray::render::{
     ssim, ColorFormat, CpuRenderer, FrameDesc, Lamp, RenderSettings, Spot, SurfaceShading,
 };
 use anari_library_caveray::scene::{
-    AlphaMode, Attribute, ColorSource, Image, PlacedShape, Sampler, SamplerKind, Scene, Shape,
+    AlphaMode, Attribute, ColorSource, Image, Pbr, PlacedShape, Sampler, SamplerKind, Scene, Shape,
     ShapeInput, SurfaceMaterial, Wrap,
 };
 use common::render::{four_cameras, gpu, off_axis_wall};
@@ -36,6 +36,7 @@ fn material(color: ColorSource) -> SurfaceMaterial {
         color,
         opacity: 1.0,
         alpha: AlphaMode::Opaque,
+        pbr: None,
     }
 }
 
@@ -94,7 +95,8 @@ fn sheet_colored(
     PlacedShape::new(Arc::new(made.shape), material(color), Mat4::IDENTITY)
 }
 
-/// Spheres of several radii, sheared into ellipsoids.
+/// Spheres of several radii, sheared into ellipsoids, of a glossy
+/// physically based material that glows a little.
 fn glyphs() -> PlacedShape {
     glyphs_in(ColorSource::Constant(Vec3::new(0.9, 0.8, 0.2)))
 }
@@ -114,7 +116,13 @@ fn glyphs_in(color: ColorSource) -> PlacedShape {
         Vec4::new(0.0, 0.0, 1.2, 0.0),
         Vec4::new(0.1, 0.0, 0.0, 1.0),
     );
-    PlacedShape::new(Arc::new(made.shape), material(color), shear)
+    let mut glossy = material(color);
+    glossy.pbr = Some(Pbr {
+        metallic: 0.6,
+        roughness: 0.3,
+        emissive: Vec3::new(0.05, 0.02, 0.0),
+    });
+    PlacedShape::new(Arc::new(made.shape), glossy, shear)
 }
 
 /// Three tubes: a cylinder capped at its first end, a cone tapering to a
@@ -471,6 +479,7 @@ fn square_at(z: f32, color: Vec3, opacity: f32, alpha: AlphaMode) -> PlacedShape
             color: ColorSource::Constant(color),
             opacity,
             alpha,
+            pbr: None,
         },
         Mat4::IDENTITY,
     )

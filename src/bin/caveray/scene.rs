@@ -357,6 +357,7 @@ impl MeshArgs {
             color: ColorSource::Constant(self.mesh_color.as_vec3()),
             opacity: self.mesh_opacity,
             alpha,
+            pbr: None,
         };
         Ok(Some(PlacedShape::new(
             std::sync::Arc::new(made.shape),

@@ -223,6 +223,20 @@ impl Device {
             implemented,
             info::initial_state(kind, implemented),
         );
+        // An object never committed has its defaults (hosts use materials
+        // and lights they never commit, and other devices draw them): its
+        // state is a commit of no parameters, where that needs none.
+        if let Some(t) = table.filter(|_| kind != DataType::FRAME) {
+            if let (false, Some(commit)) = (t.params.iter().any(|p| p.required), t.commit) {
+                let none = crate::device::object::Params::default();
+                if let Ok(Some(state)) = commit(
+                    &crate::device::table::Read::new(&none, t.params),
+                    &mut |_| {},
+                ) {
+                    drop(cell.replace_state(state));
+                }
+            }
+        }
         if let Some(t) = table.filter(|t| t.subtype != subtype && !t.subtype.is_empty()) {
             self.status(
                 Severity::Info,

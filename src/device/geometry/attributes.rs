@@ -6,22 +6,14 @@
 use glam::{Vec3, Vec4};
 
 use crate::device::array::Array;
+use crate::device::elements::{colors, COLOR_ELEMENTS, COLOR_TYPES};
 use crate::device::table::Read;
 use crate::device::types::{words, DataType as T};
 use crate::scene::{Attribute, ShapeInput, ATTRIBUTE_NAMES};
 
-/// Element types an attribute array may hold; missing components read as
-/// ANARI's (x, 0, 0, 1).
-pub const ATTRIBUTE_ELEMENTS: &[T] = &[
-    T::FLOAT32,
-    T::FLOAT32_VEC2,
-    T::FLOAT32_VEC3,
-    T::FLOAT32_VEC4,
-    T::UFIXED8,
-    T::UFIXED8_VEC2,
-    T::UFIXED8_VEC3,
-    T::UFIXED8_VEC4,
-];
+/// Element types an attribute array may hold (every color type); missing
+/// components read as ANARI's (x, 0, 0, 1).
+pub const ATTRIBUTE_ELEMENTS: &[T] = COLOR_ELEMENTS;
 
 /// Triangles' and quads' normals.
 pub const VERTEX_NORMAL: crate::device::table::ParamInfo = crate::device::table::p(
@@ -60,7 +52,7 @@ macro_rules! shape_params {
                 &[$crate::device::types::DataType::ARRAY1D],
                 false,
                 $crate::device::table::DefaultValue::None,
-                "per vertex (interpolated) or per primitive: what a material's color may name (FLOAT32 to FLOAT32_VEC4, UFIXED8 to UFIXED8_VEC4)",
+                "per vertex (interpolated) or per primitive: what a material's color may name (FLOAT32, UFIXED8, UFIXED16 or UFIXED32 with 1 to 4 components, or UFIXED8_*_SRGB)",
             )
             .elements($crate::device::geometry::attributes::ATTRIBUTE_ELEMENTS),
         )*
@@ -78,36 +70,12 @@ pub(crate) use shape_params;
 
 /// An attribute array's elements as Vec4s.
 pub fn vec4s(name: &str, a: &Array) -> Result<Vec<Vec4>, String> {
-    let (n, float) = match a.element() {
-        T::FLOAT32 => (1, true),
-        T::FLOAT32_VEC2 => (2, true),
-        T::FLOAT32_VEC3 => (3, true),
-        T::FLOAT32_VEC4 => (4, true),
-        T::UFIXED8 => (1, false),
-        T::UFIXED8_VEC2 => (2, false),
-        T::UFIXED8_VEC3 => (3, false),
-        T::UFIXED8_VEC4 => (4, false),
-        other => {
-            return Err(format!(
-                "'{name}' array holds {other}; attributes are FLOAT32 or UFIXED8 vectors"
-            ))
-        }
-    };
-    let values: Vec<f32> = if float {
-        a.f32s()
-    } else {
-        a.bytes().iter().map(|&b| f32::from(b) / 255.0).collect()
-    };
-    Ok(values
-        .chunks_exact(n)
-        .map(|c| {
-            let mut v = Vec4::new(0.0, 0.0, 0.0, 1.0);
-            for (k, &x) in c.iter().enumerate() {
-                v[k] = x;
-            }
-            v
-        })
-        .collect())
+    colors(a).ok_or_else(|| {
+        format!(
+            "'{name}' array holds {}; attributes are {COLOR_TYPES}",
+            a.element()
+        )
+    })
 }
 
 /// The FLOAT32_VEC3 array `name`, if set.
@@ -157,6 +125,39 @@ pub fn caps(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> [bool; 2] {
             [false, false]
         }
     }
+}
+
+/// Cones' and cylinders' caps per vertex.
+pub const VERTEX_CAP: crate::device::table::ParamInfo = crate::device::table::p(
+    "vertex.cap",
+    &[T::ARRAY1D],
+    false,
+    crate::device::table::DefaultValue::None,
+    "UINT8 per vertex: a disc closes the end at that vertex where it is not 0 (default: 'caps')",
+)
+.elements(&[T::UINT8]);
+
+/// Which ends of each of `ends` are closed: by `vertex.cap` where it is
+/// given, else by `caps` for every one.
+pub fn end_caps(
+    r: &Read<'_>,
+    vertices: usize,
+    ends: &[[u32; 2]],
+    warn: &mut dyn FnMut(String),
+) -> Result<Vec<[bool; 2]>, String> {
+    let global = caps(r, warn);
+    let Some(per_vertex) = r.array_of("vertex.cap", T::UINT8, |a| Ok(a.bytes().to_vec()))? else {
+        return Ok(vec![global; ends.len()]);
+    };
+    if per_vertex.len() < vertices {
+        return Err(format!(
+            "vertex.cap has {} values for {vertices} vertices",
+            per_vertex.len()
+        ));
+    }
+    // An end past the vertices is the shape's to report.
+    let at = |v: u32| per_vertex.get(v as usize).is_some_and(|&c| c != 0);
+    Ok(ends.iter().map(|e| [at(e[0]), at(e[1])]).collect())
 }
 
 /// `vertex.radius`, one per vertex, else `radius` for every vertex.

@@ -39,14 +39,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             DefaultValue::Floats(&[1.0]),
             "every end's radius where vertex.radius is unset",
         ),
-        p(
-            "vertex.cap",
-            &[T::ARRAY1D],
-            false,
-            DefaultValue::None,
-            "UINT8 per vertex: a disc closes the cone at that end where it is not 0 (default: 'caps')",
-        )
-        .elements(&[T::UINT8]),
+        attributes::VERTEX_CAP,
         p(
             "caps",
             &[T::STRING],
@@ -63,25 +56,10 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     let positions = attributes::positions(r)?;
     let ends = attributes::pairs(r, positions.len())?;
     let radii = attributes::vertex_radii(r, positions.len())?;
-    let vertex_caps = r.array_of("vertex.cap", T::UINT8, |a| Ok(a.bytes().to_vec()))?;
-    if let Some(c) = &vertex_caps {
-        if c.len() < positions.len() {
-            return Err(format!(
-                "vertex.cap has {} values for {} vertices",
-                c.len(),
-                positions.len()
-            ));
-        }
-    }
-    let global = attributes::caps(r, warn);
+    let caps = attributes::end_caps(r, positions.len(), &ends, warn)?;
     // Out-of-range ends are the shape's to report: read them as 0 here.
     let at = |v: u32| radii.get(v as usize).copied().unwrap_or(0.0);
-    let cap = |v: u32, k: usize| match &vertex_caps {
-        Some(c) => c.get(v as usize).is_some_and(|&c| c != 0),
-        None => global[k],
-    };
     let cone_radii = ends.iter().map(|e| [at(e[0]), at(e[1])]).collect();
-    let caps = ends.iter().map(|e| [cap(e[0], 0), cap(e[1], 1)]).collect();
     let input = attributes::input(r, positions.len(), ends.len())?;
     let made = crate::scene::Shape::cones("cone", positions, ends, cone_radii, caps, input)
         .map_err(|e| e.to_string())?;

@@ -1,7 +1,7 @@
 //! ANARI's `cylinder` geometry (ANARI_KHR_GEOMETRY_CYLINDER): a cylinder
 //! between each pair of consecutive vertices, or each pair of
 //! `primitive.index`, of `primitive.radius` or the geometry's `radius`,
-//! closed by discs where `caps` says.
+//! closed by discs where `vertex.cap` (or, without it, `caps`) says.
 
 use crate::device::object::State;
 use crate::device::table::Read;
@@ -39,12 +39,13 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             DefaultValue::Floats(&[1.0]),
             "every cylinder's radius where primitive.radius is unset",
         ),
+        attributes::VERTEX_CAP,
         p(
             "caps",
             &[T::STRING],
             false,
             DefaultValue::Text("none"),
-            "which ends are closed by a disc: none, first, second or both",
+            "where vertex.cap is unset, which ends are closed by a disc: none, first, second or both",
         )
         .names(&attributes::CAPS),
     ),
@@ -65,15 +66,14 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         Some(radii) => radii,
         None => vec![r.f32("radius")?; ends.len()],
     };
-    let caps = attributes::caps(r, warn);
+    let caps = attributes::end_caps(r, positions.len(), &ends, warn)?;
     let input = attributes::input(r, positions.len(), ends.len())?;
-    let count = ends.len();
     let made = crate::scene::Shape::cones(
         "cylinder",
         positions,
         ends,
         radii.iter().map(|&r| [r, r]).collect(),
-        vec![caps; count],
+        caps,
         input,
     )
     .map_err(|e| e.to_string())?;

@@ -1,12 +1,131 @@
 //! Materials: one module per subtype, each giving a surface its color
-//! before the renderer's shading.
+//! before the renderer's shading, and what `matte` and `physicallyBased`
+//! read alike (a color, an opacity and how it shows).
 
 pub mod curvature;
 pub mod matte;
+pub mod physically_based;
+
+use glam::Vec3;
 
 use super::object::ObjectRef;
+use super::table::{p, DefaultValue, ParamInfo, Read, F32};
+use super::types::DataType as T;
 pub use crate::render::iso::Coloring;
-use crate::scene::SurfaceMaterial;
+use crate::scene::{AlphaMode, ColorSource, SurfaceMaterial, ATTRIBUTE_NAMES};
+
+pub const OPACITY: ParamInfo = p(
+    "opacity",
+    &[T::FLOAT32, T::SAMPLER, T::STRING],
+    false,
+    DefaultValue::Floats(&[1.0]),
+    "how much of what lies behind the surface it hides, under alphaMode blend or mask; a constant (an attribute name or a sampler is accepted and read as 1, with a warning)",
+)
+.range(0.0, 1.0);
+
+/// Constant `name`, in its table's range; set as a sampler or an
+/// attribute name, which caveray does not model, its default, and the
+/// host hears so.
+fn constant(r: &Read<'_>, name: &str, warn: &mut dyn FnMut(String)) -> Result<f32, String> {
+    if r.object(name).is_some() || r.set(name).and_then(|v| v.string()).is_some() {
+        warn(format!(
+            "{name} from a sampler or an attribute is not modelled; the constant default is used"
+        ));
+    }
+    r.f32_in_range(name)
+}
+
+pub const ALPHA_MODE: ParamInfo = p(
+    "alphaMode",
+    &[T::STRING],
+    false,
+    DefaultValue::Text("opaque"),
+    "opaque: opacity ignored; blend: composited with the volumes and surfaces behind in depth order (up to 8 translucent surfaces a ray); mask: opaque where opacity reaches alphaCutoff, else not drawn",
+)
+.names(&AlphaMode::NAMES);
+
+pub const ALPHA_CUTOFF: ParamInfo = p(
+    "alphaCutoff",
+    F32,
+    false,
+    DefaultValue::Floats(&[0.5]),
+    "the opacity from which a masked surface shows",
+)
+.range(0.0, 1.0);
+
+/// Color parameter `name`: a constant, the name of an attribute, or a
+/// sampler (resolved when a frame renders); with the flat color an
+/// isosurface shows, which has no attributes.
+fn color(
+    r: &Read<'_>,
+    name: &str,
+    default: Vec3,
+    warn: &mut dyn FnMut(String),
+) -> Result<(ColorSource, Option<ObjectRef>, Vec3), String> {
+    let named = r.set(name).and_then(|v| v.string());
+    let sampler = r.object(name).filter(|o| o.kind == T::SAMPLER).cloned();
+    if sampler.is_some() {
+        return Ok((ColorSource::Constant(default), sampler, default));
+    }
+    if let Some(attribute) = named {
+        let source = match ATTRIBUTE_NAMES.iter().position(|n| *n == attribute) {
+            Some(slot) => ColorSource::Attribute(slot),
+            None => {
+                warn(format!(
+                    "{name} names '{attribute}'; caveray colors by {}: drawn in the default color",
+                    ATTRIBUTE_NAMES.join(", ")
+                ));
+                ColorSource::Constant(default)
+            }
+        };
+        return Ok((source, None, default));
+    }
+    let color = match r.set(name).and_then(|v| v.f32s()) {
+        Some(f) if f.len() == 4 => Vec3::from_slice(&f),
+        _ => r.vec3(name)?,
+    };
+    if !color.is_finite() {
+        return Err(format!("{name} {color} must be finite"));
+    }
+    let clamped = color.clamp(Vec3::ZERO, Vec3::ONE);
+    if clamped != color {
+        warn(format!("{name} {color} lies outside [0, 1]; clamped"));
+    }
+    Ok((ColorSource::Constant(clamped), None, clamped))
+}
+
+/// `opacity` clamped into [0, 1], and `alphaMode` (with `alphaCutoff`).
+fn opacity_and_alpha(
+    r: &Read<'_>,
+    warn: &mut dyn FnMut(String),
+) -> Result<(f32, AlphaMode), String> {
+    let given = constant(r, "opacity", warn)?;
+    if !given.is_finite() {
+        return Err(format!("opacity {given} must be finite"));
+    }
+    let opacity = given.clamp(0.0, 1.0);
+    if opacity != given {
+        warn(format!("opacity {given} lies outside [0, 1]; clamped"));
+    }
+    let alpha = match r.string("alphaMode").unwrap_or("opaque") {
+        "opaque" => AlphaMode::Opaque,
+        "blend" => AlphaMode::Blend,
+        "mask" => AlphaMode::Mask(r.f32_in_range("alphaCutoff")?),
+        other => {
+            warn(format!(
+                "alphaMode '{other}' is not one of {}: opaque",
+                AlphaMode::NAMES.join(", ")
+            ));
+            AlphaMode::Opaque
+        }
+    };
+    if alpha == AlphaMode::Opaque && opacity < 1.0 {
+        warn(format!(
+            "opacity {opacity} under alphaMode opaque is drawn opaque (alphaMode blend composites it)"
+        ));
+    }
+    Ok((opacity, alpha))
+}
 
 /// A material after commit: how it colors an isosurface, and a surface of
 /// primitives if it can (curvature needs a field's Hessian).

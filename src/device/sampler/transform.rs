@@ -15,6 +15,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     params: &[
         IN_ATTRIBUTE,
         transform("outTransform", "applied to the attribute (x, y, z, w)"),
+        transform(
+            "transform",
+            "outTransform by the name the reference device and the conformance tool use; outTransform wins where both are set",
+        ),
         offset("outOffset", "added after outTransform"),
     ],
     commit: Some(commit),
@@ -23,7 +27,11 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let sampler = Sampler {
         in_attribute: in_attribute(r, warn),
-        out_transform: r.mat4("outTransform")?,
+        out_transform: if r.set("outTransform").is_none() && r.set("transform").is_some() {
+            r.mat4("transform")?
+        } else {
+            r.mat4("outTransform")?
+        },
         out_offset: r.vec4("outOffset")?,
         ..Sampler::new(SamplerKind::Transform)
     };

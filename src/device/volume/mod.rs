@@ -1,6 +1,5 @@
 //! Volumes: one module per subtype.
 
-mod elements;
 pub mod transfer_function_1d;
 
 pub use transfer_function_1d::VolumeModel;

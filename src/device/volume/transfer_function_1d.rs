@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use glam::Vec4;
 
-use super::elements::{clamp_unit, colors, scalars, COLOR_ELEMENTS, COLOR_TYPES};
 use crate::device::array::Array;
+use crate::device::elements::{clamp_unit, colors, scalars, COLOR_ELEMENTS, COLOR_TYPES};
 use crate::device::object::{ObjectRef, State};
 use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, F32};
@@ -28,7 +28,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
           "field values mapped to the first and last entries; lo == hi (a constant field) maps that value to the middle"),
         p("color", &[T::ARRAY1D, T::FLOAT32_VEC3, T::FLOAT32_VEC4], false,
           DefaultValue::Floats(&[1.0, 1.0, 1.0]),
-          "ARRAY1D (FLOAT32, UFIXED8 or UFIXED16 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one color; out of [0, 1] clamped")
+          "ARRAY1D (FLOAT32, UFIXED8, UFIXED16 or UFIXED32 with 1 to 4 components, or UFIXED8_*_SRGB) spread over valueRange, or one color; out of [0, 1] clamped")
             .elements(COLOR_ELEMENTS),
         p("opacity", &[T::ARRAY1D, T::FLOAT32], false, DefaultValue::Floats(&[1.0]),
           "ARRAY1D of FLOAT32 spread over valueRange, or one opacity; out of [0, 1] clamped")

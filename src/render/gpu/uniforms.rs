@@ -26,10 +26,10 @@ use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
 };
 use crate::render::shapes::packed::{
-    FLAG_ALBEDO, FLAG_IMAGE, FLAG_NORMALS, KIND_CONE, KIND_CURVE, KIND_SPHERE, KIND_TRIANGLE,
-    TRAVERSAL_STACK,
+    FLAG_ALBEDO, FLAG_IMAGE, FLAG_NORMALS, FLAG_PBR, KIND_CONE, KIND_CURVE, KIND_SPHERE,
+    KIND_TRIANGLE, TRAVERSAL_STACK,
 };
-use crate::render::shapes::{MAX_TRANSLUCENT, SURFACE_PASSES};
+use crate::render::shapes::{MAX_TRANSLUCENT, MIN_ROUGHNESS, SURFACE_PASSES};
 use crate::render::stereo::Reprojection;
 use crate::render::{Lamp, RenderSettings, Spot, SurfaceShading, MAX_LAMPS};
 use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
@@ -571,6 +571,7 @@ fn constants() -> String {
         ("FLAG_ALBEDO", FLAG_ALBEDO),
         ("FLAG_NORMALS", FLAG_NORMALS),
         ("FLAG_IMAGE", FLAG_IMAGE),
+        ("FLAG_PBR", FLAG_PBR),
         ("TRAVERSAL_STACK", TRAVERSAL_STACK),
         ("MAX_TRANSLUCENT", MAX_TRANSLUCENT),
         ("SURFACE_PASSES", SURFACE_PASSES),
@@ -585,6 +586,8 @@ fn constants() -> String {
     }
     // Rust's shortest round-trip form with the f suffix is the same f32.
     out += &format!("const SHADOW_AMBIENT: f32 = {SHADOW_AMBIENT:?}f;\n");
+    out += &format!("const MIN_ROUGHNESS: f32 = {MIN_ROUGHNESS:?}f;\n");
+    out += &format!("const PI: f32 = {:?}f;\n", std::f32::consts::PI);
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
     out
 }

@@ -11,6 +11,7 @@
 //! spheres and cylinders are tested in object space, so an instance's
 //! shear or uneven scale makes the ellipsoid it should.
 
+mod brdf;
 mod intersect;
 pub mod packed;
 
@@ -23,6 +24,8 @@ use obvhs::Boundable;
 use super::frame::filled;
 use super::{RenderError, RenderSettings, SurfaceShading};
 use crate::scene::{Attribute, ColorSource, Coverage, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
+use brdf::reflected;
+pub use brdf::MIN_ROUGHNESS;
 use intersect::{cone, curve, sphere, tangent_cone, triangle, End};
 
 /// The most translucent surfaces one ray composites; those behind them
@@ -405,24 +408,27 @@ impl ShapeSet {
     /// renderer's ambient light.
     pub fn shade(&self, hit: &Hit, (o, d): (Vec3, Vec3), settings: &RenderSettings) -> Vec3 {
         let albedo = self.albedo(hit);
+        let pbr = self.traced[hit.shape as usize].placed.material.pbr.as_ref();
+        let emitted = pbr.map_or(Vec3::ZERO, |p| p.emissive);
         let n = hit.normal;
+        let v = -d.normalize_or_zero();
         if let SurfaceShading::EyeLight { blend } = settings.surface_shading {
-            let facing = n.dot(-d.normalize_or_zero()).abs().min(1.0);
-            return albedo * (blend * facing + 1.0 - blend);
+            let facing = n.dot(v).abs().min(1.0);
+            return albedo * (blend * facing + 1.0 - blend) + emitted;
         }
-        let mut direct = if settings.headlight {
-            Vec3::splat(n.dot(-d.normalize_or_zero()).max(0.0))
+        let mut light = if settings.headlight {
+            reflected(n, v, v, albedo, pbr)
         } else if settings.directional {
-            settings.light_color * n.dot(settings.light).max(0.0)
+            settings.light_color * reflected(n, v, settings.light, albedo, pbr)
         } else {
             Vec3::ZERO
         };
         let p = o + d * hit.t;
         for lamp in &settings.lamps {
-            let (towards, light) = lamp.at(p);
-            direct += light * n.dot(towards).max(0.0);
+            let (towards, arriving) = lamp.at(p);
+            light += arriving * reflected(n, v, towards, albedo, pbr);
         }
-        albedo * (direct + settings.ambient)
+        light + albedo * settings.ambient + emitted
     }
 }
 

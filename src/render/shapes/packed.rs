@@ -20,11 +20,12 @@
 //!   them.
 //! - shape s at `shapes + 16 s`: rows of world-to-object (3 words), of
 //!   object-to-world for normals (3), (constant albedo, u shading base),
-//!   (u flags, opacity (1: opaque), -, -); for an image sampler (u dims, u texel base),
-//!   (u linear, u wrap per axis), the rows of its out-transform (4) and
-//!   its out-offset; unused words are zero. Flags: bit 0 per-corner
-//!   albedo, bit 1 the host's normals, bit 2 per-corner image
-//!   coordinates.
+//!   (u flags, opacity (1: opaque), metallic, roughness); for an image
+//!   sampler (u dims, u texel base), (u linear, u wrap per axis), the rows
+//!   of its out-transform (4) and its out-offset; then (emissive, -);
+//!   unused words are zero. Flags: bit 0 per-corner albedo, bit 1 the
+//!   host's normals, bit 2 per-corner image coordinates, bit 3 a
+//!   physically based material (metallic, roughness, emissive).
 //! - in the second array, a shape's shading at `shading base + stride k`
 //!   for kept primitive
 //!   k: the albedo at each corner (3 words) if it varies, or the image
@@ -51,6 +52,7 @@ pub const KIND_CURVE: u32 = 3;
 pub const FLAG_ALBEDO: u32 = 1;
 pub const FLAG_NORMALS: u32 = 2;
 pub const FLAG_IMAGE: u32 = 4;
+pub const FLAG_PBR: u32 = 8;
 /// Node boxes a traversal keeps to visit later, and the most levels of a
 /// tree a GPU traverses.
 pub const TRAVERSAL_STACK: u32 = 64;
@@ -181,7 +183,9 @@ impl ShapeSet {
                 Coverage::Translucent(a) => a,
                 Coverage::Hidden => 0.0,
             };
-            words.push([bits(flags), alpha, 0.0, 0.0]);
+            let pbr = traced.placed.material.pbr;
+            let (metallic, roughness) = pbr.map_or((0.0, 1.0), |p| (p.metallic, p.roughness));
+            words.push([bits(flags), alpha, metallic, roughness]);
             base += Self::stride(flags) * traced.placed.shape.len();
             match Self::image_sampler(traced) {
                 Some(sampler) => {
@@ -201,10 +205,10 @@ impl ShapeSet {
                         words.push(rows.col(r).to_array());
                     }
                     words.push(sampler.out_offset.to_array());
-                    words.push([0.0; 4]);
                 }
-                None => words.extend([[0.0; 4]; SHAPE_WORDS - 8]),
+                None => words.extend([[0.0; 4]; SHAPE_WORDS - 9]),
             }
+            words.push(word(pbr.map_or(Vec3::ZERO, |p| p.emissive), 0.0));
         }
         for (s, traced) in self.traced.iter().enumerate() {
             let flags = self.flags(traced);
@@ -310,6 +314,7 @@ impl ShapeSet {
         (u32::from(varies) * FLAG_ALBEDO)
             | (u32::from(normals) * FLAG_NORMALS)
             | (u32::from(image) * FLAG_IMAGE)
+            | (u32::from(traced.placed.material.pbr.is_some()) * FLAG_PBR)
     }
 
     fn stride(flags: u32) -> usize {

@@ -51,6 +51,7 @@ fn unit_sphere(color: ColorSource, transform: Mat4) -> PlacedShape {
             color,
             opacity: 1.0,
             alpha: AlphaMode::Opaque,
+            pbr: None,
         },
         transform,
     )
@@ -155,6 +156,7 @@ fn rgb_triangle(z: f32) -> PlacedShape {
             color: ColorSource::Attribute(0),
             opacity: 1.0,
             alpha: AlphaMode::Opaque,
+            pbr: None,
         },
         Mat4::IDENTITY,
     )
@@ -336,6 +338,7 @@ fn a_cylinder_shows_its_silhouette_depth_and_colors_along_its_axis() {
             color: ColorSource::Attribute(0),
             opacity: 1.0,
             alpha: AlphaMode::Opaque,
+            pbr: None,
         },
         Mat4::IDENTITY,
     );
@@ -404,6 +407,7 @@ fn attribute_material() -> SurfaceMaterial {
         color: ColorSource::Attribute(0),
         opacity: 1.0,
         alpha: AlphaMode::Opaque,
+        pbr: None,
     }
 }
 
@@ -496,5 +500,53 @@ fn a_straight_curve_is_a_capsule_colored_along_its_vertices() {
     assert_eq!(
         e.err().unwrap().to_string(),
         "curve segment 0 refers to vertex 2; there are 2 vertices"
+    );
+}
+
+#[test]
+fn a_glossy_sphere_peaks_where_its_normal_halves_light_and_eye() {
+    let pbr = crate::scene::Pbr {
+        metallic: 1.0,
+        roughness: 0.15,
+        emissive: Vec3::new(0.0, 0.05, 0.0),
+    };
+    let mut sphere = unit_sphere(ColorSource::Constant(Vec3::splat(0.9)), Mat4::IDENTITY);
+    sphere.material.pbr = Some(pbr);
+    let scene = Scene::of_shapes(vec![sphere]).unwrap();
+    let towards = Vec3::new(0.5, 0.3, 1.0).normalize();
+    let settings = RenderSettings {
+        ambient: Vec3::ZERO,
+        surface_shading: crate::render::SurfaceShading::Lights,
+        headlight: false,
+        light: towards,
+        ..RenderSettings::default()
+    };
+    let frame = render(&scene, &settings);
+    let mut brightest = (0.0, 0, 0);
+    for y in 0..N {
+        for x in 0..N {
+            let c = frame.pixel(x, y);
+            if c.x > brightest.0 {
+                brightest = (c.x, x, y);
+            }
+        }
+    }
+    // The eye looks down -z: the highlight is where n = (l + v) / |l + v|.
+    let h = (towards + Vec3::Z).normalize();
+    let (px, py) = centre(brightest.1, brightest.2);
+    let pixel = 4.0 / N as f32;
+    assert!(
+        (px - h.x).abs() <= pixel && (py - h.y).abs() <= pixel,
+        "peak at {px},{py}, the mirror point at {},{}",
+        h.x,
+        h.y
+    );
+    // Under the eye light the material shows its base color, plus what
+    // it emits, as a matte one would.
+    let eye = render(&scene, &RenderSettings::default());
+    let c = eye.pixel(N / 2, N / 2).truncate();
+    assert!(
+        (c - Vec3::new(0.9, 0.95, 0.9)).abs().max_element() < 0.01,
+        "{c}"
     );
 }

@@ -200,7 +200,7 @@ int main(void)
     anariRelease(dev, words);
   }
   anariCommitParameters(dev, volume);
-  expect("color array of UINT32", ERR, BAD_ARG, "'color' array holds ANARI_UINT32; expected FLOAT32, UFIXED8 or UFIXED16");
+  expect("color array of UINT32", ERR, BAD_ARG, "'color' array holds ANARI_UINT32; expected FLOAT32, UFIXED8, UFIXED16 or UFIXED32");
   anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &camera);
   expect("camera as the field", ERR, BAD_ARG, "'value' expects ANARI_SPATIAL_FIELD");
   {

@@ -1,6 +1,7 @@
 //! Array elements as colors and opacities: every element type ANARI lets
-//! a transfer function's `color` array hold (fixed-point, sRGB and float,
-//! one to four components), read into linear RGBA. Missing color
+//! a transfer function's `color` array or a geometry's attribute hold
+//! (fixed-point, sRGB and float, one to four components), read into
+//! linear RGBA. Missing color
 //! components read as 0 and a missing alpha as 1, as the reference device
 //! reads attributes.
 
@@ -16,6 +17,7 @@ enum Encoding {
     Float32,
     Unorm8,
     Unorm16,
+    Unorm32,
     /// 8-bit sRGB-encoded color, linear alpha (the `*_SRGB` types).
     Srgb8,
 }
@@ -35,6 +37,10 @@ fn layout(t: T) -> Option<(Encoding, usize)> {
         T::UFIXED16_VEC2 => (Unorm16, 2),
         T::UFIXED16_VEC3 => (Unorm16, 3),
         T::UFIXED16_VEC4 => (Unorm16, 4),
+        T::UFIXED32 => (Unorm32, 1),
+        T::UFIXED32_VEC2 => (Unorm32, 2),
+        T::UFIXED32_VEC3 => (Unorm32, 3),
+        T::UFIXED32_VEC4 => (Unorm32, 4),
         T::UFIXED8_R_SRGB => (Srgb8, 1),
         T::UFIXED8_RA_SRGB => (Srgb8, 2),
         T::UFIXED8_RGB_SRGB => (Srgb8, 3),
@@ -57,6 +63,10 @@ pub const COLOR_ELEMENTS: &[T] = &[
     T::UFIXED16_VEC2,
     T::UFIXED16_VEC3,
     T::UFIXED16_VEC4,
+    T::UFIXED32,
+    T::UFIXED32_VEC2,
+    T::UFIXED32_VEC3,
+    T::UFIXED32_VEC4,
     T::UFIXED8_R_SRGB,
     T::UFIXED8_RA_SRGB,
     T::UFIXED8_RGB_SRGB,
@@ -65,7 +75,7 @@ pub const COLOR_ELEMENTS: &[T] = &[
 
 /// The color element types, for messages.
 pub const COLOR_TYPES: &str =
-    "FLOAT32, UFIXED8 or UFIXED16 (1 to 4 components), or UFIXED8_R/RA/RGB/RGBA_SRGB";
+    "FLOAT32, UFIXED8, UFIXED16 or UFIXED32 (1 to 4 components), or UFIXED8_R/RA/RGB/RGBA_SRGB";
 
 fn srgb_to_linear(x: f32) -> f32 {
     if x <= 0.04045 {
@@ -85,6 +95,9 @@ pub fn colors(array: &Array) -> Option<Vec<Vec4>> {
         Encoding::Unorm8 | Encoding::Srgb8 => bytes.iter().map(|&b| f32::from(b) / 255.0).collect(),
         Encoding::Unorm16 => words(bytes)
             .map(|w| f32::from(u16::from_ne_bytes(w)) / 65535.0)
+            .collect(),
+        Encoding::Unorm32 => words(bytes)
+            .map(|w| (f64::from(u32::from_ne_bytes(w)) / f64::from(u32::MAX)) as f32)
             .collect(),
     };
     // sRGB types: ...RA is (color, alpha); the other alphas are the 4th.
