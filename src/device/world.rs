@@ -5,7 +5,7 @@
 use glam::Mat4;
 
 use super::group::GroupModel;
-use super::instance::InstanceModel;
+use super::instance::{InstanceModel, Uniforms};
 use super::object::{ObjectRef, State, Unready};
 use super::table::Read;
 use super::table::{object_list, SubtypeInfo};
@@ -28,11 +28,11 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 /// A world after commit: the objects its arrays name, each volume and
 /// surface with the transform of the instance that placed it (`None`: in
-/// the world directly).
+/// the world directly), each surface with that instance's attributes.
 #[derive(Clone, Default)]
 pub struct WorldModel {
     pub volumes: Vec<(ObjectRef, Option<Mat4>)>,
-    pub surfaces: Vec<(ObjectRef, Option<Mat4>)>,
+    pub surfaces: Vec<(ObjectRef, Option<Mat4>, Uniforms)>,
     pub lights: Vec<ObjectRef>,
 }
 
@@ -44,7 +44,10 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
             .collect())
     };
     let mut volumes = direct("volume", T::VOLUME)?;
-    let mut surfaces = direct("surface", T::SURFACE)?;
+    let mut surfaces: Vec<_> = direct("surface", T::SURFACE)?
+        .into_iter()
+        .map(|(o, t)| (o, t, Uniforms::default()))
+        .collect();
     for instance in r.objects("instance", T::INSTANCE)? {
         let model = match instance.derived::<InstanceModel>() {
             Ok(model) => model,
@@ -58,7 +61,12 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         };
         let placed = |o: &ObjectRef| (o.clone(), Some(model.transform));
         volumes.extend(members.volumes.iter().map(placed));
-        surfaces.extend(members.surfaces.iter().map(placed));
+        surfaces.extend(
+            members
+                .surfaces
+                .iter()
+                .map(|o| (o.clone(), Some(model.transform), model.uniform)),
+        );
     }
     if volumes.len() > MAX_VOLUMES {
         return Err(format!(

@@ -590,6 +590,9 @@ pub struct PlacedShape {
     pub transform: Mat4,
     /// The surface's `id` (the objectId channel's value).
     pub id: u32,
+    /// Per attribute slot, the value the placing instance gives every
+    /// point of the shape instead of the shape's own.
+    pub uniform: [Option<Vec4>; 5],
 }
 
 impl PlacedShape {
@@ -599,6 +602,7 @@ impl PlacedShape {
             material,
             transform,
             id: u32::MAX,
+            uniform: [None; 5],
         }
     }
 
@@ -619,6 +623,7 @@ impl PlacedShape {
             && self.material == other.material
             && self.transform == other.transform
             && self.id == other.id
+            && self.uniform == other.uniform
     }
 }
 

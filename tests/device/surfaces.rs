@@ -38,6 +38,13 @@ fn frame_of(
         h.set_objects(world, "volume", DataType::VOLUME, &[v]);
     }
     h.d.commit(Subject::Object(world));
+    let frame = frame_for(h, subtype, world);
+    h.d.release(world);
+    frame
+}
+
+/// A frame of `world` by renderer `subtype`, from (0, 0, 3).
+fn frame_for(h: &mut Host, subtype: &str, world: u64) -> u64 {
     let renderer = h.d.new_object(DataType::RENDERER, subtype);
     h.set(
         renderer,
@@ -72,7 +79,7 @@ fn frame_of(
     h.set_object(frame, "renderer", DataType::RENDERER, renderer);
     h.set_object(frame, "camera", DataType::CAMERA, camera);
     h.d.commit(Subject::Object(frame));
-    for o in [world, renderer, camera] {
+    for o in [renderer, camera] {
         h.d.release(o);
     }
     frame
@@ -941,4 +948,52 @@ fn a_material_never_committed_draws_with_its_defaults() {
         c[0] == c[1] && c[1] == c[2] && (c[0] as i32 - 204).abs() <= 3,
         "{c:?}"
     );
+}
+
+#[test]
+fn instances_color_one_mesh_by_their_uniform_attributes_on_either_backend() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        // One green sphere colored by its `color` attribute...
+        let g = sphere(&mut h);
+        let green = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32_VEC4,
+            [1, 1, 1],
+            &bytes(&[0.0f32, 1.0, 0.0, 1.0]),
+        );
+        h.set_object(g, "vertex.color", DataType::ARRAY1D, green);
+        h.d.release(green);
+        h.d.commit(Subject::Object(g));
+        let m = matte(&mut h, Input::String("color".into()));
+        let s = surface(&mut h, g, m);
+        let group = h.d.new_object(DataType::GROUP, "");
+        h.set_objects(group, "surface", DataType::SURFACE, &[s]);
+        h.d.commit(Subject::Object(group));
+        // ...placed twice, left in red and right with no color of its own.
+        let mut instances = Vec::new();
+        for (x, color) in [(-0.6f32, Some([1.0f32, 0.0, 0.0, 1.0])), (0.6, None)] {
+            let i = h.d.new_object(DataType::INSTANCE, "transform");
+            h.set_object(i, "group", DataType::GROUP, group);
+            let m = glam::Mat4::from_translation(glam::Vec3::new(x, 0.0, 0.0)).to_cols_array();
+            h.set(i, "transform", DataType::FLOAT32_MAT4, bytes(&m));
+            if let Some(c) = color {
+                h.set(i, "color", DataType::FLOAT32_VEC4, bytes(&c));
+            }
+            h.d.commit(Subject::Object(i));
+            instances.push(i);
+        }
+        let world = h.d.new_object(DataType::WORLD, "");
+        h.set_objects(world, "instance", DataType::INSTANCE, &instances);
+        h.d.commit(Subject::Object(world));
+        let f = frame_for(&mut h, "default", world);
+        let p = h.pixels(f);
+        assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
+        // The sphere's centres at x = -+0.6 from 3 away, 60 degrees: a
+        // fifth of the half-width either side of the middle.
+        let (left, right) = (SIZE / 2 - SIZE * 17 / 100, SIZE / 2 + SIZE * 17 / 100);
+        let (l, r) = (pixel(&p, left, SIZE / 2), pixel(&p, right, SIZE / 2));
+        assert!(l[0] > 200 && l[1] == 0, "{backend}: left {l:?}");
+        assert!(r[1] > 200 && r[0] == 0, "{backend}: right {r:?}");
+    }
 }

@@ -468,12 +468,14 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
             GeometryModel::Shape(shape) => Some(shape.bounds()).filter(|_| !shape.is_empty()),
         }
     };
-    let placed = world.volumes.iter().chain(&world.surfaces);
+    let surfaces = world.surfaces.iter().map(|(o, t, _)| (o.clone(), *t));
+    let placed = world.volumes.iter().cloned().chain(surfaces);
     let mut boxes = placed.filter_map(|(v, transform)| {
+        let v = &v;
         let grid = box_of(v)?;
         Some(match transform {
             None => grid,
-            Some(m) => crate::scene::transformed_box(*m, grid),
+            Some(m) => crate::scene::transformed_box(m, grid),
         })
     });
     let (mut lo, mut hi) = boxes.next()?;

@@ -1,14 +1,16 @@
 //! The `transform` instance (ANARI_KHR_INSTANCE_TRANSFORM): a group placed
 //! in the world by an affine matrix, as VTK and ParaView place each
-//! dataset's volume.
+//! dataset's volume, with the uniform attributes (`color`,
+//! `attribute0..3`) that stand for its surfaces' own: one cube mesh in a
+//! hundred instances of a hundred colors.
 
-use glam::Mat4;
+use glam::{Mat4, Vec4};
 
 use crate::device::object::{ObjectRef, State};
 use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, MAT4};
 use crate::device::types::DataType as T;
-use crate::scene::PlacedVolume;
+use crate::scene::{PlacedVolume, ATTRIBUTE_NAMES};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::INSTANCE,
@@ -32,15 +34,34 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             ]),
             "object to world, column-major",
         ),
+        uniform("color"),
+        uniform("attribute0"),
+        uniform("attribute1"),
+        uniform("attribute2"),
+        uniform("attribute3"),
     ],
     commit: Some(commit),
 };
+
+const fn uniform(name: &'static str) -> crate::device::table::ParamInfo {
+    p(
+        name,
+        &[T::FLOAT32_VEC4],
+        false,
+        DefaultValue::None,
+        "one value of this attribute for every surface the instance places: a material that names it reads this, not the geometry's",
+    )
+}
+
+/// Per slot of `ATTRIBUTE_NAMES`, the value an instance gives it, if any.
+pub type Uniforms = [Option<Vec4>; 5];
 
 /// An instance after commit.
 #[derive(Clone)]
 pub struct InstanceModel {
     pub group: ObjectRef,
     pub transform: Mat4,
+    pub uniform: Uniforms,
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
@@ -50,5 +71,19 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         .clone();
     let transform = r.mat4("transform")?;
     PlacedVolume::check_transform(transform).map_err(|e| format!("transform {transform} {e}"))?;
-    Ok(Some(State::ready(InstanceModel { group, transform })))
+    let mut uniform = Uniforms::default();
+    for (slot, name) in ATTRIBUTE_NAMES.iter().enumerate() {
+        if r.set(name).is_some() {
+            let v = r.vec4(name)?;
+            if !v.is_finite() {
+                return Err(format!("{name} {v} must be finite"));
+            }
+            uniform[slot] = Some(v);
+        }
+    }
+    Ok(Some(State::ready(InstanceModel {
+        group,
+        transform,
+        uniform,
+    })))
 }

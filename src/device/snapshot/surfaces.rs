@@ -9,6 +9,7 @@ use std::sync::{Arc, OnceLock};
 use glam::Mat4;
 
 use crate::device::geometry::GeometryModel;
+use crate::device::instance::Uniforms;
 use crate::device::light::DirectionalLight;
 use crate::device::material::MaterialModel;
 use crate::device::object::{ObjectCell, ObjectRef};
@@ -42,12 +43,12 @@ pub struct Surfaces {
 /// The isosurfaces and shapes of `surfaces` (each with the transform of
 /// the instance that placed it), or why one cannot be drawn.
 pub fn surfaces(
-    surfaces: &[(ObjectRef, Option<Mat4>)],
+    surfaces: &[(ObjectRef, Option<Mat4>, Uniforms)],
     renderer: &RenderSettings,
     light: Option<DirectionalLight>,
 ) -> Result<Surfaces, String> {
     let mut out = Surfaces::default();
-    for (surface, transform) in surfaces {
+    for (surface, transform, uniform) in surfaces {
         let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
         let model = surface.ready::<SurfaceModel>(not_ours)?;
         let (geometry, material) = (&model.geometry, &model.material);
@@ -76,6 +77,7 @@ pub fn surfaces(
                 let mut placed =
                     PlacedShape::new(shape, drawn, transform.unwrap_or(Mat4::IDENTITY));
                 placed.id = model.id;
+                placed.uniform = *uniform;
                 out.shapes.push(placed);
                 continue;
             }

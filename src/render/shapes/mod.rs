@@ -345,6 +345,9 @@ impl ShapeSet {
     /// primitive's.
     pub fn attribute(&self, hit: &Hit, slot: usize) -> Vec4 {
         let traced = &self.traced[hit.shape as usize];
+        if let Some(v) = traced.placed.uniform.get(slot).copied().flatten() {
+            return v;
+        }
         let shape = &traced.placed.shape;
         let index = hit.index as usize;
         match shape.attributes.get(slot).and_then(Option::as_ref) {

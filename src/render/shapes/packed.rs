@@ -300,6 +300,11 @@ impl ShapeSet {
             ColorSource::Constant(_) => false,
             ColorSource::Attribute(slot) => {
                 shape.attributes.get(*slot).is_some_and(Option::is_some)
+                    && traced
+                        .placed
+                        .uniform
+                        .get(*slot)
+                        .is_some_and(Option::is_none)
             }
             ColorSource::Sampler(s) => s.is_affine(),
         };
