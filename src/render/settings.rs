@@ -341,7 +341,8 @@ pub struct RenderSettings {
     /// [`Shading::lights`]).
     pub light_color: Vec3,
     /// Surfaces' ambient light: the renderer's `ambientColor` times
-    /// `ambientRadiance`, scaled as the reference device scales it.
+    /// `ambientRadiance` times AMBIENT_SCALE (under
+    /// [`SurfaceShading::Lights`]).
     pub ambient: Vec3,
     pub surface_shading: SurfaceShading,
     /// Under [`SurfaceShading::Lights`]: surfaces lit from the eye, where

@@ -1,4 +1,4 @@
-//! Surfaces of triangles, spheres and cylinders as the renderers trace them: every
+//! Surfaces of triangles, spheres, cones and curves as the renderers trace them: every
 //! placed shape's primitives in one BVH, built once for a scene's shapes
 //! and kept while frames bring the same ones, the nearest hit along a ray,
 //! and its color under the world's light. The volume march stops at that
@@ -36,9 +36,9 @@ pub const MAX_TRANSLUCENT: u32 = 8;
 /// (translucent ones past MAX_TRANSLUCENT cost a traversal each).
 pub const SURFACE_PASSES: u32 = 8 * MAX_TRANSLUCENT;
 
-/// The reference device's scale of `ambientRadiance`: a radiance of 1
-/// lights a surface to a tenth of its color, so hosts tuned on it look
-/// the same here.
+/// The scale of `ambientRadiance` under direct light: a radiance of 1
+/// (the spec's default) adds a tenth of a surface's color, a fill that
+/// leaves the lights' shading to be seen.
 pub const AMBIENT_SCALE: f32 = 0.1;
 
 /// One placed shape as traced: its world-space triangle corners, the maps
