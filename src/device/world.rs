@@ -5,11 +5,12 @@
 use glam::Mat4;
 
 use super::group::GroupModel;
-use super::instance::{InstanceModel, Uniforms};
+use super::instance::InstanceModel;
 use super::object::{ObjectRef, State, Unready};
 use super::table::Read;
 use super::table::{object_list, SubtypeInfo};
 use super::types::DataType as T;
+use crate::scene::Uniforms;
 use crate::scene::MAX_VOLUMES;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {

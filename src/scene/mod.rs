@@ -15,7 +15,7 @@ pub use placement::transformed_box;
 pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};
 pub use shapes::{
     AlphaMode, Attribute, ColorSource, Coverage, Made, Pbr, PlacedShape, Primitives, Shape,
-    ShapeError, ShapeInput, SurfaceMaterial, ATTRIBUTE_NAMES, MAX_PRIMITIVES,
+    ShapeError, ShapeInput, SurfaceMaterial, Uniforms, ATTRIBUTE_NAMES, MAX_PRIMITIVES,
 };
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 pub use volume::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

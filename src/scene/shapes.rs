@@ -581,6 +581,10 @@ impl SurfaceMaterial {
     }
 }
 
+/// Per slot of [`ATTRIBUTE_NAMES`], the value an instance gives that
+/// attribute on every surface it places, if any.
+pub type Uniforms = [Option<Vec4>; 5];
+
 /// A shape in its material, placed in the world.
 #[derive(Clone, Debug)]
 pub struct PlacedShape {
@@ -590,9 +594,9 @@ pub struct PlacedShape {
     pub transform: Mat4,
     /// The surface's `id` (the objectId channel's value).
     pub id: u32,
-    /// Per attribute slot, the value the placing instance gives every
-    /// point of the shape instead of the shape's own.
-    pub uniform: [Option<Vec4>; 5],
+    /// The values the placing instance gives every point of the shape
+    /// instead of the shape's own.
+    pub uniform: Uniforms,
 }
 
 impl PlacedShape {

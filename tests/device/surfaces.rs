@@ -997,3 +997,24 @@ fn instances_color_one_mesh_by_their_uniform_attributes_on_either_backend() {
         assert!(r[1] > 200 && r[0] == 0, "{backend}: right {r:?}");
     }
 }
+
+#[test]
+fn an_opacity_outside_zero_to_one_is_clamped_with_a_warning() {
+    let mut h = Host::new();
+    let m = h.d.new_object(DataType::MATERIAL, "matte");
+    h.set(m, "opacity", DataType::FLOAT32, bytes(&[1.5f32]));
+    h.d.set_param(
+        Subject::Object(m),
+        "alphaMode",
+        Input::String("blend".into()),
+    );
+    h.d.commit(Subject::Object(m));
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    let warnings = h.messages(Severity::Warning);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("opacity 1.5 lies outside [0, 1]; clamped")),
+        "{warnings:?}"
+    );
+}

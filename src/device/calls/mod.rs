@@ -468,10 +468,9 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
             GeometryModel::Shape(shape) => Some(shape.bounds()).filter(|_| !shape.is_empty()),
         }
     };
-    let surfaces = world.surfaces.iter().map(|(o, t, _)| (o.clone(), *t));
-    let placed = world.volumes.iter().cloned().chain(surfaces);
-    let mut boxes = placed.filter_map(|(v, transform)| {
-        let v = &v;
+    let volumes = world.volumes.iter().map(|(o, t)| (o, *t));
+    let surfaces = world.surfaces.iter().map(|(o, t, _)| (o, *t));
+    let mut boxes = volumes.chain(surfaces).filter_map(|(v, transform)| {
         let grid = box_of(v)?;
         Some(match transform {
             None => grid,

@@ -2,4 +2,4 @@
 
 pub mod transform;
 
-pub use transform::{InstanceModel, Uniforms};
+pub use transform::InstanceModel;

@@ -4,13 +4,13 @@
 //! `attribute0..3`) that stand for its surfaces' own: one cube mesh in a
 //! hundred instances of a hundred colors.
 
-use glam::{Mat4, Vec4};
+use glam::Mat4;
 
 use crate::device::object::{ObjectRef, State};
 use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, MAT4};
 use crate::device::types::DataType as T;
-use crate::scene::{PlacedVolume, ATTRIBUTE_NAMES};
+use crate::scene::{PlacedVolume, Uniforms, ATTRIBUTE_NAMES};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::INSTANCE,
@@ -52,9 +52,6 @@ const fn uniform(name: &'static str) -> crate::device::table::ParamInfo {
         "one value of this attribute for every surface the instance places: a material that names it reads this, not the geometry's",
     )
 }
-
-/// Per slot of `ATTRIBUTE_NAMES`, the value an instance gives it, if any.
-pub type Uniforms = [Option<Vec4>; 5];
 
 /// An instance after commit.
 #[derive(Clone)]

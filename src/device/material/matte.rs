@@ -23,7 +23,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     params: &[
         p(
             "color",
-            &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING, T::SAMPLER],
+            super::COLOR_TYPES,
             false,
             DefaultValue::Floats(&[0.8, 0.8, 0.8]),
             "the surface's color, linear RGB in [0, 1] (a fourth component is ignored), the name of the geometry attribute that colors it (color, attribute0 to attribute3), or a sampler (its x, y, z); an isosurface, having no attributes, shows the default color for the last two",

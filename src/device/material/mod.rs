@@ -23,17 +23,18 @@ pub const OPACITY: ParamInfo = p(
 )
 .range(0.0, 1.0);
 
-/// Constant `name`, in its table's range; set as a sampler or an
-/// attribute name, which caveray does not model, its default, and the
-/// host hears so.
-fn constant(r: &Read<'_>, name: &str, warn: &mut dyn FnMut(String)) -> Result<f32, String> {
+/// Warns where number `name` is set as a sampler or an attribute name,
+/// which caveray does not model: reading it then gives its default.
+fn warn_unless_constant(r: &Read<'_>, name: &str, warn: &mut dyn FnMut(String)) {
     if r.object(name).is_some() || r.set(name).and_then(|v| v.string()).is_some() {
         warn(format!(
             "{name} from a sampler or an attribute is not modelled; the constant default is used"
         ));
     }
-    r.f32_in_range(name)
 }
+
+/// The types a material's color may be given as.
+const COLOR_TYPES: &[T] = &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING, T::SAMPLER];
 
 pub const ALPHA_MODE: ParamInfo = p(
     "alphaMode",
@@ -99,7 +100,8 @@ fn opacity_and_alpha(
     r: &Read<'_>,
     warn: &mut dyn FnMut(String),
 ) -> Result<(f32, AlphaMode), String> {
-    let given = constant(r, "opacity", warn)?;
+    warn_unless_constant(r, "opacity", warn);
+    let given = r.f32("opacity")?;
     if !given.is_finite() {
         return Err(format!("opacity {given} must be finite"));
     }

@@ -37,7 +37,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     params: &[
         p(
             "baseColor",
-            &[T::FLOAT32_VEC3, T::FLOAT32_VEC4, T::STRING, T::SAMPLER],
+            super::COLOR_TYPES,
             false,
             DefaultValue::Floats(&[1.0, 1.0, 1.0]),
             "linear RGB in [0, 1], the name of the geometry attribute that colors it (color, attribute0 to attribute3), or a sampler (its x, y, z)",
@@ -99,8 +99,14 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         ));
     }
     let pbr = Pbr {
-        metallic: super::constant(r, "metallic", warn)?,
-        roughness: super::constant(r, "roughness", warn)?,
+        metallic: {
+            super::warn_unless_constant(r, "metallic", warn);
+            r.f32_in_range("metallic")?
+        },
+        roughness: {
+            super::warn_unless_constant(r, "roughness", warn);
+            r.f32_in_range("roughness")?
+        },
         emissive,
     };
     Ok(Some(State::ready(MaterialModel {

@@ -9,7 +9,6 @@ use std::sync::{Arc, OnceLock};
 use glam::Mat4;
 
 use crate::device::geometry::GeometryModel;
-use crate::device::instance::Uniforms;
 use crate::device::light::DirectionalLight;
 use crate::device::material::MaterialModel;
 use crate::device::object::{ObjectCell, ObjectRef};
@@ -17,7 +16,9 @@ use crate::device::sampler::SamplerModel;
 use crate::device::surface::SurfaceModel;
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
-use crate::scene::{ColorSource, PlacedShape, PlacedVolume, StructuredVolume, TransferFunction};
+use crate::scene::{
+    ColorSource, PlacedShape, PlacedVolume, StructuredVolume, TransferFunction, Uniforms,
+};
 
 /// The transfer function a surface's field is placed with: the caster
 /// reads the field alone and never evaluates it. One for all, so the GPU
