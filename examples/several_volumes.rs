@@ -13,7 +13,7 @@ use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
-use anari_library_caveray::scene::{PlacedVolume, Scene, MAX_VOLUMES};
+use anari_library_caveray::scene::{ObjectIds, PlacedVolume, Scene, MAX_VOLUMES};
 use glam::{Mat4, UVec2, Vec3};
 
 /// Each example writes into its own folder, never over the demo's files.
@@ -47,6 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 * Mat4::from_rotation_y(angle)
                 * Mat4::from_scale(Vec3::splat(0.5))
                 * Mat4::from_translation(-centre),
+            ids: ObjectIds::NONE,
         }
     };
     let scene_of = |n: usize| {
@@ -54,6 +55,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             volume: Arc::clone(&head),
             transfer_function: Arc::clone(&skin),
             transform: Mat4::IDENTITY,
+            ids: ObjectIds::NONE,
         }];
         volumes.extend((1..n).map(extra));
         Scene::placed(volumes)

@@ -9,6 +9,12 @@ var<private> current: u32;
 var<private> total: f32;
 var<private> kept: array<vec4f, 16>;
 
+// Worlds with surfaces are not captured or re-projected (the engine
+// renders them whole), so no surface stands in a shadow ray's way.
+fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
+    return 1.0;
+}
+
 fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
     let k = min(capture.x, MAX_KEPT);
     if k == 0u {
@@ -47,7 +53,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let m = march(primary_ray(f32(pixel.x), f32(pixel.y)));
     let i = pixel.y * size.x + pixel.x;
     depth_out[i] = m.depth;
-    samples_out[i] = samples;
+    samples_out[i * params.pixel_words] = samples;
     store_color(i, m.color, FORMAT_RGBA32F);
     let k = min(capture.x, MAX_KEPT);
     for (var l = 0u; l < 2u * k; l++) {

@@ -3,6 +3,16 @@
 
 fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {}
 
+// As the CPU's ShapeSet::passes: an opaque surface blocks the light, a
+// translucent one lets 1 - opacity through.
+fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
+    let hit = nearest_surface(p, d, 0.0, reach);
+    if hit.slot == NO_SLOT {
+        return 1.0;
+    }
+    return 1.0 - surface_alpha(hit);
+}
+
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     let size = vec2u(params.width, params.height);
@@ -17,6 +27,8 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     var m = Marched(vec4f(0.0), infinite());
     var behind = background_at(pixel);
     var surface_depth = infinite();
+    // The surface hit at the pixel's depth, if a surface set it.
+    var first = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
     var start = params.t_near;
     var composited = 0u;
     var done = false;
@@ -33,6 +45,9 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         if a >= 1.0 {
             behind = vec4f(lit, 1.0);
             surface_depth = depth_along(p, hit.t);
+            if surface_depth <= m.depth {
+                first = hit;
+            }
             done = true;
             break;
         }
@@ -41,6 +56,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
             m.color = vec4f(m.color.rgb + lit * weight, m.color.a + weight);
             if m.depth == infinite() && m.color.a >= params.depth_threshold {
                 m.depth = depth_along(p, hit.t);
+                first = hit;
             }
             composited++;
             if m.color.a >= params.termination {
@@ -54,7 +70,61 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         m = march_segment(ray, start, infinite(), m);
     }
     let i = pixel.y * size.x + pixel.x;
-    depth_out[i] = min(m.depth, surface_depth);
-    samples_out[i] = samples;
+    let depth = min(m.depth, surface_depth);
+    depth_out[i] = depth;
+    samples_out[i * params.pixel_words] = samples;
+    if params.pixel_words > 1u {
+        store_hit(i * params.pixel_words + 1u, first, ray, depth);
+    }
     store_color(i, over(m.color, behind), params.color_format);
+}
+
+// The pixel's HitRecord (render/hits.rs) from word `at` of samples_out:
+// the surface hit `first` if it set the depth, else what the volumes show
+// at the depth (as the CPU's Field::record), else nothing.
+fn store_hit(at: u32, first: SurfaceHit, ray: Ray, depth: f32) {
+    var what = WHAT_NOTHING;
+    var index = 0u;
+    var normal = vec3f(0.0);
+    var albedo = vec3f(0.0);
+    if first.slot != NO_SLOT {
+        what = bitcast<u32>(prim_word(first.slot, 1u).w) >> 4u;
+        index = bitcast<u32>(prim_word(first.slot, 2u).w);
+        normal = surface_normal(first, ray.o + ray.d * first.t, ray.d);
+        albedo = surface_albedo(first);
+    } else if depth < infinite() && volume_count() > 0u {
+        let p = select(ray.o, params.eye, params.has_eye != 0u) + ray.d * depth;
+        var v = 0u;
+        var nearest = infinite();
+        for (var k = 0u; k < volume_count(); k++) {
+            let g = grid_of(k, p);
+            let out = max(-g, vec3f(0.0)) + max(g - last_vertex(k), vec3f(0.0));
+            if dot(out, out) < nearest {
+                nearest = dot(out, out);
+                v = k;
+            }
+        }
+        // These fetches are not the march's: the count stays the CPU's.
+        let counted = samples;
+        let h = params.step;
+        albedo = classify(v, sample_volume(v, grid_of(v, p))).rgb;
+        let gradient = vec3f(
+            sample_volume(v, grid_of(v, p + vec3f(h, 0.0, 0.0))) - sample_volume(v, grid_of(v, p - vec3f(h, 0.0, 0.0))),
+            sample_volume(v, grid_of(v, p + vec3f(0.0, h, 0.0))) - sample_volume(v, grid_of(v, p - vec3f(0.0, h, 0.0))),
+            sample_volume(v, grid_of(v, p + vec3f(0.0, 0.0, h))) - sample_volume(v, grid_of(v, p - vec3f(0.0, 0.0, h))),
+        );
+        samples = counted;
+        what = WHAT_VOLUME | v;
+        let len = length(gradient);
+        normal = select(-ray.d, gradient / len, len > 0.0);
+        if dot(normal, ray.d) > 0.0 {
+            normal = -normal;
+        }
+    }
+    samples_out[at] = what;
+    samples_out[at + 1u] = index;
+    for (var k = 0u; k < 3u; k++) {
+        samples_out[at + 2u + k] = bitcast<u32>(normal[k]);
+        samples_out[at + 5u + k] = bitcast<u32>(albedo[k]);
+    }
 }

@@ -119,6 +119,12 @@ fn advance(s: ptr<private, Open>, axis: u32, t: f32, lit: vec3f, a: f32) {
     }
 }
 
+// Worlds with surfaces are not captured or re-projected (the engine
+// renders them whole), so no surface stands in a shadow ray's way.
+fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
+    return 1.0;
+}
+
 fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
     advance(&major, major_axis, t, lit, a);
     if BOTH_FAMILIES {
@@ -189,7 +195,7 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
     if left.x >= 0 && left.x < i32(stereo.width) && left.y >= 0 && left.y < i32(stereo.height) {
         let i = u32(left.y) * stereo.width + u32(left.x);
         depth_out[i] = m.depth;
-        samples_out[i] = samples;
+        samples_out[i * params.pixel_words] = samples;
         store_color(i, over(m.color, background_at(vec2u(left))), params.color_format);
     }
 }

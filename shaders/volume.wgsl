@@ -9,7 +9,9 @@
 // Entry points live in raycast.wgsl, capture.wgsl and reproject.wgsl; each
 // defines `on_sample(p, t, lit, a)`, which sees every sample that
 // contributes, at p = o + t d along its ray (the re-projection path splits
-// the ray into right-eye segments there).
+// the ray into right-eye segments there), and `surface_pass(p, d, reach)`,
+// the light the first surface within `reach` of p along d lets through
+// (1: none there), which shadow and AO rays meet.
 
 // Filtered sampling (RenderSettings::sampling): one hardware-filtered fetch
 // per volume sample, and for primary samples one filtered fetch of the
@@ -246,46 +248,69 @@ fn transmittance(p: vec3f, dir: vec3f, steps: u32) -> f32 {
     return t;
 }
 
-fn shadow(p: vec3f) -> f32 {
-    let t = transmittance(p, params.light, SHADOW_STEPS);
-    return SHADOW_AMBIENT + (1.0 - SHADOW_AMBIENT) * t;
-}
-
-fn ambient_occlusion(p: vec3f) -> f32 {
-    let n = params.direction_count;
-    var occluded = 0.0;
-    for (var i = 0u; i < n; i++) {
-        occluded += opacity_at(p + directions[i].xyz * params.ao_radius, 0.0, true);
-    }
-    return 1.0 - occluded / f32(n);
-}
-
+// The light factor of the sample at p under the shading mode: every
+// shading ray (the shadow ray, then the AO rays, or the directional
+// rays) in one loop, so that the surfaces' traversal, which each ray
+// begins with, is compiled once (software Vulkan inlines every call).
 fn shade(p: vec3f) -> f32 {
     let n = params.direction_count;
+    var shadow_rays = 0u;
+    var ao_rays = 0u;
+    var steps = DIRECTIONAL_STEPS;
     switch params.shading {
         case SHADE_SHADOWS: {
-            return shadow(p);
+            shadow_rays = 1u;
         }
         case SHADE_AO: {
-            return ambient_occlusion(p);
+            ao_rays = n;
         }
         case SHADE_SHADOWS_AO: {
-            return shadow(p) * ambient_occlusion(p);
+            shadow_rays = 1u;
+            ao_rays = n;
         }
-        case SHADE_DIRECTIONAL: {
-            if n == 0u {
-                return 1.0;
-            }
-            var sum = 0.0;
-            for (var i = 0u; i < n; i++) {
-                sum += transmittance(p, directions[i].xyz, DIRECTIONAL_STEPS);
-            }
-            return sum / f32(n);
-        }
+        case SHADE_DIRECTIONAL: {}
         default: {
             return 1.0;
         }
     }
+    let directional = params.shading == SHADE_DIRECTIONAL;
+    let rays = select(shadow_rays + ao_rays, n, directional);
+    if rays == 0u {
+        return 1.0;
+    }
+    var shadowed = 1.0;
+    var occluded = 0.0;
+    var sum = 0.0;
+    for (var r = 0u; r < rays; r++) {
+        let ao = !directional && r >= shadow_rays;
+        var d = directions[select(r, r - shadow_rays, ao)].xyz;
+        var reach = params.ao_radius;
+        if !ao {
+            if !directional {
+                d = params.light;
+                steps = SHADOW_STEPS;
+            }
+            reach = params.shading_step * f32(steps);
+        }
+        let passed = surface_pass(p, d, reach);
+        if ao {
+            occluded += (1.0 - passed) + passed * opacity_at(p + d * params.ao_radius, 0.0, true);
+            continue;
+        }
+        var t = 0.0;
+        if passed > 0.0 {
+            t = passed * transmittance(p, d, steps);
+        }
+        if directional {
+            sum += t;
+        } else {
+            shadowed = SHADOW_AMBIENT + (1.0 - SHADOW_AMBIENT) * t;
+        }
+    }
+    if directional {
+        return sum / f32(n);
+    }
+    return shadowed * select(1.0, 1.0 - occluded / f32(ao_rays), ao_rays > 0u);
 }
 
 fn safe_inverse(x: f32) -> f32 {

@@ -228,6 +228,17 @@ fn reenter(f: impl FnOnce()) {
     DEPTH.with(|d| d.set(depth));
 }
 
+/// Every channel a frame can be asked for, mapped after a render.
+const CHANNELS: [&std::ffi::CStr; 7] = [
+    c"channel.color",
+    c"channel.depth",
+    c"channel.primitiveId",
+    c"channel.objectId",
+    c"channel.instanceId",
+    c"channel.normal",
+    c"channel.albedo",
+];
+
 const FRAME_PROPERTIES: [&std::ffi::CStr; 5] = [
     c"duration",
     c"numSamples",
@@ -491,13 +502,14 @@ impl Host<'_, '_> {
         }
         anariFrameReady(dev, f, sys::ANARIWaitMask::from(1u32));
         let (mut w, mut h, mut t) = (0u32, 0u32, 0i32);
-        let channel = if self.input.byte() % 2 == 0 {
-            c"channel.color"
-        } else {
-            c"channel.depth"
-        };
+        let channel = CHANNELS[usize::from(self.input.byte()) % CHANNELS.len()];
         let p = anariMapFrame(dev, f, channel.as_ptr(), &mut w, &mut h, &mut t);
         if !p.is_null() {
+            // Every byte the device says is there is read: a short or
+            // freed buffer shows under the sanitizer.
+            let bytes = w as usize * h as usize * DataType::from_code(t).map_or(0, DataType::size);
+            let mapped = std::slice::from_raw_parts(p.cast::<u8>(), bytes);
+            std::hint::black_box(mapped.iter().fold(0u8, |a, b| a ^ b));
             anariUnmapFrame(dev, f, channel.as_ptr());
         }
     }

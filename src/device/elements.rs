@@ -10,6 +10,7 @@ use glam::Vec4;
 use crate::device::array::Array;
 use crate::device::types::words;
 use crate::device::types::DataType as T;
+use crate::render::encoding::srgb_to_linear;
 
 /// How one element type is stored: components, their encoding.
 #[derive(Clone, Copy)]
@@ -76,14 +77,6 @@ pub const COLOR_ELEMENTS: &[T] = &[
 /// The color element types, for messages.
 pub const COLOR_TYPES: &str =
     "FLOAT32, UFIXED8, UFIXED16 or UFIXED32 (1 to 4 components), or UFIXED8_R/RA/RGB/RGBA_SRGB";
-
-fn srgb_to_linear(x: f32) -> f32 {
-    if x <= 0.04045 {
-        x / 12.92
-    } else {
-        ((x + 0.055) / 1.055).powf(2.4)
-    }
-}
 
 /// The elements of a color array as linear RGBA, `None` for an element
 /// type that is no color.

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use super::camera::CameraModel;
 use super::frame::state::FrameState;
+use super::frame::state::HIT_CHANNEL_NAMES;
 use super::geometry::GeometryModel;
 use super::group::GroupModel;
 use super::instance::InstanceModel;
@@ -17,10 +18,10 @@ use super::surface::SurfaceModel;
 use super::table::{
     ParamInfo, SubtypeInfo, EXT_ACCUMULATION, EXT_AMBIENT, EXT_BACKGROUND, EXT_BACKGROUND_IMAGE,
     EXT_COMPLETION, EXT_CONE, EXT_CURVATURE, EXT_CURVE, EXT_CYLINDER, EXT_FRAME_DEADLINE,
-    EXT_FRAME_PAIR, EXT_IMAGE1D, EXT_IMAGE2D, EXT_IMAGE3D, EXT_ISOSURFACE, EXT_MATRIX,
-    EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC, EXT_PBR,
-    EXT_PRIMITIVE_SAMPLER, EXT_QUAD, EXT_SHADING, EXT_SPHERE, EXT_STEREO, EXT_TRANSFORM_SAMPLER,
-    EXT_TRIANGLE,
+    EXT_FRAME_PAIR, EXT_HIT_CHANNELS, EXT_IMAGE1D, EXT_IMAGE2D, EXT_IMAGE3D, EXT_ISOSURFACE,
+    EXT_MATRIX, EXT_MATRIX_VSNRAY, EXT_MATTE, EXT_MULTI_VIEW, EXT_OFF_AXIS, EXT_ORTHOGRAPHIC,
+    EXT_PBR, EXT_PRIMITIVE_SAMPLER, EXT_QUAD, EXT_SHADING, EXT_SPHERE, EXT_STEREO,
+    EXT_TRANSFORM_SAMPLER, EXT_TRIANGLE,
 };
 use super::types::DataType as T;
 use super::volume::VolumeModel;
@@ -51,6 +52,11 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_SHADING,
     EXT_FRAME_PAIR,
     EXT_FRAME_DEADLINE,
+    EXT_HIT_CHANNELS[0],
+    EXT_HIT_CHANNELS[1],
+    EXT_HIT_CHANNELS[2],
+    EXT_HIT_CHANNELS[3],
+    EXT_HIT_CHANNELS[4],
     EXT_ISOSURFACE,
     EXT_TRIANGLE,
     EXT_QUAD,
@@ -73,7 +79,15 @@ pub const EXTENSIONS: &[&str] = &[
 ];
 
 /// Frame channels (`anariGetObjectInfo(FRAME, "channel")`).
-pub const CHANNELS: &[&str] = &["channel.color", "channel.depth"];
+pub const CHANNELS: &[&str] = &[
+    "channel.color",
+    "channel.depth",
+    HIT_CHANNEL_NAMES[0],
+    HIT_CHANNEL_NAMES[1],
+    HIT_CHANNEL_NAMES[2],
+    HIT_CHANNEL_NAMES[3],
+    HIT_CHANNEL_NAMES[4],
+];
 
 /// Whether any parameter of any subtype reads arrays of `element`: an
 /// array of another type can never be used, and its host hears so when

@@ -3,7 +3,7 @@
 
 use super::object::{ObjectRef, State};
 use super::table::Read;
-use super::table::{p, DefaultValue, SubtypeInfo};
+use super::table::{id_param, p, DefaultValue, SubtypeInfo};
 use super::types::DataType as T;
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
@@ -26,13 +26,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             DefaultValue::None,
             "how it is colored",
         ),
-        p(
-            "id",
-            &[T::UINT32],
-            false,
-            DefaultValue::None,
-            "the surface's number, for hosts that tell surfaces apart (default: none, UINT32 max)",
-        ),
+        id_param("the surface's number in the frame's objectId channel (default: none, UINT32 max)"),
     ],
     commit: Some(commit),
 };
@@ -55,10 +49,6 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     Ok(Some(State::ready(SurfaceModel {
         geometry: object("geometry", T::GEOMETRY)?,
         material: object("material", T::MATERIAL)?,
-        id: r
-            .set("id")
-            .and_then(|v| v.u32s())
-            .and_then(|v| v.first().copied())
-            .unwrap_or(u32::MAX),
+        id: r.id(),
     })))
 }

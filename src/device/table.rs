@@ -133,6 +133,12 @@ pub const fn p(
     }
 }
 
+/// The `id` a surface, volume or instance reports in the frame's
+/// objectId or instanceId channel.
+pub const fn id_param(description: &'static str) -> ParamInfo {
+    p("id", &[T::UINT32], false, DefaultValue::None, description)
+}
+
 pub const VEC3: &[T] = &[T::FLOAT32_VEC3];
 pub const F32: &[T] = &[T::FLOAT32];
 pub const MAT4: &[T] = &[T::FLOAT32_MAT4];
@@ -158,6 +164,14 @@ pub const EXT_FRAME_PAIR: &str = "ANARI_CAVERAY_FRAME_STEREO_PAIR";
 /// properties `caveray.imageAge`, `caveray.warp`).
 pub const EXT_FRAME_DEADLINE: &str = "ANARI_CAVERAY_FRAME_DEADLINE";
 pub const EXT_ISOSURFACE: &str = "ANARI_KHR_GEOMETRY_ISOSURFACE";
+/// The frame's channels filled from each pixel's hit.
+pub const EXT_HIT_CHANNELS: [&str; 5] = [
+    "ANARI_KHR_FRAME_CHANNEL_PRIMITIVE_ID",
+    "ANARI_KHR_FRAME_CHANNEL_OBJECT_ID",
+    "ANARI_KHR_FRAME_CHANNEL_INSTANCE_ID",
+    "ANARI_KHR_FRAME_CHANNEL_NORMAL",
+    "ANARI_KHR_FRAME_CHANNEL_ALBEDO",
+];
 pub const EXT_TRIANGLE: &str = "ANARI_KHR_GEOMETRY_TRIANGLE";
 pub const EXT_QUAD: &str = "ANARI_KHR_GEOMETRY_QUAD";
 pub const EXT_SPHERE: &str = "ANARI_KHR_GEOMETRY_SPHERE";
@@ -260,6 +274,15 @@ impl<'a> Read<'a> {
                 "'{name}' has no BOOL default in this subtype's table"
             )),
         }
+    }
+
+    /// The object's `id` ([`id_param`]), UINT32 max (ANARI's "none")
+    /// where the host set none.
+    pub fn id(&self) -> u32 {
+        self.set("id")
+            .and_then(|v| v.u32s())
+            .and_then(|v| v.first().copied())
+            .unwrap_or(u32::MAX)
     }
 
     /// The host's string, else the table's default.

@@ -27,28 +27,43 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
     commit: Some(commit),
 };
 
+/// How a world holds one of its volumes or surfaces: directly
+/// ([`Placement::DIRECT`]) or through an instance, whose transform,
+/// uniform attributes (surfaces only) and `id` it takes.
+#[derive(Clone, Copy)]
+pub struct Placement {
+    pub transform: Option<Mat4>,
+    pub uniform: Uniforms,
+    /// The instance's `id`, UINT32 max where it set none.
+    pub instance: u32,
+}
+
+impl Placement {
+    pub const DIRECT: Self = Self {
+        transform: None,
+        uniform: [None; 5],
+        instance: u32::MAX,
+    };
+}
+
 /// A world after commit: the objects its arrays name, each volume and
-/// surface with the transform of the instance that placed it (`None`: in
-/// the world directly), each surface with that instance's attributes.
+/// surface as it is placed.
 #[derive(Clone, Default)]
 pub struct WorldModel {
-    pub volumes: Vec<(ObjectRef, Option<Mat4>)>,
-    pub surfaces: Vec<(ObjectRef, Option<Mat4>, Uniforms)>,
+    pub volumes: Vec<(ObjectRef, Placement)>,
+    pub surfaces: Vec<(ObjectRef, Placement)>,
     pub lights: Vec<ObjectRef>,
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    let direct = |name, kind| -> Result<Vec<(ObjectRef, Option<Mat4>)>, String> {
+    let direct = |name, kind| -> Result<Vec<(ObjectRef, Placement)>, String> {
         Ok(r.objects(name, kind)?
             .into_iter()
-            .map(|o| (o, None))
+            .map(|o| (o, Placement::DIRECT))
             .collect())
     };
     let mut volumes = direct("volume", T::VOLUME)?;
-    let mut surfaces: Vec<_> = direct("surface", T::SURFACE)?
-        .into_iter()
-        .map(|(o, t)| (o, t, Uniforms::default()))
-        .collect();
+    let mut surfaces = direct("surface", T::SURFACE)?;
     for instance in r.objects("instance", T::INSTANCE)? {
         let model = match instance.derived::<InstanceModel>() {
             Ok(model) => model,
@@ -60,14 +75,14 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
             Err(Unready::OtherKind) => continue,
             Err(Unready::Unusable(why)) => return Err(why),
         };
-        let placed = |o: &ObjectRef| (o.clone(), Some(model.transform));
+        let placement = Placement {
+            transform: Some(model.transform),
+            uniform: model.uniform,
+            instance: model.id,
+        };
+        let placed = |o: &ObjectRef| (o.clone(), placement);
         volumes.extend(members.volumes.iter().map(placed));
-        surfaces.extend(
-            members
-                .surfaces
-                .iter()
-                .map(|o| (o.clone(), Some(model.transform), model.uniform)),
-        );
+        surfaces.extend(members.surfaces.iter().map(placed));
     }
     if volumes.len() > MAX_VOLUMES {
         return Err(format!(

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use glam::UVec2;
+use glam::{UVec2, Vec2};
 
 use crate::geometry::{MatrixCamera, MultiViewDisplay, RayGen};
 use crate::render::iso::{IsoSurface, MultiViewMethod};
@@ -45,6 +45,24 @@ pub struct PanelViews {
 }
 
 impl Views {
+    /// These views through points `by` pixels off their pixels' centres,
+    /// without their matrices (which describe the centred rays).
+    pub fn shifted(&self, by: Vec2) -> Views {
+        let shift = |v: &EyeView| EyeView {
+            rays: v.rays.shifted(by),
+            matrix: None,
+            ..*v
+        };
+        match self {
+            Views::Mono(one) => Views::Mono(shift(one)),
+            Views::StereoPair(pair) => Views::StereoPair(pair.each_ref().map(shift)),
+            Views::Panel(panel) => Views::Panel(PanelViews {
+                views: panel.views.iter().map(shift).collect(),
+                ..panel.clone()
+            }),
+        }
+    }
+
     /// Every view, in order.
     pub fn all(&self) -> &[EyeView] {
         match self {
@@ -71,6 +89,9 @@ pub struct Inputs {
     pub settings: RenderSettings,
     pub desc: FrameDesc,
     pub backend: Backend,
+    /// The host set the frame's `accumulation`: renders of unchanged
+    /// inputs refine the image (src/engine/accumulation.rs).
+    pub accumulate: bool,
 }
 
 impl PartialEq for Inputs {
@@ -91,6 +112,7 @@ impl PartialEq for Inputs {
             && self.settings == other.settings
             && self.desc == other.desc
             && self.backend == other.backend
+            && self.accumulate == other.accumulate
     }
 }
 
@@ -101,6 +123,10 @@ pub enum Unrenderable {
     VolumesAndSurfaces,
     /// A panel image asked for depth.
     PanelDepth,
+    /// A panel image asked for hit channels.
+    PanelHits,
+    /// A world of isosurfaces asked for hit channels.
+    IsosurfaceHits,
     /// A panel image of more than one isosurface (how many).
     PanelSurfaces(usize),
 }
@@ -111,9 +137,15 @@ impl Inputs {
         if self.scene.is_some() && !self.surfaces.is_empty() {
             return Err(Unrenderable::VolumesAndSurfaces);
         }
+        if self.desc.hits && !self.surfaces.is_empty() {
+            return Err(Unrenderable::IsosurfaceHits);
+        }
         if let Views::Panel(_) = self.views {
             if self.desc.depth {
                 return Err(Unrenderable::PanelDepth);
+            }
+            if self.desc.hits {
+                return Err(Unrenderable::PanelHits);
             }
             if self.surfaces.len() > 1 {
                 return Err(Unrenderable::PanelSurfaces(self.surfaces.len()));

@@ -4,12 +4,13 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::accumulation::{subpixel, MAX_SAMPLES};
 use super::deadline::Background;
 use super::inputs::{EyeView, Inputs};
 use super::slot::FrameSlot;
 use crate::render::stereo::Reprojection;
 use crate::render::warp::WarpMode;
-use crate::render::Backend;
+use crate::render::{Backend, ColorFormat, FrameDesc};
 
 pub struct RenderJob {
     /// The frame's handle, which messages name.
@@ -19,6 +20,9 @@ pub struct RenderJob {
     pub on_done: Option<Box<dyn FnOnce() + Send>>,
     /// The frame's last image is still right: keep it, render nothing.
     pub unchanged: bool,
+    /// One more sample k of the frame's unchanged inputs, which `inputs`
+    /// then render (accumulation.rs): its image refines the last one.
+    pub sample: Option<u32>,
     /// Another frame's eye to render with this one in one pass.
     pub partner: Option<Partner>,
     /// A deadline frame's background render: its image goes there, not
@@ -67,16 +71,24 @@ pub struct FrameRenders {
 impl FrameRenders {
     /// The whole render of `inputs` into this frame. Hosts render
     /// unchanged frames again (OpenCOVER up to 64 times, to accumulate):
-    /// then the last image stands.
+    /// then the last image stands, or, where the host set `accumulation`,
+    /// takes one more sample of each pixel.
     pub fn job(&mut self, frame: u64, inputs: Arc<Inputs>) -> RenderJob {
-        let unchanged = self.last.as_deref() == Some(&*inputs) && self.slot.holds_image();
+        let samples = self.slot.image_samples();
+        let unchanged = self.last.as_deref() == Some(&*inputs) && samples.is_some();
         self.last = Some(Arc::clone(&inputs));
+        let sample = samples.filter(|&n| unchanged && inputs.accumulate && n < MAX_SAMPLES);
+        let (inputs, unchanged) = match sample {
+            Some(k) => (Arc::new(sample_of(&inputs, k)), false),
+            None => (inputs, unchanged),
+        };
         RenderJob {
             frame,
             inputs,
             slot: Arc::clone(&self.slot),
             on_done: None,
             unchanged,
+            sample,
             partner: None,
             background: None,
         }
@@ -116,6 +128,25 @@ impl RenderJob {
     /// anything: this render makes a new image, no partner kept one for
     /// it, and the renderer may be the GPU's.
     pub fn wants_partner(&self) -> bool {
-        !self.unchanged && !self.slot.keeps(&self.inputs) && self.inputs.backend != Backend::Cpu
+        !self.unchanged
+            && self.sample.is_none()
+            && !self.slot.keeps(&self.inputs)
+            && self.inputs.backend != Backend::Cpu
+    }
+}
+
+/// What sample `k` of `inputs` renders: the views through that sample's
+/// point of each pixel, color alone, in floats (the mean is quantized
+/// once).
+fn sample_of(inputs: &Inputs, k: u32) -> Inputs {
+    Inputs {
+        views: inputs.views.shifted(subpixel(k)),
+        desc: FrameDesc {
+            color: ColorFormat::Rgba32F,
+            depth: false,
+            hits: false,
+            ..inputs.desc
+        },
+        ..inputs.clone()
     }
 }

@@ -45,6 +45,7 @@
 //! after it warps. Dropping the engine stops the presenters before it
 //! joins them, so it never waits for a deadline.
 
+mod accumulation;
 mod deadline;
 mod inputs;
 mod job;
@@ -135,6 +136,7 @@ impl Engine {
             Views::Panel(_) => return Err("a frame with caveray.deadline shows one view: set the multi-view camera's 'view', or render the panel image without a deadline".into()),
             _ if !inputs.surfaces.is_empty() => return Err("a frame with caveray.deadline warps volume images; this world holds isosurfaces (render it without a deadline)".into()),
             _ if inputs.scene.as_ref().is_some_and(|s| !s.shapes().is_empty()) => return Err("a frame with caveray.deadline warps volume images; this world holds surfaces of primitives (render it without a deadline)".into()),
+            _ if inputs.desc.hits => return Err("a frame with caveray.deadline warps color and depth; unset its id, normal and albedo channels (or its deadline)".into()),
             Views::StereoPair(_) => return Err("a frame with caveray.deadline shows one view: set the camera's stereoMode to none (each eye its own frame)".into()),
             Views::Mono(view) => *view,
         };
@@ -170,6 +172,7 @@ impl Engine {
                     slot,
                     on_done: None,
                     unchanged: false,
+                    sample: None,
                     partner: None,
                     background: Some(BackgroundRender {
                         target: background,

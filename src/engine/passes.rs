@@ -192,6 +192,7 @@ fn facts(r: &Renderer, scene: &Scene, job: &RenderJob) -> RenderFacts {
         reprojects: matches!(r, Renderer::Gpu(_)),
         background_image: job.inputs.settings.background_image.is_some(),
         surfaces: !scene.shapes().is_empty(),
+        hits: job.inputs.desc.hits,
     }
 }
 

@@ -5,6 +5,7 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::ThreadId;
 use std::time::Duration;
 
+use super::accumulation::Accumulated;
 use super::inputs::Inputs;
 use crate::render::warp::WarpMode;
 use crate::render::Frame;
@@ -59,6 +60,9 @@ pub struct SlotState {
     pub samples: u32,
     /// What a deadline frame showed; `None` for a whole render.
     pub shown: Option<ShownImage>,
+    /// The samples of a refined image (accumulation), once it has more
+    /// than its first.
+    accumulated: Option<Accumulated>,
     /// The thread that will finish the render in flight, once it has it.
     finisher: Option<ThreadId>,
 }
@@ -107,6 +111,48 @@ impl FrameSlot {
         self.done.notify_all();
     }
 
+    /// Ends a render of one more sample of the frame's unchanged inputs
+    /// (accumulation): the image becomes the mean of its samples. A
+    /// sample that failed leaves the image as it was, and says why.
+    pub fn finish_sample(
+        &self,
+        sample: Result<Frame, String>,
+        duration: Duration,
+    ) -> Result<(), String> {
+        let mut guard = self.lock();
+        let s = &mut *guard;
+        let added = match (sample, &s.result) {
+            (Ok(sample), Some(Ok(shown))) => {
+                let samples = s.samples;
+                let acc = s
+                    .accumulated
+                    .get_or_insert_with(|| Accumulated::new(shown, samples));
+                acc.add(&sample).and_then(|()| acc.image(shown))
+            }
+            (Ok(_), _) => Err("internal: no image to refine".into()),
+            (Err(e), _) => Err(e),
+        };
+        let outcome = match added {
+            Ok(image) => {
+                s.samples = s.accumulated.as_ref().map_or(1, Accumulated::samples);
+                s.result = Some(Ok(image));
+                Ok(())
+            }
+            Err(e) => Err(e),
+        };
+        s.duration = duration;
+        s.busy = false;
+        s.finisher = None;
+        self.done.notify_all();
+        outcome
+    }
+
+    /// How many samples the image stands for, if it is a good one.
+    pub fn image_samples(&self) -> Option<u32> {
+        let s = self.lock();
+        matches!(s.result, Some(Ok(_))).then_some(s.samples)
+    }
+
     pub fn finish(&self, result: Result<Frame, String>, duration: Duration) {
         self.finish_as(result, duration, None);
     }
@@ -129,6 +175,7 @@ impl FrameSlot {
     ) {
         let mut s = self.lock();
         s.samples = u32::from(result.is_ok());
+        s.accumulated = None;
         s.result = Some(result);
         s.duration = duration;
         s.shown = shown;

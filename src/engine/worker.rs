@@ -259,6 +259,24 @@ fn run(
         Err(_) if discarded => Err(DISCARDED.to_owned()),
         other => other,
     };
+    if let Some(k) = job.sample {
+        let outcome = job.slot.finish_sample(result, started.elapsed());
+        if let (Err(e), false) = (outcome, discarded) {
+            report(note(
+                Severity::Warning,
+                StatusCode::UnknownError,
+                format!(
+                    "frame {:#x}: sample {} of its accumulation failed ({e}); its image stays as it was",
+                    job.frame,
+                    k + 1
+                ),
+            ));
+        }
+        if let Some(done) = job.on_done {
+            done();
+        }
+        return;
+    }
     if let Err(e) = &result {
         // A discard is the host's wish, not a failure.
         let severity = if discarded {

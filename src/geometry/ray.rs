@@ -184,10 +184,12 @@ impl RayGen {
         }
     }
 
-    /// The same rays for the part of the image whose lower-left pixel is
-    /// `offset`: a cell of a frame rendered on its own.
-    pub fn shifted(mut self, offset: glam::UVec2) -> Self {
-        let (x, y) = (offset.x as f32, offset.y as f32);
+    /// The same rays moved by `by` pixels: whole pixels, for the part of
+    /// the image whose lower-left pixel is `by` (a cell of a frame
+    /// rendered on its own); a fraction, for rays through that point off
+    /// each pixel's centre (one sample of each pixel's area).
+    pub fn shifted(mut self, by: glam::Vec2) -> Self {
+        let (x, y) = (by.x, by.y);
         self.origin += x * self.origin_dx + y * self.origin_dy;
         self.direction += x * self.direction_dx + y * self.direction_dy;
         self

@@ -1,5 +1,7 @@
 use glam::{UVec2, Vec4};
 
+use super::encoding::{linear_to_srgb, srgb_to_linear, to_unorm8};
+use super::hits::PixelHit;
 use super::settings::BackgroundImage;
 use super::RenderError;
 
@@ -40,6 +42,9 @@ pub struct FrameDesc {
     /// Also return the distance along each unit ray to the first sample
     /// that contributed (infinity where none did).
     pub depth: bool,
+    /// Also return what each pixel's depth shows: the ids, normal and
+    /// albedo there ([`PixelHit`]).
+    pub hits: bool,
 }
 
 /// The most pixels one frame may have: 2^28 (16384 x 16384), whose
@@ -65,6 +70,7 @@ impl FrameDesc {
             size,
             color: ColorFormat::Rgba8,
             depth: false,
+            hits: false,
         }
     }
     pub fn with_color(self, color: ColorFormat) -> Self {
@@ -75,6 +81,9 @@ impl FrameDesc {
             depth: true,
             ..self
         }
+    }
+    pub fn with_hits(self) -> Self {
+        Self { hits: true, ..self }
     }
 
     pub fn pixels(&self) -> usize {
@@ -108,12 +117,14 @@ pub enum ColorData {
     Rgba32F(Vec<f32>),
 }
 
-/// The result of one render: color and optional depth, lower-left first.
+/// The result of one render: color, optional depth and hits, lower-left
+/// first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     pub size: UVec2,
     pub color: ColorData,
     pub depth: Option<Vec<f32>>,
+    pub hits: Option<Vec<PixelHit>>,
     /// Volume samples taken (primary and shading), for samples/s figures.
     pub samples: u64,
 }
@@ -136,6 +147,7 @@ impl Frame {
             size: desc.size,
             color,
             depth: desc.depth.then(|| vec![f32::INFINITY; n]),
+            hits: desc.hits.then(|| vec![PixelHit::NOTHING; n]),
             samples: 0,
         }
     }
@@ -180,6 +192,10 @@ impl Frame {
             true => Some(filled(n, f32::INFINITY, "the frame's depth")?),
             false => None,
         };
+        let mut hits = match desc.hits {
+            true => Some(filled(n, PixelHit::NOTHING, "the frame's hits")?),
+            false => None,
+        };
         let mut samples = 0;
         for (offset, part) in parts {
             let fits = (*offset + part.size).cmple(desc.size).all();
@@ -206,12 +222,16 @@ impl Frame {
             if let (Some(o), Some(p)) = (&mut depth, &part.depth) {
                 place(o, p, *offset, part.size, w, 1);
             }
+            if let (Some(o), Some(p)) = (&mut hits, &part.hits) {
+                place(o, p, *offset, part.size, w, 1);
+            }
             samples += part.samples;
         }
         Ok(Frame {
             size: desc.size,
             color,
             depth,
+            hits,
             samples,
         })
     }
@@ -240,6 +260,7 @@ impl Frame {
             size: desc.size,
             color,
             depth,
+            hits: None,
             samples: 0,
         })
     }
@@ -322,26 +343,4 @@ impl Frame {
 
 fn unorm4(b: &[u8]) -> Vec4 {
     Vec4::new(b[0] as f32, b[1] as f32, b[2] as f32, b[3] as f32) / 255.0
-}
-
-/// WGSL's `pack4x8unorm` rounding (ties to even), so both renderers agree
-/// to the bit on 8-bit output.
-pub(crate) fn to_unorm8(x: f32) -> u8 {
-    (x.clamp(0.0, 1.0) * 255.0).round_ties_even() as u8
-}
-
-pub(crate) fn linear_to_srgb(x: f32) -> f32 {
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-pub(crate) fn srgb_to_linear(x: f32) -> f32 {
-    if x <= 0.040_45 {
-        x / 12.92
-    } else {
-        ((x + 0.055) / 1.055).powf(2.4)
-    }
 }

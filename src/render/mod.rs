@@ -5,8 +5,10 @@ pub mod cells;
 mod compare;
 pub mod cpu;
 pub mod empty_space;
+pub mod encoding;
 mod frame;
 pub mod gpu;
+mod hits;
 pub mod iso;
 mod march_plan;
 mod progress;
@@ -23,6 +25,7 @@ pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
 pub use cpu::CpuRenderer;
 pub use frame::{ColorData, ColorFormat, Frame, FrameDesc, MAX_FRAME_PIXELS};
 pub use gpu::{GpuRenderer, PassClock, Uploads};
+pub use hits::{HitChannel, HitRecord, PixelHit};
 pub use progress::{Done, Progress, Watch};
 pub use settings::{
     check_step_factor, BackgroundImage, ClipPlanes, Lamp, RenderSettings, Sampling, Shading, Spot,

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::{DMat4, Mat4, Vec3};
 use thiserror::Error;
 
-use super::placement::{check_affine, transformed_box};
+use super::placement::{check_affine, transformed_box, ObjectIds};
 use super::{PlacedShape, ShapeError, StructuredVolume, TransferFunction};
 
 /// The most volumes one scene composites. The shaders bind one 3D texture
@@ -39,6 +39,7 @@ pub struct PlacedVolume {
     /// Object to world: affine (any rotation, scale, shear or mirror) and
     /// invertible.
     pub transform: Mat4,
+    pub ids: ObjectIds,
 }
 
 impl PlacedVolume {
@@ -95,6 +96,7 @@ impl Scene {
                 volume,
                 transfer_function,
                 transform: Mat4::IDENTITY,
+                ids: ObjectIds::NONE,
             }],
             shapes: Vec::new(),
         }
@@ -177,6 +179,7 @@ impl Scene {
                 Arc::ptr_eq(&a.volume, &b.volume)
                     && Arc::ptr_eq(&a.transfer_function, &b.transfer_function)
                     && a.transform == b.transform
+                    && a.ids == b.ids
             })
             && self.shapes.len() == other.shapes.len()
             && self
@@ -207,6 +210,7 @@ mod tests {
             volume: Arc::new(volume),
             transfer_function: Arc::new(tf),
             transform,
+            ids: ObjectIds::NONE,
         }
     }
 

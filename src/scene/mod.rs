@@ -11,7 +11,7 @@ mod transfer_function;
 mod volume;
 
 pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
-pub use placement::transformed_box;
+pub use placement::{transformed_box, ObjectIds};
 pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};
 pub use shapes::{
     AlphaMode, Attribute, ColorSource, Coverage, Made, Pbr, PlacedShape, Primitives, Shape,

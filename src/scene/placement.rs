@@ -1,5 +1,6 @@
 //! Placing things in the world: the affine transforms volumes and
-//! surfaces take, and the boxes around what they place.
+//! surfaces take, the boxes around what they place, and the numbers hosts tell the
+//! placed things apart by.
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -39,4 +40,21 @@ pub fn transformed_box(transform: Mat4, (lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) 
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
             (l.min(p), h.max(p))
         })
+}
+
+/// The numbers a host gave an object and the instance that placed it,
+/// which the frame's objectId and instanceId channels report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ObjectIds {
+    pub object: u32,
+    pub instance: u32,
+}
+
+impl ObjectIds {
+    /// What ANARI reports for an object or instance given no `id`, and
+    /// where nothing was hit.
+    pub const NONE: Self = Self {
+        object: u32::MAX,
+        instance: u32::MAX,
+    };
 }

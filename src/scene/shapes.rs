@@ -8,7 +8,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3, Vec4};
 use thiserror::Error;
 
-use super::placement::{check_affine, transformed_box};
+use super::placement::{check_affine, transformed_box, ObjectIds};
 use super::sampler::Sampler;
 
 /// The most primitives one shape holds: a primitive's index must fit the
@@ -415,6 +415,18 @@ impl Shape {
         self.source.is_empty()
     }
 
+    /// The id of kept primitive `kept`: the host's `primitive.id` of it
+    /// where given, else its index among the host's primitives.
+    pub fn primitive_id(&self, kept: u32) -> u32 {
+        let Some(&host) = self.source.get(kept as usize) else {
+            return u32::MAX;
+        };
+        match &self.ids {
+            Some(ids) => ids.get(host as usize).copied().unwrap_or(u32::MAX),
+            None => host,
+        }
+    }
+
     /// Vertices the host gave.
     pub fn vertices(&self) -> usize {
         match &self.primitives {
@@ -592,8 +604,8 @@ pub struct PlacedShape {
     pub material: SurfaceMaterial,
     /// Object to world: affine and invertible, as a volume's.
     pub transform: Mat4,
-    /// The surface's `id` (the objectId channel's value).
-    pub id: u32,
+    /// The surface's `id` and its instance's.
+    pub ids: ObjectIds,
     /// The values the placing instance gives every point of the shape
     /// instead of the shape's own.
     pub uniform: Uniforms,
@@ -605,7 +617,7 @@ impl PlacedShape {
             shape,
             material,
             transform,
-            id: u32::MAX,
+            ids: ObjectIds::NONE,
             uniform: [None; 5],
         }
     }
@@ -626,7 +638,7 @@ impl PlacedShape {
         Arc::ptr_eq(&self.shape, &other.shape)
             && self.material == other.material
             && self.transform == other.transform
-            && self.id == other.id
+            && self.ids == other.ids
             && self.uniform == other.uniform
     }
 }

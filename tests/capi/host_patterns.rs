@@ -16,7 +16,7 @@ use anari_library_caveray::render::{
     ssim, BackgroundImage, ColorData, CpuRenderer, Frame, FrameDesc, RenderSettings,
 };
 use anari_library_caveray::scene::{
-    Filter, PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
+    Filter, ObjectIds, PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
 };
 use common::c::{
     compile, describe, phantom, read_rgba, run_with, scratch, valgrind_available, wall_scene,
@@ -37,6 +37,7 @@ fn float_frame(path: &Path, size: UVec2) -> Frame {
         size,
         color: ColorData::Rgba32F(floats(path)),
         depth: None,
+        hits: None,
         samples: 0,
     }
 }
@@ -131,11 +132,13 @@ fn vtk(valgrind: bool) {
             volume: Arc::clone(v),
             transfer_function: Arc::new(phantom_tf),
             transform: shrink,
+            ids: ObjectIds::NONE,
         },
         PlacedVolume {
             volume: Arc::new(constant),
             transfer_function: Arc::new(haze_tf),
             transform: turn,
+            ids: ObjectIds::NONE,
         },
     ])
     .unwrap();
@@ -328,6 +331,7 @@ fn viewer(valgrind: bool) {
         size,
         color: ColorData::Srgba8(bytes),
         depth: None,
+        hits: None,
         samples: 0,
     };
     let (a, bg) = (0.75f32, Vec3::splat(0.1));
@@ -409,6 +413,7 @@ fn half(pair: &Frame, x0: u32) -> Frame {
         size: UVec2::new(48, 48),
         color: ColorData::Rgba8(pixels),
         depth: None,
+        hits: None,
         samples: 0,
     }
 }

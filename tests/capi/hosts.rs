@@ -413,6 +413,7 @@ fn opencover(valgrind: bool) {
         size: scene.size,
         color: ColorData::Srgba8(bytes),
         depth: None,
+        hits: None,
         samples: 0,
     };
     let s = ssim(&image, &reference).unwrap();

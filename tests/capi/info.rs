@@ -154,7 +154,15 @@ fn frame_channels_and_parameters_listed_once_per_type() {
     };
     assert_eq!(
         unsafe { strings(channels.cast()) },
-        ["channel.color", "channel.depth"]
+        [
+            "channel.color",
+            "channel.depth",
+            "channel.primitiveId",
+            "channel.objectId",
+            "channel.instanceId",
+            "channel.normal",
+            "channel.albedo"
+        ]
     );
 
     let list = unsafe {

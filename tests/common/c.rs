@@ -246,6 +246,7 @@ pub fn read_rgba(path: &Path, size: UVec2) -> Frame {
         size,
         color: anari_library_caveray::render::ColorData::Rgba8(bytes),
         depth: None,
+        hits: None,
         samples: 0,
     }
 }

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use anari_library_caveray::data::preset;
-use anari_library_caveray::scene::{PlacedVolume, StructuredVolume, Voxels};
+use anari_library_caveray::scene::{ObjectIds, PlacedVolume, StructuredVolume, Voxels};
 use glam::{Mat4, UVec3, Vec3};
 
 /// `f` sampled at `n`^3 vertices on [-1, 1]^3, placed by `transform`.
@@ -29,6 +29,7 @@ pub fn field(n: u32, transform: Mat4, f: impl Fn(Vec3) -> f32) -> PlacedVolume {
         volume: Arc::new(volume),
         transfer_function: Arc::new(preset("grey").unwrap()),
         transform,
+        ids: ObjectIds::NONE,
     }
 }
 

@@ -1,7 +1,8 @@
 //! Frames as hosts render them: OpenCOVER renders an unchanged channel up
-//! to 64 times and VTK several times per frame, expecting accumulation;
-//! an unchanged frame keeps its image, counts the renders in `numSamples`,
-//! and any change of its inputs renders anew.
+//! to 64 times and VTK several times per frame; an unchanged frame keeps
+//! its image (refines it, with `accumulation`: tests/device/surfaces.rs),
+//! counts the renders in `numSamples`, and any change of its inputs
+//! renders anew.
 
 use crate::common;
 
@@ -20,8 +21,6 @@ fn unchanged_frames_keep_their_image_and_changes_render_anew() {
     let volume = h.volume(field);
     h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
     let (frame, camera) = h.frame(volume, 3.0);
-    h.set(frame, "accumulation", DataType::BOOL, vec![1]);
-    h.d.commit(Subject::Object(frame));
 
     let first = h.pixels(frame);
     assert_eq!(

@@ -769,3 +769,30 @@ fn a_background_image_shows_around_an_isosurface() {
         h.d.release(gradient);
     }
 }
+
+#[test]
+fn an_isosurface_world_refuses_hit_channels_by_name() {
+    let mut h = Host::new();
+    let f = field(&mut h);
+    let m = matte(&mut h, [0.2, 0.6, 0.9]);
+    let (s, _) = surface(&mut h, f, &[0.5], m);
+    let world = world_of(&mut h, DataType::SURFACE, "surface", &[s]);
+    let camera = off_axis(&mut h, [0.05, 0.02, 2.0]);
+    let fr = frame(&mut h, world, camera, false);
+    h.set(
+        fr,
+        "channel.objectId",
+        DataType::DATA_TYPE,
+        bytes(&[DataType::UINT32 as i32]),
+    );
+    h.d.commit(Subject::Object(fr));
+    h.d.render_frame(fr, None);
+    assert!(h.d.map_frame(fr, "channel.color").is_none());
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("whose frames have color and depth channels only")),
+        "{errors:?}"
+    );
+}

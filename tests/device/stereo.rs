@@ -237,6 +237,7 @@ fn as_frame(pixels: Vec<u8>, w: u32, hgt: u32) -> anari_library_caveray::render:
         size: glam::UVec2::new(w, hgt),
         color: anari_library_caveray::render::ColorData::Rgba8(pixels),
         depth: None,
+        hits: None,
         samples: 0,
     }
 }

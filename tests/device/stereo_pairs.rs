@@ -122,6 +122,7 @@ fn frame(pixels: Vec<u8>) -> Frame {
         size: UVec2::splat(SIZE),
         color: ColorData::Rgba8(pixels),
         depth: None,
+        hits: None,
         samples: 0,
     }
 }

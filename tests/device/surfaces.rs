@@ -6,7 +6,7 @@
 use crate::common;
 
 use anari_library_caveray::device::{DataType, Input, Severity, StatusCode, Subject};
-use common::device::{bytes, Host, SIZE};
+use common::device::{bytes, same, Host, SIZE};
 
 /// A perspective frame from (0, 0, 3) of `surfaces` (and `volume`, if
 /// any), its renderer without ambient light, depth kept.
@@ -1017,4 +1017,227 @@ fn an_opacity_outside_zero_to_one_is_clamped_with_a_warning() {
             .any(|w| w.contains("opacity 1.5 lies outside [0, 1]; clamped")),
         "{warnings:?}"
     );
+}
+
+/// Sets frame channel `name` to ANARI type `ty`.
+fn channel(h: &mut Host, frame: u64, name: &str, ty: DataType) {
+    h.set(frame, name, DataType::DATA_TYPE, bytes(&[ty as i32]));
+    h.d.commit(Subject::Object(frame));
+}
+
+/// Mapped channel `name` of rendered `frame`: its type and its bytes.
+fn mapped(h: &mut Host, frame: u64, name: &str, bytes_per_pixel: usize) -> (DataType, Vec<u8>) {
+    let m = h.d.map_frame(frame, name).expect("the channel maps");
+    assert_eq!(m.size, glam::UVec2::splat(SIZE));
+    // SAFETY: a mapped channel of SIZE^2 pixels, valid until unmap.
+    let b = unsafe { std::slice::from_raw_parts(m.ptr, bytes_per_pixel * (SIZE * SIZE) as usize) }
+        .to_vec();
+    h.d.unmap_frame(frame, name);
+    (m.ty, b)
+}
+
+fn u32_at(b: &[u8], x: u32, y: u32) -> u32 {
+    let i = 4 * (y * SIZE + x) as usize;
+    u32::from_ne_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+#[test]
+fn id_normal_and_albedo_channels_name_what_each_pixel_shows_on_either_backend() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        // A red sphere of id 11 placed by instance 21 on the left; on the
+        // right the same sphere in the world directly, with no id.
+        let g = sphere(&mut h);
+        let red = Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 0.0, 0.0]));
+        let m = matte(&mut h, red);
+        let s = surface(&mut h, g, m);
+        h.set(s, "id", DataType::UINT32, bytes(&[11u32]));
+        h.d.commit(Subject::Object(s));
+        let group = h.d.new_object(DataType::GROUP, "");
+        h.set_objects(group, "surface", DataType::SURFACE, &[s]);
+        h.d.commit(Subject::Object(group));
+        let i = h.d.new_object(DataType::INSTANCE, "transform");
+        h.set_object(i, "group", DataType::GROUP, group);
+        let left = glam::Mat4::from_translation(glam::Vec3::new(-0.6, 0.0, 0.0)).to_cols_array();
+        h.set(i, "transform", DataType::FLOAT32_MAT4, bytes(&left));
+        h.set(i, "id", DataType::UINT32, bytes(&[21u32]));
+        h.d.commit(Subject::Object(i));
+        let g2 = sphere(&mut h);
+        let right = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32_VEC3,
+            [1, 1, 1],
+            &bytes(&[0.6f32, 0.0, 0.0]),
+        );
+        h.set_object(g2, "vertex.position", DataType::ARRAY1D, right);
+        h.d.release(right);
+        h.d.commit(Subject::Object(g2));
+        let s2 = surface(&mut h, g2, m);
+        let world = h.d.new_object(DataType::WORLD, "");
+        h.set_objects(world, "instance", DataType::INSTANCE, &[i]);
+        h.set_objects(world, "surface", DataType::SURFACE, &[s2]);
+        h.d.commit(Subject::Object(world));
+        let f = frame_for(&mut h, "default", world);
+        channel(&mut h, f, "channel.objectId", DataType::UINT32);
+        channel(&mut h, f, "channel.instanceId", DataType::UINT32);
+        channel(&mut h, f, "channel.primitiveId", DataType::UINT32);
+        channel(&mut h, f, "channel.normal", DataType::FIXED16_VEC3);
+        channel(&mut h, f, "channel.albedo", DataType::UFIXED8_RGB_SRGB);
+        h.pixels(f);
+        assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
+        let (l, r, y) = (
+            SIZE / 2 - SIZE * 17 / 100,
+            SIZE / 2 + SIZE * 17 / 100,
+            SIZE / 2,
+        );
+        let (ty, objects) = mapped(&mut h, f, "channel.objectId", 4);
+        assert_eq!(ty, DataType::UINT32);
+        let none = u32::MAX;
+        assert_eq!(
+            [
+                u32_at(&objects, l, y),
+                u32_at(&objects, r, y),
+                u32_at(&objects, 0, 0)
+            ],
+            [11, none, none],
+            "{backend}"
+        );
+        let (_, instances) = mapped(&mut h, f, "channel.instanceId", 4);
+        assert_eq!(
+            [u32_at(&instances, l, y), u32_at(&instances, r, y)],
+            [21, none],
+            "{backend}"
+        );
+        let (_, primitives) = mapped(&mut h, f, "channel.primitiveId", 4);
+        assert_eq!(
+            [u32_at(&primitives, l, y), u32_at(&primitives, 0, 0)],
+            [0, none],
+            "{backend}"
+        );
+        // At the sphere's centre the normal faces the camera (+z).
+        let (ty, normals) = mapped(&mut h, f, "channel.normal", 6);
+        assert_eq!(ty, DataType::FIXED16_VEC3);
+        let at = 6 * (y * SIZE + l) as usize;
+        let z = i16::from_ne_bytes([normals[at + 4], normals[at + 5]]);
+        assert!(z > 29_500, "{backend}: normal z {z}");
+        let (ty, albedo) = mapped(&mut h, f, "channel.albedo", 3);
+        assert_eq!(ty, DataType::UFIXED8_RGB_SRGB);
+        let at = 3 * (y * SIZE + r) as usize;
+        assert_eq!(&albedo[at..at + 3], &[255, 0, 0], "{backend}");
+        assert_eq!(&albedo[0..3], &[0, 0, 0], "{backend}: the background");
+    }
+}
+
+#[test]
+fn hit_channels_refuse_other_types_and_unset_channels_by_name() {
+    let mut h = Host::new();
+    let g = sphere(&mut h);
+    let m = matte(
+        &mut h,
+        Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 1.0, 1.0])),
+    );
+    let s = surface(&mut h, g, m);
+    let f = frame(&mut h, &[s], None);
+    channel(&mut h, f, "channel.normal", DataType::UINT32);
+    let errors = h.errors();
+    assert!(
+        errors
+            .iter()
+            .any(|(code, e)| *code == StatusCode::InvalidArgument
+                && e.contains(
+                    "channel.normal ANARI_UINT32 is not ANARI_FLOAT32_VEC3 or ANARI_FIXED16_VEC3"
+                )),
+        "{errors:?}"
+    );
+    channel(&mut h, f, "channel.normal", DataType::FLOAT32_VEC3);
+    h.pixels(f);
+    assert!(h.errors().is_empty());
+    assert!(h.d.map_frame(f, "channel.albedo").is_none());
+    let errors = h.errors();
+    assert!(
+        errors
+            .iter()
+            .any(|(code, e)| *code == StatusCode::InvalidOperation
+                && e.contains("the frame has no channel.albedo channel; set 'channel.albedo'")),
+        "{errors:?}"
+    );
+    let (ty, _) = mapped(&mut h, f, "channel.normal", 12);
+    assert_eq!(ty, DataType::FLOAT32_VEC3);
+}
+
+#[test]
+fn accumulation_antialiases_an_edge_through_pixel_centres_over_64_samples() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        // A red square whose right edge runs just right of the centres of
+        // column 12 (an orthographic window 2 wide over SIZE = 24 pixels).
+        let edge = 1.0 / 24.0 + 0.002;
+        let g = h.d.new_object(DataType::GEOMETRY, "triangle");
+        vec3_array(
+            &mut h,
+            "vertex.position",
+            g,
+            &[
+                [-2.0, -2.0, 0.0],
+                [edge, -2.0, 0.0],
+                [edge, 2.0, 0.0],
+                [-2.0, -2.0, 0.0],
+                [edge, 2.0, 0.0],
+                [-2.0, 2.0, 0.0],
+            ],
+        );
+        h.d.commit(Subject::Object(g));
+        let red = Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 0.0, 0.0]));
+        let m = matte(&mut h, red);
+        let s = surface(&mut h, g, m);
+        let f = frame(&mut h, &[s], None);
+        let camera = h.d.new_object(DataType::CAMERA, "orthographic");
+        h.set(
+            camera,
+            "position",
+            DataType::FLOAT32_VEC3,
+            bytes(&[0.0f32, 0.0, 3.0]),
+        );
+        h.set(camera, "height", DataType::FLOAT32, bytes(&[2.0f32]));
+        h.d.commit(Subject::Object(camera));
+        h.set_object(f, "camera", DataType::CAMERA, camera);
+        h.set(f, "accumulation", DataType::BOOL, vec![1]);
+        h.d.commit(Subject::Object(f));
+        let samples = |h: &mut Host| match h.d.property(Subject::Object(f), "numSamples", true) {
+            Some(anari_library_caveray::device::Property::Int32(n)) => n,
+            other => panic!("numSamples {other:?}"),
+        };
+        let y = SIZE / 2;
+        let first = h.pixels(f);
+        // The first sample is each pixel's centre.
+        let reds = |p: &[u8]| [11, 12, 13].map(|x| pixel(p, x, y)[0]);
+        assert_eq!(reds(&first), [255, 255, 0], "{backend}");
+        let mut last = first.clone();
+        for _ in 1..64 {
+            last = h.pixels(f);
+        }
+        assert_eq!(samples(&mut h), 64, "{backend}");
+        let [inside, edge_pixel, outside] = reds(&last);
+        assert_eq!((inside, outside), (255, 0), "{backend}");
+        assert!(
+            (112..=144).contains(&edge_pixel),
+            "{backend}: the edge pixel after 64 samples: {edge_pixel}"
+        );
+        // Depth stays the pixel centre's: the square, 3 away.
+        let depth = h.depth_sized(f, SIZE, SIZE);
+        assert!(
+            (depth[(y * SIZE + 12) as usize] - 3.0).abs() < 1e-4,
+            "{backend}"
+        );
+        // Past 64 samples the image stands.
+        same(&h.pixels(f), &last).unwrap();
+        assert_eq!(samples(&mut h), 65, "{backend}");
+        // Without accumulation an unchanged frame keeps its first image.
+        h.set(f, "accumulation", DataType::BOOL, vec![0]);
+        h.d.commit(Subject::Object(f));
+        same(&h.pixels(f), &first).unwrap();
+        same(&h.pixels(f), &first).unwrap();
+        assert_eq!(samples(&mut h), 2, "{backend}");
+        assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
+    }
 }

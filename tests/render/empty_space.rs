@@ -15,7 +15,7 @@ use anari_library_caveray::render::{
     ssim, ClipPlanes, Frame, FrameDesc, RenderSettings, Renderer, Shading,
 };
 use anari_library_caveray::scene::{
-    Filter, PlacedVolume, Scene, StructuredVolume, TransferFunction,
+    Filter, ObjectIds, PlacedVolume, Scene, StructuredVolume, TransferFunction,
 };
 use common::render::{four_cameras, off_axis_wall, renderers};
 use glam::{Mat4, UVec2, Vec3, Vec4};
@@ -36,6 +36,7 @@ fn two_volumes() -> Scene {
         volume: Arc::new(volume),
         transfer_function: tf,
         transform,
+        ids: ObjectIds::NONE,
     };
     Scene::placed(vec![
         place(concentric_shells(40), shells_tf(), Mat4::IDENTITY),

@@ -10,6 +10,7 @@ mod empty_space;
 mod errors;
 mod fast_path;
 mod filtered_sampling;
+mod hit_channels;
 mod isosurface;
 mod known_answers;
 mod progress;

@@ -13,7 +13,7 @@ use anari_library_caveray::render::{
     ssim, ColorFormat, CpuRenderer, FrameDesc, RenderSettings, Shading,
 };
 use anari_library_caveray::scene::{
-    PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
+    ObjectIds, PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
 };
 use common::render::{axis_camera, four_cameras, gpu, off_axis_wall, renderers};
 use glam::{Mat4, UVec2, Vec3, Vec4};
@@ -27,6 +27,7 @@ fn place(volume: &Arc<StructuredVolume>, tf: &Arc<TransferFunction>, m: Mat4) ->
         volume: Arc::clone(volume),
         transfer_function: Arc::clone(tf),
         transform: m,
+        ids: ObjectIds::NONE,
     }
 }
 

@@ -670,3 +670,108 @@ fn both(
         ),
     ]
 }
+
+/// A horizontal square over the left half of a cube of constant haze,
+/// edge-on to a camera looking down -z: it shows nowhere, but stands
+/// between the haze and a light straight above.
+fn shaded_haze(square_opacity: Option<f32>) -> Scene {
+    use anari_library_caveray::scene::{StructuredVolume, TransferFunction, Voxels};
+    let n = 8u32;
+    let volume = StructuredVolume::new(
+        UVec3::splat(n),
+        Voxels::F32(vec![0.5; (n * n * n) as usize]),
+        Vec3::splat(-1.0),
+        Vec3::splat(2.0 / (n - 1) as f32),
+    )
+    .unwrap();
+    let tf = TransferFunction::new(vec![Vec4::ONE; 2], vec![0.6, 0.6], (0.0, 1.0), 1.0).unwrap();
+    let scene = Scene::new(volume, tf);
+    let Some(opacity) = square_opacity else {
+        return scene;
+    };
+    let alpha = if opacity < 1.0 {
+        AlphaMode::Blend
+    } else {
+        AlphaMode::Opaque
+    };
+    let mut square = square_at(0.0, Vec3::ONE, opacity, alpha);
+    square.transform = Mat4::from_translation(Vec3::new(-1.0, 1.1, 0.0))
+        * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2)
+        * Mat4::from_scale(Vec3::new(1.0, 2.0, 1.0));
+    scene.with_shapes(vec![square]).unwrap()
+}
+
+/// Mean red of the pixels left of x = -0.2 and right of x = 0.2 inside
+/// the cube, n x n of a window 3 wide.
+fn halves(frame: &anari_library_caveray::render::Frame, n: u32) -> (f32, f32) {
+    let (mut left, mut right) = ((0.0, 0), (0.0, 0));
+    for y in 0..n {
+        for x in 0..n {
+            let (px, py) = (
+                -1.5 + 3.0 * (x as f32 + 0.5) / n as f32,
+                -1.5 + 3.0 * (y as f32 + 0.5) / n as f32,
+            );
+            if py.abs() > 0.9 || px.abs() > 0.9 {
+                continue;
+            }
+            let r = frame.pixel(x, y).x;
+            if px < -0.2 {
+                left = (left.0 + r, left.1 + 1);
+            } else if px > 0.2 {
+                right = (right.0 + r, right.1 + 1);
+            }
+        }
+    }
+    (left.0 / left.1 as f32, right.0 / right.1 as f32)
+}
+
+#[test]
+fn shadow_and_ao_rays_of_the_volume_meet_the_surfaces() {
+    use anari_library_caveray::render::Shading;
+    let n = 24;
+    let camera = head_on(n, 3.0);
+    let desc = FrameDesc::new(UVec2::splat(n)).with_color(ColorFormat::Rgba32F);
+    let settings = RenderSettings {
+        shading: Shading::Shadows,
+        light: Vec3::Y,
+        ..Default::default()
+    };
+    let cpu = CpuRenderer::new();
+    let render = |scene: &Scene| cpu.render(scene, &camera, &settings, &desc).unwrap();
+    let (l, r) = halves(&render(&shaded_haze(None)), n);
+    assert!((l - r).abs() < 0.01 * r, "no square: halves {l} and {r}");
+    let (lo, ro) = halves(&render(&shaded_haze(Some(1.0))), n);
+    assert!((ro - r).abs() < 1e-4, "the lit half changed: {ro} vs {r}");
+    assert!(
+        lo < 0.8 * ro,
+        "under the opaque square: {lo}, beside it {ro}"
+    );
+    let (lt, rt) = halves(&render(&shaded_haze(Some(0.5))), n);
+    assert!(
+        lo < lt && lt < rt,
+        "translucent: {lt} between {lo} and {rt}"
+    );
+    // The GPU's shadow and AO rays meet the same surfaces.
+    let mut gpu = gpu();
+    for shading in [Shading::Shadows, Shading::ShadowsAo] {
+        let settings = RenderSettings {
+            shading,
+            ..settings.clone()
+        };
+        for opacity in [1.0, 0.5] {
+            let scene = shaded_haze(Some(opacity));
+            let g = gpu.render(&scene, &camera, &settings, &desc).unwrap();
+            let c = cpu.render(&scene, &camera, &settings, &desc).unwrap();
+            let s = ssim(&g, &c).unwrap();
+            assert!(
+                s >= 0.99,
+                "{shading:?}, opacity {opacity}: GPU vs CPU SSIM {s}"
+            );
+            let ((gl, _), (cl, _)) = (halves(&g, n), halves(&c, n));
+            assert!(
+                (gl - cl).abs() < 0.01,
+                "{shading:?}: GPU {gl}, CPU {cl} under the square"
+            );
+        }
+    }
+}

@@ -347,7 +347,7 @@ fn geometry_and_layer_counts_it_cannot_serve_are_refused() {
 
 #[test]
 fn several_placed_volumes_reproject_like_two_pass() {
-    use anari_library_caveray::scene::PlacedVolume;
+    use anari_library_caveray::scene::{ObjectIds, PlacedVolume};
     use glam::Mat4;
     use std::sync::Arc;
     let phantom = unit_phantom(32);
@@ -363,6 +363,7 @@ fn several_placed_volumes_reproject_like_two_pass() {
             transform: Mat4::from_translation(Vec3::new(0.5, 0.2, 0.6))
                 * Mat4::from_rotation_y(0.8)
                 * Mat4::from_scale(Vec3::splat(0.5)),
+            ids: ObjectIds::NONE,
         },
     ])
     .unwrap();

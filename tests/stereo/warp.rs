@@ -178,7 +178,7 @@ fn cells_tile_the_image_and_pasted_together_are_the_whole_capture() {
         let part = CpuRenderer::new()
             .capture(
                 &scene,
-                &rays.shifted(lo),
+                &rays.shifted(lo.as_vec2()),
                 &RenderSettings::default(),
                 size,
                 3,

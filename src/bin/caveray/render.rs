@@ -508,6 +508,7 @@ fn stereo_pair<'v>(
         reprojects: renderer.backend() == Backend::Gpu,
         background_image: settings.background_image.is_some(),
         surfaces: !scene.shapes().is_empty(),
+        hits: false,
     };
     let layers = LayerRequest {
         count: args.layers,

@@ -9,8 +9,8 @@ use anari_library_caveray::data::{
 };
 use anari_library_caveray::geometry::VolumeAxis;
 use anari_library_caveray::scene::{
-    AlphaMode, ColorSource, PlacedShape, PlacedVolume, Scene, Shape, ShapeInput, StructuredVolume,
-    SurfaceMaterial, TransferFunction, Voxels,
+    AlphaMode, ColorSource, ObjectIds, PlacedShape, PlacedVolume, Scene, Shape, ShapeInput,
+    StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -305,6 +305,7 @@ impl Loaded {
             volume: volume.into(),
             transfer_function: tf.into(),
             transform,
+            ids: ObjectIds::NONE,
         }])
         .map_err(|e| runtime(&e))?;
         match mesh {

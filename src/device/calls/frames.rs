@@ -9,7 +9,8 @@ use std::sync::Arc;
 use glam::UVec2;
 
 use super::Device;
-use crate::device::frame::state::Channel;
+use crate::device::frame::hit_channel_type;
+use crate::device::frame::state::{Channel, HIT_CHANNEL_NAMES};
 use crate::device::object::ObjectRef;
 use crate::device::snapshot::{self, FrameSnapshot};
 use crate::device::types::{DataType, StatusCode};
@@ -31,6 +32,13 @@ pub struct Mapped {
     pub ptr: *const u8,
     pub size: UVec2,
     pub ty: DataType,
+}
+
+/// Where a mapped channel's pixels are: in the rendered frame, or
+/// encoded for the host in a buffer the frame keeps (hit channel i).
+enum Pixels {
+    Rendered(*const u8),
+    Encoded(usize, Vec<u8>),
 }
 
 impl Device {
@@ -123,6 +131,7 @@ impl Device {
             Ok((Next::Present(present), snap)) => {
                 frame.with_frame(|f| {
                     f.color_type = snap.color_type;
+                    f.hit_channels = snap.hit_channels.clone();
                     f.renders.presenting();
                 });
                 slot.start();
@@ -131,6 +140,7 @@ impl Device {
             Ok((Next::Render, snap)) => {
                 let job = frame.with_frame(|f| {
                     f.color_type = snap.color_type;
+                    f.hit_channels = snap.hit_channels.clone();
                     f.renders.job(frame.handle, Arc::clone(&snap.inputs))
                 });
                 let Some(mut job) = job else { return Ok(()) };
@@ -295,15 +305,16 @@ impl Device {
             self.error(
                 StatusCode::InvalidArgument,
                 Some(&frame),
-                format!("anariMapFrame: unknown channel '{channel_name}'; expected channel.color or channel.depth"),
+                format!("anariMapFrame: unknown channel '{channel_name}'; expected channel.color, channel.depth or one of {}", HIT_CHANNEL_NAMES.join(", ")),
             );
             return Ok(None);
         };
-        let Some((slot, color_type, already)) = frame.with_frame(|f| {
+        let Some((slot, color_type, hit_channels, already)) = frame.with_frame(|f| {
             (
                 f.renders.slot.clone(),
                 f.color_type,
-                f.mapped[channel as usize],
+                f.hit_channels.clone(),
+                f.mapped[channel.index()],
             )
         }) else {
             return Ok(None);
@@ -340,27 +351,48 @@ impl Device {
                     (None, _) => {
                         Err("the frame has no color channel; set 'channel.color'".to_owned())
                     }
-                    (Some(ty), ColorData::Rgba8(b) | ColorData::Srgba8(b)) => Ok((b.as_ptr(), ty)),
-                    (Some(ty), ColorData::Rgba32F(v)) => Ok((v.as_ptr().cast(), ty)),
+                    (Some(ty), ColorData::Rgba8(b) | ColorData::Srgba8(b)) => {
+                        Ok((Pixels::Rendered(b.as_ptr()), ty))
+                    }
+                    (Some(ty), ColorData::Rgba32F(v)) => {
+                        Ok((Pixels::Rendered(v.as_ptr().cast()), ty))
+                    }
                 },
                 Channel::Depth => match &f.depth {
-                    Some(d) => Ok((d.as_ptr().cast(), DataType::FLOAT32)),
+                    Some(d) => Ok((Pixels::Rendered(d.as_ptr().cast()), DataType::FLOAT32)),
                     None => Err(
                         "the frame has no depth channel; set 'channel.depth' to FLOAT32".to_owned(),
                     ),
                 },
+                Channel::Hit(i) => {
+                    let name = HIT_CHANNEL_NAMES[i];
+                    let format = hit_channels.iter().find(|(n, _)| *n == name);
+                    match (format, &f.hits) {
+                        (Some((_, format)), Some(hits)) => Ok((
+                            Pixels::Encoded(i, format.encode(hits)),
+                            hit_channel_type(*format),
+                        )),
+                        _ => Err(format!("the frame has no {name} channel; set '{name}'")),
+                    }
+                }
             }
-            .map(|(ptr, ty)| Mapped {
-                ptr,
-                size: f.size,
-                ty,
-            }),
+            .map(|(pixels, ty)| (pixels, f.size, ty)),
         };
         drop(state);
         match mapped {
-            Ok(m) => {
-                frame.with_frame(|f| f.mapped[channel as usize] = true);
-                Ok(Some(m))
+            Ok((pixels, size, ty)) => {
+                let ptr = frame.with_frame(|f| {
+                    f.mapped[channel.index()] = true;
+                    match pixels {
+                        Pixels::Rendered(ptr) => ptr,
+                        // Kept until unmapped: the host reads through ptr.
+                        Pixels::Encoded(i, bytes) => {
+                            f.encoded[i] = bytes;
+                            f.encoded[i].as_ptr()
+                        }
+                    }
+                });
+                Ok(ptr.map(|ptr| Mapped { ptr, size, ty }))
             }
             Err(e) => fail(self, StatusCode::InvalidOperation, e),
         }
@@ -371,7 +403,12 @@ impl Device {
             return;
         };
         let was = Channel::parse(channel_name).and_then(|c| {
-            frame.with_frame(|f| std::mem::replace(&mut f.mapped[c as usize], false))
+            frame.with_frame(|f| {
+                if let Channel::Hit(i) = c {
+                    f.encoded[i] = Vec::new();
+                }
+                std::mem::replace(&mut f.mapped[c.index()], false)
+            })
         });
         if was != Some(true) {
             self.error(

@@ -468,11 +468,10 @@ fn world_bounds(world: &WorldModel) -> Option<Property> {
             GeometryModel::Shape(shape) => Some(shape.bounds()).filter(|_| !shape.is_empty()),
         }
     };
-    let volumes = world.volumes.iter().map(|(o, t)| (o, *t));
-    let surfaces = world.surfaces.iter().map(|(o, t, _)| (o, *t));
-    let mut boxes = volumes.chain(surfaces).filter_map(|(v, transform)| {
+    let placed = world.volumes.iter().chain(&world.surfaces);
+    let mut boxes = placed.filter_map(|(v, placement)| {
         let grid = box_of(v)?;
-        Some(match transform {
+        Some(match placement.transform {
             None => grid,
             Some(m) => crate::scene::transformed_box(m, grid),
         })

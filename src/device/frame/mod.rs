@@ -13,12 +13,12 @@ use super::object::State;
 use super::table::Read;
 use super::table::{
     p, DefaultValue, SubtypeInfo, EXT_ACCUMULATION, EXT_COMPLETION, EXT_FRAME_DEADLINE,
-    EXT_FRAME_PAIR, F32,
+    EXT_FRAME_PAIR, EXT_HIT_CHANNELS, F32,
 };
 use super::types::DataType as T;
 use crate::engine::Deadline;
 use crate::render::warp::WarpMode;
-use crate::render::ColorFormat;
+use crate::render::{ColorFormat, HitChannel};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::FRAME,
@@ -29,6 +29,11 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         EXT_ACCUMULATION,
         EXT_FRAME_PAIR,
         EXT_FRAME_DEADLINE,
+        EXT_HIT_CHANNELS[0],
+        EXT_HIT_CHANNELS[1],
+        EXT_HIT_CHANNELS[2],
+        EXT_HIT_CHANNELS[3],
+        EXT_HIT_CHANNELS[4],
     ],
     params: &[
         p(
@@ -58,6 +63,46 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         )
         .data_types(&[T::FLOAT32]),
         p(
+            "channel.primitiveId",
+            &[T::DATA_TYPE],
+            false,
+            DefaultValue::None,
+            "UINT32: the primitive at each pixel's depth, as the host numbered it or its primitive.id (a volume: 0; nothing: UINT32 max)",
+        )
+        .data_types(&[T::UINT32]),
+        p(
+            "channel.objectId",
+            &[T::DATA_TYPE],
+            false,
+            DefaultValue::None,
+            "UINT32: the 'id' of the surface or volume at each pixel's depth (none set, or nothing there: UINT32 max)",
+        )
+        .data_types(&[T::UINT32]),
+        p(
+            "channel.instanceId",
+            &[T::DATA_TYPE],
+            false,
+            DefaultValue::None,
+            "UINT32: the 'id' of the instance that placed what is at each pixel's depth (none set, placed directly, or nothing there: UINT32 max)",
+        )
+        .data_types(&[T::UINT32]),
+        p(
+            "channel.normal",
+            &[T::DATA_TYPE],
+            false,
+            DefaultValue::None,
+            "FLOAT32_VEC3 or FIXED16_VEC3: the world-space unit normal at each pixel's depth, facing the camera (a volume's: its field's gradient; nothing: zero)",
+        )
+        .data_types(&[T::FLOAT32_VEC3, T::FIXED16_VEC3]),
+        p(
+            "channel.albedo",
+            &[T::DATA_TYPE],
+            false,
+            DefaultValue::None,
+            "FLOAT32_VEC3, UFIXED8_VEC3 or UFIXED8_RGB_SRGB: the color before lighting at each pixel's depth (a volume's: its transfer function's; nothing: zero)",
+        )
+        .data_types(&[T::FLOAT32_VEC3, T::UFIXED8_VEC3, T::UFIXED8_RGB_SRGB]),
+        p(
             "frameCompletionCallback",
             &[T::FRAME_COMPLETION_CALLBACK],
             false,
@@ -76,7 +121,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             &[T::BOOL],
             false,
             DefaultValue::None,
-            "accepted: a render is complete at once, and renders of unchanged inputs keep it (numSamples counts them)",
+            "renders of unchanged inputs refine the image, one more sample of each pixel's area each, up to 64 (numSamples counts them; depth and the id, normal and albedo channels stay the pixel centre's); false: they keep it",
         ),
         p(
             "stereoPartner",
@@ -111,6 +156,7 @@ const WARP_NAMES: &[&str] = &["none", "quad", "grid", "layers"];
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     color_type(r.params())?;
+    hit_channels(r.params())?;
     deadline(r.params())?;
     Ok(None)
 }
@@ -158,11 +204,76 @@ pub fn color_type(p: &Params) -> Result<Option<T>, String> {
     }
 }
 
+/// The channels a frame fills from each pixel's hit (render::PixelHit),
+/// by their names and in the formats the host set.
+pub type HitChannels = Vec<(&'static str, HitChannel)>;
+
+/// The hit channels `p` asks for.
+pub fn hit_channels(p: &Params) -> Result<HitChannels, String> {
+    let mut out = Vec::new();
+    for (name, formats) in HIT_CHANNELS {
+        let Some(code) = p.get(name).and_then(|v| v.i32()) else {
+            continue;
+        };
+        let ty = T::from_code(code);
+        let format = formats.iter().find(|(t, _)| Some(*t) == ty);
+        match format {
+            Some((_, format)) => out.push((*name, *format)),
+            None => {
+                let types: Vec<&str> = formats.iter().map(|(t, _)| t.name()).collect();
+                return Err(format!(
+                    "{name} {} is not {}",
+                    ty.map_or_else(|| code.to_string(), |t| t.name().to_owned()),
+                    types.join(" or ")
+                ));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Each hit channel and the ANARI types it is filled in.
+const HIT_CHANNELS: &[(&str, &[(T, HitChannel)])] = &[
+    (
+        "channel.primitiveId",
+        &[(T::UINT32, HitChannel::PrimitiveId)],
+    ),
+    ("channel.objectId", &[(T::UINT32, HitChannel::ObjectId)]),
+    ("channel.instanceId", &[(T::UINT32, HitChannel::InstanceId)]),
+    (
+        "channel.normal",
+        &[
+            (T::FLOAT32_VEC3, HitChannel::NormalF32),
+            (T::FIXED16_VEC3, HitChannel::NormalFixed16),
+        ],
+    ),
+    (
+        "channel.albedo",
+        &[
+            (T::FLOAT32_VEC3, HitChannel::AlbedoF32),
+            (T::UFIXED8_VEC3, HitChannel::AlbedoUnorm8),
+            (T::UFIXED8_RGB_SRGB, HitChannel::AlbedoSrgb8),
+        ],
+    ),
+];
+
+/// The ANARI type a hit channel's format is.
+pub fn hit_channel_type(format: HitChannel) -> T {
+    HIT_CHANNELS
+        .iter()
+        .flat_map(|(_, formats)| formats.iter())
+        .find(|(_, f)| *f == format)
+        .map_or(T::UNKNOWN, |(t, _)| *t)
+}
+
 /// What a committed frame asks for, read when it renders.
 pub struct Setup {
     pub size: UVec2,
     pub color_type: Option<T>,
     pub depth: bool,
+    pub hit_channels: HitChannels,
+    /// Renders of unchanged inputs refine the image.
+    pub accumulate: bool,
     pub deadline: Option<Deadline>,
 }
 
@@ -182,6 +293,11 @@ pub fn setup(p: &Params) -> Result<Setup, String> {
         size,
         color_type,
         depth,
+        hit_channels: hit_channels(p)?,
+        accumulate: p
+            .get("accumulation")
+            .and_then(|v| v.bool())
+            .unwrap_or(false),
         deadline: deadline(p)?,
     })
 }

@@ -8,7 +8,7 @@ use glam::Mat4;
 
 use crate::device::object::{ObjectRef, State};
 use crate::device::table::Read;
-use crate::device::table::{p, DefaultValue, SubtypeInfo, MAT4};
+use crate::device::table::{id_param, p, DefaultValue, SubtypeInfo, MAT4};
 use crate::device::types::DataType as T;
 use crate::scene::{PlacedVolume, Uniforms, ATTRIBUTE_NAMES};
 
@@ -39,6 +39,9 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         uniform("attribute1"),
         uniform("attribute2"),
         uniform("attribute3"),
+        id_param(
+            "the instance's number in the frame's instanceId channel (default: none, UINT32 max)",
+        ),
     ],
     commit: Some(commit),
 };
@@ -59,6 +62,7 @@ pub struct InstanceModel {
     pub group: ObjectRef,
     pub transform: Mat4,
     pub uniform: Uniforms,
+    pub id: u32,
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
@@ -82,5 +86,6 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
         group,
         transform,
         uniform,
+        id: r.id(),
     })))
 }

@@ -22,7 +22,7 @@ use super::world::WorldModel;
 use crate::engine::{Deadline, Inputs, Unrenderable};
 use crate::render::{Backend, FrameDesc, RenderSettings};
 use crate::render::{Lamp, MAX_LAMPS};
-use crate::scene::{PlacedVolume, Scene, StructuredVolume};
+use crate::scene::{ObjectIds, PlacedVolume, Scene, StructuredVolume};
 
 /// The device's count of changes: a snapshot taken at one epoch stands
 /// while the epoch is the same.
@@ -33,6 +33,7 @@ pub struct FrameSnapshot {
     pub inputs: Arc<Inputs>,
     /// The color channel's ANARI type, if the frame has one.
     pub color_type: Option<DataType>,
+    pub hit_channels: frame::HitChannels,
     pub deadline: Option<Deadline>,
 }
 
@@ -48,6 +49,8 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
         size,
         color_type,
         depth,
+        hit_channels,
+        accumulate,
         deadline,
     } = frame::setup(&params)?;
     let needed = |name: &str, kind: DataType| -> Result<ObjectRef, String> {
@@ -93,13 +96,17 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
     settings.directional = light.is_some();
     let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
     let mut placed = Vec::with_capacity(world_model.volumes.len());
-    for (v, transform) in &world_model.volumes {
+    for (v, placement) in &world_model.volumes {
         let model = v.ready::<VolumeModel>(not_ours)?;
         let volume = model.field.ready::<Arc<StructuredVolume>>(not_ours)?;
         placed.push(PlacedVolume {
             volume,
             transfer_function: model.transfer_function,
-            transform: transform.unwrap_or(Mat4::IDENTITY),
+            transform: placement.transform.unwrap_or(Mat4::IDENTITY),
+            ids: ObjectIds {
+                object: model.id,
+                instance: placement.instance,
+            },
         });
     }
     let surfaces = surfaces::surfaces(&world_model.surfaces, &settings, light)?;
@@ -117,6 +124,7 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
     let mut desc =
         FrameDesc::new(size).with_color(color_type.and_then(color_format).unwrap_or_default());
     desc.depth = depth;
+    desc.hits = !hit_channels.is_empty();
     let inputs = Inputs {
         scene,
         surfaces,
@@ -124,6 +132,7 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
         settings,
         desc,
         backend,
+        accumulate,
     };
     inputs.check().map_err(|e| match e {
         Unrenderable::VolumesAndSurfaces => format!(
@@ -131,6 +140,11 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
             world.describe()
         ),
         Unrenderable::PanelDepth => "a multi-view panel image has no depth channel (each subpixel has its own eye): unset 'channel.depth', or set the camera's 'view'".into(),
+        Unrenderable::PanelHits => "a multi-view panel image has no id, normal or albedo channels (each subpixel has its own eye): unset them, or set the camera's 'view'".into(),
+        Unrenderable::IsosurfaceHits => format!(
+            "{} holds isosurfaces, whose frames have color and depth channels only: unset channel.primitiveId, objectId, instanceId, normal and albedo",
+            world.describe()
+        ),
         Unrenderable::PanelSurfaces(n) => format!(
             "{} has {n} isosurfaces (surfaces times iso-values); a multi-view panel image shows one",
             world.describe()
@@ -139,6 +153,7 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
     Ok(FrameSnapshot {
         inputs: Arc::new(inputs),
         color_type,
+        hit_channels,
         deadline,
     })
 }

@@ -14,10 +14,11 @@ use crate::device::material::MaterialModel;
 use crate::device::object::{ObjectCell, ObjectRef};
 use crate::device::sampler::SamplerModel;
 use crate::device::surface::SurfaceModel;
+use crate::device::world::Placement;
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
 use crate::scene::{
-    ColorSource, PlacedShape, PlacedVolume, StructuredVolume, TransferFunction, Uniforms,
+    ColorSource, ObjectIds, PlacedShape, PlacedVolume, StructuredVolume, TransferFunction,
 };
 
 /// The transfer function a surface's field is placed with: the caster
@@ -44,12 +45,13 @@ pub struct Surfaces {
 /// The isosurfaces and shapes of `surfaces` (each with the transform of
 /// the instance that placed it), or why one cannot be drawn.
 pub fn surfaces(
-    surfaces: &[(ObjectRef, Option<Mat4>, Uniforms)],
+    surfaces: &[(ObjectRef, Placement)],
     renderer: &RenderSettings,
     light: Option<DirectionalLight>,
 ) -> Result<Surfaces, String> {
     let mut out = Surfaces::default();
-    for (surface, transform, uniform) in surfaces {
+    for (surface, placement) in surfaces {
+        let transform = placement.transform.unwrap_or(Mat4::IDENTITY);
         let not_ours = |o: &ObjectCell| format!("{} is not implemented by caveray", o.describe());
         let model = surface.ready::<SurfaceModel>(not_ours)?;
         let (geometry, material) = (&model.geometry, &model.material);
@@ -75,10 +77,12 @@ pub fn surfaces(
                     })?;
                     drawn.color = ColorSource::Sampler(sampler);
                 }
-                let mut placed =
-                    PlacedShape::new(shape, drawn, transform.unwrap_or(Mat4::IDENTITY));
-                placed.id = model.id;
-                placed.uniform = *uniform;
+                let mut placed = PlacedShape::new(shape, drawn, transform);
+                placed.ids = ObjectIds {
+                    object: model.id,
+                    instance: placement.instance,
+                };
+                placed.uniform = placement.uniform;
                 out.shapes.push(placed);
                 continue;
             }
@@ -90,7 +94,11 @@ pub fn surfaces(
         let placed = PlacedVolume {
             volume,
             transfer_function: unclassified()?,
-            transform: transform.unwrap_or(Mat4::IDENTITY),
+            transform,
+            ids: ObjectIds {
+                object: model.id,
+                instance: placement.instance,
+            },
         };
         for &isovalue in &geometry_model.isovalues {
             let settings = IsoSettings {

@@ -9,7 +9,7 @@ use crate::device::array::Array;
 use crate::device::elements::{clamp_unit, colors, scalars, COLOR_ELEMENTS, COLOR_TYPES};
 use crate::device::object::{ObjectRef, State};
 use crate::device::table::Read;
-use crate::device::table::{p, DefaultValue, SubtypeInfo, F32};
+use crate::device::table::{id_param, p, DefaultValue, SubtypeInfo, F32};
 use crate::device::types::DataType as T;
 use crate::scene::TransferFunction;
 
@@ -36,6 +36,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             .range(0.0, 1.0),
         p("unitDistance", F32, false, DefaultValue::Floats(&[1.0]),
           "world distance over which the opacities apply"),
+        id_param("the volume's number in the frame's objectId channel (default: none, UINT32 max)"),
     ],
     commit: Some(commit),
 };
@@ -45,6 +46,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 pub struct VolumeModel {
     pub field: ObjectRef,
     pub transfer_function: Arc<TransferFunction>,
+    pub id: u32,
 }
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
@@ -92,6 +94,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     Ok(Some(State::ready(VolumeModel {
         field,
         transfer_function: Arc::new(tf),
+        id: r.id(),
     })))
 }
 

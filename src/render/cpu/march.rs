@@ -311,7 +311,9 @@ fn shade(field: &Field, p: Vec3, samples: &mut u32) -> f32 {
     let ao = |samples: &mut u32| {
         let mut occluded = 0.0;
         for &d in &plan.directions {
-            occluded += field.opacity(p + d * plan.ao_radius, None, samples);
+            let blocked = 1.0 - field.surfaces_pass(p, d, plan.ao_radius);
+            occluded +=
+                blocked + (1.0 - blocked) * field.opacity(p + d * plan.ao_radius, None, samples);
         }
         1.0 - occluded / plan.directions.len() as f32
     };
@@ -331,10 +333,14 @@ fn shade(field: &Field, p: Vec3, samples: &mut u32) -> f32 {
 }
 
 /// Transmittance over up to `steps` shading steps from `p` along `dir`,
-/// ending where the ray leaves every volume.
+/// ending where the ray leaves every volume, through the first surface in
+/// its way.
 fn transmittance(field: &Field, p: Vec3, dir: Vec3, steps: u32, samples: &mut u32) -> f32 {
     let step = field.plan.shading_step;
-    let mut t = 1.0;
+    let mut t = field.surfaces_pass(p, dir, step * steps as f32);
+    if t <= 0.0 {
+        return 0.0;
+    }
     for k in 1..=steps {
         let q = p + dir * (step * k as f32);
         if !field.inside(q) {

@@ -13,12 +13,13 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::frame::{filled, Frame, FrameDesc};
+use super::hits::{self, HitRecord};
 use super::iso::{self, IsoFilter, IsoSettings};
 use super::march_plan::MarchPlan;
 use super::{Render, RenderError, RenderSettings, Watch};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
-use crate::render::shapes::{ShapeSet, MAX_TRANSLUCENT, SURFACE_PASSES};
+use crate::render::shapes::{Hit, ShapeSet, MAX_TRANSLUCENT, SURFACE_PASSES};
 use crate::scene::Coverage;
 use crate::scene::{PlacedShape, PlacedVolume, Scene, StructuredVolume, TransferFunction};
 use packet::Channels;
@@ -240,47 +241,60 @@ impl CpuRenderer {
             [one] if self.packets && packet::available() => Some(Channels::new(&one.table)),
             _ => None,
         };
-        let field = sample::Field::new(&plan, &data, channels.as_deref());
+        let field =
+            sample::Field::new(&plan, &data, channels.as_deref()).with_shapes(shapes.as_deref());
         let (w, h) = (desc.size.x as usize, desc.size.y as usize);
         // Square tiles, not rows: neighbouring rays in both directions read
         // the same voxels while they are in cache, and a tile is small
         // enough that two threads stay busy to the frame's end.
         let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
         watch.expect((tx * ty) as u64);
-        let tiles: Vec<(usize, Vec<f32>, Vec<f32>, u64)> = (0..tx * ty)
+        let tiles: Vec<Tile> = (0..tx * ty)
             .into_par_iter()
             .map(|tile| {
                 let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-                let mut c = Vec::with_capacity(4 * TILE * TILE);
-                let mut d = Vec::with_capacity(TILE * TILE);
-                let mut samples = 0u64;
+                let mut out = Tile {
+                    index: tile,
+                    color: Vec::with_capacity(4 * TILE * TILE),
+                    depth: Vec::with_capacity(TILE * TILE),
+                    hits: Vec::with_capacity(if desc.hits { TILE * TILE } else { 0 }),
+                    samples: 0,
+                };
                 for y in y0..y1 {
                     for x in x0..x1 {
                         // Per pixel: one slow tile must not hold up a stop.
                         if watch.stopped() {
-                            return (tile, c, d, samples);
+                            return out;
                         }
                         let (o, dir) = rays.pixel_ray(x as u32, y as u32);
                         let bg = match &settings.background_image {
                             Some(image) => image.at(x as u32, y as u32, desc.size),
                             None => plan.background,
                         };
-                        let (color, depth, n) = match shapes.as_deref() {
+                        let (color, depth, n, first) = match shapes.as_deref() {
                             None => {
                                 let ray =
                                     march::march(&field, rays, o, dir, (bg, f32::INFINITY), None);
-                                (ray.color, ray.depth, ray.samples)
+                                (ray.color, ray.depth, ray.samples, None)
                             }
                             Some(s) => through_surfaces(s, &field, rays, (o, dir), bg, settings),
                         };
-                        c.extend_from_slice(&color.to_array());
-                        d.push(depth);
-                        samples += u64::from(n);
+                        if desc.hits {
+                            out.hits.push(match (first, shapes.as_deref()) {
+                                (Some(hit), Some(s)) => s.record(&hit),
+                                _ if depth.is_finite() => field
+                                    .record(rays.point_at_depth(x as u32, y as u32, depth), dir),
+                                _ => HitRecord::NOTHING,
+                            });
+                        }
+                        out.color.extend_from_slice(&color.to_array());
+                        out.depth.push(depth);
+                        out.samples += u64::from(n);
                     }
                 }
                 watch.advance(1);
-                (tile, c, d, samples)
+                out
             })
             .collect();
         // A stopped render leaves at once: filling a large frame's buffers
@@ -290,24 +304,50 @@ impl CpuRenderer {
         }
         let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's color")?;
         let mut depth = filled(desc.pixels(), 0.0f32, "the frame's depth")?;
+        let mut records = match desc.hits {
+            true => filled(desc.pixels(), HitRecord::NOTHING, "the frame's hits")?,
+            false => Vec::new(),
+        };
         let mut samples = 0;
-        for (tile, c, d, n) in tiles {
-            samples += n;
-            let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
+        for tile in tiles {
+            samples += tile.samples;
+            let (x0, y0) = ((tile.index % tx) * TILE, (tile.index / tx) * TILE);
             let tw = (x0 + TILE).min(w) - x0;
-            for (row, (cr, dr)) in c.chunks(4 * tw).zip(d.chunks(tw)).enumerate() {
+            for (row, (cr, dr)) in tile
+                .color
+                .chunks(4 * tw)
+                .zip(tile.depth.chunks(tw))
+                .enumerate()
+            {
                 let at = (y0 + row) * w + x0;
                 color[4 * at..4 * at + cr.len()].copy_from_slice(cr);
                 depth[at..at + dr.len()].copy_from_slice(dr);
+            }
+            for (row, hr) in tile.hits.chunks(tw).enumerate() {
+                let at = (y0 + row) * w + x0;
+                records[at..at + hr.len()].copy_from_slice(hr);
             }
         }
         if watch.stopped() {
             return Err(RenderError::Stopped);
         }
         let mut frame = Frame::from_linear(desc, color, desc.depth.then_some(depth))?;
+        if desc.hits {
+            frame.hits = Some(hits::resolve(scene, &records));
+        }
         frame.samples = samples;
         Ok(frame)
     }
+}
+
+/// One tile's pixels, row by row.
+struct Tile {
+    index: usize,
+    color: Vec<f32>,
+    depth: Vec<f32>,
+    /// Empty unless the frame asks for hits.
+    hits: Vec<HitRecord>,
+    samples: u64,
 }
 
 /// What `cache` holds for `key`, if it holds it.
@@ -323,7 +363,8 @@ fn reuse<K, V>(cache: &[(Arc<K>, Arc<V>)], key: &Arc<K>) -> Option<Arc<V>> {
 /// (up to MAX_TRANSLUCENT, the rest passed through), and ended by the
 /// first opaque one, whose lit color hides `bg`. Returns the color, the depth (the nearer of the
 /// opaque surface and where the accumulated opacity reached the
-/// threshold) and the volume samples taken.
+/// threshold), the volume samples taken and the surface hit at that
+/// depth (`None`: the depth is the volumes', or there is none).
 fn through_surfaces(
     shapes: &ShapeSet,
     field: &sample::Field,
@@ -331,26 +372,32 @@ fn through_surfaces(
     (o, dir): (glam::Vec3, glam::Vec3),
     bg: glam::Vec4,
     settings: &RenderSettings,
-) -> (glam::Vec4, f32, u32) {
+) -> (glam::Vec4, f32, u32, Option<Hit>) {
     let plan = field.plan;
     let mut acc = march::Accumulator::new();
     let mut samples = 0;
     let mut from = rays.t_near;
     let mut composited = 0;
+    let mut first = None;
     for _ in 0..SURFACE_PASSES {
         let hit = shapes.hit(o, dir, from, rays.t_far);
         let stop = hit.map_or(f32::INFINITY, |h| h.t);
         samples += march::march_segment(field, rays, (o, dir), (from, stop), &mut acc, None);
         let Some(h) = hit else {
-            return (acc.over(bg), acc.depth, samples);
+            return (acc.over(bg), acc.depth, samples, first);
         };
         match shapes.coverage(&h) {
             Coverage::Translucent(a) => {
                 if composited < MAX_TRANSLUCENT {
                     let lit = shapes.shade(&h, (o, dir), settings);
                     let p = o + dir * h.t;
-                    if acc.add(plan, rays, p, h.t, lit, a) {
-                        return (acc.over(bg), acc.depth, samples);
+                    let had_depth = acc.depth.is_finite();
+                    let stop = acc.add(plan, rays, p, h.t, lit, a);
+                    if !had_depth && acc.depth.is_finite() {
+                        first = Some(h);
+                    }
+                    if stop {
+                        return (acc.over(bg), acc.depth, samples, first);
                     }
                     composited += 1;
                 }
@@ -360,11 +407,14 @@ fn through_surfaces(
             Coverage::Opaque | Coverage::Hidden => {
                 let lit = shapes.shade(&h, (o, dir), settings).extend(1.0);
                 let surface = rays.depth_at(o + dir * h.t, h.t);
-                return (acc.over(lit), acc.depth.min(surface), samples);
+                if surface <= acc.depth {
+                    first = Some(h);
+                }
+                return (acc.over(lit), acc.depth.min(surface), samples, first);
             }
         }
     }
     // Past that many translucent surfaces, the ray goes on through any.
     samples += march::march_segment(field, rays, (o, dir), (from, f32::INFINITY), &mut acc, None);
-    (acc.over(bg), acc.depth, samples)
+    (acc.over(bg), acc.depth, samples, first)
 }

@@ -4,7 +4,9 @@ use glam::{IVec3, Vec3, Vec4};
 
 use super::packet::{Channels, PacketGrid};
 use crate::render::empty_space::{Along, EmptySpace, Region};
+use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
+use crate::render::shapes::ShapeSet;
 use crate::scene::{Filter, TABLE_SIZE};
 
 /// One volume as the CPU reads it: voxel values already normalised to
@@ -85,6 +87,8 @@ pub(super) struct Field<'a> {
     /// Where the scene is one trilinear volume and the CPU has AVX2: its
     /// primary samples, eight at a time (packet.rs).
     pub packet: Option<PacketGrid<'a>>,
+    /// The surfaces beside the volumes, which shadow and AO rays meet.
+    pub shapes: Option<&'a ShapeSet>,
 }
 
 impl<'a> Field<'a> {
@@ -123,7 +127,48 @@ impl<'a> Field<'a> {
             plan,
             grids,
             packet,
+            shapes: None,
         }
+    }
+
+    /// This field with `shapes` in the way of its shading rays.
+    pub fn with_shapes(self, shapes: Option<&'a ShapeSet>) -> Self {
+        Self { shapes, ..self }
+    }
+
+    /// The light the surfaces let through from `p` along `d` over `reach`
+    /// (ShapeSet::passes; all of it where there are none).
+    pub fn surfaces_pass(&self, p: Vec3, d: Vec3, reach: f32) -> f32 {
+        self.shapes.map_or(1.0, |s| s.passes(p, d, reach))
+    }
+
+    /// What the frame's hit channels record of world point `p`, where a
+    /// ray of direction `dir` took its depth in the volumes: the first
+    /// volume holding it (the nearest, if rounding put `p` just outside
+    /// all), its classified color there and its normal, the field's
+    /// gradient (central differences one step apart) facing the ray.
+    pub fn record(&self, p: Vec3, dir: Vec3) -> HitRecord {
+        let outside = |g: &Grid| {
+            let q = g.plan.grid(p);
+            (Vec3::ZERO.max(-q) + Vec3::ZERO.max(q - g.plan.last_vertex())).length_squared()
+        };
+        let Some((v, grid)) = self
+            .grids
+            .iter()
+            .enumerate()
+            .min_by(|a, b| outside(a.1).total_cmp(&outside(b.1)))
+        else {
+            return HitRecord::NOTHING;
+        };
+        let at = |q: Vec3| grid.sample(grid.plan.grid(q));
+        let albedo = grid.classify(at(p)).truncate();
+        let h = self.plan.step;
+        let gradient = Vec3::new(
+            at(p + Vec3::X * h) - at(p - Vec3::X * h),
+            at(p + Vec3::Y * h) - at(p - Vec3::Y * h),
+            at(p + Vec3::Z * h) - at(p - Vec3::Z * h),
+        );
+        HitRecord::volume(v, facing(gradient, dir), albedo)
     }
 
     /// Whether world point `p` lies in any volume.
@@ -226,6 +271,20 @@ impl Mixture {
 }
 
 /// WGSL's `mix`.
+/// `n` as a unit vector on the side a ray of direction `dir` sees;
+/// against the ray where `n` has no direction.
+fn facing(n: Vec3, dir: Vec3) -> Vec3 {
+    let n = n.normalize_or_zero();
+    if n == Vec3::ZERO {
+        return -dir.normalize_or_zero();
+    }
+    if n.dot(dir) > 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
 fn mix(a: f32, b: f32, t: f32) -> f32 {
     a * (1.0 - t) + b * t
 }

@@ -95,7 +95,7 @@ impl CapturePass {
             band: Some(&raycast.band_group),
         };
         let ms = ctx.dispatch_bands(&pass, &bands, watch)?;
-        let frame = raycast.read_frame(ctx, desc)?;
+        let frame = raycast.read_frame(ctx, desc, scene)?;
         let kept = if layers > 0 {
             let used = pixels * layers as u64 * 32;
             let mut encoder = ctx.device.create_command_encoder(&Default::default());

@@ -234,7 +234,7 @@ impl IsoPass {
         (raycast, watch): (&RaycastPass, Watch),
     ) -> Result<(Frame, f64), RenderError> {
         if !matches!(&self.target, Some(t) if t.size == desc.size && t.format == desc.color) {
-            self.target = Some(OutputBuffers::new(ctx, desc.size, desc.color));
+            self.target = Some(OutputBuffers::new(ctx, desc.size, desc.color, false));
         }
         let bounds = match &self.crossing {
             Some((key, bounds)) if key.matches(placed, settings) => *bounds,
@@ -320,6 +320,7 @@ impl IsoPass {
             size: desc.size,
             color: color_data(desc.color, color),
             depth,
+            hits: None,
             samples: 0,
         };
         Ok((frame, ms))

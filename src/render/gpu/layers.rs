@@ -534,6 +534,7 @@ impl LayersPass {
             size: desc.size,
             color: color_data(desc.color, color),
             depth,
+            hits: None,
             samples: 0,
         };
         Ok((right, summarise_ms + composite_ms))

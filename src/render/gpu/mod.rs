@@ -158,7 +158,7 @@ impl GpuRenderer {
         self.scene.upload_surfaces(ctx, scene)?;
         self.scene
             .set_background(ctx, settings.background_image.as_ref());
-        self.raycast.bind(ctx, &self.scene, desc.size, desc.color);
+        self.raycast.bind(ctx, &self.scene, desc);
         if filtered {
             self.scene.write_stepped_tables(ctx, scene, &plan);
         }
@@ -248,7 +248,7 @@ impl GpuRenderer {
             watch,
         )?;
         self.last_pass_ms = times.left_ms;
-        let left = self.raycast.read_frame(ctx, desc)?;
+        let left = self.raycast.read_frame(ctx, desc, scene)?;
         Ok(StereoFrames { left, right, times })
     }
 
@@ -489,6 +489,6 @@ impl Render for &mut GpuRenderer {
             .raycast
             .cast(&self.ctx, scene, settings, desc.size, watch.into())?;
         self.last_pass_ms = ms;
-        self.raycast.read_frame(&self.ctx, desc)
+        self.raycast.read_frame(&self.ctx, desc, scene)
     }
 }

@@ -15,7 +15,8 @@ use super::scene::GpuScene;
 use super::shaders::compute_pipeline;
 use super::uniforms::{self, RayUniforms};
 use crate::geometry::RayGen;
-use crate::render::frame::{ColorFormat, Frame, FrameDesc};
+use crate::render::frame::{Frame, FrameDesc};
+use crate::render::hits::{self, HitRecord};
 use crate::render::march_plan::MarchPlan;
 use crate::render::settings::MAX_DIRECTIONS;
 use crate::render::{RenderError, RenderSettings, Sampling};
@@ -268,10 +269,10 @@ impl RaycastPass {
     /// Output buffers for a frame of `size` and `format`, and group 0
     /// binding them with what `scene` holds now; both made anew only
     /// where they changed.
-    pub fn bind(&mut self, ctx: &Context, scene: &GpuScene, size: UVec2, format: ColorFormat) {
+    pub fn bind(&mut self, ctx: &Context, scene: &GpuScene, desc: &FrameDesc) {
         let mut changed = !matches!(&self.group, Some((g, _)) if *g == scene.generation());
-        if !matches!(&self.target, Some(t) if t.size == size && t.format == format) {
-            self.target = Some(OutputBuffers::new(ctx, size, format));
+        if !matches!(&self.target, Some(t) if t.fit(desc)) {
+            self.target = Some(OutputBuffers::new(ctx, desc.size, desc.color, desc.hits));
             changed = true;
         }
         let Some(target) = self.target.as_ref().filter(|_| changed) else {
@@ -314,7 +315,7 @@ impl RaycastPass {
         slots: (&[BrickSlot], SurfaceSlot),
         desc: &FrameDesc,
     ) {
-        let params = RayUniforms::new(rays, plan, slots, settings, desc.size, desc.color);
+        let params = RayUniforms::new(rays, plan, slots, settings, desc);
         ctx.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         ctx.queue.write_buffer(
@@ -365,8 +366,14 @@ impl RaycastPass {
         ctx.dispatch_bands(&pass, &bands, watch)
     }
 
-    /// Copies the left (or only) eye's frame out of the target buffers.
-    pub fn read_frame(&self, ctx: &Context, desc: &FrameDesc) -> Result<Frame, RenderError> {
+    /// Copies the left (or only) eye's frame out of the target buffers,
+    /// its hits (if `desc` asks for them) named as in `scene`.
+    pub fn read_frame(
+        &self,
+        ctx: &Context,
+        desc: &FrameDesc,
+        scene: &Scene,
+    ) -> Result<Frame, RenderError> {
         let target = self.target.as_ref().ok_or_else(unprepared)?;
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&target.color, 0, &target.color_read, 0, None);
@@ -385,16 +392,25 @@ impl RaycastPass {
         } else {
             None
         };
-        let samples = ctx
-            .read(&target.samples_read, target.scalar_bytes())?
-            .chunks_exact(4)
+        let words = ctx.read(&target.samples_read, target.samples_read.size())?;
+        let stride = 4 * target.pixel_words as usize;
+        let samples = words
+            .chunks_exact(stride)
             .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
             .sum();
+        let hits = (desc.hits && target.pixel_words > 1).then(|| {
+            let records: Vec<HitRecord> = words
+                .chunks_exact(stride)
+                .map(|b| bytemuck::pod_read_unaligned(&b[4..4 + size_of::<HitRecord>()]))
+                .collect();
+            hits::resolve(scene, &records)
+        });
         ctx.check()?;
         Ok(Frame {
             size: desc.size,
             color: color_data(desc.color, color),
             depth,
+            hits,
             samples,
         })
     }

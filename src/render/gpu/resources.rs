@@ -8,7 +8,8 @@ use wgpu::util::DeviceExt;
 
 use super::context::Context;
 use crate::render::empty_space::EmptySpace;
-use crate::render::frame::{ColorData, ColorFormat};
+use crate::render::frame::{ColorData, ColorFormat, FrameDesc};
+use crate::render::hits::HIT_WORDS;
 use crate::render::shapes::packed::Packed;
 use crate::render::{BackgroundImage, RenderError};
 use crate::scene::{StructuredVolume, TransferFunction, MAX_VOLUMES, TABLE_SIZE};
@@ -365,6 +366,9 @@ fn write_rows(ctx: &Context, texture: &wgpu::Texture, first: u32, size: UVec2, b
 pub(super) struct OutputBuffers {
     pub size: UVec2,
     pub format: ColorFormat,
+    /// Words per pixel of `samples`: the count of volume samples, then
+    /// (where the frame asks for hits) its hit record (render/hits.rs).
+    pub pixel_words: u32,
     pub color: wgpu::Buffer,
     pub depth: wgpu::Buffer,
     pub samples: wgpu::Buffer,
@@ -374,8 +378,9 @@ pub(super) struct OutputBuffers {
 }
 
 impl OutputBuffers {
-    pub fn new(ctx: &Context, size: UVec2, format: ColorFormat) -> Self {
+    pub fn new(ctx: &Context, size: UVec2, format: ColorFormat, hits: bool) -> Self {
         let pixels = u64::from(size.x) * u64::from(size.y);
+        let pixel_words = pixel_words(hits);
         let storage = |label, bytes| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -396,22 +401,35 @@ impl OutputBuffers {
         Self {
             size,
             format,
+            pixel_words,
             color: storage("color", color_bytes),
             depth: storage("depth", 4 * pixels),
-            samples: storage("samples", 4 * pixels),
+            samples: storage("samples", 4 * pixels * u64::from(pixel_words)),
             color_read: readable("color read-back", color_bytes),
             depth_read: readable("depth read-back", 4 * pixels),
-            samples_read: readable("samples read-back", 4 * pixels),
+            samples_read: readable("samples read-back", 4 * pixels * u64::from(pixel_words)),
         }
+    }
+
+    /// Whether these buffers fit a frame of `desc`.
+    pub fn fit(&self, desc: &FrameDesc) -> bool {
+        self.size == desc.size
+            && self.format == desc.color
+            && self.pixel_words == pixel_words(desc.hits)
     }
 
     pub fn color_bytes(&self) -> u64 {
         self.color.size()
     }
-    /// Size of the depth and of the sample-count buffers.
+    /// Size of the depth buffer.
     pub fn scalar_bytes(&self) -> u64 {
         self.depth.size()
     }
+}
+
+/// Words per pixel of the samples buffer of a frame with or without hits.
+pub(super) fn pixel_words(hits: bool) -> u32 {
+    1 + if hits { HIT_WORDS } else { 0 }
 }
 
 pub(super) fn color_data(format: ColorFormat, bytes: Vec<u8>) -> ColorData {

@@ -13,13 +13,14 @@
 //! so no pass compiles a shader while it renders.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{UVec2, Vec3};
+use glam::Vec3;
 
 use super::context::WORKGROUP;
-use super::resources::{BrickSlot, SurfaceSlot, LOD_LEVELS};
+use super::resources::{pixel_words, BrickSlot, SurfaceSlot, LOD_LEVELS};
 use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
-use crate::render::frame::ColorFormat;
+use crate::render::frame::{ColorFormat, FrameDesc};
+use crate::render::hits::{WHAT_NOTHING, WHAT_VOLUME};
 use crate::render::iso::{same_view_offsets, SAME_VIEW_SAMPLES, SEARCH_MARGIN_STEPS};
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::settings::{
@@ -199,7 +200,9 @@ uniform! {
         lamp_count: u32,
         /// Under SURFACE_LIT_EYE_BLEND, the eye light's share.
         eye_blend: f32,
-        _surface_pad: u32,
+        /// Words per pixel of samples_out: the samples taken, then, where
+        /// the frame asks for hits, the pixel's HitRecord (render/hits.rs).
+        pixel_words: u32,
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
@@ -387,9 +390,9 @@ impl RayUniforms {
         plan: &MarchPlan,
         (bricks, surfaces): (&[BrickSlot], SurfaceSlot),
         settings: &RenderSettings,
-        size: UVec2,
-        format: ColorFormat,
+        desc: &FrameDesc,
     ) -> Self {
+        let (size, format) = (desc.size, desc.color);
         let v = |v: Vec3| v.to_array();
         let mut clip = [[0.0; 4]; MAX_CLIP_PLANES];
         for (slot, plane) in clip.iter_mut().zip(&plan.clip_planes) {
@@ -452,7 +455,7 @@ impl RayUniforms {
                 SurfaceShading::EyeLight { blend } => blend,
                 SurfaceShading::Lights => 0.0,
             },
-            _surface_pad: 0,
+            pixel_words: pixel_words(desc.hits),
             clip,
             volumes,
             lamps: lamp_slots(&settings.lamps),
@@ -579,6 +582,8 @@ fn constants() -> String {
         ("SURFACE_LIT_FROM_EYE", SURFACE_LIT_FROM_EYE),
         ("SURFACE_LIT_BY_LAMPS", SURFACE_LIT_BY_LAMPS),
         ("SURFACE_LIT_EYE_BLEND", SURFACE_LIT_EYE_BLEND),
+        ("WHAT_VOLUME", WHAT_VOLUME),
+        ("WHAT_NOTHING", WHAT_NOTHING),
     ];
     let mut out = String::from("// Generated from src/render/gpu/uniforms.rs.\n");
     for (name, value) in u32s {

@@ -22,6 +22,7 @@ use obvhs::ray::{Ray, RayHit};
 use obvhs::Boundable;
 
 use super::frame::filled;
+use super::hits::HitRecord;
 use super::{RenderError, RenderSettings, SurfaceShading};
 use crate::scene::{Attribute, ColorSource, Coverage, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
 use brdf::reflected;
@@ -392,16 +393,26 @@ impl ShapeSet {
         self.traced[hit.shape as usize].placed.material.coverage()
     }
 
-    /// The surface's `id` at `hit` and the host's primitive id.
-    pub fn ids(&self, hit: &Hit) -> (u32, u32) {
-        let placed = &self.traced[hit.shape as usize].placed;
-        let host = placed.shape.source[hit.index as usize];
-        let primitive = placed
-            .shape
-            .ids
-            .as_ref()
-            .map_or(host, |ids| ids[host as usize]);
-        (placed.id, primitive)
+    /// The light the first surface within `reach` of `p` along `d` lets
+    /// through, for the volumes' shadow and ambient-occlusion rays: none
+    /// past an opaque one, 1 - opacity past a translucent one, all where
+    /// there is none.
+    pub fn passes(&self, p: Vec3, d: Vec3, reach: f32) -> f32 {
+        match self.hit(p, d, 0.0, reach).map(|h| self.coverage(&h)) {
+            Some(Coverage::Translucent(a)) => 1.0 - a,
+            Some(Coverage::Opaque | Coverage::Hidden) => 0.0,
+            None => 1.0,
+        }
+    }
+
+    /// What the frame's hit channels record of `hit`.
+    pub fn record(&self, hit: &Hit) -> HitRecord {
+        HitRecord {
+            what: hit.shape,
+            index: hit.index,
+            normal: hit.normal.to_array(),
+            albedo: self.albedo(hit).to_array(),
+        }
     }
 
     /// The shaded color at `hit` of ray `o + t d`: as the reference

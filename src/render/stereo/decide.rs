@@ -40,6 +40,9 @@ pub struct RenderFacts {
     /// The world holds surfaces of primitives; the layers hold volume
     /// samples only.
     pub surfaces: bool,
+    /// The frame asks for hit channels, which the right eye's composite
+    /// does not fill.
+    pub hits: bool,
 }
 
 /// Why a pair is rendered in two passes.
@@ -55,6 +58,8 @@ pub enum TwoPasses {
     BackgroundImage,
     #[error("re-projection layers hold volume samples; a world with surfaces of primitives renders each eye in its own pass")]
     Surfaces,
+    #[error("the right eye is composited with color and depth only; a frame asking for id, normal or albedo channels renders each eye in its own pass")]
+    HitChannels,
     #[error(transparent)]
     Plan(#[from] ReprojectionError),
 }
@@ -70,6 +75,9 @@ impl RenderFacts {
         }
         if self.surfaces {
             return Err(TwoPasses::Surfaces);
+        }
+        if self.hits {
+            return Err(TwoPasses::HitChannels);
         }
         Ok(())
     }
@@ -100,6 +108,9 @@ pub fn decide(
     }
     if facts.is_some_and(|f| f.surfaces) {
         return Err(TwoPasses::Surfaces);
+    }
+    if facts.is_some_and(|f| f.hits) {
+        return Err(TwoPasses::HitChannels);
     }
     Ok(Reprojection::new(
         &left,
@@ -146,6 +157,7 @@ mod tests {
             reprojects: true,
             background_image: false,
             surfaces: false,
+            hits: false,
         };
         let early = decide(eyes(), bounds(), LAYERS, None).unwrap();
         facts.admit().unwrap();
@@ -161,6 +173,7 @@ mod tests {
             reprojects: false,
             background_image: true,
             surfaces: false,
+            hits: false,
         };
         let no_matrices = Eyes {
             left: Err("no matrices".into()),
@@ -174,6 +187,7 @@ mod tests {
             reprojects: true,
             background_image: true,
             surfaces: false,
+            hits: false,
         };
         assert_eq!(
             decide(no_matrices, bounds(), LAYERS, Some(gpu_over_image)),
@@ -197,10 +211,19 @@ mod tests {
             reprojects: true,
             background_image: false,
             surfaces: true,
+            hits: false,
         };
         let err = decide(eyes(), bounds(), LAYERS, Some(with_surfaces)).unwrap_err();
         assert_eq!(err, TwoPasses::Surfaces);
         assert!(err.to_string().contains("each eye in its own pass"));
         assert_eq!(with_surfaces.admit(), Err(TwoPasses::Surfaces));
+        let with_hits = RenderFacts {
+            hits: true,
+            surfaces: false,
+            ..with_surfaces
+        };
+        let err = decide(eyes(), bounds(), LAYERS, Some(with_hits)).unwrap_err();
+        assert_eq!(err, TwoPasses::HitChannels);
+        assert!(err.to_string().contains("each eye in its own pass"));
     }
 }

@@ -136,7 +136,7 @@ impl Timeline {
             let (offset, size) = grid.rect(i);
             let (part, real) = renderer.capture(
                 scene,
-                &flight.source.rays.shifted(offset),
+                &flight.source.rays.shifted(offset.as_vec2()),
                 settings,
                 size,
                 self.layers,

@@ -43,7 +43,8 @@ int main(void)
   float tf_colors[6] = {1, 1, 1, 1, 1, 1}, range[2] = {0, 1};
   float origin[3] = {-1, -1, -1}, spacing[3] = {2.f / 3, 2.f / 3, 2.f / 3};
   unsigned size[2] = {SIZE, SIZE};
-  ANARIDataType color_type = ANARI_UFIXED8_VEC4, type;
+  ANARIDataType color_type = ANARI_UFIXED8_VEC4, id_type = ANARI_UINT32, type;
+  uint32_t mesh_id = 3, glyph_id = 4;
   uint32_t w, h;
   int i;
   ANARILibrary lib;
@@ -106,10 +107,12 @@ int main(void)
   mesh_surface = anariNewSurface(dev);
   anariSetParameter(dev, mesh_surface, "geometry", ANARI_GEOMETRY, &mesh);
   anariSetParameter(dev, mesh_surface, "material", ANARI_MATERIAL, &by_color);
+  anariSetParameter(dev, mesh_surface, "id", ANARI_UINT32, &mesh_id);
   anariCommitParameters(dev, mesh_surface);
   glyph_surface = anariNewSurface(dev);
   anariSetParameter(dev, glyph_surface, "geometry", ANARI_GEOMETRY, &glyphs);
   anariSetParameter(dev, glyph_surface, "material", ANARI_MATERIAL, &by_color);
+  anariSetParameter(dev, glyph_surface, "id", ANARI_UINT32, &glyph_id);
   anariCommitParameters(dev, glyph_surface);
 
   /* A faint constant volume over [-1, 1]^3. */
@@ -146,6 +149,8 @@ int main(void)
   frame = anariNewFrame(dev);
   anariSetParameter(dev, frame, "size", ANARI_UINT32_VEC2, size);
   anariSetParameter(dev, frame, "channel.color", ANARI_DATA_TYPE, &color_type);
+  anariSetParameter(dev, frame, "channel.objectId", ANARI_DATA_TYPE, &id_type);
+  anariSetParameter(dev, frame, "channel.primitiveId", ANARI_DATA_TYPE, &id_type);
   anariSetParameter(dev, frame, "world", ANARI_WORLD, &world);
   anariSetParameter(dev, frame, "renderer", ANARI_RENDERER, &renderer);
   anariSetParameter(dev, frame, "camera", ANARI_CAMERA, &camera);
@@ -168,6 +173,29 @@ int main(void)
     anariUnmapFrame(dev, frame, "channel.color");
   }
   expect_quiet("the render");
+
+  /* What each pixel shows, by the ids the host gave: the quads (the host's
+   * primitives 0 and 1) through the faint volume, the sphere in front. */
+  {
+    const uint32_t *objects = anariMapFrame(dev, frame, "channel.objectId", &w, &h, &type);
+    check("the objectId channel maps as UINT32", objects != NULL && type == ANARI_UINT32);
+    if (objects) {
+      check("the quads' pixels report the mesh's id", objects[SIZE / 2 * SIZE + 6] == mesh_id
+              && objects[4 * SIZE + SIZE - 7] == mesh_id);
+      check("the sphere's pixel reports its id", objects[SIZE / 2 * SIZE + SIZE / 2 + 8] == glyph_id);
+      anariUnmapFrame(dev, frame, "channel.objectId");
+    }
+  }
+  {
+    const uint32_t *prims = anariMapFrame(dev, frame, "channel.primitiveId", &w, &h, &type);
+    check("the primitiveId channel maps", prims != NULL && type == ANARI_UINT32);
+    if (prims) {
+      check("the left and right quads are primitives 0 and 1",
+          prims[SIZE / 2 * SIZE + 6] == 0 && prims[4 * SIZE + SIZE - 7] == 1);
+      anariUnmapFrame(dev, frame, "channel.primitiveId");
+    }
+  }
+  expect_quiet("the id channels");
 
   anariRelease(dev, positions);
   anariRelease(dev, index);

@@ -283,8 +283,11 @@ int main(void)
   expect("unmapping twice", ERR, BAD_OP, "is not mapped");
   check("no depth channel", anariMapFrame(dev, frame, "channel.depth", &w, &h, &type) == NULL);
   expect("mapping a missing depth channel", ERR, BAD_OP, "no depth channel");
-  check("unknown channel", anariMapFrame(dev, frame, "channel.normal", &w, &h, &type) == NULL);
-  expect("mapping an unknown channel", ERR, BAD_ARG, "unknown channel 'channel.normal'");
+  check("no normal channel", anariMapFrame(dev, frame, "channel.normal", &w, &h, &type) == NULL);
+  expect("mapping a channel the frame was not given", ERR, BAD_OP,
+      "no channel.normal channel; set 'channel.normal'");
+  check("unknown channel", anariMapFrame(dev, frame, "channel.tangent", &w, &h, &type) == NULL);
+  expect("mapping an unknown channel", ERR, BAD_ARG, "unknown channel 'channel.tangent'");
   check("duration property", anariGetProperty(dev, frame, "duration", ANARI_FLOAT32, &fvalue, sizeof fvalue, ANARI_WAIT) == 1 && fvalue > 0.0f);
   anariRenderFrame(dev, camera);
   expect("rendering a camera", ERR, BAD_ARG, "is not a frame");

@@ -1,7 +1,7 @@
 /* An SDK-viewer-style host, from what anari_viewer sends (HOSTS.md): an
  * orthographic camera, frame `accumulation` on, only `channel.color`
  * (sRGB), anariFrameReady(NO_WAIT) polled until the frame is ready, the
- * frame rendered again unchanged to accumulate, and anariDiscardFrame
+ * frame rendered again unchanged to accumulate (refine), and anariDiscardFrame
  * when the view changes in the middle of a (deliberately slow) render;
  * `duration` and `numSamples` read.
  * The scene is a solid box [-1, 1]^3 of color (0.2, 0.8, 0.4) and
@@ -15,6 +15,7 @@
 
 #include <anari/anari.h>
 
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -138,9 +139,20 @@ int main(int argc, char **argv)
     if (i == 0) {
       memcpy(first, pixels, sizeof first);
       ok &= write_rgba(argv[1], "viewer", pixels, w, h);
-    } else if (memcmp(first, pixels, sizeof first) != 0) {
-      fprintf(stderr, "viewer_host: the unchanged frame changed\n");
-      ok = 0;
+    } else {
+      /* Accumulating: the second render adds a sample a fraction of a
+       * pixel off each centre. The box's edges lie on pixel borders and
+       * its depth along the rays does not change, so the image hardly
+       * does. */
+      int k, worst = 0;
+      for (k = 0; k < (int)sizeof first; ++k) {
+        int d = abs((int)first[k] - (int)((const unsigned char *)pixels)[k]);
+        worst = d > worst ? d : worst;
+      }
+      if (worst > 2) {
+        fprintf(stderr, "viewer_host: the refined frame moved by %d levels\n", worst);
+        ok = 0;
+      }
     }
     anariUnmapFrame(dev, frame, "channel.color");
   }

@@ -64,6 +64,7 @@ const GPU: RenderFacts = RenderFacts {
     reprojects: true,
     background_image: false,
     surfaces: false,
+    hits: false,
 };
 
 fn mean(v: impl IntoIterator<Item = f64>) -> f64 {
