@@ -265,3 +265,111 @@ fn a_device_released_while_its_frames_present_waits_for_them() {
     drop(h);
     assert_eq!(*done.lock().unwrap(), 3, "every presented frame completed");
 }
+
+/// A world of one sphere of radius 0.5 at the origin, in white.
+fn sphere_world(h: &mut Host) -> u64 {
+    let g = h.d.new_object(DataType::GEOMETRY, "sphere");
+    let at = h.array(
+        DataType::ARRAY1D,
+        DataType::FLOAT32_VEC3,
+        [1, 1, 1],
+        &bytes(&[0.0f32, 0.0, 0.0]),
+    );
+    h.set_object(g, "vertex.position", DataType::ARRAY1D, at);
+    h.set(g, "radius", DataType::FLOAT32, bytes(&[0.5f32]));
+    h.d.commit(Subject::Object(g));
+    let m = h.d.new_object(DataType::MATERIAL, "matte");
+    h.set(
+        m,
+        "color",
+        DataType::FLOAT32_VEC3,
+        bytes(&[1.0f32, 1.0, 1.0]),
+    );
+    h.d.commit(Subject::Object(m));
+    let s = h.d.new_object(DataType::SURFACE, "");
+    h.set_object(s, "geometry", DataType::GEOMETRY, g);
+    h.set_object(s, "material", DataType::MATERIAL, m);
+    h.d.commit(Subject::Object(s));
+    let world = h.d.new_object(DataType::WORLD, "");
+    h.set_objects(world, "surface", DataType::SURFACE, &[s]);
+    h.d.commit(Subject::Object(world));
+    world
+}
+
+#[test]
+fn a_world_of_surfaces_is_warped_by_quad_or_grid_but_not_by_layers() {
+    for backend in ["cpu", "gpu"] {
+        surfaces_warped_on(backend);
+    }
+}
+
+fn surfaces_warped_on(backend: &str) {
+    let mut h = Host::on_backend(backend, Arc::new(|_| {}));
+    let world = sphere_world(&mut h);
+    let f = field(&mut h);
+    let v = h.volume(f);
+    let (frame, camera) = h.frame(v, 3.0);
+    h.set_object(frame, "world", DataType::WORLD, world);
+    h.d.commit(Subject::Object(frame));
+    deadline(&mut h, frame, 500.0, "layers");
+    h.d.render_frame(frame, None);
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("set caveray.warp to quad or grid")),
+        "{errors:?}"
+    );
+    deadline(&mut h, frame, 500.0, "grid");
+    // Its own image once the background render is done: the sphere, white
+    // at the centre.
+    let start = Instant::now();
+    let own = loop {
+        let p = h.pixels(frame);
+        let s = shown(&mut h, frame).unwrap();
+        if s.1 == "none" && s.0 >= 0.0 {
+            break p;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no image after a minute"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let centre = |p: &[u8]| {
+        let i = 4
+            * (common::device::SIZE / 2 * common::device::SIZE + common::device::SIZE / 2) as usize;
+        p[i]
+    };
+    assert!(centre(&own) > 200, "the sphere's centre: {}", centre(&own));
+    // A camera moved while a large render keeps the render thread busy:
+    // the sphere's image, warped to it by the grid.
+    let (slow, _slow_camera) = h.frame(v, 3.0);
+    h.set(slow, "size", DataType::UINT32_VEC2, bytes(&[4096u32, 4096]));
+    h.d.commit(Subject::Object(slow));
+    h.set(
+        camera,
+        "position",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.3f32, 0.0, 3.0]),
+    );
+    h.d.commit(Subject::Object(camera));
+    h.d.render_frame(slow, None);
+    let warped = h.pixels(frame);
+    h.d.discard_frame(slow);
+    let (age, warp) = shown(&mut h, frame).unwrap();
+    assert_eq!(warp, "grid");
+    assert!(
+        age > 0.0,
+        "the warped image is older than this render: {age}"
+    );
+    // Still the sphere (the background is black), seen from the side now.
+    assert!(
+        centre(&warped) > 100,
+        "the warped sphere's centre: {}",
+        centre(&warped)
+    );
+    let moved = own.iter().zip(&warped).filter(|(a, b)| a != b).count();
+    assert!(moved > 0, "the warp moved nothing");
+    assert!(h.messages(Severity::Error).is_empty());
+}
