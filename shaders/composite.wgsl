@@ -1,7 +1,10 @@
-// #import color, stereo, composite_bindings
+// #import volume, surface, color, stereo, composite_bindings
 // The right eye from the re-projection layers: per right pixel, the left
 // rays on its epipolar line whose segments crossed it, nearest first, each
-// blended from the two rays the line passes between.
+// blended from the two rays the line passes between. Surfaces are the
+// right eye's own: its ray traces them as raycast.wgsl does, and each
+// takes its place among the segments by its distance (a surface seen at a
+// slant would leave cracks between the points the left eye's rays hit).
 
 // Left pixels are summarised in blocks of BLOCK x BLOCK (one workgroup of
 // the march): the right coordinates any of their rays wrote, per family.
@@ -63,6 +66,115 @@ fn block_wrote(b: vec2i, at: i32, axis: u32) -> bool {
     return at >= lo && at <= hi;
 }
 
+// The march's hooks (volume.wgsl): nothing is marched here.
+fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {}
+fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
+    return 1.0;
+}
+
+// The right pixel's ray and the next surface along it, with its distance
+// from the right eye (infinite where none is left).
+var<private> right_ray: Ray;
+var<private> next: SurfaceHit;
+var<private> next_distance: f32;
+var<private> looked: u32;
+var<private> translucent: u32;
+// What an opaque surface leaves behind the pixel's color.
+var<private> behind: vec4f;
+// Set once an opaque surface or the pixel's opacity ends it.
+var<private> ended: bool;
+
+fn find_next(t_min: f32) {
+    next = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
+    if looked < SURFACE_PASSES {
+        next = nearest_surface(right_ray.o, right_ray.d, t_min, stereo.right_t_far);
+        looked++;
+    }
+    next_distance = infinite();
+    if next.slot != NO_SLOT {
+        next_distance = length(right_ray.o + right_ray.d * next.t - stereo.right_eye);
+    }
+}
+
+// The next surface behind `acc`, as raycast.wgsl's loop takes it: an
+// opaque one ends the pixel, translucent ones past MAX_TRANSLUCENT pass.
+fn take_surface(acc: ptr<function, vec4f>, depth: ptr<function, f32>) {
+    let lit = surface_color(next, right_ray.o, right_ray.d);
+    let a = surface_alpha(next);
+    if a >= 1.0 {
+        behind = vec4f(lit, 1.0);
+        *depth = min(*depth, next_distance);
+        ended = true;
+        return;
+    }
+    if translucent < MAX_TRANSLUCENT {
+        let weight = (1.0 - (*acc).a) * a;
+        *acc = vec4f((*acc).rgb + lit * weight, (*acc).a + weight);
+        if *depth == infinite() && (*acc).a >= stereo.depth_threshold {
+            *depth = next_distance;
+        }
+        translucent++;
+        if (*acc).a >= stereo.termination {
+            ended = true;
+            return;
+        }
+    }
+    find_next(next.t);
+}
+
+// Segment s (premultiplied) behind `acc`; d: its right-eye distances
+// (first sample, last, where its own opacity crosses the depth threshold).
+fn take_segment(acc: ptr<function, vec4f>, depth: ptr<function, f32>, s: vec4f, d: vec3f) {
+    let before = (*acc).a;
+    *acc = *acc + (1.0 - before) * s;
+    if stereo.has_depth != 0u && *depth == infinite() && (*acc).a >= stereo.depth_threshold {
+        // A segment that alone crosses the threshold (often the whole
+        // ray, near the epipole) knows where; else the crossing is placed
+        // between its first and last sample by the opacity it still
+        // needed.
+        let needed = (stereo.depth_threshold - before) / (1.0 - before);
+        *depth = mix(d.x, d.y, clamp(needed / max(s.a, 1e-6), 0.0, 1.0));
+        if before == 0.0 && d.z < 3.0e38 {
+            *depth = d.z;
+        }
+    }
+    if (*acc).a >= stereo.termination {
+        ended = true;
+    }
+}
+
+// The share f of segment s's stretch: the same absorption per length.
+fn part_of(s: vec4f, f: f32) -> vec4f {
+    if s.a <= 0.0 {
+        return s * f;
+    }
+    let a = 1.0 - pow(max(1.0 - s.a, 0.0), f);
+    return s * (a / s.a);
+}
+
+// Segment s with distances d behind `acc`, the surfaces in front of its
+// end taken first, a segment that a surface cuts taken in two.
+fn take_segment_among_surfaces(acc: ptr<function, vec4f>, depth: ptr<function, f32>, s: vec4f, d: vec3f) {
+    var rest = s;
+    var first = d.x;
+    var crossed = d.z;
+    while !ended && next_distance < d.y {
+        if next_distance > first && d.y > first {
+            let f = (next_distance - first) / (d.y - first);
+            take_segment(acc, depth, part_of(rest, f), vec3f(first, next_distance, select(infinite(), crossed, crossed < next_distance)));
+            rest = part_of(rest, 1.0 - f);
+            first = next_distance;
+            crossed = select(infinite(), crossed, crossed >= next_distance);
+        }
+        if !ended {
+            take_surface(acc, depth);
+        }
+    }
+    if !ended {
+        take_segment(acc, depth, rest, vec3f(first, d.y, crossed));
+    }
+}
+
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     if id.x >= stereo.width || id.y >= stereo.height {
@@ -85,10 +197,18 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let own_across = f32(select(q.y, q.x, axis == 1u));
     let first_along = along(stereo.first, axis);
     var acc = vec4f(0.0);
-    var depth = bitcast<f32>(0x7f800000u);
+    var depth = infinite();
+    let fx = f32(q.x);
+    let fy = f32(q.y);
+    let o = stereo.right_origin.xyz + fx * stereo.right_origin_dx.xyz + fy * stereo.right_origin_dy.xyz;
+    right_ray = Ray(o, normalize(stereo.right_dir.xyz + fx * stereo.right_dir_dx.xyz + fy * stereo.right_dir_dy.xyz));
+    looked = 0u;
+    translucent = 0u;
+    behind = stereo.background;
+    ended = false;
+    find_next(stereo.right_t_near);
     var k = 0;
-    var opaque = false;
-    while k < count && !opaque {
+    while k < count && !ended {
         // The offsets up to where the rays read leave their block along
         // the axis, and every block the line passes between meanwhile.
         let along_left = at - (near + (k - 1) * dir);
@@ -137,7 +257,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
                 let texel = texel_of(p, at, axis);
                 let layer = layer_of(p, axis);
                 segment += share * textureLoad(layers, texel, layer, 0);
-                if stereo.has_depth != 0u && share >= weight {
+                if stereo.segment_depths != 0u && share >= weight {
                     d = textureLoad(depths, texel, layer, 0).xyz;
                 }
                 weight += share;
@@ -146,29 +266,23 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
                 continue;
             }
             segment /= weight;
-            let before = acc.a;
-            acc = acc + (1.0 - acc.a) * segment;
-            if stereo.has_depth != 0u && depth == bitcast<f32>(0x7f800000u) && acc.a >= stereo.depth_threshold {
-                // A segment that alone crosses the threshold (often the
-                // whole ray, near the epipole) knows where; else the
-                // crossing is placed between its first and last sample by
-                // the opacity it still needed.
-                let needed = (stereo.depth_threshold - before) / (1.0 - before);
-                depth = mix(d.x, d.y, clamp(needed / max(segment.a, 1e-6), 0.0, 1.0));
-                if before == 0.0 && d.z < 3.0e38 {
-                    depth = d.z;
-                }
-            }
-            if acc.a >= stereo.termination {
-                opaque = true;
+            take_segment_among_surfaces(&acc, &depth, segment, d);
+            if ended {
                 break;
             }
         }
         k += chunk;
     }
+    while !ended && next.slot != NO_SLOT {
+        take_surface(&acc, &depth);
+    }
     let i = id.y * stereo.width + id.x;
-    store_color(i, over(acc, stereo.background), stereo.color_format);
+    let words = encoded(over(acc, behind), stereo.color_format);
+    let n = color_words(stereo.color_format);
+    for (var word = 0u; word < n; word++) {
+        right_color[n * i + word] = words[word];
+    }
     if stereo.has_depth != 0u {
-        depth_out[i] = depth;
+        right_depth[i] = depth;
     }
 }

@@ -1,7 +1,10 @@
-// #import volume, color, stereo, reproject_bindings, band_bindings
+// #import volume, surface, color, stereo, reproject_bindings, band_bindings
 // The left eye, ray cast over the image plus the pixels the right eye
 // needs beyond its borders, writing each ray's right-eye segments into the
 // re-projection layers, whose storage format is the binding table's.
+// Surfaces are not re-projected: the composite ray traces the right
+// eye's own (composite.wgsl). The left eye's image ends at its first
+// opaque surface; the ray's segments go on behind it.
 
 const NO_PIXEL: i32 = -2147483647;
 const INFINITY: f32 = 3.4028235e38;
@@ -64,7 +67,7 @@ fn emit(axis: u32, at: i32, value: vec4f, t: vec3f) {
     let texel = texel_of(left, at, axis);
     let layer = layer_of(left, axis);
     textureStore(layers, texel, layer, value);
-    if stereo.has_depth != 0u {
+    if stereo.segment_depths != 0u {
         let crossed = select(INFINITY, right_distance(t.z), t.z < INFINITY);
         textureStore(depths, texel, layer, vec4f(right_distance(t.x), right_distance(t.y), crossed, 0.0));
     }
@@ -119,10 +122,13 @@ fn advance(s: ptr<private, Open>, axis: u32, t: f32, lit: vec3f, a: f32) {
     }
 }
 
-// Worlds with surfaces are not captured or re-projected (the engine
-// renders them whole), so no surface stands in a shadow ray's way.
+// As raycast.wgsl's: shadow and AO rays meet the surfaces.
 fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
-    return 1.0;
+    let hit = nearest_surface(p, d, 0.0, reach);
+    if hit.slot == NO_SLOT {
+        return 1.0;
+    }
+    return 1.0 - surface_alpha(hit);
 }
 
 fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
@@ -184,7 +190,60 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
     if BOTH_FAMILIES {
         rows = open_family(1u, ray.o, ray.d);
     }
-    let m = march(ray);
+    // The left eye's march as raycast.wgsl's (so the left eye is the
+    // image it renders alone), up to each surface, a translucent one
+    // composited in its turn, the first opaque one ending it; the pass
+    // after the last looks at no surface. Behind the first opaque
+    // surface the ray marches on through the volumes alone (`behind_it`):
+    // the right eye sees past that surface's edge what the left eye does
+    // not (disocclusion), and its surfaces it traces itself. One call of
+    // the march, which the compiler inlines at each.
+    var m = Marched(vec4f(0.0), infinite());
+    var behind = vec4f(0.0);
+    var surface_depth = infinite();
+    var start = params.t_near;
+    var composited = 0u;
+    var behind_it = false;
+    for (var looked = 0u; looked <= SURFACE_PASSES; looked++) {
+        var hit = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
+        if looked < SURFACE_PASSES && !behind_it {
+            hit = nearest_surface(ray.o, ray.d, start, params.t_far);
+        }
+        var carried = m;
+        if behind_it {
+            carried = Marched(vec4f(0.0), infinite());
+        }
+        let marched = march_segment(ray, start, hit.t, carried);
+        if hit.slot == NO_SLOT {
+            if !behind_it {
+                m = marched;
+            }
+            break;
+        }
+        m = marched;
+        let lit = surface_color(hit, ray.o, ray.d);
+        let a = surface_alpha(hit);
+        let p = ray.o + ray.d * hit.t;
+        if a >= 1.0 {
+            behind = vec4f(lit, 1.0);
+            surface_depth = depth_along(p, hit.t);
+            if m.color.a >= params.termination {
+                break;
+            }
+            behind_it = true;
+        } else if composited < MAX_TRANSLUCENT {
+            let weight = (1.0 - m.color.a) * a;
+            m.color = vec4f(m.color.rgb + lit * weight, m.color.a + weight);
+            if m.depth == infinite() && m.color.a >= params.depth_threshold {
+                m.depth = depth_along(p, hit.t);
+            }
+            composited++;
+            if m.color.a >= params.termination {
+                break;
+            }
+        }
+        start = hit.t;
+    }
     let major_span = close_family(&major, major_axis);
     var span = select(vec4i(major_span, 1, 0), vec4i(1, 0, major_span), major_axis == 1u);
     if BOTH_FAMILIES {
@@ -194,9 +253,12 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
 
     if left.x >= 0 && left.x < i32(stereo.width) && left.y >= 0 && left.y < i32(stereo.height) {
         let i = u32(left.y) * stereo.width + u32(left.x);
-        depth_out[i] = m.depth;
+        depth_out[i] = min(m.depth, surface_depth);
         samples_out[i * params.pixel_words] = samples;
-        store_color(i, over(m.color, background_at(vec2u(left))), params.color_format);
+        if surface_depth == infinite() {
+            behind = background_at(vec2u(left));
+        }
+        store_color(i, over(m.color, behind), params.color_format);
     }
 }
 

@@ -187,11 +187,10 @@ fn paid(
 }
 
 /// What the job's renderer brings to the stereo decision.
-fn facts(r: &Renderer, scene: &Scene, job: &RenderJob) -> RenderFacts {
+fn facts(r: &Renderer, job: &RenderJob) -> RenderFacts {
     RenderFacts {
         reprojects: matches!(r, Renderer::Gpu(_)),
         background_image: job.inputs.settings.background_image.is_some(),
-        surfaces: !scene.shapes().is_empty(),
         hits: job.inputs.desc.hits,
     }
 }
@@ -218,7 +217,7 @@ fn stereo_camera(
         eyes,
         Bounds::of(scene),
         REPROJECTION_LAYERS,
-        Some(facts(r, scene, job)),
+        Some(facts(r, job)),
     )
     .map_err(|e| e.to_string())?;
     paid(r, scene, job, left, &plan, costs)
@@ -234,7 +233,7 @@ fn with_partner(
     partner: &Partner,
     costs: &mut PairCosts,
 ) -> Result<Paired, String> {
-    facts(r, scene, job).admit().map_err(|e| e.to_string())?;
+    facts(r, job).admit().map_err(|e| e.to_string())?;
     paid(r, scene, job, one, &partner.plan, costs)
 }
 

@@ -1241,3 +1241,92 @@ fn accumulation_antialiases_an_edge_through_pixel_centres_over_64_samples() {
         assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
     }
 }
+
+#[test]
+fn a_stereo_camera_reprojects_a_sphere_inside_a_volume_in_one_pass() {
+    use anari_library_caveray::device::Status;
+    use anari_library_caveray::render::{dssim, ColorData, Frame};
+    use std::sync::{Arc, Mutex};
+    let heard: Arc<Mutex<Vec<String>>> = Arc::default();
+    let log = Arc::clone(&heard);
+    let mut h = Host::on_backend(
+        "gpu",
+        Arc::new(move |s: Status| {
+            if s.severity == Severity::Info {
+                log.lock().unwrap().push(s.message);
+            }
+        }),
+    );
+    let field = h.field(|i| 0.2 + 0.1 * (i % 4) as f32, None);
+    let volume = h.volume(field);
+    let g = sphere(&mut h);
+    let m = matte(
+        &mut h,
+        Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 0.8, 0.1])),
+    );
+    let s = surface(&mut h, g, m);
+    let frame = frame(&mut h, &[s], Some(volume));
+    let camera = h.d.new_object(DataType::CAMERA, "perspective");
+    h.set(
+        camera,
+        "position",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.0f32, 0.0, 3.0]),
+    );
+    h.set(
+        camera,
+        "interpupillaryDistance",
+        DataType::FLOAT32,
+        bytes(&[0.3f32]),
+    );
+    h.set_object(frame, "camera", DataType::CAMERA, camera);
+    let n = 2 * SIZE;
+    let eye = |h: &mut Host, mode: &str, width: u32| {
+        h.d.set_param(
+            Subject::Object(camera),
+            "stereoMode",
+            Input::String(mode.into()),
+        );
+        h.d.commit(Subject::Object(camera));
+        h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[width, n]));
+        h.d.commit(Subject::Object(frame));
+        h.pixels_sized(frame, width, n)
+    };
+    let left = eye(&mut h, "left", n);
+    let right = eye(&mut h, "right", n);
+    heard.lock().unwrap().clear();
+    let pair = eye(&mut h, "sideBySide", 2 * n);
+    let said = heard.lock().unwrap().clone();
+    assert!(
+        said.iter()
+            .any(|m| m.contains("stereo frame: both eyes in one re-projection pass")),
+        "{said:?}"
+    );
+    let as_frame = |pixels: Vec<u8>| Frame {
+        size: glam::UVec2::splat(n),
+        color: ColorData::Rgba8(pixels),
+        depth: None,
+        hits: None,
+        samples: 0,
+    };
+    let half = |x0: usize| -> Vec<u8> {
+        (0..n as usize)
+            .flat_map(|y| {
+                let start = 4 * (y * 2 * n as usize + x0);
+                pair[start..start + 4 * n as usize].to_vec()
+            })
+            .collect()
+    };
+    // The left eye is its own pass; the right eye's sphere is its own
+    // rays', the volume around it re-projected.
+    assert_eq!(half(0), left);
+    let d = dssim(&as_frame(half(n as usize)), &as_frame(right.clone())).unwrap();
+    let unmoved = dssim(&as_frame(left), &as_frame(right)).unwrap();
+    eprintln!("sideBySide with a sphere: right DSSIM {d:.4}, left as right {unmoved:.4}");
+    assert!(
+        d < 0.01 && d < 0.5 * unmoved,
+        "DSSIM {d} (left as right {unmoved})"
+    );
+    assert!(h.errors().is_empty(), "{:?}", h.errors());
+    h.d.release(camera);
+}

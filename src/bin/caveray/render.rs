@@ -507,7 +507,6 @@ fn stereo_pair<'v>(
     let facts = RenderFacts {
         reprojects: renderer.backend() == Backend::Gpu,
         background_image: settings.background_image.is_some(),
-        surfaces: !scene.shapes().is_empty(),
         hits: false,
     };
     let layers = LayerRequest {

@@ -34,15 +34,16 @@ binding_table! {
 }
 
 binding_table! {
-    /// The compositing pass's only group.
+    /// Group 1 of the compositing pass (group 0 is the ray caster's, for
+    /// the right eye's surfaces).
     CompositeResources / CompositeLayout = "composite_bindings" imports ["stereo_uniforms"] () {
         stereo: Kind::storage("Stereo"),
         layers: Kind::texture(Dim::D2Array, false),
         spans: Kind::storage("array<vec4i>"),
         blocks: Kind::storage_rw("array<vec4i>"),
-        color_out: Kind::storage_rw("array<u32>"),
+        right_color: Kind::storage_rw("array<u32>"),
         depths: Kind::texture(Dim::D2Array, false),
-        depth_out: Kind::storage_rw("array<f32>"),
+        right_depth: Kind::storage_rw("array<f32>"),
     }
 }
 
@@ -75,6 +76,7 @@ struct Shape {
     /// Layers of all families together.
     layers: u32,
     color: ColorFormat,
+    /// Whether the layers record right-eye distances.
     depth: bool,
 }
 
@@ -163,7 +165,7 @@ impl LayersPass {
                 label,
                 "composite",
                 entry,
-                &[composite_layout.group()],
+                &[raycast.volume_layout.group(), composite_layout.group()],
                 constants,
             )
         };
@@ -345,9 +347,9 @@ fn bind_groups(
         layers: wgpu::BindingResource::TextureView(&res.layers),
         spans: spans.rays.as_entire_binding(),
         blocks: spans.blocks.as_entire_binding(),
-        color_out: res.color.as_entire_binding(),
+        right_color: res.color.as_entire_binding(),
         depths: wgpu::BindingResource::TextureView(&res.depths),
-        depth_out: res.depth.as_entire_binding(),
+        right_depth: res.depth.as_entire_binding(),
     }
     .bind(device, &gpu.composite_layout);
     (writer, composite)
@@ -444,18 +446,19 @@ impl LayersPass {
     ) -> Result<(Frame, StereoTimes), RenderError> {
         let plan = &reprojection.plan;
         let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
+        let surfaces = !scene.shapes().is_empty();
         let shape = Shape {
             pixels,
             texels: plan.texture_size(),
             layers: reprojection.layers * plan.family_count(),
             color: desc.color,
-            depth: desc.depth,
+            depth: desc.depth || surfaces,
         };
         let cast = plan.cast;
         self.reshape(ctx, shape, u64::from(cast.x) * u64::from(cast.y));
         let target = self.target.as_ref().ok_or_else(unprepared)?;
         let res = &target.res;
-        let uniform = Stereo::new(reprojection, desc.color, settings, desc.depth);
+        let uniform = Stereo::new(reprojection, desc.color, settings, desc.depth, surfaces);
         ctx.queue
             .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = raycast.group()?;
@@ -470,7 +473,7 @@ impl LayersPass {
         if watch.stopped() {
             return Err(RenderError::Stopped);
         }
-        let (right, composite_ms) = self.composite_right(ctx, desc, cast, false)?;
+        let (right, composite_ms) = self.composite_right((ctx, raycast), desc, cast, false)?;
         watch.advance(1);
         Ok((
             right,
@@ -485,7 +488,7 @@ impl LayersPass {
     /// (with the block summary's).
     fn composite_right(
         &mut self,
-        ctx: &Context,
+        (ctx, raycast): (&Context, &RaycastPass),
         desc: &FrameDesc,
         cast: UVec2,
         every_offset: bool,
@@ -493,9 +496,10 @@ impl LayersPass {
         let target = self.target.as_mut().ok_or_else(unprepared)?;
         target.last = Some((*desc, cast));
         let res = &target.res;
+        let groups = [raycast.group()?, &target.composite];
         let summarise_ms = ctx.dispatch(
             &self.summarise,
-            &[&target.composite],
+            &groups,
             [
                 cast.x.div_ceil(WORKGROUP * WORKGROUP),
                 cast.y.div_ceil(WORKGROUP * WORKGROUP),
@@ -509,7 +513,7 @@ impl LayersPass {
         };
         let composite_ms = ctx.dispatch(
             pipeline,
-            &[&target.composite],
+            &groups,
             [
                 desc.size.x.div_ceil(WORKGROUP),
                 desc.size.y.div_ceil(WORKGROUP),
@@ -543,10 +547,14 @@ impl LayersPass {
     /// The last right eye composited again, reading every left ray of the
     /// bounding depth range: what the block summary spares, for the
     /// benchmark to measure and the tests to check it changes nothing.
-    pub fn composite_every_offset(&mut self, ctx: &Context) -> Result<(Frame, f64), RenderError> {
+    pub fn composite_every_offset(
+        &mut self,
+        ctx: &Context,
+        raycast: &RaycastPass,
+    ) -> Result<(Frame, f64), RenderError> {
         let target = self.target.as_ref().ok_or_else(no_layers)?;
         let (desc, cast) = target.last.ok_or_else(no_layers)?;
-        self.composite_right(ctx, &desc, cast, true)
+        self.composite_right((ctx, raycast), &desc, cast, true)
     }
 
     /// Milliseconds a full clear of the last frame's layers takes: the
@@ -591,7 +599,7 @@ mod tests {
             ];
             assert_declared(&compose("reproject", &groups).unwrap(), &groups);
         }
-        let groups = [&CompositeLayout::table()];
+        let groups = [&VolumeLayout::table(false), &CompositeLayout::table()];
         assert_declared(&compose("composite", &groups).unwrap(), &groups);
     }
 }

@@ -225,7 +225,6 @@ impl GpuRenderer {
             )));
         }
         LayersPass::check(&self.ctx, reprojection)?;
-        volumes_only(scene, "re-projection stereo")?;
         if settings.background_image.is_some() {
             return Err(RenderError::Settings(
                 "re-projection composites over a flat background only; render background images in two passes".into(),
@@ -265,7 +264,7 @@ impl GpuRenderer {
     /// it changes no pixel.
     pub fn composite_every_offset(&mut self) -> Result<(Frame, f64), RenderError> {
         let stereo = self.stereo.as_mut().ok_or_else(no_layers)?;
-        stereo.composite_every_offset(&self.ctx)
+        stereo.composite_every_offset(&self.ctx, &self.raycast)
     }
 
     /// `rays` cast for an image of `size` keeping `layers` layers a pixel

@@ -259,9 +259,24 @@ uniform! {
         color_format: u32,
         /// Opacity at which a right pixel stops compositing.
         termination: f32,
-        /// Whether segments record and the composite writes depth.
+        /// Whether the composite writes depth.
         has_depth: u32,
-        _pad: [u32; 3],
+        /// Whether segments record their right-eye distances (for the
+        /// depth channel, and to place the right eye's surfaces among
+        /// them).
+        segment_depths: u32,
+        /// The right eye's clip range along each unit ray.
+        right_t_near: f32,
+        right_t_far: f32,
+        /// The right eye's ray of pixel (0, 0) and its change per pixel
+        /// (xyz), as `RayUniforms` holds the left eye's: its surfaces are
+        /// ray traced, not re-projected.
+        right_origin: [f32; 4],
+        right_origin_dx: [f32; 4],
+        right_origin_dy: [f32; 4],
+        right_dir: [f32; 4],
+        right_dir_dx: [f32; 4],
+        right_dir_dy: [f32; 4],
     }
 }
 
@@ -464,13 +479,18 @@ impl RayUniforms {
 }
 
 impl Stereo {
+    /// `surfaces`: the world has surfaces, which the composite places
+    /// among the segments by their distances.
     pub fn new(
         r: &Reprojection,
         format: ColorFormat,
         settings: &RenderSettings,
         depth: bool,
+        surfaces: bool,
     ) -> Self {
         let plan = &r.plan;
+        let rays = &r.right_rays;
+        let v = |v: Vec3| v.extend(0.0).to_array();
         Self {
             right_x: r.right_x.to_array(),
             right_y: r.right_y.to_array(),
@@ -490,7 +510,15 @@ impl Stereo {
             color_format: format.code(),
             termination: settings.termination,
             has_depth: u32::from(depth),
-            _pad: [0; 3],
+            segment_depths: u32::from(depth || surfaces),
+            right_t_near: rays.t_near,
+            right_t_far: rays.t_far,
+            right_origin: v(rays.origin),
+            right_origin_dx: v(rays.origin_dx),
+            right_origin_dy: v(rays.origin_dy),
+            right_dir: v(rays.direction),
+            right_dir_dx: v(rays.direction_dx),
+            right_dir_dy: v(rays.direction_dy),
         }
     }
 }

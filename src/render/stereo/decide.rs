@@ -37,9 +37,6 @@ pub struct RenderFacts {
     /// The frame's background is an image; the pass composites over a
     /// color only.
     pub background_image: bool,
-    /// The world holds surfaces of primitives; the layers hold volume
-    /// samples only.
-    pub surfaces: bool,
     /// The frame asks for hit channels, which the right eye's composite
     /// does not fill.
     pub hits: bool,
@@ -56,8 +53,6 @@ pub enum TwoPasses {
     UnevenEyes(UVec2, UVec2),
     #[error("re-projection takes a background color, not an image")]
     BackgroundImage,
-    #[error("re-projection layers hold volume samples; a world with surfaces of primitives renders each eye in its own pass")]
-    Surfaces,
     #[error("the right eye is composited with color and depth only; a frame asking for id, normal or albedo channels renders each eye in its own pass")]
     HitChannels,
     #[error(transparent)]
@@ -72,9 +67,6 @@ impl RenderFacts {
         }
         if self.background_image {
             return Err(TwoPasses::BackgroundImage);
-        }
-        if self.surfaces {
-            return Err(TwoPasses::Surfaces);
         }
         if self.hits {
             return Err(TwoPasses::HitChannels);
@@ -105,9 +97,6 @@ pub fn decide(
     }
     if facts.is_some_and(|f| f.background_image) {
         return Err(TwoPasses::BackgroundImage);
-    }
-    if facts.is_some_and(|f| f.surfaces) {
-        return Err(TwoPasses::Surfaces);
     }
     if facts.is_some_and(|f| f.hits) {
         return Err(TwoPasses::HitChannels);
@@ -156,7 +145,6 @@ mod tests {
         let facts = RenderFacts {
             reprojects: true,
             background_image: false,
-            surfaces: false,
             hits: false,
         };
         let early = decide(eyes(), bounds(), LAYERS, None).unwrap();
@@ -172,7 +160,6 @@ mod tests {
         let cpu = RenderFacts {
             reprojects: false,
             background_image: true,
-            surfaces: false,
             hits: false,
         };
         let no_matrices = Eyes {
@@ -186,7 +173,6 @@ mod tests {
         let gpu_over_image = RenderFacts {
             reprojects: true,
             background_image: true,
-            surfaces: false,
             hits: false,
         };
         assert_eq!(
@@ -207,20 +193,10 @@ mod tests {
         );
         assert_eq!(gpu_over_image.admit(), Err(TwoPasses::BackgroundImage));
         assert_eq!(cpu.admit(), Err(TwoPasses::NotOnThisRenderer));
-        let with_surfaces = RenderFacts {
+        let with_hits = RenderFacts {
             reprojects: true,
             background_image: false,
-            surfaces: true,
-            hits: false,
-        };
-        let err = decide(eyes(), bounds(), LAYERS, Some(with_surfaces)).unwrap_err();
-        assert_eq!(err, TwoPasses::Surfaces);
-        assert!(err.to_string().contains("each eye in its own pass"));
-        assert_eq!(with_surfaces.admit(), Err(TwoPasses::Surfaces));
-        let with_hits = RenderFacts {
             hits: true,
-            surfaces: false,
-            ..with_surfaces
         };
         let err = decide(eyes(), bounds(), LAYERS, Some(with_hits)).unwrap_err();
         assert_eq!(err, TwoPasses::HitChannels);

@@ -8,7 +8,7 @@ use thiserror::Error;
 use super::bounds::Bounds;
 use super::epipolar::{plan_views, NotEpipolar, ViewPlan};
 use super::layers::{layer_count, LayerCountError, LayerFormat};
-use crate::geometry::{MatrixCamera, PrimaryRays};
+use crate::geometry::{MatrixCamera, PrimaryRays, RayGen};
 use crate::render::Frame;
 
 /// Layer memory a plan may ask for: beyond it the two passes are the
@@ -50,6 +50,8 @@ pub struct Reprojection {
     pub right_w: Vec4,
     /// Where right-eye depth is measured from.
     pub right_eye: Vec3,
+    /// The right eye's rays, for what the right eye ray traces itself.
+    pub right_rays: RayGen,
 }
 
 impl Reprojection {
@@ -102,6 +104,7 @@ impl Reprojection {
             right_y: to_pixel(row_y, size.y),
             right_w: row_w.as_vec4(),
             right_eye,
+            right_rays: right.ray_gen(size),
         })
     }
 

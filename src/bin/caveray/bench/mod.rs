@@ -63,7 +63,6 @@ fn without_shader_cache() {
 const GPU: RenderFacts = RenderFacts {
     reprojects: true,
     background_image: false,
-    surfaces: false,
     hits: false,
 };
 
