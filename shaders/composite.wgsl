@@ -75,6 +75,9 @@ fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
 // The right pixel's ray and the next surface along it, with its distance
 // from the right eye (infinite where none is left).
 var<private> right_ray: Ray;
+// How far along it the right eye can see: to its first opaque surface,
+// where first_opaque found one.
+var<private> right_reach: f32;
 var<private> next: SurfaceHit;
 var<private> next_distance: f32;
 var<private> looked: u32;
@@ -87,13 +90,44 @@ var<private> ended: bool;
 fn find_next(t_min: f32) {
     next = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
     if looked < SURFACE_PASSES {
-        next = nearest_surface(right_ray.o, right_ray.d, t_min, stereo.right_t_far);
+        next = nearest_surface(right_ray.o, right_ray.d, t_min, right_reach);
         looked++;
     }
     next_distance = infinite();
     if next.slot != NO_SLOT {
         next_distance = length(right_ray.o + right_ray.d * next.t - stereo.right_eye);
     }
+}
+
+fn right_ray_of(q: vec2i) -> Ray {
+    let fx = f32(q.x);
+    let fy = f32(q.y);
+    let o = stereo.right_origin.xyz + fx * stereo.right_origin_dx.xyz + fy * stereo.right_origin_dy.xyz;
+    return Ray(o, normalize(stereo.right_dir.xyz + fx * stereo.right_dir_dx.xyz + fy * stereo.right_dir_dy.xyz));
+}
+
+// Per right pixel, the distance from the right eye to its first opaque
+// surface (infinite where none), translucent ones passed: before the
+// march, so that its rays march on behind the left eye's surfaces only
+// where the right eye sees further (reproject.wgsl).
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn first_opaque(@builtin(global_invocation_id) id: vec3u) {
+    if id.x >= stereo.width || id.y >= stereo.height {
+        return;
+    }
+    right_ray = right_ray_of(vec2i(id.xy));
+    right_reach = stereo.right_t_far;
+    looked = 0u;
+    var found = infinite();
+    find_next(stereo.right_t_near);
+    while next.slot != NO_SLOT {
+        if surface_alpha(next) >= 1.0 {
+            found = next_distance;
+            break;
+        }
+        find_next(next.t);
+    }
+    right_opaque[id.y * stereo.width + id.x] = found;
 }
 
 // The next surface behind `acc`, as raycast.wgsl's loop takes it: an
@@ -198,10 +232,18 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let first_along = along(stereo.first, axis);
     var acc = vec4f(0.0);
     var depth = infinite();
-    let fx = f32(q.x);
-    let fy = f32(q.y);
-    let o = stereo.right_origin.xyz + fx * stereo.right_origin_dx.xyz + fy * stereo.right_origin_dy.xyz;
-    right_ray = Ray(o, normalize(stereo.right_dir.xyz + fx * stereo.right_dir_dx.xyz + fy * stereo.right_dir_dy.xyz));
+    right_ray = right_ray_of(q);
+    // The traversal need look no further than first_opaque's surface (a
+    // little past it, for rounding); distances run from the eye, t from
+    // the ray's origin.
+    right_reach = stereo.right_t_far;
+    if params.surface_nodes != 0u {
+        let opaque = right_opaque[id.y * stereo.width + id.x];
+        if opaque < infinite() {
+            let from_eye = length(right_ray.o - stereo.right_eye);
+            right_reach = min(right_reach, (opaque - from_eye) * (1.0 + 1e-4) + 1e-6);
+        }
+    }
     looked = 0u;
     translucent = 0u;
     behind = stereo.background;

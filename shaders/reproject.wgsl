@@ -139,6 +139,46 @@ fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
     last_t = t;
 }
 
+// Right pixels a ray's path behind its opaque surface is checked at, at
+// most: past them the march behind goes on unchecked.
+const BEHIND_CHECKS: i32 = 64;
+
+// Whether the right eye sees any point of `ray` behind t_s (its first
+// opaque surface) before its own first opaque surface: checked where the
+// path crosses each right pixel's centre along a family written.
+fn seen_behind(ray: Ray, t_s: f32) -> bool {
+    var s = major;
+    if !s.on && BOTH_FAMILIES {
+        s = rows;
+    }
+    if !s.on {
+        return false;
+    }
+    let line = s.line;
+    let end = select(s.lo, s.hi, s.dir > 0);
+    var o = clamp(round((line.x + t_s * line.y) / (line.z + t_s * line.w)), s.lo, s.hi);
+    for (var k = 0; k < BEHIND_CHECKS; k++) {
+        if (s.dir > 0 && o > end) || (s.dir < 0 && o < end) {
+            return false;
+        }
+        // Where the path's offset is o: linear in t before the divide.
+        let t = (o * line.z - line.x) / (line.y - o * line.w);
+        o += f32(s.dir);
+        if !(t > t_s) || t > params.t_far {
+            continue;
+        }
+        let x = vec4f(ray.o + ray.d * t, 1.0);
+        let q = vec2i(round(vec2f(dot(stereo.right_x, x), dot(stereo.right_y, x)) / dot(stereo.right_w, x)));
+        if any(q < vec2i(0)) || q.x >= i32(stereo.width) || q.y >= i32(stereo.height) {
+            continue;
+        }
+        if right_opaque[u32(q.y) * stereo.width + u32(q.x)] > length(x.xyz - stereo.right_eye) {
+            return true;
+        }
+    }
+    return true;
+}
+
 // Family `axis`'s segment state for the ray (o, d) of left pixel `left`.
 fn open_family(axis: u32, o: vec3f, d: vec3f) -> Open {
     let g = g_of(left);
@@ -194,10 +234,10 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
     // image it renders alone), up to each surface, a translucent one
     // composited in its turn, the first opaque one ending it; the pass
     // after the last looks at no surface. Behind the first opaque
-    // surface the ray marches on through the volumes alone (`behind_it`):
-    // the right eye sees past that surface's edge what the left eye does
-    // not (disocclusion), and its surfaces it traces itself. One call of
-    // the march, which the compiler inlines at each.
+    // surface the ray marches on through the volumes alone (`behind_it`)
+    // where the right eye sees past it (near its edge): what the left eye
+    // does not see (disocclusion); its surfaces the right eye traces
+    // itself. One call of the march, which the compiler inlines at each.
     var m = Marched(vec4f(0.0), infinite());
     var behind = vec4f(0.0);
     var surface_depth = infinite();
@@ -230,7 +270,10 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
             if m.color.a >= params.termination {
                 break;
             }
-            behind_it = true;
+            behind_it = seen_behind(ray, hit.t);
+            if !behind_it {
+                break;
+            }
         } else if composited < MAX_TRANSLUCENT {
             let weight = (1.0 - m.color.a) * a;
             m.color = vec4f(m.color.rgb + lit * weight, m.color.a + weight);

@@ -30,6 +30,10 @@ binding_table! {
         layers: Kind::write_texture(Dim::D2Array, format),
         spans: Kind::storage_rw("array<vec4i>"),
         depths: Kind::write_texture(Dim::D2Array, wgpu::TextureFormat::Rgba32Float),
+        /// Per right pixel, the right eye's distance to its first opaque
+        /// surface (infinite where it has none), from the composite's
+        /// `first_opaque`.
+        right_opaque: Kind::storage("array<f32>"),
     }
 }
 
@@ -44,6 +48,7 @@ binding_table! {
         right_color: Kind::storage_rw("array<u32>"),
         depths: Kind::texture(Dim::D2Array, false),
         right_depth: Kind::storage_rw("array<f32>"),
+        right_opaque: Kind::storage_rw("array<f32>"),
     }
 }
 
@@ -54,6 +59,8 @@ pub(super) struct LayersPass {
     /// family of lines, and both.
     reproject: [Variants; 2],
     clear: wgpu::ComputePipeline,
+    /// The right eye's first opaque surfaces, before the march.
+    first_opaque: wgpu::ComputePipeline,
     summarise: wgpu::ComputePipeline,
     composite: wgpu::ComputePipeline,
     /// The compositing without the block summary, to measure and check it.
@@ -131,6 +138,7 @@ struct Resources {
     color_read: wgpu::Buffer,
     depth: wgpu::Buffer,
     depth_read: wgpu::Buffer,
+    right_opaque: wgpu::Buffer,
 }
 
 fn texture_format(format: LayerFormat) -> wgpu::TextureFormat {
@@ -184,6 +192,7 @@ impl LayersPass {
             format,
             reproject: [families(1)?, families(2)?],
             clear: pipeline("layer clear", "clear", &[])?,
+            first_opaque: compositing("right-eye surfaces", "first_opaque", &[])?,
             summarise: compositing("span blocks", "summarise", &[])?,
             composite: compositing("compositing", "main", &[])?,
             composite_every_offset: compositing(
@@ -294,7 +303,9 @@ impl LayerTarget {
             depth_bytes,
             U::MAP_READ | U::COPY_DST,
         );
+        let right_opaque = buffer(ctx, "right opaque surfaces", 4 * pixels, U::STORAGE);
         let res = Resources {
+            right_opaque,
             uniform,
             layers,
             depths,
@@ -340,6 +351,7 @@ fn bind_groups(
         layers: wgpu::BindingResource::TextureView(&res.layers),
         spans: spans.rays.as_entire_binding(),
         depths: wgpu::BindingResource::TextureView(&res.depths),
+        right_opaque: res.right_opaque.as_entire_binding(),
     }
     .bind(device, &gpu.writer_layout);
     let composite = CompositeResources {
@@ -350,6 +362,7 @@ fn bind_groups(
         right_color: res.color.as_entire_binding(),
         depths: wgpu::BindingResource::TextureView(&res.depths),
         right_depth: res.depth.as_entire_binding(),
+        right_opaque: res.right_opaque.as_entire_binding(),
     }
     .bind(device, &gpu.composite_layout);
     (writer, composite)
@@ -462,6 +475,21 @@ impl LayersPass {
         ctx.queue
             .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = raycast.group()?;
+        // Where the right eye's own surfaces end its view, for the march
+        // behind the left eye's: a world without surfaces needs none.
+        let first_opaque_ms = if surfaces {
+            ctx.dispatch(
+                &self.first_opaque,
+                &[volume, &target.composite],
+                [
+                    desc.size.x.div_ceil(WORKGROUP),
+                    desc.size.y.div_ceil(WORKGROUP),
+                    1,
+                ],
+            )?
+        } else {
+            0.0
+        };
         let march = Pass {
             pipeline: self.reproject[usize::from(plan.family_count() == 2)].for_scene(scene),
             groups: &[volume, &target.writer],
@@ -469,7 +497,7 @@ impl LayersPass {
         };
         let bands = raycast.write_bands(ctx, cast);
         watch.expect(bands.len() as u64 + 1);
-        let left_ms = ctx.dispatch_bands(&march, &bands, watch)?;
+        let left_ms = first_opaque_ms + ctx.dispatch_bands(&march, &bands, watch)?;
         if watch.stopped() {
             return Err(RenderError::Stopped);
         }
