@@ -86,6 +86,10 @@ var<private> translucent: u32;
 var<private> behind: vec4f;
 // Set once an opaque surface or the pixel's opacity ends it.
 var<private> ended: bool;
+// Set where the right eye's only surface is the opaque one first_opaque
+// found, lit `known_color`: no traversal again.
+var<private> known: bool;
+var<private> known_color: vec3f;
 
 fn find_next(t_min: f32) {
     next = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
@@ -118,14 +122,19 @@ fn first_opaque(@builtin(global_invocation_id) id: vec3u) {
     right_ray = right_ray_of(vec2i(id.xy));
     right_reach = stereo.right_t_far;
     looked = 0u;
-    var found = infinite();
+    var found = vec4f(0.0, 0.0, 0.0, infinite());
+    var passed = false;
     find_next(stereo.right_t_near);
     while next.slot != NO_SLOT {
         if surface_alpha(next) >= 1.0 {
-            found = next_distance;
+            found = vec4f(surface_color(next, right_ray.o, right_ray.d), next_distance);
             break;
         }
+        passed = true;
         find_next(next.t);
+    }
+    if passed {
+        found.w = -found.w;
     }
     right_opaque[id.y * stereo.width + id.x] = found;
 }
@@ -133,6 +142,12 @@ fn first_opaque(@builtin(global_invocation_id) id: vec3u) {
 // The next surface behind `acc`, as raycast.wgsl's loop takes it: an
 // opaque one ends the pixel, translucent ones past MAX_TRANSLUCENT pass.
 fn take_surface(acc: ptr<function, vec4f>, depth: ptr<function, f32>) {
+    if known {
+        behind = vec4f(known_color, 1.0);
+        *depth = min(*depth, next_distance);
+        ended = true;
+        return;
+    }
     let lit = surface_color(next, right_ray.o, right_ray.d);
     let a = surface_alpha(next);
     if a >= 1.0 {
@@ -233,22 +248,29 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     var acc = vec4f(0.0);
     var depth = infinite();
     right_ray = right_ray_of(q);
-    // The traversal need look no further than first_opaque's surface (a
-    // little past it, for rounding); distances run from the eye, t from
-    // the ray's origin.
     right_reach = stereo.right_t_far;
-    if params.surface_nodes != 0u {
-        let opaque = right_opaque[id.y * stereo.width + id.x];
-        if opaque < infinite() {
-            let from_eye = length(right_ray.o - stereo.right_eye);
-            right_reach = min(right_reach, (opaque - from_eye) * (1.0 + 1e-4) + 1e-6);
-        }
-    }
     looked = 0u;
     translucent = 0u;
     behind = stereo.background;
     ended = false;
-    find_next(stereo.right_t_near);
+    known = false;
+    let opaque = right_opaque[id.y * stereo.width + id.x];
+    if params.surface_nodes != 0u && opaque.w >= 0.0 {
+        // first_opaque saw all there is: one opaque surface or none.
+        known = opaque.w < infinite();
+        known_color = opaque.xyz;
+        next = SurfaceHit(infinite(), select(NO_SLOT, 0u, known), vec2f(0.0));
+        next_distance = opaque.w;
+    } else {
+        // Translucent surfaces first: the traversal need look no further
+        // than the opaque one (a little past it, for rounding); distances
+        // run from the eye, t from the ray's origin.
+        if params.surface_nodes != 0u && -opaque.w < infinite() {
+            let from_eye = length(right_ray.o - stereo.right_eye);
+            right_reach = min(right_reach, (-opaque.w - from_eye) * (1.0 + 1e-4) + 1e-6);
+        }
+        find_next(stereo.right_t_near);
+    }
     var k = 0;
     while k < count && !ended {
         // The offsets up to where the rays read leave their block along

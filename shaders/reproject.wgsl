@@ -172,7 +172,7 @@ fn seen_behind(ray: Ray, t_s: f32) -> bool {
         if any(q < vec2i(0)) || q.x >= i32(stereo.width) || q.y >= i32(stereo.height) {
             continue;
         }
-        if right_opaque[u32(q.y) * stereo.width + u32(q.x)] > length(x.xyz - stereo.right_eye) {
+        if abs(right_opaque[u32(q.y) * stereo.width + u32(q.x)].w) > length(x.xyz - stereo.right_eye) {
             return true;
         }
     }

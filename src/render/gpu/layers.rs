@@ -30,10 +30,11 @@ binding_table! {
         layers: Kind::write_texture(Dim::D2Array, format),
         spans: Kind::storage_rw("array<vec4i>"),
         depths: Kind::write_texture(Dim::D2Array, wgpu::TextureFormat::Rgba32Float),
-        /// Per right pixel, the right eye's distance to its first opaque
-        /// surface (infinite where it has none), from the composite's
-        /// `first_opaque`.
-        right_opaque: Kind::storage("array<f32>"),
+        /// Per right pixel, the right eye's first opaque surface from the
+        /// composite's `first_opaque`: its color (xyz) and distance (w,
+        /// infinite where there is none, negative where translucent
+        /// surfaces lie in front of it).
+        right_opaque: Kind::storage("array<vec4f>"),
     }
 }
 
@@ -48,7 +49,7 @@ binding_table! {
         right_color: Kind::storage_rw("array<u32>"),
         depths: Kind::texture(Dim::D2Array, false),
         right_depth: Kind::storage_rw("array<f32>"),
-        right_opaque: Kind::storage_rw("array<f32>"),
+        right_opaque: Kind::storage_rw("array<vec4f>"),
     }
 }
 
@@ -303,7 +304,7 @@ impl LayerTarget {
             depth_bytes,
             U::MAP_READ | U::COPY_DST,
         );
-        let right_opaque = buffer(ctx, "right opaque surfaces", 4 * pixels, U::STORAGE);
+        let right_opaque = buffer(ctx, "right opaque surfaces", 16 * pixels, U::STORAGE);
         let res = Resources {
             right_opaque,
             uniform,
