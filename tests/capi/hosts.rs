@@ -200,6 +200,33 @@ fn sdk_loader_protocol_renders_the_wall() {
     );
 }
 
+/// The mesh benchmark's host (docs/benchmarks.md) builds against caveray's
+/// headers and times it: one JSON line, its million triangles, no error,
+/// the mesh on screen.
+#[test]
+fn mesh_benchmark_host_times_a_million_triangles() {
+    let dir = scratch("c_mesh_bench");
+    let program = dir.join("mesh_bench");
+    compile(&["examples/c/mesh_bench.c"], &program, false, true);
+    let output = common::c::host_command(&program)
+        .args(["caveray", "2"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "mesh_bench: {}", describe(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout.lines().last().unwrap_or_default();
+    let report: serde_json::Value =
+        serde_json::from_str(line).unwrap_or_else(|e| panic!("not one JSON line ({e}): {stdout}"));
+    assert_eq!(report["triangles"], 1_001_112, "{line}");
+    assert_eq!(report["anari_errors"], 0, "{line}");
+    assert!(report["frame_ms_median"].as_f64().unwrap() > 0.0, "{line}");
+    // The sphere of radius about 1 from 3.5 away under a 60 degree field
+    // of view covers about a fifth of the image.
+    let hit = report["hit_pixels"].as_u64().unwrap();
+    assert!((60_000..200_000).contains(&hit), "{line}");
+}
+
 /// The README's C example builds with one cc command and renders both eyes.
 #[test]
 fn cave_wall_example_renders_both_eyes() {
