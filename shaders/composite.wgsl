@@ -104,10 +104,11 @@ fn find_next(t_min: f32) {
 }
 
 fn right_ray_of(q: vec2i) -> Ray {
-    let fx = f32(q.x);
-    let fy = f32(q.y);
-    let o = stereo.right_origin.xyz + fx * stereo.right_origin_dx.xyz + fy * stereo.right_origin_dy.xyz;
-    return Ray(o, normalize(stereo.right_dir.xyz + fx * stereo.right_dir_dx.xyz + fy * stereo.right_dir_dy.xyz));
+    return ray_through(
+        f32(q.x), f32(q.y),
+        stereo.right_origin.xyz, stereo.right_origin_dx.xyz, stereo.right_origin_dy.xyz,
+        stereo.right_dir.xyz, stereo.right_dir_dx.xyz, stereo.right_dir_dy.xyz,
+    );
 }
 
 // Per right pixel, the distance from the right eye to its first opaque

@@ -52,10 +52,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
             break;
         }
         if composited < MAX_TRANSLUCENT {
-            let weight = (1.0 - m.color.a) * a;
-            m.color = vec4f(m.color.rgb + lit * weight, m.color.a + weight);
-            if m.depth == infinite() && m.color.a >= params.depth_threshold {
-                m.depth = depth_along(p, hit.t);
+            if composite_surface(&m, lit, a, p, hit.t) {
                 first = hit;
             }
             composited++;

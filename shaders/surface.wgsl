@@ -459,6 +459,18 @@ fn image_sample(shape: u32, c: vec4f) -> vec4f {
     return v + shape_word(shape, 14u);
 }
 
+// A translucent surface lit `lit`, of opacity a, at p (t along the ray)
+// composited behind what `m` holds; true where it makes m's depth.
+fn composite_surface(m: ptr<function, Marched>, lit: vec3f, a: f32, p: vec3f, t: f32) -> bool {
+    let weight = (1.0 - (*m).color.a) * a;
+    (*m).color = vec4f((*m).color.rgb + lit * weight, (*m).color.a + weight);
+    if (*m).depth == infinite() && (*m).color.a >= params.depth_threshold {
+        (*m).depth = depth_along(p, t);
+        return true;
+    }
+    return false;
+}
+
 // The opacity of the surface hit (1: opaque).
 fn surface_alpha(h: SurfaceHit) -> f32 {
     return shape_word(bitcast<u32>(prim_word(h.slot, 1u).w) >> 4u, 7u).y;

@@ -392,9 +392,14 @@ struct Ray {
 }
 
 // The ray of pixel (fx, fy); columns outside the image are allowed.
+// The ray of pixel (fx, fy) from the ray of pixel (0, 0) and its change
+// per pixel (RayGen), for either eye.
+fn ray_through(fx: f32, fy: f32, o: vec3f, o_dx: vec3f, o_dy: vec3f, d: vec3f, d_dx: vec3f, d_dy: vec3f) -> Ray {
+    return Ray(o + fx * o_dx + fy * o_dy, normalize(d + fx * d_dx + fy * d_dy));
+}
+
 fn primary_ray(fx: f32, fy: f32) -> Ray {
-    let o = params.ray_origin + fx * params.ray_origin_dx + fy * params.ray_origin_dy;
-    return Ray(o, normalize(params.ray_dir + fx * params.ray_dir_dx + fy * params.ray_dir_dy));
+    return ray_through(fx, fy, params.ray_origin, params.ray_origin_dx, params.ray_origin_dy, params.ray_dir, params.ray_dir_dx, params.ray_dir_dy);
 }
 
 // What one ray gathered.
