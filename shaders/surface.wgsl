@@ -42,8 +42,13 @@ fn prim_word(slot: u32, k: u32) -> vec4f {
     return surfaces[params.surface_prims + 3u * slot + k];
 }
 
+// Where shape's words begin.
+fn shape_at(shape: u32) -> u32 {
+    return params.surface_shapes + SHAPE_WORDS * shape;
+}
+
 fn shape_word(shape: u32, k: u32) -> vec4f {
-    return surfaces[params.surface_shapes + 16u * shape + k];
+    return surfaces[shape_at(shape) + k];
 }
 
 // Point p (w 1) or direction (w 0) into shape's object space.
@@ -271,6 +276,21 @@ fn hit_slot(slot: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> vec3f {
     }
 }
 
+// Slot `slot`'s primitive where first hit and drawn along o + t d: past
+// the points its opacity hides (ShapeSet::shown).
+fn shown_slot(slot: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> vec3f {
+    var after = t_min;
+    // A primitive meets a ray at most four times.
+    for (var k = 0u; k < 4u; k++) {
+        let h = hit_slot(slot, o, d, after, t_max);
+        if !(h.x < t_max) || surface_alpha(SurfaceHit(h.x, slot, h.yz)) > 0.0 {
+            return h;
+        }
+        after = h.x;
+    }
+    return vec3f(infinite(), 0.0, 0.0);
+}
+
 // The nearest surface with t in (t_min, t_max) along o + t d.
 fn nearest_surface(o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> SurfaceHit {
     var best = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
@@ -295,7 +315,7 @@ fn nearest_surface(o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> SurfaceHit {
         var descend = false;
         if count > 0u {
             for (var j = first; j < first + count; j++) {
-                let h = hit_slot(j, o, d, t_min, limit);
+                let h = shown_slot(j, o, d, t_min, limit);
                 if h.x < limit {
                     limit = h.x;
                     best = SurfaceHit(h.x, j, h.yz);
@@ -383,24 +403,73 @@ fn surface_normal(h: SurfaceHit, p: vec3f, d: vec3f) -> vec3f {
 // Where shape's shading data for kept primitive `index` begins.
 fn shading_at(shape: u32, index: u32) -> u32 {
     let flags = bitcast<u32>(shape_word(shape, 7u).x);
-    let stride = select(0u, 3u, (flags & (FLAG_ALBEDO | FLAG_IMAGE)) != 0u) + select(0u, 3u, (flags & FLAG_NORMALS) != 0u);
+    let stride = select(0u, 3u, (flags & (FLAG_ALBEDO | FLAG_IMAGE)) != 0u) + select(0u, 3u, (flags & FLAG_NORMALS) != 0u) + select(0u, 1u, (flags & FLAG_OPACITY) != 0u) + select(0u, 3u, (flags & FLAG_OPACITY_IMAGE) != 0u);
     return bitcast<u32>(shape_word(shape, 6u).w) + stride * index;
 }
 
-fn surface_albedo(h: SurfaceHit) -> vec3f {
-    let w1 = prim_word(h.slot, 1u);
-    let shape = bitcast<u32>(w1.w) >> 4u;
+// Shape's kept primitive at slot.
+fn slot_shape(slot: u32) -> u32 {
+    return bitcast<u32>(prim_word(slot, 1u).w) >> 4u;
+}
+
+fn slot_index(slot: u32) -> u32 {
+    return bitcast<u32>(prim_word(slot, 2u).w);
+}
+
+// Three corner words from `at` weighted by h's barycentrics.
+fn at_corners(at: u32, h: SurfaceHit) -> vec4f {
+    let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
+    return surface_shading[at] * weights.x + surface_shading[at + 1u] * weights.y + surface_shading[at + 2u] * weights.z;
+}
+
+// The material's color at h, its fourth component the color's alpha
+// where it varies (ShapeSet::read).
+fn surface_rgba(h: SurfaceHit) -> vec4f {
+    let shape = slot_shape(h.slot);
     let flags = bitcast<u32>(shape_word(shape, 7u).x);
     if (flags & (FLAG_ALBEDO | FLAG_IMAGE)) == 0u {
-        return shape_word(shape, 6u).xyz;
+        return vec4f(shape_word(shape, 6u).xyz, 1.0);
     }
-    let at = shading_at(shape, bitcast<u32>(prim_word(h.slot, 2u).w));
-    let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
-    let v = surface_shading[at] * weights.x + surface_shading[at + 1u] * weights.y + surface_shading[at + 2u] * weights.z;
+    let v = at_corners(shading_at(shape, slot_index(h.slot)), h);
     if (flags & FLAG_IMAGE) == 0u {
-        return v.xyz;
+        return v;
     }
-    return image_sample(shape, v).xyz;
+    return image_sample(shape_at(shape) + COLOR_IMAGE, v);
+}
+
+fn surface_albedo(h: SurfaceHit) -> vec3f {
+    return surface_rgba(h).xyz;
+}
+
+// The opacity of the surface at h after its alpha mode: 1 opaque, 0 not
+// drawn (ShapeSet::opacity, AlphaMode::coverage).
+fn surface_alpha(h: SurfaceHit) -> f32 {
+    let shape = slot_shape(h.slot);
+    let material = shape_word(shape, 7u);
+    let flags = bitcast<u32>(material.x);
+    if (flags & (FLAG_BLEND | FLAG_MASK)) == 0u {
+        return 1.0;
+    }
+    var a = material.y;
+    if (flags & (FLAG_OPACITY | FLAG_OPACITY_IMAGE)) != 0u {
+        // After the color's and the normals' words.
+        let skip = select(0u, 3u, (flags & (FLAG_ALBEDO | FLAG_IMAGE)) != 0u) + select(0u, 3u, (flags & FLAG_NORMALS) != 0u);
+        let at = shading_at(shape, slot_index(h.slot)) + skip;
+        if (flags & FLAG_OPACITY) != 0u {
+            let weights = vec3f(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
+            a *= dot(surface_shading[at].xyz, weights);
+        } else {
+            a *= image_sample(shape_at(shape) + OPACITY_IMAGE, at_corners(at, h)).x;
+        }
+    }
+    if (flags & (FLAG_ALBEDO | FLAG_IMAGE)) != 0u {
+        a *= surface_rgba(h).w;
+    }
+    a = select(0.0, min(a, 1.0), a > 0.0);
+    if (flags & FLAG_MASK) != 0u {
+        return select(0.0, 1.0, a >= shape_word(shape, 15u).w);
+    }
+    return a;
 }
 
 // Texel i of n after the wrap mode (Wrap::index).
@@ -419,13 +488,13 @@ fn wrap_index(mode: u32, i: i32, n: i32) -> i32 {
     }
 }
 
-// Shape's image sampler at coordinates c, out-transformed (Image::at,
-// Sampler::sample).
-fn image_sample(shape: u32, c: vec4f) -> vec4f {
-    let info = shape_word(shape, 8u);
+// The image sampler whose words begin at `block` at coordinates c,
+// out-transformed (Image::at, Sampler::sample).
+fn image_sample(block: u32, c: vec4f) -> vec4f {
+    let info = surfaces[block];
     let dims = vec3i(vec3u(bitcast<u32>(info.x), bitcast<u32>(info.y), bitcast<u32>(info.z)));
     let base = bitcast<u32>(info.w);
-    let mode = shape_word(shape, 9u);
+    let mode = surfaces[block + 1u];
     let linear = bitcast<u32>(mode.x) != 0u;
     let wraps = vec3u(bitcast<u32>(mode.y), bitcast<u32>(mode.z), bitcast<u32>(mode.w));
     var lower: vec3i;
@@ -455,8 +524,8 @@ fn image_sample(shape: u32, c: vec4f) -> vec4f {
             sum += surface_shading[base + i] * weight;
         }
     }
-    let v = vec4f(dot(shape_word(shape, 10u), sum), dot(shape_word(shape, 11u), sum), dot(shape_word(shape, 12u), sum), dot(shape_word(shape, 13u), sum));
-    return v + shape_word(shape, 14u);
+    let v = vec4f(dot(surfaces[block + 2u], sum), dot(surfaces[block + 3u], sum), dot(surfaces[block + 4u], sum), dot(surfaces[block + 5u], sum));
+    return v + surfaces[block + 6u];
 }
 
 // A translucent surface lit `lit`, of opacity a, at p (t along the ray)
@@ -469,11 +538,6 @@ fn composite_surface(m: ptr<function, Marched>, lit: vec3f, a: f32, p: vec3f, t:
         return true;
     }
     return false;
-}
-
-// The opacity of the surface hit (1: opaque).
-fn surface_alpha(h: SurfaceHit) -> f32 {
-    return shape_word(bitcast<u32>(prim_word(h.slot, 1u).w) >> 4u, 7u).y;
 }
 
 // Light reflected towards v per unit arriving from l, the cosine

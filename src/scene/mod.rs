@@ -14,8 +14,9 @@ pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use placement::{transformed_box, ObjectIds};
 pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};
 pub use shapes::{
-    AlphaMode, Attribute, ColorSource, Coverage, Made, Pbr, PlacedShape, Primitives, Shape,
-    ShapeError, ShapeInput, SurfaceMaterial, Uniforms, ATTRIBUTE_NAMES, MAX_PRIMITIVES,
+    AlphaMode, Attribute, ColorSource, Coverage, Made, OpacitySource, Pbr, PlacedShape, Primitives,
+    Shape, ShapeError, ShapeInput, Source, SurfaceMaterial, Uniforms, ATTRIBUTE_NAMES,
+    MAX_PRIMITIVES,
 };
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 pub use volume::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

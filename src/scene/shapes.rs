@@ -493,11 +493,10 @@ impl Shape {
     }
 }
 
-/// Where a surface's color comes from.
+/// Where a material's color or number comes from.
 #[derive(Clone, Debug)]
-pub enum ColorSource {
-    /// Linear RGB.
-    Constant(Vec3),
+pub enum Source<C> {
+    Constant(C),
     /// An attribute slot of [`ATTRIBUTE_NAMES`]; a shape without it gives
     /// ANARI's default attribute value (0, 0, 0, 1).
     Attribute(usize),
@@ -505,7 +504,14 @@ pub enum ColorSource {
     Sampler(Arc<Sampler>),
 }
 
-impl PartialEq for ColorSource {
+/// A color, linear RGB; from an attribute or a sampler its fourth
+/// component multiplies the opacity.
+pub type ColorSource = Source<Vec3>;
+
+/// An opacity; from an attribute or a sampler its first component.
+pub type OpacitySource = Source<f32>;
+
+impl<C: PartialEq> PartialEq for Source<C> {
     /// Samplers by identity: a commit makes a new one.
     fn eq(&self, other: &Self) -> bool {
         match (self, other) {
@@ -513,6 +519,20 @@ impl PartialEq for ColorSource {
             (Self::Attribute(a), Self::Attribute(b)) => a == b,
             (Self::Sampler(a), Self::Sampler(b)) => Arc::ptr_eq(a, b),
             _ => false,
+        }
+    }
+}
+
+impl<C> Source<C> {
+    pub fn is_constant(&self) -> bool {
+        matches!(self, Self::Constant(_))
+    }
+
+    /// The sampler, if it is one that reads an image.
+    pub fn image_sampler(&self) -> Option<&Arc<Sampler>> {
+        match self {
+            Self::Sampler(s) if !s.is_affine() => Some(s),
+            _ => None,
         }
     }
 }
@@ -531,6 +551,20 @@ pub enum AlphaMode {
 
 impl AlphaMode {
     pub const NAMES: [&'static str; 3] = ["opaque", "blend", "mask"];
+
+    /// What a surface of opacity `a` lets through under this mode.
+    pub fn coverage(self, a: f32) -> Coverage {
+        // NaN from a host's attribute or sampler hides the surface.
+        let a = if a > 0.0 { a.min(1.0) } else { 0.0 };
+        match self {
+            Self::Opaque => Coverage::Opaque,
+            Self::Blend if a >= 1.0 => Coverage::Opaque,
+            Self::Blend if a > 0.0 => Coverage::Translucent(a),
+            Self::Blend => Coverage::Hidden,
+            Self::Mask(cutoff) if a >= cutoff => Coverage::Opaque,
+            Self::Mask(_) => Coverage::Hidden,
+        }
+    }
 }
 
 /// What a material lets through.
@@ -562,7 +596,7 @@ pub struct Pbr {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceMaterial {
     pub color: ColorSource,
-    pub opacity: f32,
+    pub opacity: OpacitySource,
     pub alpha: AlphaMode,
     /// None: matte (Lambertian).
     pub pbr: Option<Pbr>,
@@ -572,7 +606,7 @@ impl Default for SurfaceMaterial {
     fn default() -> Self {
         Self {
             color: ColorSource::Constant(Vec3::splat(0.8)),
-            opacity: 1.0,
+            opacity: OpacitySource::Constant(1.0),
             alpha: AlphaMode::Opaque,
             pbr: None,
         }
@@ -580,15 +614,16 @@ impl Default for SurfaceMaterial {
 }
 
 impl SurfaceMaterial {
-    pub fn coverage(&self) -> Coverage {
-        let a = self.opacity;
-        match self.alpha {
-            AlphaMode::Opaque => Coverage::Opaque,
-            AlphaMode::Blend if a >= 1.0 => Coverage::Opaque,
-            AlphaMode::Blend if a > 0.0 => Coverage::Translucent(a),
-            AlphaMode::Blend => Coverage::Hidden,
-            AlphaMode::Mask(cutoff) if a >= cutoff => Coverage::Opaque,
-            AlphaMode::Mask(_) => Coverage::Hidden,
+    /// What the surface lets through wherever it is hit, if that does not
+    /// vary over it (its opacity and color are constants, or its alpha
+    /// mode ignores them).
+    pub fn fixed_coverage(&self) -> Option<Coverage> {
+        match (&self.opacity, &self.alpha) {
+            (_, AlphaMode::Opaque) => Some(Coverage::Opaque),
+            (OpacitySource::Constant(a), mode) if self.color.is_constant() => {
+                Some(mode.coverage(*a))
+            }
+            _ => None,
         }
     }
 }

@@ -800,6 +800,120 @@ fn alpha_modes_blend_mask_and_warn() {
 }
 
 #[test]
+fn opacity_from_an_attribute_or_a_sampler_cuts_a_surface_on_either_backend() {
+    for backend in ["cpu", "gpu"] {
+        let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));
+        // attribute0 runs from 0 at the square's left edge to 1 at its
+        // right; the square fills the view.
+        let g = scalar_square(&mut h);
+        let red = || Input::Bytes(DataType::FLOAT32_VEC3, bytes(&[1.0f32, 0.0, 0.0]));
+        let draw = |h: &mut Host, params: Vec<(&str, Input)>| {
+            let m = h.d.new_object(DataType::MATERIAL, "matte");
+            h.d.set_param(Subject::Object(m), "color", red());
+            for (name, value) in params {
+                h.d.set_param(Subject::Object(m), name, value);
+            }
+            h.d.commit(Subject::Object(m));
+            let s = surface(h, g, m);
+            let f = frame(h, &[s], None);
+            let p = h.pixels(f);
+            for o in [m, s, f] {
+                h.d.release(o);
+            }
+            [SIZE / 8, 3 * SIZE / 8, 5 * SIZE / 8, 7 * SIZE / 8].map(|x| pixel(&p, x, SIZE / 2))
+        };
+        let background = draw(
+            &mut h,
+            vec![
+                ("opacity", Input::Bytes(DataType::FLOAT32, bytes(&[0.0f32]))),
+                ("alphaMode", Input::String("blend".into())),
+            ],
+        )[0];
+        let masked = draw(
+            &mut h,
+            vec![
+                ("opacity", Input::String("attribute0".into())),
+                ("alphaMode", Input::String("mask".into())),
+            ],
+        );
+        // The sampler's image: 0 then 1, nearest, read at attribute0.
+        let sampler = h.d.new_object(DataType::SAMPLER, "image1D");
+        let steps = h.array(
+            DataType::ARRAY1D,
+            DataType::FLOAT32,
+            [2, 1, 1],
+            &bytes(&[0.0f32, 1.0]),
+        );
+        h.set_object(sampler, "image", DataType::ARRAY1D, steps);
+        h.d.set_param(
+            Subject::Object(sampler),
+            "inAttribute",
+            Input::String("attribute0".into()),
+        );
+        h.d.set_param(
+            Subject::Object(sampler),
+            "filter",
+            Input::String("nearest".into()),
+        );
+        h.d.commit(Subject::Object(sampler));
+        let sampled = draw(
+            &mut h,
+            vec![
+                ("opacity", Input::Object(DataType::SAMPLER, sampler)),
+                ("alphaMode", Input::String("blend".into())),
+            ],
+        );
+        // Blended by attribute0: redder to the right.
+        let blended = draw(
+            &mut h,
+            vec![
+                ("opacity", Input::String("attribute0".into())),
+                ("alphaMode", Input::String("blend".into())),
+            ],
+        );
+        assert!(h.errors().is_empty(), "{backend}: {:?}", h.errors());
+        for cut in [masked, sampled] {
+            assert_eq!(&cut[..2], &[background; 2], "{backend}: {cut:?}");
+            for c in &cut[2..] {
+                assert!(c[0] > 200 && c[1] == 0 && c[2] == 0, "{backend}: {cut:?}");
+            }
+        }
+        let reds = blended.map(|c| c[0]);
+        assert!(
+            reds.windows(2).all(|w| w[1] > w[0] + 20),
+            "{backend}: {blended:?}"
+        );
+        // An opacity from an attribute under alphaMode opaque, and one
+        // naming no attribute, are warned about.
+        draw(
+            &mut h,
+            vec![("opacity", Input::String("attribute0".into()))],
+        );
+        draw(
+            &mut h,
+            vec![("opacity", Input::String("temperature".into()))],
+        );
+        let warnings = h.messages(Severity::Warning);
+        assert!(
+            warnings
+                .iter()
+                .any(|m| m
+                    .contains("opacity from attribute0 under alphaMode opaque is drawn opaque")),
+            "{warnings:?}"
+        );
+        assert!(
+            warnings
+                .iter()
+                .any(|m| m.contains("opacity names 'temperature'")),
+            "{warnings:?}"
+        );
+        for o in [g, sampler, steps] {
+            h.d.release(o);
+        }
+    }
+}
+
+#[test]
 fn point_and_spot_lights_light_surfaces_through_the_world() {
     for backend in ["cpu", "gpu"] {
         let mut h = Host::on_backend(backend, std::sync::Arc::new(|_| {}));

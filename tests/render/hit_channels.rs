@@ -13,8 +13,8 @@ use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera, PrimaryRa
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{CpuRenderer, Frame, FrameDesc, PixelHit, RenderSettings};
 use anari_library_caveray::scene::{
-    AlphaMode, ColorSource, ObjectIds, PlacedShape, PlacedVolume, Scene, Shape, ShapeInput,
-    SurfaceMaterial, TransferFunction,
+    AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume, Scene, Shape,
+    ShapeInput, SurfaceMaterial, TransferFunction,
 };
 use common::render::{four_cameras, gpu, off_axis_wall};
 use glam::{DVec3, Mat4, UVec2, Vec3, Vec4};
@@ -53,7 +53,7 @@ fn input(vertices: usize, primitives: usize, ids: Option<Vec<u32>>) -> ShapeInpu
 fn matte(color: Vec3) -> SurfaceMaterial {
     SurfaceMaterial {
         color: ColorSource::Constant(color),
-        opacity: 1.0,
+        opacity: OpacitySource::Constant(1.0),
         alpha: AlphaMode::Opaque,
         pbr: None,
     }

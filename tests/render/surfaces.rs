@@ -14,8 +14,8 @@ use anari_library_caveray::render::{
     ssim, ColorFormat, CpuRenderer, FrameDesc, Lamp, RenderSettings, Spot, SurfaceShading,
 };
 use anari_library_caveray::scene::{
-    AlphaMode, Attribute, ColorSource, Image, Pbr, PlacedShape, Sampler, SamplerKind, Scene, Shape,
-    ShapeInput, SurfaceMaterial, Wrap,
+    AlphaMode, Attribute, ColorSource, Image, OpacitySource, Pbr, PlacedShape, Sampler,
+    SamplerKind, Scene, Shape, ShapeInput, SurfaceMaterial, Wrap,
 };
 use common::render::{four_cameras, gpu, off_axis_wall};
 use glam::{DVec3, Mat4, UVec2, UVec3, Vec3, Vec4};
@@ -34,7 +34,7 @@ fn input(vertices: usize, primitives: usize, slot: usize, a: Option<Attribute>) 
 fn material(color: ColorSource) -> SurfaceMaterial {
     SurfaceMaterial {
         color,
-        opacity: 1.0,
+        opacity: OpacitySource::Constant(1.0),
         alpha: AlphaMode::Opaque,
         pbr: None,
     }
@@ -477,7 +477,7 @@ fn square_at(z: f32, color: Vec3, opacity: f32, alpha: AlphaMode) -> PlacedShape
         Arc::new(made.shape),
         SurfaceMaterial {
             color: ColorSource::Constant(color),
-            opacity,
+            opacity: OpacitySource::Constant(opacity),
             alpha,
             pbr: None,
         },
@@ -538,13 +538,195 @@ fn translucent_and_masked_surfaces_composite_in_depth_order() {
     assert!((frame.depth.as_ref().unwrap()[i] - 2.5).abs() < 1e-4);
 }
 
+/// A red square at z = 0.5 over [-1, 1]^2 in `material` (its color
+/// replaced where it is constant), attribute0 its vertex colors (red,
+/// alpha from 0 at the left to 1 at the right) and attribute1 its x
+/// mapped to [0, 1].
+fn ramped_square(material: SurfaceMaterial) -> PlacedShape {
+    let positions = vec![
+        Vec3::new(-1.0, -1.0, 0.5),
+        Vec3::new(1.0, -1.0, 0.5),
+        Vec3::new(1.0, 1.0, 0.5),
+        Vec3::new(-1.0, 1.0, 0.5),
+    ];
+    let u = [0.0, 1.0, 1.0, 0.0];
+    let mut attributes: [Option<Attribute>; 5] = Default::default();
+    attributes[0] = Some(Attribute::PerVertex(
+        u.iter().map(|&u| Vec4::new(1.0, 0.0, 0.0, u)).collect(),
+    ));
+    attributes[2] = Some(Attribute::PerVertex(
+        u.iter().map(|&u| Vec4::new(u, 0.0, 0.0, 1.0)).collect(),
+    ));
+    let made = Shape::triangles(
+        positions,
+        vec![[0, 1, 2], [0, 2, 3]],
+        vec![0, 0],
+        None,
+        ShapeInput {
+            vertices: 4,
+            primitives: 1,
+            attributes,
+            ids: None,
+        },
+    )
+    .unwrap();
+    PlacedShape::new(Arc::new(made.shape), material, Mat4::IDENTITY)
+}
+
+#[test]
+fn opacity_from_an_attribute_a_sampler_or_the_colors_alpha_varies_across_a_surface() {
+    // The ramped red square in front of an opaque blue one, head-on under
+    // the headlight without ambient light: each pixel is red over blue
+    // by the opacity its x gives, or red or blue alone where a mask cuts,
+    // on both renderers.
+    let n = 32;
+    let camera = head_on(n, 2.0);
+    let settings = RenderSettings {
+        ambient: Vec3::ZERO,
+        background: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        ..Default::default()
+    };
+    let blue = square_at(-0.5, Vec3::Z, 1.0, AlphaMode::Opaque);
+    // Opacity steps of a nearest image: its first channel.
+    let steps = Image::new(
+        UVec3::new(4, 1, 1),
+        [0.0, 0.25, 0.75, 1.0]
+            .map(|a| Vec4::new(a, 0.0, 0.0, 1.0))
+            .to_vec(),
+        false,
+        [Wrap::ClampToEdge; 3],
+    )
+    .unwrap();
+    let step = |u: f32| [0.0, 0.25, 0.75, 1.0][((u * 4.0) as usize).min(3)];
+    // Red whose fourth channel steps the same way.
+    let red_steps = Image::new(
+        UVec3::new(4, 1, 1),
+        [0.0, 0.25, 0.75, 1.0]
+            .map(|a| Vec4::new(1.0, 0.0, 0.0, a))
+            .to_vec(),
+        false,
+        [Wrap::ClampToEdge; 3],
+    )
+    .unwrap();
+    let by_x = |kind: SamplerKind| {
+        let mut s = Sampler::new(kind);
+        s.in_attribute = Some(2);
+        Arc::new(s)
+    };
+    let mut half = Sampler::new(SamplerKind::Transform);
+    half.in_attribute = Some(2);
+    half.out_transform = Mat4::from_scale(Vec3::splat(0.5));
+    let red = ColorSource::Constant(Vec3::X);
+    let material = |color: ColorSource, opacity: OpacitySource, alpha: AlphaMode| SurfaceMaterial {
+        color,
+        opacity,
+        alpha,
+        pbr: None,
+    };
+    type Case = (&'static str, SurfaceMaterial, Box<dyn Fn(f32) -> f32>);
+    let cases: Vec<Case> = vec![
+        (
+            "attribute, blend",
+            material(red.clone(), OpacitySource::Attribute(2), AlphaMode::Blend),
+            Box::new(|u| u),
+        ),
+        (
+            "attribute, mask",
+            material(
+                red.clone(),
+                OpacitySource::Attribute(2),
+                AlphaMode::Mask(0.5),
+            ),
+            Box::new(|u| f32::from(u >= 0.5)),
+        ),
+        (
+            "attribute, opaque",
+            material(red.clone(), OpacitySource::Attribute(2), AlphaMode::Opaque),
+            Box::new(|_| 1.0),
+        ),
+        (
+            "image sampler, blend",
+            material(
+                red.clone(),
+                OpacitySource::Sampler(by_x(SamplerKind::Image(steps.clone()))),
+                AlphaMode::Blend,
+            ),
+            Box::new(step),
+        ),
+        (
+            "image sampler, mask",
+            material(
+                red.clone(),
+                OpacitySource::Sampler(by_x(SamplerKind::Image(steps))),
+                AlphaMode::Mask(0.5),
+            ),
+            Box::new(move |u| f32::from(step(u) >= 0.5)),
+        ),
+        (
+            "transform sampler, blend",
+            material(
+                red.clone(),
+                OpacitySource::Sampler(Arc::new(half)),
+                AlphaMode::Blend,
+            ),
+            Box::new(|u| 0.5 * u),
+        ),
+        (
+            "color attribute's alpha times a constant, blend",
+            material(
+                ColorSource::Attribute(0),
+                OpacitySource::Constant(0.8),
+                AlphaMode::Blend,
+            ),
+            Box::new(|u| 0.8 * u),
+        ),
+        (
+            "color image's alpha times an attribute, blend",
+            material(
+                ColorSource::Sampler(by_x(SamplerKind::Image(red_steps))),
+                OpacitySource::Attribute(2),
+                AlphaMode::Blend,
+            ),
+            Box::new(move |u| step(u) * u),
+        ),
+        (
+            "color attribute's alpha, mask",
+            material(
+                ColorSource::Attribute(0),
+                OpacitySource::Constant(1.0),
+                AlphaMode::Mask(0.25),
+            ),
+            Box::new(|u| f32::from(u >= 0.25)),
+        ),
+    ];
+    let mut gpu = gpu();
+    for (what, drawn, opacity) in cases {
+        let scene = Scene::of_shapes(vec![ramped_square(drawn), blue.clone()]).unwrap();
+        for (name, rgba) in both(&mut gpu, &scene, (&camera, n), &settings) {
+            for y in [1, n / 2, n - 2] {
+                for x in 0..n {
+                    let u = (x as f32 + 0.5) / n as f32;
+                    let a = opacity(u);
+                    let expected = Vec3::new(a, 0.0, 1.0 - a);
+                    let i = 4 * (y * n + x) as usize;
+                    let got = Vec3::from_slice(&rgba[i..i + 3]);
+                    assert!(
+                        (got - expected).abs().max_element() < 2e-3,
+                        "{name}, {what}: pixel ({x}, {y}) {got}, expected {expected}"
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn translucent_surfaces_inside_a_volume_on_the_gpu_match_the_cpu_reference() {
     let mut glass = glyphs();
-    glass.material.opacity = 0.4;
+    glass.material.opacity = OpacitySource::Constant(0.4);
     glass.material.alpha = AlphaMode::Blend;
     let mut veil = sheet(8);
-    veil.material.opacity = 0.6;
+    veil.material.opacity = OpacitySource::Constant(0.6);
     veil.material.alpha = AlphaMode::Blend;
     let scene = Scene::new(shepp_logan(16), preset("phantom").unwrap())
         .with_shapes(vec![veil, glass, tubes()])

@@ -553,19 +553,19 @@ fn share_off(
 
 #[test]
 fn surfaces_reproject_like_two_pass_beside_their_edges() {
-    use anari_library_caveray::scene::{AlphaMode, ColorSource, SurfaceMaterial};
+    use anari_library_caveray::scene::{AlphaMode, ColorSource, OpacitySource, SurfaceMaterial};
     // Opaque balls in the phantom's near half, where the right eye sees
     // past their edges what the left eye's rays never reach, and a
     // translucent one the volume shows through.
     let opaque = SurfaceMaterial {
         color: ColorSource::Constant(Vec3::new(0.9, 0.5, 0.2)),
-        opacity: 1.0,
+        opacity: OpacitySource::Constant(1.0),
         alpha: AlphaMode::Opaque,
         pbr: None,
     };
     let glass = SurfaceMaterial {
         color: ColorSource::Constant(Vec3::new(0.2, 0.6, 0.9)),
-        opacity: 0.4,
+        opacity: OpacitySource::Constant(0.4),
         alpha: AlphaMode::Blend,
         pbr: None,
     };

@@ -9,8 +9,8 @@ use anari_library_caveray::data::{
 };
 use anari_library_caveray::geometry::VolumeAxis;
 use anari_library_caveray::scene::{
-    AlphaMode, ColorSource, ObjectIds, PlacedShape, PlacedVolume, Scene, Shape, ShapeInput,
-    StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
+    AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume, Scene, Shape,
+    ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -356,7 +356,7 @@ impl MeshArgs {
         };
         let material = SurfaceMaterial {
             color: ColorSource::Constant(self.mesh_color.as_vec3()),
-            opacity: self.mesh_opacity,
+            opacity: OpacitySource::Constant(self.mesh_opacity),
             alpha,
             pbr: None,
         };

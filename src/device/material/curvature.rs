@@ -31,6 +31,7 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     }
     Ok(Some(State::ready(MaterialModel {
         color_sampler: None,
+        opacity_sampler: None,
         coloring: Coloring::Curvature { radius },
         surface: None,
     })))

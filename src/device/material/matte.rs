@@ -1,6 +1,6 @@
 //! ANARI's `matte` material (ANARI_KHR_MATERIAL_MATTE): one color, a
 //! geometry attribute named as the color (`color`, `attribute0..3`), or a
-//! sampler of one; `opacity` as `alphaMode` says: ignored (`opaque`),
+//! sampler of one; `opacity` likewise, as `alphaMode` says: ignored (`opaque`),
 //! composited in depth order (`blend`), or a cutoff (`mask`).
 
 use crate::device::object::State;
@@ -37,9 +37,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let (color, color_sampler, flat) = super::color(r, "color", DEFAULT_COLOR, warn)?;
-    let (opacity, alpha) = super::opacity_and_alpha(r, warn)?;
+    let (opacity, opacity_sampler, alpha) = super::opacity_and_alpha(r, warn)?;
     Ok(Some(State::ready(MaterialModel {
         color_sampler,
+        opacity_sampler,
         // An isosurface has no attributes: a named one is the default color.
         coloring: Coloring::Flat(flat),
         surface: Some(SurfaceMaterial {

@@ -12,14 +12,16 @@ use super::object::ObjectRef;
 use super::table::{p, DefaultValue, ParamInfo, Read, F32};
 use super::types::DataType as T;
 pub use crate::render::iso::Coloring;
-use crate::scene::{AlphaMode, ColorSource, SurfaceMaterial, ATTRIBUTE_NAMES};
+use crate::scene::{
+    AlphaMode, ColorSource, OpacitySource, Source, SurfaceMaterial, ATTRIBUTE_NAMES,
+};
 
 pub const OPACITY: ParamInfo = p(
     "opacity",
     &[T::FLOAT32, T::SAMPLER, T::STRING],
     false,
     DefaultValue::Floats(&[1.0]),
-    "how much of what lies behind the surface it hides, under alphaMode blend or mask; a constant (an attribute name or a sampler is accepted and read as 1, with a warning)",
+    "how much of what lies behind the surface it hides, under alphaMode blend or mask: a constant, the name of the geometry attribute that gives it (its first component), or a sampler (its x); times the color's fourth component where the color is an attribute or a sampler",
 )
 .range(0.0, 1.0);
 
@@ -54,6 +56,32 @@ pub const ALPHA_CUTOFF: ParamInfo = p(
 )
 .range(0.0, 1.0);
 
+/// Parameter `name` where the host names an attribute or gives a
+/// sampler: its source (a sampler stands as the constant `fallback` until
+/// a frame resolves it) and the sampler. None where it is a constant.
+fn varying<C>(
+    r: &Read<'_>,
+    name: &str,
+    fallback: C,
+    warn: &mut dyn FnMut(String),
+) -> Option<(Source<C>, Option<ObjectRef>)> {
+    if let Some(sampler) = r.object(name).filter(|o| o.kind == T::SAMPLER) {
+        return Some((Source::Constant(fallback), Some(sampler.clone())));
+    }
+    let attribute = r.set(name).and_then(|v| v.string())?;
+    let source = match ATTRIBUTE_NAMES.iter().position(|n| *n == attribute) {
+        Some(slot) => Source::Attribute(slot),
+        None => {
+            warn(format!(
+                "{name} names '{attribute}'; caveray reads {}: the default is used",
+                ATTRIBUTE_NAMES.join(", ")
+            ));
+            Source::Constant(fallback)
+        }
+    };
+    Some((source, None))
+}
+
 /// Color parameter `name`: a constant, the name of an attribute, or a
 /// sampler (resolved when a frame renders); with the flat color an
 /// isosurface shows, which has no attributes.
@@ -63,23 +91,8 @@ fn color(
     default: Vec3,
     warn: &mut dyn FnMut(String),
 ) -> Result<(ColorSource, Option<ObjectRef>, Vec3), String> {
-    let named = r.set(name).and_then(|v| v.string());
-    let sampler = r.object(name).filter(|o| o.kind == T::SAMPLER).cloned();
-    if sampler.is_some() {
-        return Ok((ColorSource::Constant(default), sampler, default));
-    }
-    if let Some(attribute) = named {
-        let source = match ATTRIBUTE_NAMES.iter().position(|n| *n == attribute) {
-            Some(slot) => ColorSource::Attribute(slot),
-            None => {
-                warn(format!(
-                    "{name} names '{attribute}'; caveray colors by {}: drawn in the default color",
-                    ATTRIBUTE_NAMES.join(", ")
-                ));
-                ColorSource::Constant(default)
-            }
-        };
-        return Ok((source, None, default));
+    if let Some((source, sampler)) = varying(r, name, default, warn) {
+        return Ok((source, sampler, default));
     }
     let color = match r.set(name).and_then(|v| v.f32s()) {
         Some(f) if f.len() == 4 => Vec3::from_slice(&f),
@@ -95,20 +108,27 @@ fn color(
     Ok((ColorSource::Constant(clamped), None, clamped))
 }
 
-/// `opacity` clamped into [0, 1], and `alphaMode` (with `alphaCutoff`).
+/// A material's `opacity` (a constant clamped into [0, 1], an attribute
+/// or a sampler, resolved when a frame renders) and `alphaMode` (with
+/// `alphaCutoff`).
 fn opacity_and_alpha(
     r: &Read<'_>,
     warn: &mut dyn FnMut(String),
-) -> Result<(f32, AlphaMode), String> {
-    warn_unless_constant(r, "opacity", warn);
-    let given = r.f32("opacity")?;
-    if !given.is_finite() {
-        return Err(format!("opacity {given} must be finite"));
-    }
-    let opacity = given.clamp(0.0, 1.0);
-    if opacity != given {
-        warn(format!("opacity {given} lies outside [0, 1]; clamped"));
-    }
+) -> Result<(OpacitySource, Option<ObjectRef>, AlphaMode), String> {
+    let (opacity, sampler) = match varying(r, "opacity", 1.0, warn) {
+        Some(varying) => varying,
+        None => {
+            let given = r.f32("opacity")?;
+            if !given.is_finite() {
+                return Err(format!("opacity {given} must be finite"));
+            }
+            let opacity = given.clamp(0.0, 1.0);
+            if opacity != given {
+                warn(format!("opacity {given} lies outside [0, 1]; clamped"));
+            }
+            (OpacitySource::Constant(opacity), None)
+        }
+    };
     let alpha = match r.string("alphaMode").unwrap_or("opaque") {
         "opaque" => AlphaMode::Opaque,
         "blend" => AlphaMode::Blend,
@@ -121,12 +141,21 @@ fn opacity_and_alpha(
             AlphaMode::Opaque
         }
     };
-    if alpha == AlphaMode::Opaque && opacity < 1.0 {
-        warn(format!(
-            "opacity {opacity} under alphaMode opaque is drawn opaque (alphaMode blend composites it)"
-        ));
+    if alpha == AlphaMode::Opaque {
+        let given = match &opacity {
+            _ if sampler.is_some() => Some("from a sampler".to_string()),
+            OpacitySource::Constant(a) if *a < 1.0 => Some(a.to_string()),
+            OpacitySource::Constant(_) => None,
+            OpacitySource::Attribute(slot) => Some(format!("from {}", ATTRIBUTE_NAMES[*slot])),
+            OpacitySource::Sampler(_) => Some("from a sampler".to_string()),
+        };
+        if let Some(given) = given {
+            warn(format!(
+                "opacity {given} under alphaMode opaque is drawn opaque (alphaMode blend composites it)"
+            ));
+        }
     }
-    Ok((opacity, alpha))
+    Ok((opacity, sampler, alpha))
 }
 
 /// A material after commit: how it colors an isosurface, and a surface of
@@ -135,7 +164,8 @@ fn opacity_and_alpha(
 pub struct MaterialModel {
     pub coloring: Coloring,
     pub surface: Option<SurfaceMaterial>,
-    /// The sampler `color` names: resolved when a frame renders, so that
-    /// its own later commits show.
+    /// The samplers `color` and `opacity` name: resolved when a frame
+    /// renders, so that their own later commits show.
     pub color_sampler: Option<ObjectRef>,
+    pub opacity_sampler: Option<ObjectRef>,
 }

@@ -91,7 +91,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let (color, color_sampler, flat) = super::color(r, "baseColor", Vec3::ONE, warn)?;
-    let (opacity, alpha) = super::opacity_and_alpha(r, warn)?;
+    let (opacity, opacity_sampler, alpha) = super::opacity_and_alpha(r, warn)?;
     let emissive = r.vec3("emissive")?;
     if !(emissive.is_finite() && emissive.min_element() >= 0.0) {
         return Err(format!(
@@ -111,6 +111,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     };
     Ok(Some(State::ready(MaterialModel {
         color_sampler,
+        opacity_sampler,
         coloring: Coloring::Flat(flat),
         surface: Some(SurfaceMaterial {
             color,

@@ -18,7 +18,7 @@ use crate::device::world::Placement;
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
 use crate::scene::{
-    ColorSource, ObjectIds, PlacedShape, PlacedVolume, StructuredVolume, TransferFunction,
+    ObjectIds, PlacedShape, PlacedVolume, Source, StructuredVolume, TransferFunction,
 };
 
 /// The transfer function a surface's field is placed with: the caster
@@ -67,15 +67,20 @@ pub fn surfaces(
                         material.describe()
                     )
                 })?;
-                if let Some(sampler) = &material_model.color_sampler {
-                    let sampler = sampler.ready::<SamplerModel>(not_ours).map_err(|e| {
+                let sampled = |sampler: &ObjectRef, what: &str| {
+                    sampler.ready::<SamplerModel>(not_ours).map_err(|e| {
                         format!(
-                            "{}: {} colors by {e}",
+                            "{}: {} {what} by {e}",
                             surface.describe(),
                             material.describe()
                         )
-                    })?;
-                    drawn.color = ColorSource::Sampler(sampler);
+                    })
+                };
+                if let Some(sampler) = &material_model.color_sampler {
+                    drawn.color = Source::Sampler(sampled(sampler, "colors")?);
+                }
+                if let Some(sampler) = &material_model.opacity_sampler {
+                    drawn.opacity = Source::Sampler(sampled(sampler, "takes its opacity")?);
                 }
                 let mut placed = PlacedShape::new(shape, drawn, transform);
                 placed.ids = ObjectIds {

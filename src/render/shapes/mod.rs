@@ -24,7 +24,10 @@ use obvhs::Boundable;
 use super::frame::filled;
 use super::hits::HitRecord;
 use super::{RenderError, RenderSettings, SurfaceShading};
-use crate::scene::{Attribute, ColorSource, Coverage, PlacedShape, Primitives, DEFAULT_ATTRIBUTE};
+use crate::scene::{
+    Attribute, ColorSource, Coverage, OpacitySource, PlacedShape, Primitives, Source,
+    DEFAULT_ATTRIBUTE,
+};
 use brdf::reflected;
 pub use brdf::MIN_ROUGHNESS;
 use intersect::{cone, curve, sphere, tangent_cone, triangle, End};
@@ -51,6 +54,9 @@ struct Traced {
     to_object: Mat4,
     /// Object-space normals to world space (the inverse transpose).
     normal_to_world: Mat3,
+    /// Whether its opacity varies over it and can hide parts of it: then
+    /// a traversal looks at each hit's.
+    cuts: bool,
 }
 
 /// A BVH primitive: the kept primitive `index` of placed shape `shape`.
@@ -114,7 +120,8 @@ impl ShapeSet {
         let mut traced = Vec::with_capacity(shapes.len());
         for (s, placed) in shapes.iter().enumerate() {
             let m = placed.transform;
-            let hidden = placed.material.coverage() == Coverage::Hidden;
+            let fixed = placed.material.fixed_coverage();
+            let hidden = fixed == Some(Coverage::Hidden);
             let to_object = m.inverse();
             let normal_to_world = Mat3::from_mat4(to_object).transpose();
             let shape = &placed.shape;
@@ -177,6 +184,7 @@ impl ShapeSet {
                 world,
                 to_object,
                 normal_to_world,
+                cuts: fixed.is_none(),
             });
         }
         let bvh = if boxes.is_empty() {
@@ -207,14 +215,14 @@ impl ShapeSet {
         let indices = &self.bvh.primitive_indices;
         let hit = self.bvh.ray_traverse(ray, &mut found, |ray, id| {
             let prim = self.prims[indices[id] as usize];
-            self.distance(prim, o, d, ray.tmin, ray.tmax)
+            self.shown(prim, o, d, ray.tmin, ray.tmax)
                 .map_or(f32::INFINITY, |(t, _)| t)
         });
         if !hit {
             return None;
         }
         let prim = self.prims[indices[found.primitive_id as usize] as usize];
-        let (t, bary) = self.distance(prim, o, d, t_min, t_max)?;
+        let (t, bary) = self.shown(prim, o, d, t_min, t_max)?;
         let normal = self.normal(prim, o + d * t, bary, d);
         Some(Hit {
             t,
@@ -223,6 +231,39 @@ impl ShapeSet {
             bary,
             normal,
         })
+    }
+
+    /// Where `prim` is first hit and drawn in `(t_min, t_max)`: past the
+    /// points its opacity hides.
+    fn shown(&self, prim: Prim, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<(f32, Vec2)> {
+        let found = self.distance(prim, o, d, t_min, t_max)?;
+        if !self.traced[prim.shape as usize].cuts {
+            return Some(found);
+        }
+        // A primitive meets a ray at most four times (a capped cone's
+        // side twice and both discs).
+        let mut from = found;
+        for _ in 0..4 {
+            let (t, bary) = from;
+            let hit = Self::point_hit(prim, t, bary);
+            if self.coverage(&hit) != Coverage::Hidden {
+                return Some(from);
+            }
+            from = self.distance(prim, o, d, t, t_max)?;
+        }
+        None
+    }
+
+    /// A hit of `prim` at `t` as far as its attributes go (its normal
+    /// unknown).
+    fn point_hit(prim: Prim, t: f32, bary: Vec2) -> Hit {
+        Hit {
+            t,
+            shape: prim.shape,
+            index: prim.index,
+            bary,
+            normal: Vec3::ZERO,
+        }
     }
 
     /// Where `prim` is hit in `(t_min, t_max)`, with its barycentrics.
@@ -377,20 +418,45 @@ impl ShapeSet {
         let placed = &self.traced[hit.shape as usize].placed;
         match &placed.material.color {
             ColorSource::Constant(c) => *c,
-            ColorSource::Attribute(slot) => self.attribute(hit, *slot).truncate(),
-            ColorSource::Sampler(s) => {
+            source => self.read(hit, source).truncate(),
+        }
+    }
+
+    /// What attribute or sampler `source` gives at `hit` (a constant
+    /// gives the default attribute value).
+    fn read<C>(&self, hit: &Hit, source: &Source<C>) -> Vec4 {
+        match source {
+            Source::Constant(_) => DEFAULT_ATTRIBUTE,
+            Source::Attribute(slot) => self.attribute(hit, *slot),
+            Source::Sampler(s) => {
                 let input = s
                     .in_attribute
                     .map_or(DEFAULT_ATTRIBUTE, |slot| self.attribute(hit, slot));
-                let host = placed.shape.source[hit.index as usize];
-                s.sample(input, host).truncate()
+                let host = self.traced[hit.shape as usize].placed.shape.source[hit.index as usize];
+                s.sample(input, host)
             }
         }
     }
 
+    /// The material's opacity at `hit` before its alpha mode: its own
+    /// (a constant, or the first component of an attribute or a sample)
+    /// times its color's fourth component where that is an attribute or
+    /// a sample, as glTF multiplies a base color's alpha in.
+    pub fn opacity(&self, hit: &Hit) -> f32 {
+        let material = &self.traced[hit.shape as usize].placed.material;
+        let own = match &material.opacity {
+            OpacitySource::Constant(a) => *a,
+            source => self.read(hit, source).x,
+        };
+        own * self.read(hit, &material.color).w
+    }
+
     /// What the surface at `hit` lets through.
     pub fn coverage(&self, hit: &Hit) -> Coverage {
-        self.traced[hit.shape as usize].placed.material.coverage()
+        let material = &self.traced[hit.shape as usize].placed.material;
+        material
+            .fixed_coverage()
+            .unwrap_or_else(|| material.alpha.coverage(self.opacity(hit)))
     }
 
     /// The light the first surface within `reach` of `p` along `d` lets

@@ -18,22 +18,29 @@
 //!   | shape << 4; index is the kept primitive within its shape. Triangles
 //!   are in world space, the others in object space, as the CPU traces
 //!   them.
-//! - shape s at `shapes + 16 s`: rows of world-to-object (3 words), of
+//! - shape s at `shapes + 23 s`: rows of world-to-object (3 words), of
 //!   object-to-world for normals (3), (constant albedo, u shading base),
-//!   (u flags, opacity (1: opaque), metallic, roughness); for an image
+//!   (u flags, constant opacity, metallic, roughness); for a color image
 //!   sampler (u dims, u texel base), (u linear, u wrap per axis), the rows
-//!   of its out-transform (4) and its out-offset; then (emissive, -);
-//!   unused words are zero. Flags: bit 0 per-corner albedo, bit 1 the
-//!   host's normals, bit 2 per-corner image coordinates, bit 3 a
-//!   physically based material (metallic, roughness, emissive).
+//!   of its out-transform (4) and its out-offset; then (emissive, alpha
+//!   cutoff); then an opacity image sampler's 7 words as the color's;
+//!   unused words are zero. Flags: bit 0 per-corner color, bit 1 the
+//!   host's normals, bit 2 per-corner color image coordinates, bit 3 a
+//!   physically based material (metallic, roughness, emissive), bit 4
+//!   per-corner opacity, bit 5 per-corner opacity image coordinates, bit
+//!   6 alphaMode blend, bit 7 mask. The constant opacity is what neither
+//!   varies nor samples an image of the opacity and the color's fourth
+//!   component gives (1 under alphaMode opaque).
 //! - in the second array, a shape's shading at `shading base + stride k`
 //!   for kept primitive
-//!   k: the albedo at each corner (3 words) if it varies, or the image
-//!   coordinates there (the sampler's in-transform applied), then each
-//!   corner's normal in world space (3 words) if the host gave normals.
-//!   Samplers that are affine in the attribute (transform, primitive) are
-//!   sampled at the corners: interpolating those is sampling the
-//!   interpolated attribute. Images are read per pixel.
+//!   k: the color at each corner (3 words, its fourth component in w) if
+//!   it varies, or the image coordinates there (the sampler's in-transform
+//!   applied), then each corner's normal in world space (3 words) if the
+//!   host gave normals, then the opacity at each corner (1 word, x y z) if
+//!   it varies, or its image coordinates (3 words). Samplers that are
+//!   affine in the attribute (transform, primitive) are sampled at the
+//!   corners: interpolating those is sampling the interpolated attribute.
+//!   Images are read per pixel.
 //! - after all shading, each image sampler's texels (x fastest), once
 //!   however many shapes use it.
 
@@ -43,7 +50,18 @@ use std::sync::Arc;
 
 use super::{Hit, ShapeSet};
 use crate::render::RenderError;
-use crate::scene::{ColorSource, Coverage, Primitives, Sampler, SamplerKind, DEFAULT_ATTRIBUTE};
+use crate::scene::{
+    AlphaMode, OpacitySource, Primitives, Sampler, SamplerKind, Source, SurfaceMaterial,
+    DEFAULT_ATTRIBUTE,
+};
+
+/// The image sampler of a material's opacity, where its alpha mode reads
+/// it.
+fn opacity_image(material: &SurfaceMaterial) -> Option<&Arc<Sampler>> {
+    (material.alpha != AlphaMode::Opaque)
+        .then(|| material.opacity.image_sampler())
+        .flatten()
+}
 
 pub const KIND_TRIANGLE: u32 = 0;
 pub const KIND_SPHERE: u32 = 1;
@@ -53,13 +71,21 @@ pub const FLAG_ALBEDO: u32 = 1;
 pub const FLAG_NORMALS: u32 = 2;
 pub const FLAG_IMAGE: u32 = 4;
 pub const FLAG_PBR: u32 = 8;
+pub const FLAG_OPACITY: u32 = 16;
+pub const FLAG_OPACITY_IMAGE: u32 = 32;
+pub const FLAG_BLEND: u32 = 64;
+pub const FLAG_MASK: u32 = 128;
 /// Node boxes a traversal keeps to visit later, and the most levels of a
 /// tree a GPU traverses.
 pub const TRAVERSAL_STACK: u32 = 64;
 
 const NODE_WORDS: usize = 2;
 const PRIM_WORDS: usize = 3;
-const SHAPE_WORDS: usize = 16;
+pub const SHAPE_WORDS: usize = 23;
+/// Where in a shape's words each image sampler's block begins.
+pub const COLOR_IMAGE: usize = 8;
+pub const OPACITY_IMAGE: usize = 16;
+const IMAGE_WORDS: usize = 7;
 
 /// The words and where each part begins.
 #[derive(Debug, Default)]
@@ -176,39 +202,60 @@ impl ShapeSet {
                 words.push(word(normals.col(r), 0.0));
             }
             // Where the albedo does not vary, any hit's is the shape's.
-            let constant = self.albedo(&Self::corner_hit(s as u32, 0, Vec2::ZERO));
+            let anywhere = Self::corner_hit(s as u32, 0, Vec2::ZERO);
+            let constant = self.albedo(&anywhere);
             words.push(word(constant, bits(base as u32)));
-            let alpha = match traced.placed.material.coverage() {
-                Coverage::Opaque => 1.0,
-                Coverage::Translucent(a) => a,
-                Coverage::Hidden => 0.0,
+            let material = &traced.placed.material;
+            let opacity = if material.alpha == AlphaMode::Opaque {
+                1.0
+            } else {
+                let own = match &material.opacity {
+                    OpacitySource::Constant(a) => *a,
+                    _ if flags & (FLAG_OPACITY | FLAG_OPACITY_IMAGE) != 0 => 1.0,
+                    source => self.read(&anywhere, source).x,
+                };
+                let color = if flags & (FLAG_ALBEDO | FLAG_IMAGE) != 0 {
+                    1.0
+                } else {
+                    self.read(&anywhere, &material.color).w
+                };
+                own * color
             };
-            let pbr = traced.placed.material.pbr;
+            let pbr = material.pbr;
             let (metallic, roughness) = pbr.map_or((0.0, 1.0), |p| (p.metallic, p.roughness));
-            words.push([bits(flags), alpha, metallic, roughness]);
+            words.push([bits(flags), opacity, metallic, roughness]);
             base += Self::stride(flags) * traced.placed.shape.len();
-            match Self::image_sampler(traced) {
-                Some(sampler) => {
-                    let SamplerKind::Image(image) = &sampler.kind else {
-                        unreachable!("image_sampler gives image samplers only");
-                    };
-                    let at = images
-                        .iter()
-                        .position(|(s, _)| Arc::ptr_eq(s, sampler))
-                        .map_or(0, |i| texel_bases[i]);
-                    let d = image.dims;
-                    words.push([bits(d.x), bits(d.y), bits(d.z), bits(at as u32)]);
-                    let w = image.wrap.map(|w| bits(w.code()));
-                    words.push([bits(u32::from(image.linear)), w[0], w[1], w[2]]);
-                    let rows = sampler.out_transform.transpose();
-                    for r in 0..4 {
-                        words.push(rows.col(r).to_array());
-                    }
-                    words.push(sampler.out_offset.to_array());
+            let image = |sampler: Option<&Arc<Sampler>>, words: &mut Vec<[f32; 4]>| {
+                let Some(sampler) = sampler else {
+                    words.extend([[0.0; 4]; IMAGE_WORDS]);
+                    return;
+                };
+                let SamplerKind::Image(image) = &sampler.kind else {
+                    unreachable!("image_sampler gives image samplers only");
+                };
+                let at = images
+                    .iter()
+                    .position(|(s, _)| Arc::ptr_eq(s, sampler))
+                    .map_or(0, |i| texel_bases[i]);
+                let d = image.dims;
+                words.push([bits(d.x), bits(d.y), bits(d.z), bits(at as u32)]);
+                let w = image.wrap.map(|w| bits(w.code()));
+                words.push([bits(u32::from(image.linear)), w[0], w[1], w[2]]);
+                let rows = sampler.out_transform.transpose();
+                for r in 0..4 {
+                    words.push(rows.col(r).to_array());
                 }
-                None => words.extend([[0.0; 4]; SHAPE_WORDS - 9]),
-            }
-            words.push(word(pbr.map_or(Vec3::ZERO, |p| p.emissive), 0.0));
+                words.push(sampler.out_offset.to_array());
+            };
+            debug_assert_eq!(words.len() - shapes, s * SHAPE_WORDS + COLOR_IMAGE);
+            image(material.color.image_sampler(), &mut words);
+            let cutoff = match material.alpha {
+                AlphaMode::Mask(cutoff) => cutoff,
+                _ => 0.0,
+            };
+            words.push(word(pbr.map_or(Vec3::ZERO, |p| p.emissive), cutoff));
+            debug_assert_eq!(words.len() - shapes, s * SHAPE_WORDS + OPACITY_IMAGE);
+            image(opacity_image(material), &mut words);
         }
         for (s, traced) in self.traced.iter().enumerate() {
             let flags = self.flags(traced);
@@ -216,17 +263,12 @@ impl ShapeSet {
                 if flags & FLAG_ALBEDO != 0 {
                     for bary in self.corners(s) {
                         let hit = Self::corner_hit(s as u32, index, bary);
-                        shaded.push(self.albedo(&hit).extend(1.0).to_array());
+                        let color = &traced.placed.material.color;
+                        shaded.push(self.read(&hit, color).to_array());
                     }
                 }
-                if let Some(sampler) = Self::image_sampler(traced) {
-                    for bary in self.corners(s) {
-                        let hit = Self::corner_hit(s as u32, index, bary);
-                        let input = sampler
-                            .in_attribute
-                            .map_or(DEFAULT_ATTRIBUTE, |slot| self.attribute(&hit, slot));
-                        shaded.push(sampler.coordinates(input).to_array());
-                    }
+                if let Some(sampler) = traced.placed.material.color.image_sampler() {
+                    self.push_coordinates(s, index, sampler, &mut shaded);
                 }
                 if flags & FLAG_NORMALS != 0 {
                     let Primitives::Triangles {
@@ -240,6 +282,17 @@ impl ShapeSet {
                     for v in triangles[index as usize] {
                         shaded.push(word(traced.normal_to_world * n[v as usize], 0.0));
                     }
+                }
+                if flags & FLAG_OPACITY != 0 {
+                    let source = &traced.placed.material.opacity;
+                    let at = self.corners(s).map(|bary| {
+                        self.read(&Self::corner_hit(s as u32, index, bary), source)
+                            .x
+                    });
+                    shaded.push([at[0], at[1], at[2], 0.0]);
+                }
+                if let Some(sampler) = opacity_image(&traced.placed.material) {
+                    self.push_coordinates(s, index, sampler, &mut shaded);
                 }
             }
         }
@@ -276,7 +329,11 @@ impl ShapeSet {
     fn images(&self) -> Vec<(&Arc<Sampler>, &[glam::Vec4])> {
         let mut out: Vec<(&Arc<Sampler>, &[glam::Vec4])> = Vec::new();
         for traced in &self.traced {
-            if let Some(sampler) = Self::image_sampler(traced) {
+            let material = &traced.placed.material;
+            for sampler in [material.color.image_sampler(), opacity_image(material)]
+                .into_iter()
+                .flatten()
+            {
                 if let SamplerKind::Image(image) = &sampler.kind {
                     if !out.iter().any(|(s, _)| Arc::ptr_eq(s, sampler)) {
                         out.push((sampler, &image.texels));
@@ -287,28 +344,45 @@ impl ShapeSet {
         out
     }
 
-    fn image_sampler(traced: &super::Traced) -> Option<&Arc<Sampler>> {
-        match &traced.placed.material.color {
-            ColorSource::Sampler(s) if !s.is_affine() => Some(s),
-            _ => None,
+    /// Image `sampler`'s coordinates at each corner of kept primitive
+    /// `index` of shape `s`.
+    fn push_coordinates(&self, s: usize, index: u32, sampler: &Sampler, out: &mut Vec<[f32; 4]>) {
+        for bary in self.corners(s) {
+            let hit = Self::corner_hit(s as u32, index, bary);
+            let input = sampler
+                .in_attribute
+                .map_or(DEFAULT_ATTRIBUTE, |slot| self.attribute(&hit, slot));
+            out.push(sampler.coordinates(input).to_array());
         }
     }
 
-    fn flags(&self, traced: &super::Traced) -> u32 {
-        let shape = &traced.placed.shape;
-        let varies = match &traced.placed.material.color {
-            ColorSource::Constant(_) => false,
-            ColorSource::Attribute(slot) => {
-                shape.attributes.get(*slot).is_some_and(Option::is_some)
+    /// Whether `source` differs between a shape's corners (an image
+    /// sampler aside, which is read per pixel).
+    fn varies<C>(traced: &super::Traced, source: &Source<C>) -> bool {
+        match source {
+            Source::Constant(_) => false,
+            Source::Attribute(slot) => {
+                traced
+                    .placed
+                    .shape
+                    .attributes
+                    .get(*slot)
+                    .is_some_and(Option::is_some)
                     && traced
                         .placed
                         .uniform
                         .get(*slot)
                         .is_some_and(Option::is_none)
             }
-            ColorSource::Sampler(s) => s.is_affine(),
-        };
-        let image = Self::image_sampler(traced).is_some();
+            Source::Sampler(s) => s.is_affine(),
+        }
+    }
+
+    fn flags(&self, traced: &super::Traced) -> u32 {
+        let shape = &traced.placed.shape;
+        let material = &traced.placed.material;
+        let varies = Self::varies(traced, &material.color);
+        let image = material.color.image_sampler().is_some();
         let normals = matches!(
             &shape.primitives,
             Primitives::Triangles {
@@ -316,15 +390,28 @@ impl ShapeSet {
                 ..
             }
         );
+        let shown = material.alpha != AlphaMode::Opaque;
+        let opacity = shown && Self::varies(traced, &material.opacity);
+        let opacity_image = opacity_image(material).is_some();
+        let mode = match material.alpha {
+            AlphaMode::Opaque => 0,
+            AlphaMode::Blend => FLAG_BLEND,
+            AlphaMode::Mask(_) => FLAG_MASK,
+        };
         (u32::from(varies) * FLAG_ALBEDO)
             | (u32::from(normals) * FLAG_NORMALS)
             | (u32::from(image) * FLAG_IMAGE)
-            | (u32::from(traced.placed.material.pbr.is_some()) * FLAG_PBR)
+            | (u32::from(material.pbr.is_some()) * FLAG_PBR)
+            | (u32::from(opacity) * FLAG_OPACITY)
+            | (u32::from(opacity_image) * FLAG_OPACITY_IMAGE)
+            | mode
     }
 
     fn stride(flags: u32) -> usize {
         3 * (flags & (FLAG_ALBEDO | FLAG_IMAGE) != 0) as usize
             + 3 * (flags & FLAG_NORMALS != 0) as usize
+            + (flags & FLAG_OPACITY != 0) as usize
+            + 3 * (flags & FLAG_OPACITY_IMAGE != 0) as usize
     }
 
     /// The weights a primitive's corners have in [`Hit::bary`]: a

@@ -49,7 +49,7 @@ fn unit_sphere(color: ColorSource, transform: Mat4) -> PlacedShape {
         Arc::new(made.shape),
         SurfaceMaterial {
             color,
-            opacity: 1.0,
+            opacity: OpacitySource::Constant(1.0),
             alpha: AlphaMode::Opaque,
             pbr: None,
         },
@@ -154,7 +154,7 @@ fn rgb_triangle(z: f32) -> PlacedShape {
         Arc::new(made.shape),
         SurfaceMaterial {
             color: ColorSource::Attribute(0),
-            opacity: 1.0,
+            opacity: OpacitySource::Constant(1.0),
             alpha: AlphaMode::Opaque,
             pbr: None,
         },
@@ -354,7 +354,7 @@ fn check_view(
 fn attribute_material() -> SurfaceMaterial {
     SurfaceMaterial {
         color: ColorSource::Attribute(0),
-        opacity: 1.0,
+        opacity: OpacitySource::Constant(1.0),
         alpha: AlphaMode::Opaque,
         pbr: None,
     }
