@@ -1,41 +1,73 @@
-// #import volume, color, capture_bindings, band_bindings
+// #import trace, color, capture_bindings, band_bindings
 // A view as image warping needs it: color over nothing, first-hit depth,
 // and the emission-absorption layers of src/render/warp/layers.rs,
-// recorded sample by sample as the CPU's LayerBuilder does.
+// recorded sample by sample and surface by surface as the CPU's
+// LayerBuilder does.
 
 const MAX_KEPT: u32 = 8u;
 
 var<private> current: u32;
 var<private> total: f32;
+// Whether the next sample starts a layer of its own (after a surface).
+var<private> sealed: bool;
 var<private> kept: array<vec4f, 16>;
 
-// Worlds with surfaces are not captured or re-projected (the engine
-// renders them whole), so no surface stands in a shadow ray's way.
-fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
-    return 1.0;
+fn layer_count() -> u32 {
+    return min(capture.x, MAX_KEPT);
 }
 
-fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
-    let k = min(capture.x, MAX_KEPT);
-    if k == 0u {
-        return;
+// Moves on to the next layer if the current one holds anything and one
+// is left (LayerBuilder::open).
+fn open_layer() {
+    if kept[2u * current].a > 0.0 && current + 1u < layer_count() {
+        current += 1u;
     }
-    // Every segment is taken as a full step (the last one of a ray is
-    // shorter on the CPU).
-    let seg = params.step;
+}
+
+// Adds opacity a of color lit over [begin, end] to the current layer; the
+// ray's opacity is then `total`. A layer's span keeps in z whether it
+// holds one surface alone (Layer::surface).
+fn keep(begin: f32, end: f32, lit: vec3f, a: f32, surface: bool) {
     var c = kept[2u * current];
     var span = kept[2u * current + 1u];
     if c.a == 0.0 {
-        span.x = t - 0.5 * seg;
+        span = vec4f(begin, end, select(0.0, 1.0, surface), 0.0);
+    } else {
+        span.y = max(span.y, end);
+        span.z = 0.0;
     }
-    span.y = t + 0.5 * seg;
     let weight = (1.0 - c.a) * a;
     kept[2u * current] = vec4f(c.rgb + lit * weight, c.a + weight);
     kept[2u * current + 1u] = span;
     total = total + (1.0 - total) * a;
-    if total >= f32(current + 1u) / f32(k) && current + 1u < k {
+    if total >= f32(current + 1u) / f32(layer_count()) && current + 1u < layer_count() {
         current += 1u;
     }
+}
+
+fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {
+    if layer_count() == 0u {
+        return;
+    }
+    if sealed {
+        open_layer();
+        sealed = false;
+    }
+    // Every segment is taken as a full step (the last one of a ray is
+    // shorter on the CPU).
+    let seg = params.step;
+    keep(t - 0.5 * seg, t + 0.5 * seg, lit, a, false);
+}
+
+// A surface in a layer of its own where one is left, capture.y deep,
+// ending where it is hit (LayerBuilder::add_surface).
+fn on_surface(t: f32, lit: vec3f, a: f32) {
+    if layer_count() == 0u {
+        return;
+    }
+    open_layer();
+    keep(t - bitcast<f32>(capture.y), t, lit, a, true);
+    sealed = true;
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
@@ -47,15 +79,16 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     }
     current = 0u;
     total = 0.0;
+    sealed = false;
     for (var k = 0u; k < 2u * MAX_KEPT; k++) {
         kept[k] = vec4f(0.0);
     }
-    let m = march(primary_ray(f32(pixel.x), f32(pixel.y)));
+    let traced = trace(primary_ray(f32(pixel.x), f32(pixel.y)));
     let i = pixel.y * size.x + pixel.x;
-    depth_out[i] = m.depth;
+    depth_out[i] = min(traced.m.depth, traced.surface_depth);
     samples_out[i * params.pixel_words] = samples;
-    store_color(i, m.color, FORMAT_RGBA32F);
-    let k = min(capture.x, MAX_KEPT);
+    store_color(i, over(traced.m.color, traced.opaque), FORMAT_RGBA32F);
+    let k = layer_count();
     for (var l = 0u; l < 2u * k; l++) {
         layer_out[2u * i * k + l] = kept[l];
     }

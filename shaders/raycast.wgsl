@@ -1,17 +1,9 @@
-// #import volume, surface, color, band_bindings
+// #import trace, color, band_bindings
 // One eye, one invocation per pixel.
 
+// The march's hooks: nothing is recorded.
 fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {}
-
-// As the CPU's ShapeSet::passes: an opaque surface blocks the light, a
-// translucent one lets 1 - opacity through.
-fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
-    let hit = nearest_surface(p, d, 0.0, reach);
-    if hit.slot == NO_SLOT {
-        return 1.0;
-    }
-    return 1.0 - surface_alpha(hit);
-}
+fn on_surface(t: f32, lit: vec3f, a: f32) {}
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3u) {
@@ -21,50 +13,13 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let ray = primary_ray(f32(pixel.x), f32(pixel.y));
-    // Marched up to each surface, a translucent one composited in its
-    // turn, the first opaque one ending the ray in front of the
-    // background (as the CPU's through_surfaces).
-    var m = Marched(vec4f(0.0), infinite());
+    let traced = trace(ray);
+    let m = traced.m;
+    let surface_depth = traced.surface_depth;
+    let first = traced.first;
     var behind = background_at(pixel);
-    var surface_depth = infinite();
-    // The surface hit at the pixel's depth, if a surface set it.
-    var first = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
-    var start = params.t_near;
-    var composited = 0u;
-    var done = false;
-    for (var looked = 0u; looked < SURFACE_PASSES; looked++) {
-        let hit = nearest_surface(ray.o, ray.d, start, params.t_far);
-        m = march_segment(ray, start, hit.t, m);
-        if hit.slot == NO_SLOT {
-            done = true;
-            break;
-        }
-        let lit = surface_color(hit, ray.o, ray.d);
-        let a = surface_alpha(hit);
-        let p = ray.o + ray.d * hit.t;
-        if a >= 1.0 {
-            behind = vec4f(lit, 1.0);
-            surface_depth = depth_along(p, hit.t);
-            if surface_depth <= m.depth {
-                first = hit;
-            }
-            done = true;
-            break;
-        }
-        if composited < MAX_TRANSLUCENT {
-            if composite_surface(&m, lit, a, p, hit.t) {
-                first = hit;
-            }
-            composited++;
-            if m.color.a >= params.termination {
-                done = true;
-                break;
-            }
-        }
-        start = hit.t;
-    }
-    if !done {
-        m = march_segment(ray, start, infinite(), m);
+    if traced.opaque.a > 0.0 {
+        behind = traced.opaque;
     }
     let i = pixel.y * size.x + pixel.x;
     let depth = min(m.depth, surface_depth);

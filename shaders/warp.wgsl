@@ -148,8 +148,10 @@ fn safe(x: f32) -> f32 {
 
 // Premultiplied color and opacity of the stretch [lo, hi] of source
 // pixel `px`'s ray, for a target step `c` times longer: each overlapping
-// layer absorbs and emits over its share, front to back, exactly.
-fn through(px: vec2f, lo: f32, hi: f32, c: f32) -> vec4f {
+// layer absorbs and emits over its share, front to back, exactly; a
+// surface's layer counts whole where the ray crossed it since `crossed`,
+// an opaque one also within a stretch's length before (through_layers).
+fn through(px: vec2f, crossed: f32, lo: f32, hi: f32, c: f32) -> vec4f {
     if any(px < vec2f(0.0)) || any(px >= vec2f(w.from_size)) {
         return vec4f(0.0);
     }
@@ -157,20 +159,37 @@ fn through(px: vec2f, lo: f32, hi: f32, c: f32) -> vec4f {
     var s = vec4f(0.0);
     for (var k = 0u; k < w.layers; k++) {
         let span = layers[2u * (base + k) + 1u];
-        let overlap = (min(span.y, hi) - max(span.x, lo)) / c;
-        if !(overlap > 0.0) {
-            continue;
-        }
         let col = layers[2u * (base + k)];
-        let len = span.y - span.x;
-        let a = min(col.a, 0.999999);
-        if a <= 0.0 || len <= 0.0 {
-            continue;
+        var alpha: f32;
+        var emitted: vec3f;
+        if span.z != 0.0 {
+            let a = min(col.a, 1.0);
+            var since = crossed;
+            if a >= SOLID {
+                since = min(crossed, 2.0 * lo - hi);
+            }
+            let met = span.y <= hi && span.y > since;
+            if !met || a <= 0.0 {
+                continue;
+            }
+            alpha = a;
+            emitted = col.rgb / a;
+        } else {
+            let overlap = (min(span.y, hi) - max(span.x, lo)) / c;
+            if !(overlap > 0.0) {
+                continue;
+            }
+            let len = span.y - span.x;
+            let a = min(col.a, 0.999999);
+            if a <= 0.0 || len <= 0.0 {
+                continue;
+            }
+            let sigma = -log(1.0 - a) / len;
+            alpha = 1.0 - exp(-sigma * overlap);
+            emitted = col.rgb / a;
         }
-        let sigma = -log(1.0 - a) / len;
-        let alpha = 1.0 - exp(-sigma * overlap);
         let weight = (1.0 - s.a) * alpha;
-        s = vec4f(s.rgb + col.rgb / a * weight, s.a + weight);
+        s = vec4f(s.rgb + emitted * weight, s.a + weight);
     }
     return s;
 }
@@ -197,6 +216,8 @@ fn layer_march(@builtin(global_invocation_id) id: vec3u) {
     let step = (t1 - t0) / f32(w.steps);
     var acc = vec4f(0.0);
     var first = infinity();
+    // Where the previous step's stretch ended (march's `since`).
+    var since = infinity();
     for (var s = 0u; s < w.steps; s++) {
         let t = t0 + (f32(s) + 0.5) * step;
         let p = r.o + r.d * t;
@@ -209,11 +230,13 @@ fn layer_march(@builtin(global_invocation_id) id: vec3u) {
         let c = max(abs(dot(r.d, l.direction)), 1e-3);
         let lo_along = l.along - 0.5 * step * c;
         let hi_along = l.along + 0.5 * step * c;
+        let crossed = min(since, lo_along);
+        since = hi_along;
         let q = l.at - vec2f(0.5);
         let base = floor(q);
         let f = q - base;
-        let bottom = mix(through(base, lo_along, hi_along, c), through(base + vec2f(1.0, 0.0), lo_along, hi_along, c), f.x);
-        let top = mix(through(base + vec2f(0.0, 1.0), lo_along, hi_along, c), through(base + vec2f(1.0, 1.0), lo_along, hi_along, c), f.x);
+        let bottom = mix(through(base, crossed, lo_along, hi_along, c), through(base + vec2f(1.0, 0.0), crossed, lo_along, hi_along, c), f.x);
+        let top = mix(through(base + vec2f(0.0, 1.0), crossed, lo_along, hi_along, c), through(base + vec2f(1.0, 1.0), crossed, lo_along, hi_along, c), f.x);
         let st = mix(bottom, top, f.y);
         if st.a <= 0.0 {
             continue;

@@ -135,7 +135,6 @@ impl Engine {
         let view = match &inputs.views {
             Views::Panel(_) => return Err("a frame with caveray.deadline shows one view: set the multi-view camera's 'view', or render the panel image without a deadline".into()),
             _ if !inputs.surfaces.is_empty() => return Err("a frame with caveray.deadline warps volume images; this world holds isosurfaces (render it without a deadline)".into()),
-            _ if warp == WarpMode::Layers && inputs.scene.as_ref().is_some_and(|s| !s.shapes().is_empty()) => return Err("the layers warp re-marches volume samples; this world holds surfaces of primitives: set caveray.warp to quad or grid".into()),
             _ if inputs.desc.hits => return Err("a frame with caveray.deadline warps color and depth; unset its id, normal and albedo channels (or its deadline)".into()),
             Views::StereoPair(_) => return Err("a frame with caveray.deadline shows one view: set the camera's stereoMode to none (each eye its own frame)".into()),
             Views::Mono(view) => *view,

@@ -260,9 +260,6 @@ impl Renderer {
         watch: impl Into<Watch<'w>>,
     ) -> Result<(warp::Source, f64), RenderError> {
         let watch = watch.into();
-        if !scene.shapes().is_empty() {
-            return self.capture_with_surfaces(scene, rays, settings, size, layers, watch);
-        }
         match self {
             Renderer::Gpu(g) => g.capture(scene, rays, settings, size, layers, watch),
             Renderer::Cpu(c) => {
@@ -271,50 +268,6 @@ impl Renderer {
                 Ok((source, clock.elapsed().as_secs_f64() * 1e3))
             }
         }
-    }
-
-    /// `capture` of a world with surfaces of primitives: the whole render
-    /// over nothing (which gives color over nothing and the nearer depth
-    /// of surface and volume), without layers, which hold volume samples.
-    fn capture_with_surfaces(
-        &mut self,
-        scene: &Scene,
-        rays: &RayGen,
-        settings: &RenderSettings,
-        size: glam::UVec2,
-        layers: usize,
-        watch: Watch,
-    ) -> Result<(warp::Source, f64), RenderError> {
-        if layers > 0 {
-            return Err(RenderError::Settings(
-                "the layers warp re-marches volume samples; a world with surfaces of primitives is warped by quad or grid".into(),
-            ));
-        }
-        let bare = RenderSettings {
-            background: glam::Vec4::ZERO,
-            background_image: None,
-            ..settings.clone()
-        };
-        let desc = FrameDesc::new(size)
-            .with_color(ColorFormat::Rgba32F)
-            .with_depth();
-        let clock = std::time::Instant::now();
-        let frame = (&mut *self).render_until(scene, rays, &bare, &desc, watch)?;
-        let ms = match self {
-            Renderer::Gpu(g) => g.last_pass_ms(),
-            Renderer::Cpu(_) => clock.elapsed().as_secs_f64() * 1e3,
-        };
-        let depth = frame.depth.clone().unwrap_or_default();
-        let source = warp::Source::new(
-            size,
-            *rays,
-            frame.to_linear(),
-            depth,
-            Vec::new(),
-            0,
-            frame.samples,
-        );
-        Ok((source, ms))
     }
 
     /// `source` shown from `target` by `settings.mode`, on this renderer's

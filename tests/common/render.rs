@@ -85,3 +85,30 @@ pub fn axis_camera(distance: f64, half: f64) -> (Screen, DVec3) {
     .unwrap();
     (screen, DVec3::new(0.0, 0.0, distance))
 }
+
+/// Balls of `material` at `centres` (radius `r`).
+pub fn balls(
+    centres: Vec<glam::Vec3>,
+    r: f32,
+    material: anari_library_caveray::scene::SurfaceMaterial,
+) -> anari_library_caveray::scene::PlacedShape {
+    use anari_library_caveray::scene::{PlacedShape, Shape, ShapeInput};
+    let n = centres.len();
+    let made = Shape::spheres(
+        centres,
+        vec![r; n],
+        (0..n as u32).collect(),
+        ShapeInput {
+            vertices: n,
+            primitives: n,
+            attributes: Default::default(),
+            ids: None,
+        },
+    )
+    .unwrap();
+    PlacedShape::new(
+        std::sync::Arc::new(made.shape),
+        material,
+        glam::Mat4::IDENTITY,
+    )
+}

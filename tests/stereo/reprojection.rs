@@ -507,34 +507,6 @@ fn every_wall_and_head_pose_reprojects_like_two_pass_with_depth() {
     }
 }
 
-/// Balls of `material` at `centres` (radius `r`), in the unit phantom's
-/// space.
-fn balls(
-    centres: Vec<Vec3>,
-    r: f32,
-    material: anari_library_caveray::scene::SurfaceMaterial,
-) -> anari_library_caveray::scene::PlacedShape {
-    use anari_library_caveray::scene::{PlacedShape, Shape, ShapeInput};
-    let n = centres.len();
-    let made = Shape::spheres(
-        centres,
-        vec![r; n],
-        (0..n as u32).collect(),
-        ShapeInput {
-            vertices: n,
-            primitives: n,
-            attributes: Default::default(),
-            ids: None,
-        },
-    )
-    .unwrap();
-    PlacedShape::new(
-        std::sync::Arc::new(made.shape),
-        material,
-        glam::Mat4::IDENTITY,
-    )
-}
-
 /// The share of pixels whose color differs from `b`'s by more than
 /// `by` in some channel.
 fn share_off(
@@ -570,12 +542,12 @@ fn surfaces_reproject_like_two_pass_beside_their_edges() {
         pbr: None,
     };
     let shapes = vec![
-        balls(
+        common::render::balls(
             vec![Vec3::new(-0.25, 0.2, 0.35), Vec3::new(0.3, -0.25, 0.3)],
             0.18,
             opaque,
         ),
-        balls(vec![Vec3::new(0.05, 0.0, -0.1)], 0.3, glass),
+        common::render::balls(vec![Vec3::new(0.05, 0.0, -0.1)], 0.3, glass),
     ];
     let in_volume = unit_phantom(32).with_shapes(shapes.clone()).unwrap();
     // A light haze filling the bounding box: beside the opaque balls the

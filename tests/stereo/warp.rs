@@ -270,6 +270,65 @@ fn moved_eyes_are_shown_better_by_every_warp_and_a_step_best_by_the_layers() {
 }
 
 #[test]
+fn surfaces_in_the_volume_are_warped_by_every_mode_and_a_step_best_by_the_layers() {
+    use anari_library_caveray::scene::{AlphaMode, ColorSource, OpacitySource, SurfaceMaterial};
+    use glam::Vec3;
+    // An opaque ball in front of the phantom's middle and a translucent
+    // one inside it: the layers hold each as a layer of its own, so a
+    // step sideways moves them against the volume behind.
+    let material = |color: Vec3, opacity: f32, alpha: AlphaMode| SurfaceMaterial {
+        color: ColorSource::Constant(color),
+        opacity: OpacitySource::Constant(opacity),
+        alpha,
+        pbr: None,
+    };
+    let scene = phantom(32)
+        .with_shapes(vec![
+            common::render::balls(
+                vec![Vec3::new(-0.3, 0.25, 0.6)],
+                0.25,
+                material(Vec3::new(0.9, 0.5, 0.2), 1.0, AlphaMode::Opaque),
+            ),
+            common::render::balls(
+                vec![Vec3::new(0.25, -0.2, 0.0)],
+                0.4,
+                material(Vec3::new(0.2, 0.6, 0.9), 0.4, AlphaMode::Blend),
+            ),
+        ])
+        .unwrap();
+    let look = DVec3::ZERO;
+    let from = pinhole(DVec3::new(0.0, 0.0, 3.5), look);
+    let source = capture(&scene, &from, 4);
+    let same = dssim(
+        &shown(&source, &from, WarpMode::Layers, &scene),
+        &ideal(&scene, &from),
+    )
+    .unwrap();
+    assert!(same < 2e-3, "layers: DSSIM {same} for the same view");
+    let step = pinhole(DVec3::new(0.35, 0.0, 3.5), DVec3::new(0.35, 0.0, 0.0));
+    let turn = pinhole(DVec3::new(0.0, 0.0, 3.5), DVec3::new(0.5, 0.0, 0.0));
+    for (name, target) in [("step", step), ("turn", turn)] {
+        let truth = ideal(&scene, &target);
+        let d: Vec<f64> = WarpMode::ALL
+            .iter()
+            .map(|&m| dssim(&shown(&source, &target, m, &scene), &truth).unwrap())
+            .collect();
+        eprintln!("{name}: none, quad, grid, layers DSSIM {d:?}");
+        for (m, v) in WarpMode::ALL.iter().zip(&d).skip(1) {
+            assert!(
+                v < &d[0],
+                "{name}: {} ({v}) is no better than none ({})",
+                m.name(),
+                d[0]
+            );
+        }
+        if name == "step" {
+            assert!(d[3] < d[1] && d[3] < d[2], "{name}: layers not best: {d:?}");
+        }
+    }
+}
+
+#[test]
 fn a_wall_warp_follows_the_eye_across_the_fixed_wall() {
     // On a wall only the eye moves: the quad warp's plane stays parallel
     // to the wall, and the stale image is worse than every warp.

@@ -153,13 +153,43 @@ fn a_new_source_is_uploaded_and_bad_input_fails_as_on_the_cpu() {
 
 #[test]
 fn the_gpu_captures_the_cpus_color_depth_and_layers() {
+    use anari_library_caveray::scene::{AlphaMode, ColorSource, OpacitySource, SurfaceMaterial};
+    use glam::Vec3;
     let mut g = gpu();
-    let scene = phantom(32);
+    // The phantom, and the phantom with an opaque and a translucent ball
+    // in it, each of which takes a layer.
+    let ball = |centre: Vec3, r: f32, opacity: f32, alpha: AlphaMode| {
+        common::render::balls(
+            vec![centre],
+            r,
+            SurfaceMaterial {
+                color: ColorSource::Constant(Vec3::new(0.9, 0.5, 0.2)),
+                opacity: OpacitySource::Constant(opacity),
+                alpha,
+                pbr: None,
+            },
+        )
+    };
+    let with_balls = phantom(32)
+        .with_shapes(vec![
+            ball(Vec3::new(-0.3, 0.25, 0.6), 0.25, 1.0, AlphaMode::Opaque),
+            ball(Vec3::new(0.25, -0.2, 0.0), 0.4, 0.4, AlphaMode::Blend),
+        ])
+        .unwrap();
+    for (what, scene) in [
+        ("the phantom", phantom(32)),
+        ("balls in the phantom", with_balls),
+    ] {
+        captured_alike(&mut g, what, &scene);
+    }
+}
+
+fn captured_alike(g: &mut anari_library_caveray::render::GpuRenderer, what: &str, scene: &Scene) {
     let from = pinhole(DVec3::new(0.2, 0.1, 3.5), DVec3::ZERO);
     let settings = RenderSettings::default();
-    let cpu = capture(&scene, &from);
+    let cpu = capture(scene, &from);
     let (on_gpu, ms) = g
-        .capture(&scene, &from, &settings, SIZE, 4, &AtomicBool::new(false))
+        .capture(scene, &from, &settings, SIZE, 4, &AtomicBool::new(false))
         .unwrap();
     assert!(ms >= 0.0);
     assert_eq!(
@@ -171,14 +201,18 @@ fn the_gpu_captures_the_cpus_color_depth_and_layers() {
         color: s.color.clone(),
         depth: s.depth.clone(),
     };
-    compare("captured color", &as_warped(&cpu), &as_warped(&on_gpu));
+    compare(
+        &format!("{what}: captured color"),
+        &as_warped(&cpu),
+        &as_warped(&on_gpu),
+    );
     let depths = cpu.depth.iter().zip(&on_gpu.depth);
     let same_depth = depths
         .filter(|(a, b)| (a.is_infinite() && b.is_infinite()) || (*a - *b).abs() < 1e-3)
         .count();
     assert!(
         same_depth as f64 >= 0.97 * cpu.depth.len() as f64,
-        "depths differ"
+        "{what}: depths differ"
     );
     // Layers agree to within a step of their extents (the GPU takes every
     // segment as a full step), and what they warp to is the CPU's.
@@ -190,17 +224,17 @@ fn the_gpu_captures_the_cpus_color_depth_and_layers() {
     });
     assert!(
         close.count() as f64 >= 0.97 * cpu.layers.len() as f64,
-        "layers differ"
+        "{what}: layers differ"
     );
     let target = pinhole(DVec3::new(0.5, 0.1, 3.5), DVec3::new(0.3, 0.0, 0.0));
     let layers = WarpSettings::new(WarpMode::Layers, scene.bounds());
     compare(
-        "layers from the GPU's capture",
+        &format!("{what}: layers from the GPU's capture"),
         &warp(&cpu, &target, SIZE, &layers).unwrap(),
         &g.warp(&on_gpu, &target, SIZE, &layers).unwrap().0,
     );
     let e = g
-        .capture(&scene, &from, &settings, SIZE, 9, &AtomicBool::new(false))
+        .capture(scene, &from, &settings, SIZE, 9, &AtomicBool::new(false))
         .unwrap_err();
     assert!(e.to_string().contains("at most 8 layers"), "{e}");
 }

@@ -1,6 +1,7 @@
 //! A view as image warping needs it: color over nothing, first-hit depth
-//! and the emission-absorption layers, cast by the scalar path (layers
-//! are recorded per sample, which the packet path does not visit).
+//! and the emission-absorption layers of its volumes and surfaces, cast
+//! by the scalar path (layers are recorded per sample, which the packet
+//! path does not visit).
 
 use glam::{UVec2, Vec4};
 use rayon::prelude::*;
@@ -9,7 +10,7 @@ use super::{march, sample, CpuRenderer};
 use crate::geometry::RayGen;
 use crate::render::frame::filled;
 use crate::render::march_plan::MarchPlan;
-use crate::render::warp::{check_layers, Layer, LayerBuilder, Source};
+use crate::render::warp::{check_layers, surface_layer_depth, Layer, LayerBuilder, Source};
 use crate::render::{FrameDesc, RenderError, RenderSettings, Watch};
 use crate::scene::Scene;
 
@@ -30,8 +31,10 @@ impl CpuRenderer {
         FrameDesc::new(size).validate()?;
         check_layers(layers)?;
         let plan = MarchPlan::new(scene, rays, settings)?;
+        let shapes = self.shape_set(scene)?;
         let data = self.prepare(scene, &plan)?;
-        let field = sample::Field::new(&plan, &data, None);
+        let field = sample::Field::new(&plan, &data, None).with_shapes(shapes.as_deref());
+        let surface_depth = surface_layer_depth(scene.bounds());
         let (w, n) = (size.x as usize, size.x as usize * size.y as usize);
         let mut color = filled(n, Vec4::ZERO, "the warp source's color")?;
         let mut depth = filled(n, f32::INFINITY, "the warp source's depth")?;
@@ -51,21 +54,38 @@ impl CpuRenderer {
                         return samples;
                     }
                     let (o, dir) = rays.pixel_ray(x as u32, y as u32);
-                    let mut builder = LayerBuilder::new(per);
-                    let ray = march::march(
-                        &field,
-                        rays,
-                        o,
-                        dir,
-                        (Vec4::ZERO, f32::INFINITY),
-                        Some(&mut builder),
-                    );
-                    c[x] = ray.color;
-                    d[x] = ray.depth;
+                    let mut builder = LayerBuilder::new(per, surface_depth);
+                    let (color, depth, n) = match shapes.as_deref() {
+                        None => {
+                            let ray = march::march(
+                                &field,
+                                rays,
+                                o,
+                                dir,
+                                (Vec4::ZERO, f32::INFINITY),
+                                Some(&mut builder),
+                            );
+                            (ray.color, ray.depth, ray.samples)
+                        }
+                        Some(s) => {
+                            let (color, depth, n, _) = super::through_surfaces(
+                                s,
+                                &field,
+                                rays,
+                                (o, dir),
+                                Vec4::ZERO,
+                                settings,
+                                Some(&mut builder),
+                            );
+                            (color, depth, n)
+                        }
+                    };
+                    c[x] = color;
+                    d[x] = depth;
                     if layers > 0 {
                         l[x * layers..(x + 1) * layers].copy_from_slice(builder.layers());
                     }
-                    samples += u64::from(ray.samples);
+                    samples += u64::from(n);
                 }
                 watch.advance(1);
                 samples

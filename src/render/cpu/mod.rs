@@ -20,6 +20,7 @@ use super::{Render, RenderError, RenderSettings, Watch};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
 use crate::render::shapes::{Hit, ShapeSet, MAX_TRANSLUCENT, SURFACE_PASSES};
+use crate::render::warp::LayerBuilder;
 use crate::scene::Coverage;
 use crate::scene::{PlacedShape, PlacedVolume, Scene, StructuredVolume, TransferFunction};
 use packet::Channels;
@@ -278,7 +279,9 @@ impl CpuRenderer {
                                     march::march(&field, rays, o, dir, (bg, f32::INFINITY), None);
                                 (ray.color, ray.depth, ray.samples, None)
                             }
-                            Some(s) => through_surfaces(s, &field, rays, (o, dir), bg, settings),
+                            Some(s) => {
+                                through_surfaces(s, &field, rays, (o, dir), bg, settings, None)
+                            }
                         };
                         if desc.hits {
                             out.hits.push(match (first, shapes.as_deref()) {
@@ -364,7 +367,8 @@ fn reuse<K, V>(cache: &[(Arc<K>, Arc<V>)], key: &Arc<K>) -> Option<Arc<V>> {
 /// first opaque one, whose lit color hides `bg`. Returns the color, the depth (the nearer of the
 /// opaque surface and where the accumulated opacity reached the
 /// threshold), the volume samples taken and the surface hit at that
-/// depth (`None`: the depth is the volumes', or there is none).
+/// depth (`None`: the depth is the volumes', or there is none). With
+/// `layers`, every contributing sample and surface is recorded there.
 fn through_surfaces(
     shapes: &ShapeSet,
     field: &sample::Field,
@@ -372,6 +376,7 @@ fn through_surfaces(
     (o, dir): (glam::Vec3, glam::Vec3),
     bg: glam::Vec4,
     settings: &RenderSettings,
+    mut layers: Option<&mut LayerBuilder>,
 ) -> (glam::Vec4, f32, u32, Option<Hit>) {
     let plan = field.plan;
     let mut acc = march::Accumulator::new();
@@ -382,7 +387,14 @@ fn through_surfaces(
     for _ in 0..SURFACE_PASSES {
         let hit = shapes.hit(o, dir, from, rays.t_far);
         let stop = hit.map_or(f32::INFINITY, |h| h.t);
-        samples += march::march_segment(field, rays, (o, dir), (from, stop), &mut acc, None);
+        samples += march::march_segment(
+            field,
+            rays,
+            (o, dir),
+            (from, stop),
+            &mut acc,
+            layers.as_deref_mut(),
+        );
         let Some(h) = hit else {
             return (acc.over(bg), acc.depth, samples, first);
         };
@@ -396,6 +408,9 @@ fn through_surfaces(
                     if !had_depth && acc.depth.is_finite() {
                         first = Some(h);
                     }
+                    if let Some(layers) = layers.as_deref_mut() {
+                        layers.add_surface(h.t, lit, a, acc.color.w);
+                    }
                     if stop {
                         return (acc.over(bg), acc.depth, samples, first);
                     }
@@ -405,7 +420,11 @@ fn through_surfaces(
             }
             // Hidden surfaces are not in the BVH.
             Coverage::Opaque | Coverage::Hidden => {
-                let lit = shapes.shade(&h, (o, dir), settings).extend(1.0);
+                let lit = shapes.shade(&h, (o, dir), settings);
+                if let Some(layers) = layers.as_deref_mut() {
+                    layers.add_surface(h.t, lit, 1.0, 1.0);
+                }
+                let lit = lit.extend(1.0);
                 let surface = rays.depth_at(o + dir * h.t, h.t);
                 if surface <= acc.depth {
                     first = Some(h);
@@ -415,6 +434,13 @@ fn through_surfaces(
         }
     }
     // Past that many translucent surfaces, the ray goes on through any.
-    samples += march::march_segment(field, rays, (o, dir), (from, f32::INFINITY), &mut acc, None);
+    samples += march::march_segment(
+        field,
+        rays,
+        (o, dir),
+        (from, f32::INFINITY),
+        &mut acc,
+        layers,
+    );
     (acc.over(bg), acc.depth, samples, first)
 }

@@ -190,6 +190,7 @@ impl BindingTable {
 }
 
 /// A bind group layout and the table it was made from.
+#[derive(Clone)]
 pub(super) struct GroupLayout {
     table: BindingTable,
     layout: wgpu::BindGroupLayout,

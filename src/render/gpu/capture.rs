@@ -1,6 +1,7 @@
 //! A view as warps need it, on the GPU (shaders/capture.wgsl): the ray
-//! caster's march with each contributing sample recorded into the pixel's
-//! emission-absorption layers, cast in bands like a frame.
+//! caster's march through volumes and surfaces with each contributing
+//! sample and surface recorded into the pixel's emission-absorption
+//! layers, cast in bands like a frame.
 
 use glam::{UVec2, Vec4};
 
@@ -17,10 +18,11 @@ binding_table! {
     /// Group 1 of the capture pass (group 0 is the ray caster's, group 2
     /// its band).
     CaptureResources / CaptureLayout = "capture_bindings" imports [] () {
-        /// Two vec4s a layer (color; start, end), `capture.x` layers a
-        /// pixel.
+        /// Two vec4s a layer (color; start, end, 1 for a surface's),
+        /// `capture.x` layers a pixel.
         layer_out: Kind::storage_rw("array<vec4f>"),
-        /// x: the layer count a pixel.
+        /// x: the layer count a pixel; y: a surface layer's depth (f32
+        /// bits).
         capture: Kind::storage("vec4u"),
     }
 }
@@ -28,7 +30,7 @@ binding_table! {
 pub(super) struct CapturePass {
     layout: CaptureLayout,
     pipelines: Sampled,
-    /// The layer count a pixel (x).
+    /// The layer count a pixel (x) and a surface layer's depth (y).
     uniform: wgpu::Buffer,
     /// Layer buffers of `bytes` and the group binding them.
     buffers: Option<(u64, wgpu::Buffer, wgpu::Buffer, wgpu::BindGroup)>,
@@ -39,7 +41,6 @@ impl CapturePass {
         let device = &ctx.device;
         let layout = CaptureLayout::new(device);
         let pipelines = Sampled::new(
-            ctx,
             "capture",
             "capture",
             &[
@@ -47,7 +48,7 @@ impl CapturePass {
                 layout.group(),
                 raycast.band_layout.group(),
             ],
-        )?;
+        );
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("capture"),
             size: 16,
@@ -63,8 +64,9 @@ impl CapturePass {
     }
 
     /// Casts the frame the ray caster's uniforms describe (bound by
-    /// `raycast`), keeping `layers` layers a pixel (the layer buffers hold
-    /// `bytes`): the frame, its layers and the pass's milliseconds.
+    /// `raycast`), keeping `layers` layers a pixel, surfaces
+    /// `surface_depth` deep (the layer buffers hold `bytes`): the frame,
+    /// its layers and the pass's milliseconds.
     #[allow(clippy::too_many_arguments)]
     pub fn capture(
         &mut self,
@@ -73,7 +75,7 @@ impl CapturePass {
         scene: &Scene,
         settings: &RenderSettings,
         desc: &FrameDesc,
-        layers: usize,
+        (layers, surface_depth): (usize, f32),
         bytes: u64,
         watch: Watch,
     ) -> Result<(Frame, Vec<Layer>, f64), RenderError> {
@@ -86,7 +88,7 @@ impl CapturePass {
         ctx.queue.write_buffer(
             &self.uniform,
             0,
-            bytemuck::cast_slice(&[layers as u32, 0, 0, 0]),
+            bytemuck::cast_slice(&[layers as u32, surface_depth.to_bits(), 0, 0]),
         );
         let main = raycast.group()?;
         let pass = Pass {
@@ -107,6 +109,7 @@ impl CapturePass {
                     color: Vec4::from_slice(&l[..4]),
                     start: l[4],
                     end: l[5],
+                    surface: l[6] != 0.0,
                 })
                 .collect()
         } else {

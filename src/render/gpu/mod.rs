@@ -38,7 +38,7 @@ use self::warp::WarpPass;
 use super::frame::{ColorData, Frame, FrameDesc};
 use super::march_plan::MarchPlan;
 use super::stereo::{Reprojection, StereoFrames};
-use super::warp::{check_layers, Source};
+use super::warp::{check_layers, surface_layer_depth, Source};
 use super::{ColorFormat, Render, RenderError, RenderSettings, Sampling, Watch};
 use crate::geometry::RayGen;
 use crate::render::iso::{IsoSettings, MultiViewMethod, Panel};
@@ -283,7 +283,6 @@ impl GpuRenderer {
     ) -> Result<(Source, f64), RenderError> {
         let watch = watch.into();
         check_layers(layers)?;
-        volumes_only(scene, "a capture for warps")?;
         let desc = FrameDesc::new(size)
             .with_color(ColorFormat::Rgba32F)
             .with_depth();
@@ -314,7 +313,7 @@ impl GpuRenderer {
             scene,
             &settings,
             &desc,
-            layers,
+            (layers, surface_layer_depth(scene.bounds())),
             bytes,
             watch,
         )?;
@@ -452,22 +451,6 @@ impl GpuRenderer {
         }
         Ok(())
     }
-}
-
-/// Refuses, for the passes that march volumes alone (`what`), a scene
-/// with surfaces or without volumes.
-fn volumes_only(scene: &Scene, what: &str) -> Result<(), RenderError> {
-    if !scene.shapes().is_empty() {
-        return Err(RenderError::Settings(format!(
-            "{what} takes volumes only; this world holds surfaces of primitives (render each view in its own pass)"
-        )));
-    }
-    if scene.volumes().is_empty() {
-        return Err(RenderError::Settings(format!(
-            "{what} needs a volume; this world has none"
-        )));
-    }
-    Ok(())
 }
 
 impl Render for &mut GpuRenderer {

@@ -8,7 +8,9 @@ use crate::render::Watch;
 use glam::UVec2;
 use wgpu::TextureViewDimension as Dim;
 
-use super::bindings::{binding_table, Kind};
+use std::sync::OnceLock;
+
+use super::bindings::{binding_table, GroupLayout, Kind};
 use super::context::{unprepared, Context, Pass, BAND_STRIDE, WORKGROUP};
 use super::resources::{color_data, floats, BrickSlot, OutputBuffers, SurfaceSlot};
 use super::scene::GpuScene;
@@ -90,61 +92,66 @@ impl Variants {
     }
 }
 
-/// A marching shader's pipelines: exact, and hardware-filtered where the
-/// adapter filters 32-bit floats.
+/// A marching shader's pipelines, each compiled the first time a frame
+/// needs it: exact or hardware-filtered sampling (where the adapter
+/// filters 32-bit floats), one volume or several, with surfaces or
+/// without. Each override lets the compiler drop what a scene does not
+/// use: software Vulkan takes seconds for each pipeline that traverses
+/// surfaces, and a fraction of one for a volume's march alone.
 pub(super) struct Sampled {
-    pub exact: Variants,
-    pub filtered: Option<Variants>,
+    label: &'static str,
+    module: &'static str,
+    groups: Vec<GroupLayout>,
+    /// Indexed by filtered * 4 + one volume * 2 + surfaces.
+    variants: [OnceLock<wgpu::ComputePipeline>; 8],
 }
 
 impl Sampled {
-    /// Entry point `main` of `module` in each sampling mode, for one
-    /// volume and several.
-    pub fn new(
-        ctx: &Context,
-        label: &str,
-        module: &str,
-        groups: &[&super::bindings::GroupLayout],
-    ) -> Result<Self, RenderError> {
-        let variant = |filtered: bool, one: bool| {
-            let flag = |b: bool| if b { 1.0 } else { 0.0 };
-            compute_pipeline(
-                &ctx.device,
-                label,
-                module,
-                "main",
-                groups,
-                &[("FILTERED", flag(filtered)), ("ONE_VOLUME", flag(one))],
-            )
-        };
-        let exact = Variants {
-            one: variant(false, true)?,
-            several: variant(false, false)?,
-        };
-        let filtered = if ctx.filterable {
-            Some(Variants {
-                one: variant(true, true)?,
-                several: variant(true, false)?,
-            })
-        } else {
-            None
-        };
-        Ok(Self { exact, filtered })
+    /// Entry point `main` of `module`, its bind groups `groups`.
+    pub fn new(label: &'static str, module: &'static str, groups: &[&GroupLayout]) -> Self {
+        Self {
+            label,
+            module,
+            groups: groups.iter().map(|g| (*g).clone()).collect(),
+            variants: Default::default(),
+        }
     }
 
-    /// The pipeline for the settings' sampling and the scene's count of
-    /// volumes.
+    /// The pipeline for the settings' sampling, the scene's count of
+    /// volumes and whether it has surfaces, compiled if it is the first.
     pub fn pick(
         &self,
         ctx: &Context,
         scene: &Scene,
         settings: &RenderSettings,
     ) -> Result<&wgpu::ComputePipeline, RenderError> {
-        let variants = match settings.sampling {
-            Sampling::Exact => &self.exact,
-            Sampling::Filtered => self.filtered.as_ref().ok_or_else(|| no_filtering(ctx))?,
+        let filtered = match settings.sampling {
+            Sampling::Exact => false,
+            Sampling::Filtered if ctx.filterable => true,
+            Sampling::Filtered => return Err(no_filtering(ctx)),
         };
-        Ok(variants.for_scene(scene))
+        let one = scene.volumes().len() == 1;
+        let surfaces = !scene.shapes().is_empty();
+        let cell = &self.variants
+            [usize::from(filtered) * 4 + usize::from(one) * 2 + usize::from(surfaces)];
+        if let Some(pipeline) = cell.get() {
+            return Ok(pipeline);
+        }
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        let groups: Vec<&GroupLayout> = self.groups.iter().collect();
+        let pipeline = compute_pipeline(
+            &ctx.device,
+            self.label,
+            self.module,
+            "main",
+            &groups,
+            &[
+                ("FILTERED", flag(filtered)),
+                ("ONE_VOLUME", flag(one)),
+                ("SURFACES", flag(surfaces)),
+            ],
+        )?;
+        Ok(cell.get_or_init(|| pipeline))
     }
 }
 
@@ -159,6 +166,8 @@ pub(super) struct RaycastPass {
     pub volume_layout: VolumeLayout,
     pub band_layout: BandLayout,
     pipelines: Sampled,
+    /// Whether the adapter filters 32-bit floats (filtered sampling).
+    filterable: bool,
     sampler: wgpu::Sampler,
     mip_sampler: wgpu::Sampler,
     params: wgpu::Buffer,
@@ -181,11 +190,10 @@ impl RaycastPass {
         let volume_layout = VolumeLayout::new(device, filterable);
         let band_layout = BandLayout::new(device);
         let pipelines = Sampled::new(
-            ctx,
             "raycast",
             "raycast",
             &[volume_layout.group(), band_layout.group()],
-        )?;
+        );
         // Linear where the adapter filters 32-bit floats. Level of detail's
         // sampler blends mip levels too, so that it coarsens smoothly; full
         // detail keeps the other, which software Vulkan samples faster.
@@ -242,6 +250,7 @@ impl RaycastPass {
         }
         .bind(device, &band_layout);
         Ok(Self {
+            filterable,
             volume_layout,
             band_layout,
             pipelines,
@@ -258,7 +267,7 @@ impl RaycastPass {
 
     /// Whether this adapter runs filtered sampling.
     pub fn filters(&self) -> bool {
-        self.pipelines.filtered.is_some()
+        self.filterable
     }
 
     /// Group 0 as the last `bind` made it.

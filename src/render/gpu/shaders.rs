@@ -10,9 +10,10 @@ use super::modules::{ComposeError, Library};
 use super::uniforms;
 use crate::render::RenderError;
 
-const FILES: [(&str, &str); 11] = [
+const FILES: [(&str, &str); 12] = [
     ("volume", include_str!("../../../shaders/volume.wgsl")),
     ("surface", include_str!("../../../shaders/surface.wgsl")),
+    ("trace", include_str!("../../../shaders/trace.wgsl")),
     ("color", include_str!("../../../shaders/color.wgsl")),
     ("stereo", include_str!("../../../shaders/stereo.wgsl")),
     ("raycast", include_str!("../../../shaders/raycast.wgsl")),

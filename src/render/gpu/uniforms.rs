@@ -33,6 +33,7 @@ use crate::render::shapes::packed::{
 };
 use crate::render::shapes::{MAX_TRANSLUCENT, MIN_ROUGHNESS, SURFACE_PASSES};
 use crate::render::stereo::Reprojection;
+use crate::render::warp::SOLID;
 use crate::render::{Lamp, RenderSettings, Spot, SurfaceShading, MAX_LAMPS};
 use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
 
@@ -630,6 +631,7 @@ fn constants() -> String {
     out += &format!("const MIN_ROUGHNESS: f32 = {MIN_ROUGHNESS:?}f;\n");
     out += &format!("const PI: f32 = {:?}f;\n", std::f32::consts::PI);
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
+    out += &format!("const SOLID: f32 = {SOLID:?}f;\n");
     out
 }
 

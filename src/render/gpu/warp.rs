@@ -24,7 +24,8 @@ binding_table! {
     WarpResources / WarpLayout = "warp_bindings" imports ["warp_uniforms"] () {
         w: Kind::storage("Warp"),
         /// The source: premultiplied color, first-hit depth, and
-        /// `w.layers` layers a pixel as two vec4s each (color; start, end).
+        /// `w.layers` layers a pixel as two vec4s each (color; start, end,
+        /// 1 for a surface's).
         color: Kind::storage("array<vec4f>"),
         depth: Kind::storage("array<f32>"),
         layers: Kind::storage("array<vec4f>"),
@@ -158,7 +159,10 @@ impl WarpPass {
                 let packed: Vec<[f32; 4]> = source
                     .layers
                     .iter()
-                    .flat_map(|l| [l.color.to_array(), [l.start, l.end, 0.0, 0.0]])
+                    .flat_map(|l| {
+                        let surface = if l.surface { 1.0 } else { 0.0 };
+                        [l.color.to_array(), [l.start, l.end, surface, 0.0]]
+                    })
                     .collect();
                 queue.write_buffer(&buffers.layers, 0, bytemuck::cast_slice(&packed));
             }

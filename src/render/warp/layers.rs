@@ -14,6 +14,21 @@ use crate::geometry::RayGen;
 /// The most layers a pixel may keep.
 pub const MAX_LAYERS: usize = 8;
 
+/// A surface's layer at least this opaque is opaque.
+pub const SOLID: f32 = 0.999_999;
+
+/// How deep a surface's layer is in a scene of box `(lo, hi)`: a
+/// ten-thousandth of its diagonal, far thinner than a warp's re-march
+/// step, so that one step takes it whole, as it would the surface.
+pub fn surface_layer_depth((lo, hi): (Vec3, Vec3)) -> f32 {
+    let depth = 1e-4 * (hi - lo).length();
+    if depth.is_finite() && depth > 0.0 {
+        depth
+    } else {
+        f32::MIN_POSITIVE
+    }
+}
+
 /// One segment of a source ray: where it starts and ends (distances along
 /// the unit ray from its origin) and what it shows on its own
 /// (premultiplied color, opacity).
@@ -22,6 +37,11 @@ pub struct Layer {
     pub start: f32,
     pub end: f32,
     pub color: Vec4,
+    /// It holds one surface alone, met at `end`: a re-march takes it
+    /// whole where it crosses that point, since a layer that thin falls
+    /// between the steps of a ray that crosses from one source pixel to
+    /// the next.
+    pub surface: bool,
 }
 
 impl Layer {
@@ -38,31 +58,66 @@ impl Layer {
 }
 
 /// Collects one ray's contributing samples into layers while it marches.
+/// A surface takes a layer of its own where one is left (blended into a
+/// volume's layer it would spread its opacity over that layer's depth),
+/// `surface_depth` deep and ending where the ray meets it.
 #[derive(Clone, Copy, Debug)]
 pub struct LayerBuilder {
     k: usize,
     current: usize,
     layers: [Layer; MAX_LAYERS],
+    surface_depth: f32,
+    /// Whether the next sample starts a layer of its own (after a
+    /// surface).
+    sealed: bool,
 }
 
 impl LayerBuilder {
-    /// A builder for `k` layers (1..=MAX_LAYERS).
-    pub fn new(k: usize) -> Self {
+    /// A builder for `k` layers (1..=MAX_LAYERS), surfaces
+    /// `surface_depth` deep.
+    pub fn new(k: usize, surface_depth: f32) -> Self {
         Self {
             k: k.clamp(1, MAX_LAYERS),
             current: 0,
             layers: [Layer::default(); MAX_LAYERS],
+            surface_depth,
+            sealed: false,
         }
     }
 
     /// A sample at `t` covering `seg` along the ray, shaded color `lit`
     /// and opacity `a`, after which the ray's opacity is `total`.
     pub fn add(&mut self, t: f32, seg: f32, lit: Vec3, a: f32, total: f32) {
+        if std::mem::take(&mut self.sealed) {
+            self.open();
+        }
+        self.keep((t - 0.5 * seg, t + 0.5 * seg), lit, a, total, false);
+    }
+
+    /// A surface met at `t`, shaded `lit`, of opacity `a` (1: the opaque
+    /// one that ends the ray), after which the ray's opacity is `total`.
+    pub fn add_surface(&mut self, t: f32, lit: Vec3, a: f32, total: f32) {
+        self.open();
+        self.keep((t - self.surface_depth, t), lit, a, total, true);
+        self.sealed = true;
+    }
+
+    /// Moves on to the next layer if the current one holds anything and
+    /// one is left.
+    fn open(&mut self) {
+        if self.layers[self.current].color.w > 0.0 && self.current + 1 < self.k {
+            self.current += 1;
+        }
+    }
+
+    fn keep(&mut self, (from, to): (f32, f32), lit: Vec3, a: f32, total: f32, surface: bool) {
         let layer = &mut self.layers[self.current];
         if layer.color.w == 0.0 {
-            layer.start = t - 0.5 * seg;
+            (layer.start, layer.end, layer.surface) = (from, to, surface);
+        } else {
+            layer.end = layer.end.max(to);
+            layer.surface = false;
         }
-        layer.end = t + 0.5 * seg;
         let weight = (1.0 - layer.color.w) * a;
         layer.color += (lit * weight).extend(weight);
         let threshold = (self.current + 1) as f32 / self.k as f32;
@@ -100,6 +155,9 @@ pub(super) fn march(
     let step = (t1 - t0) / steps as f32;
     let mut acc = Vec4::ZERO;
     let mut depth = f32::INFINITY;
+    // Where the previous step's stretch ended: surfaces between there and
+    // this step's end are crossed now (from the first step's start).
+    let mut since = f32::INFINITY;
     for i in 0..steps {
         let t = t0 + (i as f32 + 0.5) * step;
         let p = o + d * t;
@@ -110,6 +168,8 @@ pub(super) fn march(
         // scaled by the rays' cosine).
         let c = d.dot(seen.direction).abs().max(1e-3);
         let (lo, hi) = (seen.along - 0.5 * step * c, seen.along + 0.5 * step * c);
+        let crossed = since.min(lo);
+        since = hi;
         // The step through the four source pixels around the point,
         // blended bilinearly as the quad warp blends colors.
         let q = seen.at - Vec2::splat(0.5);
@@ -119,7 +179,7 @@ pub(super) fn march(
             let px = base + Vec2::new(dx, dy);
             let inside = px.cmpge(Vec2::ZERO).all() && px.cmplt(source.size.as_vec2()).all();
             match inside.then(|| source.layers_at(px.as_uvec2())).flatten() {
-                Some(layers) => through_layers(layers, lo, hi, c),
+                Some(layers) => through_layers(layers, (crossed, lo, hi), c),
                 None => Vec4::ZERO,
             }
         };
@@ -143,16 +203,33 @@ pub(super) fn march(
 /// Premultiplied color and opacity of the stretch [lo, hi] of a source
 /// ray with `layers`, for a target step `c` times longer than it:
 /// each overlapping layer absorbs and emits over its share, front to back,
-/// integrated exactly.
-fn through_layers(layers: &[Layer], lo: f32, hi: f32, c: f32) -> Vec4 {
+/// integrated exactly; a surface's layer counts whole where the ray
+/// crossed it since `crossed`, an opaque one also where it lies within a
+/// stretch's length before this one (the four source pixels' blend may
+/// take a part of it at one step; the next takes the rest).
+fn through_layers(layers: &[Layer], (crossed, lo, hi): (f32, f32, f32), c: f32) -> Vec4 {
     let mut s = Vec4::ZERO;
     for layer in layers {
-        let overlap = (layer.end.min(hi) - layer.start.max(lo)) / c;
-        if overlap <= 0.0 {
-            continue;
-        }
-        let (sigma, emitted) = layer.coefficients();
-        let a = 1.0 - (-sigma * overlap).exp();
+        let (a, emitted) = if layer.surface {
+            let a = layer.color.w.min(1.0);
+            let since = if a >= SOLID {
+                crossed.min(2.0 * lo - hi)
+            } else {
+                crossed
+            };
+            let met = layer.end <= hi && layer.end > since;
+            if !met || a <= 0.0 {
+                continue;
+            }
+            (a, layer.color.truncate() / a)
+        } else {
+            let overlap = (layer.end.min(hi) - layer.start.max(lo)) / c;
+            if overlap <= 0.0 {
+                continue;
+            }
+            let (sigma, emitted) = layer.coefficients();
+            (1.0 - (-sigma * overlap).exp(), emitted)
+        };
         let weight = (1.0 - s.w) * a;
         s += (emitted * weight).extend(weight);
     }

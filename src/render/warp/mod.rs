@@ -17,7 +17,7 @@ use std::time::Instant;
 use glam::{UVec2, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-pub use layers::{Layer, LayerBuilder, MAX_LAYERS};
+pub use layers::{surface_layer_depth, Layer, LayerBuilder, MAX_LAYERS, SOLID};
 pub use project::Projector;
 pub use timeline::{Refresh, RefreshSummary, Shown, Timeline};
 
