@@ -6,7 +6,7 @@
 //! pair good to about 1e-7. Where AVX2 and FMA are missing, or the scene
 //! is not one trilinear volume, the march takes the scalar path.
 
-use glam::{Vec3, Vec4};
+use glam::{UVec3, Vec3, Vec4};
 
 use crate::scene::TABLE_SIZE;
 
@@ -53,6 +53,13 @@ pub(super) struct Packet {
     pub alpha: [f32; LANES],
     /// Some sample shows.
     pub any: bool,
+}
+
+/// Whether the packet path's gathers reach every voxel of a grid of
+/// `dims`: their indices are 32-bit and signed, so a grid of 2^31 voxels
+/// or more takes the scalar path.
+pub(super) fn addressable(dims: UVec3) -> bool {
+    u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z) <= i32::MAX as u64
 }
 
 /// Whether this CPU runs the packet path.
@@ -448,6 +455,15 @@ mod tests {
                 assert!((p.color(3) - Vec3::new(0.2, 0.4, 0.6)).length() < 1e-6);
             }
         }
+    }
+
+    #[test]
+    fn grids_of_two_to_the_31_voxels_are_left_to_the_scalar_path() {
+        assert!(addressable(UVec3::new(2048, 2048, 511)));
+        assert!(addressable(UVec3::new(1290, 1290, 1290)));
+        assert!(!addressable(UVec3::new(2048, 2048, 512)));
+        assert!(!addressable(UVec3::new(65536, 65536, 1)));
+        assert!(!addressable(UVec3::splat(u32::MAX)));
     }
 
     #[test]

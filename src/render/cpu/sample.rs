@@ -111,8 +111,13 @@ impl<'a> Field<'a> {
             })
             .collect();
         let packet = match (channels, &plan.volumes[..], data) {
-            // x-neighbour pairs are single loads there: two vertices along x.
-            (Some(channels), [one], [c]) if one.filter == Filter::Linear && one.dims.x >= 2 => {
+            // x-neighbour pairs are single loads there: two vertices along x;
+            // its gathers address up to 2^31 - 1 voxels.
+            (Some(channels), [one], [c])
+                if one.filter == Filter::Linear
+                    && one.dims.x >= 2
+                    && super::packet::addressable(one.dims) =>
+            {
                 Some(PacketGrid {
                     values: &c.values,
                     dims: one.dims.as_ivec3().to_array(),
