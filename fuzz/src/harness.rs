@@ -11,7 +11,9 @@ use std::sync::Mutex;
 use anari_library_caveray::capi::entry_points::*;
 use anari_library_caveray::capi::sys;
 use anari_library_caveray::cave::{MultiViewDisplay, Rig};
-use anari_library_caveray::data::{parse_paraview, parse_raw, sniff, Manifest, VoxelType};
+use anari_library_caveray::data::{
+    parse_nifti, parse_paraview, parse_raw, sniff, Manifest, VoxelType,
+};
 use anari_library_caveray::device::info::SUBTYPES;
 use anari_library_caveray::device::DataType;
 use glam::{UVec3, Vec3};
@@ -83,6 +85,16 @@ pub fn raw_manifest(data: &[u8]) {
         Vec3::from_array(entry.spacing),
     ) {
         let _ = v.value_range();
+    }
+}
+
+/// A NIfTI file: any bytes, read as a `.nii` and, gunzipped, as a
+/// `.nii.gz`.
+pub fn nifti(data: &[u8]) {
+    for name in ["fuzz.nii", "fuzz.nii.gz"] {
+        if let Ok(n) = parse_nifti(data, name) {
+            let _ = (n.volume.value_range(), n.transform());
+        }
     }
 }
 

@@ -1,7 +1,7 @@
-//! Volume file formats caveray recognises but does not read, so that a
-//! NRRD, NIfTI, MetaImage, VTK or DICOM file is refused with its name and
-//! a way to convert it, instead of being taken for a headerless raw file
-//! of the wrong size. Known by content where it has a signature at a fixed
+//! Volume file formats caveray recognises, so that a NIfTI file is read
+//! by its own reader and a NRRD, MetaImage, VTK or DICOM file is refused
+//! with its name and a way to convert it, instead of being taken for a
+//! headerless raw file of the wrong size. Known by content where it has a signature at a fixed
 //! place, else by file name.
 
 use std::io::Read;
@@ -75,7 +75,8 @@ impl VolumeFormat {
     /// A one-line shell command that writes the voxels of `input` as a
     /// raw float32 file `output` (x fastest, little-endian) and prints the
     /// `--dims`, `--dtype` and `--spacing` to load it with; `None` where
-    /// there is nothing to convert (gzip: decompress it instead).
+    /// there is nothing to convert (gzip: decompress it instead; NIfTI:
+    /// caveray reads it).
     /// Float32 keeps any source type, signed CT values included.
     pub fn conversion(self, input: &str, output: &str) -> Option<String> {
         let (input, output) = if [input, output].iter().all(|s| shell_safe(s)) {
@@ -92,10 +93,9 @@ impl VolumeFormat {
             )
         };
         match self {
-            VolumeFormat::Nrrd
-            | VolumeFormat::Nifti
-            | VolumeFormat::MetaImage
-            | VolumeFormat::VtkLegacy => Some(itk(format!("i = s.ReadImage('{input}')"))),
+            VolumeFormat::Nrrd | VolumeFormat::MetaImage | VolumeFormat::VtkLegacy => {
+                Some(itk(format!("i = s.ReadImage('{input}')")))
+            }
             VolumeFormat::Dicom | VolumeFormat::DicomSeries => {
                 let folder = if self == VolumeFormat::Dicom {
                     Path::new(input)
@@ -118,7 +118,7 @@ impl VolumeFormat {
                  d = r.GetOutput(); n(d.GetPointData().GetScalars()).astype('<f4').tofile('{output}'); \
                  print('--dims %d,%d,%d --dtype f32 --spacing %g,%g,%g' % (d.GetDimensions() + d.GetSpacing()))\""
             )),
-            VolumeFormat::Gzip => None,
+            VolumeFormat::Gzip | VolumeFormat::Nifti => None,
         }
     }
 
@@ -391,14 +391,15 @@ mod tests {
             folder.contains("GetGDCMSeriesFileNames('series')"),
             "{folder}"
         );
-        let odd = VolumeFormat::Nifti
-            .conversion("it's $HOME.nii", "x.raw")
+        let odd = VolumeFormat::Nrrd
+            .conversion("it's $HOME.nrrd", "x.raw")
             .unwrap();
         assert!(
             odd.contains("ReadImage('IN')") && odd.contains("'OUT.raw'"),
             "{odd}"
         );
         assert_eq!(VolumeFormat::Gzip.conversion("a.gz", "a.raw"), None);
+        assert_eq!(VolumeFormat::Nifti.conversion("a.nii", "a.raw"), None);
         let raw = |format: VolumeFormat, path: &str| format.raw_name(Path::new(path));
         assert_eq!(
             raw(VolumeFormat::Nifti, "d/Head.NII.GZ"),

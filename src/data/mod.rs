@@ -1,4 +1,4 @@
-//! Where volumes and transfer functions come from: raw files, the
+//! Where volumes and transfer functions come from: raw files, NIfTI files, the
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
 //! color maps; triangle meshes of volumes' isosurfaces; and the formats with headers that are recognised, to be
 //! refused by name rather than read as raw.
@@ -7,6 +7,7 @@ pub mod files;
 mod format;
 mod manifest;
 mod mesh;
+mod nifti;
 mod orientation;
 mod paraview;
 mod presets;
@@ -17,6 +18,7 @@ pub mod toml_syntax;
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};
 pub use mesh::{isosurface_mesh, Mesh, MeshError};
+pub use nifti::{load_nifti, parse_nifti, parse_nifti_header, Nifti, NiftiHeader};
 pub use orientation::{known_orientation, Orientation};
 pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};
@@ -69,6 +71,12 @@ pub enum DataError {
     ParaView { file: String, message: String },
     #[error("unknown transfer function preset '{name}' (presets: {known})")]
     UnknownPreset { name: String, known: String },
+    #[error("{file}: {field}: {why}")]
+    Header {
+        file: String,
+        field: String,
+        why: String,
+    },
     #[error(transparent)]
     Volume(#[from] VolumeError),
     #[error(transparent)]

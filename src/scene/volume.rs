@@ -103,7 +103,9 @@ impl StructuredVolume {
         if dims.min_element() == 0 {
             return Err(VolumeError::ZeroDims { dims });
         }
-        let expected = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
+        let expected = u64::from(dims.x)
+            .saturating_mul(u64::from(dims.y))
+            .saturating_mul(u64::from(dims.z));
         if expected > MAX_VOXELS {
             return Err(VolumeError::TooManyVoxels { dims });
         }

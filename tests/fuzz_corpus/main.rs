@@ -16,12 +16,13 @@ const LIMIT: Duration = Duration::from_secs(30);
 
 type Target = fn(&[u8]);
 
-const TARGETS: [(&str, Target); 5] = [
+const TARGETS: [(&str, Target); 6] = [
     ("rig", harness::rig),
     ("display", harness::display),
     ("paraview", harness::paraview),
     ("raw_manifest", harness::raw_manifest),
     ("capi", harness::capi),
+    ("nifti", harness::nifti),
 ];
 
 /// Every file under fuzz/<kind>/<target>/, sorted.

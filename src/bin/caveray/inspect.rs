@@ -1,9 +1,11 @@
-//! `caveray inspect`: the cameras of every wall and eye, as text or JSON.
+//! `caveray inspect`: the cameras of every wall and eye, or what a volume
+//! file's header says, as text or JSON.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::inspect::{inspect, Pinhole, Report, Selection, ViewReport};
 use anari_library_caveray::cave::{Eye, Rig};
+use anari_library_caveray::data::{load_nifti, VolumeFormat};
 use clap::{Args, ValueEnum};
 
 use crate::{Failure, HeadArgs};
@@ -11,8 +13,13 @@ use crate::{Failure, HeadArgs};
 #[derive(Args)]
 pub struct InspectArgs {
     /// Rig file (TOML), e.g. cave_configs/cologne_5wall.toml.
-    #[arg(long)]
-    config: PathBuf,
+    #[arg(long, required_unless_present = "volume")]
+    config: Option<PathBuf>,
+    /// A volume file with a header (NIfTI: .nii, .nii.gz, .hdr/.img):
+    /// prints its size, type, spacing, index-to-world map and value range
+    /// instead of a rig's views.
+    #[arg(long, conflicts_with = "config")]
+    volume: Option<PathBuf>,
     #[command(flatten)]
     head: HeadArgs,
     /// One wall by name, or all.
@@ -38,7 +45,16 @@ enum EyeArg {
 }
 
 pub fn run(args: InspectArgs) -> Result<(), Failure> {
-    let rig = Rig::load(&args.config).map_err(|e| Failure::Usage(e.to_string()))?;
+    let config = match (&args.volume, &args.config) {
+        (Some(volume), _) => return inspect_volume(volume, args.json),
+        (None, Some(config)) => config,
+        (None, None) => {
+            return Err(Failure::Usage(
+                "give a rig (--config) or a volume file (--volume)".into(),
+            ))
+        }
+    };
+    let rig = Rig::load(config).map_err(|e| Failure::Usage(e.to_string()))?;
     let wall = (!args.wall.eq_ignore_ascii_case("all")).then_some(args.wall.as_str());
     if let Some(name) = wall {
         if rig.wall(name).is_none() {
@@ -172,4 +188,52 @@ fn vn(v: &[f64], digits: usize) -> String {
         .map(|x| format!("{x:.digits$}"))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// What a volume file's header says, and its values' range.
+fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
+    if VolumeFormat::of(path) != Some(VolumeFormat::Nifti) {
+        return Err(Failure::Usage(format!(
+            "{}: caveray inspect reads NIfTI files (.nii, .nii.gz, .hdr/.img)",
+            path.display()
+        )));
+    }
+    let nifti = load_nifti(path).map_err(|e| Failure::Usage(e.to_string()))?;
+    let h = &nifti.header;
+    let (lo, hi) = nifti.volume.value_range();
+    let rows: Vec<[f64; 4]> = (0..3).map(|r| h.affine.row(r).to_array()).collect();
+    if json {
+        let doc = serde_json::json!({
+            "file": path.display().to_string(),
+            "format": format!("NIfTI-{}", h.version),
+            "dims": h.dims.to_array(),
+            "dtype": h.dtype,
+            "spacing": h.spacing.to_array(),
+            "units": h.units,
+            "index_to_world": rows,
+            "placed_by": h.placed_by,
+            "scaling": [h.slope, h.intercept],
+            "value_range": [lo, hi],
+        });
+        println!("{doc:#}");
+        return Ok(());
+    }
+    println!("{}: NIfTI-{}", path.display(), h.version);
+    println!("  dims          {} x {} x {}", h.dims.x, h.dims.y, h.dims.z);
+    println!(
+        "  type          {} (read as value * {} + {})",
+        h.dtype, h.slope, h.intercept
+    );
+    // pixdim is single precision in NIfTI-1: shown as it was stored.
+    let s = h.spacing.as_vec3();
+    println!("  spacing       {} x {} x {} {}", s.x, s.y, s.z, h.units);
+    println!("  index to world ({}, {}):", h.placed_by, h.units);
+    for r in rows {
+        println!(
+            "    [{:>10.4} {:>10.4} {:>10.4} {:>10.4}]",
+            r[0], r[1], r[2], r[3]
+        );
+    }
+    println!("  value range   {lo} to {hi}");
+    Ok(())
 }

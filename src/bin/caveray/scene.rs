@@ -4,13 +4,13 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
-    concentric_shells, isosurface_mesh, load_paraview, load_raw, marschner_lobb, preset,
-    shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat, VoxelType,
+    concentric_shells, isosurface_mesh, load_nifti, load_paraview, load_raw, marschner_lobb,
+    preset, shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat, VoxelType,
 };
 use anari_library_caveray::geometry::VolumeAxis;
 use anari_library_caveray::scene::{
-    AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume, Scene, Shape,
-    ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
+    transformed_box, AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume,
+    Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -159,6 +159,9 @@ fn dims(s: &str) -> Result<UVec3, String> {
 pub struct Loaded {
     pub name: String,
     pub volume: StructuredVolume,
+    /// Where a file with a placement (NIfTI) puts its voxels: voxel index
+    /// to the file's world, in its units. None: `volume`'s own grid.
+    pub index_to_file: Option<glam::Mat4>,
     tf: TransferFunction,
     /// Presets span the data's range; a ParaView map keeps its own.
     stretch_tf: bool,
@@ -196,6 +199,7 @@ impl VolumeArgs {
     pub fn load(&self) -> Result<Loaded, Failure> {
         let usage = |e: &dyn std::fmt::Display| Failure::Usage(e.to_string());
         let spec = self.volume.as_deref().unwrap_or("phantom");
+        let mut index_to_file = None;
         let (name, volume, default_tf, orientation) = if let Some((name, volume)) =
             procedural(spec)?
         {
@@ -205,6 +209,27 @@ impl VolumeArgs {
                 "phantom"
             };
             (name, volume, tf, Orientation::UNKNOWN)
+        } else if VolumeFormat::of(Path::new(spec)) == Some(VolumeFormat::Nifti) {
+            if self.dims.is_some() {
+                return Err(Failure::Usage(format!(
+                    "{spec} is a NIfTI file, whose header gives its size, type and spacing \
+                     (--dims, --dtype and --spacing describe raw files only)"
+                )));
+            }
+            let nifti = load_nifti(Path::new(spec)).map_err(|e| usage(&e))?;
+            index_to_file = Some(nifti.transform());
+            let tf = match nifti.header.dtype {
+                // Hounsfield units: signed CT.
+                "int16" => "ct-skin-bone",
+                _ => "grey",
+            };
+            // Scanner and template spaces are RAS+: superior up, the
+            // anterior (the face) toward the viewer.
+            let ras = Orientation {
+                up: Some(VolumeAxis::PosZ),
+                front: Some(VolumeAxis::PosY),
+            };
+            (file_stem(spec), nifti.volume, tf, ras)
         } else if let Some(format) = VolumeFormat::of(Path::new(spec)) {
             return Err(Failure::Usage(not_raw(spec, format, self.dims.is_some())));
         } else if self.dims.is_some() || Path::new(spec).is_file() {
@@ -253,6 +278,7 @@ impl VolumeArgs {
         Ok(Loaded {
             name,
             volume,
+            index_to_file,
             tf,
             stretch_tf,
             placement: self.placement,
@@ -273,6 +299,15 @@ impl Loaded {
         }
     }
 
+    /// The volume's box in its own world: the file's, where it places its
+    /// voxels (NIfTI), else its grid's.
+    pub fn bounds(&self) -> (glam::Vec3, glam::Vec3) {
+        match self.index_to_file {
+            Some(affine) => transformed_box(affine, self.volume.bounds()),
+            None => self.volume.bounds(),
+        }
+    }
+
     /// Where the volume goes: `default`, less what the command line says.
     pub fn placement(&self, default: ScenePlacement) -> Result<ScenePlacement, Failure> {
         self.placement.over(default, self.orientation)
@@ -287,7 +322,24 @@ impl Loaded {
         let runtime = |e: &dyn std::fmt::Display| Failure::Runtime(e.to_string());
         let placement = self.placement(default)?;
         let size = placement.size as f32;
-        let volume = self.volume.clone().placed(placement.centre.as_vec3(), size);
+        let centre = placement.centre.as_vec3();
+        // A file's own placement is kept, scaled as a whole so that its
+        // box in the file's world fits the rig's; the axes (RAS+ for a
+        // NIfTI file) are then turned as any volume's.
+        let (volume, fitted) = match self.index_to_file {
+            None => (
+                self.volume.clone().placed(centre, size),
+                glam::Mat4::IDENTITY,
+            ),
+            Some(affine) => {
+                let (lo, hi) = self.bounds();
+                let scale = size / (hi - lo).max_element().max(f32::MIN_POSITIVE);
+                let fit = glam::Mat4::from_translation(centre)
+                    * glam::Mat4::from_scale(glam::Vec3::splat(scale))
+                    * glam::Mat4::from_translation(-0.5 * (lo + hi));
+                (self.volume.clone(), fit * affine)
+            }
+        };
         let mut tf = self
             .tf
             .clone()
@@ -299,7 +351,7 @@ impl Loaded {
                 tf = tf.with_value_range(lo, hi).map_err(|e| runtime(&e))?;
             }
         }
-        let transform = placement.transform(frame).as_mat4();
+        let transform = placement.transform(frame).as_mat4() * fitted;
         let mesh = self.mesh.shape(&volume, transform)?;
         let scene = Scene::placed(vec![PlacedVolume {
             volume: volume.into(),

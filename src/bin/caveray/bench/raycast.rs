@@ -244,7 +244,7 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
     for name in &names {
         let loaded = args.volume.with_volume(name).load()?.with_stored_axes();
         // Longest side such that the bounding sphere has the protocol's radius.
-        let (lo, hi) = loaded.volume.bounds();
+        let (lo, hi) = loaded.bounds();
         let extent = hi - lo;
         let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
         let scene = loaded.placed(at(Vec3::ZERO, size), &protocol_frame())?;

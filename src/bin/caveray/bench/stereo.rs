@@ -189,7 +189,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
 
     let mut datasets = Vec::new();
     for (name, loaded) in names.iter().zip(&volumes) {
-        let (lo, hi) = loaded.volume.bounds();
+        let (lo, hi) = loaded.bounds();
         let extent = hi - lo;
         // Longest side such that the bounding sphere has radius 1 m.
         let longest = extent.max_element() * 2.0 / extent.length();

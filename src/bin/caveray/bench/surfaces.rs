@@ -103,7 +103,7 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
         .map(|i| camera(i, args.views, &setup, radius, image))
         .collect::<Result<Vec<_>, _>>()?;
     let loaded = args.volume.load()?.with_stored_axes();
-    let (lo, hi) = loaded.volume.bounds();
+    let (lo, hi) = loaded.bounds();
     let extent = hi - lo;
     let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
     let mixed = loaded.placed(at(Vec3::ZERO, size), &protocol_frame())?;
