@@ -12,7 +12,7 @@ use anari_library_caveray::capi::entry_points::*;
 use anari_library_caveray::capi::sys;
 use anari_library_caveray::cave::{MultiViewDisplay, Rig};
 use anari_library_caveray::data::{
-    parse_nifti, parse_paraview, parse_raw, sniff, Manifest, VoxelType,
+    parse_nifti, parse_nrrd, parse_paraview, parse_raw, sniff, Manifest, VoxelType,
 };
 use anari_library_caveray::device::info::SUBTYPES;
 use anari_library_caveray::device::DataType;
@@ -95,6 +95,13 @@ pub fn nifti(data: &[u8]) {
         if let Ok(n) = parse_nifti(data, name) {
             let _ = (n.volume.value_range(), n.transform());
         }
+    }
+}
+
+/// A NRRD file with its voxels attached: any bytes.
+pub fn nrrd(data: &[u8]) {
+    if let Ok(n) = parse_nrrd(data, "fuzz.nrrd") {
+        let _ = (n.volume.value_range(), n.transform());
     }
 }
 

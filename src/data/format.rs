@@ -1,5 +1,5 @@
-//! Volume file formats caveray recognises, so that a NIfTI file is read
-//! by its own reader and a NRRD, MetaImage, VTK or DICOM file is refused
+//! Volume file formats caveray recognises, so that a NIfTI or NRRD file is
+//! read by its own reader and a MetaImage, VTK or DICOM file is refused
 //! with its name and a way to convert it, instead of being taken for a
 //! headerless raw file of the wrong size. Known by content where it has a signature at a fixed
 //! place, else by file name.
@@ -75,8 +75,8 @@ impl VolumeFormat {
     /// A one-line shell command that writes the voxels of `input` as a
     /// raw float32 file `output` (x fastest, little-endian) and prints the
     /// `--dims`, `--dtype` and `--spacing` to load it with; `None` where
-    /// there is nothing to convert (gzip: decompress it instead; NIfTI:
-    /// caveray reads it).
+    /// there is nothing to convert (gzip: decompress it instead; NIfTI and
+    /// NRRD: caveray reads them).
     /// Float32 keeps any source type, signed CT values included.
     pub fn conversion(self, input: &str, output: &str) -> Option<String> {
         let (input, output) = if [input, output].iter().all(|s| shell_safe(s)) {
@@ -93,7 +93,7 @@ impl VolumeFormat {
             )
         };
         match self {
-            VolumeFormat::Nrrd | VolumeFormat::MetaImage | VolumeFormat::VtkLegacy => {
+            VolumeFormat::MetaImage | VolumeFormat::VtkLegacy => {
                 Some(itk(format!("i = s.ReadImage('{input}')")))
             }
             VolumeFormat::Dicom | VolumeFormat::DicomSeries => {
@@ -118,7 +118,7 @@ impl VolumeFormat {
                  d = r.GetOutput(); n(d.GetPointData().GetScalars()).astype('<f4').tofile('{output}'); \
                  print('--dims %d,%d,%d --dtype f32 --spacing %g,%g,%g' % (d.GetDimensions() + d.GetSpacing()))\""
             )),
-            VolumeFormat::Gzip | VolumeFormat::Nifti => None,
+            VolumeFormat::Gzip | VolumeFormat::Nifti | VolumeFormat::Nrrd => None,
         }
     }
 
@@ -371,12 +371,12 @@ mod tests {
 
     #[test]
     fn conversions_name_the_files_and_print_the_flags() {
-        let nrrd = VolumeFormat::Nrrd
-            .conversion("d/ct.nrrd", "d/ct.raw")
+        let mha = VolumeFormat::MetaImage
+            .conversion("d/ct.mha", "d/ct.raw")
             .unwrap();
-        assert!(nrrd.contains("s.ReadImage('d/ct.nrrd')"), "{nrrd}");
-        assert!(nrrd.contains("tofile('d/ct.raw')"), "{nrrd}");
-        assert!(nrrd.contains("--dims %d,%d,%d --dtype f32"), "{nrrd}");
+        assert!(mha.contains("s.ReadImage('d/ct.mha')"), "{mha}");
+        assert!(mha.contains("tofile('d/ct.raw')"), "{mha}");
+        assert!(mha.contains("--dims %d,%d,%d --dtype f32"), "{mha}");
         let slice = VolumeFormat::Dicom
             .conversion("series/1.dcm", "series/1.raw")
             .unwrap();
@@ -391,8 +391,8 @@ mod tests {
             folder.contains("GetGDCMSeriesFileNames('series')"),
             "{folder}"
         );
-        let odd = VolumeFormat::Nrrd
-            .conversion("it's $HOME.nrrd", "x.raw")
+        let odd = VolumeFormat::MetaImage
+            .conversion("it's $HOME.mha", "x.raw")
             .unwrap();
         assert!(
             odd.contains("ReadImage('IN')") && odd.contains("'OUT.raw'"),
@@ -400,6 +400,7 @@ mod tests {
         );
         assert_eq!(VolumeFormat::Gzip.conversion("a.gz", "a.raw"), None);
         assert_eq!(VolumeFormat::Nifti.conversion("a.nii", "a.raw"), None);
+        assert_eq!(VolumeFormat::Nrrd.conversion("a.nrrd", "a.raw"), None);
         let raw = |format: VolumeFormat, path: &str| format.raw_name(Path::new(path));
         assert_eq!(
             raw(VolumeFormat::Nifti, "d/Head.NII.GZ"),

@@ -1,4 +1,4 @@
-//! Where volumes and transfer functions come from: raw files, NIfTI files, the
+//! Where volumes and transfer functions come from: raw, NIfTI and NRRD files, the
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
 //! color maps; triangle meshes of volumes' isosurfaces; and the formats with headers that are recognised, to be
 //! refused by name rather than read as raw.
@@ -8,17 +8,20 @@ mod format;
 mod manifest;
 mod mesh;
 mod nifti;
+mod nrrd;
 mod orientation;
 mod paraview;
 mod presets;
 mod procedural;
 mod raw;
+mod stored;
 pub mod toml_syntax;
 
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};
 pub use mesh::{isosurface_mesh, Mesh, MeshError};
 pub use nifti::{load_nifti, parse_nifti, parse_nifti_header, Nifti, NiftiHeader};
+pub use nrrd::{load_nrrd, parse_nrrd, parse_nrrd_header, Nrrd, NrrdHeader};
 pub use orientation::{known_orientation, Orientation};
 pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DMat4, DVec3, DVec4, Mat4, UVec3};
 
 use super::files;
+use super::stored::Stored;
 use super::DataError;
 use crate::scene::{StructuredVolume, Voxels, MAX_VOXELS};
 
@@ -41,8 +42,7 @@ pub struct NiftiHeader {
     /// The file the voxels are in (the `.img` of a pair).
     pub data_file: PathBuf,
     big_endian: bool,
-    bytes_per_voxel: u64,
-    datatype: i32,
+    stored: Stored,
 }
 
 /// A NIfTI volume: its voxels (index space: origin 0, spacing 1) and header.
@@ -140,7 +140,7 @@ fn read_voxels(
 ) -> Result<Nifti, DataError> {
     let file = header.data_file.display().to_string();
     let voxels = u64::from(header.dims.x) * u64::from(header.dims.y) * u64::from(header.dims.z);
-    let bytes = voxels * header.bytes_per_voxel;
+    let bytes = voxels * header.stored.bytes();
     let header_len = if header.version == 1 {
         NIFTI1_HEADER
     } else {
@@ -194,7 +194,10 @@ fn read_voxels(
     if (data.len() as u64) < bytes {
         return Err(short(&file, &header, bytes, data.len() as u64));
     }
-    let values = decode(&header, &data).map_err(io)?;
+    let values = header
+        .stored
+        .decode(&data, header.big_endian, (header.slope, header.intercept))
+        .map_err(io)?;
     drop(data);
     let volume = StructuredVolume::new(
         header.dims,
@@ -322,15 +325,15 @@ pub fn parse_nifti_header(head: &[u8], path: &Path) -> Result<NiftiHeader, DataE
             dims: format!("{}x{}x{}", dims3.x, dims3.y, dims3.z),
         });
     }
-    let (dtype, bytes_per_voxel) = match datatype {
-        2 => ("uint8", 1),
-        4 => ("int16", 2),
-        8 => ("int32", 4),
-        16 => ("float32", 4),
-        64 => ("float64", 8),
-        256 => ("int8", 1),
-        512 => ("uint16", 2),
-        768 => ("uint32", 4),
+    let stored = match datatype {
+        2 => Stored::U8,
+        4 => Stored::I16,
+        8 => Stored::I32,
+        16 => Stored::F32,
+        64 => Stored::F64,
+        256 => Stored::I8,
+        512 => Stored::U16,
+        768 => Stored::U32,
         other => {
             return Err(field(
                 "datatype",
@@ -431,7 +434,7 @@ pub fn parse_nifti_header(head: &[u8], path: &Path) -> Result<NiftiHeader, DataE
     Ok(NiftiHeader {
         version,
         dims: dims3,
-        dtype,
+        dtype: stored.name(),
         spacing,
         affine,
         placed_by,
@@ -441,8 +444,7 @@ pub fn parse_nifti_header(head: &[u8], path: &Path) -> Result<NiftiHeader, DataE
         offset: offset as u64,
         data_file,
         big_endian,
-        bytes_per_voxel,
-        datatype,
+        stored,
     })
 }
 
@@ -522,38 +524,6 @@ impl Fields<'_> {
     fn f64(&self, at: usize) -> f64 {
         f64::from_le_bytes(self.bytes(at))
     }
-}
-
-/// The stored values as f32, scaled as the header says; their buffer
-/// reserved fallibly.
-fn decode(header: &NiftiHeader, data: &[u8]) -> std::io::Result<Vec<f32>> {
-    let n = header.bytes_per_voxel as usize;
-    let (slope, intercept) = (header.slope, header.intercept);
-    let big = header.big_endian;
-    let datatype = header.datatype;
-    let mut values = Vec::new();
-    values
-        .try_reserve_exact(data.len() / n)
-        .map_err(|_| too_large((data.len() / n * 4) as u64))?;
-    values.extend(data.chunks_exact(n).map(|c| {
-        let mut b = [0u8; 8];
-        b[..n].copy_from_slice(c);
-        if big {
-            b[..n].reverse();
-        }
-        let v = match datatype {
-            2 => f64::from(b[0]),
-            256 => f64::from(b[0] as i8),
-            4 => f64::from(i16::from_le_bytes([b[0], b[1]])),
-            512 => f64::from(u16::from_le_bytes([b[0], b[1]])),
-            8 => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            768 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            16 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            _ => f64::from_le_bytes(b),
-        };
-        (v * slope + intercept) as f32
-    }));
-    Ok(values)
 }
 
 fn is_gz(path: &Path) -> bool {

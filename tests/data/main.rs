@@ -4,4 +4,5 @@
 mod common;
 
 mod nifti;
+mod nrrd;
 mod volumes;

@@ -16,13 +16,14 @@ const LIMIT: Duration = Duration::from_secs(30);
 
 type Target = fn(&[u8]);
 
-const TARGETS: [(&str, Target); 6] = [
+const TARGETS: [(&str, Target); 7] = [
     ("rig", harness::rig),
     ("display", harness::display),
     ("paraview", harness::paraview),
     ("raw_manifest", harness::raw_manifest),
     ("capi", harness::capi),
     ("nifti", harness::nifti),
+    ("nrrd", harness::nrrd),
 ];
 
 /// Every file under fuzz/<kind>/<target>/, sorted.

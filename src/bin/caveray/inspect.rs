@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::inspect::{inspect, Pinhole, Report, Selection, ViewReport};
 use anari_library_caveray::cave::{Eye, Rig};
-use anari_library_caveray::data::{load_nifti, VolumeFormat};
+use anari_library_caveray::data::{load_nifti, load_nrrd, VolumeFormat};
 use clap::{Args, ValueEnum};
 
 use crate::{Failure, HeadArgs};
@@ -15,7 +15,7 @@ pub struct InspectArgs {
     /// Rig file (TOML), e.g. cave_configs/cologne_5wall.toml.
     #[arg(long, required_unless_present = "volume")]
     config: Option<PathBuf>,
-    /// A volume file with a header (NIfTI: .nii, .nii.gz, .hdr/.img):
+    /// A volume file with a header (NIfTI: .nii, .nii.gz, .hdr/.img; NRRD):
     /// prints its size, type, spacing, index-to-world map and value range
     /// instead of a rig's views.
     #[arg(long, conflicts_with = "config")]
@@ -192,11 +192,15 @@ fn vn(v: &[f64], digits: usize) -> String {
 
 /// What a volume file's header says, and its values' range.
 fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
-    if VolumeFormat::of(path) != Some(VolumeFormat::Nifti) {
-        return Err(Failure::Usage(format!(
-            "{}: caveray inspect reads NIfTI files (.nii, .nii.gz, .hdr/.img)",
-            path.display()
-        )));
+    match VolumeFormat::of(path) {
+        Some(VolumeFormat::Nifti) => {}
+        Some(VolumeFormat::Nrrd) => return inspect_nrrd(path, json),
+        _ => {
+            return Err(Failure::Usage(format!(
+                "{}: caveray inspect reads NIfTI (.nii, .nii.gz, .hdr/.img) and NRRD (.nrrd, .nhdr) files",
+                path.display()
+            )))
+        }
     }
     let nifti = load_nifti(path).map_err(|e| Failure::Usage(e.to_string()))?;
     let h = &nifti.header;
@@ -228,6 +232,43 @@ fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
     let s = h.spacing.as_vec3();
     println!("  spacing       {} x {} x {} {}", s.x, s.y, s.z, h.units);
     println!("  index to world ({}, {}):", h.placed_by, h.units);
+    for r in rows {
+        println!(
+            "    [{:>10.4} {:>10.4} {:>10.4} {:>10.4}]",
+            r[0], r[1], r[2], r[3]
+        );
+    }
+    println!("  value range   {lo} to {hi}");
+    Ok(())
+}
+
+/// `inspect_volume` of a NRRD file.
+fn inspect_nrrd(path: &Path, json: bool) -> Result<(), Failure> {
+    let nrrd = load_nrrd(path).map_err(|e| Failure::Usage(e.to_string()))?;
+    let h = &nrrd.header;
+    let (lo, hi) = nrrd.volume.value_range();
+    let rows: Vec<[f64; 4]> = (0..3).map(|r| h.affine.row(r).to_array()).collect();
+    if json {
+        let doc = serde_json::json!({
+            "file": path.display().to_string(),
+            "format": "NRRD",
+            "dims": h.dims.to_array(),
+            "dtype": h.dtype,
+            "encoding": h.encoding,
+            "space": h.space,
+            "index_to_world": rows,
+            "ras": h.anatomical,
+            "value_range": [lo, hi],
+        });
+        println!("{doc:#}");
+        return Ok(());
+    }
+    println!("{}: NRRD", path.display());
+    println!("  dims          {} x {} x {}", h.dims.x, h.dims.y, h.dims.z);
+    println!("  type          {} ({})", h.dtype, h.encoding);
+    let space = if h.space.is_empty() { "none" } else { &h.space };
+    let turned = if h.anatomical { ", as RAS+" } else { "" };
+    println!("  index to world (space {space}{turned}):");
     for r in rows {
         println!(
             "    [{:>10.4} {:>10.4} {:>10.4} {:>10.4}]",

@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
-    concentric_shells, isosurface_mesh, load_nifti, load_paraview, load_raw, marschner_lobb,
-    preset, shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat, VoxelType,
+    concentric_shells, isosurface_mesh, load_nifti, load_nrrd, load_paraview, load_raw,
+    marschner_lobb, preset, shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat,
+    VoxelType,
 };
 use anari_library_caveray::geometry::VolumeAxis;
 use anari_library_caveray::scene::{
@@ -159,7 +160,7 @@ fn dims(s: &str) -> Result<UVec3, String> {
 pub struct Loaded {
     pub name: String,
     pub volume: StructuredVolume,
-    /// Where a file with a placement (NIfTI) puts its voxels: voxel index
+    /// Where a file with a placement (NIfTI, NRRD) puts its voxels: voxel index
     /// to the file's world, in its units. None: `volume`'s own grid.
     pub index_to_file: Option<glam::Mat4>,
     tf: TransferFunction,
@@ -230,6 +231,29 @@ impl VolumeArgs {
                 front: Some(VolumeAxis::PosY),
             };
             (file_stem(spec), nifti.volume, tf, ras)
+        } else if VolumeFormat::of(Path::new(spec)) == Some(VolumeFormat::Nrrd) {
+            if self.dims.is_some() {
+                return Err(Failure::Usage(format!(
+                    "{spec} is a NRRD file, whose header gives its size, type and spacing \
+                     (--dims, --dtype and --spacing describe raw files only)"
+                )));
+            }
+            let nrrd = load_nrrd(Path::new(spec)).map_err(|e| usage(&e))?;
+            index_to_file = Some(nrrd.transform());
+            let tf = match nrrd.header.dtype {
+                "int16" => "ct-skin-bone",
+                _ => "grey",
+            };
+            // An anatomical space is turned into RAS+ on reading.
+            let orientation = if nrrd.header.anatomical {
+                Orientation {
+                    up: Some(VolumeAxis::PosZ),
+                    front: Some(VolumeAxis::PosY),
+                }
+            } else {
+                Orientation::UNKNOWN
+            };
+            (file_stem(spec), nrrd.volume, tf, orientation)
         } else if let Some(format) = VolumeFormat::of(Path::new(spec)) {
             return Err(Failure::Usage(not_raw(spec, format, self.dims.is_some())));
         } else if self.dims.is_some() || Path::new(spec).is_file() {

@@ -1,0 +1,78 @@
+//! Voxel values as files store them: the scalar types NIfTI and NRRD
+//! write, either byte order, read as 32-bit floats through a linear
+//! scaling.
+
+/// A stored scalar type.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stored {
+    U8,
+    I8,
+    U16,
+    I16,
+    U32,
+    I32,
+    F32,
+    F64,
+}
+
+impl Stored {
+    /// As NumPy and the file formats' documentation name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stored::U8 => "uint8",
+            Stored::I8 => "int8",
+            Stored::U16 => "uint16",
+            Stored::I16 => "int16",
+            Stored::U32 => "uint32",
+            Stored::I32 => "int32",
+            Stored::F32 => "float32",
+            Stored::F64 => "float64",
+        }
+    }
+
+    pub fn bytes(self) -> u64 {
+        match self {
+            Stored::U8 | Stored::I8 => 1,
+            Stored::U16 | Stored::I16 => 2,
+            Stored::U32 | Stored::I32 | Stored::F32 => 4,
+            Stored::F64 => 8,
+        }
+    }
+
+    /// `data`'s values, `big_endian` or not, as `value * slope +
+    /// intercept`; their buffer reserved fallibly.
+    pub fn decode(
+        self,
+        data: &[u8],
+        big_endian: bool,
+        (slope, intercept): (f64, f64),
+    ) -> std::io::Result<Vec<f32>> {
+        let n = self.bytes() as usize;
+        let mut values = Vec::new();
+        values.try_reserve_exact(data.len() / n).map_err(|_| {
+            std::io::Error::new(
+                std::io::ErrorKind::OutOfMemory,
+                format!("cannot hold {} bytes in memory", data.len() / n * 4),
+            )
+        })?;
+        values.extend(data.chunks_exact(n).map(|c| {
+            let mut b = [0u8; 8];
+            b[..n].copy_from_slice(c);
+            if big_endian {
+                b[..n].reverse();
+            }
+            let v = match self {
+                Stored::U8 => f64::from(b[0]),
+                Stored::I8 => f64::from(b[0] as i8),
+                Stored::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
+                Stored::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
+                Stored::I32 => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                Stored::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                Stored::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                Stored::F64 => f64::from_le_bytes(b),
+            };
+            (v * slope + intercept) as f32
+        }));
+        Ok(values)
+    }
+}

@@ -1,0 +1,180 @@
+//! NRRD files as pynrrd (PyPI) writes them, made at test time: an oblique
+//! LPS scan gzipped, a RAS one raw and big-endian, a detached header with
+//! its data file, and one with spacings only; each marker voxel lands
+//! where the header's space directions and origin put it (turned into
+//! RAS+), and bad headers are refused by the field at fault.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anari_library_caveray::data::{load_nrrd, DataError};
+use glam::{DVec3, Vec3};
+use serde_json::Value;
+
+use crate::common;
+
+fn python() -> Option<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = std::env::var_os("CAVERAY_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("target/pynari/bin/python"));
+    path.exists().then_some(path)
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Writes the fixtures with pynrrd; prints each one's marker index, its
+/// world position in RAS+ and its value, and whether the file is in an
+/// anatomical space.
+const WRITE: &str = r#"
+import json, sys
+import numpy as np, nrrd
+out = {}
+def marked(dtype, shape=(20, 16, 12), marker=(5, 7, 3), value=1000):
+    d = np.zeros(shape, dtype=dtype)
+    d[2:-2, 2:-2, 2:-2] = 100
+    d[marker] = value
+    return d
+th = np.radians(25)
+oblique = (np.array([[np.cos(th), -np.sin(th), 0], [np.sin(th), np.cos(th), 0], [0, 0, 1]]) @ np.diag([0.7, 1.1, 2.0])).T
+def save(name, data, header, to_ras, marker=(5, 7, 3), **kw):
+    nrrd.write(name, data, header, index_order="F", **kw)
+    back, h = nrrd.read(name, index_order="F")
+    dirs = h.get("space directions")
+    origin = h.get("space origin", np.zeros(3))
+    world = (np.asarray(origin, float) + np.asarray(dirs, float).T @ np.array(marker, float)) if dirs is not None else np.array(marker, float) * np.asarray(h.get("spacings", [1, 1, 1]), float)
+    out[name] = {"marker": list(marker), "world": (np.array(to_ras) * world).tolist(),
+                 "value": float(back[marker]), "ras": dirs is not None}
+save("oblique_lps.nrrd", marked(np.int16),
+     {"space": "left-posterior-superior", "space directions": oblique, "space origin": [12.0, -7.5, 30.0], "encoding": "gzip"},
+     [-1, -1, 1])
+save("ras_big.nrrd", marked(np.float32),
+     {"space": "right-anterior-superior", "space directions": np.diag([0.9, 0.9, 1.5]), "space origin": [-5.0, 4.0, 2.0], "encoding": "raw", "endian": "big"},
+     [1, 1, 1])
+save("detached.nhdr", marked(np.uint16, value=60000),
+     {"space": "left-posterior-superior", "space directions": np.diag([1.2, 1.2, 3.0]), "space origin": [0.0, 0.0, 0.0], "encoding": "raw"},
+     [-1, -1, 1], detached_header=True)
+save("spacings.nrrd", marked(np.uint8, value=250), {"spacings": [2.0, 1.0, 0.5], "encoding": "raw"}, [1, 1, 1])
+json.dump(out, sys.stdout)
+"#;
+
+#[test]
+fn pynrrd_files_load_with_their_markers_where_their_headers_put_them() {
+    let Some(python) = python() else {
+        common::missing("pynrrd's virtual environment (target/pynari, made by scripts/deps)");
+        return;
+    };
+    let dir = scratch("nrrd");
+    let run = Command::new(&python)
+        .arg("-c")
+        .arg(WRITE)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "pynrrd: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let said: Value = serde_json::from_slice(&run.stdout).unwrap();
+    let fixtures = said.as_object().unwrap();
+    assert_eq!(fixtures.len(), 4);
+    for (name, truth) in fixtures {
+        let nrrd = load_nrrd(&dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(
+            nrrd.header.anatomical,
+            truth["ras"].as_bool().unwrap(),
+            "{name}"
+        );
+        let v = &nrrd.volume;
+        let (mut best, mut at) = (f32::NEG_INFINITY, 0);
+        for i in 0..v.voxels().len() {
+            if v.voxels().value(i) > best {
+                (best, at) = (v.voxels().value(i), i);
+            }
+        }
+        let dims = v.dims();
+        let (nx, ny) = (dims.x as usize, dims.y as usize);
+        let index = Vec3::new(
+            (at % nx) as f32,
+            ((at / nx) % ny) as f32,
+            (at / (nx * ny)) as f32,
+        );
+        let marker: Vec<f32> = truth["marker"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap() as f32)
+            .collect();
+        assert_eq!(
+            index.to_array().to_vec(),
+            marker,
+            "{name}: the marker's index"
+        );
+        let value = truth["value"].as_f64().unwrap() as f32;
+        assert!(
+            (best - value).abs() <= 1e-3 * value.abs(),
+            "{name}: marker value {best} vs pynrrd's {value}"
+        );
+        let world = nrrd.transform().transform_point3(index).as_dvec3();
+        let want: Vec<f64> = truth["world"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let want = DVec3::from_slice(&want);
+        assert!(
+            world.distance(want) < 1e-3,
+            "{name}: marker at {world}, the header puts it at {want}"
+        );
+    }
+}
+
+#[test]
+fn broken_nrrd_headers_are_refused_by_the_field_at_fault() {
+    let dir = scratch("nrrd_broken");
+    let header = |fields: &str| {
+        let mut b = format!("NRRD0004\n{fields}\n").into_bytes();
+        b.extend((0..64u8).collect::<Vec<_>>());
+        b
+    };
+    let good = "type: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n";
+    let path = dir.join("good.nrrd");
+    std::fs::write(&path, header(good)).unwrap();
+    assert_eq!(load_nrrd(&path).unwrap().volume.voxels().value(63), 63.0);
+    let refused = |name: &str, fields: &str| -> String {
+        let path = dir.join(name);
+        std::fs::write(&path, header(fields)).unwrap();
+        match load_nrrd(&path) {
+            Err(DataError::Header { field, why, .. }) => format!("{field}: {why}"),
+            other => panic!("{name}: {:?}", other.map(|n| n.header)),
+        }
+    };
+    let cases = [
+        ("type.nrrd", "type: block\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n", "type: 'block'"),
+        ("dims.nrrd", "type: uint8\ndimension: 3\nsizes: 4 4\nencoding: raw\n", "sizes: 2 sizes for dimension 3"),
+        ("four.nrrd", "type: uint8\ndimension: 4\nsizes: 3 4 4 4\nencoding: raw\n", "dimension: 4"),
+        ("enc.nrrd", "type: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: bzip2\n", "encoding: 'bzip2'"),
+        ("endian.nrrd", "type: short\ndimension: 3\nsizes: 4 4 2\nencoding: raw\n", "endian: missing"),
+        ("short.nrrd", "type: uint8\ndimension: 3\nsizes: 4 4 8\nencoding: raw\n", "voxels: 4x4x8 uint8 needs 128 bytes"),
+        ("dirs.nrrd", "type: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\nspace: RAS\nspace directions: (1,0,0) (0,1,0) (2,0,0)\n", "space directions: they are not finite or span no volume"),
+        ("nospace.nrrd", "dimension: 3\nsizes: 4 4 4\nencoding: raw\n", "type: missing"),
+    ];
+    for (name, fields, start) in cases {
+        let got = refused(name, fields);
+        assert!(got.starts_with(start), "{name}: {got}");
+    }
+    let path = dir.join("magic.nrrd");
+    std::fs::write(&path, b"NRRD0009\n").unwrap();
+    assert!(load_nrrd(&path)
+        .err()
+        .unwrap()
+        .to_string()
+        .contains("magic"));
+}
