@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DMat4, DVec3, DVec4, Mat4, UVec3};
 
 use super::files;
-use super::stored::Stored;
+use super::stored::{out_of_memory, Stored};
 use super::DataError;
-use crate::scene::{StructuredVolume, Voxels, MAX_VOXELS};
+use crate::scene::{StructuredVolume, MAX_VOXELS};
 
 const NIFTI1_HEADER: usize = 348;
 const NIFTI2_HEADER: usize = 540;
@@ -183,10 +183,10 @@ fn read_voxels(
         // The file's length held the voxels: their buffer can be had
         // whole, or the error says so.
         let total = usize::try_from(bytes)
-            .map_err(|_| too_large(bytes))
+            .map_err(|_| out_of_memory(bytes))
             .map_err(io)?;
         data.try_reserve_exact(total.saturating_sub(data.len()))
-            .map_err(|_| too_large(bytes))
+            .map_err(|_| out_of_memory(bytes))
             .map_err(io)?;
     }
     let missing = bytes - data.len() as u64;
@@ -194,25 +194,11 @@ fn read_voxels(
     if (data.len() as u64) < bytes {
         return Err(short(&file, &header, bytes, data.len() as u64));
     }
-    let values = header
+    let scaling = (header.slope, header.intercept);
+    let volume = header
         .stored
-        .decode(&data, header.big_endian, (header.slope, header.intercept))
-        .map_err(io)?;
-    drop(data);
-    let volume = StructuredVolume::new(
-        header.dims,
-        Voxels::F32(values),
-        glam::Vec3::ZERO,
-        glam::Vec3::ONE,
-    )?;
+        .grid(header.dims, &data, header.big_endian, scaling, &file)?;
     Ok(Nifti { volume, header })
-}
-
-fn too_large(bytes: u64) -> std::io::Error {
-    std::io::Error::new(
-        std::io::ErrorKind::OutOfMemory,
-        format!("cannot hold {bytes} bytes in memory"),
-    )
 }
 
 /// The header of a NIfTI-1 or NIfTI-2 file that begins with `head`, the

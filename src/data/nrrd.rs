@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use glam::{DMat4, DVec3, Mat4, UVec3};
 
 use super::files;
-use super::stored::Stored;
+use super::stored::{out_of_memory, Stored};
 use super::DataError;
-use crate::scene::{StructuredVolume, Voxels, MAX_VOXELS};
+use crate::scene::{StructuredVolume, MAX_VOXELS};
 
 /// The most a header may hold.
 const HEADER_LIMIT: usize = 1 << 16;
@@ -146,28 +146,16 @@ fn read_voxels(
     let mut data = Vec::new();
     if header.encoding == "raw" {
         let total = usize::try_from(bytes).unwrap_or(usize::MAX);
-        data.try_reserve_exact(total).map_err(|_| {
-            io(std::io::Error::new(
-                std::io::ErrorKind::OutOfMemory,
-                format!("cannot hold {bytes} bytes in memory"),
-            ))
-        })?;
+        data.try_reserve_exact(total)
+            .map_err(|_| io(out_of_memory(bytes)))?;
     }
     reader.take(bytes).read_to_end(&mut data).map_err(io)?;
     if (data.len() as u64) < bytes {
         return Err(short(data.len() as u64));
     }
-    let values = header
+    let volume = header
         .stored
-        .decode(&data, header.big_endian, (1.0, 0.0))
-        .map_err(io)?;
-    drop(data);
-    let volume = StructuredVolume::new(
-        header.dims,
-        Voxels::F32(values),
-        glam::Vec3::ZERO,
-        glam::Vec3::ONE,
-    )?;
+        .grid(header.dims, &data, header.big_endian, (1.0, 0.0), file)?;
     Ok(Nrrd { volume, header })
 }
 

@@ -1,6 +1,19 @@
 //! Voxel values as files store them: the scalar types NIfTI and NRRD
 //! write, either byte order, read as 32-bit floats through a linear
-//! scaling.
+//! scaling into a grid in index space.
+
+use glam::{UVec3, Vec3};
+
+use super::DataError;
+use crate::scene::{StructuredVolume, Voxels};
+
+/// The error of a buffer of `bytes` that cannot be had.
+pub fn out_of_memory(bytes: u64) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::OutOfMemory,
+        format!("cannot hold {bytes} bytes in memory"),
+    )
+}
 
 /// A stored scalar type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,12 +62,9 @@ impl Stored {
     ) -> std::io::Result<Vec<f32>> {
         let n = self.bytes() as usize;
         let mut values = Vec::new();
-        values.try_reserve_exact(data.len() / n).map_err(|_| {
-            std::io::Error::new(
-                std::io::ErrorKind::OutOfMemory,
-                format!("cannot hold {} bytes in memory", data.len() / n * 4),
-            )
-        })?;
+        values
+            .try_reserve_exact(data.len() / n)
+            .map_err(|_| out_of_memory((data.len() / n * 4) as u64))?;
         values.extend(data.chunks_exact(n).map(|c| {
             let mut b = [0u8; 8];
             b[..n].copy_from_slice(c);
@@ -74,5 +84,29 @@ impl Stored {
             (v * slope + intercept) as f32
         }));
         Ok(values)
+    }
+
+    /// The grid of `dims` voxels that `data` (of file `file`) holds, origin
+    /// 0 and spacing 1: a file's own map places it.
+    pub fn grid(
+        self,
+        dims: UVec3,
+        data: &[u8],
+        big_endian: bool,
+        scaling: (f64, f64),
+        file: &str,
+    ) -> Result<StructuredVolume, DataError> {
+        let values = self
+            .decode(data, big_endian, scaling)
+            .map_err(|source| DataError::Io {
+                file: file.to_string(),
+                source,
+            })?;
+        Ok(StructuredVolume::new(
+            dims,
+            Voxels::F32(values),
+            Vec3::ZERO,
+            Vec3::ONE,
+        )?)
     }
 }

@@ -179,6 +179,16 @@ fn nifti(dims: [i16; 3]) -> Vec<u8> {
     h
 }
 
+/// `caveray inspect --volume path --json`'s document.
+fn inspect_json(path: &Path) -> serde_json::Value {
+    let inspect = Command::new(env!("CARGO_BIN_EXE_caveray"))
+        .args(["inspect", "--volume", path.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    assert!(inspect.status.success(), "{inspect:?}");
+    serde_json::from_slice(&inspect.stdout).unwrap()
+}
+
 #[test]
 fn a_nrrd_file_renders_in_the_cave_and_inspects_with_no_other_flag() {
     let dir = scratch("nrrd");
@@ -200,12 +210,7 @@ fn a_nrrd_file_renders_in_the_cave_and_inspects_with_no_other_flag() {
         );
     }
     let path = dir.join("ct.nrrd");
-    let inspect = Command::new(env!("CARGO_BIN_EXE_caveray"))
-        .args(["inspect", "--volume", path.to_str().unwrap(), "--json"])
-        .output()
-        .unwrap();
-    assert!(inspect.status.success(), "{inspect:?}");
-    let doc: serde_json::Value = serde_json::from_slice(&inspect.stdout).unwrap();
+    let doc = inspect_json(&path);
     assert_eq!(doc["dims"], serde_json::json!([12, 10, 8]));
     assert_eq!(doc["ras"], true);
     // LPS turned into RAS+: x and y flip, with the origin.
@@ -258,12 +263,7 @@ fn a_nifti_file_renders_in_the_cave_and_inspects_with_no_other_flag() {
             "{p}: {report}"
         );
     }
-    let inspect = Command::new(env!("CARGO_BIN_EXE_caveray"))
-        .args(["inspect", "--volume", gz.to_str().unwrap(), "--json"])
-        .output()
-        .unwrap();
-    assert!(inspect.status.success(), "{inspect:?}");
-    let doc: serde_json::Value = serde_json::from_slice(&inspect.stdout).unwrap();
+    let doc = inspect_json(&gz);
     assert_eq!(doc["dims"], serde_json::json!([12, 10, 8]));
     assert_eq!(doc["dtype"], "uint8");
     assert_eq!(doc["units"], "mm");

@@ -3,6 +3,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod fixtures;
 mod nifti;
 mod nrrd;
 mod volumes;

@@ -4,30 +4,11 @@
 //! voxel lands where nibabel's affine puts it, the values are nibabel's,
 //! and bad files are refused by the field at fault.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
 use anari_library_caveray::data::{load_nifti, DataError};
 use anari_library_caveray::scene::{StructuredVolume, VolumeError, Voxels};
-use glam::{DVec3, Vec3};
-use serde_json::Value;
+use glam::Vec3;
 
-use crate::common;
-
-fn python() -> Option<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let path = std::env::var_os("CAVERAY_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("target/pynari/bin/python"));
-    path.exists().then_some(path)
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use crate::fixtures;
 
 /// Writes the fixtures into `dir` with nibabel and returns what nibabel
 /// says of each: its affine, its marker's index and world position, and
@@ -76,23 +57,9 @@ json.dump(out, sys.stdout)
 
 #[test]
 fn nibabel_files_load_with_their_markers_where_their_headers_put_them() {
-    let Some(python) = python() else {
-        common::missing("nibabel's virtual environment (target/pynari, made by scripts/deps)");
+    let Some((dir, said)) = fixtures::written_by("nibabel", WRITE, "nifti") else {
         return;
     };
-    let dir = scratch("nifti");
-    let run = Command::new(&python)
-        .arg("-c")
-        .arg(WRITE)
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "nibabel: {}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let said: Value = serde_json::from_slice(&run.stdout).unwrap();
     let fixtures = said.as_object().unwrap();
     assert_eq!(fixtures.len(), 6);
     for (name, truth) in fixtures {
@@ -111,49 +78,8 @@ fn nibabel_files_load_with_their_markers_where_their_headers_put_them() {
         }
         // The brightest voxel is the marker, with nibabel's value, and
         // lands where nibabel puts it, within half a voxel.
-        let v = &nifti.volume;
-        let dims = v.dims();
-        let (mut best, mut at) = (f32::NEG_INFINITY, 0);
-        for i in 0..v.voxels().len() {
-            if v.voxels().value(i) > best {
-                (best, at) = (v.voxels().value(i), i);
-            }
-        }
-        let (nx, ny) = (dims.x as usize, dims.y as usize);
-        let index = Vec3::new(
-            (at % nx) as f32,
-            ((at / nx) % ny) as f32,
-            (at / (nx * ny)) as f32,
-        );
-        let marker: Vec<f32> = truth["marker"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap() as f32)
-            .collect();
-        assert_eq!(
-            index.to_array().to_vec(),
-            marker,
-            "{name}: the marker's index"
-        );
-        let want_value = truth["value"].as_f64().unwrap() as f32;
-        assert!(
-            (best - want_value).abs() <= 1e-3 * want_value.abs(),
-            "{name}: marker value {best} vs nibabel's {want_value}"
-        );
-        let world = nifti.transform().transform_point3(index).as_dvec3();
-        let want: Vec<f64> = truth["world"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect();
-        let want = DVec3::from_slice(&want);
         let half = 0.5 * nifti.header.spacing.abs().min_element();
-        assert!(
-            world.distance(want) < half,
-            "{name}: marker at {world}, nibabel says {want}"
-        );
+        fixtures::marker_lands(name, &nifti.volume, nifti.transform(), truth, half);
     }
     // A series of volumes is refused by the dimension at fault.
     let e = load_nifti(&dir.join("series.nii")).err().unwrap();
@@ -166,7 +92,7 @@ fn nibabel_files_load_with_their_markers_where_their_headers_put_them() {
 
 #[test]
 fn broken_nifti_files_are_refused_by_the_field_at_fault() {
-    let dir = scratch("nifti_broken");
+    let dir = fixtures::scratch("nifti_broken");
     // A NIfTI-1 header by hand: 4 x 4 x 4 uint8, the voxels at 352.
     let mut h = vec![0u8; 352];
     h[0..4].copy_from_slice(&348i32.to_le_bytes());

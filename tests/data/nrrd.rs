@@ -4,29 +4,8 @@
 //! where the header's space directions and origin put it (turned into
 //! RAS+), and bad headers are refused by the field at fault.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
+use crate::fixtures;
 use anari_library_caveray::data::{load_nrrd, DataError};
-use glam::{DVec3, Vec3};
-use serde_json::Value;
-
-use crate::common;
-
-fn python() -> Option<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let path = std::env::var_os("CAVERAY_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("target/pynari/bin/python"));
-    path.exists().then_some(path)
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Writes the fixtures with pynrrd; prints each one's marker index, its
 /// world position in RAS+ and its value, and whether the file is in an
@@ -65,23 +44,9 @@ json.dump(out, sys.stdout)
 
 #[test]
 fn pynrrd_files_load_with_their_markers_where_their_headers_put_them() {
-    let Some(python) = python() else {
-        common::missing("pynrrd's virtual environment (target/pynari, made by scripts/deps)");
+    let Some((dir, said)) = fixtures::written_by("pynrrd", WRITE, "nrrd") else {
         return;
     };
-    let dir = scratch("nrrd");
-    let run = Command::new(&python)
-        .arg("-c")
-        .arg(WRITE)
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "pynrrd: {}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let said: Value = serde_json::from_slice(&run.stdout).unwrap();
     let fixtures = said.as_object().unwrap();
     assert_eq!(fixtures.len(), 4);
     for (name, truth) in fixtures {
@@ -91,54 +56,13 @@ fn pynrrd_files_load_with_their_markers_where_their_headers_put_them() {
             truth["ras"].as_bool().unwrap(),
             "{name}"
         );
-        let v = &nrrd.volume;
-        let (mut best, mut at) = (f32::NEG_INFINITY, 0);
-        for i in 0..v.voxels().len() {
-            if v.voxels().value(i) > best {
-                (best, at) = (v.voxels().value(i), i);
-            }
-        }
-        let dims = v.dims();
-        let (nx, ny) = (dims.x as usize, dims.y as usize);
-        let index = Vec3::new(
-            (at % nx) as f32,
-            ((at / nx) % ny) as f32,
-            (at / (nx * ny)) as f32,
-        );
-        let marker: Vec<f32> = truth["marker"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap() as f32)
-            .collect();
-        assert_eq!(
-            index.to_array().to_vec(),
-            marker,
-            "{name}: the marker's index"
-        );
-        let value = truth["value"].as_f64().unwrap() as f32;
-        assert!(
-            (best - value).abs() <= 1e-3 * value.abs(),
-            "{name}: marker value {best} vs pynrrd's {value}"
-        );
-        let world = nrrd.transform().transform_point3(index).as_dvec3();
-        let want: Vec<f64> = truth["world"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect();
-        let want = DVec3::from_slice(&want);
-        assert!(
-            world.distance(want) < 1e-3,
-            "{name}: marker at {world}, the header puts it at {want}"
-        );
+        fixtures::marker_lands(name, &nrrd.volume, nrrd.transform(), truth, 1e-3);
     }
 }
 
 #[test]
 fn broken_nrrd_headers_are_refused_by_the_field_at_fault() {
-    let dir = scratch("nrrd_broken");
+    let dir = fixtures::scratch("nrrd_broken");
     let header = |fields: &str| {
         let mut b = format!("NRRD0004\n{fields}\n").into_bytes();
         b.extend((0..64u8).collect::<Vec<_>>());

@@ -232,13 +232,7 @@ fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
     let s = h.spacing.as_vec3();
     println!("  spacing       {} x {} x {} {}", s.x, s.y, s.z, h.units);
     println!("  index to world ({}, {}):", h.placed_by, h.units);
-    for r in rows {
-        println!(
-            "    [{:>10.4} {:>10.4} {:>10.4} {:>10.4}]",
-            r[0], r[1], r[2], r[3]
-        );
-    }
-    println!("  value range   {lo} to {hi}");
+    print_map(&rows, (lo, hi));
     Ok(())
 }
 
@@ -269,6 +263,13 @@ fn inspect_nrrd(path: &Path, json: bool) -> Result<(), Failure> {
     let space = if h.space.is_empty() { "none" } else { &h.space };
     let turned = if h.anatomical { ", as RAS+" } else { "" };
     println!("  index to world (space {space}{turned}):");
+    print_map(&rows, (lo, hi));
+    Ok(())
+}
+
+/// A voxel-to-world map's rows and a value range, as both formats print
+/// them.
+fn print_map(rows: &[[f64; 4]], (lo, hi): (f32, f32)) {
     for r in rows {
         println!(
             "    [{:>10.4} {:>10.4} {:>10.4} {:>10.4}]",
@@ -276,5 +277,4 @@ fn inspect_nrrd(path: &Path, json: bool) -> Result<(), Failure> {
         );
     }
     println!("  value range   {lo} to {hi}");
-    Ok(())
 }
