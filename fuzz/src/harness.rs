@@ -12,7 +12,8 @@ use anari_library_caveray::capi::entry_points::*;
 use anari_library_caveray::capi::sys;
 use anari_library_caveray::cave::{MultiViewDisplay, Rig};
 use anari_library_caveray::data::{
-    parse_nifti, parse_nrrd, parse_paraview, parse_raw, sniff, Manifest, VoxelType,
+    parse_dicom, parse_metaimage, parse_nifti, parse_nrrd, parse_paraview, parse_raw, parse_vtk,
+    sniff, Manifest, VoxelType,
 };
 use anari_library_caveray::device::info::SUBTYPES;
 use anari_library_caveray::device::DataType;
@@ -102,6 +103,27 @@ pub fn nifti(data: &[u8]) {
 pub fn nrrd(data: &[u8]) {
     if let Ok(n) = parse_nrrd(data, "fuzz.nrrd") {
         let _ = (n.volume.value_range(), n.transform());
+    }
+}
+
+/// A MetaImage file with its voxels attached (`.mha`): any bytes.
+pub fn metaimage(data: &[u8]) {
+    if let Ok(m) = parse_metaimage(data, "fuzz.mha") {
+        let _ = (m.volume.value_range(), m.transform());
+    }
+}
+
+/// A VTK image data file, legacy or XML: any bytes.
+pub fn vtk(data: &[u8]) {
+    if let Ok(v) = parse_vtk(data, "fuzz.vti") {
+        let _ = (v.volume.value_range(), v.transform());
+    }
+}
+
+/// One DICOM file (a series of one slice): any bytes.
+pub fn dicom(data: &[u8]) {
+    if let Ok(d) = parse_dicom(data, "fuzz.dcm") {
+        let _ = (d.volume.value_range(), d.transform());
     }
 }
 

@@ -96,6 +96,7 @@ struct RawRig {
 struct RawScene {
     centre: Option<Vec3>,
     size: Option<Spanned<f64>>,
+    units: Option<Spanned<Units>>,
     volume_up: Option<Spanned<String>>,
     volume_front: Option<Spanned<String>>,
 }
@@ -326,6 +327,18 @@ impl Ctx<'_> {
                     size: match &s.size {
                         Some(v) => self.positive(v, "scene.size", false)?,
                         None => scene.size,
+                    },
+                    life_size: match (&s.units, &s.size) {
+                        (Some(u), Some(_)) => {
+                            return Err(self.at(
+                                u,
+                                "scene.units".into(),
+                                "shows the volume at its own size, which scene.size sets \
+                                 otherwise: give one of them"
+                                    .into(),
+                            ))
+                        }
+                        (u, _) => u.as_ref().map(|u| *u.get_ref()),
                     },
                     up,
                     front,

@@ -5,17 +5,20 @@
 use glam::{DMat3, DMat4, DQuat, DVec3};
 
 use super::head::HeadFrame;
-use crate::geometry::VolumeAxis;
+use crate::geometry::{Units, VolumeAxis};
 
 /// Where a rig puts the volume: its bounding box is centred at `centre`
-/// and its longest side is `size` long, in rig units. `up` is the volume
-/// axis that points along the viewer's up and `front` the one that faces a
-/// viewer at rest (against the viewer's forward); unset, the volume's axes
-/// are the rig's.
+/// and its longest side is `size` long, in rig units, unless `life_size`
+/// names the data's unit: then the volume is shown at its own size, its
+/// file's unit converted to the rig's (`life_size` for data whose file
+/// does not say). `up` is the volume axis that points along the viewer's
+/// up and `front` the one that faces a viewer at rest (against the
+/// viewer's forward); unset, the volume's axes are the rig's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScenePlacement {
     pub centre: DVec3,
     pub size: f64,
+    pub life_size: Option<Units>,
     pub up: Option<VolumeAxis>,
     pub front: Option<VolumeAxis>,
 }
@@ -39,8 +42,22 @@ impl ScenePlacement {
         Self {
             centre: 0.5 * (lo + hi),
             size: smallest / 3.0,
+            life_size: None,
             up: None,
             front: None,
+        }
+    }
+
+    /// How long the longest side of a volume whose box's longest side is
+    /// `extent` (in its data's unit) is shown, in `world` units: `size`,
+    /// or its own length where `life_size` says so, in the unit its file
+    /// states (`stated_metres`, metres a data unit) or else `life_size`.
+    pub fn shown_size(&self, extent: f64, stated_metres: Option<f64>, world: Units) -> f64 {
+        match self.life_size {
+            None => self.size,
+            Some(data) => {
+                extent * stated_metres.unwrap_or(data.metres_per_unit()) / world.metres_per_unit()
+            }
         }
     }
 
@@ -102,6 +119,7 @@ mod tests {
         ScenePlacement {
             centre: DVec3::new(0.0, 850.0, -250.0),
             size: 1300.0,
+            life_size: None,
             up: up.map(|s| s.parse().unwrap()),
             front: front.map(|s| s.parse().unwrap()),
         }

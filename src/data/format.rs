@@ -1,11 +1,10 @@
-//! Volume file formats caveray recognises, so that a NIfTI or NRRD file is
-//! read by its own reader and a MetaImage, VTK or DICOM file is refused
-//! with its name and a way to convert it, instead of being taken for a
-//! headerless raw file of the wrong size. Known by content where it has a signature at a fixed
-//! place, else by file name.
+//! Volume file formats caveray recognises, so that each file goes to its
+//! own reader (and a gzipped raw file is refused by name) instead of being
+//! taken for a headerless raw file of the wrong size. Known by content
+//! where a format has a signature at a fixed place, else by file name.
 
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::files;
 
@@ -16,7 +15,7 @@ pub const SNIFF_BYTES: usize = 512;
 /// slices side by side, so the first few tell.
 const FOLDER_ENTRIES: usize = 64;
 
-/// A format with a header (or a compression) that caveray does not read.
+/// A format with a header, or a compression.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VolumeFormat {
     /// `NRRD000n` magic (`.nrrd`, or a detached `.nhdr` header).
@@ -70,82 +69,6 @@ impl VolumeFormat {
         // An unreadable file is judged by its name; reading it as raw
         // then reports why it cannot be read.
         sniff(&name, &head(path).unwrap_or_default())
-    }
-
-    /// A one-line shell command that writes the voxels of `input` as a
-    /// raw float32 file `output` (x fastest, little-endian) and prints the
-    /// `--dims`, `--dtype` and `--spacing` to load it with; `None` where
-    /// there is nothing to convert (gzip: decompress it instead; NIfTI and
-    /// NRRD: caveray reads them).
-    /// Float32 keeps any source type, signed CT values included.
-    pub fn conversion(self, input: &str, output: &str) -> Option<String> {
-        let (input, output) = if [input, output].iter().all(|s| shell_safe(s)) {
-            (input, output)
-        } else {
-            ("IN", "OUT.raw")
-        };
-        // SimpleITK's arrays are z, y, x: written in C order, x is fastest.
-        let flags = "print('--dims %d,%d,%d --dtype f32 --spacing %g,%g,%g' % (i.GetSize() + i.GetSpacing()))";
-        let itk = |read: String| {
-            format!(
-                "python3 -c \"import SimpleITK as s; {read}; \
-                 s.GetArrayFromImage(i).astype('<f4').tofile('{output}'); {flags}\""
-            )
-        };
-        match self {
-            VolumeFormat::MetaImage | VolumeFormat::VtkLegacy => {
-                Some(itk(format!("i = s.ReadImage('{input}')")))
-            }
-            VolumeFormat::Dicom | VolumeFormat::DicomSeries => {
-                let folder = if self == VolumeFormat::Dicom {
-                    Path::new(input)
-                        .parent()
-                        .map(|p| p.to_string_lossy().into_owned())
-                        .filter(|p| !p.is_empty())
-                        .unwrap_or_else(|| ".".into())
-                } else {
-                    input.to_string()
-                };
-                Some(itk(format!(
-                    "r = s.ImageSeriesReader(); \
-                     r.SetFileNames(r.GetGDCMSeriesFileNames('{folder}')); i = r.Execute()"
-                )))
-            }
-            // VTK image data keeps x fastest already.
-            VolumeFormat::VtkXml => Some(format!(
-                "python3 -c \"import vtk; from vtk.util.numpy_support import vtk_to_numpy as n; \
-                 r = vtk.vtkXMLImageDataReader(); r.SetFileName('{input}'); r.Update(); \
-                 d = r.GetOutput(); n(d.GetPointData().GetScalars()).astype('<f4').tofile('{output}'); \
-                 print('--dims %d,%d,%d --dtype f32 --spacing %g,%g,%g' % (d.GetDimensions() + d.GetSpacing()))\""
-            )),
-            VolumeFormat::Gzip | VolumeFormat::Nifti | VolumeFormat::Nrrd => None,
-        }
-    }
-
-    /// The raw file a conversion of `path` would write: beside it (beside
-    /// the series' folder for a DICOM slice), its name without the
-    /// format's extension, `_f32.raw` instead; the suffix keeps it from
-    /// overwriting a MetaImage `.mhd`'s own data file, often `<name>.raw`.
-    pub fn raw_name(self, path: &Path) -> PathBuf {
-        let path = match self {
-            VolumeFormat::Dicom => path.parent().unwrap_or(Path::new("")),
-            _ => path,
-        };
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let lower = name.to_lowercase();
-        let stem = [".nii.gz", ".gz"]
-            .iter()
-            .chain(EXTENSIONS.iter().map(|(e, _)| e))
-            .find(|e| lower.ends_with(*e))
-            .map_or(name.as_str(), |e| &name[..name.len() - e.len()]);
-        let stem = if stem.is_empty() { "volume" } else { stem };
-        match path.file_name() {
-            Some(_) => path.with_file_name(format!("{stem}_f32.raw")),
-            None => path.join(format!("{stem}_f32.raw")),
-        }
     }
 }
 
@@ -265,13 +188,6 @@ fn dicom_folder(path: &Path) -> bool {
     })
 }
 
-/// Whether `s` goes inside the command's quotes as it is.
-fn shell_safe(s: &str) -> bool {
-    !s.is_empty()
-        && s.chars()
-            .all(|c| c.is_alphanumeric() || " ._-+/,:=@".contains(c))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -367,66 +283,6 @@ mod tests {
         assert_eq!(sniff("x.raw", &nifti1(b"abc\0", false)), None);
         assert_eq!(sniff("x.raw", b"Comment = hello\n"), None);
         assert_eq!(sniff("x.raw", b"<?xml version=\"1.0\"?><svg>"), None);
-    }
-
-    #[test]
-    fn conversions_name_the_files_and_print_the_flags() {
-        let mha = VolumeFormat::MetaImage
-            .conversion("d/ct.mha", "d/ct.raw")
-            .unwrap();
-        assert!(mha.contains("s.ReadImage('d/ct.mha')"), "{mha}");
-        assert!(mha.contains("tofile('d/ct.raw')"), "{mha}");
-        assert!(mha.contains("--dims %d,%d,%d --dtype f32"), "{mha}");
-        let slice = VolumeFormat::Dicom
-            .conversion("series/1.dcm", "series/1.raw")
-            .unwrap();
-        assert!(
-            slice.contains("GetGDCMSeriesFileNames('series')"),
-            "{slice}"
-        );
-        let folder = VolumeFormat::DicomSeries
-            .conversion("series", "series.raw")
-            .unwrap();
-        assert!(
-            folder.contains("GetGDCMSeriesFileNames('series')"),
-            "{folder}"
-        );
-        let odd = VolumeFormat::MetaImage
-            .conversion("it's $HOME.mha", "x.raw")
-            .unwrap();
-        assert!(
-            odd.contains("ReadImage('IN')") && odd.contains("'OUT.raw'"),
-            "{odd}"
-        );
-        assert_eq!(VolumeFormat::Gzip.conversion("a.gz", "a.raw"), None);
-        assert_eq!(VolumeFormat::Nifti.conversion("a.nii", "a.raw"), None);
-        assert_eq!(VolumeFormat::Nrrd.conversion("a.nrrd", "a.raw"), None);
-        let raw = |format: VolumeFormat, path: &str| format.raw_name(Path::new(path));
-        assert_eq!(
-            raw(VolumeFormat::Nifti, "d/Head.NII.GZ"),
-            Path::new("d/Head_f32.raw")
-        );
-        assert_eq!(
-            raw(VolumeFormat::MetaImage, "ct.mhd"),
-            Path::new("ct_f32.raw")
-        );
-        assert_eq!(
-            raw(VolumeFormat::DicomSeries, "a/series"),
-            Path::new("a/series_f32.raw")
-        );
-        // Not inside the series' folder, where it would lie among slices.
-        assert_eq!(
-            raw(VolumeFormat::Dicom, "a/series/IM1.dcm"),
-            Path::new("a/series_f32.raw")
-        );
-        assert_eq!(
-            raw(VolumeFormat::Dicom, "IM1.dcm"),
-            Path::new("volume_f32.raw")
-        );
-        assert_eq!(
-            raw(VolumeFormat::DicomSeries, "."),
-            Path::new("./volume_f32.raw")
-        );
     }
 
     #[test]

@@ -3,12 +3,15 @@
 //! color maps; triangle meshes of volumes' isosurfaces; and the formats with headers that are recognised, to be
 //! refused by name rather than read as raw.
 
+mod dicom;
 pub mod files;
 mod format;
 mod manifest;
 mod mesh;
+mod metaimage;
 mod nifti;
 mod nrrd;
+mod open;
 mod orientation;
 mod paraview;
 mod presets;
@@ -16,17 +19,24 @@ mod procedural;
 mod raw;
 mod stored;
 pub mod toml_syntax;
+mod volume_file;
+mod vtk;
 
+pub use dicom::{load_dicom, parse_dicom};
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};
 pub use mesh::{isosurface_mesh, Mesh, MeshError};
+pub use metaimage::{load_metaimage, parse_metaimage};
 pub use nifti::{load_nifti, parse_nifti, parse_nifti_header, Nifti, NiftiHeader};
 pub use nrrd::{load_nrrd, parse_nrrd, parse_nrrd_header, Nrrd, NrrdHeader};
+pub use open::load_volume_file;
 pub use orientation::{known_orientation, Orientation};
 pub use paraview::{load_paraview, parse_paraview};
 pub use presets::{preset, PRESETS};
 pub use procedural::{concentric_shells, marschner_lobb, shepp_logan, solid_box};
 pub use raw::{load_raw, parse_raw, raw_size, VoxelType};
+pub use volume_file::VolumeFile;
+pub use vtk::{load_vtk, parse_vtk};
 
 use thiserror::Error;
 

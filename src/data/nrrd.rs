@@ -32,6 +32,10 @@ pub struct NrrdHeader {
     pub encoding: &'static str,
     /// Whether `affine` is anatomical (RAS+), so that superior is up.
     pub anatomical: bool,
+    /// The world's unit: the `space units` field where all three agree,
+    /// else `mm` in an anatomical space (as 3D Slicer takes it), else
+    /// `unknown`.
+    pub units: &'static str,
     data_file: Option<PathBuf>,
     byte_skip: u64,
     big_endian: bool,
@@ -349,6 +353,27 @@ pub fn parse_nrrd_header(head: &[u8], path: &Path) -> Result<(NrrdHeader, usize)
             "they are not finite or span no volume".into(),
         ));
     }
+    let units = match get("space units") {
+        Some(given) => {
+            let named: Vec<&str> = given
+                .split_whitespace()
+                .map(|u| u.trim_matches('"'))
+                .collect();
+            let unit = match named.first().copied() {
+                Some("mm") => "mm",
+                Some("m") => "m",
+                Some("um" | "µm") => "um",
+                _ => "unknown",
+            };
+            if named.iter().all(|u| *u == named[0]) {
+                unit
+            } else {
+                "unknown"
+            }
+        }
+        None if flip.is_some() => "mm",
+        None => "unknown",
+    };
     let data_file = match get("data file").or(get("datafile")) {
         None => None,
         Some(name) if name.starts_with("LIST") || name.contains('%') || name.contains(' ') => {
@@ -373,6 +398,7 @@ pub fn parse_nrrd_header(head: &[u8], path: &Path) -> Result<(NrrdHeader, usize)
             space,
             encoding,
             anatomical: flip.is_some(),
+            units,
             data_file,
             byte_skip,
             big_endian,

@@ -1,6 +1,9 @@
-//! Voxel values as files store them: the scalar types NIfTI and NRRD
+//! Voxel values as files store them: the scalar types the readers
 //! write, either byte order, read as 32-bit floats through a linear
-//! scaling into a grid in index space.
+//! scaling into a grid in index space; and zlib streams inflated no
+//! further than a volume needs.
+
+use std::io::Read;
 
 use glam::{UVec3, Vec3};
 
@@ -13,6 +16,26 @@ pub fn out_of_memory(bytes: u64) -> std::io::Error {
         std::io::ErrorKind::OutOfMemory,
         format!("cannot hold {bytes} bytes in memory"),
     )
+}
+
+/// The most zlib's deflate can expand its input (a stream of one
+/// repeated byte comes near), so that a buffer for inflated data need
+/// never be larger than its compressed size allows, however large the
+/// header says the volume is.
+pub const ZLIB_MAX_RATIO: usize = 1032;
+
+/// Appends to `out` at most `want` bytes inflated from the zlib stream
+/// `compressed`; its buffer reserved fallibly and never beyond what
+/// `compressed` can inflate to, so that neither a header's claim nor a
+/// zip bomb can make it larger than the volume needs.
+pub fn inflate(compressed: &[u8], out: &mut Vec<u8>, want: usize) -> std::io::Result<()> {
+    let reserve = compressed.len().saturating_mul(ZLIB_MAX_RATIO).min(want);
+    out.try_reserve_exact(reserve)
+        .map_err(|_| out_of_memory(reserve as u64))?;
+    flate2::read::ZlibDecoder::new(compressed)
+        .take(want as u64)
+        .read_to_end(out)?;
+    Ok(())
 }
 
 /// A stored scalar type.

@@ -23,6 +23,11 @@ fn remove(dir: &Path) {
 /// `CAVERAY_DATA` as given (unset if `None`).
 fn render_in(dir: &Path, data: Option<&Path>, extra: &[&str]) -> Output {
     let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/cologne_5wall.toml");
+    render_with(dir, data, &config, extra)
+}
+
+/// `render_in` of the rig `config`.
+fn render_with(dir: &Path, data: Option<&Path>, config: &Path, extra: &[&str]) -> Output {
     let mut command = Command::new(env!("CARGO_BIN_EXE_caveray"));
     command
         .args(["render", "--config", config.to_str().unwrap()])
@@ -305,7 +310,7 @@ fn dicom() -> Vec<u8> {
 }
 
 #[test]
-fn files_with_headers_are_refused_by_format_with_a_conversion() {
+fn broken_files_with_headers_are_refused_by_their_readers() {
     let dir = scratch("formats");
     let vti = "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"1.0\">\n";
     // Named as raw where the content tells; by name where it does not.
@@ -313,51 +318,36 @@ fn files_with_headers_are_refused_by_format_with_a_conversion() {
         (
             "ct.mha",
             b"ObjectType = Image\nNDims = 3\n".to_vec(),
-            "a MetaImage file",
+            "MetaImage",
+        ),
+        (
+            "ct.raw",
+            b"ObjectType = Image\nNDims = 3\n".to_vec(),
+            "MetaImage",
         ),
         (
             "ct.mhd",
             b"NDims = 3\nDimSize = 8 8 8\n".to_vec(),
-            "a MetaImage file",
+            "MetaImage",
         ),
         (
             "ct.vtk",
             b"# vtk DataFile Version 3.0\n".to_vec(),
-            "a legacy VTK file",
+            "legacy VTK",
         ),
-        ("ct.vti", vti.as_bytes().to_vec(), "a VTK XML file"),
-        ("IM0001", dicom(), "a DICOM file (one slice of a series)"),
-        (
-            "slice.dcm",
-            vec![0u8; 16],
-            "a DICOM file (one slice of a series)",
-        ),
+        ("ct.vti", vti.as_bytes().to_vec(), "VTK XML"),
+        ("IM0001", dicom(), "DICOM"),
     ];
-    for (name, bytes, what) in files {
+    for (name, bytes, format) in files {
         let path = dir.join(name);
         std::fs::write(&path, &bytes).unwrap();
         let p = path.to_str().unwrap();
-        let format = what
-            .trim_start_matches("a ")
-            .trim_end_matches(" file (one slice of a series)")
-            .trim_end_matches(" file");
+        // Its reader names the file (or the slice) and the field at fault.
         let err = usage_error(&dir, None, &["--volume", p]);
-        let start = format!(
-            "caveray: {p} is {what}; caveray does not read {format} yet: convert it to raw \
-             (headerless, little-endian, x fastest), e.g. python3 -c \""
-        );
-        assert!(err.starts_with(&start), "{err}\nlacks {start}");
-        assert!(
-            err.ends_with("with the --dims, --dtype and --spacing that prints (docs/data.md)"),
-            "{err}"
-        );
-        assert!(err.contains("--dims %d,%d,%d --dtype f32"), "{err}");
+        assert!(err.starts_with(&format!("caveray: {p}: ")), "{err}");
         // --dims does not make such a file raw.
         let err = usage_error(&dir, None, &["--volume", p, "--dims", "8,8,8"]);
-        let start = format!(
-            "caveray: {p} is {what} (--dims, --dtype and --spacing describe raw files only); \
-             caveray does not read {format} yet"
-        );
+        let start = format!("caveray: {p} is a {format} file, whose header gives its size");
         assert!(err.starts_with(&start), "{err}\nlacks {start}");
     }
     // A folder of slices, which are often named without an extension.
@@ -368,14 +358,8 @@ fn files_with_headers_are_refused_by_format_with_a_conversion() {
     let err = usage_error(&dir, None, &["--volume", s]);
     assert!(
         err.starts_with(&format!(
-            "caveray: {s} is a folder of DICOM slices; caveray does not read DICOM yet"
+            "caveray: {s}: files: no DICOM image slices in the folder (the first file: {s}/IM0001: "
         )),
-        "{err}"
-    );
-    let expected = format!("GetGDCMSeriesFileNames('{s}')");
-    assert!(err.contains(&expected), "{err}");
-    assert!(
-        err.contains(&format!("then load {s}_f32.raw with the")),
         "{err}"
     );
     // Compressed data: decompress it first.
@@ -400,6 +384,104 @@ fn files_with_headers_are_refused_by_format_with_a_conversion() {
     let err = usage_error(&dir, None, &["--volume", raw.to_str().unwrap()]);
     assert!(
         err.contains("is a raw file: give its size with --dims"),
+        "{err}"
+    );
+    remove(&dir);
+}
+
+/// The longest side of the volume's box in the world, as `render`
+/// reports where it landed.
+fn shown_size(dir: &Path, config: Option<&Path>, extra: &[&str]) -> f64 {
+    let result = match config {
+        Some(config) => render_with(dir, None, config, extra),
+        None => render_in(dir, None, extra),
+    };
+    assert!(
+        result.status.success(),
+        "{extra:?}: {}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/timings.json")).unwrap())
+            .unwrap();
+    let corner = |i: usize| -> Vec<f64> {
+        (0..3)
+            .map(|k| report["volume"]["world_box"][i][k].as_f64().unwrap())
+            .collect()
+    };
+    let (lo, hi) = (corner(0), corner(1));
+    (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
+}
+
+#[test]
+fn a_volume_is_shown_at_its_own_size_where_the_rig_or_the_command_line_says() {
+    let dir = scratch("life_size");
+    let scan = dir.join("scan.nii");
+    // 12 x 10 x 8 voxels of 2 mm: 22 mm along its longest side.
+    std::fs::write(&scan, nifti([12, 10, 8])).unwrap();
+    let s = scan.to_str().unwrap();
+    let close = |got: f64, want: f64, what: &str| {
+        assert!(
+            (got - want).abs() < 1e-3 * want,
+            "{what}: {got}, not {want}"
+        );
+    };
+    close(
+        shown_size(&dir, None, &["--volume", s]),
+        1300.0,
+        "the rig's size",
+    );
+    close(
+        shown_size(&dir, None, &["--volume", s, "--volume-units", "mm"]),
+        22.0,
+        "life size in the mm rig",
+    );
+    // The file states millimetres: a unit for data that do not is not its.
+    close(
+        shown_size(&dir, None, &["--volume", s, "--volume-units", "m"]),
+        22.0,
+        "the file's own unit",
+    );
+    // The rig says so in its [scene]; the command line's size still wins.
+    let rig_text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/cologne_5wall.toml"),
+    )
+    .unwrap();
+    let life = dir.join("life.toml");
+    std::fs::write(&life, rig_text.replace("size = 1300", "units = \"mm\"")).unwrap();
+    close(
+        shown_size(&dir, Some(&life), &["--volume", s]),
+        22.0,
+        "scene.units",
+    );
+    close(
+        shown_size(&dir, Some(&life), &["--volume", s, "--volume-size", "500"]),
+        500.0,
+        "--volume-size over scene.units",
+    );
+    // A manifest volume's spacing states no unit: metres, as told.
+    let manifest = own_manifest(&dir, None);
+    let m = manifest.to_str().unwrap();
+    close(
+        shown_size(
+            &dir,
+            None,
+            &["--manifest", m, "--volume", "tiny", "--volume-units", "m"],
+        ),
+        14_000.0,
+        "8 voxels spaced 2 along z, in metres, in a mm rig",
+    );
+    let both = dir.join("both.toml");
+    std::fs::write(
+        &both,
+        rig_text.replace("size = 1300", "size = 1300\nunits = \"mm\""),
+    )
+    .unwrap();
+    let result = render_with(&dir, None, &both, &["--volume", s]);
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert_eq!(result.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("scene.units") && err.contains("give one of them"),
         "{err}"
     );
     remove(&dir);

@@ -3,7 +3,10 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod dicom;
 mod fixtures;
+mod metaimage;
 mod nifti;
 mod nrrd;
 mod volumes;
+mod vtk;

@@ -16,7 +16,7 @@ const LIMIT: Duration = Duration::from_secs(30);
 
 type Target = fn(&[u8]);
 
-const TARGETS: [(&str, Target); 7] = [
+const TARGETS: [(&str, Target); 10] = [
     ("rig", harness::rig),
     ("display", harness::display),
     ("paraview", harness::paraview),
@@ -24,6 +24,9 @@ const TARGETS: [(&str, Target); 7] = [
     ("capi", harness::capi),
     ("nifti", harness::nifti),
     ("nrrd", harness::nrrd),
+    ("metaimage", harness::metaimage),
+    ("vtk", harness::vtk),
+    ("dicom", harness::dicom),
 ];
 
 /// Every file under fuzz/<kind>/<target>/, sorted.

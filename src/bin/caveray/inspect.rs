@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::inspect::{inspect, Pinhole, Report, Selection, ViewReport};
 use anari_library_caveray::cave::{Eye, Rig};
-use anari_library_caveray::data::{load_nifti, load_nrrd, VolumeFormat};
+use anari_library_caveray::data::{load_volume_file, VolumeFormat};
 use clap::{Args, ValueEnum};
 
 use crate::{Failure, HeadArgs};
@@ -15,8 +15,8 @@ pub struct InspectArgs {
     /// Rig file (TOML), e.g. cave_configs/cologne_5wall.toml.
     #[arg(long, required_unless_present = "volume")]
     config: Option<PathBuf>,
-    /// A volume file with a header (NIfTI: .nii, .nii.gz, .hdr/.img; NRRD):
-    /// prints its size, type, spacing, index-to-world map and value range
+    /// A volume file with a header (NIfTI, NRRD, MetaImage, VTK image data,
+    /// or a DICOM series' folder): prints its size, type, spacing, index-to-world map and value range
     /// instead of a rig's views.
     #[arg(long, conflicts_with = "config")]
     volume: Option<PathBuf>,
@@ -192,83 +192,56 @@ fn vn(v: &[f64], digits: usize) -> String {
 
 /// What a volume file's header says, and its values' range.
 fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
-    match VolumeFormat::of(path) {
-        Some(VolumeFormat::Nifti) => {}
-        Some(VolumeFormat::Nrrd) => return inspect_nrrd(path, json),
-        _ => {
-            return Err(Failure::Usage(format!(
-                "{}: caveray inspect reads NIfTI (.nii, .nii.gz, .hdr/.img) and NRRD (.nrrd, .nhdr) files",
-                path.display()
-            )))
+    if !VolumeFormat::of(path).is_some_and(|f| f.readable()) {
+        return Err(Failure::Usage(format!(
+            "{}: caveray inspect reads volume files with a header: NIfTI (.nii, .nii.gz, \
+             .hdr/.img), NRRD (.nrrd, .nhdr), MetaImage (.mha, .mhd), VTK image data (.vti, \
+             .vtk) and DICOM (a series' folder or one of its files)",
+            path.display()
+        )));
+    }
+    let file = load_volume_file(path).map_err(|e| Failure::Usage(e.to_string()))?;
+    let (lo, hi) = file.volume.value_range();
+    let rows: Vec<[f64; 4]> = (0..3).map(|r| file.affine.row(r).to_array()).collect();
+    let dims = file.volume.dims();
+    if json {
+        let mut doc = serde_json::json!({
+            "file": path.display().to_string(),
+            "format": file.format.name(),
+            "dims": dims.to_array(),
+            "dtype": file.dtype,
+            "units": file.units,
+            "ras": file.anatomical,
+            "index_to_world": rows,
+            "value_range": [lo, hi],
+        });
+        for (key, value) in &file.details {
+            doc[*key] = value.clone();
         }
-    }
-    let nifti = load_nifti(path).map_err(|e| Failure::Usage(e.to_string()))?;
-    let h = &nifti.header;
-    let (lo, hi) = nifti.volume.value_range();
-    let rows: Vec<[f64; 4]> = (0..3).map(|r| h.affine.row(r).to_array()).collect();
-    if json {
-        let doc = serde_json::json!({
-            "file": path.display().to_string(),
-            "format": format!("NIfTI-{}", h.version),
-            "dims": h.dims.to_array(),
-            "dtype": h.dtype,
-            "spacing": h.spacing.to_array(),
-            "units": h.units,
-            "index_to_world": rows,
-            "placed_by": h.placed_by,
-            "scaling": [h.slope, h.intercept],
-            "value_range": [lo, hi],
-        });
         println!("{doc:#}");
         return Ok(());
     }
-    println!("{}: NIfTI-{}", path.display(), h.version);
-    println!("  dims          {} x {} x {}", h.dims.x, h.dims.y, h.dims.z);
-    println!(
-        "  type          {} (read as value * {} + {})",
-        h.dtype, h.slope, h.intercept
-    );
-    // pixdim is single precision in NIfTI-1: shown as it was stored.
-    let s = h.spacing.as_vec3();
-    println!("  spacing       {} x {} x {} {}", s.x, s.y, s.z, h.units);
-    println!("  index to world ({}, {}):", h.placed_by, h.units);
+    println!("{}: {}", path.display(), file.format.name());
+    println!("  dims          {} x {} x {}", dims.x, dims.y, dims.z);
+    println!("  type          {}", file.dtype);
+    for (key, value) in &file.details {
+        let shown = match value {
+            serde_json::Value::String(s) => s.clone(),
+            other => other.to_string(),
+        };
+        println!("  {:<13} {shown}", key.replace('_', " "));
+    }
+    let space = if file.anatomical {
+        "RAS+"
+    } else {
+        "the file's axes"
+    };
+    println!("  index to world ({space}, {}):", file.units);
     print_map(&rows, (lo, hi));
     Ok(())
 }
 
-/// `inspect_volume` of a NRRD file.
-fn inspect_nrrd(path: &Path, json: bool) -> Result<(), Failure> {
-    let nrrd = load_nrrd(path).map_err(|e| Failure::Usage(e.to_string()))?;
-    let h = &nrrd.header;
-    let (lo, hi) = nrrd.volume.value_range();
-    let rows: Vec<[f64; 4]> = (0..3).map(|r| h.affine.row(r).to_array()).collect();
-    if json {
-        let doc = serde_json::json!({
-            "file": path.display().to_string(),
-            "format": "NRRD",
-            "dims": h.dims.to_array(),
-            "dtype": h.dtype,
-            "encoding": h.encoding,
-            "space": h.space,
-            "index_to_world": rows,
-            "ras": h.anatomical,
-            "value_range": [lo, hi],
-        });
-        println!("{doc:#}");
-        return Ok(());
-    }
-    println!("{}: NRRD", path.display());
-    println!("  dims          {} x {} x {}", h.dims.x, h.dims.y, h.dims.z);
-    println!("  type          {} ({})", h.dtype, h.encoding);
-    let space = if h.space.is_empty() { "none" } else { &h.space };
-    let turned = if h.anatomical { ", as RAS+" } else { "" };
-    println!("  index to world (space {space}{turned}):");
-    print_map(&rows, (lo, hi));
-    Ok(())
-}
-
-/// A voxel-to-world map's rows and a value range, as both formats print
-/// them.
+/// A voxel-to-world map's rows and a value range.
 fn print_map(rows: &[[f64; 4]], (lo, hi): (f32, f32)) {
     for r in rows {
         println!(

@@ -254,7 +254,7 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     }
     let head = args.head.pose(&rig)?;
     let loaded = args.volume.load()?;
-    let scene = loaded.placed(rig.scene, &rig.viewer.frame)?;
+    let scene = loaded.placed(rig.scene, &rig.viewer.frame, rig.units)?;
     let settings = args.render.settings();
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", args.out.display())))?;

@@ -63,6 +63,7 @@ pub fn run(
     let scene = loaded.placed(
         at(centre.as_vec3(), (panel.width() / 3.0) as f32),
         &panel_frame(panel),
+        display.units,
     )?;
     let placed = &scene.volumes()[0];
     let (lo, hi) = placed.volume.value_range();

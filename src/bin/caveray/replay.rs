@@ -201,7 +201,7 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
         })
         .collect::<Result<_, Failure>>()?;
     let loaded = args.volume.load()?;
-    let scene = loaded.placed(rig.scene, &rig.viewer.frame)?;
+    let scene = loaded.placed(rig.scene, &rig.viewer.frame, rig.units)?;
     let settings = RenderSettings {
         shading: args.shading,
         ..RenderSettings::default()

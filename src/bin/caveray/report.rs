@@ -3,7 +3,7 @@
 //! tables are both made from.
 
 use anari_library_caveray::render::{PassClock, Renderer};
-use anari_library_caveray::scene::Scene;
+use anari_library_caveray::scene::{transformed_box, Scene};
 use serde::Serialize;
 
 use crate::Failure;
@@ -96,13 +96,19 @@ impl RendererInfo {
 pub struct VolumeInfo {
     pub name: String,
     pub dims: [u32; 3],
+    /// Where it landed: its box in the world (lowest and highest corner),
+    /// in the rig's units.
+    pub world_box: [[f32; 3]; 2],
 }
 
 impl VolumeInfo {
     pub fn of(name: &str, scene: &Scene) -> Self {
+        let placed = &scene.volumes()[0];
+        let (lo, hi) = transformed_box(placed.transform, placed.volume.bounds());
         Self {
             name: name.to_string(),
-            dims: scene.volumes()[0].volume.dims().to_array(),
+            dims: placed.volume.dims().to_array(),
+            world_box: [lo.to_array(), hi.to_array()],
         }
     }
 }

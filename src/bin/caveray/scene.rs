@@ -4,11 +4,10 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
-    concentric_shells, isosurface_mesh, load_nifti, load_nrrd, load_paraview, load_raw,
-    marschner_lobb, preset, shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat,
-    VoxelType,
+    concentric_shells, isosurface_mesh, load_paraview, load_raw, load_volume_file, marschner_lobb,
+    preset, shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat, VoxelType,
 };
-use anari_library_caveray::geometry::VolumeAxis;
+use anari_library_caveray::geometry::{Units, VolumeAxis};
 use anari_library_caveray::scene::{
     transformed_box, AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume,
     Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
@@ -27,7 +26,8 @@ const SHARED_MANIFEST: &str = "../shared/data/volumes/volumes.toml";
 #[derive(Args, Clone)]
 pub struct VolumeArgs {
     /// phantom[:N], shells[:N], marschner-lobb[:N], box[:N], a name from volumes.toml,
-    /// or a raw file (then --dims is required). Default: the phantom.
+    /// a file with a header (NIfTI, NRRD, MetaImage, VTK image data), a DICOM series'
+    /// folder, or a raw file (then --dims is required). Default: the phantom.
     #[arg(long)]
     volume: Option<String>,
     /// Raw file dimensions X,Y,Z.
@@ -91,8 +91,12 @@ pub struct PlacementArgs {
     #[arg(long, value_parser = triple, allow_hyphen_values = true)]
     volume_centre: Option<DVec3>,
     /// Longest side of the volume's bounding box, in the rig's units.
-    #[arg(long, value_parser = positive)]
+    #[arg(long, value_parser = positive, conflicts_with = "volume_units")]
     volume_size: Option<f64>,
+    /// Show the volume at its own size: the unit (mm or m) of data whose
+    /// file does not state one (a file that does is taken in its own).
+    #[arg(long, value_parser = units)]
+    volume_units: Option<Units>,
     /// The volume axis that points up, along the viewer's up (a CT series
     /// stored crown first wants -z).
     #[arg(long, value_parser = axis(), allow_hyphen_values = true)]
@@ -122,6 +126,12 @@ impl PlacementArgs {
         let placement = ScenePlacement {
             centre: self.volume_centre.unwrap_or(default.centre),
             size: self.volume_size.unwrap_or(default.size),
+            // The command line's size or units take the place of the rig's.
+            life_size: match (self.volume_size, self.volume_units) {
+                (Some(_), _) => None,
+                (None, Some(u)) => Some(u),
+                (None, None) => default.life_size,
+            },
             up: up.map(|(a, _)| a),
             front: front.map(|(a, _)| a),
         };
@@ -135,6 +145,14 @@ impl PlacementArgs {
 
 fn axis() -> impl TypedValueParser<Value = VolumeAxis> {
     PossibleValuesParser::new(VolumeAxis::NAMES).try_map(|s| s.parse::<VolumeAxis>())
+}
+
+fn units(s: &str) -> Result<Units, String> {
+    match s.trim() {
+        "mm" => Ok(Units::Millimetres),
+        "m" => Ok(Units::Metres),
+        _ => Err(format!("expected mm or m, got '{s}'")),
+    }
 }
 
 fn positive(s: &str) -> Result<f64, String> {
@@ -163,6 +181,8 @@ pub struct Loaded {
     /// Where a file with a placement (NIfTI, NRRD) puts its voxels: voxel index
     /// to the file's world, in its units. None: `volume`'s own grid.
     pub index_to_file: Option<glam::Mat4>,
+    /// Metres a unit of the file's world, where its header says.
+    metres_per_unit: Option<f64>,
     tf: TransferFunction,
     /// Presets span the data's range; a ParaView map keeps its own.
     stretch_tf: bool,
@@ -201,6 +221,7 @@ impl VolumeArgs {
         let usage = |e: &dyn std::fmt::Display| Failure::Usage(e.to_string());
         let spec = self.volume.as_deref().unwrap_or("phantom");
         let mut index_to_file = None;
+        let mut metres_per_unit = None;
         let (name, volume, default_tf, orientation) = if let Some((name, volume)) =
             procedural(spec)?
         {
@@ -210,42 +231,30 @@ impl VolumeArgs {
                 "phantom"
             };
             (name, volume, tf, Orientation::UNKNOWN)
-        } else if VolumeFormat::of(Path::new(spec)) == Some(VolumeFormat::Nifti) {
+        } else if let Some(format) = VolumeFormat::of(Path::new(spec)).filter(|f| f.readable()) {
             if self.dims.is_some() {
                 return Err(Failure::Usage(format!(
-                    "{spec} is a NIfTI file, whose header gives its size, type and spacing \
-                     (--dims, --dtype and --spacing describe raw files only)"
+                    "{spec} is a {} {}, whose header gives its size, type and spacing \
+                     (--dims, --dtype and --spacing describe raw files only)",
+                    format.name(),
+                    if format == VolumeFormat::DicomSeries {
+                        "series"
+                    } else {
+                        "file"
+                    }
                 )));
             }
-            let nifti = load_nifti(Path::new(spec)).map_err(|e| usage(&e))?;
-            index_to_file = Some(nifti.transform());
-            let tf = match nifti.header.dtype {
+            let file = load_volume_file(Path::new(spec)).map_err(|e| usage(&e))?;
+            index_to_file = Some(file.transform());
+            metres_per_unit = file.metres_per_unit();
+            let tf = match file.dtype {
                 // Hounsfield units: signed CT.
                 "int16" => "ct-skin-bone",
                 _ => "grey",
             };
-            // Scanner and template spaces are RAS+: superior up, the
+            // Anatomical spaces are read as RAS+: superior up, the
             // anterior (the face) toward the viewer.
-            let ras = Orientation {
-                up: Some(VolumeAxis::PosZ),
-                front: Some(VolumeAxis::PosY),
-            };
-            (file_stem(spec), nifti.volume, tf, ras)
-        } else if VolumeFormat::of(Path::new(spec)) == Some(VolumeFormat::Nrrd) {
-            if self.dims.is_some() {
-                return Err(Failure::Usage(format!(
-                    "{spec} is a NRRD file, whose header gives its size, type and spacing \
-                     (--dims, --dtype and --spacing describe raw files only)"
-                )));
-            }
-            let nrrd = load_nrrd(Path::new(spec)).map_err(|e| usage(&e))?;
-            index_to_file = Some(nrrd.transform());
-            let tf = match nrrd.header.dtype {
-                "int16" => "ct-skin-bone",
-                _ => "grey",
-            };
-            // An anatomical space is turned into RAS+ on reading.
-            let orientation = if nrrd.header.anatomical {
+            let orientation = if file.anatomical {
                 Orientation {
                     up: Some(VolumeAxis::PosZ),
                     front: Some(VolumeAxis::PosY),
@@ -253,9 +262,9 @@ impl VolumeArgs {
             } else {
                 Orientation::UNKNOWN
             };
-            (file_stem(spec), nrrd.volume, tf, orientation)
-        } else if let Some(format) = VolumeFormat::of(Path::new(spec)) {
-            return Err(Failure::Usage(not_raw(spec, format, self.dims.is_some())));
+            (file_stem(spec), file.volume, tf, orientation)
+        } else if VolumeFormat::of(Path::new(spec)) == Some(VolumeFormat::Gzip) {
+            return Err(Failure::Usage(gzipped(spec, self.dims.is_some())));
         } else if self.dims.is_some() || Path::new(spec).is_file() {
             let dims = self.dims.ok_or_else(|| {
                 Failure::Usage(format!(
@@ -303,6 +312,7 @@ impl VolumeArgs {
             name,
             volume,
             index_to_file,
+            metres_per_unit,
             tf,
             stretch_tf,
             placement: self.placement,
@@ -324,7 +334,7 @@ impl Loaded {
     }
 
     /// The volume's box in its own world: the file's, where it places its
-    /// voxels (NIfTI), else its grid's.
+    /// voxels, else its grid's.
     pub fn bounds(&self) -> (glam::Vec3, glam::Vec3) {
         match self.index_to_file {
             Some(affine) => transformed_box(affine, self.volume.bounds()),
@@ -342,10 +352,17 @@ impl Loaded {
     /// up and front axes point along `frame`'s up and toward its viewer.
     /// Opacities keep their look at any size: presets are tuned for a
     /// volume two units across.
-    pub fn placed(&self, default: ScenePlacement, frame: &HeadFrame) -> Result<Scene, Failure> {
+    pub fn placed(
+        &self,
+        default: ScenePlacement,
+        frame: &HeadFrame,
+        world: Units,
+    ) -> Result<Scene, Failure> {
         let runtime = |e: &dyn std::fmt::Display| Failure::Runtime(e.to_string());
         let placement = self.placement(default)?;
-        let size = placement.size as f32;
+        let (lo, hi) = self.bounds();
+        let extent = f64::from((hi - lo).max_element());
+        let size = placement.shown_size(extent, self.metres_per_unit, world) as f32;
         let centre = placement.centre.as_vec3();
         // A file's own placement is kept, scaled as a whole so that its
         // box in the file's world fits the rig's; the axes (RAS+ for a
@@ -356,7 +373,6 @@ impl Loaded {
                 glam::Mat4::IDENTITY,
             ),
             Some(affine) => {
-                let (lo, hi) = self.bounds();
                 let scale = size / (hi - lo).max_element().max(f32::MIN_POSITIVE);
                 let fit = glam::Mat4::from_translation(centre)
                     * glam::Mat4::from_scale(glam::Vec3::splat(scale))
@@ -450,6 +466,7 @@ pub fn at(centre: glam::Vec3, size: f32) -> ScenePlacement {
     ScenePlacement {
         centre: centre.as_dvec3(),
         size: f64::from(size),
+        life_size: None,
         up: None,
         front: None,
     }
@@ -494,6 +511,10 @@ pub fn panel_frame(panel: &anari_library_caveray::geometry::Screen) -> HeadFrame
     HeadFrame::new(-panel.normal(), panel.y_axis()).unwrap_or(protocol_frame())
 }
 
+/// The unit of the benchmark protocols' views (radii of a few units around
+/// a volume), which `--volume-units` shows a volume's own size in.
+pub const PROTOCOL_UNITS: Units = Units::Metres;
+
 /// The benchmark protocols' first view: looking down -z, y up.
 pub fn protocol_frame() -> HeadFrame {
     HeadFrame {
@@ -529,30 +550,15 @@ fn unknown_volume(spec: &str, e: &DataError) -> Failure {
     })
 }
 
-/// Why a file in a format with a header is not loaded, and how to
-/// convert it to a raw file that is.
-fn not_raw(spec: &str, format: VolumeFormat, dims_given: bool) -> String {
-    let name = format.name();
+/// Why a gzipped raw file is not loaded, and what to do instead.
+fn gzipped(spec: &str, dims_given: bool) -> String {
     let dims = if dims_given {
         " (--dims, --dtype and --spacing describe raw files only)"
     } else {
         ""
     };
-    let raw = format.raw_name(Path::new(spec)).display().to_string();
-    let Some(command) = format.conversion(spec, &raw) else {
-        return format!(
-            "{spec} is gzip-compressed{dims}; caveray reads raw volumes uncompressed: \
-             decompress it (gunzip -k {spec}) and load the file it holds"
-        );
-    };
-    let what = match format {
-        VolumeFormat::DicomSeries => "a folder of DICOM slices".to_string(),
-        VolumeFormat::Dicom => "a DICOM file (one slice of a series)".to_string(),
-        _ => format!("a {name} file"),
-    };
     format!(
-        "{spec} is {what}{dims}; caveray does not read {name} yet: convert it to raw \
-         (headerless, little-endian, x fastest), e.g. {command}, then load {raw} with the \
-         --dims, --dtype and --spacing that prints (docs/data.md)"
+        "{spec} is gzip-compressed{dims}; caveray reads raw volumes uncompressed: \
+         decompress it (gunzip -k {spec}) and load the file it holds"
     )
 }

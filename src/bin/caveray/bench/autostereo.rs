@@ -172,7 +172,7 @@ pub fn run(args: AutostereoArgs) -> Result<(), Failure> {
         let panel = &base.screen;
         let size = (panel.width() / 3.0) as f32;
         let centre = panel.centre() - panel.normal() * panel.width() / 3.0;
-        let scene = loaded.placed(at(centre.as_vec3(), size), &panel_frame(panel))?;
+        let scene = loaded.placed(at(centre.as_vec3(), size), &panel_frame(panel), base.units)?;
         let placed = &scene.volumes()[0];
         let (lo, hi) = placed.volume.value_range();
         let settings = IsoSettings {

@@ -255,7 +255,7 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
         .unwrap_or_else(|| "cthead".into());
     let loaded = args.volume.with_volume(&name).load()?;
     let placement = loaded.placement(rig.scene)?;
-    let scene = loaded.placed(rig.scene, &rig.viewer.frame)?;
+    let scene = loaded.placed(rig.scene, &rig.viewer.frame, rig.units)?;
     let mut gpu = GpuRenderer::new().map_err(|e| {
         Failure::Runtime(format!("{e} (re-projection runs on the GPU renderer only)"))
     })?;

@@ -24,7 +24,7 @@ use super::mean;
 use crate::options::shading;
 use crate::progress::Progress;
 use crate::report::{write_json, Machine, RendererInfo, VolumeInfo};
-use crate::scene::{at, protocol_frame, VolumeArgs};
+use crate::scene::{at, protocol_frame, VolumeArgs, PROTOCOL_UNITS};
 use crate::Failure;
 
 #[derive(Args)]
@@ -247,7 +247,7 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
         let (lo, hi) = loaded.bounds();
         let extent = hi - lo;
         let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
-        let scene = loaded.placed(at(Vec3::ZERO, size), &protocol_frame())?;
+        let scene = loaded.placed(at(Vec3::ZERO, size), &protocol_frame(), PROTOCOL_UNITS)?;
         let mut runs = Vec::new();
         // The first view of each (mode, renderer, skipping), to compare.
         let mut first_images: Vec<((String, Kind, bool), Frame)> = Vec::new();

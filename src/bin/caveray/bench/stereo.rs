@@ -29,7 +29,7 @@ use super::{mean, runtime, GPU};
 use crate::options::shading;
 use crate::progress::Progress;
 use crate::report::{write_json, Adapter, Machine, RendererInfo};
-use crate::scene::{at, protocol_frame, Loaded, VolumeArgs};
+use crate::scene::{at, protocol_frame, Loaded, VolumeArgs, PROTOCOL_UNITS};
 use crate::Failure;
 
 /// Buchacher & Erdt's data sets, as named in volumes.toml.
@@ -193,7 +193,7 @@ pub fn run(args: StereoBenchArgs) -> Result<(), Failure> {
         let extent = hi - lo;
         // Longest side such that the bounding sphere has radius 1 m.
         let longest = extent.max_element() * 2.0 / extent.length();
-        let scene = loaded.placed(at(Vec3::ZERO, longest), &protocol_frame())?;
+        let scene = loaded.placed(at(Vec3::ZERO, longest), &protocol_frame(), PROTOCOL_UNITS)?;
         gpu.upload(&scene).map_err(runtime)?;
         let layers = LayerRequest {
             count: Some(args.layers),

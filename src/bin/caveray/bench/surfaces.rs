@@ -22,7 +22,7 @@ use super::mean;
 use super::raycast::camera;
 use crate::progress::Progress;
 use crate::report::{write_json, Machine, RendererInfo};
-use crate::scene::{at, protocol_frame, VolumeArgs};
+use crate::scene::{at, protocol_frame, VolumeArgs, PROTOCOL_UNITS};
 use crate::Failure;
 
 #[derive(Args)]
@@ -106,7 +106,7 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
     let (lo, hi) = loaded.bounds();
     let extent = hi - lo;
     let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
-    let mixed = loaded.placed(at(Vec3::ZERO, size), &protocol_frame())?;
+    let mixed = loaded.placed(at(Vec3::ZERO, size), &protocol_frame(), PROTOCOL_UNITS)?;
     let shapes = mixed.shapes().to_vec();
     let mesh = Scene::of_shapes(shapes.clone()).map_err(|e| Failure::Runtime(e.to_string()))?;
     let (triangles, vertices) = shapes
