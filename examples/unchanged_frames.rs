@@ -34,7 +34,7 @@ fn main() {
     let n = 128u64;
     let volume = shepp_logan(n as u32);
     let voxels: Vec<f32> = (0..volume.voxels().len())
-        .map(|i| volume.voxels().value(i))
+        .map(|i| volume.value(i))
         .collect();
     let data = d
         .new_array(DataType::ARRAY3D, DataType::FLOAT32 as i32, [n, n, n], None)

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DMat4, DVec3, DVec4, Mat4, UVec3};
 
 use super::files;
-use super::stored::{out_of_memory, Stored};
+use super::stored::Stored;
 use super::DataError;
 use crate::scene::{StructuredVolume, MAX_VOXELS};
 
@@ -179,22 +179,28 @@ fn read_voxels(
     if skipped < skip {
         return Err(short(&file, &header, bytes, 0));
     }
+    let scaling = (header.slope, header.intercept);
     if len.is_some() {
-        // The file's length held the voxels: their buffer can be had
-        // whole, or the error says so.
-        let total = usize::try_from(bytes)
-            .map_err(|_| out_of_memory(bytes))
-            .map_err(io)?;
-        data.try_reserve_exact(total.saturating_sub(data.len()))
-            .map_err(|_| out_of_memory(bytes))
-            .map_err(io)?;
+        // The file's length held the voxels: they are read once, into a
+        // buffer of their own type.
+        let missing = bytes - data.len() as u64;
+        let volume = header.stored.read_grid(
+            header.dims,
+            &data,
+            &mut reader.take(missing),
+            header.big_endian,
+            scaling,
+            &file,
+        )?;
+        return Ok(Nifti { volume, header });
     }
+    // Compressed: the buffer grows as the voxels arrive, so a small file
+    // that claims a large volume costs no more than it holds.
     let missing = bytes - data.len() as u64;
     reader.take(missing).read_to_end(&mut data).map_err(io)?;
     if (data.len() as u64) < bytes {
         return Err(short(&file, &header, bytes, data.len() as u64));
     }
-    let scaling = (header.slope, header.intercept);
     let volume = header
         .stored
         .grid(header.dims, &data, header.big_endian, scaling, &file)?;

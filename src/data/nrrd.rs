@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat4, DVec3, Mat4, UVec3};
 
 use super::files;
-use super::stored::{out_of_memory, Stored};
+use super::stored::Stored;
 use super::DataError;
 use crate::scene::{StructuredVolume, MAX_VOXELS};
 
@@ -147,12 +147,21 @@ fn read_voxels(
     if skipped < header.byte_skip {
         return Err(short(0));
     }
-    let mut data = Vec::new();
     if header.encoding == "raw" {
-        let total = usize::try_from(bytes).unwrap_or(usize::MAX);
-        data.try_reserve_exact(total)
-            .map_err(|_| io(out_of_memory(bytes)))?;
+        // Checked against the data's length above: read once, into a
+        // buffer of their own type.
+        let volume = header.stored.read_grid(
+            header.dims,
+            &[],
+            &mut reader.take(bytes),
+            header.big_endian,
+            (1.0, 0.0),
+            file,
+        )?;
+        return Ok(Nrrd { volume, header });
     }
+    // gzip: the buffer grows as the voxels arrive.
+    let mut data = Vec::new();
     reader.take(bytes).read_to_end(&mut data).map_err(io)?;
     if (data.len() as u64) < bytes {
         return Err(short(data.len() as u64));

@@ -1,14 +1,15 @@
 //! Voxel values as files store them: the scalar types the readers
-//! write, either byte order, read as 32-bit floats through a linear
-//! scaling into a grid in index space; and zlib streams inflated no
-//! further than a volume needs.
+//! write, either byte order, into a grid in index space, in their own
+//! type where the renderers sample it (8 and 16-bit integers, 32-bit
+//! floats) and read through the file's linear scaling; and zlib streams
+//! inflated no further than a volume needs.
 
 use std::io::Read;
 
 use glam::{UVec3, Vec3};
 
 use super::DataError;
-use crate::scene::{StructuredVolume, Voxels};
+use crate::scene::{Scaling, StructuredVolume, Voxels};
 
 /// The error of a buffer of `bytes` that cannot be had.
 pub fn out_of_memory(bytes: u64) -> std::io::Error {
@@ -110,26 +111,159 @@ impl Stored {
     }
 
     /// The grid of `dims` voxels that `data` (of file `file`) holds, origin
-    /// 0 and spacing 1: a file's own map places it.
+    /// 0 and spacing 1 (a file's own map places it): 8 and 16-bit integers
+    /// and 32-bit floats kept in their own type, read through `scaling`
+    /// (slope, intercept); the other types as 32-bit floats, scaled.
     pub fn grid(
         self,
         dims: UVec3,
         data: &[u8],
         big_endian: bool,
+        (slope, intercept): (f64, f64),
+        file: &str,
+    ) -> Result<StructuredVolume, DataError> {
+        let io = |source| DataError::Io {
+            file: file.to_string(),
+            source,
+        };
+        let scaling = Scaling {
+            slope: slope as f32,
+            intercept: intercept as f32,
+        };
+        let (voxels, scaling) = match self {
+            Stored::U8 => (
+                Voxels::U8(own(data, |b: [u8; 1]| b[0]).map_err(io)?),
+                scaling,
+            ),
+            Stored::U16 => (
+                Voxels::U16(own(data, |b| ordered(b, big_endian, u16::from_le_bytes)).map_err(io)?),
+                scaling,
+            ),
+            Stored::I16 => (
+                Voxels::I16(own(data, |b| ordered(b, big_endian, i16::from_le_bytes)).map_err(io)?),
+                scaling,
+            ),
+            Stored::F32 => (
+                Voxels::F32(own(data, |b| ordered(b, big_endian, f32::from_le_bytes)).map_err(io)?),
+                scaling,
+            ),
+            _ => (
+                Voxels::F32(
+                    self.decode(data, big_endian, (slope, intercept))
+                        .map_err(io)?,
+                ),
+                Scaling::IDENTITY,
+            ),
+        };
+        Ok(StructuredVolume::new(dims, voxels, Vec3::ZERO, Vec3::ONE)?.with_scaling(scaling)?)
+    }
+}
+
+impl Stored {
+    /// `grid` of voxels read from `reader` (after `prefix`, their first
+    /// bytes, read already) straight into a buffer of their own type, so
+    /// that an uncompressed file's voxels are held once, not twice on the
+    /// way in. For sizes the caller has checked against the file: the
+    /// buffer is the size `dims` says.
+    pub fn read_grid(
+        self,
+        dims: UVec3,
+        prefix: &[u8],
+        reader: &mut dyn Read,
+        big_endian: bool,
         scaling: (f64, f64),
         file: &str,
     ) -> Result<StructuredVolume, DataError> {
-        let values = self
-            .decode(data, big_endian, scaling)
-            .map_err(|source| DataError::Io {
-                file: file.to_string(),
-                source,
-            })?;
-        Ok(StructuredVolume::new(
-            dims,
-            Voxels::F32(values),
-            Vec3::ZERO,
-            Vec3::ONE,
-        )?)
+        let io = |source| DataError::Io {
+            file: file.to_string(),
+            source,
+        };
+        let n = (u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z)) as usize;
+        let swap = big_endian != cfg!(target_endian = "big");
+        let voxels = match self {
+            Stored::U8 => Voxels::U8(filled_from(n, prefix, reader).map_err(io)?),
+            Stored::U16 => {
+                let mut v: Vec<u16> = filled_from(n, prefix, reader).map_err(io)?;
+                if swap {
+                    v.iter_mut().for_each(|x| *x = x.swap_bytes());
+                }
+                Voxels::U16(v)
+            }
+            Stored::I16 => {
+                let mut v: Vec<i16> = filled_from(n, prefix, reader).map_err(io)?;
+                if swap {
+                    v.iter_mut().for_each(|x| *x = x.swap_bytes());
+                }
+                Voxels::I16(v)
+            }
+            Stored::F32 => {
+                let mut v: Vec<f32> = filled_from(n, prefix, reader).map_err(io)?;
+                if swap {
+                    v.iter_mut()
+                        .for_each(|x| *x = f32::from_bits(x.to_bits().swap_bytes()));
+                }
+                Voxels::F32(v)
+            }
+            // Converted to f32 anyway: read as bytes first.
+            _ => {
+                let bytes = n as u64 * self.bytes();
+                let mut data = Vec::new();
+                data.try_reserve_exact(bytes as usize)
+                    .map_err(|_| io(out_of_memory(bytes)))?;
+                data.extend_from_slice(&prefix[..prefix.len().min(bytes as usize)]);
+                let rest = bytes - data.len() as u64;
+                reader.take(rest).read_to_end(&mut data).map_err(io)?;
+                if (data.len() as u64) < bytes {
+                    return Err(io(std::io::ErrorKind::UnexpectedEof.into()));
+                }
+                return self.grid(dims, &data, big_endian, scaling, file);
+            }
+        };
+        let scaling = Scaling {
+            slope: scaling.0 as f32,
+            intercept: scaling.1 as f32,
+        };
+        Ok(StructuredVolume::new(dims, voxels, Vec3::ZERO, Vec3::ONE)?.with_scaling(scaling)?)
     }
+}
+
+/// `n` numbers whose bytes are `prefix` and then what `reader` holds;
+/// their buffer reserved fallibly.
+fn filled_from<T: bytemuck::Pod>(
+    n: usize,
+    prefix: &[u8],
+    reader: &mut dyn Read,
+) -> std::io::Result<Vec<T>> {
+    let mut values = Vec::new();
+    values
+        .try_reserve_exact(n)
+        .map_err(|_| out_of_memory((n * std::mem::size_of::<T>()) as u64))?;
+    values.resize(n, T::zeroed());
+    let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut values);
+    let first = prefix.len().min(bytes.len());
+    bytes[..first].copy_from_slice(&prefix[..first]);
+    reader.read_exact(&mut bytes[first..])?;
+    Ok(values)
+}
+
+/// `data` as numbers of `N` bytes each, by `read`; their buffer reserved
+/// fallibly.
+fn own<T, const N: usize>(data: &[u8], read: impl Fn([u8; N]) -> T) -> std::io::Result<Vec<T>> {
+    let mut values = Vec::new();
+    values
+        .try_reserve_exact(data.len() / N)
+        .map_err(|_| out_of_memory((data.len() / N * std::mem::size_of::<T>()) as u64))?;
+    values.extend(
+        data.chunks_exact(N)
+            .map(|c| read(c.try_into().unwrap_or([0; N]))),
+    );
+    Ok(values)
+}
+
+/// A little-endian reader `read` of bytes `b` stored `big_endian` or not.
+fn ordered<T, const N: usize>(mut b: [u8; N], big_endian: bool, read: fn([u8; N]) -> T) -> T {
+    if big_endian {
+        b.reverse();
+    }
+    read(b)
 }

@@ -58,10 +58,7 @@ impl SpaceCache {
                 .map(|(_, r)| Arc::clone(r));
             let ranges = match known {
                 Some(r) => r,
-                None => {
-                    let voxels = volume.voxels();
-                    Arc::new(BrickRanges::new(volume.dims(), |i| voxels.value(i))?)
-                }
+                None => Arc::new(BrickRanges::new(volume.dims(), |i| volume.value(i))?),
             };
             let known = next
                 .spaces

@@ -19,4 +19,4 @@ pub use shapes::{
     MAX_PRIMITIVES,
 };
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
-pub use volume::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};
+pub use volume::{Filter, Scaling, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

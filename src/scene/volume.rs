@@ -3,12 +3,13 @@ use std::sync::Arc;
 use glam::{UVec3, Vec3};
 use thiserror::Error;
 
-/// Voxel values as stored. Fixed-point types read as [0, 1] (ANARI's
-/// UFIXED8 / UFIXED16); floats are taken as they are.
+/// Voxel values as stored, in their own type: the volume's [`Scaling`]
+/// makes them values.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Voxels {
     U8(Vec<u8>),
     U16(Vec<u16>),
+    I16(Vec<i16>),
     F32(Vec<f32>),
 }
 
@@ -17,6 +18,7 @@ impl Voxels {
         match self {
             Voxels::U8(v) => v.len(),
             Voxels::U16(v) => v.len(),
+            Voxels::I16(v) => v.len(),
             Voxels::F32(v) => v.len(),
         }
     }
@@ -25,13 +27,51 @@ impl Voxels {
         self.len() == 0
     }
 
-    /// The value of voxel `i`, fixed-point types normalised to [0, 1].
-    pub fn value(&self, i: usize) -> f32 {
+    /// The number stored for voxel `i`, unscaled.
+    pub fn stored(&self, i: usize) -> f32 {
         match self {
-            Voxels::U8(v) => f32::from(v[i]) / 255.0,
-            Voxels::U16(v) => f32::from(v[i]) / 65535.0,
+            Voxels::U8(v) => f32::from(v[i]),
+            Voxels::U16(v) => f32::from(v[i]),
+            Voxels::I16(v) => f32::from(v[i]),
             Voxels::F32(v) => v[i],
         }
+    }
+
+    /// The map ANARI's element types imply: fixed-point numbers to [0, 1]
+    /// (UFIXED8, UFIXED16) or [-1, 1] (FIXED16), floats as they are.
+    pub fn fixed_point(&self) -> Scaling {
+        let slope = match self {
+            Voxels::U8(_) => 1.0 / 255.0,
+            Voxels::U16(_) => 1.0 / 65535.0,
+            Voxels::I16(_) => 1.0 / 32767.0,
+            Voxels::F32(_) => 1.0,
+        };
+        Scaling {
+            slope,
+            intercept: 0.0,
+        }
+    }
+}
+
+/// A linear map from stored numbers to values, `stored * slope +
+/// intercept`: a fixed-point type's normalisation, or a file's rescale
+/// (NIfTI's scl_slope, DICOM's RescaleSlope). Being linear, it commutes
+/// with trilinear interpolation, so renderers interpolate stored numbers
+/// and map the result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scaling {
+    pub slope: f32,
+    pub intercept: f32,
+}
+
+impl Scaling {
+    pub const IDENTITY: Self = Self {
+        slope: 1.0,
+        intercept: 0.0,
+    };
+
+    pub fn apply(self, stored: f32) -> f32 {
+        stored * self.slope + self.intercept
     }
 }
 
@@ -58,6 +98,8 @@ pub enum VolumeError {
     BadOrigin { origin: Vec3 },
     #[error("voxel {index} is not a finite number")]
     NonFiniteVoxel { index: usize },
+    #[error("a scaling of stored values must be finite with a slope other than 0, got {slope} * v + {intercept}")]
+    BadScaling { slope: f32, intercept: f32 },
 }
 
 /// How a volume is sampled between its grid vertices.
@@ -89,7 +131,9 @@ pub struct StructuredVolume {
     voxels: Arc<Voxels>,
     origin: Vec3,
     spacing: Vec3,
-    value_range: (f32, f32),
+    scaling: Scaling,
+    /// Smallest and largest stored number.
+    stored_range: (f32, f32),
     filter: Filter,
 }
 
@@ -127,19 +171,39 @@ impl StructuredVolume {
                 return Err(VolumeError::NonFiniteVoxel { index });
             }
         }
-        let value_range =
+        let stored_range =
             (0..voxels.len()).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), i| {
-                let v = voxels.value(i);
+                let v = voxels.stored(i);
                 (lo.min(v), hi.max(v))
             });
         Ok(Self {
             dims,
+            scaling: voxels.fixed_point(),
             voxels: Arc::new(voxels),
             origin,
             spacing,
-            value_range,
+            stored_range,
             filter: Filter::Linear,
         })
+    }
+
+    /// The same grid with its stored numbers read through `scaling`
+    /// instead of their type's fixed-point map.
+    pub fn with_scaling(mut self, scaling: Scaling) -> Result<Self, VolumeError> {
+        let Scaling { slope, intercept } = scaling;
+        if !slope.is_finite() || !intercept.is_finite() || slope == 0.0 {
+            return Err(VolumeError::BadScaling { slope, intercept });
+        }
+        self.scaling = scaling;
+        Ok(self)
+    }
+    pub fn scaling(&self) -> Scaling {
+        self.scaling
+    }
+
+    /// The value of voxel `i`: its stored number scaled.
+    pub fn value(&self, i: usize) -> f32 {
+        self.scaling.apply(self.voxels.stored(i))
     }
 
     /// The same grid sampled with `filter`.
@@ -163,9 +227,13 @@ impl StructuredVolume {
     pub fn spacing(&self) -> Vec3 {
         self.spacing
     }
-    /// Smallest and largest (normalised) voxel value.
+    /// Smallest and largest voxel value.
     pub fn value_range(&self) -> (f32, f32) {
-        self.value_range
+        let (a, b) = (
+            self.scaling.apply(self.stored_range.0),
+            self.scaling.apply(self.stored_range.1),
+        );
+        (a.min(b), a.max(b))
     }
     /// World-space box of the grid's vertices.
     pub fn bounds(&self) -> (Vec3, Vec3) {

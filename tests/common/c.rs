@@ -171,7 +171,7 @@ pub fn wall_scene(
 
     let raw = dir.join("phantom.f32");
     let voxels: Vec<u8> = (0..volume.voxels().len())
-        .flat_map(|i| volume.voxels().value(i).to_ne_bytes())
+        .flat_map(|i| volume.value(i).to_ne_bytes())
         .collect();
     std::fs::write(&raw, voxels).unwrap();
 

@@ -131,6 +131,7 @@ fn pydicom_series_load_with_their_markers_where_their_headers_put_them() {
         let truth = &said[name];
         let file = load_volume_file(&dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(file.anatomical && file.units == "mm", "{name}");
+        fixtures::kept_in_its_type(name, &file.volume, file.dtype);
         fixtures::marker_lands(name, &file.volume, file.transform(), truth, 1e-3);
         let (lo, hi) = file.volume.value_range();
         assert_eq!(
@@ -254,8 +255,9 @@ fn series_in_every_transfer_syntax_read_as_dcmtk_wrote_them() {
 
 /// The voxels of `file` in order.
 fn values(file: &anari_library_caveray::data::VolumeFile) -> Vec<f32> {
-    let v = file.volume.voxels();
-    (0..v.len()).map(|i| v.value(i)).collect()
+    (0..file.volume.voxels().len())
+        .map(|i| file.volume.value(i))
+        .collect()
 }
 
 /// Copies of the written series by dcmtk: compressed by dcmcrle and

@@ -58,11 +58,10 @@ pub fn marker_lands(
     truth: &Value,
     within: f64,
 ) {
-    let voxels = volume.voxels();
     let (mut best, mut at) = (f32::NEG_INFINITY, 0);
-    for i in 0..voxels.len() {
-        if voxels.value(i) > best {
-            (best, at) = (voxels.value(i), i);
+    for i in 0..volume.voxels().len() {
+        if volume.value(i) > best {
+            (best, at) = (volume.value(i), i);
         }
     }
     let dims = volume.dims();
@@ -93,4 +92,24 @@ pub fn marker_lands(
         world.distance(want) < within,
         "{name}: marker at {world}, the header puts it at {want}"
     );
+}
+
+/// Asserts that file `name`'s voxels of stored type `dtype` are held in
+/// that type where the renderers sample it (8 and 16-bit integers, 32-bit
+/// floats), not as a copy in 32-bit floats.
+pub fn kept_in_its_type(name: &str, volume: &StructuredVolume, dtype: &str) {
+    use anari_library_caveray::scene::Voxels;
+    let held = match volume.voxels() {
+        Voxels::U8(_) => "uint8",
+        Voxels::U16(_) => "uint16",
+        Voxels::I16(_) => "int16",
+        Voxels::F32(_) => "float32",
+    };
+    let sampled = ["uint8", "uint16", "int16", "float32"];
+    let want = if sampled.contains(&dtype) {
+        dtype
+    } else {
+        "float32"
+    };
+    assert_eq!(held, want, "{name}: {dtype} voxels held as {held}");
 }

@@ -80,6 +80,7 @@ fn nibabel_files_load_with_their_markers_where_their_headers_put_them() {
         // lands where nibabel puts it, within half a voxel.
         let half = 0.5 * nifti.header.spacing.abs().min_element();
         fixtures::marker_lands(name, &nifti.volume, nifti.transform(), truth, half);
+        fixtures::kept_in_its_type(name, &nifti.volume, nifti.header.dtype);
     }
     // A series of volumes is refused by the dimension at fault.
     let e = load_nifti(&dir.join("series.nii")).err().unwrap();
@@ -114,7 +115,7 @@ fn broken_nifti_files_are_refused_by_the_field_at_fault() {
     let mut whole = h.clone();
     whole.extend((0..64u8).collect::<Vec<_>>());
     let good = load_nifti(&write("good.nii", &whole)).unwrap();
-    assert_eq!(good.volume.voxels().value(63), 63.0);
+    assert_eq!(good.volume.value(63), 63.0);
     let field_of = |bytes: Vec<u8>, name: &str| match load_nifti(&write(name, &bytes)) {
         Err(DataError::Header { field, why, .. }) => format!("{field}: {why}"),
         other => panic!("{name}: {:?}", other.map(|n| n.header)),

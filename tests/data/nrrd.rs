@@ -57,6 +57,7 @@ fn pynrrd_files_load_with_their_markers_where_their_headers_put_them() {
             "{name}"
         );
         fixtures::marker_lands(name, &nrrd.volume, nrrd.transform(), truth, 1e-3);
+        fixtures::kept_in_its_type(name, &nrrd.volume, nrrd.header.dtype);
     }
 }
 
@@ -71,7 +72,7 @@ fn broken_nrrd_headers_are_refused_by_the_field_at_fault() {
     let good = "type: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n";
     let path = dir.join("good.nrrd");
     std::fs::write(&path, header(good)).unwrap();
-    assert_eq!(load_nrrd(&path).unwrap().volume.voxels().value(63), 63.0);
+    assert_eq!(load_nrrd(&path).unwrap().volume.value(63), 63.0);
     let refused = |name: &str, fields: &str| -> String {
         let path = dir.join(name);
         std::fs::write(&path, header(fields)).unwrap();

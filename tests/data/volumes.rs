@@ -40,12 +40,12 @@ fn raw_files_load_little_endian_and_normalised() {
     )
     .unwrap();
     assert_eq!(v.voxels(), &Voxels::U16(vec![0, 65535, 256, 1, 2, 3, 4, 5]));
-    assert_eq!(v.voxels().value(1), 1.0);
+    assert_eq!(v.value(1), 1.0);
     assert_eq!(v.value_range(), (0.0, 1.0));
     assert_eq!(v.bounds(), (Vec3::ZERO, Vec3::new(1.0, 1.0, 2.0)));
     std::fs::write(&path, 1.5f32.to_le_bytes()).unwrap();
     let f = load_raw(&path, UVec3::ONE, VoxelType::F32, Vec3::ONE).unwrap();
-    assert_eq!(f.voxels().value(0), 1.5);
+    assert_eq!(f.value(0), 1.5);
 }
 
 #[test]
@@ -137,7 +137,7 @@ fn a_volume_can_be_placed_and_scaled() {
 #[test]
 fn procedural_volumes_have_known_values() {
     let n = 33;
-    let centre = |v: &StructuredVolume| v.voxels().value((16 * n * n + 16 * n + 16) as usize);
+    let centre = |v: &StructuredVolume| v.value((16 * n * n + 16 * n + 16) as usize);
     let phantom = shepp_logan(n);
     assert_eq!(phantom.dims(), UVec3::splat(n));
     assert_eq!(phantom.bounds(), (Vec3::splat(-1.0), Vec3::splat(1.0)));
@@ -147,11 +147,7 @@ fn procedural_volumes_have_known_values() {
         "{}",
         centre(&phantom)
     );
-    assert_eq!(
-        phantom.voxels().value(0),
-        0.0,
-        "corners are outside the head"
-    );
+    assert_eq!(phantom.value(0), 0.0, "corners are outside the head");
     let (lo, hi) = phantom.value_range();
     assert!(lo >= 0.0 && hi <= 1.0 && hi > 0.9);
     // Marschner-Lobb at the origin: (1 - 0 + 0.25 (1 + cos 12 pi)) / 2.5 = 0.6.

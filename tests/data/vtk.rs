@@ -70,6 +70,7 @@ fn simpleitk_and_pyevtk_files_load_with_their_markers_where_they_put_them() {
         let encoding = if legacy { "binary" } else { "raw" };
         assert_eq!(detail(&image, "encoding"), encoding, "{name}");
         fixtures::marker_lands(name, &image.volume, image.transform(), truth, 1e-3);
+        fixtures::kept_in_its_type(name, &image.volume, image.dtype);
     }
 }
 
@@ -260,8 +261,9 @@ fn vti_files_in_each_of_vtks_encodings_load_their_values_where_they_say() {
         assert_eq!(detail(&image, "array"), "v", "{name}");
         assert_eq!(image.dtype, "float32", "{name}");
         assert_eq!(image.volume.dims().to_array(), [5, 4, 3], "{name}");
-        let voxels = image.volume.voxels();
-        let got: Vec<f32> = (0..voxels.len()).map(|i| voxels.value(i)).collect();
+        let got: Vec<f32> = (0..image.volume.voxels().len())
+            .map(|i| image.volume.value(i))
+            .collect();
         assert_eq!(got, values(), "{name}");
         let (origin, m) = if name.starts_with("oblique") {
             let turn = DMat3::from_cols(DVec3::new(c, s, 0.0), DVec3::new(-s, c, 0.0), DVec3::Z);
@@ -317,8 +319,9 @@ fn legacy_ascii_files_pass_over_cell_data_and_field_data() {
     let path = dir.join("ascii.vtk");
     std::fs::write(&path, file).unwrap();
     let image = load_vtk(&path).unwrap();
-    let voxels = image.volume.voxels();
-    let got: Vec<f32> = (0..voxels.len()).map(|i| voxels.value(i)).collect();
+    let got: Vec<f32> = (0..image.volume.voxels().len())
+        .map(|i| image.volume.value(i))
+        .collect();
     assert_eq!(got, values());
     assert_eq!(detail(&image, "encoding"), "ascii");
     assert_eq!(detail(&image, "array"), "v");

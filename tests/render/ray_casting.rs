@@ -322,3 +322,79 @@ fn a_frame_cast_in_bands_is_whole_and_a_stop_ends_it_between_bands() {
     let again = gpu.render(&scene, &rays, &settings, &desc).unwrap();
     assert_eq!(again.color, g.color);
 }
+
+/// A volume kept in its stored type (16-bit integers read through a
+/// file's rescale, 8-bit ones as UFIXED8) renders as the same values held
+/// as f32 do: on the scalar path (which samples the stored numbers), the
+/// packet path (a copy as f32) and the GPU.
+#[test]
+fn volumes_in_their_stored_type_render_as_their_values_do() {
+    use anari_library_caveray::scene::{Scaling, StructuredVolume, Voxels};
+    let mut gpu = gpu();
+    let (screen, eye) = off_axis_wall();
+    let size = UVec2::new(48, 48);
+    let rays = four_cameras(&screen, eye, size)[0].1;
+    let desc = FrameDesc::new(size);
+    let settings = RenderSettings::default();
+    let as_f32 = phantom(24);
+    let placed = &as_f32.volumes()[0];
+    let reference = &placed.volume;
+    let n = reference.voxels().len();
+    // The phantom's values in [0, 1], stored as int16 through a CT-like
+    // rescale, and as 8-bit fixed point; the f32 twins hold exactly the
+    // values the stored numbers stand for.
+    let rescale = Scaling {
+        slope: 1.0 / 2000.0,
+        intercept: 0.5,
+    };
+    let int16: Vec<i16> = (0..n)
+        .map(|i| ((reference.value(i) - 0.5) * 2000.0).round() as i16)
+        .collect();
+    let uint8: Vec<u8> = (0..n)
+        .map(|i| (reference.value(i) * 255.0).round() as u8)
+        .collect();
+    let grid = |voxels: Voxels| {
+        StructuredVolume::new(
+            reference.dims(),
+            voxels,
+            reference.origin(),
+            reference.spacing(),
+        )
+        .unwrap()
+    };
+    let stored = [
+        (
+            "int16 rescaled",
+            grid(Voxels::I16(int16)).with_scaling(rescale).unwrap(),
+        ),
+        ("uint8 fixed point", grid(Voxels::U8(uint8))),
+    ];
+    for (name, volume) in stored {
+        let twin = grid(Voxels::F32((0..n).map(|i| volume.value(i)).collect()));
+        assert_eq!(volume.value_range(), twin.value_range(), "{name}");
+        let scene = |v: StructuredVolume| {
+            Scene::shared(std::sync::Arc::new(v), placed.transfer_function.clone())
+        };
+        let (own, copy) = (scene(volume), scene(twin));
+        let reference_cpu = CpuRenderer::reference();
+        let expected = reference_cpu
+            .render(&copy, &rays, &settings, &desc)
+            .unwrap();
+        for (path, frame) in [
+            (
+                "scalar, stored numbers",
+                reference_cpu.render(&own, &rays, &settings, &desc).unwrap(),
+            ),
+            (
+                "packets, f32 copy",
+                CpuRenderer::new()
+                    .render(&own, &rays, &settings, &desc)
+                    .unwrap(),
+            ),
+            ("gpu", gpu.render(&own, &rays, &settings, &desc).unwrap()),
+        ] {
+            let s = ssim(&expected, &frame).unwrap();
+            assert!(s >= 0.9999, "{name}, {path}: SSIM {s} against the f32 twin");
+        }
+    }
+}

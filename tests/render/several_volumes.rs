@@ -117,11 +117,10 @@ fn overlapping_volumes_mix_per_sample_whatever_their_order() {
 /// moving its voxels: world (X, Y, Z) is object (Y, -X, Z).
 fn turned_by_hand(volume: &StructuredVolume) -> StructuredVolume {
     let n = volume.dims().x as usize;
-    let v = volume.voxels();
     let turned = (0..n * n * n)
         .map(|w| {
             let (i, j, k) = (w % n, (w / n) % n, w / (n * n));
-            v.value(j + n * ((n - 1 - i) + n * k))
+            volume.value(j + n * ((n - 1 - i) + n * k))
         })
         .collect();
     StructuredVolume::new(

@@ -10,7 +10,7 @@ use anari_library_caveray::data::{
 use anari_library_caveray::geometry::{Units, VolumeAxis};
 use anari_library_caveray::scene::{
     transformed_box, AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume,
-    Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction, Voxels,
+    Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -293,17 +293,14 @@ impl VolumeArgs {
         let tf_spec = self.tf.as_deref().unwrap_or(default_tf);
         let (tf, stretch_tf) = if Path::new(tf_spec).is_file() {
             let tf = load_paraview(Path::new(tf_spec)).map_err(|e| usage(&e))?;
-            // ParaView ranges are in stored units; fixed-point voxels are
-            // read as [0, 1].
-            let scale = match volume.voxels() {
-                Voxels::U8(_) => 255.0,
-                Voxels::U16(_) => 65535.0,
-                Voxels::F32(_) => 1.0,
-            };
-            let (lo, hi) = tf.value_range();
-            let tf = tf
-                .with_value_range(lo / scale, hi / scale)
-                .map_err(|e| usage(&e))?;
+            // ParaView ranges are in the data's own units: the stored
+            // numbers of a raw or manifest volume, whose fixed-point
+            // values are read as [0, 1], or a file's rescaled values.
+            let (mut lo, mut hi) = tf.value_range();
+            if volume.scaling() == volume.voxels().fixed_point() {
+                (lo, hi) = (volume.scaling().apply(lo), volume.scaling().apply(hi));
+            }
+            let tf = tf.with_value_range(lo, hi).map_err(|e| usage(&e))?;
             (tf, false)
         } else {
             (preset(tf_spec).map_err(|e| usage(&e))?, true)

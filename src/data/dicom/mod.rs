@@ -7,7 +7,8 @@
 //! ImageOrientationPatient, ImagePositionPatient and PixelSpacing, turned
 //! from DICOM's LPS into RAS+ as the other readers' anatomical spaces are.
 //! Values are the modality's (Hounsfield units for CT): stored bits, sign
-//! and each slice's own rescale slope and intercept applied.
+//! and each slice's own rescale slope and intercept applied; the voxels
+//! are kept in their stored type where one rescale holds for the series.
 
 mod dataset;
 
@@ -23,7 +24,7 @@ use super::format::VolumeFormat;
 use super::stored::{out_of_memory, ZLIB_MAX_RATIO};
 use super::volume_file::VolumeFile;
 use super::DataError;
-use crate::scene::{StructuredVolume, Voxels, MAX_VOXELS};
+use crate::scene::{Scaling, StructuredVolume, Voxels, MAX_VOXELS};
 
 /// The elements a slice is read from (group << 16 | element).
 mod tags {
@@ -184,8 +185,8 @@ fn read_slice(file: &Path) -> Result<Slice, DataError> {
     slice_of(&set, file)
 }
 
-/// The pixels of `slice`, from its file read whole.
-fn read_pixels(file: &Path, slice: &Slice) -> Result<Vec<f32>, DataError> {
+/// The stored numbers of `slice`'s pixels, from its file read whole.
+fn read_pixels(file: &Path, slice: &Slice) -> Result<Vec<i64>, DataError> {
     let name = file.display().to_string();
     let bytes = file_bytes(file)?;
     let set = DataSet::parse(&bytes, true).map_err(|why| bad(&name, "file", why))?;
@@ -338,8 +339,9 @@ fn slice_of(set: &DataSet, file: &Path) -> Result<Slice, DataError> {
     })
 }
 
-/// The modality values of `object`'s pixels, which `slice` describes.
-fn decode(set: &DataSet, slice: &Slice, file_len: usize) -> Result<Vec<f32>, DataError> {
+/// The stored numbers of `set`'s pixels (masked to the bits stored,
+/// sign-extended), which `slice` describes.
+fn decode(set: &DataSet, slice: &Slice, file_len: usize) -> Result<Vec<i64>, DataError> {
     let name = slice.file.display().to_string();
     let pixels = slice.rows as usize * slice.columns as usize;
     let width = usize::from(slice.bits_allocated / 8);
@@ -379,27 +381,75 @@ fn decode(set: &DataSet, slice: &Slice, file_len: usize) -> Result<Vec<f32>, Dat
         (1u64 << stored) - 1
     };
     let sign_bit = 1u64 << (stored - 1);
-    let (slope, intercept) = (slice.slope, slice.intercept);
     let mut values = Vec::new();
     values
         .try_reserve_exact(pixels)
         .map_err(|_| DataError::Io {
             file: name.clone(),
-            source: out_of_memory(pixels as u64 * 4),
+            source: out_of_memory(pixels as u64 * 8),
         })?;
     // Decoders hand back samples in the machine's byte order.
     values.extend(data[..pixels * width].chunks_exact(width).map(|c| {
         let mut b = [0u8; 4];
         b[..width].copy_from_slice(c);
         let raw = u64::from(u32::from_ne_bytes(b)) & mask;
-        let v = if slice.signed && raw & sign_bit != 0 {
-            raw as f64 - (mask + 1) as f64
+        if slice.signed && raw & sign_bit != 0 {
+            raw as i64 - (mask + 1) as i64
         } else {
-            raw as f64
-        };
-        (v * slope + intercept) as f32
+            raw as i64
+        }
     }));
     Ok(values)
+}
+
+/// A series' voxels as they are gathered slice by slice: in the type
+/// the slices store where one rescale holds for all of them, else as
+/// 32-bit floats, each slice's rescale applied.
+enum Gathered {
+    U8(Vec<u8>),
+    U16(Vec<u16>),
+    I16(Vec<i16>),
+    F32(Vec<f32>),
+}
+
+impl Gathered {
+    fn new(first: &Slice, uniform: bool, voxels: usize) -> Option<Self> {
+        fn reserved<T>(n: usize) -> Option<Vec<T>> {
+            let mut v = Vec::new();
+            v.try_reserve_exact(n).ok()?;
+            Some(v)
+        }
+        Some(match (uniform, first.bits_allocated, first.signed) {
+            (true, 8, false) => Gathered::U8(reserved(voxels)?),
+            (true, 16, false) => Gathered::U16(reserved(voxels)?),
+            (true, 16, true) => Gathered::I16(reserved(voxels)?),
+            _ => Gathered::F32(reserved(voxels)?),
+        })
+    }
+
+    /// Appends a slice's stored numbers (masked to the bits the type
+    /// holds, so each fits it), rescaled where kept as floats.
+    fn push(&mut self, stored: &[i64], slice: &Slice) {
+        match self {
+            Gathered::U8(v) => v.extend(stored.iter().map(|&x| x as u8)),
+            Gathered::U16(v) => v.extend(stored.iter().map(|&x| x as u16)),
+            Gathered::I16(v) => v.extend(stored.iter().map(|&x| x as i16)),
+            Gathered::F32(v) => v.extend(
+                stored
+                    .iter()
+                    .map(|&x| (x as f64 * slice.slope + slice.intercept) as f32),
+            ),
+        }
+    }
+
+    fn voxels(self) -> Voxels {
+        match self {
+            Gathered::U8(v) => Voxels::U8(v),
+            Gathered::U16(v) => Voxels::U16(v),
+            Gathered::I16(v) => Voxels::I16(v),
+            Gathered::F32(v) => Voxels::F32(v),
+        }
+    }
 }
 
 /// The volume of `slices` (one series), ordered along their normal and
@@ -407,7 +457,7 @@ fn decode(set: &DataSet, slice: &Slice, file_len: usize) -> Result<Vec<f32>, Dat
 fn assemble(
     mut slices: Vec<Slice>,
     name: &str,
-    mut pixels: impl FnMut(&Slice) -> Result<Vec<f32>, DataError>,
+    mut pixels: impl FnMut(&Slice) -> Result<Vec<i64>, DataError>,
 ) -> Result<VolumeFile, DataError> {
     let Some(first) = slices.first().cloned() else {
         return Err(bad(name, "files", "no slices".into()));
@@ -486,16 +536,24 @@ fn assemble(
     } else {
         normal * first.thickness.unwrap_or(1.0)
     };
-    let mut values: Vec<f32> = Vec::new();
-    values
-        .try_reserve_exact(voxels as usize)
-        .map_err(|_| DataError::Io {
+    let uniform = slices
+        .iter()
+        .all(|s| (s.slope, s.intercept) == (first.slope, first.intercept));
+    let mut gathered =
+        Gathered::new(&first, uniform, voxels as usize).ok_or_else(|| DataError::Io {
             file: name.to_string(),
             source: out_of_memory(voxels * 4),
         })?;
     for slice in &slices {
-        values.extend(pixels(slice)?);
+        gathered.push(&pixels(slice)?, slice);
     }
+    let scaling = match gathered {
+        Gathered::F32(_) => Scaling::IDENTITY,
+        _ => Scaling {
+            slope: first.slope as f32,
+            intercept: first.intercept as f32,
+        },
+    };
     // DICOM's patient space is LPS: to RAS+.
     let turn = DVec3::new(-1.0, -1.0, 1.0);
     let affine = DMat4::from_cols(
@@ -512,9 +570,6 @@ fn assemble(
             "the slices span no volume".into(),
         ));
     }
-    let uniform = slices
-        .iter()
-        .all(|s| (s.slope, s.intercept) == (first.slope, first.intercept));
     let dtype = match (first.bits_allocated, first.signed) {
         (8, false) => "uint8",
         (8, true) => "int8",
@@ -523,8 +578,8 @@ fn assemble(
         (_, false) => "uint32",
         (_, true) => "int32",
     };
-    let volume =
-        StructuredVolume::new(dims, Voxels::F32(values), glam::Vec3::ZERO, glam::Vec3::ONE)?;
+    let volume = StructuredVolume::new(dims, gathered.voxels(), glam::Vec3::ZERO, glam::Vec3::ONE)?
+        .with_scaling(scaling)?;
     let spacing = [
         first.pixel_spacing[1],
         first.pixel_spacing[0],

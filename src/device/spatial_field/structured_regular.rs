@@ -109,10 +109,7 @@ fn read_voxels(array: &Array, warn: &mut dyn FnMut(String)) -> Result<(UVec3, Vo
             }
             Voxels::U16(gather(n, words(bytes).map(u16::from_ne_bytes))?)
         }
-        T::FIXED16 => Voxels::F32(gather(
-            n,
-            words(bytes).map(|w| (f32::from(i16::from_ne_bytes(w)) / 32767.0).max(-1.0)),
-        )?),
+        T::FIXED16 => Voxels::I16(gather(n, words(bytes).map(i16::from_ne_bytes))?),
         T::FLOAT32 => Voxels::F32(gather(n, words(bytes).map(f32::from_ne_bytes))?),
         T::FLOAT64 => Voxels::F32(gather(
             n,

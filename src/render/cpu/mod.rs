@@ -24,13 +24,17 @@ use crate::render::warp::LayerBuilder;
 use crate::scene::Coverage;
 use crate::scene::{PlacedShape, PlacedVolume, Scene, StructuredVolume, TransferFunction};
 use packet::Channels;
-use sample::Converted;
+use sample::{Converted, Samples};
 
 /// Pixels per tile edge.
 const TILE: usize = 16;
 
 /// Isosurface fields, and crossing boxes per field, the CPU renderer keeps.
 const ISO_KEPT: usize = 16;
+/// The largest volume copied to f32 for the packet path (512 MiB of
+/// copy): beyond it the packets' speed costs more memory than it is worth,
+/// and the volume is sampled in its own type on the scalar path.
+const PACKET_COPY_VOXELS: usize = 1 << 27;
 
 #[derive(Debug, Default)]
 pub struct CpuRenderer {
@@ -44,7 +48,7 @@ pub struct CpuRenderer {
 
 #[derive(Debug, Default)]
 struct Prepared {
-    values: Vec<(Arc<StructuredVolume>, Arc<Vec<f32>>)>,
+    samples: Vec<(Arc<StructuredVolume>, Samples)>,
     tables: Vec<(Arc<TransferFunction>, Arc<Vec<Vec4>>)>,
     spaces: SpaceCache,
     /// The last scene's surfaces, and their BVH.
@@ -137,6 +141,23 @@ impl CpuRenderer {
         Ok((Arc::clone(&entry.values), bounds))
     }
 
+    /// How `volume` is sampled: its own stored numbers, unless the packet
+    /// path runs here and needs f32 values it does not hold; then a copy
+    /// as f32, where one of at most PACKET_COPY_VOXELS pays for itself in
+    /// speed (past that, the memory counts more).
+    fn samples(&self, volume: &Arc<StructuredVolume>) -> Result<Samples, RenderError> {
+        let own = Samples::Stored(Arc::clone(volume));
+        let n = volume.voxels().len();
+        if !self.uses_packets() || own.f32_values().is_some() || n > PACKET_COPY_VOXELS {
+            return Ok(own);
+        }
+        let mut values = filled(n, 0.0f32, "the volume as f32")?;
+        for (i, v) in values.iter_mut().enumerate() {
+            *v = volume.value(i);
+        }
+        Ok(Samples::Copied(Arc::new(values)))
+    }
+
     /// Each volume's values, table and (if the plan skips) clear bricks,
     /// made only when new.
     fn prepare(&self, scene: &Scene, plan: &MarchPlan) -> Result<Vec<Converted>, RenderError> {
@@ -162,23 +183,21 @@ impl CpuRenderer {
         let mut converted = Vec::new();
         for (placed, space) in scene.volumes().iter().zip(spaces) {
             let volume = &placed.volume;
-            let values = match reuse(&cache.values, volume) {
-                Some(v) => v,
-                None => {
-                    let voxels = volume.voxels();
-                    let mut values = filled(voxels.len(), 0.0f32, "the volume as f32")?;
-                    for (i, v) in values.iter_mut().enumerate() {
-                        *v = voxels.value(i);
-                    }
-                    Arc::new(values)
-                }
+            let kept = cache
+                .samples
+                .iter()
+                .find(|(v, _)| Arc::ptr_eq(v, volume))
+                .map(|(_, s)| s.clone());
+            let samples = match kept {
+                Some(s) => s,
+                None => self.samples(volume)?,
             };
             let tf = &placed.transfer_function;
             let table = reuse(&cache.tables, tf).unwrap_or_else(|| Arc::new(tf.table()));
-            next.values.push((Arc::clone(volume), Arc::clone(&values)));
+            next.samples.push((Arc::clone(volume), samples.clone()));
             next.tables.push((Arc::clone(tf), Arc::clone(&table)));
             converted.push(Converted {
-                values,
+                samples,
                 table,
                 space,
             });

@@ -7,16 +7,38 @@ use crate::render::empty_space::{Along, EmptySpace, Region};
 use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::shapes::ShapeSet;
-use crate::scene::{Filter, TABLE_SIZE};
+use crate::scene::{Filter, Scaling, StructuredVolume, Voxels, TABLE_SIZE};
 
-/// One volume as the CPU reads it: voxel values already normalised to
-/// f32, exactly what the GPU texture holds, and its table.
+/// One volume as the CPU reads it: its numbers in their stored type (or
+/// an f32 copy made for the packet path) and the scaling that makes them
+/// values, exactly what the GPU texture holds; and its table.
 pub(super) struct Grid<'a> {
     pub plan: &'a VolumePlan,
-    values: &'a [f32],
+    numbers: Numbers<'a>,
+    scaling: Scaling,
     table: &'a [Vec4],
     /// Where the plan skips: the clear bricks under this table.
     pub space: Option<&'a EmptySpace>,
+}
+
+/// A volume's numbers as stored.
+#[derive(Clone, Copy)]
+enum Numbers<'a> {
+    U8(&'a [u8]),
+    U16(&'a [u16]),
+    I16(&'a [i16]),
+    F32(&'a [f32]),
+}
+
+impl<'a> Numbers<'a> {
+    fn of(voxels: &'a Voxels) -> Self {
+        match voxels {
+            Voxels::U8(v) => Numbers::U8(v),
+            Voxels::U16(v) => Numbers::U16(v),
+            Voxels::I16(v) => Numbers::I16(v),
+            Voxels::F32(v) => Numbers::F32(v),
+        }
+    }
 }
 
 impl Grid<'_> {
@@ -25,9 +47,20 @@ impl Grid<'_> {
         g.cmpge(Vec3::ZERO).all() && g.cmple(self.plan.last_vertex()).all()
     }
 
+    fn index(&self, i: IVec3) -> usize {
+        let d = self.plan.dims;
+        i.x as usize + d.x as usize * (i.y as usize + d.y as usize * i.z as usize)
+    }
+
     fn voxel(&self, i: IVec3) -> f32 {
-        let d = self.plan.dims.as_ivec3();
-        self.values[(i.x + d.x * (i.y + d.y * i.z)) as usize]
+        let at = self.index(i);
+        let stored = match self.numbers {
+            Numbers::U8(v) => f32::from(v[at]),
+            Numbers::U16(v) => f32::from(v[at]),
+            Numbers::I16(v) => f32::from(v[at]),
+            Numbers::F32(v) => v[at],
+        };
+        self.scaling.apply(stored)
     }
 
     /// Trilinear interpolation between the eight grid vertices around
@@ -44,8 +77,8 @@ impl Grid<'_> {
         let f = g - i0.as_vec3();
         // The eight corners as one base index and three strides (0 on an
         // axis one vertex thick, where i1 = i0); one slice check for all.
-        let d = self.plan.dims.as_ivec3();
-        let base = (i0.x + d.x * (i0.y + d.y * i0.z)) as usize;
+        let d = self.plan.dims;
+        let base = self.index(i0);
         let sx = usize::from(i0.x < hi.x);
         let sy = if i0.y < hi.y { d.x as usize } else { 0 };
         let sz = if i0.z < hi.z {
@@ -53,12 +86,16 @@ impl Grid<'_> {
         } else {
             0
         };
-        let c = &self.values[base..=base + sx + sy + sz];
-        let x00 = mix(c[0], c[sx], f.x);
-        let x10 = mix(c[sy], c[sy + sx], f.x);
-        let x01 = mix(c[sz], c[sz + sx], f.x);
-        let x11 = mix(c[sz + sy], c[sz + sy + sx], f.x);
-        mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z)
+        let strides = (base, sx, sy, sz);
+        // The scaling is linear: the stored numbers are interpolated, the
+        // result mapped.
+        let stored = match self.numbers {
+            Numbers::U8(v) => trilinear(v, strides, f),
+            Numbers::U16(v) => trilinear(v, strides, f),
+            Numbers::I16(v) => trilinear(v, strides, f),
+            Numbers::F32(v) => trilinear(v, strides, f),
+        };
+        self.scaling.apply(stored)
     }
 
     /// Post-classification: straight RGBA of a value from the table.
@@ -72,10 +109,49 @@ impl Grid<'_> {
     }
 }
 
-/// One volume's values as f32, its table and its clear bricks, shared
-/// with the renderer's cache.
+/// The eight corners' stored numbers at `base` and its strides along x,
+/// y and z, interpolated at `f`.
+fn trilinear<T: Copy + Into<f32>>(
+    v: &[T],
+    (base, sx, sy, sz): (usize, usize, usize, usize),
+    f: Vec3,
+) -> f32 {
+    let c = &v[base..=base + sx + sy + sz];
+    let at = |i: usize| -> f32 { c[i].into() };
+    let x00 = mix(at(0), at(sx), f.x);
+    let x10 = mix(at(sy), at(sy + sx), f.x);
+    let x01 = mix(at(sz), at(sz + sx), f.x);
+    let x11 = mix(at(sz + sy), at(sz + sy + sx), f.x);
+    mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z)
+}
+
+/// A volume's numbers as the CPU samples them.
+#[derive(Clone, Debug)]
+pub(super) enum Samples {
+    /// Its values as f32: a copy made for the packet path's gathers.
+    Copied(Arc<Vec<f32>>),
+    /// The volume's own stored numbers, read through its scaling.
+    Stored(Arc<StructuredVolume>),
+}
+
+impl Samples {
+    /// The values as one f32 slice, where they are that already: what
+    /// the packet path gathers from.
+    pub fn f32_values(&self) -> Option<&[f32]> {
+        match self {
+            Samples::Copied(v) => Some(v),
+            Samples::Stored(volume) => match volume.voxels() {
+                Voxels::F32(v) if volume.scaling() == Scaling::IDENTITY => Some(v),
+                _ => None,
+            },
+        }
+    }
+}
+
+/// One volume's numbers, its table and its clear bricks, shared with the
+/// renderer's cache.
 pub(super) struct Converted {
-    pub values: Arc<Vec<f32>>,
+    pub samples: Samples,
     pub table: Arc<Vec<Vec4>>,
     pub space: Option<Arc<EmptySpace>>,
 }
@@ -102,9 +178,14 @@ impl<'a> Field<'a> {
             .zip(data)
             .map(|(plan, c)| {
                 debug_assert_eq!(c.table.len(), TABLE_SIZE);
+                let (numbers, scaling) = match &c.samples {
+                    Samples::Copied(v) => (Numbers::F32(v), Scaling::IDENTITY),
+                    Samples::Stored(volume) => (Numbers::of(volume.voxels()), volume.scaling()),
+                };
                 Grid {
                     plan,
-                    values: &c.values,
+                    numbers,
+                    scaling,
                     table: &c.table,
                     space: c.space.as_deref(),
                 }
@@ -118,8 +199,8 @@ impl<'a> Field<'a> {
                     && one.dims.x >= 2
                     && super::packet::addressable(one.dims) =>
             {
-                Some(PacketGrid {
-                    values: &c.values,
+                c.samples.f32_values().map(|values| PacketGrid {
+                    values,
                     dims: one.dims.as_ivec3().to_array(),
                     channels,
                     value_lo: one.value_lo,

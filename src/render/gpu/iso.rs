@@ -240,12 +240,8 @@ impl IsoPass {
             Some((key, bounds)) if key.matches(placed, settings) => *bounds,
             _ => {
                 let v = &placed.volume;
-                let bounds = crossing_box(
-                    v.dims(),
-                    |i| v.voxels().value(i),
-                    settings.isovalue,
-                    settings.filter,
-                );
+                let bounds =
+                    crossing_box(v.dims(), |i| v.value(i), settings.isovalue, settings.filter);
                 let key = Crossing {
                     volume: std::sync::Arc::clone(v),
                     isovalue: settings.isovalue,

@@ -26,7 +26,7 @@ pub(super) fn upload_volume(
     mips: bool,
 ) -> wgpu::TextureView {
     let levels = if mips { LOD_LEVELS } else { 1 };
-    volume_texture(ctx, volume.dims(), levels, |i| volume.voxels().value(i))
+    volume_texture(ctx, volume.dims(), levels, |i| volume.value(i))
 }
 
 /// A 1 x 1 x 1 volume bound in the slots a scene leaves empty.

@@ -44,10 +44,9 @@ pub struct Caster<'a> {
 
 /// The volume's values as f32, which a [`Caster`] reads.
 pub fn values(placed: &PlacedVolume) -> Result<Vec<f32>, RenderError> {
-    let voxels = placed.volume.voxels();
-    let mut values = filled(voxels.len(), 0.0f32, "the volume as f32")?;
+    let mut values = filled(placed.volume.voxels().len(), 0.0f32, "the volume as f32")?;
     for (i, v) in values.iter_mut().enumerate() {
-        *v = voxels.value(i);
+        *v = placed.volume.value(i);
     }
     Ok(values)
 }

@@ -208,7 +208,7 @@ fn rays_that_miss_show_the_background_and_bad_settings_fail() {
 fn the_crossing_box_holds_the_surface_and_nothing_far_from_it() {
     let placed = ball();
     let v = &placed.volume;
-    let value = |i| v.voxels().value(i);
+    let value = |i| v.value(i);
     // The ball of radius 0.5 is 0.5 * 47 / 2 = 11.75 cells around the
     // grid's centre, 23.5: from 11.75 to 35.25 on each axis.
     for (filter, reach) in [
