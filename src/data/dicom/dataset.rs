@@ -3,10 +3,10 @@
 //! the top-level elements' values and the pixel data, native or
 //! encapsulated. Every length the file declares is checked against the
 //! bytes that follow before anything is taken, so a broken or hostile file
-//! costs no more memory than its own size (dicom-rs, tried first, reserves
-//! and zeroes whatever length a header claims, and its decoders panic on
-//! some broken frames). Sequences are stepped over: no field a volume
-//! needs lies inside one.
+//! costs no more memory than its own size (dicom-rs 0.10 reserves and
+//! zeroes whatever length a header claims, and its RLE and JPEG adapters
+//! panic on some broken frames). Sequences are stepped over: no field a
+//! volume needs lies inside one.
 
 use std::io::Read;
 
