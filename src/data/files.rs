@@ -75,6 +75,11 @@ pub fn read_len(file: File, len: u64) -> Result<Vec<u8>, Error> {
     Ok(bytes)
 }
 
+/// Where `needle` first occurs in `haystack`.
+pub fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).position(|w| w == needle)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,10 +11,9 @@ use glam::{DMat3, DMat4, DVec3, UVec3};
 use serde_json::Value;
 
 use super::files;
-use super::stored::{inflate, out_of_memory, Stored};
+use super::stored::{inflate, out_of_memory, voxel_count, Stored};
 use super::volume_file::VolumeFile;
-use super::{DataError, VolumeFormat};
-use crate::scene::MAX_VOXELS;
+use super::{bad, DataError, VolumeFormat};
 
 /// The most a header may hold.
 const HEADER_LIMIT: usize = 1 << 16;
@@ -308,14 +307,7 @@ fn parse_header(head: &[u8], file: &str) -> Result<(MetaHeader, usize), DataErro
             .ok_or_else(|| field("DimSize", format!("{n} voxels along axis {k}")))?;
     }
     let dims = UVec3::from_array(size);
-    let voxels = u64::from(dims.x)
-        .saturating_mul(u64::from(dims.y))
-        .saturating_mul(u64::from(dims.z));
-    if voxels > MAX_VOXELS {
-        return Err(DataError::TooManyVoxels {
-            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
-        });
-    }
+    voxel_count(dims)?;
     let stored = match need("ElementType")? {
         "MET_UCHAR" => Stored::U8,
         "MET_CHAR" => Stored::I8,
@@ -458,12 +450,4 @@ fn parse_header(head: &[u8], file: &str) -> Result<(MetaHeader, usize), DataErro
         },
         data_at,
     ))
-}
-
-fn bad(file: &str, field: &str, why: String) -> DataError {
-    DataError::Header {
-        file: file.to_string(),
-        field: field.to_string(),
-        why,
-    }
 }

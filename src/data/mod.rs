@@ -95,3 +95,12 @@ pub enum DataError {
     #[error(transparent)]
     TransferFunction(#[from] TransferFunctionError),
 }
+
+/// A header refused: the file, the field at fault and why.
+fn bad(file: &str, field: &str, why: String) -> DataError {
+    DataError::Header {
+        file: file.to_string(),
+        field: field.to_string(),
+        why,
+    }
+}

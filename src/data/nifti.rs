@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DMat4, DVec3, DVec4, Mat4, UVec3};
 
 use super::files;
-use super::stored::Stored;
-use super::DataError;
-use crate::scene::{StructuredVolume, MAX_VOXELS};
+use super::stored::{voxel_count, Stored};
+use super::{bad, DataError};
+use crate::scene::StructuredVolume;
 
 const NIFTI1_HEADER: usize = 348;
 const NIFTI2_HEADER: usize = 540;
@@ -309,14 +309,7 @@ pub fn parse_nifti_header(head: &[u8], path: &Path) -> Result<NiftiHeader, DataE
         ));
     }
     let dims3 = UVec3::from_array(size);
-    let voxels = u64::from(dims3.x)
-        .saturating_mul(u64::from(dims3.y))
-        .saturating_mul(u64::from(dims3.z));
-    if voxels > MAX_VOXELS {
-        return Err(DataError::TooManyVoxels {
-            dims: format!("{}x{}x{}", dims3.x, dims3.y, dims3.z),
-        });
-    }
+    voxel_count(dims3)?;
     let stored = match datatype {
         2 => Stored::U8,
         4 => Stored::I16,
@@ -559,14 +552,6 @@ fn read_up_to(reader: &mut dyn Read, buf: &mut [u8]) -> std::io::Result<usize> {
         }
     }
     Ok(got)
-}
-
-fn bad(file: &str, field: &str, why: String) -> DataError {
-    DataError::Header {
-        file: file.to_string(),
-        field: field.to_string(),
-        why,
-    }
 }
 
 fn short(file: &str, header: &NiftiHeader, bytes: u64, got: u64) -> DataError {

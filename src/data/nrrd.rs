@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 
 use glam::{DMat4, DVec3, Mat4, UVec3};
 
-use super::files;
-use super::stored::Stored;
-use super::DataError;
-use crate::scene::{StructuredVolume, MAX_VOXELS};
+use super::files::{self, find};
+use super::stored::{voxel_count, Stored};
+use super::{bad, DataError};
+use crate::scene::StructuredVolume;
 
 /// The most a header may hold.
 const HEADER_LIMIT: usize = 1 << 16;
@@ -268,14 +268,7 @@ pub fn parse_nrrd_header(head: &[u8], path: &Path) -> Result<(NrrdHeader, usize)
         size[k] = n as u32;
     }
     let dims = UVec3::from_array(size);
-    let voxels = u64::from(dims.x)
-        .saturating_mul(u64::from(dims.y))
-        .saturating_mul(u64::from(dims.z));
-    if voxels > MAX_VOXELS {
-        return Err(DataError::TooManyVoxels {
-            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
-        });
-    }
+    voxel_count(dims)?;
     let encoding = match need("encoding")? {
         "raw" => "raw",
         "gzip" | "gz" => "gzip",
@@ -425,16 +418,4 @@ fn vector(s: &str) -> Option<DVec3> {
         .map(|p| p.trim().parse().ok())
         .collect::<Option<_>>()?;
     (v.len() == 3).then(|| DVec3::new(v[0], v[1], v[2]))
-}
-
-fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
-    haystack.windows(needle.len()).position(|w| w == needle)
-}
-
-fn bad(file: &str, field: &str, why: String) -> DataError {
-    DataError::Header {
-        file: file.to_string(),
-        field: field.to_string(),
-        why,
-    }
 }

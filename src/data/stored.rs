@@ -9,7 +9,7 @@ use std::io::Read;
 use glam::{UVec3, Vec3};
 
 use super::DataError;
-use crate::scene::{Scaling, StructuredVolume, Voxels};
+use crate::scene::{Scaling, StructuredVolume, Voxels, MAX_VOXELS};
 
 /// The error of a buffer of `bytes` that cannot be had.
 pub fn out_of_memory(bytes: u64) -> std::io::Error {
@@ -37,6 +37,20 @@ pub fn inflate(compressed: &[u8], out: &mut Vec<u8>, want: usize) -> std::io::Re
         .take(want as u64)
         .read_to_end(out)?;
     Ok(())
+}
+
+/// The voxels of a grid of `dims`, refused past `MAX_VOXELS` before
+/// anything is allocated for them.
+pub fn voxel_count(dims: UVec3) -> Result<u64, DataError> {
+    let voxels = u64::from(dims.x)
+        .saturating_mul(u64::from(dims.y))
+        .saturating_mul(u64::from(dims.z));
+    if voxels > MAX_VOXELS {
+        return Err(DataError::TooManyVoxels {
+            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
+        });
+    }
+    Ok(voxels)
 }
 
 /// A stored scalar type.

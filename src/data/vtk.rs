@@ -12,12 +12,12 @@ use base64::Engine;
 use glam::{DMat3, DMat4, DVec3, UVec3, Vec3};
 use serde_json::Value;
 
-use super::files;
-use super::stored::{inflate, ZLIB_MAX_RATIO};
+use super::files::{self, find};
+use super::stored::{inflate, voxel_count, ZLIB_MAX_RATIO};
 use super::stored::{out_of_memory, Stored};
 use super::volume_file::VolumeFile;
-use super::{DataError, VolumeFormat};
-use crate::scene::{StructuredVolume, Voxels, MAX_VOXELS};
+use super::{bad, DataError, VolumeFormat};
+use crate::scene::{StructuredVolume, Voxels};
 
 /// Loads the VTK image data at `path`, legacy or XML as its content says.
 pub fn load_vtk(path: &Path) -> Result<VolumeFile, DataError> {
@@ -269,12 +269,7 @@ fn legacy_scalars<'a>(
             ));
         }
     }
-    let voxels = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
-    if voxels > MAX_VOXELS {
-        return Err(DataError::TooManyVoxels {
-            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
-        });
-    }
+    let voxels = voxel_count(dims)?;
     if count != voxels {
         return Err(field(
             "POINT_DATA",
@@ -614,12 +609,7 @@ fn xml(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
         *s = n as u32;
     }
     let dims = UVec3::from_array(size);
-    let voxels = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
-    if voxels > MAX_VOXELS {
-        return Err(DataError::TooManyVoxels {
-            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
-        });
-    }
+    let voxels = voxel_count(dims)?;
     let origin = numbers(image, "Origin", 3)?.map_or(DVec3::ZERO, |o| DVec3::from_slice(&o));
     let spacing = numbers(image, "Spacing", 3)?.map_or(DVec3::ONE, |s| DVec3::from_slice(&s));
     if spacing.cmpeq(DVec3::ZERO).any() {
@@ -990,16 +980,4 @@ fn array_bytes<'a>(
 /// The elements named `tag` in `node`.
 fn child<'a, 'i>(node: roxmltree::Node<'a, 'i>, tag: &str) -> Vec<roxmltree::Node<'a, 'i>> {
     node.children().filter(|n| n.has_tag_name(tag)).collect()
-}
-
-fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
-    haystack.windows(needle.len()).position(|w| w == needle)
-}
-
-fn bad(file: &str, field: &str, why: String) -> DataError {
-    DataError::Header {
-        file: file.to_string(),
-        field: field.to_string(),
-        why,
-    }
 }

@@ -21,10 +21,10 @@ use serde_json::Value;
 use self::dataset::DataSet;
 use super::files;
 use super::format::VolumeFormat;
-use super::stored::{out_of_memory, ZLIB_MAX_RATIO};
+use super::stored::{out_of_memory, voxel_count, ZLIB_MAX_RATIO};
 use super::volume_file::VolumeFile;
-use super::DataError;
-use crate::scene::{Scaling, StructuredVolume, Voxels, MAX_VOXELS};
+use super::{bad, DataError};
+use crate::scene::{Scaling, StructuredVolume, Voxels};
 
 /// The elements a slice is read from (group << 16 | element).
 mod tags {
@@ -496,12 +496,7 @@ fn assemble(
     slices.sort_by(|a, b| normal.dot(a.position).total_cmp(&normal.dot(b.position)));
     let depth = slices.len();
     let dims = UVec3::new(first.columns, first.rows, depth as u32);
-    let voxels = u64::from(dims.x) * u64::from(dims.y) * depth as u64;
-    if voxels > MAX_VOXELS {
-        return Err(DataError::TooManyVoxels {
-            dims: format!("{}x{}x{}", dims.x, dims.y, dims.z),
-        });
-    }
+    let voxels = voxel_count(dims)?;
     let along: Vec<f64> = slices.iter().map(|s| normal.dot(s.position)).collect();
     let step = if depth > 1 {
         let mut gaps: Vec<f64> = along.windows(2).map(|p| p[1] - p[0]).collect();
@@ -612,12 +607,4 @@ fn assemble(
         dtype,
         details,
     })
-}
-
-fn bad(file: &str, field: &str, why: String) -> DataError {
-    DataError::Header {
-        file: file.to_string(),
-        field: field.to_string(),
-        why,
-    }
 }
