@@ -8,7 +8,7 @@
 
 fn voxel(i: vec3i) -> f32 {
     let hi = vec3i(iso.dims.xyz) - vec3i(1);
-    return textureLoad(volume, clamp(i, vec3i(0), hi), 0).r;
+    return textureLoad(volume, clamp(i, vec3i(0), hi), 0).r * iso.texel_scale + iso.texel_offset;
 }
 
 fn last_vertex() -> vec3f {

@@ -53,7 +53,13 @@ fn background_at(pixel: vec2u) -> vec4f {
 
 var<private> samples: u32;
 
+// Volume v's texel i as the field's value: the texture holds the stored
+// numbers (normalised where they are integers), the slot the map back.
 fn voxel(v: u32, i: vec3i) -> f32 {
+    return texel(v, i) * params.volumes[v].texel_scale + params.volumes[v].texel_offset;
+}
+
+fn texel(v: u32, i: vec3i) -> f32 {
     if ONE_VOLUME {
         return textureLoad(volume0, i, 0).r;
     }
@@ -67,6 +73,26 @@ fn voxel(v: u32, i: vec3i) -> f32 {
         case 6u: { return textureLoad(volume6, i, 0).r; }
         default: { return textureLoad(volume7, i, 0).r; }
     }
+}
+
+// What to add to grid index i, and to the grid indices of the trilinear
+// cell whose low corner it is, to address volume v's texture: nothing for
+// a volume in one texture; for a bricked one, the offset of i's brick in
+// the atlas (brick k at atlas place k, both x fastest; on an axis cut
+// into several bricks, every brick's texels reach one voxel past its
+// side, so the whole cell is in them).
+fn brick_offset(v: u32, i: vec3i) -> vec3i {
+    if params.volumes[v].bricked == 0u {
+        return vec3i(0);
+    }
+    let side = vec3i(params.volumes[v].brick_side);
+    let b = i / side;
+    let n = (vec3i(params.volumes[v].dims) + side - 1) / side;
+    let texels = side + select(vec3i(0), vec3i(1), n > vec3i(1));
+    let k = b.x + n.x * (b.y + n.y * b.z);
+    let a = vec2i(params.volumes[v].atlas_bricks);
+    let place = vec3i(k % a.x, (k / a.x) % a.y, k / (a.x * a.y));
+    return place * texels - b * side;
 }
 
 // Grid coordinates of world point p in volume v.
@@ -90,14 +116,43 @@ fn contains(v: u32, g: vec3f) -> bool {
 }
 
 // Volume v at grid point g by the texture unit (vertex i is texel centre
-// i), from mip level `level` (0: full detail).
+// i), from mip level `level` (0: full detail; bricked volumes have no
+// coarser levels).
 fn filtered_value(v: u32, grid: vec3f, level: f32) -> f32 {
     let n = vec3f(params.volumes[v].dims);
-    let c = (clamp(grid, vec3f(0.0), n - 1.0) + 0.5) / n;
-    if level <= 0.0 {
-        return texture_value(v, linear, c, 0.0);
+    var g = clamp(grid, vec3f(0.0), n - 1.0);
+    var size = n;
+    var lod = level;
+    if params.volumes[v].bricked != 0u {
+        let i0 = min(vec3i(g), max(vec3i(n) - 2, vec3i(0)));
+        g += vec3f(brick_offset(v, i0));
+        size = vec3f(volume_size(v));
+        lod = 0.0;
     }
-    return texture_value(v, linear_mips, c, level);
+    let c = (g + 0.5) / size;
+    var t: f32;
+    if lod <= 0.0 {
+        t = texture_value(v, linear, c, 0.0);
+    } else {
+        t = texture_value(v, linear_mips, c, lod);
+    }
+    return t * params.volumes[v].texel_scale + params.volumes[v].texel_offset;
+}
+
+fn volume_size(v: u32) -> vec3u {
+    if ONE_VOLUME {
+        return textureDimensions(volume0);
+    }
+    switch v {
+        case 0u: { return textureDimensions(volume0); }
+        case 1u: { return textureDimensions(volume1); }
+        case 2u: { return textureDimensions(volume2); }
+        case 3u: { return textureDimensions(volume3); }
+        case 4u: { return textureDimensions(volume4); }
+        case 5u: { return textureDimensions(volume5); }
+        case 6u: { return textureDimensions(volume6); }
+        default: { return textureDimensions(volume7); }
+    }
 }
 
 // Volume v's texture at normalised coordinates c through sampler s.
@@ -138,11 +193,15 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
     let hi = vec3i(params.volumes[v].dims) - vec3i(1);
     let g = clamp(grid, vec3f(0.0), vec3f(hi));
     if params.volumes[v].sampling == FILTER_NEAREST {
-        return voxel(v, min(vec3i(floor(g + vec3f(0.5))), hi));
+        let i = min(vec3i(floor(g + vec3f(0.5))), hi);
+        return voxel(v, i + brick_offset(v, i));
     }
-    let i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
+    var i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
     let f = g - vec3f(i0);
-    let i1 = min(i0 + vec3i(1), hi);
+    var i1 = min(i0 + vec3i(1), hi);
+    let at = brick_offset(v, i0);
+    i0 += at;
+    i1 += at;
     let x00 = mix(voxel(v, vec3i(i0.x, i0.y, i0.z)), voxel(v, vec3i(i1.x, i0.y, i0.z)), f.x);
     let x10 = mix(voxel(v, vec3i(i0.x, i1.y, i0.z)), voxel(v, vec3i(i1.x, i1.y, i0.z)), f.x);
     let x01 = mix(voxel(v, vec3i(i0.x, i0.y, i1.z)), voxel(v, vec3i(i1.x, i0.y, i1.z)), f.x);

@@ -49,8 +49,7 @@ struct Grid<'a> {
 
 impl Grid<'_> {
     fn value(&self, p: UVec3) -> f32 {
-        let d = self.dims;
-        self.volume.value((p.x + d.x * (p.y + d.y * p.z)) as usize)
+        self.volume.value(self.index(p) as usize)
     }
 
     fn index(&self, p: UVec3) -> u64 {

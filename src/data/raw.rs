@@ -2,6 +2,7 @@ use std::path::Path;
 
 use glam::{UVec3, Vec3};
 
+use super::stored::Stored;
 use super::{files, DataError};
 use crate::scene::{StructuredVolume, Voxels, MAX_VOXELS};
 
@@ -87,17 +88,31 @@ pub fn raw_size(dims: UVec3, dtype: VoxelType) -> Result<u64, DataError> {
     Ok(voxels * dtype.bytes())
 }
 
-/// Loads a headerless little-endian raw volume, x fastest. A file whose
-/// size does not match `dims` and `dtype` is rejected with both numbers,
-/// before anything is read.
+/// Loads a headerless little-endian raw volume, x fastest, read straight
+/// into a buffer of its type (no copy of the file's bytes beside it). A
+/// file whose size does not match `dims` and `dtype` is rejected with
+/// both numbers, before anything is read.
 pub fn load_raw(
     path: &Path,
     dims: UVec3,
     dtype: VoxelType,
     spacing: Vec3,
 ) -> Result<StructuredVolume, DataError> {
-    let bytes = read_raw(path, dims, dtype)?;
-    decode_raw(&bytes, dims, dtype, spacing)
+    let name = path.display().to_string();
+    let io = |source| DataError::Io {
+        file: name.clone(),
+        source,
+    };
+    let (file, actual) = files::open_regular(path).map_err(io)?;
+    check_size(&name, dims, dtype, actual)?;
+    let (stored, slope) = match dtype {
+        VoxelType::U8 => (Stored::U8, 1.0 / 255.0),
+        VoxelType::U16 => (Stored::U16, 1.0 / 65535.0),
+        VoxelType::F32 => (Stored::F32, 1.0),
+    };
+    let mut reader = std::io::BufReader::new(file);
+    let volume = stored.read_grid(dims, &[], &mut reader, false, (slope, 0.0), &name)?;
+    Ok(volume.with_geometry(Vec3::ZERO, spacing)?)
 }
 
 /// The bytes of the raw file at `path`, which must be exactly the size

@@ -141,6 +141,12 @@ fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, re
             return Err("internal: a background render needs a scene and one view".into());
         };
         let r = renderer_for(renderer, inputs.backend, &say)?;
+        if let Some(why) = r
+            .upload_for(inputs.backend, scene)
+            .map_err(|e| e.to_string())?
+        {
+            say(Severity::Warning, why.to_string());
+        }
         let layers = if back.warp == WarpMode::Layers {
             WARP_LAYERS
         } else {
@@ -233,9 +239,16 @@ fn run(
                 inputs.settings.background_image.as_deref(),
             ));
         }
-        let r = renderer_for(renderer, inputs.backend, &|severity, message| {
-            report(note(severity, StatusCode::NoError, message))
-        })?;
+        let say = |severity, message| report(note(severity, StatusCode::NoError, message));
+        let r = renderer_for(renderer, inputs.backend, &say)?;
+        if let Some(scene) = &inputs.scene {
+            if let Some(why) = r
+                .upload_for(inputs.backend, scene)
+                .map_err(|e| e.to_string())?
+            {
+                say(Severity::Warning, why.to_string());
+            }
+        }
         if let Some(why) = inputs
             .scene
             .as_ref()

@@ -65,6 +65,17 @@ pub enum RenderError {
     OutOfMemory { bytes: u64, what: String },
 }
 
+impl RenderError {
+    /// Whether the scene is too large for this renderer (another may
+    /// render it).
+    pub fn is_size(&self) -> bool {
+        matches!(
+            self,
+            RenderError::VolumeTooLarge { .. } | RenderError::OutOfMemory { .. }
+        )
+    }
+}
+
 /// Why some primary rays of `scene` under `settings` stop before they
 /// have crossed it, if any would: the scene's diagonal takes more than
 /// MAX_STEPS_PER_RAY steps (one volume much finer than the scene is
@@ -124,6 +135,8 @@ pub enum AutoChoice {
     NoGpu(RenderError),
     /// The best adapter is this software one, slower than the CPU path.
     SoftwareAdapter(String),
+    /// The GPU cannot hold the scene.
+    TooLarge(RenderError),
 }
 
 impl std::fmt::Display for AutoChoice {
@@ -134,6 +147,7 @@ impl std::fmt::Display for AutoChoice {
                 f,
                 "the only Vulkan adapter is {name}, which runs on the CPU: the CPU renderer is faster here, so it renders (backend 'gpu' takes the adapter anyway)"
             ),
+            AutoChoice::TooLarge(e) => write!(f, "{e}; rendering on the CPU"),
         }
     }
 }
@@ -242,6 +256,23 @@ impl Renderer {
         match self {
             Renderer::Gpu(g) => g.upload(scene),
             Renderer::Cpu(_) => Ok(()),
+        }
+    }
+
+    /// [`Renderer::upload`], except that where `backend` is `Auto` and the
+    /// GPU cannot hold the scene (a volume past its textures or its
+    /// memory), this becomes the CPU renderer, which can, and says why.
+    pub fn upload_for(
+        &mut self,
+        backend: Backend,
+        scene: &Scene,
+    ) -> Result<Option<AutoChoice>, RenderError> {
+        match self.upload(scene) {
+            Err(e) if backend == Backend::Auto && e.is_size() => {
+                *self = Renderer::Cpu(CpuRenderer::new());
+                Ok(Some(AutoChoice::TooLarge(e)))
+            }
+            other => other.map(|()| None),
         }
     }
 

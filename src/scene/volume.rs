@@ -75,10 +75,11 @@ impl Scaling {
     }
 }
 
-/// The most voxels a volume may have: 2^31 (8 GiB as the renderers' f32),
-/// beyond any GPU's 3D texture limit and what a workstation should hold
-/// twice.
-pub const MAX_VOXELS: u64 = 1 << 31;
+/// The most voxels a volume may have: 2^32 (4 GiB as uint8, 8 GiB as
+/// uint16, 16 GiB as float32). Every index into a grid is a usize or u64;
+/// the AVX2 packet gathers, which index in i32, take grids of fewer than
+/// 2^31 voxels and leave larger ones to the scalar path.
+pub const MAX_VOXELS: u64 = 1 << 32;
 
 #[derive(Debug, Error, PartialEq)]
 pub enum VolumeError {
@@ -160,12 +161,6 @@ impl StructuredVolume {
                 got: voxels.len(),
             });
         }
-        if !spacing.is_finite() || spacing.min_element() <= 0.0 {
-            return Err(VolumeError::BadSpacing { spacing });
-        }
-        if !origin.is_finite() {
-            return Err(VolumeError::BadOrigin { origin });
-        }
         if let Voxels::F32(v) = &voxels {
             if let Some(index) = v.iter().position(|x| !x.is_finite()) {
                 return Err(VolumeError::NonFiniteVoxel { index });
@@ -176,15 +171,30 @@ impl StructuredVolume {
                 let v = voxels.stored(i);
                 (lo.min(v), hi.max(v))
             });
-        Ok(Self {
+        Self {
             dims,
             scaling: voxels.fixed_point(),
             voxels: Arc::new(voxels),
-            origin,
-            spacing,
+            origin: Vec3::ZERO,
+            spacing: Vec3::ONE,
             stored_range,
             filter: Filter::Linear,
-        })
+        }
+        .with_geometry(origin, spacing)
+    }
+
+    /// The same grid with its first voxel at `origin` and voxels
+    /// `spacing` apart.
+    pub fn with_geometry(mut self, origin: Vec3, spacing: Vec3) -> Result<Self, VolumeError> {
+        if !spacing.is_finite() || spacing.min_element() <= 0.0 {
+            return Err(VolumeError::BadSpacing { spacing });
+        }
+        if !origin.is_finite() {
+            return Err(VolumeError::BadOrigin { origin });
+        }
+        self.origin = origin;
+        self.spacing = spacing;
+        Ok(self)
     }
 
     /// The same grid with its stored numbers read through `scaling`

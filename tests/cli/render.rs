@@ -230,7 +230,7 @@ fn bad_arguments_are_one_line_errors() {
         ),
         (
             vec!["--volume", r, "--dims", "4294967295,4294967295,4294967295"],
-            "more than caveray loads (2147483648 voxels at most)",
+            "more than caveray loads (4294967296 voxels at most)",
         ),
     ];
     for (extra, needle) in cases {

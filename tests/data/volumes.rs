@@ -421,7 +421,7 @@ fn sizes_that_overflow_or_exceed_the_budget_are_refused_before_reading() {
         let err = load_raw(&empty, dims, VoxelType::F32, Vec3::ONE).unwrap_err();
         assert!(matches!(err, DataError::TooManyVoxels { .. }), "{err}");
         assert!(
-            err.to_string().contains("2147483648 voxels at most"),
+            err.to_string().contains("4294967296 voxels at most"),
             "{err}"
         );
     }

@@ -6,6 +6,7 @@
 mod common;
 
 mod autostereo;
+mod bricks;
 mod empty_space;
 mod errors;
 mod fast_path;

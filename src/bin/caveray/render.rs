@@ -261,9 +261,12 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     let mut renderer = args.render.renderer()?;
 
     let start = Instant::now();
-    renderer
-        .upload(&scene)
+    let fell_back = renderer
+        .upload_for(args.render.backend, &scene)
         .map_err(|e| Failure::Runtime(e.to_string()))?;
+    if let Some(why) = fell_back {
+        eprintln!("caveray: {why}");
+    }
     let upload_ms = start.elapsed().as_secs_f64() * 1e3;
 
     let views = rig.views(&head);

@@ -210,6 +210,12 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
     if let Some(why) = why {
         eprintln!("caveray: {why}");
     }
+    if let Some(why) = renderer
+        .upload_for(args.backend, &scene)
+        .map_err(|e| runtime(&e))?
+    {
+        eprintln!("caveray: {why}");
+    }
     let renderer_name = renderer.describe();
     eprintln!("caveray: rendering on {renderer_name}");
     std::fs::create_dir_all(&args.out)

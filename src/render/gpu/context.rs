@@ -8,7 +8,6 @@ use serde::Serialize;
 
 use crate::render::frame::FrameDesc;
 use crate::render::{RenderError, Watch};
-use crate::scene::Scene;
 
 /// Invocations per workgroup along x and y.
 pub(super) const WORKGROUP: u32 = 8;
@@ -65,6 +64,15 @@ pub(super) struct Context {
     pub limits: wgpu::Limits,
     /// Whether 32-bit float textures can be filtered (filtered sampling).
     pub filterable: bool,
+    /// Whether 16-bit normalised textures exist: 16-bit volumes keep two
+    /// bytes a voxel where they do, and take four (as floats) where not.
+    pub norm16: bool,
+    /// Bricks of this many texels a side for every volume, where the
+    /// renderer was told so; otherwise only volumes longer than the
+    /// adapter's 3D texture limit are bricked.
+    pub brick_texels: Option<u32>,
+    /// Bytes the scene's volume textures may take together, where set.
+    pub memory_budget: Option<u64>,
     errors: Arc<Mutex<Vec<String>>>,
     timestamps: Option<Timestamps>,
 }
@@ -99,6 +107,14 @@ impl Context {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::VULKAN,
             flags: wgpu::InstanceFlags::empty().with_env(),
+            // A texture past 90% of the memory budget the driver reports
+            // (VK_EXT_memory_budget) is refused as out of memory before
+            // it is allocated, instead of failing, or losing the device,
+            // as it is.
+            memory_budget_thresholds: wgpu::MemoryBudgetThresholds {
+                for_resource_creation: Some(90),
+                for_device_loss: None,
+            },
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
         pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
@@ -121,7 +137,9 @@ impl Context {
         };
         // Filtered sampling reads R32Float volumes and RGBA32Float tables
         // through a linear sampler.
-        let features = timing | (adapter.features() & wgpu::Features::FLOAT32_FILTERABLE);
+        let features = timing
+            | (adapter.features()
+                & (wgpu::Features::FLOAT32_FILTERABLE | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM));
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("caveray"),
             required_limits: limits.clone(),
@@ -161,8 +179,11 @@ impl Context {
             device,
             queue,
             info,
+            brick_texels: None,
+            memory_budget: None,
             limits,
             filterable: features.contains(wgpu::Features::FLOAT32_FILTERABLE),
+            norm16: features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM),
             errors,
             timestamps,
         })
@@ -294,21 +315,10 @@ impl Context {
         }
     }
 
-    /// Fails, before touching the GPU, if the scene or frame exceeds what
-    /// this adapter allows.
-    pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
+    /// Fails, before touching the GPU, if the frame exceeds what this
+    /// adapter allows.
+    pub fn check_frame(&self, desc: &FrameDesc) -> Result<(), RenderError> {
         let limits = &self.limits;
-        let max = limits.max_texture_dimension_3d;
-        for placed in scene.volumes() {
-            let dims = placed.volume.dims();
-            if dims.max_element() > max {
-                return Err(RenderError::VolumeTooLarge {
-                    dims: [dims.x, dims.y, dims.z],
-                    max,
-                    adapter: self.info.name.clone(),
-                });
-            }
-        }
         let pixels = u64::from(desc.size.x) * u64::from(desc.size.y);
         let bytes = pixels * desc.color.bytes_per_pixel();
         let max_bytes = limits

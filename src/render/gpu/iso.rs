@@ -13,10 +13,11 @@ use super::raycast::RaycastPass;
 use super::resources::{color_data, floats, OutputBuffers};
 use super::shaders::compute_pipeline;
 use super::uniforms::Iso;
+use super::volume_texture::VolumeTexture;
 use crate::geometry::RayGen;
 use crate::render::iso::{crossing_box, Coloring, IsoFilter, IsoSettings, MultiViewMethod};
 use crate::render::{Frame, FrameDesc, RenderError, Watch};
-use crate::scene::PlacedVolume;
+use crate::scene::{PlacedVolume, Scaling};
 
 binding_table! {
     /// Group 0 of every isosurface pass.
@@ -146,7 +147,7 @@ impl IsoPass {
     pub fn cast_display(
         &mut self,
         ctx: &Context,
-        volume: &wgpu::TextureView,
+        volume: &VolumeTexture,
         placed: &PlacedVolume,
         first: &RayGen,
         rays: Vec<[f32; 4]>,
@@ -225,7 +226,7 @@ impl IsoPass {
     pub fn cast(
         &mut self,
         ctx: &Context,
-        volume: &wgpu::TextureView,
+        volume: &VolumeTexture,
         placed: &PlacedVolume,
         rays: &RayGen,
         desc: &FrameDesc,
@@ -252,12 +253,12 @@ impl IsoPass {
             }
         };
         let target = self.target.as_ref().ok_or_else(unprepared)?;
-        let uniform = uniform(placed, rays, desc, settings, bounds);
+        let uniform = uniform(placed, volume.to_value, rays, desc, settings, bounds);
         ctx.queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let group = IsoResources {
             iso: self.uniform.as_entire_binding(),
-            volume: wgpu::BindingResource::TextureView(volume),
+            volume: wgpu::BindingResource::TextureView(&volume.view),
             color_out: target.color.as_entire_binding(),
             depth_out: target.depth.as_entire_binding(),
         }
@@ -325,6 +326,7 @@ impl IsoPass {
 
 fn uniform(
     placed: &PlacedVolume,
+    to_value: Scaling,
     rays: &RayGen,
     desc: &FrameDesc,
     s: &IsoSettings,
@@ -365,6 +367,8 @@ fn uniform(
         curvature,
         radius,
         color_format: desc.color.code(),
+        texel_scale: to_value.slope,
+        texel_offset: to_value.intercept,
         ..Iso::zeroed()
     }
 }

@@ -19,6 +19,7 @@ mod resources;
 mod scene;
 mod shaders;
 mod uniforms;
+mod volume_texture;
 mod warp;
 
 use std::sync::atomic::AtomicBool;
@@ -125,10 +126,39 @@ impl GpuRenderer {
         self.scene.uploads()
     }
 
+    /// Every volume in bricks of `texels` a side from now on (None: only
+    /// those longer than the adapter's 3D texture limit, in bricks of
+    /// 64): lets tests and benchmarks brick volumes small enough to
+    /// compare with a whole texture. Volumes on the GPU are uploaded
+    /// again.
+    pub fn brick_every_volume(&mut self, texels: Option<u32>) {
+        self.ctx.brick_texels = texels;
+        self.scene.forget_volumes();
+    }
+
+    /// At most `bytes` of volume textures from now on (None: as many as
+    /// the adapter allocates): a scene past it is refused before anything
+    /// is allocated, and `Backend::Auto` renders it on the CPU.
+    pub fn set_memory_budget(&mut self, bytes: Option<u64>) {
+        self.ctx.memory_budget = bytes;
+    }
+
+    /// Whether 16-bit volumes sit in 16-bit textures here (else in
+    /// 32-bit floats).
+    pub fn has_16bit_textures(&self) -> bool {
+        self.ctx.norm16
+    }
+
+    /// Bytes the current scene's volume textures hold on the GPU.
+    pub fn volume_bytes(&self) -> u64 {
+        self.scene.volume_bytes()
+    }
+
     /// Fails, before touching the GPU, if the scene or frame exceeds what
     /// this adapter allows.
     pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
-        self.ctx.check_limits(scene, desc)
+        volume_texture::check_scene(&self.ctx, scene)?;
+        self.ctx.check_frame(desc)
     }
 
     /// Checks the frame against the adapter, uploads what changed and
@@ -143,7 +173,8 @@ impl GpuRenderer {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
         let ctx = &self.ctx;
-        ctx.check_limits(scene, desc)?;
+        volume_texture::check_scene(ctx, scene)?;
+        ctx.check_frame(desc)?;
         if plan.skipping {
             self.scene.find_clear_bricks(ctx, scene, &plan)?;
         }
@@ -154,7 +185,7 @@ impl GpuRenderer {
         if filtered && settings.level_of_detail > 0.0 {
             self.scene.use_mips();
         }
-        self.scene.upload(ctx, scene);
+        self.scene.upload(ctx, scene)?;
         self.scene.upload_surfaces(ctx, scene)?;
         self.scene
             .set_background(ctx, settings.background_image.as_ref());
@@ -162,8 +193,10 @@ impl GpuRenderer {
         if filtered {
             self.scene.write_stepped_tables(ctx, scene, &plan);
         }
+        let textures = self.scene.texture_slots();
         let slots = (
             self.scene.brick_slots(plan.skipping),
+            &textures[..],
             self.scene.surface_slot(),
         );
         self.raycast
@@ -176,7 +209,7 @@ impl GpuRenderer {
     /// uploads apart from frames.
     pub fn upload(&mut self, scene: &Scene) -> Result<(), RenderError> {
         self.check_limits(scene, &FrameDesc::new(UVec2::ONE))?;
-        self.scene.upload(&self.ctx, scene);
+        self.scene.upload(&self.ctx, scene)?;
         self.ctx.queue.submit([]);
         self.ctx.wait()?;
         self.ctx.check()
@@ -444,8 +477,16 @@ impl GpuRenderer {
         settings.validate()?;
         let scene = Scene::placed(vec![placed.clone()])
             .map_err(|e| RenderError::Settings(e.to_string()))?;
-        self.ctx.check_limits(&scene, desc)?;
-        self.scene.upload(&self.ctx, &scene);
+        self.check_limits(&scene, desc)?;
+        let dims = placed.volume.dims();
+        let max = self.ctx.limits.max_texture_dimension_3d;
+        if dims.max_element() > max || self.ctx.brick_texels.is_some() {
+            return Err(RenderError::Settings(format!(
+                "isosurfaces on the GPU read a volume from one texture, and this {}x{}x{} volume is bricked (textures on {} hold {max} texels a side): cast it on the CPU",
+                dims.x, dims.y, dims.z, self.ctx.info.name
+            )));
+        }
+        self.scene.upload(&self.ctx, &scene)?;
         if self.iso.is_none() {
             self.iso = Some(IsoPass::new(&self.ctx, &self.raycast)?);
         }

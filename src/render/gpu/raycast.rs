@@ -16,6 +16,7 @@ use super::resources::{color_data, floats, BrickSlot, OutputBuffers, SurfaceSlot
 use super::scene::GpuScene;
 use super::shaders::compute_pipeline;
 use super::uniforms::{self, RayUniforms};
+use super::volume_texture::TextureSlot;
 use crate::geometry::RayGen;
 use crate::render::frame::{Frame, FrameDesc};
 use crate::render::hits::{self, HitRecord};
@@ -321,7 +322,7 @@ impl RaycastPass {
         ctx: &Context,
         rays: &RayGen,
         (plan, settings): (&MarchPlan, &RenderSettings),
-        slots: (&[BrickSlot], SurfaceSlot),
+        slots: (&[BrickSlot], &[TextureSlot], SurfaceSlot),
         desc: &FrameDesc,
     ) {
         let params = RayUniforms::new(rays, plan, slots, settings, desc);

@@ -1,8 +1,8 @@
-//! What the passes upload and read back: volume textures with their mip
-//! chains, transfer function tables, background images, clear-brick
-//! distances, surfaces, and the frame's output buffers.
+//! What the passes upload and read back, volumes aside (volume_texture.rs):
+//! transfer function tables, background images, clear-brick distances,
+//! surfaces, and the frame's output buffers.
 
-use glam::{UVec2, UVec3};
+use glam::UVec2;
 
 use wgpu::util::DeviceExt;
 
@@ -12,141 +12,7 @@ use crate::render::frame::{ColorData, ColorFormat, FrameDesc};
 use crate::render::hits::HIT_WORDS;
 use crate::render::shapes::packed::Packed;
 use crate::render::{BackgroundImage, RenderError};
-use crate::scene::{StructuredVolume, TransferFunction, MAX_VOLUMES, TABLE_SIZE};
-
-/// Slices per write when uploading a volume, so staging memory stays
-/// bounded (about 64 MiB) however large the volume is.
-const UPLOAD_BYTES: u64 = 64 << 20;
-
-/// The volume as an R32Float 3D texture holding normalised values, with
-/// its mip chain where `mips` (level of detail).
-pub(super) fn upload_volume(
-    ctx: &Context,
-    volume: &StructuredVolume,
-    mips: bool,
-) -> wgpu::TextureView {
-    let levels = if mips { LOD_LEVELS } else { 1 };
-    volume_texture(ctx, volume.dims(), levels, |i| volume.value(i))
-}
-
-/// A 1 x 1 x 1 volume bound in the slots a scene leaves empty.
-pub(super) fn stand_in_volume(ctx: &Context) -> wgpu::TextureView {
-    volume_texture(ctx, UVec3::ONE, 1, |_| 0.0)
-}
-
-/// Mip levels of a volume texture at most (level of detail): full
-/// resolution and three halvings.
-pub(super) const LOD_LEVELS: u32 = 4;
-
-/// An R32Float 3D texture of `dims` holding `value(i)` at voxel i (x
-/// fastest), written a bounded slab at a time, with its mip chain (each
-/// level the mean of the 2 x 2 x 2 texels below it, as the texture unit
-/// expects).
-fn volume_texture(
-    ctx: &Context,
-    dims: UVec3,
-    levels: u32,
-    value: impl Fn(usize) -> f32,
-) -> wgpu::TextureView {
-    let size = wgpu::Extent3d {
-        width: dims.x,
-        height: dims.y,
-        depth_or_array_layers: dims.z,
-    };
-    let levels = levels.min(32 - dims.max_element().leading_zeros());
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("volume"),
-        size,
-        mip_level_count: levels,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D3,
-        format: wgpu::TextureFormat::R32Float,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let slice_voxels = dims.x as usize * dims.y as usize;
-    let slices_per_write = (UPLOAD_BYTES / (4 * slice_voxels as u64)).max(1) as u32;
-    let mut z = 0;
-    while z < dims.z {
-        let n = slices_per_write.min(dims.z - z);
-        let first = z as usize * slice_voxels;
-        let bytes: Vec<u8> = (first..first + n as usize * slice_voxels)
-            .flat_map(|i| value(i).to_le_bytes())
-            .collect();
-        ctx.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d { x: 0, y: 0, z },
-                aspect: wgpu::TextureAspect::All,
-            },
-            &bytes,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * dims.x),
-                rows_per_image: Some(dims.y),
-            },
-            wgpu::Extent3d {
-                depth_or_array_layers: n,
-                ..size
-            },
-        );
-        z += n;
-    }
-    let mut below: Option<(UVec3, Vec<f32>)> = None;
-    for level in 1..levels {
-        let (from, values) = match &below {
-            Some((d, v)) => (*d, halve(*d, |i| v[i])),
-            None => (dims, halve(dims, &value)),
-        };
-        let to = (from / 2).max(UVec3::ONE);
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        ctx.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: level,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            &bytes,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * to.x),
-                rows_per_image: Some(to.y),
-            },
-            wgpu::Extent3d {
-                width: to.x,
-                height: to.y,
-                depth_or_array_layers: to.z,
-            },
-        );
-        below = Some((to, values));
-    }
-    texture.create_view(&Default::default())
-}
-
-/// The next mip level of a grid of `dims`: dims / 2 (at least 1) texels,
-/// each the mean of the 2 x 2 x 2 below it (edges clamped).
-fn halve(dims: UVec3, value: impl Fn(usize) -> f32) -> Vec<f32> {
-    let to = (dims / 2).max(UVec3::ONE);
-    let at = |x: u32, y: u32, z: u32| {
-        let (x, y, z) = (x.min(dims.x - 1), y.min(dims.y - 1), z.min(dims.z - 1));
-        value(x as usize + dims.x as usize * (y as usize + dims.y as usize * z as usize))
-    };
-    let mut out = Vec::with_capacity((to.x * to.y * to.z) as usize);
-    for z in 0..to.z {
-        for y in 0..to.y {
-            for x in 0..to.x {
-                let mut sum = 0.0;
-                for (dx, dy, dz) in (0..8).map(|k| (k & 1, (k >> 1) & 1, k >> 2)) {
-                    sum += at(2 * x + dx, 2 * y + dy, 2 * z + dz);
-                }
-                out.push(sum / 8.0);
-            }
-        }
-    }
-    out
-}
+use crate::scene::{TransferFunction, MAX_VOLUMES, TABLE_SIZE};
 
 /// Where one volume's clear-brick distances lie in the bricks buffer.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -445,32 +311,4 @@ pub(super) fn floats(bytes: &[u8]) -> Vec<f32> {
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_mip_level_is_the_mean_of_the_texels_below_it() {
-        let dims = UVec3::new(4, 2, 3);
-        let value = |i: usize| i as f32;
-        let half = halve(dims, value);
-        // 2 x 1 x 1 texels; the odd z layer is clamped into the last pair.
-        assert_eq!(half.len(), 2);
-        let mean = |xs: [usize; 8]| xs.iter().map(|&i| i as f32).sum::<f32>() / 8.0;
-        let at = |x: usize, y: usize, z: usize| x + 4 * (y + 2 * z);
-        let first = [
-            at(0, 0, 0),
-            at(1, 0, 0),
-            at(0, 1, 0),
-            at(1, 1, 0),
-            at(0, 0, 1),
-            at(1, 0, 1),
-            at(0, 1, 1),
-            at(1, 1, 1),
-        ];
-        assert_eq!(half[0], mean(first));
-        assert_eq!(halve(UVec3::ONE, |_| 7.0), vec![7.0]);
-    }
 }

@@ -9,6 +9,7 @@ use std::sync::Arc;
 
 use super::context::Context;
 use super::resources::{self, BrickSlot, SurfaceSlot};
+use super::volume_texture::{self, TextureSlot, VolumeTexture};
 use crate::render::empty_space::{EmptySpace, SpaceCache};
 use crate::render::march_plan::MarchPlan;
 use crate::render::shapes::ShapeSet;
@@ -31,7 +32,7 @@ pub(super) struct GpuScene {
     /// them faster, so full detail does not pay for them before).
     mips: bool,
     /// The scene's volumes on the GPU, in its order.
-    volumes: Vec<(Arc<StructuredVolume>, wgpu::TextureView)>,
+    volumes: Vec<(Arc<StructuredVolume>, VolumeTexture)>,
     /// Bound where a scene has fewer than MAX_VOLUMES volumes.
     no_volume: wgpu::TextureView,
     /// One row per volume slot; which transfer function each row holds.
@@ -64,7 +65,7 @@ pub(super) struct GpuScene {
 impl GpuScene {
     pub fn new(ctx: &Context) -> Self {
         let no_background = resources::upload_background(ctx, None);
-        let no_volume = resources::stand_in_volume(ctx);
+        let no_volume = volume_texture::stand_in(ctx);
         let table = resources::table_texture(ctx);
         let table_view = table.create_view(&Default::default());
         let (bricks, _) = resources::bricks_buffer(ctx, &[]);
@@ -103,12 +104,14 @@ impl GpuScene {
 
     /// Volume slot `i`'s texture (the stand-in past the scene's volumes).
     pub fn volume(&self, i: usize) -> &wgpu::TextureView {
-        self.volumes.get(i).map_or(&self.no_volume, |(_, v)| v)
+        self.volumes
+            .get(i)
+            .map_or(&self.no_volume, |(_, t)| &t.view)
     }
 
     /// The first volume's texture, if the scene has one.
-    pub fn first_volume(&self) -> Option<&wgpu::TextureView> {
-        self.volumes.first().map(|(_, v)| v)
+    pub fn first_volume(&self) -> Option<&VolumeTexture> {
+        self.volumes.first().map(|(_, t)| t)
     }
 
     pub fn table_view(&self) -> &wgpu::TextureView {
@@ -159,6 +162,12 @@ impl GpuScene {
         }
     }
 
+    /// Drops the volume textures: the next upload makes them again.
+    pub fn forget_volumes(&mut self) {
+        self.volumes.clear();
+        self.generation += 1;
+    }
+
     /// From now on volumes carry their mip chains: those on the GPU are
     /// uploaded again on the next upload.
     pub fn use_mips(&mut self) {
@@ -172,7 +181,7 @@ impl GpuScene {
     /// Uploads whatever of the scene is not on the GPU (a new volume
     /// texture changes the generation; tables are rows of one texture,
     /// rewritten in place).
-    pub fn upload(&mut self, ctx: &Context, scene: &Scene) {
+    pub fn upload(&mut self, ctx: &Context, scene: &Scene) -> Result<(), RenderError> {
         let mut volumes = Vec::with_capacity(scene.volumes().len());
         for placed in scene.volumes() {
             // A grid placed twice is one texture.
@@ -180,12 +189,20 @@ impl GpuScene {
                 .iter()
                 .chain(&self.volumes)
                 .find(|(v, _)| Arc::ptr_eq(v, &placed.volume))
-                .map(|(_, view)| view.clone());
-            let view = kept.unwrap_or_else(|| {
-                self.uploads.volumes += 1;
-                resources::upload_volume(ctx, &placed.volume, self.mips)
-            });
-            volumes.push((Arc::clone(&placed.volume), view));
+                .map(|(_, texture)| texture.clone());
+            let texture = match kept {
+                Some(t) => t,
+                None => {
+                    // Textures no longer in the scene go before new ones
+                    // are made, so that replacing a large volume does not
+                    // need room for both.
+                    self.volumes
+                        .retain(|(v, _)| scene.volumes().iter().any(|p| Arc::ptr_eq(v, &p.volume)));
+                    self.uploads.volumes += 1;
+                    volume_texture::upload(ctx, &placed.volume, self.mips)?
+                }
+            };
+            volumes.push((Arc::clone(&placed.volume), texture));
         }
         let changed = volumes.len() != self.volumes.len()
             || volumes
@@ -204,6 +221,23 @@ impl GpuScene {
         if changed {
             self.generation += 1;
         }
+        Ok(())
+    }
+
+    /// How the shaders read each of the scene's volume textures.
+    pub fn texture_slots(&self) -> Vec<TextureSlot> {
+        self.volumes.iter().map(|(_, t)| t.slot()).collect()
+    }
+
+    /// Bytes the scene's volume textures hold on the GPU, each texture
+    /// once.
+    pub fn volume_bytes(&self) -> u64 {
+        let v = &self.volumes;
+        v.iter()
+            .enumerate()
+            .filter(|(i, (a, _))| !v[..*i].iter().any(|(b, _)| Arc::ptr_eq(a, b)))
+            .map(|(_, (_, t))| t.bytes)
+            .sum()
     }
 
     /// Binds `background` (or the stand-in), uploading it if it is not the

@@ -16,7 +16,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::context::WORKGROUP;
-use super::resources::{pixel_words, BrickSlot, SurfaceSlot, LOD_LEVELS};
+use super::resources::{pixel_words, BrickSlot, SurfaceSlot};
+use super::volume_texture::{TextureSlot, LOD_LEVELS};
 use crate::geometry::RayGen;
 use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::{ColorFormat, FrameDesc};
@@ -124,6 +125,16 @@ uniform! {
         brick_offset: u32,
         /// Bricks per axis (render::empty_space).
         bricks: [u32; 3],
+        /// Texel to field value: value = texel * scale + offset.
+        texel_scale: f32,
+        texel_offset: f32,
+        /// 1: the texture is an atlas of bricks.
+        bricked: u32,
+        /// Bricks per row and column of the atlas.
+        atlas_bricks: [u32; 2],
+        /// Voxels a brick covers per axis (its texels hold one more on
+        /// the axes cut into several bricks).
+        brick_side: [u32; 3],
         _pad: u32,
     }
 }
@@ -375,12 +386,18 @@ uniform! {
         curvature: u32,
         radius: f32,
         color_format: u32,
-        _pad: u32,
+        /// Texel to field value: value = texel * scale + offset.
+        texel_scale: f32,
+        texel_offset: f32,
+        _pad: [u32; 3],
     }
 }
 
 impl VolumeSlot {
-    fn new(plan: &VolumePlan, bricks: BrickSlot) -> Self {
+    fn new(plan: &VolumePlan, bricks: BrickSlot, texture: TextureSlot) -> Self {
+        let (brick_side, atlas_bricks) = texture.bricking.map_or(([1; 3], [1; 2]), |b| {
+            (b.side.to_array(), b.atlas.to_array())
+        });
         let [x, y, z] = plan.world_to_grid.map(|r| r.to_array());
         Self {
             world_to_grid_x: x,
@@ -393,6 +410,11 @@ impl VolumeSlot {
             inv_unit_distance: plan.inv_unit_distance,
             brick_offset: bricks.offset,
             bricks: bricks.bricks,
+            texel_scale: texture.to_value.slope,
+            texel_offset: texture.to_value.intercept,
+            bricked: u32::from(texture.bricking.is_some()),
+            atlas_bricks,
+            brick_side,
             _pad: 0,
         }
     }
@@ -400,12 +422,12 @@ impl VolumeSlot {
 
 impl RayUniforms {
     /// `bricks`: each volume's place in the bricks buffer, when `plan`
-    /// skips; `surfaces`: the surfaces buffer's parts, lit as `settings`
-    /// say.
+    /// skips; `textures`: how each volume's texture is read; `surfaces`:
+    /// the surfaces buffer's parts, lit as `settings` say.
     pub fn new(
         rays: &RayGen,
         plan: &MarchPlan,
-        (bricks, surfaces): (&[BrickSlot], SurfaceSlot),
+        (bricks, textures, surfaces): (&[BrickSlot], &[TextureSlot], SurfaceSlot),
         settings: &RenderSettings,
         desc: &FrameDesc,
     ) -> Self {
@@ -417,7 +439,11 @@ impl RayUniforms {
         }
         let mut volumes = [VolumeSlot::default(); MAX_VOLUMES];
         for (i, (slot, volume)) in volumes.iter_mut().zip(&plan.volumes).enumerate() {
-            *slot = VolumeSlot::new(volume, bricks.get(i).copied().unwrap_or_default());
+            *slot = VolumeSlot::new(
+                volume,
+                bricks.get(i).copied().unwrap_or_default(),
+                textures.get(i).copied().unwrap_or_default(),
+            );
         }
         let skipping = plan.skipping && bricks.len() == plan.volumes.len();
         Self {
