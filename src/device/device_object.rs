@@ -20,6 +20,9 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
           "auto | gpu | cpu: the Vulkan ray caster, the CPU renderer, or a hardware GPU when one opens \
            and the CPU otherwise (default auto, or $CAVERAY_BACKEND)")
         .names(&Backend::NAMES),
+        p("caveray.memoryBudget", &[T::UINT64], false, DefaultValue::None,
+          "bytes of volume textures the GPU may hold (unset or 0: what its driver allows); a world past \
+           it is refused before anything is allocated, and backend auto renders it on the CPU"),
         p("pairStereoFrames", &[T::BOOL], false, DefaultValue::Bool(true),
           "render two frames that show the eyes of one wall in one re-projection pass when the first \
            renders, keeping the second's image for its render (ANARI_CAVERAY_FRAME_STEREO_PAIR)"),

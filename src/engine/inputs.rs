@@ -89,6 +89,9 @@ pub struct Inputs {
     pub settings: RenderSettings,
     pub desc: FrameDesc,
     pub backend: Backend,
+    /// Bytes of volume textures the GPU may hold (the device's
+    /// `caveray.memoryBudget`); None: what the driver allows.
+    pub gpu_budget: Option<u64>,
     /// The host set the frame's `accumulation`: renders of unchanged
     /// inputs refine the image (src/engine/accumulation.rs).
     pub accumulate: bool,
@@ -112,6 +115,7 @@ impl PartialEq for Inputs {
             && self.settings == other.settings
             && self.desc == other.desc
             && self.backend == other.backend
+            && self.gpu_budget == other.gpu_budget
             && self.accumulate == other.accumulate
     }
 }

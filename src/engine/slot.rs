@@ -8,7 +8,7 @@ use std::time::Duration;
 use super::accumulation::Accumulated;
 use super::inputs::Inputs;
 use crate::render::warp::WarpMode;
-use crate::render::Frame;
+use crate::render::{Frame, Residency};
 
 /// What a render that was stopped leaves in its frame.
 pub const DISCARDED: &str = "the render was discarded (anariDiscardFrame)";
@@ -60,6 +60,8 @@ pub struct SlotState {
     pub samples: u32,
     /// What a deadline frame showed; `None` for a whole render.
     pub shown: Option<ShownImage>,
+    /// What the last render's volumes hold in memory, once one ran.
+    pub resident: Option<Residency>,
     /// The samples of a refined image (accumulation), once it has more
     /// than its first.
     accumulated: Option<Accumulated>,

@@ -141,6 +141,7 @@ fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, re
             return Err("internal: a background render needs a scene and one view".into());
         };
         let r = renderer_for(renderer, inputs.backend, &say)?;
+        r.set_gpu_budget(inputs.gpu_budget);
         if let Some(why) = r
             .upload_for(inputs.backend, scene)
             .map_err(|e| e.to_string())?
@@ -241,6 +242,7 @@ fn run(
         }
         let say = |severity, message| report(note(severity, StatusCode::NoError, message));
         let r = renderer_for(renderer, inputs.backend, &say)?;
+        r.set_gpu_budget(inputs.gpu_budget);
         if let Some(scene) = &inputs.scene {
             if let Some(why) = r
                 .upload_for(inputs.backend, scene)
@@ -256,12 +258,16 @@ fn run(
         {
             report(note(Severity::Warning, StatusCode::NoError, why));
         }
-        match (&inputs.views, &inputs.scene) {
+        let frame = match (&inputs.views, &inputs.scene) {
             (Views::Panel(panel), _) => render_panel(r, &job, panel, kept),
             (_, Some(scene)) => render_views(r, scene, &job, report, &mut handed, costs),
             (_, None) => render_surface_views(r, &job),
         }
-        .map_err(|e| e.to_string())
+        .map_err(|e| e.to_string())?;
+        if let Some(scene) = &inputs.scene {
+            job.slot.lock().resident = Some(r.resident_bytes(scene));
+        }
+        Ok(frame)
     }))
     .unwrap_or_else(|panic| {
         *renderer = None;

@@ -18,6 +18,7 @@ pub mod stereo;
 pub mod warp;
 
 use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 use thiserror::Error;
 
@@ -126,6 +127,13 @@ impl std::str::FromStr for Backend {
             _ => Err(format!("unknown backend '{s}'; expected auto, gpu or cpu")),
         }
     }
+}
+
+/// Bytes a scene's volumes take in host memory and on the GPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Residency {
+    pub host: u64,
+    pub gpu: u64,
 }
 
 /// Why `Backend::Auto` rendered on the CPU.
@@ -259,6 +267,14 @@ impl Renderer {
         }
     }
 
+    /// At most `bytes` of volume textures on the GPU (None: what the
+    /// driver allows); the CPU has no such budget.
+    pub fn set_gpu_budget(&mut self, bytes: Option<u64>) {
+        if let Renderer::Gpu(g) = self {
+            g.set_memory_budget(bytes);
+        }
+    }
+
     /// [`Renderer::upload`], except that where `backend` is `Auto` and the
     /// GPU cannot hold the scene (a volume past its textures or its
     /// memory), this becomes the CPU renderer, which can, and says why.
@@ -273,6 +289,33 @@ impl Renderer {
                 Ok(Some(AutoChoice::TooLarge(e)))
             }
             other => other.map(|()| None),
+        }
+    }
+
+    /// Bytes `scene`'s volumes hold where this renderer reads them, each
+    /// grid once: their stored voxels in host memory, and the CPU's f32
+    /// copies for its packets or the GPU's textures.
+    pub fn resident_bytes(&self, scene: &Scene) -> Residency {
+        let volumes = scene.volumes();
+        let host: u64 = volumes
+            .iter()
+            .enumerate()
+            .filter(|(i, p)| {
+                !volumes[..*i]
+                    .iter()
+                    .any(|q| Arc::ptr_eq(&q.volume, &p.volume))
+            })
+            .map(|(_, p)| p.volume.voxels().bytes())
+            .sum();
+        match self {
+            Renderer::Gpu(g) => Residency {
+                host,
+                gpu: g.volume_bytes(),
+            },
+            Renderer::Cpu(c) => Residency {
+                host: host + c.copy_bytes(scene),
+                gpu: 0,
+            },
         }
     }
 

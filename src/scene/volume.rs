@@ -27,6 +27,16 @@ impl Voxels {
         self.len() == 0
     }
 
+    /// Bytes the stored numbers take.
+    pub fn bytes(&self) -> u64 {
+        let each = match self {
+            Voxels::U8(_) => 1,
+            Voxels::U16(_) | Voxels::I16(_) => 2,
+            Voxels::F32(_) => 4,
+        };
+        self.len() as u64 * each
+    }
+
     /// The number stored for voxel `i`, unscaled.
     pub fn stored(&self, i: usize) -> f32 {
         match self {

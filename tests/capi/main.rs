@@ -6,6 +6,7 @@
 mod common;
 
 mod autostereo_host;
+mod big_grid;
 mod bindings;
 mod deadline_host;
 mod dlopen;

@@ -486,3 +486,43 @@ fn a_volume_is_shown_at_its_own_size_where_the_rig_or_the_command_line_says() {
     );
     remove(&dir);
 }
+
+#[test]
+fn a_gpu_memory_budget_refuses_what_is_past_it_before_rendering() {
+    let dir = scratch("gpu_budget");
+    // The phantom's 128^3 float32 voxels take 8 MiB as a texture.
+    let result = render_in(
+        &dir,
+        None,
+        &["--backend", "gpu", "--gpu-memory-budget", "1K"],
+    );
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert_eq!(result.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot allocate 8388608 bytes for the scene's volume textures, past the GPU memory budget of 1024 bytes"),
+        "{err}"
+    );
+    assert!(!dir.join("out/timings.json").exists());
+    let err = usage_error(&dir, None, &["--gpu-memory-budget", "6T"]);
+    assert!(
+        err.contains("expected bytes, or a number with K, M or G, got '6T'"),
+        "{err}"
+    );
+    let err = usage_error(&dir, None, &["--gpu-memory-budget", "0"]);
+    assert!(
+        err.contains("expected a positive number of bytes (e.g. 6G), got '0'"),
+        "{err}"
+    );
+    // A budget the scene fits in renders.
+    let result = render_in(
+        &dir,
+        None,
+        &["--backend", "gpu", "--gpu-memory-budget", "8M"],
+    );
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    remove(&dir);
+}

@@ -233,3 +233,61 @@ fn a_color_alpha_without_an_opacity_array_is_the_opacity() {
         assert_ne!(from_alpha, opaque, "{backend}: the alpha changed nothing");
     }
 }
+
+#[test]
+fn the_gpu_memory_budget_refuses_a_world_past_it_and_residency_is_reported() {
+    use anari_library_caveray::device::{Input, Property, Status, Subject};
+    use std::sync::{Arc, Mutex};
+    let said = Arc::new(Mutex::new(Vec::<Status>::new()));
+    let sink = Arc::clone(&said);
+    let mut h = Host::on_backend(
+        "gpu",
+        Arc::new(move |s: Status| sink.lock().unwrap().push(s)),
+    );
+    // 4^3 float32 voxels: 256 bytes in host memory, 256 as a texture.
+    let field = h.field(|x| x as f32 / 3.0, None);
+    let volume = h.volume(field);
+    let bytes_of = |h: &mut Host, object: u64, name: &str| match h.d.property(
+        Subject::Object(object),
+        name,
+        true,
+    ) {
+        Some(Property::UInt64(n)) => n,
+        other => panic!("{name}: {other:?}"),
+    };
+    assert_eq!(bytes_of(&mut h, field, "caveray.residentBytes"), 256);
+    let budget = |h: &mut Host, bytes: u64| {
+        h.d.set_param(
+            Subject::Device,
+            "caveray.memoryBudget",
+            Input::Bytes(DataType::UINT64, bytes.to_le_bytes().to_vec()),
+        );
+        h.d.commit(Subject::Device);
+    };
+    budget(&mut h, 255);
+    let (frame, _camera) = h.frame(volume, 3.0);
+    h.d.render_frame(frame, None);
+    assert!(h.d.map_frame(frame, "channel.color").is_none());
+    let errors: Vec<String> = said
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|s| s.severity == Severity::Error)
+        .map(|s| s.message.clone())
+        .collect();
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("cannot allocate 256 bytes for the scene's volume textures, past the GPU memory budget of 255 bytes")),
+        "{errors:?}"
+    );
+    // Within the budget (and with none), the frame renders and says what
+    // its volume holds: the voxels, and their texture on the GPU.
+    for bytes in [256, 0] {
+        budget(&mut h, bytes);
+        h.pixels(frame);
+        assert_eq!(bytes_of(&mut h, frame, "caveray.gpuBytes"), 256);
+        assert_eq!(bytes_of(&mut h, frame, "caveray.residentBytes"), 512);
+    }
+    assert_eq!(bytes_of(&mut h, volume, "caveray.residentBytes"), 256);
+}

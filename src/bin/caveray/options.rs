@@ -28,6 +28,34 @@ pub fn step_factor(s: &str) -> Result<f32, String> {
     check_step_factor(x).map_err(|e| e.to_string())
 }
 
+/// `--gpu-memory-budget` values: bytes, or a number with K, M or G
+/// (binary: 1K is 1024 bytes).
+pub fn bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (digits, unit) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => (&t[..i], c.to_ascii_uppercase()),
+        _ => (t, 'B'),
+    };
+    let shift = match unit {
+        'B' => 0,
+        'K' => 10,
+        'M' => 20,
+        'G' => 30,
+        _ => {
+            return Err(format!(
+                "expected bytes, or a number with K, M or G, got '{s}'"
+            ))
+        }
+    };
+    digits
+        .trim()
+        .parse::<u64>()
+        .ok()
+        .and_then(|n| n.checked_mul(1 << shift))
+        .filter(|&n| n > 0)
+        .ok_or_else(|| format!("expected a positive number of bytes (e.g. 6G), got '{s}'"))
+}
+
 /// `--layer-format` values, listed in the help and checked by clap.
 pub fn layer_format() -> impl TypedValueParser<Value = LayerFormat> {
     PossibleValuesParser::new(LayerFormat::NAMES).try_map(|s| s.parse::<LayerFormat>())
@@ -56,6 +84,11 @@ pub struct RenderOptions {
     /// filtered (hardware trilinear and a stepped table).
     #[arg(long, default_value = "exact", value_parser = PossibleValuesParser::new(Sampling::NAMES).try_map(|s| s.parse::<Sampling>()))]
     pub gpu_sampling: Sampling,
+    /// Bytes of volume textures the GPU may hold (e.g. 6G); a scene past
+    /// it is refused, or with --backend auto rendered on the CPU. Default:
+    /// what the GPU's driver allows.
+    #[arg(long, value_parser = bytes)]
+    pub gpu_memory_budget: Option<u64>,
 }
 
 impl RenderOptions {
@@ -78,6 +111,8 @@ impl RenderOptions {
         if let Some(why) = missing {
             eprintln!("caveray: {why}");
         }
+        let mut renderer = renderer;
+        renderer.set_gpu_budget(self.gpu_memory_budget);
         eprintln!("caveray: rendering on {}", renderer.describe());
         Ok(renderer)
     }

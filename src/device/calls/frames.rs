@@ -66,7 +66,7 @@ impl Device {
         if let Some(Some(kept)) = kept {
             return kept;
         }
-        let taken = snapshot::take(frame, self.backend()).map(Arc::new);
+        let taken = snapshot::take(frame, self.backend(), self.gpu_budget()).map(Arc::new);
         frame.with_frame(|f| f.snapshot = Some((epoch, taken.clone())));
         taken
     }

@@ -85,6 +85,8 @@ pub struct Device {
     /// Arrays handed out by `anariMapParameterArray*D`, by object and name.
     mapped_params: HashMap<(u64, String), (DataType, ObjectRef)>,
     backend: Backend,
+    /// `caveray.memoryBudget`: bytes of volume textures the GPU may hold.
+    gpu_budget: Option<u64>,
     /// `pairStereoFrames`: frames that show the two eyes of one wall are
     /// found and rendered together.
     pairing: bool,
@@ -116,6 +118,7 @@ impl Device {
             warned: Default::default(),
             mapped_params: HashMap::new(),
             backend,
+            gpu_budget: None,
             pairing: true,
             statuses: Vec::new(),
             due: Vec::new(),
@@ -152,6 +155,10 @@ impl Device {
 
     pub fn backend(&self) -> Backend {
         self.backend
+    }
+
+    pub fn gpu_budget(&self) -> Option<u64> {
+        self.gpu_budget
     }
 
     pub(super) fn status(
@@ -371,10 +378,18 @@ impl Device {
                     return Ok(None);
                 };
                 let Some(slot) = cell.with_frame(|f| f.renders.slot.clone()) else {
-                    if name != "bounds" {
-                        return Ok(None);
-                    }
-                    return Ok(cell.usable::<WorldModel>().and_then(|w| world_bounds(&w)));
+                    return Ok(match name {
+                        "bounds" => cell.usable::<WorldModel>().and_then(|w| world_bounds(&w)),
+                        // A field's voxels in host memory, as stored.
+                        "caveray.residentBytes" => {
+                            let field = match cell.usable::<VolumeModel>() {
+                                Some(volume) => volume.field.usable::<Arc<StructuredVolume>>(),
+                                None => cell.usable::<Arc<StructuredVolume>>(),
+                            };
+                            field.map(|f| Property::UInt64(f.voxels().bytes()))
+                        }
+                        _ => None,
+                    });
                 };
                 let s = slot.lock();
                 if wait && s.busy && !slot.finishes_here() {
@@ -395,6 +410,11 @@ impl Device {
                     // What a deadline frame showed (absent for a whole render).
                     "caveray.imageAge" => s.shown.map(|v| Property::Float32(v.age_ms)),
                     "caveray.warp" => s.shown.map(|v| Property::Text(warp_name(v.warp))),
+                    // What the last render's volumes hold: voxels in host
+                    // memory and the renderer's copies, and of that the
+                    // GPU's textures.
+                    "caveray.residentBytes" => s.resident.map(|r| Property::UInt64(r.host + r.gpu)),
+                    "caveray.gpuBytes" => s.resident.map(|r| Property::UInt64(r.gpu)),
                     _ => None,
                 }
             }

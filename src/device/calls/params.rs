@@ -263,6 +263,11 @@ impl Device {
     fn commit_device(&mut self) {
         self.committed = self.pending.clone();
         self.pairing = self.committed.bool("pairStereoFrames").unwrap_or(true);
+        self.gpu_budget = self
+            .committed
+            .get("caveray.memoryBudget")
+            .and_then(|v| v.u64())
+            .filter(|&b| b > 0);
         if let Some(b) = self.committed.string("backend") {
             match b.parse() {
                 Ok(b) => self.backend = b,

@@ -39,7 +39,11 @@ pub struct FrameSnapshot {
 
 /// Reads what `frame` renders with `backend` out of its committed
 /// objects, or says why it cannot render.
-pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String> {
+pub fn take(
+    frame: &ObjectRef,
+    backend: Backend,
+    gpu_budget: Option<u64>,
+) -> Result<FrameSnapshot, String> {
     let params = frame
         .lock()
         .committed
@@ -132,6 +136,7 @@ pub fn take(frame: &ObjectRef, backend: Backend) -> Result<FrameSnapshot, String
         settings,
         desc,
         backend,
+        gpu_budget,
         accumulate,
     };
     inputs.check().map_err(|e| match e {

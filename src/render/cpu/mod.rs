@@ -158,6 +158,20 @@ impl CpuRenderer {
         Ok(Samples::Copied(Arc::new(values)))
     }
 
+    /// Bytes of the f32 copies the packet path keeps of `scene`'s volumes.
+    pub fn copy_bytes(&self, scene: &Scene) -> u64 {
+        let cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        cache
+            .samples
+            .iter()
+            .filter(|(v, _)| scene.volumes().iter().any(|p| Arc::ptr_eq(&p.volume, v)))
+            .map(|(_, s)| match s {
+                Samples::Copied(values) => 4 * values.len() as u64,
+                Samples::Stored(_) => 0,
+            })
+            .sum()
+    }
+
     /// Each volume's values, table and (if the plan skips) clear bricks,
     /// made only when new.
     fn prepare(&self, scene: &Scene, plan: &MarchPlan) -> Result<Vec<Converted>, RenderError> {
