@@ -251,6 +251,9 @@ fn run(
                 say(Severity::Warning, why.to_string());
             }
         }
+        if let Some(why) = r.fit_surfaces(inputs.backend, &inputs.surfaces) {
+            say(Severity::Warning, why.to_string());
+        }
         if let Some(why) = inputs
             .scene
             .as_ref()

@@ -267,6 +267,25 @@ impl Renderer {
         }
     }
 
+    /// Where `backend` is `Auto` and the GPU cannot hold one of
+    /// `surfaces`' fields (longer than its textures, or past its memory
+    /// budget), this becomes the CPU renderer, which can, and says why.
+    pub fn fit_surfaces(
+        &mut self,
+        backend: Backend,
+        surfaces: &[iso::IsoSurface],
+    ) -> Option<AutoChoice> {
+        let Renderer::Gpu(g) = self else {
+            return None;
+        };
+        let refused = surfaces
+            .iter()
+            .find_map(|s| g.check_iso(&s.placed).err())
+            .filter(|e| backend == Backend::Auto && e.is_size())?;
+        *self = Renderer::Cpu(CpuRenderer::new());
+        Some(AutoChoice::TooLarge(refused))
+    }
+
     /// At most `bytes` of volume textures on the GPU (None: what the
     /// driver allows); the CPU has no such budget.
     pub fn set_gpu_budget(&mut self, bytes: Option<u64>) {

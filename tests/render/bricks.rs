@@ -181,3 +181,33 @@ fn a_scene_past_the_gpu_budget_is_refused_before_upload_and_auto_renders_it_on_t
         .unwrap();
     assert!(frame.samples > 0);
 }
+
+#[test]
+fn isosurfaces_the_gpu_cannot_hold_are_cast_on_the_cpu_under_auto() {
+    use anari_library_caveray::render::iso::{IsoSettings, IsoSurface};
+    use anari_library_caveray::render::{Backend, RenderError, Renderer};
+    let surfaces = [IsoSurface {
+        placed: common::iso::two_balls(24, glam::Mat4::IDENTITY),
+        settings: IsoSettings::new(0.5),
+    }];
+    // 24^3 float32 voxels: 55296 bytes of texture.
+    let mut asked = Renderer::Gpu(Box::new(gpu()));
+    asked.set_gpu_budget(Some(55_296));
+    assert!(asked.fit_surfaces(Backend::Auto, &surfaces).is_none());
+    assert_eq!(asked.backend(), Backend::Gpu);
+    asked.set_gpu_budget(Some(55_295));
+    let Renderer::Gpu(g) = &asked else {
+        unreachable!()
+    };
+    let err = g.check_iso(&surfaces[0].placed).unwrap_err();
+    assert!(
+        matches!(err, RenderError::OutOfMemory { bytes: 55_296, .. }),
+        "{err}"
+    );
+    // Asked for the GPU, it stays there (and its cast says why it fails).
+    assert!(asked.fit_surfaces(Backend::Gpu, &surfaces).is_none());
+    assert_eq!(asked.backend(), Backend::Gpu);
+    let why = asked.fit_surfaces(Backend::Auto, &surfaces).unwrap();
+    assert!(why.to_string().ends_with("rendering on the CPU"), "{why}");
+    assert_eq!(asked.backend(), Backend::Cpu);
+}

@@ -154,6 +154,30 @@ impl GpuRenderer {
         self.scene.volume_bytes()
     }
 
+    /// `placed` as the scene an isosurface cast uploads, refused before
+    /// touching the GPU where its field does not fit one texture (GPU
+    /// isosurfaces read no bricks) or the memory budget.
+    pub fn check_iso(&self, placed: &PlacedVolume) -> Result<Scene, RenderError> {
+        let scene = Scene::placed(vec![placed.clone()])
+            .map_err(|e| RenderError::Settings(e.to_string()))?;
+        let dims = placed.volume.dims();
+        let max = self.ctx.limits.max_texture_dimension_3d;
+        if dims.max_element() > max {
+            return Err(RenderError::VolumeTooLarge {
+                dims: dims.to_array(),
+                max,
+                adapter: self.ctx.info.name.clone(),
+            });
+        }
+        if self.ctx.brick_texels.is_some() {
+            return Err(RenderError::Settings(
+                "isosurfaces on the GPU read a volume from one texture, and this renderer was told to brick every volume".into(),
+            ));
+        }
+        volume_texture::check_scene(&self.ctx, &scene)?;
+        Ok(scene)
+    }
+
     /// Fails, before touching the GPU, if the scene or frame exceeds what
     /// this adapter allows.
     pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
@@ -475,17 +499,8 @@ impl GpuRenderer {
     ) -> Result<(), RenderError> {
         desc.validate()?;
         settings.validate()?;
-        let scene = Scene::placed(vec![placed.clone()])
-            .map_err(|e| RenderError::Settings(e.to_string()))?;
-        self.check_limits(&scene, desc)?;
-        let dims = placed.volume.dims();
-        let max = self.ctx.limits.max_texture_dimension_3d;
-        if dims.max_element() > max || self.ctx.brick_texels.is_some() {
-            return Err(RenderError::Settings(format!(
-                "isosurfaces on the GPU read a volume from one texture, and this {}x{}x{} volume is bricked (textures on {} hold {max} texels a side): cast it on the CPU",
-                dims.x, dims.y, dims.z, self.ctx.info.name
-            )));
-        }
+        let scene = self.check_iso(placed)?;
+        self.ctx.check_frame(desc)?;
         self.scene.upload(&self.ctx, &scene)?;
         if self.iso.is_none() {
             self.iso = Some(IsoPass::new(&self.ctx, &self.raycast)?);
