@@ -192,7 +192,7 @@ mod tests {
         }
         StructuredVolume::new(
             UVec3::splat(n),
-            Voxels::F32(v),
+            Voxels::F32(v.into()),
             Vec3::splat(-1.0),
             Vec3::splat(2.0 / (n - 1) as f32),
         )

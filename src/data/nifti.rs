@@ -73,11 +73,17 @@ pub fn load_nifti(path: &Path) -> Result<Nifti, DataError> {
     let known = (!gzipped).then_some(len);
     let (header, head) = read_header(&mut reader, &header_path)?;
     if header.data_file == header_path {
+        if let Some(nifti) = mapped(&header, gzipped, true) {
+            return nifti;
+        }
         return read_voxels(header, head, &mut reader, known);
     }
     let data_file = header.data_file.display().to_string();
     let (handle, len) = files::open_regular(&header.data_file).map_err(io(&data_file))?;
     let gzipped = is_gz(&header.data_file);
+    if let Some(nifti) = mapped(&header, gzipped, false) {
+        return nifti;
+    }
     let mut reader = maybe_gunzip(handle, gzipped);
     read_voxels(header, Vec::new(), &mut reader, (!gzipped).then_some(len))
 }
@@ -106,6 +112,32 @@ pub fn parse_nifti(bytes: &[u8], name: &str) -> Result<Nifti, DataError> {
         &mut reader,
         (!gzipped).then_some(bytes.len() as u64),
     )
+}
+
+/// The volume of `header` with its voxels mapped from the data file, where
+/// they can be (uncompressed, in a type and byte order kept as stored,
+/// after the header where it shares their file); None leaves the reading,
+/// and the reporting of what is wrong, to `read_voxels`.
+fn mapped(header: &NiftiHeader, gzipped: bool, single: bool) -> Option<Result<Nifti, DataError>> {
+    let header_len = if header.version == 1 {
+        NIFTI1_HEADER
+    } else {
+        NIFTI2_HEADER
+    } as u64;
+    if gzipped || (single && header.offset < header_len) {
+        return None;
+    }
+    let volume = header.stored.mapped_grid(
+        &header.data_file,
+        header.offset,
+        header.dims,
+        header.big_endian,
+        (header.slope, header.intercept),
+    )?;
+    Some(volume.map(|volume| Nifti {
+        volume,
+        header: header.clone(),
+    }))
 }
 
 fn maybe_gunzip(file: std::fs::File, gzipped: bool) -> Box<dyn Read> {

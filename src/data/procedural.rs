@@ -36,7 +36,7 @@ fn sampled(n: u32, f: impl Fn(Vec3) -> f32) -> StructuredVolume {
     }
     StructuredVolume::new(
         UVec3::splat(n),
-        Voxels::F32(values),
+        Voxels::F32(values.into()),
         Vec3::splat(-1.0),
         Vec3::splat(spacing),
     )

@@ -42,18 +42,20 @@ impl VoxelType {
 
     fn decode(self, bytes: &[u8]) -> Voxels {
         match self {
-            VoxelType::U8 => Voxels::U8(bytes.to_vec()),
+            VoxelType::U8 => Voxels::U8(bytes.to_vec().into()),
             VoxelType::U16 => Voxels::U16(
                 bytes
                     .chunks_exact(2)
                     .map(|b| u16::from_le_bytes([b[0], b[1]]))
-                    .collect(),
+                    .collect::<Vec<_>>()
+                    .into(),
             ),
             VoxelType::F32 => Voxels::F32(
                 bytes
                     .chunks_exact(4)
                     .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                    .collect(),
+                    .collect::<Vec<_>>()
+                    .into(),
             ),
         }
     }
@@ -110,6 +112,9 @@ pub fn load_raw(
         VoxelType::U16 => (Stored::U16, 1.0 / 65535.0),
         VoxelType::F32 => (Stored::F32, 1.0),
     };
+    if let Some(mapped) = stored.mapped_grid(path, 0, dims, false, (slope, 0.0)) {
+        return Ok(mapped?.with_geometry(Vec3::ZERO, spacing)?);
+    }
     let mut reader = std::io::BufReader::new(file);
     let volume = stored.read_grid(dims, &[], &mut reader, false, (slope, 0.0), &name)?;
     Ok(volume.with_geometry(Vec3::ZERO, spacing)?)

@@ -5,11 +5,13 @@
 //! inflated no further than a volume needs.
 
 use std::io::Read;
+use std::path::Path;
+use std::sync::Arc;
 
 use glam::{UVec3, Vec3};
 
-use super::DataError;
-use crate::scene::{Scaling, StructuredVolume, Voxels, MAX_VOXELS};
+use super::{files, DataError};
+use crate::scene::{Buf, Mapping, Scaling, StructuredVolume, Voxels, MAX_VOXELS};
 
 /// The error of a buffer of `bytes` that cannot be had.
 pub fn out_of_memory(bytes: u64) -> std::io::Error {
@@ -90,6 +92,48 @@ impl Stored {
         }
     }
 
+    /// The grid of `dims` stored at byte `offset` of the file at `path`,
+    /// mapped rather than read (storage.rs): where the numbers are ones
+    /// the renderers sample as stored, in this machine's byte order,
+    /// aligned for their type, and the file holds them all. None where
+    /// they cannot be mapped; the caller then reads them (and reports a
+    /// short file).
+    pub fn mapped_grid(
+        self,
+        path: &Path,
+        offset: u64,
+        dims: UVec3,
+        big_endian: bool,
+        scaling: (f64, f64),
+    ) -> Option<Result<StructuredVolume, DataError>> {
+        if big_endian != cfg!(target_endian = "big") && self.bytes() > 1 {
+            return None;
+        }
+        let n = voxel_count(dims).ok()? as usize;
+        let (file, len) = files::open_regular(path).ok()?;
+        if len < offset.checked_add(n as u64 * self.bytes())? {
+            return None;
+        }
+        let map = Arc::new(Mapping::of(&file, usize::try_from(len).ok()?).ok()?);
+        let at = usize::try_from(offset).ok()?;
+        let voxels = match self {
+            Stored::U8 => Voxels::U8(Buf::mapped(map, at, n)?),
+            Stored::U16 => Voxels::U16(Buf::mapped(map, at, n)?),
+            Stored::I16 => Voxels::I16(Buf::mapped(map, at, n)?),
+            Stored::F32 => Voxels::F32(Buf::mapped(map, at, n)?),
+            _ => return None,
+        };
+        let scaling = Scaling {
+            slope: scaling.0 as f32,
+            intercept: scaling.1 as f32,
+        };
+        Some(
+            StructuredVolume::new(dims, voxels, Vec3::ZERO, Vec3::ONE)
+                .and_then(|v| v.with_scaling(scaling))
+                .map_err(DataError::from),
+        )
+    }
+
     /// `data`'s values, `big_endian` or not, as `value * slope +
     /// intercept`; their buffer reserved fallibly.
     pub fn decode(
@@ -146,25 +190,38 @@ impl Stored {
         };
         let (voxels, scaling) = match self {
             Stored::U8 => (
-                Voxels::U8(own(data, |b: [u8; 1]| b[0]).map_err(io)?),
+                Voxels::U8(own(data, |b: [u8; 1]| b[0]).map_err(io)?.into()),
                 scaling,
             ),
             Stored::U16 => (
-                Voxels::U16(own(data, |b| ordered(b, big_endian, u16::from_le_bytes)).map_err(io)?),
+                Voxels::U16(
+                    own(data, |b| ordered(b, big_endian, u16::from_le_bytes))
+                        .map_err(io)?
+                        .into(),
+                ),
                 scaling,
             ),
             Stored::I16 => (
-                Voxels::I16(own(data, |b| ordered(b, big_endian, i16::from_le_bytes)).map_err(io)?),
+                Voxels::I16(
+                    own(data, |b| ordered(b, big_endian, i16::from_le_bytes))
+                        .map_err(io)?
+                        .into(),
+                ),
                 scaling,
             ),
             Stored::F32 => (
-                Voxels::F32(own(data, |b| ordered(b, big_endian, f32::from_le_bytes)).map_err(io)?),
+                Voxels::F32(
+                    own(data, |b| ordered(b, big_endian, f32::from_le_bytes))
+                        .map_err(io)?
+                        .into(),
+                ),
                 scaling,
             ),
             _ => (
                 Voxels::F32(
                     self.decode(data, big_endian, (slope, intercept))
-                        .map_err(io)?,
+                        .map_err(io)?
+                        .into(),
                 ),
                 Scaling::IDENTITY,
             ),
@@ -195,20 +252,20 @@ impl Stored {
         let n = (u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z)) as usize;
         let swap = big_endian != cfg!(target_endian = "big");
         let voxels = match self {
-            Stored::U8 => Voxels::U8(filled_from(n, prefix, reader).map_err(io)?),
+            Stored::U8 => Voxels::U8(filled_from(n, prefix, reader).map_err(io)?.into()),
             Stored::U16 => {
                 let mut v: Vec<u16> = filled_from(n, prefix, reader).map_err(io)?;
                 if swap {
                     v.iter_mut().for_each(|x| *x = x.swap_bytes());
                 }
-                Voxels::U16(v)
+                Voxels::U16(v.into())
             }
             Stored::I16 => {
                 let mut v: Vec<i16> = filled_from(n, prefix, reader).map_err(io)?;
                 if swap {
                     v.iter_mut().for_each(|x| *x = x.swap_bytes());
                 }
-                Voxels::I16(v)
+                Voxels::I16(v.into())
             }
             Stored::F32 => {
                 let mut v: Vec<f32> = filled_from(n, prefix, reader).map_err(io)?;
@@ -216,7 +273,7 @@ impl Stored {
                     v.iter_mut()
                         .for_each(|x| *x = f32::from_bits(x.to_bits().swap_bytes()));
                 }
-                Voxels::F32(v)
+                Voxels::F32(v.into())
             }
             // Converted to f32 anyway: read as bytes first.
             _ => {

@@ -76,7 +76,7 @@ impl Grid<'_> {
                     .grid(self.dims, &data, big_endian, (1.0, 0.0), file)?
             }
             Scalars::Text(values) => {
-                StructuredVolume::new(self.dims, Voxels::F32(values), Vec3::ZERO, Vec3::ONE)?
+                StructuredVolume::new(self.dims, Voxels::F32(values.into()), Vec3::ZERO, Vec3::ONE)?
             }
         };
         Ok(VolumeFile {

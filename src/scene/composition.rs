@@ -199,7 +199,7 @@ mod tests {
     fn placed(transform: Mat4) -> PlacedVolume {
         let volume = StructuredVolume::new(
             UVec3::new(3, 5, 9),
-            Voxels::F32(vec![0.0; 3 * 5 * 9]),
+            Voxels::F32(vec![0.0; 3 * 5 * 9].into()),
             Vec3::new(1.0, 2.0, 3.0),
             Vec3::new(0.5, 0.25, 2.0),
         )

@@ -7,6 +7,7 @@ mod composition;
 mod placement;
 mod sampler;
 mod shapes;
+mod storage;
 mod transfer_function;
 mod volume;
 
@@ -18,5 +19,6 @@ pub use shapes::{
     Shape, ShapeError, ShapeInput, Source, SurfaceMaterial, Uniforms, ATTRIBUTE_NAMES,
     MAX_PRIMITIVES,
 };
+pub use storage::{Buf, Mapping};
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 pub use volume::{Filter, Scaling, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

@@ -3,14 +3,16 @@ use std::sync::Arc;
 use glam::{UVec3, Vec3};
 use thiserror::Error;
 
+use super::storage::Buf;
+
 /// Voxel values as stored, in their own type: the volume's [`Scaling`]
 /// makes them values.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Voxels {
-    U8(Vec<u8>),
-    U16(Vec<u16>),
-    I16(Vec<i16>),
-    F32(Vec<f32>),
+    U8(Buf<u8>),
+    U16(Buf<u16>),
+    I16(Buf<i16>),
+    F32(Buf<f32>),
 }
 
 impl Voxels {
@@ -25,6 +27,16 @@ impl Voxels {
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Whether the numbers are a mapped file's bytes, not a copy.
+    pub fn is_mapped(&self) -> bool {
+        match self {
+            Voxels::U8(v) => v.is_mapped(),
+            Voxels::U16(v) => v.is_mapped(),
+            Voxels::I16(v) => v.is_mapped(),
+            Voxels::F32(v) => v.is_mapped(),
+        }
     }
 
     /// Bytes the stored numbers take.

@@ -114,7 +114,7 @@ fn vtk(valgrind: bool) {
     let cells = v.spacing() * (v.dims() - UVec3::ONE).as_vec3() / 3.0;
     let constant = StructuredVolume::new(
         UVec3::splat(4),
-        Voxels::F32(vec![0.5; 64]),
+        Voxels::F32(vec![0.5; 64].into()),
         v.origin(),
         cells,
     )
@@ -270,7 +270,7 @@ fn cts(valgrind: bool) {
     ] {
         let volume = StructuredVolume::new(
             UVec3::splat(8),
-            Voxels::F32(ramp.clone()),
+            Voxels::F32(ramp.clone().into()),
             Vec3::NEG_ONE,
             Vec3::splat(2.0 / 7.0),
         )

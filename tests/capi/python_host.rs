@@ -89,7 +89,7 @@ fn a_pynari_host_renders_what_the_rust_api_renders_on_each_backend() {
     // The same numbers through the Rust API, on the CPU reference.
     let volume = StructuredVolume::new(
         UVec3::splat(n),
-        Voxels::F32(voxels),
+        Voxels::F32(voxels.into()),
         Vec3::splat(-1.0),
         Vec3::splat(spacing),
     )

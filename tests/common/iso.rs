@@ -20,7 +20,7 @@ pub fn field(n: u32, transform: Mat4, f: impl Fn(Vec3) -> f32) -> PlacedVolume {
     }
     let volume = StructuredVolume::new(
         UVec3::splat(n),
-        Voxels::F32(v),
+        Voxels::F32(v.into()),
         Vec3::splat(-1.0),
         Vec3::splat(h),
     )

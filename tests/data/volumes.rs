@@ -39,10 +39,17 @@ fn raw_files_load_little_endian_and_normalised() {
         Vec3::new(1.0, 1.0, 2.0),
     )
     .unwrap();
-    assert_eq!(v.voxels(), &Voxels::U16(vec![0, 65535, 256, 1, 2, 3, 4, 5]));
+    assert_eq!(
+        v.voxels(),
+        &Voxels::U16(vec![0, 65535, 256, 1, 2, 3, 4, 5].into())
+    );
     assert_eq!(v.value(1), 1.0);
     assert_eq!(v.value_range(), (0.0, 1.0));
     assert_eq!(v.bounds(), (Vec3::ZERO, Vec3::new(1.0, 1.0, 2.0)));
+    // The file's bytes, mapped rather than copied; a mapped file must not
+    // shrink while it is in use, so the volume goes before it is rewritten.
+    assert!(v.voxels().is_mapped());
+    drop(v);
     std::fs::write(&path, 1.5f32.to_le_bytes()).unwrap();
     let f = load_raw(&path, UVec3::ONE, VoxelType::F32, Vec3::ONE).unwrap();
     assert_eq!(f.value(0), 1.5);
@@ -88,7 +95,7 @@ fn a_raw_file_of_the_wrong_size_names_both_numbers() {
 fn bad_volumes_are_rejected() {
     let err = StructuredVolume::new(
         UVec3::new(0, 4, 4),
-        Voxels::U8(vec![]),
+        Voxels::U8(vec![].into()),
         Vec3::ZERO,
         Vec3::ONE,
     )
@@ -102,7 +109,7 @@ fn bad_volumes_are_rejected() {
     assert!(err.to_string().contains("0x4x4"));
     let err = StructuredVolume::new(
         UVec3::splat(2),
-        Voxels::U8(vec![0; 7]),
+        Voxels::U8(vec![0; 7].into()),
         Vec3::ZERO,
         Vec3::ONE,
     )
@@ -110,7 +117,7 @@ fn bad_volumes_are_rejected() {
     assert!(err.to_string().contains("needs 8 voxels, got 7"), "{err}");
     let err = StructuredVolume::new(
         UVec3::ONE,
-        Voxels::U8(vec![0]),
+        Voxels::U8(vec![0].into()),
         Vec3::ZERO,
         Vec3::new(1.0, 0.0, 1.0),
     )
@@ -118,7 +125,7 @@ fn bad_volumes_are_rejected() {
     assert!(matches!(err, VolumeError::BadSpacing { .. }));
     let err = StructuredVolume::new(
         UVec3::new(2, 1, 1),
-        Voxels::F32(vec![0.0, f32::NAN]),
+        Voxels::F32(vec![0.0, f32::NAN].into()),
         Vec3::ZERO,
         Vec3::ONE,
     )

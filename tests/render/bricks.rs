@@ -22,7 +22,7 @@ fn as_uint16(volume: &StructuredVolume) -> StructuredVolume {
         .collect();
     StructuredVolume::new(
         volume.dims(),
-        Voxels::U16(stored),
+        Voxels::U16(stored.into()),
         volume.origin(),
         volume.spacing(),
     )

@@ -17,7 +17,12 @@ fn a_volume_longer_than_the_adapters_textures_is_bricked_and_renders_as_on_the_c
     let max = gpu.limits().max_texture_dimension_3d;
     let dims = UVec3::new(max + 1, 5, 6);
     let n = (dims.x * dims.y * dims.z) as usize;
-    let voxels = Voxels::U8((0..n).map(|i| (i * 37 % 251) as u8).collect());
+    let voxels = Voxels::U8(
+        (0..n)
+            .map(|i| (i * 37 % 251) as u8)
+            .collect::<Vec<u8>>()
+            .into(),
+    );
     // A unit cube in the world, however many voxels span each axis.
     let spacing = 1.0 / (dims - UVec3::ONE).as_vec3();
     let long = StructuredVolume::new(dims, voxels, Vec3::splat(-0.5), spacing).unwrap();

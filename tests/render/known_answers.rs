@@ -280,10 +280,10 @@ fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
     assert_eq!((u.volumes, u.transfer_functions), (1, 2));
     // A new volume (u8 this time) re-uploads the volume only.
     let dims = UVec3::splat(8);
-    let bytes = (0..512u32).map(|i| (i % 251) as u8).collect();
+    let bytes: Vec<u8> = (0..512u32).map(|i| (i % 251) as u8).collect();
     let volume = StructuredVolume::new(
         dims,
-        Voxels::U8(bytes),
+        Voxels::U8(bytes.into()),
         Vec3::NEG_ONE,
         Vec3::splat(2.0 / 7.0),
     )

@@ -186,7 +186,7 @@ fn nearest_filter_is_nearest_on_both_renderers() {
     // ramp, where trilinear ramps.
     let step = StructuredVolume::new(
         glam::UVec3::new(2, 2, 2),
-        Voxels::F32(vec![0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0]),
+        Voxels::F32(vec![0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0].into()),
         Vec3::new(-1.0, -1.0, -0.5),
         Vec3::new(2.0, 2.0, 1.0),
     )
@@ -365,12 +365,16 @@ fn volumes_in_their_stored_type_render_as_their_values_do() {
     let stored = [
         (
             "int16 rescaled",
-            grid(Voxels::I16(int16)).with_scaling(rescale).unwrap(),
+            grid(Voxels::I16(int16.into()))
+                .with_scaling(rescale)
+                .unwrap(),
         ),
-        ("uint8 fixed point", grid(Voxels::U8(uint8))),
+        ("uint8 fixed point", grid(Voxels::U8(uint8.into()))),
     ];
     for (name, volume) in stored {
-        let twin = grid(Voxels::F32((0..n).map(|i| volume.value(i)).collect()));
+        let twin = grid(Voxels::F32(
+            (0..n).map(|i| volume.value(i)).collect::<Vec<f32>>().into(),
+        ));
         assert_eq!(volume.value_range(), twin.value_range(), "{name}");
         let scene = |v: StructuredVolume| {
             Scene::shared(std::sync::Arc::new(v), placed.transfer_function.clone())

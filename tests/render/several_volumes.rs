@@ -117,7 +117,7 @@ fn overlapping_volumes_mix_per_sample_whatever_their_order() {
 /// moving its voxels: world (X, Y, Z) is object (Y, -X, Z).
 fn turned_by_hand(volume: &StructuredVolume) -> StructuredVolume {
     let n = volume.dims().x as usize;
-    let turned = (0..n * n * n)
+    let turned: Vec<f32> = (0..n * n * n)
         .map(|w| {
             let (i, j, k) = (w % n, (w / n) % n, w / (n * n));
             volume.value(j + n * ((n - 1 - i) + n * k))
@@ -125,7 +125,7 @@ fn turned_by_hand(volume: &StructuredVolume) -> StructuredVolume {
         .collect();
     StructuredVolume::new(
         volume.dims(),
-        Voxels::F32(turned),
+        Voxels::F32(turned.into()),
         volume.origin(),
         volume.spacing(),
     )

@@ -861,7 +861,7 @@ fn shaded_haze(square_opacity: Option<f32>) -> Scene {
     let n = 8u32;
     let volume = StructuredVolume::new(
         UVec3::splat(n),
-        Voxels::F32(vec![0.5; (n * n * n) as usize]),
+        Voxels::F32(vec![0.5; (n * n * n) as usize].into()),
         Vec3::splat(-1.0),
         Vec3::splat(2.0 / (n - 1) as f32),
     )

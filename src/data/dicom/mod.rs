@@ -444,10 +444,10 @@ impl Gathered {
 
     fn voxels(self) -> Voxels {
         match self {
-            Gathered::U8(v) => Voxels::U8(v),
-            Gathered::U16(v) => Voxels::U16(v),
-            Gathered::I16(v) => Voxels::I16(v),
-            Gathered::F32(v) => Voxels::F32(v),
+            Gathered::U8(v) => Voxels::U8(v.into()),
+            Gathered::U16(v) => Voxels::U16(v.into()),
+            Gathered::I16(v) => Voxels::I16(v.into()),
+            Gathered::F32(v) => Voxels::F32(v.into()),
         }
     }
 }

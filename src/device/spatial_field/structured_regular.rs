@@ -98,23 +98,22 @@ fn read_voxels(array: &Array, warn: &mut dyn FnMut(String)) -> Result<(UVec3, Vo
     let n = count as usize;
     let bytes = array.bytes();
     let voxels = match array.element() {
-        T::UFIXED8 => Voxels::U8(gather(n, bytes.iter().copied())?),
+        T::UFIXED8 => Voxels::U8(gather(n, bytes.iter().copied())?.into()),
         T::UINT8 => {
             warn("UINT8 voxels are read as UFIXED8 (0..255 maps to 0..1)".into());
-            Voxels::U8(gather(n, bytes.iter().copied())?)
+            Voxels::U8(gather(n, bytes.iter().copied())?.into())
         }
         T::UFIXED16 | T::UINT16 => {
             if array.element() == T::UINT16 {
                 warn("UINT16 voxels are read as UFIXED16 (0..65535 maps to 0..1)".into());
             }
-            Voxels::U16(gather(n, words(bytes).map(u16::from_ne_bytes))?)
+            Voxels::U16(gather(n, words(bytes).map(u16::from_ne_bytes))?.into())
         }
-        T::FIXED16 => Voxels::I16(gather(n, words(bytes).map(i16::from_ne_bytes))?),
-        T::FLOAT32 => Voxels::F32(gather(n, words(bytes).map(f32::from_ne_bytes))?),
-        T::FLOAT64 => Voxels::F32(gather(
-            n,
-            words(bytes).map(|w| f64::from_ne_bytes(w) as f32),
-        )?),
+        T::FIXED16 => Voxels::I16(gather(n, words(bytes).map(i16::from_ne_bytes))?.into()),
+        T::FLOAT32 => Voxels::F32(gather(n, words(bytes).map(f32::from_ne_bytes))?.into()),
+        T::FLOAT64 => {
+            Voxels::F32(gather(n, words(bytes).map(|w| f64::from_ne_bytes(w) as f32))?.into())
+        }
         other => {
             return Err(format!(
                 "'data' holds {other}; a structured regular field needs {VOXEL_TYPES}"

@@ -597,14 +597,14 @@ mod tests {
             slope: 2.0,
             intercept: -1024.0,
         };
-        let v = Voxels::I16(vec![-32768, -1, 0, 32767]);
+        let v = Voxels::I16(vec![-32768, -1, 0, 32767].into());
         let t = Texel::of(&v, true);
         let m = t.to_value(s);
         for i in 0..4 {
             let want = s.apply(v.stored(i));
             assert!((m.apply(t.read(&v, i)) - want).abs() <= 1e-3 * want.abs().max(1.0));
         }
-        let v = Voxels::U8(vec![0, 7, 255]);
+        let v = Voxels::U8(vec![0, 7, 255].into());
         let t = Texel::of(&v, true);
         let m = t.to_value(s);
         for i in 0..3 {

@@ -190,7 +190,7 @@ fn a_triangle_interpolates_its_vertex_colors_barycentrically() {
 fn slab() -> Scene {
     let volume = StructuredVolume::new(
         UVec3::new(4, 4, 4),
-        Voxels::F32(vec![1.0; 64]),
+        Voxels::F32(vec![1.0; 64].into()),
         Vec3::new(-2.0, -2.0, -1.0),
         Vec3::new(4.0 / 3.0, 4.0 / 3.0, 2.0 / 3.0),
     )
