@@ -23,6 +23,10 @@ override FILTERED: bool = false;
 // once and every switch over them takes volume 0, which the compiler can
 // then see (software Vulkan runs the general form several times slower).
 override ONE_VOLUME: bool = false;
+// Set where a volume of the scene is bricked (its texture an atlas):
+// without it the compiler drops the brick arithmetic, whose mere presence
+// halves the march's speed on software Vulkan.
+override BRICKED: bool = false;
 
 fn volume_count() -> u32 {
     if ONE_VOLUME {
@@ -53,13 +57,16 @@ fn background_at(pixel: vec2u) -> vec4f {
 
 var<private> samples: u32;
 
-// Volume v's texel i as the field's value: the texture holds the stored
-// numbers (normalised where they are integers), the slot the map back.
-fn voxel(v: u32, i: vec3i) -> f32 {
-    return texel(v, i) * params.volumes[v].texel_scale + params.volumes[v].texel_offset;
+// The field's value of what volume v's texture holds, interpolated or
+// not: the texture holds the stored numbers (normalised where they are
+// integers), the slot the map back. Linear, so it is applied once a
+// sample, after interpolation, as the reference does.
+fn value_of(v: u32, t: f32) -> f32 {
+    return t * params.volumes[v].texel_scale + params.volumes[v].texel_offset;
 }
 
-fn texel(v: u32, i: vec3i) -> f32 {
+// Volume v's texel i, as stored.
+fn voxel(v: u32, i: vec3i) -> f32 {
     if ONE_VOLUME {
         return textureLoad(volume0, i, 0).r;
     }
@@ -82,7 +89,7 @@ fn texel(v: u32, i: vec3i) -> f32 {
 // into several bricks, every brick's texels reach one voxel past its
 // side, so the whole cell is in them).
 fn brick_offset(v: u32, i: vec3i) -> vec3i {
-    if params.volumes[v].bricked == 0u {
+    if !BRICKED || params.volumes[v].bricked == 0u {
         return vec3i(0);
     }
     let side = vec3i(params.volumes[v].brick_side);
@@ -123,7 +130,7 @@ fn filtered_value(v: u32, grid: vec3f, level: f32) -> f32 {
     var g = clamp(grid, vec3f(0.0), n - 1.0);
     var size = n;
     var lod = level;
-    if params.volumes[v].bricked != 0u {
+    if BRICKED && params.volumes[v].bricked != 0u {
         let i0 = min(vec3i(g), max(vec3i(n) - 2, vec3i(0)));
         g += vec3f(brick_offset(v, i0));
         size = vec3f(volume_size(v));
@@ -136,7 +143,7 @@ fn filtered_value(v: u32, grid: vec3f, level: f32) -> f32 {
     } else {
         t = texture_value(v, linear_mips, c, lod);
     }
-    return t * params.volumes[v].texel_scale + params.volumes[v].texel_offset;
+    return value_of(v, t);
 }
 
 fn volume_size(v: u32) -> vec3u {
@@ -194,7 +201,7 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
     let g = clamp(grid, vec3f(0.0), vec3f(hi));
     if params.volumes[v].sampling == FILTER_NEAREST {
         let i = min(vec3i(floor(g + vec3f(0.5))), hi);
-        return voxel(v, i + brick_offset(v, i));
+        return value_of(v, voxel(v, i + brick_offset(v, i)));
     }
     var i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
     let f = g - vec3f(i0);
@@ -206,7 +213,7 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
     let x10 = mix(voxel(v, vec3i(i0.x, i1.y, i0.z)), voxel(v, vec3i(i1.x, i1.y, i0.z)), f.x);
     let x01 = mix(voxel(v, vec3i(i0.x, i0.y, i1.z)), voxel(v, vec3i(i1.x, i0.y, i1.z)), f.x);
     let x11 = mix(voxel(v, vec3i(i0.x, i1.y, i1.z)), voxel(v, vec3i(i1.x, i1.y, i1.z)), f.x);
-    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+    return value_of(v, mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z));
 }
 
 fn classify(v: u32, value: f32) -> vec4f {

@@ -628,3 +628,36 @@ fn surfaces_reproject_like_two_pass_beside_their_edges() {
         );
     }
 }
+
+#[test]
+fn a_bricked_volume_reprojects_as_the_same_volume_in_one_texture() {
+    let mut gpu = common::render::gpu();
+    let scene = unit_phantom(40);
+    let pair = hmd(96, 12.0, 0.5);
+    let settings = RenderSettings::default();
+    let desc = FrameDesc::new(pair.size);
+    let whole = reprojected(
+        &mut gpu,
+        &scene,
+        &pair,
+        &settings,
+        &desc,
+        LayerFormat::Rgba16F,
+    );
+    gpu.brick_every_volume(Some(8));
+    let bricked = reprojected(
+        &mut gpu,
+        &scene,
+        &pair,
+        &settings,
+        &desc,
+        LayerFormat::Rgba16F,
+    );
+    let (l, r) = (
+        dssim(&bricked.left, &whole.left).unwrap(),
+        dssim(&bricked.right, &whole.right).unwrap(),
+    );
+    println!("bricked against one texture: left DSSIM {l:.6}, right {r:.6}");
+    assert!(l < 1e-4 && r < 1e-4, "left {l}, right {r}");
+    assert!(gpu.volume_bytes() > 40 * 40 * 40 * 4);
+}

@@ -6,6 +6,7 @@
 //! reads nothing outside it.
 
 use std::sync::atomic::AtomicBool;
+use std::sync::OnceLock;
 
 use glam::UVec2;
 use wgpu::TextureViewDimension as Dim;
@@ -16,6 +17,7 @@ use super::raycast::{RaycastPass, Variants};
 use super::resources::{color_data, floats};
 use super::shaders::compute_pipeline;
 use super::uniforms::Stereo;
+use super::volume_texture;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
 use crate::render::stereo::{LayerFormat, Reprojection, StereoTimes};
 use crate::render::{RenderError, RenderSettings, Watch};
@@ -59,6 +61,9 @@ pub(super) struct LayersPass {
     /// The left eye's march, for one volume and for several: writing one
     /// family of lines, and both.
     reproject: [Variants; 2],
+    /// The same for scenes with a bricked volume, compiled when the first
+    /// comes (any count of volumes).
+    reproject_bricked: [OnceLock<wgpu::ComputePipeline>; 2],
     clear: wgpu::ComputePipeline,
     /// The right eye's first opaque surfaces, before the march.
     first_opaque: wgpu::ComputePipeline,
@@ -192,6 +197,7 @@ impl LayersPass {
         Ok(Self {
             format,
             reproject: [families(1)?, families(2)?],
+            reproject_bricked: Default::default(),
             clear: pipeline("layer clear", "clear", &[])?,
             first_opaque: compositing("right-eye surfaces", "first_opaque", &[])?,
             summarise: compositing("span blocks", "summarise", &[])?,
@@ -491,8 +497,36 @@ impl LayersPass {
         } else {
             0.0
         };
+        let both = plan.family_count() == 2;
+        let pipeline = if volume_texture::any_bricked(ctx, scene) {
+            let cell = &self.reproject_bricked[usize::from(both)];
+            match cell.get() {
+                Some(p) => p,
+                None => {
+                    let groups = [
+                        raycast.volume_layout.group(),
+                        self.writer_layout.group(),
+                        raycast.band_layout.group(),
+                    ];
+                    let made = compute_pipeline(
+                        &ctx.device,
+                        "re-projection, bricked",
+                        "reproject",
+                        "main",
+                        &groups,
+                        &[
+                            ("BRICKED", 1.0),
+                            ("BOTH_FAMILIES", if both { 1.0 } else { 0.0 }),
+                        ],
+                    )?;
+                    cell.get_or_init(|| made)
+                }
+            }
+        } else {
+            self.reproject[usize::from(both)].for_scene(scene)
+        };
         let march = Pass {
-            pipeline: self.reproject[usize::from(plan.family_count() == 2)].for_scene(scene),
+            pipeline,
             groups: &[volume, &target.writer],
             band: Some(&raycast.band_group),
         };

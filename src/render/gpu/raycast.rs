@@ -16,7 +16,7 @@ use super::resources::{color_data, floats, BrickSlot, OutputBuffers, SurfaceSlot
 use super::scene::GpuScene;
 use super::shaders::compute_pipeline;
 use super::uniforms::{self, RayUniforms};
-use super::volume_texture::TextureSlot;
+use super::volume_texture::{self, TextureSlot};
 use crate::geometry::RayGen;
 use crate::render::frame::{Frame, FrameDesc};
 use crate::render::hits::{self, HitRecord};
@@ -96,15 +96,15 @@ impl Variants {
 /// A marching shader's pipelines, each compiled the first time a frame
 /// needs it: exact or hardware-filtered sampling (where the adapter
 /// filters 32-bit floats), one volume or several, with surfaces or
-/// without. Each override lets the compiler drop what a scene does not
+/// without, with bricked volumes or without. Each override lets the compiler drop what a scene does not
 /// use: software Vulkan takes seconds for each pipeline that traverses
 /// surfaces, and a fraction of one for a volume's march alone.
 pub(super) struct Sampled {
     label: &'static str,
     module: &'static str,
     groups: Vec<GroupLayout>,
-    /// Indexed by filtered * 4 + one volume * 2 + surfaces.
-    variants: [OnceLock<wgpu::ComputePipeline>; 8],
+    /// Indexed by bricked * 8 + filtered * 4 + one volume * 2 + surfaces.
+    variants: [OnceLock<wgpu::ComputePipeline>; 16],
 }
 
 impl Sampled {
@@ -133,8 +133,11 @@ impl Sampled {
         };
         let one = scene.volumes().len() == 1;
         let surfaces = !scene.shapes().is_empty();
-        let cell = &self.variants
-            [usize::from(filtered) * 4 + usize::from(one) * 2 + usize::from(surfaces)];
+        let bricked = volume_texture::any_bricked(ctx, scene);
+        let cell = &self.variants[usize::from(bricked) * 8
+            + usize::from(filtered) * 4
+            + usize::from(one) * 2
+            + usize::from(surfaces)];
         if let Some(pipeline) = cell.get() {
             return Ok(pipeline);
         }
@@ -150,6 +153,7 @@ impl Sampled {
                 ("FILTERED", flag(filtered)),
                 ("ONE_VOLUME", flag(one)),
                 ("SURFACES", flag(surfaces)),
+                ("BRICKED", flag(bricked)),
             ],
         )?;
         Ok(cell.get_or_init(|| pipeline))

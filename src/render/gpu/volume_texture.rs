@@ -261,6 +261,18 @@ pub(super) fn layout_of(
     Ok((bricking, bytes))
 }
 
+/// Whether one of the scene's volumes is bricked on this adapter (its
+/// shaders then need the brick arithmetic).
+pub(super) fn any_bricked(ctx: &Context, scene: &Scene) -> bool {
+    let max = ctx.limits.max_texture_dimension_3d;
+    scene.volumes().iter().any(|p| {
+        matches!(
+            Bricking::plan(p.volume.dims(), max, ctx.brick_texels),
+            Some(Some(_))
+        )
+    })
+}
+
 /// Fails, before anything is allocated, if the scene's volume textures
 /// cannot be made on this adapter or would pass the memory budget.
 pub(super) fn check_scene(ctx: &Context, scene: &Scene) -> Result<(), RenderError> {
