@@ -67,6 +67,17 @@ pub fn load_nrrd(path: &Path) -> Result<Nrrd, DataError> {
     let mut head = vec![0u8; HEADER_LIMIT.min(len as usize)];
     handle.read_exact(&mut head).map_err(io(&file))?;
     let (header, data_at) = parse_nrrd_header(&head, path)?;
+    let data_path = header
+        .data_file
+        .clone()
+        .unwrap_or_else(|| path.to_path_buf());
+    let start = match header.data_file {
+        Some(_) => 0,
+        None => data_at as u64,
+    };
+    if let Some(nrrd) = mapped(&header, &data_path, start) {
+        return nrrd;
+    }
     match &header.data_file {
         None => {
             drop(head);
@@ -85,6 +96,25 @@ pub fn load_nrrd(path: &Path) -> Result<Nrrd, DataError> {
             read_voxels(header, handle, Some(len), &data_name)
         }
     }
+}
+
+/// The volume of `header` with its raw voxels mapped from `data` (they
+/// begin `start` bytes in, before the byte skip), where they can be; None
+/// leaves the reading, and the reporting of what is wrong, to
+/// `read_voxels`.
+fn mapped(header: &NrrdHeader, data: &Path, start: u64) -> Option<Result<Nrrd, DataError>> {
+    if header.encoding != "raw" {
+        return None;
+    }
+    let offset = start.checked_add(header.byte_skip)?;
+    let volume =
+        header
+            .stored
+            .mapped_grid(data, offset, header.dims, header.big_endian, (1.0, 0.0))?;
+    Some(volume.map(|volume| Nrrd {
+        volume,
+        header: header.clone(),
+    }))
 }
 
 /// A NRRD file with attached voxels held in memory, as `load_nrrd`

@@ -1,6 +1,7 @@
 //! Where a grid's numbers live: in a vector of their own, or in a file
 //! mapped read-only into memory, so that a file whose bytes are already
-//! the numbers (raw and uncompressed NIfTI, in this machine's byte order)
+//! the numbers (raw, uncompressed NIfTI, raw NRRD, in this machine's byte
+//! order)
 //! is never copied. Mapped pages are the page cache's: they cost no memory
 //! until read, and the kernel may drop them again under pressure.
 //!

@@ -58,6 +58,10 @@ fn pynrrd_files_load_with_their_markers_where_their_headers_put_them() {
         );
         fixtures::marker_lands(name, &nrrd.volume, nrrd.transform(), truth, 1e-3);
         fixtures::kept_in_its_type(name, &nrrd.volume, nrrd.header.dtype);
+        // Raw voxels in this machine's byte order, inline or detached, are
+        // the file's own bytes, mapped; gzipped or big-endian ones are read.
+        let mapped = matches!(name.as_str(), "detached.nhdr" | "spacings.nrrd");
+        assert_eq!(nrrd.volume.voxels().is_mapped(), mapped, "{name}");
     }
 }
 
