@@ -18,7 +18,6 @@ pub mod stereo;
 pub mod warp;
 
 use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 
 use thiserror::Error;
 
@@ -315,17 +314,7 @@ impl Renderer {
     /// grid once: their stored voxels in host memory, and the CPU's f32
     /// copies for its packets or the GPU's textures.
     pub fn resident_bytes(&self, scene: &Scene) -> Residency {
-        let volumes = scene.volumes();
-        let host: u64 = volumes
-            .iter()
-            .enumerate()
-            .filter(|(i, p)| {
-                !volumes[..*i]
-                    .iter()
-                    .any(|q| Arc::ptr_eq(&q.volume, &p.volume))
-            })
-            .map(|(_, p)| p.volume.voxels().bytes())
-            .sum();
+        let host: u64 = scene.grids().map(|v| v.voxels().bytes()).sum();
         match self {
             Renderer::Gpu(g) => Residency {
                 host,

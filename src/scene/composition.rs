@@ -155,6 +155,15 @@ impl Scene {
         &self.volumes
     }
 
+    /// The scene's grids, each once however often it is placed.
+    pub fn grids(&self) -> impl Iterator<Item = &Arc<StructuredVolume>> {
+        let all = &self.volumes;
+        all.iter()
+            .enumerate()
+            .filter(|(i, p)| !all[..*i].iter().any(|q| Arc::ptr_eq(&q.volume, &p.volume)))
+            .map(|(_, p)| &p.volume)
+    }
+
     pub fn shapes(&self) -> &[PlacedShape] {
         &self.shapes
     }

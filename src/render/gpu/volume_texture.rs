@@ -15,7 +15,6 @@ use glam::{UVec2, UVec3};
 
 use super::context::Context;
 use crate::render::RenderError;
-use std::sync::Arc;
 
 use crate::scene::{Scaling, Scene, StructuredVolume, Voxels};
 
@@ -277,12 +276,8 @@ pub(super) fn any_bricked(ctx: &Context, scene: &Scene) -> bool {
 /// cannot be made on this adapter or would pass the memory budget.
 pub(super) fn check_scene(ctx: &Context, scene: &Scene) -> Result<(), RenderError> {
     let mut bytes = 0;
-    for (i, placed) in scene.volumes().iter().enumerate() {
-        let (_, b) = layout_of(ctx, &placed.volume)?;
-        let seen = scene.volumes()[..i]
-            .iter()
-            .any(|p| Arc::ptr_eq(&p.volume, &placed.volume));
-        bytes += if seen { 0 } else { b };
+    for grid in scene.grids() {
+        bytes += layout_of(ctx, grid)?.1;
     }
     match ctx.memory_budget {
         Some(budget) if bytes > budget => Err(RenderError::OutOfMemory {
@@ -491,9 +486,9 @@ impl<'a> Writer<'a> {
                                 row + lo.x as usize..row + x1 as usize,
                                 &mut bytes,
                             );
-                            let edge = bytes[bytes.len() - one..].to_vec();
+                            let edge = bytes.len() - one;
                             while bytes.len() < end {
-                                bytes.extend_from_slice(&edge);
+                                bytes.extend_from_within(edge..edge + one);
                             }
                         }
                     }
