@@ -23,10 +23,11 @@ override FILTERED: bool = false;
 // once and every switch over them takes volume 0, which the compiler can
 // then see (software Vulkan runs the general form several times slower).
 override ONE_VOLUME: bool = false;
-// Set where a volume of the scene is bricked (its texture an atlas):
-// without it the compiler drops the brick arithmetic, whose mere presence
-// halves the march's speed on software Vulkan.
-override BRICKED: bool = false;
+// Set where a volume of the scene is paged (read through its page table
+// from a pool of bricks, src/render/gpu/paging.rs): without it the
+// compiler drops the page arithmetic, whose mere presence halves the
+// march's speed on software Vulkan.
+override PAGED: bool = false;
 
 fn volume_count() -> u32 {
     if ONE_VOLUME {
@@ -82,24 +83,69 @@ fn voxel(v: u32, i: vec3i) -> f32 {
     }
 }
 
-// What to add to grid index i, and to the grid indices of the trilinear
-// cell whose low corner it is, to address volume v's texture: nothing for
-// a volume in one texture; for a bricked one, the offset of i's brick in
-// the atlas (brick k at atlas place k, both x fastest; on an axis cut
-// into several bricks, every brick's texels reach one voxel past its
-// side, so the whole cell is in them).
-fn brick_offset(v: u32, i: vec3i) -> vec3i {
-    if !BRICKED || params.volumes[v].bricked == 0u {
-        return vec3i(0);
+fn is_paged(v: u32) -> bool {
+    return PAGED && params.volumes[v].levels != 0u;
+}
+
+// Voxels of level l of volume v's chain per axis: level l halves level
+// l - 1, rounding up.
+fn level_dims(v: u32, l: u32) -> vec3u {
+    return max((params.volumes[v].dims + vec3u((1u << l) - 1u)) >> vec3u(l), vec3u(1u));
+}
+
+// Where a paged volume's sample is read: at grid point g of level
+// `level` (the level's voxel i is the full-detail point (i + 0.5) 2^l -
+// 0.5), the low corner i0 of its trilinear cell, the level's last voxel
+// hi, and what to add to the level's voxel indices to address the pool:
+// the cell lies in the brick of its low corner, whose texels reach one
+// voxel past its side.
+struct Page {
+    g: vec3f,
+    i0: vec3i,
+    hi: vec3i,
+    at: vec3i,
+}
+
+fn page_cell(v: u32, grid: vec3f, l: u32) -> Page {
+    let hi = vec3i(level_dims(v, l)) - 1;
+    var q = grid;
+    if l > 0u {
+        q = (grid + 0.5) / f32(1u << l) - 0.5;
     }
-    let side = vec3i(params.volumes[v].brick_side);
-    let b = i / side;
-    let n = (vec3i(params.volumes[v].dims) + side - 1) / side;
-    let texels = side + select(vec3i(0), vec3i(1), n > vec3i(1));
-    let k = b.x + n.x * (b.y + n.y * b.z);
-    let a = vec2i(params.volumes[v].atlas_bricks);
+    let g = clamp(q, vec3f(0.0), vec3f(hi));
+    let i0 = min(vec3i(floor(g)), max(hi - 1, vec3i(0)));
+    return Page(g, i0, hi, vec3i(0));
+}
+
+// Volume v's page entry for the brick holding cell `c` of level l: its
+// pool slot + 1, or 0 where it is not resident.
+fn page_entry(v: u32, l: u32, c: Page) -> u32 {
+    let m = params.volumes[v];
+    let side = vec3u(m.brick_side);
+    let b = vec3u(c.i0) / side;
+    let n = (vec3u(c.hi + 1) + side - 1u) / side;
+    return pages[m.page_offset + pages[m.page_offset + l] + b.x + n.x * (b.y + n.y * b.z)];
+}
+
+// Grid point `grid` of paged volume v at level `level`, or at the nearest
+// coarser level whose brick there is resident (the coarsest always is).
+fn page_of(v: u32, grid: vec3f, level: u32) -> Page {
+    let m = params.volumes[v];
+    var l = min(level, m.levels - 1u);
+    var c = page_cell(v, grid, l);
+    var e = page_entry(v, l, c);
+    while e == 0u && l + 1u < m.levels {
+        l += 1u;
+        c = page_cell(v, grid, l);
+        e = page_entry(v, l, c);
+    }
+    let side = vec3i(m.brick_side);
+    let texels = side + select(vec3i(0), vec3i(1), vec3i(m.dims) > side);
+    let a = vec2i(m.atlas_bricks);
+    let k = i32(max(e, 1u) - 1u);
     let place = vec3i(k % a.x, (k / a.x) % a.y, k / (a.x * a.y));
-    return place * texels - b * side;
+    c.at = place * texels - (c.i0 / side) * side;
+    return c;
 }
 
 // Grid coordinates of world point p in volume v.
@@ -123,25 +169,21 @@ fn contains(v: u32, g: vec3f) -> bool {
 }
 
 // Volume v at grid point g by the texture unit (vertex i is texel centre
-// i), from mip level `level` (0: full detail; bricked volumes have no
-// coarser levels).
+// i), from mip level `level` (0: full detail), or for a paged volume from
+// the level of its chain the page table gives for the whole level.
 fn filtered_value(v: u32, grid: vec3f, level: f32) -> f32 {
-    let n = vec3f(params.volumes[v].dims);
-    var g = clamp(grid, vec3f(0.0), n - 1.0);
-    var size = n;
-    var lod = level;
-    if BRICKED && params.volumes[v].bricked != 0u {
-        let i0 = min(vec3i(g), max(vec3i(n) - 2, vec3i(0)));
-        g += vec3f(brick_offset(v, i0));
-        size = vec3f(volume_size(v));
-        lod = 0.0;
+    if is_paged(v) {
+        let p = page_of(v, grid, u32(level));
+        let c = (p.g + vec3f(p.at) + 0.5) / vec3f(volume_size(v));
+        return value_of(v, texture_value(v, linear, c, 0.0));
     }
-    let c = (g + 0.5) / size;
+    let n = vec3f(params.volumes[v].dims);
+    let c = (clamp(grid, vec3f(0.0), n - 1.0) + 0.5) / n;
     var t: f32;
-    if lod <= 0.0 {
+    if level <= 0.0 {
         t = texture_value(v, linear, c, 0.0);
     } else {
-        t = texture_value(v, linear_mips, c, lod);
+        t = texture_value(v, linear_mips, c, level);
     }
     return value_of(v, t);
 }
@@ -197,18 +239,19 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
     if FILTERED && params.volumes[v].sampling != FILTER_NEAREST {
         return filtered_value(v, grid, 0.0);
     }
-    let hi = vec3i(params.volumes[v].dims) - vec3i(1);
-    let g = clamp(grid, vec3f(0.0), vec3f(hi));
-    if params.volumes[v].sampling == FILTER_NEAREST {
-        let i = min(vec3i(floor(g + vec3f(0.5))), hi);
-        return value_of(v, voxel(v, i + brick_offset(v, i)));
+    var p: Page;
+    if is_paged(v) {
+        p = page_of(v, grid, 0u);
+    } else {
+        p = page_cell(v, grid, 0u);
     }
-    var i0 = min(vec3i(floor(g)), max(hi - vec3i(1), vec3i(0)));
-    let f = g - vec3f(i0);
-    var i1 = min(i0 + vec3i(1), hi);
-    let at = brick_offset(v, i0);
-    i0 += at;
-    i1 += at;
+    if params.volumes[v].sampling == FILTER_NEAREST {
+        let i = min(vec3i(floor(p.g + vec3f(0.5))), p.hi);
+        return value_of(v, voxel(v, i + p.at));
+    }
+    let f = p.g - vec3f(p.i0);
+    let i0 = p.i0 + p.at;
+    let i1 = min(p.i0 + vec3i(1), p.hi) + p.at;
     let x00 = mix(voxel(v, vec3i(i0.x, i0.y, i0.z)), voxel(v, vec3i(i1.x, i0.y, i0.z)), f.x);
     let x10 = mix(voxel(v, vec3i(i0.x, i1.y, i0.z)), voxel(v, vec3i(i1.x, i1.y, i0.z)), f.x);
     let x01 = mix(voxel(v, vec3i(i0.x, i0.y, i1.z)), voxel(v, vec3i(i1.x, i0.y, i1.z)), f.x);

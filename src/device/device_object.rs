@@ -21,8 +21,14 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
            and the CPU otherwise (default auto, or $CAVERAY_BACKEND)")
         .names(&Backend::NAMES),
         p("caveray.memoryBudget", &[T::UINT64], false, DefaultValue::None,
-          "bytes of volume textures the GPU may hold (unset or 0: what its driver allows); a world past \
-           it is refused before anything is allocated, and backend auto renders it on the CPU"),
+          "bytes of volume textures the GPU may hold (unset or 0: what its driver allows); the volumes \
+           of a world past it are paged, each holding the bricks its views ask for within its share; \
+           one too small for a single brick is refused before anything is allocated, and backend auto \
+           renders it on the CPU"),
+        p("caveray.streamWait", &[T::FLOAT32], false, DefaultValue::None,
+          "milliseconds a frame waits for the bricks of paged volumes (unset: until all it selected \
+           are resident); past it the frame renders coarser levels where bricks are missing, reports \
+           renderProgress below 1, and later frames refine"),
         p("pairStereoFrames", &[T::BOOL], false, DefaultValue::Bool(true),
           "render two frames that show the eyes of one wall in one re-projection pass when the first \
            renders, keeping the second's image for its render (ANARI_CAVERAY_FRAME_STEREO_PAIR)"),

@@ -7,7 +7,7 @@ use glam::{UVec2, Vec2};
 
 use crate::geometry::{MatrixCamera, MultiViewDisplay, RayGen};
 use crate::render::iso::{IsoSurface, MultiViewMethod};
-use crate::render::{Backend, FrameDesc, RenderSettings};
+use crate::render::{Backend, FrameDesc, RenderSettings, StreamWait};
 use crate::scene::Scene;
 
 /// One eye's rays and the rectangle of the frame they fill.
@@ -92,6 +92,9 @@ pub struct Inputs {
     /// Bytes of volume textures the GPU may hold (the device's
     /// `caveray.memoryBudget`); None: what the driver allows.
     pub gpu_budget: Option<u64>,
+    /// How long a GPU frame waits for the bricks of paged volumes (the
+    /// device's `caveray.streamWait`).
+    pub stream_wait: StreamWait,
     /// The host set the frame's `accumulation`: renders of unchanged
     /// inputs refine the image (src/engine/accumulation.rs).
     pub accumulate: bool,
@@ -116,6 +119,7 @@ impl PartialEq for Inputs {
             && self.desc == other.desc
             && self.backend == other.backend
             && self.gpu_budget == other.gpu_budget
+            && self.stream_wait == other.stream_wait
             && self.accumulate == other.accumulate
     }
 }

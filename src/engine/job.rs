@@ -75,7 +75,11 @@ impl FrameRenders {
     /// takes one more sample of each pixel.
     pub fn job(&mut self, frame: u64, inputs: Arc<Inputs>) -> RenderJob {
         let samples = self.slot.image_samples();
-        let unchanged = self.last.as_deref() == Some(&*inputs) && samples.is_some();
+        // An image rendered before all its bricks were resident is not
+        // kept: the render again refines it.
+        let unchanged = self.last.as_deref() == Some(&*inputs)
+            && samples.is_some()
+            && self.slot.lock().progress.is_none_or(|p| p >= 1.0);
         self.last = Some(Arc::clone(&inputs));
         let sample = samples.filter(|&n| unchanged && inputs.accumulate && n < MAX_SAMPLES);
         let (inputs, unchanged) = match sample {

@@ -62,6 +62,9 @@ pub struct SlotState {
     pub shown: Option<ShownImage>,
     /// What the last render's volumes hold in memory, once one ran.
     pub resident: Option<Residency>,
+    /// The share of the bricks of paged volumes the last render selected
+    /// that it rendered with, once one ran.
+    pub progress: Option<f32>,
     /// The samples of a refined image (accumulation), once it has more
     /// than its first.
     accumulated: Option<Accumulated>,

@@ -142,6 +142,7 @@ fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, re
         };
         let r = renderer_for(renderer, inputs.backend, &say)?;
         r.set_gpu_budget(inputs.gpu_budget);
+        r.set_stream_wait(inputs.stream_wait);
         if let Some(why) = r
             .upload_for(inputs.backend, scene)
             .map_err(|e| e.to_string())?
@@ -243,6 +244,7 @@ fn run(
         let say = |severity, message| report(note(severity, StatusCode::NoError, message));
         let r = renderer_for(renderer, inputs.backend, &say)?;
         r.set_gpu_budget(inputs.gpu_budget);
+        r.set_stream_wait(inputs.stream_wait);
         if let Some(scene) = &inputs.scene {
             if let Some(why) = r
                 .upload_for(inputs.backend, scene)
@@ -268,7 +270,9 @@ fn run(
         }
         .map_err(|e| e.to_string())?;
         if let Some(scene) = &inputs.scene {
-            job.slot.lock().resident = Some(r.resident_bytes(scene));
+            let mut s = job.slot.lock();
+            s.resident = Some(r.resident_bytes(scene));
+            s.progress = Some(r.stream_progress());
         }
         Ok(frame)
     }))

@@ -161,6 +161,51 @@ fn owners(v: usize, b: usize, n: usize) -> std::ops::Range<usize> {
     lo..hi + 1
 }
 
+/// Which value ranges a transfer function can make visible, as both
+/// renderers classify (value -> (value - lo) * scale in [0, 1]).
+pub(crate) struct Visibility {
+    /// Entries below i with opacity above zero: any in a range of entries
+    /// shows as a difference.
+    visible_before: [u32; TABLE_SIZE + 1],
+    value_lo: f32,
+    value_scale: f32,
+}
+
+impl Visibility {
+    /// `table`: the transfer function's TABLE_SIZE entries.
+    pub fn new(table: &[Vec4], value_lo: f32, value_scale: f32) -> Self {
+        debug_assert_eq!(table.len(), TABLE_SIZE);
+        let mut visible_before = [0u32; TABLE_SIZE + 1];
+        for (i, c) in table.iter().enumerate() {
+            visible_before[i + 1] = visible_before[i] + u32::from(c.w > 0.0);
+        }
+        Self {
+            visible_before,
+            value_lo,
+            value_scale,
+        }
+    }
+
+    /// Whether a sample whose value lies in `lo..=hi` (interpolated
+    /// between values in that range) could be visible; an empty range
+    /// (lo > hi: every value NaN) never is.
+    pub fn shows(&self, lo: f32, hi: f32) -> bool {
+        if lo > hi {
+            return false;
+        }
+        let last = (TABLE_SIZE - 1) as f32;
+        let entry = |v: f32| {
+            let t = ((v - self.value_lo) * self.value_scale).clamp(0.0, 1.0) * last;
+            // The interpolation reads entries i and i + 1, i <= size - 2.
+            (t as usize).min(TABLE_SIZE - 2)
+        };
+        // Scale may be negative only in theory; order the entries.
+        let (a, b) = (entry(lo), entry(hi));
+        let (first, last) = (a.min(b), a.max(b) + 1);
+        self.visible_before[last + 1] > self.visible_before[first]
+    }
+}
+
 /// One volume under one transfer function: per brick, the chessboard
 /// distance to the nearest brick a sample could be visible in (0: this
 /// one), at most MAX_DISTANCE.
@@ -180,29 +225,11 @@ impl EmptySpace {
         value_lo: f32,
         value_scale: f32,
     ) -> Result<Self, RenderError> {
-        debug_assert_eq!(table.len(), TABLE_SIZE);
-        // visible_before[i]: entries below i with opacity above zero; any
-        // in a range of entries shows as a difference.
-        let mut visible_before = [0u32; TABLE_SIZE + 1];
-        for (i, c) in table.iter().enumerate() {
-            visible_before[i + 1] = visible_before[i] + u32::from(c.w > 0.0);
-        }
-        let last = (TABLE_SIZE - 1) as f32;
-        let entry = |v: f32| {
-            let t = ((v - value_lo) * value_scale).clamp(0.0, 1.0) * last;
-            // The interpolation reads entries i and i + 1, i <= size - 2.
-            (t as usize).min(TABLE_SIZE - 2)
-        };
+        let visible = Visibility::new(table, value_lo, value_scale);
         let count = ranges.ranges.len();
         let mut distance = filled(count, MAX_DISTANCE, "the empty-space distances")?;
         for (d, &[lo, hi]) in distance.iter_mut().zip(&ranges.ranges) {
-            if lo > hi {
-                continue; // no value at all (every vertex NaN)
-            }
-            // Scale may be negative only in theory; order the entries.
-            let (a, b) = (entry(lo), entry(hi));
-            let (first, last) = (a.min(b), a.max(b) + 1);
-            if visible_before[last + 1] > visible_before[first] {
+            if visible.shows(lo, hi) {
                 *d = 0;
             }
         }

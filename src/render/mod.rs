@@ -24,7 +24,7 @@ use thiserror::Error;
 pub use compare::{dssim, ssim, ssim_map, SsimMap, SSIM_WINDOW};
 pub use cpu::CpuRenderer;
 pub use frame::{ColorData, ColorFormat, Frame, FrameDesc, MAX_FRAME_PIXELS};
-pub use gpu::{GpuRenderer, PassClock, Uploads};
+pub use gpu::{GpuRenderer, PassClock, StreamWait, Streaming, Uploads};
 pub use hits::{HitChannel, HitRecord, PixelHit};
 pub use progress::{Done, Progress, Watch};
 pub use settings::{
@@ -293,6 +293,24 @@ impl Renderer {
         }
     }
 
+    /// How long a GPU frame waits for the bricks of paged volumes
+    /// ([`GpuRenderer::set_stream_wait`]); the CPU reads every voxel
+    /// where it lies.
+    pub fn set_stream_wait(&mut self, wait: StreamWait) {
+        if let Renderer::Gpu(g) = self {
+            g.set_stream_wait(wait);
+        }
+    }
+
+    /// The share of the bricks the last frame selected that it rendered
+    /// with (1 where nothing is paged, and on the CPU).
+    pub fn stream_progress(&self) -> f32 {
+        match self {
+            Renderer::Gpu(g) => g.streaming().progress(),
+            Renderer::Cpu(_) => 1.0,
+        }
+    }
+
     /// [`Renderer::upload`], except that where `backend` is `Auto` and the
     /// GPU cannot hold the scene (a volume past its textures or its
     /// memory), this becomes the CPU renderer, which can, and says why.
@@ -312,12 +330,13 @@ impl Renderer {
 
     /// Bytes `scene`'s volumes hold where this renderer reads them, each
     /// grid once: their stored voxels in host memory, and the CPU's f32
-    /// copies for its packets or the GPU's textures.
+    /// copies for its packets, or the GPU's textures (and for paged
+    /// volumes their pools, and the coarser levels the host keeps).
     pub fn resident_bytes(&self, scene: &Scene) -> Residency {
         let host: u64 = scene.grids().map(|v| v.voxels().bytes()).sum();
         match self {
             Renderer::Gpu(g) => Residency {
-                host,
+                host: host + g.host_volume_bytes(),
                 gpu: g.volume_bytes(),
             },
             Renderer::Cpu(c) => Residency {

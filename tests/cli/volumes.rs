@@ -488,9 +488,10 @@ fn a_volume_is_shown_at_its_own_size_where_the_rig_or_the_command_line_says() {
 }
 
 #[test]
-fn a_gpu_memory_budget_refuses_what_is_past_it_before_rendering() {
+fn a_gpu_memory_budget_pages_what_is_past_it_and_refuses_what_holds_no_brick() {
     let dir = scratch("gpu_budget");
-    // The phantom's 128^3 float32 voxels take 8 MiB as a texture.
+    // The phantom's 128^3 float32 voxels take 8 MiB as a texture; paged,
+    // a brick of 64^3 takes 1 MiB.
     let result = render_in(
         &dir,
         None,
@@ -499,7 +500,7 @@ fn a_gpu_memory_budget_refuses_what_is_past_it_before_rendering() {
     let err = String::from_utf8(result.stderr).unwrap();
     assert_eq!(result.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("cannot allocate 8388608 bytes for the scene's volume textures, past the GPU memory budget of 1024 bytes"),
+        err.contains("cannot allocate 1048576 bytes for one 64x64x64 brick of a 128x128x128 volume, past its share of the GPU memory budget of 1024 bytes"),
         "{err}"
     );
     assert!(!dir.join("out/timings.json").exists());
@@ -513,16 +514,25 @@ fn a_gpu_memory_budget_refuses_what_is_past_it_before_rendering() {
         err.contains("expected a positive number of bytes (e.g. 6G), got '0'"),
         "{err}"
     );
-    // A budget the scene fits in renders.
-    let result = render_in(
-        &dir,
-        None,
-        &["--backend", "gpu", "--gpu-memory-budget", "8M"],
-    );
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
+    // A budget the scene fits in renders, and so does one it is paged
+    // within.
+    for budget in ["8M", "4M"] {
+        let result = render_in(
+            &dir,
+            None,
+            &["--backend", "gpu", "--gpu-memory-budget", budget],
+        );
+        assert!(
+            result.status.success(),
+            "{budget}: {}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        let out = String::from_utf8_lossy(&result.stdout);
+        let paged = out.contains("the volume is paged on the GPU");
+        assert_eq!(paged, budget == "4M", "{budget}: {out}");
+        if paged {
+            assert!(out.contains("within a budget of 4.0 MiB"), "{out}");
+        }
+    }
     remove(&dir);
 }

@@ -235,7 +235,7 @@ fn a_color_alpha_without_an_opacity_array_is_the_opacity() {
 }
 
 #[test]
-fn the_gpu_memory_budget_refuses_a_world_past_it_and_residency_is_reported() {
+fn a_gpu_memory_budget_too_small_for_a_brick_is_refused_and_residency_is_reported() {
     use anari_library_caveray::device::{Input, Property, Status, Subject};
     use std::sync::{Arc, Mutex};
     let said = Arc::new(Mutex::new(Vec::<Status>::new()));
@@ -275,10 +275,12 @@ fn the_gpu_memory_budget_refuses_a_world_past_it_and_residency_is_reported() {
         .filter(|s| s.severity == Severity::Error)
         .map(|s| s.message.clone())
         .collect();
+    // Past the budget the world's volume would be paged, but its pool
+    // would not hold its one brick.
     assert!(
         errors
             .iter()
-            .any(|e| e.contains("cannot allocate 256 bytes for the scene's volume textures, past the GPU memory budget of 255 bytes")),
+            .any(|e| e.contains("cannot allocate 256 bytes for one 4x4x4 brick of a 4x4x4 volume, past its share of the GPU memory budget of 255 bytes")),
         "{errors:?}"
     );
     // Within the budget (and with none), the frame renders and says what
@@ -290,4 +292,122 @@ fn the_gpu_memory_budget_refuses_a_world_past_it_and_residency_is_reported() {
         assert_eq!(bytes_of(&mut h, frame, "caveray.residentBytes"), 512);
     }
     assert_eq!(bytes_of(&mut h, volume, "caveray.residentBytes"), 256);
+}
+
+/// A fresh GPU device with a 200 x 200 x 8 float32 field (1.28 MB:
+/// bricks of 63 x 63 x 8 voxels, 128 KiB each in the pool, 16 at full
+/// detail and 21 in the chain) under a memory budget of `budget` bytes,
+/// its frames waiting `wait` ms for bricks where set: the host and the
+/// frame.
+fn paged_world(budget: u64, wait: Option<f32>) -> (Host, u64) {
+    use anari_library_caveray::device::{Input, Subject};
+    let mut h = Host::on_backend("gpu", std::sync::Arc::new(|_| {}));
+    let (nx, ny, nz) = (200u32, 200u32, 8u32);
+    let voxels: Vec<f32> = (0..nx * ny * nz)
+        .map(|i| {
+            let x = (i % nx) as f32 / nx as f32;
+            let y = (i / nx % ny) as f32 / ny as f32;
+            ((x * 9.0).sin() * (y * 7.0).cos()).abs()
+        })
+        .collect();
+    let data = h.array(
+        DataType::ARRAY3D,
+        DataType::FLOAT32,
+        [nx.into(), ny.into(), nz.into()],
+        &bytes(&voxels),
+    );
+    let field = h.d.new_object(DataType::SPATIAL_FIELD, "structuredRegular");
+    h.set_object(field, "data", DataType::ARRAY3D, data);
+    h.set(
+        field,
+        "origin",
+        DataType::FLOAT32_VEC3,
+        bytes(&[-1.0f32, -1.0, -0.04]),
+    );
+    h.set(
+        field,
+        "spacing",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.01f32; 3]),
+    );
+    h.d.commit(Subject::Object(field));
+    h.d.release(data);
+    let volume = h.volume(field);
+    h.d.set_param(
+        Subject::Device,
+        "caveray.memoryBudget",
+        Input::Bytes(DataType::UINT64, budget.to_le_bytes().to_vec()),
+    );
+    if let Some(ms) = wait {
+        h.d.set_param(
+            Subject::Device,
+            "caveray.streamWait",
+            Input::Bytes(DataType::FLOAT32, bytes(&[ms])),
+        );
+    }
+    h.d.commit(Subject::Device);
+    let (frame, _camera) = h.frame(volume, 3.0);
+    (h, frame)
+}
+
+fn render_progress(h: &mut Host, frame: u64) -> f32 {
+    use anari_library_caveray::device::{Property, Subject};
+    match h.d.property(Subject::Object(frame), "renderProgress", true) {
+        Some(Property::Float32(p)) => p,
+        other => panic!("renderProgress: {other:?}"),
+    }
+}
+
+/// A world past the GPU memory budget is paged within it; with
+/// `caveray.streamWait` set, frames render what is resident and say how
+/// much through `renderProgress`, and rendering again refines the image
+/// until it equals the frame that waited for every brick.
+#[test]
+fn a_world_past_the_gpu_budget_streams_and_render_progress_reaches_one() {
+    use anari_library_caveray::device::{Property, Subject};
+    let budget = 1_200_000;
+    let (mut h, frame) = paged_world(budget, None);
+    let complete = h.pixels(frame);
+    assert_eq!(
+        render_progress(&mut h, frame),
+        1.0,
+        "a frame that waits has every brick"
+    );
+    let gpu = match h
+        .d
+        .property(Subject::Object(frame), "caveray.gpuBytes", true)
+    {
+        Some(Property::UInt64(n)) => n,
+        other => panic!("caveray.gpuBytes: {other:?}"),
+    };
+    assert!(gpu <= budget, "{gpu} bytes on the GPU");
+    assert!(h.messages(Severity::Error).is_empty());
+
+    let (mut h, frame) = paged_world(budget, Some(0.0));
+    let mut seen = Vec::new();
+    let image = loop {
+        let image = h.pixels(frame);
+        let p = render_progress(&mut h, frame);
+        assert!(p > 0.0 && p <= 1.0, "{p}");
+        seen.push(p);
+        if p >= 1.0 || seen.len() >= 500 {
+            break image;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    println!("renderProgress over {} renders: {seen:?}", seen.len());
+    assert_eq!(seen.last(), Some(&1.0), "{seen:?}");
+    same(&image, &complete).unwrap();
+    assert!(h.messages(Severity::Error).is_empty());
+
+    // A wait that is not a duration is refused, and frames wait.
+    let (mut h, _) = paged_world(budget, Some(-1.0));
+    let errors = h.messages(Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e
+                .contains("'caveray.streamWait' must be one FLOAT32 of at least 0 milliseconds")),
+        "{errors:?}"
+    );
 }

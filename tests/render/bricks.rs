@@ -1,6 +1,8 @@
-//! Volumes cut into bricks on the GPU (bricks with a one-voxel apron,
-//! packed into one atlas texture) render as the same volume in one texture
-//! does, and as the CPU reference renders it.
+//! Volumes paged on the GPU (bricks with a one-voxel apron in a pool
+//! texture, read through a page table), every brick resident, render as
+//! the same volume in one texture does, and as the CPU reference renders
+//! it; budgets too small for a brick are refused before anything is
+//! allocated.
 
 use crate::common;
 
@@ -129,7 +131,7 @@ fn sixteen_bit_volumes_take_two_bytes_a_voxel_where_the_adapter_allows() {
 }
 
 #[test]
-fn a_scene_past_the_gpu_budget_is_refused_before_upload_and_auto_renders_it_on_the_cpu() {
+fn a_gpu_budget_too_small_for_one_brick_is_refused_before_upload_and_auto_renders_on_the_cpu() {
     use anari_library_caveray::render::{Backend, RenderError, Renderer};
     let volume = Arc::new(shepp_logan(20));
     let scene = Scene::shared(Arc::clone(&volume), Arc::new(preset("phantom").unwrap()));
@@ -139,6 +141,8 @@ fn a_scene_past_the_gpu_budget_is_refused_before_upload_and_auto_renders_it_on_t
     let mut gpu = gpu();
     gpu.set_memory_budget(Some(32_000));
     gpu.upload(&twice).unwrap();
+    // Past the budget the volume would be paged, but its pool would not
+    // hold its one brick (20^3 voxels fit one).
     gpu.set_memory_budget(Some(31_999));
     let before = gpu.uploads().volumes;
     let err = gpu.upload(&scene).unwrap_err();
@@ -148,7 +152,7 @@ fn a_scene_past_the_gpu_budget_is_refused_before_upload_and_auto_renders_it_on_t
     );
     assert!(
         err.to_string()
-            .contains("past the GPU memory budget of 31999 bytes"),
+            .contains("past its share of the GPU memory budget of 31999 bytes"),
         "{err}"
     );
     assert_eq!(gpu.uploads().volumes, before, "nothing was uploaded");
@@ -163,8 +167,9 @@ fn a_scene_past_the_gpu_budget_is_refused_before_upload_and_auto_renders_it_on_t
     let mut auto = Renderer::Gpu(gpu);
     let why = auto.upload_for(Backend::Auto, &scene).unwrap().unwrap();
     assert!(
-        why.to_string()
-            .ends_with("past the GPU memory budget of 31999 bytes; rendering on the CPU"),
+        why.to_string().ends_with(
+            "past its share of the GPU memory budget of 31999 bytes; rendering on the CPU"
+        ),
         "{why}"
     );
     assert_eq!(auto.backend(), Backend::Cpu);

@@ -12,7 +12,7 @@ use common::render::{four_cameras, gpu, off_axis_wall, phantom, renderers};
 use glam::{UVec2, UVec3, Vec3, Vec4};
 
 #[test]
-fn a_volume_longer_than_the_adapters_textures_is_bricked_and_renders_as_on_the_cpu() {
+fn a_volume_longer_than_the_adapters_textures_is_paged_and_renders_as_on_the_cpu() {
     let mut gpu = gpu();
     let max = gpu.limits().max_texture_dimension_3d;
     let dims = UVec3::new(max + 1, 5, 6);
@@ -40,9 +40,21 @@ fn a_volume_longer_than_the_adapters_textures_is_bricked_and_renders_as_on_the_c
     let s = ssim(&frame, &expected).unwrap();
     assert!(s >= 0.9999, "SSIM {s} against the CPU");
     assert!(frame.samples > 0);
-    // Bricks of 63 voxels and their aprons along x; y and z whole.
-    let bricks = u64::from(dims.x.div_ceil(63));
-    assert_eq!(gpu.volume_bytes(), bricks * 64 * 5 * 6);
+    // Bricks of 63 voxels and their aprons along x, y and z whole, at
+    // every level of the chain (x halves until one brick holds it), and
+    // the page table: a word per level and per brick.
+    let mut bricks = Vec::new();
+    let mut x = dims.x;
+    loop {
+        bricks.push(u64::from(x.div_ceil(63)));
+        if x <= 63 {
+            break;
+        }
+        x = x.div_ceil(2);
+    }
+    let count: u64 = bricks.iter().sum();
+    let table = 4 * (bricks.len() as u64 + count);
+    assert_eq!(gpu.volume_bytes(), count * 64 * 5 * 6 + table);
 }
 
 #[test]

@@ -14,6 +14,7 @@ mod filtered_sampling;
 mod hit_channels;
 mod isosurface;
 mod known_answers;
+mod out_of_core;
 mod progress;
 mod ray_casting;
 mod several_volumes;

@@ -100,6 +100,9 @@ pub struct RenderReport {
     pub head: HeadInfo,
     pub upload_ms: f64,
     pub total_ms: f64,
+    /// What the volumes took on the GPU, where it rendered.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_memory: Option<GpuMemory>,
     pub views: Vec<ViewRecord>,
     pub contact_sheets: Vec<String>,
 }
@@ -375,6 +378,7 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
         },
         upload_ms,
         total_ms: start.elapsed().as_secs_f64() * 1e3,
+        gpu_memory: GpuMemory::of(&renderer),
         views: records,
         contact_sheets,
     };
@@ -552,6 +556,30 @@ fn write(image: &image::RgbaImage, path: &Path) -> Result<(), Failure> {
     write_rgba_png(image, path).map_err(|e| Failure::Runtime(e.to_string()))
 }
 
+/// The volumes' textures (or pools and page tables) on the GPU, and
+/// whether they were paged within a budget (set, or found from what the
+/// driver allocates).
+#[derive(Serialize)]
+pub struct GpuMemory {
+    pub bytes: u64,
+    pub paged: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub budget: Option<u64>,
+}
+
+impl GpuMemory {
+    fn of(renderer: &Renderer) -> Option<Self> {
+        let Renderer::Gpu(g) = renderer else {
+            return None;
+        };
+        Some(Self {
+            bytes: g.volume_bytes(),
+            paged: g.streaming().wanted > 0,
+            budget: g.memory_budget(),
+        })
+    }
+}
+
 fn print_summary(report: &RenderReport) {
     println!(
         "{} on {}",
@@ -591,4 +619,15 @@ fn print_summary(report: &RenderReport) {
         "upload {:.1} ms, total {:.1} ms; images, contact sheets and timings.json are in the output folder",
         report.upload_ms, report.total_ms
     );
+    if let Some(m) = report.gpu_memory.as_ref().filter(|m| m.paged) {
+        let mib = |b: u64| b as f64 / f64::from(1 << 20);
+        println!(
+            "the volume is paged on the GPU: {:.1} MiB of bricks and page table{}",
+            mib(m.bytes),
+            m.budget.map_or(String::new(), |b| format!(
+                " within a budget of {:.1} MiB",
+                mib(b)
+            ))
+        );
+    }
 }

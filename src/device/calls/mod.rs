@@ -22,7 +22,7 @@ use super::types::{kind_name, object_kind, DataType, Reporter, Severity, Status,
 use super::volume::VolumeModel;
 use super::world::WorldModel;
 use crate::engine::{About, Engine, FrameSlot, Note};
-use crate::render::Backend;
+use crate::render::{Backend, StreamWait};
 use crate::scene::StructuredVolume;
 
 pub use frames::{Mapped, OnDone};
@@ -87,6 +87,8 @@ pub struct Device {
     backend: Backend,
     /// `caveray.memoryBudget`: bytes of volume textures the GPU may hold.
     gpu_budget: Option<u64>,
+    /// `caveray.streamWait`: how long a frame waits for bricks.
+    stream_wait: StreamWait,
     /// `pairStereoFrames`: frames that show the two eyes of one wall are
     /// found and rendered together.
     pairing: bool,
@@ -119,6 +121,7 @@ impl Device {
             mapped_params: HashMap::new(),
             backend,
             gpu_budget: None,
+            stream_wait: StreamWait::Complete,
             pairing: true,
             statuses: Vec::new(),
             due: Vec::new(),
@@ -159,6 +162,10 @@ impl Device {
 
     pub fn gpu_budget(&self) -> Option<u64> {
         self.gpu_budget
+    }
+
+    pub fn stream_wait(&self) -> StreamWait {
+        self.stream_wait
     }
 
     pub(super) fn status(
@@ -398,8 +405,14 @@ impl Device {
                 }
                 match name {
                     "duration" => Some(Property::Float32(s.duration.as_secs_f32())),
-                    // A render is whole or not started: no partial progress.
-                    "renderProgress" => Some(Property::Float32(if s.busy { 0.0 } else { 1.0 })),
+                    // 0 while a render runs; after, the share of the
+                    // bricks of paged volumes it selected that it
+                    // rendered with (1 where nothing is paged).
+                    "renderProgress" => Some(Property::Float32(if s.busy {
+                        0.0
+                    } else {
+                        s.progress.unwrap_or(1.0)
+                    })),
                     "numSamples" => Some(Property::Int32(s.samples as i32)),
                     // Volume samples the last image took, primary and
                     // shading: what benchmark hosts divide time by.

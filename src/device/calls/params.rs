@@ -6,6 +6,7 @@ use crate::device::object::{ObjectRef, Params, Value};
 use crate::device::table::{ParamInfo, Read};
 use crate::device::types::{DataType, StatusCode};
 use crate::device::{device_object, info};
+use crate::render::StreamWait;
 
 impl Device {
     /// `anariSetParameter`: checked against the subtype's table. Unknown
@@ -268,6 +269,23 @@ impl Device {
             .get("caveray.memoryBudget")
             .and_then(|v| v.u64())
             .filter(|&b| b > 0);
+        self.stream_wait = match self.committed.get("caveray.streamWait") {
+            None => StreamWait::Complete,
+            Some(v) => match v.f32s().as_deref() {
+                Some(&[ms]) if ms.is_finite() && ms >= 0.0 => StreamWait::Budget {
+                    wait: std::time::Duration::from_secs_f32(ms / 1000.0),
+                    bricks: u32::MAX,
+                },
+                _ => {
+                    self.error(
+                        StatusCode::InvalidArgument,
+                        None,
+                        "anariCommitParameters: device parameter 'caveray.streamWait' must be one FLOAT32 of at least 0 milliseconds; frames wait for every brick".into(),
+                    );
+                    StreamWait::Complete
+                }
+            },
+        };
         if let Some(b) = self.committed.string("backend") {
             match b.parse() {
                 Ok(b) => self.backend = b,

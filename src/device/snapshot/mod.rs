@@ -20,7 +20,7 @@ use super::types::{kind_name, DataType};
 use super::volume::VolumeModel;
 use super::world::WorldModel;
 use crate::engine::{Deadline, Inputs, Unrenderable};
-use crate::render::{Backend, FrameDesc, RenderSettings};
+use crate::render::{Backend, FrameDesc, RenderSettings, StreamWait};
 use crate::render::{Lamp, MAX_LAMPS};
 use crate::scene::{ObjectIds, PlacedVolume, Scene, StructuredVolume};
 
@@ -43,6 +43,7 @@ pub fn take(
     frame: &ObjectRef,
     backend: Backend,
     gpu_budget: Option<u64>,
+    stream_wait: StreamWait,
 ) -> Result<FrameSnapshot, String> {
     let params = frame
         .lock()
@@ -137,6 +138,7 @@ pub fn take(
         desc,
         backend,
         gpu_budget,
+        stream_wait,
         accumulate,
     };
     inputs.check().map_err(|e| match e {

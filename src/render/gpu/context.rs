@@ -67,12 +67,16 @@ pub(super) struct Context {
     /// Whether 16-bit normalised textures exist: 16-bit volumes keep two
     /// bytes a voxel where they do, and take four (as floats) where not.
     pub norm16: bool,
-    /// Bricks of this many texels a side for every volume, where the
-    /// renderer was told so; otherwise only volumes longer than the
-    /// adapter's 3D texture limit are bricked.
+    /// Every volume paged, in bricks of this many texels a side, where
+    /// the renderer was told so; otherwise only volumes longer than the
+    /// adapter's 3D texture limit or past the memory budget are paged.
     pub brick_texels: Option<u32>,
-    /// Bytes the scene's volume textures may take together, where set.
+    /// Bytes the scene's volume textures (and brick pools) may take
+    /// together, where set.
     pub memory_budget: Option<u64>,
+    /// What the driver was found to allocate: set where it refused a
+    /// scene's textures for lack of memory, halved at each refusal.
+    pub driver_budget: Option<u64>,
     errors: Arc<Mutex<Vec<String>>>,
     timestamps: Option<Timestamps>,
 }
@@ -95,6 +99,15 @@ fn quiet_device_select() {
 }
 
 impl Context {
+    /// The memory budget volumes are laid out for: the one set, or what
+    /// the driver was found to allocate, whichever is smaller.
+    pub fn budget(&self) -> Option<u64> {
+        match (self.memory_budget, self.driver_budget) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// The adapter `new` would open, without a device: what it is.
     pub fn probe() -> Result<wgpu::AdapterInfo, RenderError> {
         Ok(Self::adapter()?.get_info())
@@ -181,6 +194,7 @@ impl Context {
             info,
             brick_texels: None,
             memory_budget: None,
+            driver_budget: None,
             limits,
             filterable: features.contains(wgpu::Features::FLOAT32_FILTERABLE),
             norm16: features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM),

@@ -13,11 +13,11 @@ use wgpu::TextureViewDimension as Dim;
 
 use super::bindings::{binding_table, Kind};
 use super::context::{unprepared, Context, Pass, WORKGROUP};
+use super::paging;
 use super::raycast::{RaycastPass, Variants};
 use super::resources::{color_data, floats};
 use super::shaders::compute_pipeline;
 use super::uniforms::Stereo;
-use super::volume_texture;
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
 use crate::render::stereo::{LayerFormat, Reprojection, StereoTimes};
 use crate::render::{RenderError, RenderSettings, Watch};
@@ -61,9 +61,9 @@ pub(super) struct LayersPass {
     /// The left eye's march, for one volume and for several: writing one
     /// family of lines, and both.
     reproject: [Variants; 2],
-    /// The same for scenes with a bricked volume, compiled when the first
+    /// The same for scenes with a paged volume, compiled when the first
     /// comes (any count of volumes).
-    reproject_bricked: [OnceLock<wgpu::ComputePipeline>; 2],
+    reproject_paged: [OnceLock<wgpu::ComputePipeline>; 2],
     clear: wgpu::ComputePipeline,
     /// The right eye's first opaque surfaces, before the march.
     first_opaque: wgpu::ComputePipeline,
@@ -197,7 +197,7 @@ impl LayersPass {
         Ok(Self {
             format,
             reproject: [families(1)?, families(2)?],
-            reproject_bricked: Default::default(),
+            reproject_paged: Default::default(),
             clear: pipeline("layer clear", "clear", &[])?,
             first_opaque: compositing("right-eye surfaces", "first_opaque", &[])?,
             summarise: compositing("span blocks", "summarise", &[])?,
@@ -498,8 +498,8 @@ impl LayersPass {
             0.0
         };
         let both = plan.family_count() == 2;
-        let pipeline = if volume_texture::any_bricked(ctx, scene) {
-            let cell = &self.reproject_bricked[usize::from(both)];
+        let pipeline = if paging::any_paged(ctx, scene) {
+            let cell = &self.reproject_paged[usize::from(both)];
             match cell.get() {
                 Some(p) => p,
                 None => {
@@ -510,12 +510,12 @@ impl LayersPass {
                     ];
                     let made = compute_pipeline(
                         &ctx.device,
-                        "re-projection, bricked",
+                        "re-projection, paged",
                         "reproject",
                         "main",
                         &groups,
                         &[
-                            ("BRICKED", 1.0),
+                            ("PAGED", 1.0),
                             ("BOTH_FAMILIES", if both { 1.0 } else { 0.0 }),
                         ],
                     )?;

@@ -14,6 +14,7 @@ mod context;
 mod iso;
 mod layers;
 mod modules;
+mod paging;
 mod raycast;
 mod resources;
 mod scene;
@@ -27,6 +28,7 @@ use std::sync::atomic::AtomicBool;
 use glam::{UVec2, Vec4};
 
 pub use self::context::PassClock;
+pub use self::paging::{StreamWait, Streaming};
 pub use self::scene::Uploads;
 
 use self::capture::{layer_bytes, CapturePass};
@@ -59,6 +61,10 @@ pub struct GpuRenderer {
     /// The isosurface pipelines, made on the first cast.
     iso: Option<IsoPass>,
     last_pass_ms: f64,
+    /// How long a frame waits for the bricks of paged volumes.
+    stream_wait: StreamWait,
+    /// How much of what the last frame selected was resident.
+    streaming: Streaming,
 }
 
 impl GpuRenderer {
@@ -77,6 +83,8 @@ impl GpuRenderer {
             capture: None,
             iso: None,
             last_pass_ms: 0.0,
+            stream_wait: StreamWait::Complete,
+            streaming: Streaming::default(),
         })
     }
 
@@ -126,21 +134,38 @@ impl GpuRenderer {
         self.scene.uploads()
     }
 
-    /// Every volume in bricks of `texels` a side from now on (None: only
-    /// those longer than the adapter's 3D texture limit, in bricks of
-    /// 64): lets tests and benchmarks brick volumes small enough to
-    /// compare with a whole texture. Volumes on the GPU are uploaded
-    /// again.
+    /// Every volume paged, in bricks of `texels` a side, from now on
+    /// (None: only those longer than the adapter's 3D texture limit or
+    /// past the memory budget, in bricks of 64): lets tests and
+    /// benchmarks page volumes small enough to compare with a whole
+    /// texture. Volumes on the GPU are uploaded again.
     pub fn brick_every_volume(&mut self, texels: Option<u32>) {
         self.ctx.brick_texels = texels;
         self.scene.forget_volumes();
     }
 
     /// At most `bytes` of volume textures from now on (None: as many as
-    /// the adapter allocates): a scene past it is refused before anything
-    /// is allocated, and `Backend::Auto` renders it on the CPU.
+    /// the adapter allocates): the volumes of a scene past it are paged,
+    /// each pool its share of the budget; one too small for a single
+    /// brick is refused before anything is allocated, and `Backend::Auto`
+    /// renders it on the CPU.
     pub fn set_memory_budget(&mut self, bytes: Option<u64>) {
         self.ctx.memory_budget = bytes;
+        self.ctx.driver_budget = None;
+    }
+
+    /// How long a frame waits for the bricks of paged volumes from now on:
+    /// until all it selected are resident (`Complete`, the default), or
+    /// at most a budget, after which it renders what is resident (coarser
+    /// levels where bricks are missing) and later frames refine.
+    pub fn set_stream_wait(&mut self, wait: StreamWait) {
+        self.stream_wait = wait;
+    }
+
+    /// How much of what the last frame selected of its paged volumes was
+    /// resident ([`Streaming::progress`]).
+    pub fn streaming(&self) -> Streaming {
+        self.streaming
     }
 
     /// Whether 16-bit volumes sit in 16-bit textures here (else in
@@ -152,6 +177,18 @@ impl GpuRenderer {
     /// Bytes the current scene's volume textures hold on the GPU.
     pub fn volume_bytes(&self) -> u64 {
         self.scene.volume_bytes()
+    }
+
+    /// The memory budget volumes are laid out for: the one set, or what
+    /// the driver was found to allocate, whichever is smaller.
+    pub fn memory_budget(&self) -> Option<u64> {
+        self.ctx.budget()
+    }
+
+    /// Bytes the current scene's paged volumes keep in host memory beside
+    /// their voxels: their coarser levels, once made.
+    pub fn host_volume_bytes(&self) -> u64 {
+        self.scene.host_volume_bytes()
     }
 
     /// `placed` as the scene an isosurface cast uploads, refused before
@@ -171,17 +208,32 @@ impl GpuRenderer {
         }
         if self.ctx.brick_texels.is_some() {
             return Err(RenderError::Settings(
-                "isosurfaces on the GPU read a volume from one texture, and this renderer was told to brick every volume".into(),
+                "isosurfaces on the GPU read a volume from one texture, and this renderer was told to page every volume".into(),
             ));
         }
-        volume_texture::check_scene(&self.ctx, &scene)?;
+        let layout = paging::layouts(&self.ctx, &scene)?;
+        if let Some(budget) = self.ctx.budget() {
+            let bytes: u64 = layout.iter().map(|l| l.bytes()).sum();
+            let whole = layout
+                .iter()
+                .all(|l| matches!(l, paging::Layout::Whole { .. }));
+            if !whole {
+                let bytes = dims.as_u64vec3().element_product().max(bytes);
+                return Err(RenderError::OutOfMemory {
+                    bytes,
+                    what: format!(
+                        "the isosurface's volume texture, past the GPU memory budget of {budget} bytes (isosurfaces read no paged volumes)"
+                    ),
+                });
+            }
+        }
         Ok(scene)
     }
 
     /// Fails, before touching the GPU, if the scene or frame exceeds what
     /// this adapter allows.
     pub fn check_limits(&self, scene: &Scene, desc: &FrameDesc) -> Result<(), RenderError> {
-        volume_texture::check_scene(&self.ctx, scene)?;
+        paging::layouts(&self.ctx, scene)?;
         self.ctx.check_frame(desc)
     }
 
@@ -197,7 +249,7 @@ impl GpuRenderer {
         desc.validate()?;
         let plan = MarchPlan::new(scene, rays, settings)?;
         let ctx = &self.ctx;
-        volume_texture::check_scene(ctx, scene)?;
+        paging::layouts(ctx, scene)?;
         ctx.check_frame(desc)?;
         if plan.skipping {
             self.scene.find_clear_bricks(ctx, scene, &plan)?;
@@ -209,7 +261,16 @@ impl GpuRenderer {
         if filtered && settings.level_of_detail > 0.0 {
             self.scene.use_mips();
         }
-        self.scene.upload(ctx, scene)?;
+        self.upload_within_the_driver(scene)?;
+        let ctx = &self.ctx;
+        self.streaming = self.scene.stream(
+            ctx,
+            scene,
+            &plan,
+            rays,
+            (settings.sampling, desc),
+            self.stream_wait,
+        )?;
         self.scene.upload_surfaces(ctx, scene)?;
         self.scene
             .set_background(ctx, settings.background_image.as_ref());
@@ -233,10 +294,29 @@ impl GpuRenderer {
     /// uploads apart from frames.
     pub fn upload(&mut self, scene: &Scene) -> Result<(), RenderError> {
         self.check_limits(scene, &FrameDesc::new(UVec2::ONE))?;
-        self.scene.upload(&self.ctx, scene)?;
+        self.upload_within_the_driver(scene)?;
         self.ctx.queue.submit([]);
         self.ctx.wait()?;
         self.ctx.check()
+    }
+
+    /// Uploads the scene; where the driver refuses a texture or pool for
+    /// lack of memory (past the limits checked before), lays the scene
+    /// out again for half the bytes it asked for, paging its volumes,
+    /// until the driver allocates it or a pool would hold no brick.
+    fn upload_within_the_driver(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        loop {
+            let asked: u64 = paging::layouts(&self.ctx, scene)?
+                .iter()
+                .map(paging::Layout::bytes)
+                .sum();
+            match self.scene.upload(&self.ctx, scene) {
+                Err(RenderError::OutOfMemory { .. }) if asked > 1 => {
+                    self.ctx.driver_budget = Some(asked / 2);
+                }
+                other => return other,
+            }
+        }
     }
 
     /// Whether this adapter runs filtered sampling.

@@ -12,11 +12,12 @@ use std::sync::OnceLock;
 
 use super::bindings::{binding_table, GroupLayout, Kind};
 use super::context::{unprepared, Context, Pass, BAND_STRIDE, WORKGROUP};
+use super::paging;
 use super::resources::{color_data, floats, BrickSlot, OutputBuffers, SurfaceSlot};
 use super::scene::GpuScene;
 use super::shaders::compute_pipeline;
 use super::uniforms::{self, RayUniforms};
-use super::volume_texture::{self, TextureSlot};
+use super::volume_texture::TextureSlot;
 use crate::geometry::RayGen;
 use crate::render::frame::{Frame, FrameDesc};
 use crate::render::hits::{self, HitRecord};
@@ -54,6 +55,9 @@ binding_table! {
         /// from params.volumes[v].brick_offset on
         /// (src/render/empty_space.rs).
         bricks: Kind::storage("array<u32>"),
+        /// The paged volumes' page tables (src/render/gpu/paging.rs);
+        /// volume v's from params.volumes[v].page_offset on.
+        pages: Kind::storage("array<u32>"),
         /// Linear where the adapter filters 32-bit floats (filtered
         /// sampling).
         linear: Kind::sampler(filterable),
@@ -96,14 +100,14 @@ impl Variants {
 /// A marching shader's pipelines, each compiled the first time a frame
 /// needs it: exact or hardware-filtered sampling (where the adapter
 /// filters 32-bit floats), one volume or several, with surfaces or
-/// without, with bricked volumes or without. Each override lets the compiler drop what a scene does not
+/// without, with paged volumes or without. Each override lets the compiler drop what a scene does not
 /// use: software Vulkan takes seconds for each pipeline that traverses
 /// surfaces, and a fraction of one for a volume's march alone.
 pub(super) struct Sampled {
     label: &'static str,
     module: &'static str,
     groups: Vec<GroupLayout>,
-    /// Indexed by bricked * 8 + filtered * 4 + one volume * 2 + surfaces.
+    /// Indexed by paged * 8 + filtered * 4 + one volume * 2 + surfaces.
     variants: [OnceLock<wgpu::ComputePipeline>; 16],
 }
 
@@ -133,8 +137,8 @@ impl Sampled {
         };
         let one = scene.volumes().len() == 1;
         let surfaces = !scene.shapes().is_empty();
-        let bricked = volume_texture::any_bricked(ctx, scene);
-        let cell = &self.variants[usize::from(bricked) * 8
+        let paged = paging::any_paged(ctx, scene);
+        let cell = &self.variants[usize::from(paged) * 8
             + usize::from(filtered) * 4
             + usize::from(one) * 2
             + usize::from(surfaces)];
@@ -153,7 +157,7 @@ impl Sampled {
                 ("FILTERED", flag(filtered)),
                 ("ONE_VOLUME", flag(one)),
                 ("SURFACES", flag(surfaces)),
-                ("BRICKED", flag(bricked)),
+                ("PAGED", flag(paged)),
             ],
         )?;
         Ok(cell.get_or_init(|| pipeline))
@@ -310,6 +314,7 @@ impl RaycastPass {
             volume6: volume(6),
             volume7: volume(7),
             bricks: scene.bricks().as_entire_binding(),
+            pages: scene.pages().as_entire_binding(),
             linear: wgpu::BindingResource::Sampler(&self.sampler),
             linear_mips: wgpu::BindingResource::Sampler(&self.mip_sampler),
             surfaces: scene.surfaces()[0].as_entire_binding(),

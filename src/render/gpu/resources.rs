@@ -94,6 +94,18 @@ pub(super) fn surfaces_buffers(
     Ok((buffer, slot))
 }
 
+/// A storage buffer of u32 words that frames rewrite in place (one zero
+/// word where there are none: storage bindings cannot be empty).
+pub(super) fn words_u32_buffer(ctx: &Context, label: &str, words: &[u32]) -> wgpu::Buffer {
+    let words = if words.is_empty() { &[0][..] } else { words };
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(words),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        })
+}
+
 /// A storage buffer of vec4 words (one zero word where there are none:
 /// storage bindings cannot be empty).
 pub(super) fn words_buffer(ctx: &Context, words: &[[f32; 4]]) -> wgpu::Buffer {

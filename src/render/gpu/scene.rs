@@ -1,20 +1,56 @@
-//! The scene on the GPU: its volumes as textures, its transfer functions
-//! as rows of one table texture, the background image and the clear-brick
-//! distances and the surfaces' BVH, uploaded when a scene brings new ones
-//! and kept otherwise.
+//! The scene on the GPU: its volumes as textures (or brick pools and page
+//! tables, paging.rs), its transfer functions as rows of one table
+//! texture, the background image and the clear-brick distances and the
+//! surfaces' BVH, uploaded when a scene brings new ones and kept
+//! otherwise.
 //! Passes bind these; `generation` tells them when a bind group made
 //! before binds something no longer current.
 
 use std::sync::Arc;
+use std::time::Instant;
+
+use glam::Vec3;
 
 use super::context::Context;
+use super::paging::{self, Footprint, Layout, PagedVolume, Sight, StreamWait, Streaming, View};
 use super::resources::{self, BrickSlot, SurfaceSlot};
-use super::volume_texture::{self, TextureSlot, VolumeTexture};
-use crate::render::empty_space::{EmptySpace, SpaceCache};
+use super::volume_texture::{self, PageSlot, TextureSlot, VolumeTexture};
+use crate::geometry::RayGen;
+use crate::render::empty_space::{EmptySpace, SpaceCache, Visibility};
 use crate::render::march_plan::MarchPlan;
 use crate::render::shapes::ShapeSet;
-use crate::render::{BackgroundImage, RenderError};
-use crate::scene::{PlacedShape, Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
+use crate::render::{BackgroundImage, FrameDesc, RenderError, Sampling};
+use crate::scene::{Filter, PlacedShape, Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
+
+/// A grid on the GPU: one texture, or paged.
+enum OnGpu {
+    Whole(VolumeTexture),
+    Paged(Box<PagedVolume>),
+}
+
+impl OnGpu {
+    fn view(&self) -> &wgpu::TextureView {
+        match self {
+            OnGpu::Whole(t) => &t.view,
+            OnGpu::Paged(p) => &p.view,
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        match self {
+            OnGpu::Whole(t) => t.bytes,
+            OnGpu::Paged(p) => p.bytes(),
+        }
+    }
+
+    fn fits(&self, layout: &Layout) -> bool {
+        match (self, layout) {
+            (OnGpu::Whole(_), Layout::Whole { .. }) => true,
+            (OnGpu::Paged(p), Layout::Paged { pool, .. }) => p.pool == *pool,
+            _ => false,
+        }
+    }
+}
 
 /// How often data went to the GPU; lets tests (and curious users) check
 /// that unchanged scenes are not uploaded again.
@@ -31,8 +67,14 @@ pub(super) struct GpuScene {
     /// with level of detail on (software Vulkan samples textures without
     /// them faster, so full detail does not pay for them before).
     mips: bool,
-    /// The scene's volumes on the GPU, in its order.
-    volumes: Vec<(Arc<StructuredVolume>, VolumeTexture)>,
+    /// The scene's grids on the GPU, each once (Scene::grids order).
+    grids: Vec<(Arc<StructuredVolume>, OnGpu)>,
+    /// Per scene volume, its grid's index in `grids`.
+    placed: Vec<usize>,
+    /// The paged grids' page tables, one after the other, and where each
+    /// grid's starts (by index in `grids`).
+    pages: wgpu::Buffer,
+    page_offsets: Vec<Option<u32>>,
     /// Bound where a scene has fewer than MAX_VOLUMES volumes.
     no_volume: wgpu::TextureView,
     /// One row per volume slot; which transfer function each row holds.
@@ -73,9 +115,13 @@ impl GpuScene {
             resources::words_buffer(ctx, &[]),
             resources::words_buffer(ctx, &[]),
         ];
+        let pages = resources::words_u32_buffer(ctx, "pages", &[]);
         Self {
             mips: false,
-            volumes: Vec::new(),
+            grids: Vec::new(),
+            placed: Vec::new(),
+            pages,
+            page_offsets: Vec::new(),
             no_volume,
             table,
             table_view,
@@ -104,14 +150,21 @@ impl GpuScene {
 
     /// Volume slot `i`'s texture (the stand-in past the scene's volumes).
     pub fn volume(&self, i: usize) -> &wgpu::TextureView {
-        self.volumes
+        self.placed
             .get(i)
-            .map_or(&self.no_volume, |(_, t)| &t.view)
+            .map_or(&self.no_volume, |&g| self.grids[g].1.view())
     }
 
-    /// The first volume's texture, if the scene has one.
+    /// The first volume's texture, if the scene has one in one texture.
     pub fn first_volume(&self) -> Option<&VolumeTexture> {
-        self.volumes.first().map(|(_, t)| t)
+        match self.grids.get(*self.placed.first()?)?.1 {
+            OnGpu::Whole(ref t) => Some(t),
+            OnGpu::Paged(_) => None,
+        }
+    }
+
+    pub fn pages(&self) -> &wgpu::Buffer {
+        &self.pages
     }
 
     pub fn table_view(&self) -> &wgpu::TextureView {
@@ -164,7 +217,8 @@ impl GpuScene {
 
     /// Drops the volume textures: the next upload makes them again.
     pub fn forget_volumes(&mut self) {
-        self.volumes.clear();
+        self.grids.clear();
+        self.placed.clear();
         self.generation += 1;
     }
 
@@ -173,43 +227,72 @@ impl GpuScene {
     pub fn use_mips(&mut self) {
         if !self.mips {
             self.mips = true;
-            self.volumes.clear();
+            self.grids.retain(|(_, g)| matches!(g, OnGpu::Paged(_)));
+            self.placed.clear();
             self.generation += 1;
         }
     }
 
     /// Uploads whatever of the scene is not on the GPU (a new volume
-    /// texture changes the generation; tables are rows of one texture,
-    /// rewritten in place).
+    /// texture or pool changes the generation; tables are rows of one
+    /// texture, rewritten in place). Paged volumes get their pools here,
+    /// and their bricks as frames stream them.
     pub fn upload(&mut self, ctx: &Context, scene: &Scene) -> Result<(), RenderError> {
-        let mut volumes = Vec::with_capacity(scene.volumes().len());
-        for placed in scene.volumes() {
-            // A grid placed twice is one texture.
-            let kept = volumes
+        let layouts = paging::layouts(ctx, scene)?;
+        let wanted: Vec<&Arc<StructuredVolume>> = scene.grids().collect();
+        // Grids no longer in the scene, or laid out differently now, go
+        // before new ones are made, so that replacing a large volume does
+        // not need room for both.
+        let before = self.grids.len();
+        self.grids.retain(|(v, g)| {
+            wanted
                 .iter()
-                .chain(&self.volumes)
-                .find(|(v, _)| Arc::ptr_eq(v, &placed.volume))
-                .map(|(_, texture)| texture.clone());
-            let texture = match kept {
-                Some(t) => t,
+                .zip(&layouts)
+                .any(|(w, l)| Arc::ptr_eq(v, w) && g.fits(l))
+        });
+        let mut changed = self.grids.len() != before;
+        let mut grids = Vec::with_capacity(wanted.len());
+        for (volume, layout) in wanted.into_iter().zip(&layouts) {
+            let kept = self
+                .grids
+                .iter()
+                .position(|(v, _)| Arc::ptr_eq(v, volume))
+                .map(|i| self.grids.swap_remove(i));
+            let grid = match kept {
+                Some(g) => g,
                 None => {
-                    // Textures no longer in the scene go before new ones
-                    // are made, so that replacing a large volume does not
-                    // need room for both.
-                    self.volumes
-                        .retain(|(v, _)| scene.volumes().iter().any(|p| Arc::ptr_eq(v, &p.volume)));
+                    changed = true;
                     self.uploads.volumes += 1;
-                    volume_texture::upload(ctx, &placed.volume, self.mips)?
+                    let on_gpu = match layout {
+                        Layout::Whole { .. } => {
+                            OnGpu::Whole(volume_texture::upload(ctx, volume, self.mips)?)
+                        }
+                        Layout::Paged { pool, .. } => {
+                            OnGpu::Paged(Box::new(PagedVolume::new(ctx, volume, *pool)?))
+                        }
+                    };
+                    (Arc::clone(volume), on_gpu)
                 }
             };
-            volumes.push((Arc::clone(&placed.volume), texture));
+            grids.push(grid);
         }
-        let changed = volumes.len() != self.volumes.len()
-            || volumes
-                .iter()
-                .zip(&self.volumes)
-                .any(|((a, _), (b, _))| !Arc::ptr_eq(a, b));
-        self.volumes = volumes;
+        self.grids = grids;
+        let placed: Vec<usize> = scene
+            .volumes()
+            .iter()
+            .map(|p| {
+                self.grids
+                    .iter()
+                    .position(|(v, _)| Arc::ptr_eq(v, &p.volume))
+                    .unwrap_or(0)
+            })
+            .collect();
+        changed |= placed != self.placed;
+        self.placed = placed;
+        if changed {
+            self.lay_out_pages(ctx);
+            self.generation += 1;
+        }
         for (row, placed) in scene.volumes().iter().enumerate() {
             let tf = &placed.transfer_function;
             if !matches!(&self.tables[row], Some(t) if Arc::ptr_eq(t, tf)) {
@@ -218,25 +301,145 @@ impl GpuScene {
                 self.uploads.transfer_functions += 1;
             }
         }
-        if changed {
-            self.generation += 1;
-        }
         Ok(())
     }
 
-    /// How the shaders read each of the scene's volume textures.
-    pub fn texture_slots(&self) -> Vec<TextureSlot> {
-        self.volumes.iter().map(|(_, t)| t.slot()).collect()
+    /// The pages buffer for the grids now paged, every table written.
+    fn lay_out_pages(&mut self, ctx: &Context) {
+        let mut words = Vec::new();
+        self.page_offsets = self
+            .grids
+            .iter_mut()
+            .map(|(_, g)| match g {
+                OnGpu::Whole(_) => None,
+                OnGpu::Paged(p) => {
+                    let at = words.len() as u32;
+                    words.extend(p.table());
+                    p.dirty = false;
+                    Some(at)
+                }
+            })
+            .collect();
+        self.pages = resources::words_u32_buffer(ctx, "pages", &words);
     }
 
-    /// Bytes the scene's volume textures hold on the GPU, each texture
-    /// once.
+    /// Streams the paged volumes' bricks for a frame cast along `rays`:
+    /// selects what its view asks for, uploads what is built (waiting as
+    /// `wait` says) and writes the page tables that changed.
+    pub fn stream(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        plan: &MarchPlan,
+        rays: &RayGen,
+        (sampling, desc): (Sampling, &FrameDesc),
+        wait: StreamWait,
+    ) -> Result<Streaming, RenderError> {
+        let mut total = Streaming::default();
+        let until = Instant::now()
+            + match wait {
+                StreamWait::Complete => std::time::Duration::ZERO,
+                StreamWait::Budget { wait, .. } => wait,
+            };
+        let centre = desc.size.as_vec2() * 0.5;
+        let eye = rays
+            .eye
+            .unwrap_or(rays.origin + centre.x * rays.origin_dx + centre.y * rays.origin_dy);
+        let eyes: [Vec3; 1] = [eye];
+        for (g, (volume, on_gpu)) in self.grids.iter_mut().enumerate() {
+            let OnGpu::Paged(paged) = on_gpu else {
+                continue;
+            };
+            let sights: Vec<Sight> = scene
+                .volumes()
+                .iter()
+                .zip(&plan.volumes)
+                .filter(|(p, _)| Arc::ptr_eq(&p.volume, volume))
+                .map(|(p, vplan)| {
+                    let world_to_grid = p.world_to_grid().as_mat4();
+                    Sight {
+                        world_to_grid,
+                        grid_to_world: world_to_grid.inverse(),
+                        visible: Visibility::new(
+                            &p.transfer_function.table(),
+                            vplan.value_lo,
+                            vplan.value_scale,
+                        ),
+                    }
+                })
+                .collect();
+            let lod = if sampling == Sampling::Filtered && volume.filter() != Filter::Nearest {
+                plan.level_of_detail
+            } else {
+                0.0
+            };
+            let view = View {
+                eyes: &eyes,
+                footprint: Footprint {
+                    lod,
+                    width: rays.pixel_width(),
+                    spread: rays.pixel_spread(desc.size),
+                    step: plan.shading_step,
+                },
+                sights: &sights,
+            };
+            total.add(paged.stream(ctx, &view, wait, until)?);
+            if paged.dirty {
+                if let Some(at) = self.page_offsets.get(g).copied().flatten() {
+                    let words = paged.table();
+                    ctx.queue.write_buffer(
+                        &self.pages,
+                        u64::from(at) * 4,
+                        bytemuck::cast_slice(&words),
+                    );
+                }
+                paged.dirty = false;
+            }
+        }
+        Ok(total)
+    }
+
+    /// How the shaders read each of the scene's volumes.
+    pub fn texture_slots(&self) -> Vec<TextureSlot> {
+        self.placed
+            .iter()
+            .map(|&g| match &self.grids[g].1 {
+                OnGpu::Whole(t) => TextureSlot {
+                    to_value: t.to_value,
+                    pages: None,
+                },
+                OnGpu::Paged(p) => TextureSlot {
+                    to_value: p.to_value,
+                    pages: Some(PageSlot {
+                        offset: self.page_offsets[g].unwrap_or(0),
+                        levels: p.pyramid.levels(),
+                        side: p.pool.side,
+                        atlas: p.pool.atlas.to_array(),
+                    }),
+                },
+            })
+            .collect()
+    }
+
+    /// Bytes the scene's volumes hold on the GPU: textures and pools, each
+    /// grid once, and the page tables.
     pub fn volume_bytes(&self) -> u64 {
-        let v = &self.volumes;
-        v.iter()
-            .enumerate()
-            .filter(|(i, (a, _))| !v[..*i].iter().any(|(b, _)| Arc::ptr_eq(a, b)))
-            .map(|(_, (_, t))| t.bytes)
+        let pages = if self.page_offsets.iter().any(Option::is_some) {
+            self.pages.size()
+        } else {
+            0
+        };
+        self.grids.iter().map(|(_, g)| g.bytes()).sum::<u64>() + pages
+    }
+
+    /// Bytes the paged grids keep in host memory: their coarser levels.
+    pub fn host_volume_bytes(&self) -> u64 {
+        self.grids
+            .iter()
+            .map(|(_, g)| match g {
+                OnGpu::Paged(p) => p.host_bytes(),
+                OnGpu::Whole(_) => 0,
+            })
             .sum()
     }
 

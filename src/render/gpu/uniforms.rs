@@ -128,14 +128,16 @@ uniform! {
         /// Texel to field value: value = texel * scale + offset.
         texel_scale: f32,
         texel_offset: f32,
-        /// 1: the texture is an atlas of bricks.
-        bricked: u32,
-        /// Bricks per row and column of the atlas.
+        /// Levels of a paged volume's chain (0: the volume is one
+        /// texture; src/render/gpu/paging.rs).
+        levels: u32,
+        /// Slots per row and column of its pool texture.
         atlas_bricks: [u32; 2],
         /// Voxels a brick covers per axis (its texels hold one more on
         /// the axes cut into several bricks).
         brick_side: [u32; 3],
-        _pad: u32,
+        /// Its page table's first word in `pages`.
+        page_offset: u32,
     }
 }
 
@@ -395,9 +397,10 @@ uniform! {
 
 impl VolumeSlot {
     fn new(plan: &VolumePlan, bricks: BrickSlot, texture: TextureSlot) -> Self {
-        let (brick_side, atlas_bricks) = texture.bricking.map_or(([1; 3], [1; 2]), |b| {
-            (b.side.to_array(), b.atlas.to_array())
-        });
+        let (brick_side, atlas_bricks, levels, page_offset) =
+            texture.pages.map_or(([1; 3], [1; 2], 0, 0), |p| {
+                (p.side.to_array(), p.atlas, p.levels, p.offset)
+            });
         let [x, y, z] = plan.world_to_grid.map(|r| r.to_array());
         Self {
             world_to_grid_x: x,
@@ -412,10 +415,10 @@ impl VolumeSlot {
             bricks: bricks.bricks,
             texel_scale: texture.to_value.slope,
             texel_offset: texture.to_value.intercept,
-            bricked: u32::from(texture.bricking.is_some()),
+            levels,
             atlas_bricks,
             brick_side,
-            _pad: 0,
+            page_offset,
         }
     }
 }
