@@ -15,6 +15,8 @@ use super::stored::{inflate, out_of_memory, voxel_count, Stored};
 use super::volume_file::VolumeFile;
 use super::{bad, DataError, VolumeFormat};
 
+use crate::scene::StructuredVolume;
+
 /// The most a header may hold.
 const HEADER_LIMIT: usize = 1 << 16;
 
@@ -67,8 +69,12 @@ pub fn load_metaimage(path: &Path) -> Result<VolumeFile, DataError> {
     handle.read_exact(&mut head).map_err(io(&file))?;
     let (header, data_at) = parse_header(&head, &file)?;
     if header.local() {
+        if let Some(volume) = mapped(&header, path, data_at as u64, len) {
+            return volume_file(header, volume?);
+        }
         let data = voxel_bytes(&header, &mut handle, data_at as u64, len, &file)?;
-        return volume_file(header, &data, &file);
+        let volume = grid(&header, &data, &file)?;
+        return volume_file(header, volume);
     }
     let data_path = path
         .parent()
@@ -76,8 +82,34 @@ pub fn load_metaimage(path: &Path) -> Result<VolumeFile, DataError> {
         .join(&header.data_file);
     let data_name = data_path.display().to_string();
     let (mut handle, len) = files::open_regular(&data_path).map_err(io(&data_name))?;
+    if let Some(volume) = mapped(&header, &data_path, 0, len) {
+        return volume_file(header, volume?);
+    }
     let data = voxel_bytes(&header, &mut handle, 0, len, &data_name)?;
-    volume_file(header, &data, &data_name)
+    let volume = grid(&header, &data, &data_name)?;
+    volume_file(header, volume)
+}
+
+/// The voxels of `header` mapped from the file at `path` (`len` bytes,
+/// its data region from `start`), where they are uncompressed and can be
+/// mapped (scene/storage.rs); None leaves the reading, and the reporting
+/// of what is wrong, to `voxel_bytes`.
+fn mapped(
+    header: &MetaHeader,
+    path: &Path,
+    start: u64,
+    len: u64,
+) -> Option<Result<StructuredVolume, DataError>> {
+    if header.compressed {
+        return None;
+    }
+    let at = match header.skip {
+        Skip::Bytes(skip) => start.checked_add(skip)?,
+        Skip::AtEnd => len.checked_sub(header.bytes())?.max(start),
+    };
+    header
+        .stored
+        .mapped_grid(path, at, header.dims, header.big_endian, (1.0, 0.0))
 }
 
 /// A `.mha` with its voxels attached held in memory, as `load_metaimage`
@@ -100,13 +132,17 @@ pub fn parse_metaimage(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError
         bytes.len() as u64,
         name,
     )?;
-    volume_file(header, &data, name)
+    let volume = grid(&header, &data, name)?;
+    volume_file(header, volume)
 }
 
-fn volume_file(header: MetaHeader, data: &[u8], file: &str) -> Result<VolumeFile, DataError> {
-    let volume = header
+fn grid(header: &MetaHeader, data: &[u8], file: &str) -> Result<StructuredVolume, DataError> {
+    header
         .stored
-        .grid(header.dims, data, header.big_endian, (1.0, 0.0), file)?;
+        .grid(header.dims, data, header.big_endian, (1.0, 0.0), file)
+}
+
+fn volume_file(header: MetaHeader, volume: StructuredVolume) -> Result<VolumeFile, DataError> {
     Ok(VolumeFile {
         format: VolumeFormat::MetaImage,
         volume,

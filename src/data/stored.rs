@@ -106,16 +106,27 @@ impl Stored {
         big_endian: bool,
         scaling: (f64, f64),
     ) -> Option<Result<StructuredVolume, DataError>> {
+        let (file, len) = files::open_regular(path).ok()?;
+        let map = Arc::new(Mapping::of(&file, usize::try_from(len).ok()?).ok()?);
+        let at = usize::try_from(offset).ok()?;
+        self.mapped_in(&map, at, dims, big_endian, scaling)
+    }
+
+    /// The grid of `dims` at byte `at` of the mapped file `map`, as
+    /// `mapped_grid` takes it (None where the map does not hold it all).
+    pub fn mapped_in(
+        self,
+        map: &Arc<Mapping>,
+        at: usize,
+        dims: UVec3,
+        big_endian: bool,
+        scaling: (f64, f64),
+    ) -> Option<Result<StructuredVolume, DataError>> {
         if big_endian != cfg!(target_endian = "big") && self.bytes() > 1 {
             return None;
         }
         let n = voxel_count(dims).ok()? as usize;
-        let (file, len) = files::open_regular(path).ok()?;
-        if len < offset.checked_add(n as u64 * self.bytes())? {
-            return None;
-        }
-        let map = Arc::new(Mapping::of(&file, usize::try_from(len).ok()?).ok()?);
-        let at = usize::try_from(offset).ok()?;
+        let map = Arc::clone(map);
         let voxels = match self {
             Stored::U8 => Voxels::U8(Buf::mapped(map, at, n)?),
             Stored::U16 => Voxels::U16(Buf::mapped(map, at, n)?),

@@ -7,6 +7,7 @@
 
 use std::borrow::Cow;
 use std::path::Path;
+use std::sync::Arc;
 
 use base64::Engine;
 use glam::{DMat3, DMat4, DVec3, UVec3, Vec3};
@@ -17,7 +18,7 @@ use super::stored::{inflate, voxel_count, ZLIB_MAX_RATIO};
 use super::stored::{out_of_memory, Stored};
 use super::volume_file::VolumeFile;
 use super::{bad, DataError, VolumeFormat};
-use crate::scene::{StructuredVolume, Voxels};
+use crate::scene::{Mapping, StructuredVolume, Voxels};
 
 /// Loads the VTK image data at `path`, legacy or XML as its content says.
 pub fn load_vtk(path: &Path) -> Result<VolumeFile, DataError> {
@@ -27,6 +28,15 @@ pub fn load_vtk(path: &Path) -> Result<VolumeFile, DataError> {
         source,
     };
     let (handle, len) = files::open_regular(path).map_err(io)?;
+    // Mapped, raw appended voxels in this machine's byte order stay where
+    // they are in the file (scene/storage.rs).
+    if let Some(map) = usize::try_from(len)
+        .ok()
+        .and_then(|n| Mapping::of(&handle, n).ok())
+    {
+        let map = Arc::new(map);
+        return parse(map.bytes(), &file, Some(&map));
+    }
     let bytes = files::read_len(handle, len).map_err(io)?;
     parse_vtk(&bytes, &file)
 }
@@ -34,6 +44,12 @@ pub fn load_vtk(path: &Path) -> Result<VolumeFile, DataError> {
 /// A VTK image data file held in memory, as `load_vtk` reads one (for
 /// the fuzz target).
 pub fn parse_vtk(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
+    parse(bytes, name, None)
+}
+
+/// `bytes`, the whole file, or a map of it (`map`) whose voxels may stay
+/// mapped.
+fn parse(bytes: &[u8], name: &str, map: Option<&Arc<Mapping>>) -> Result<VolumeFile, DataError> {
     if bytes.starts_with(b"# vtk DataFile") {
         return legacy(bytes, name);
     }
@@ -42,7 +58,7 @@ pub fn parse_vtk(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
         .unwrap_or(bytes)
         .trim_ascii_start();
     if start.starts_with(b"<?xml") || start.starts_with(b"<VTKFile") {
-        return xml(bytes, name);
+        return xml(bytes, name, map);
     }
     Err(bad(
         name,
@@ -69,13 +85,31 @@ struct Grid<'a> {
 }
 
 impl Grid<'_> {
-    fn into_file(self, format: VolumeFormat, file: &str) -> Result<VolumeFile, DataError> {
-        let volume = match self.scalars {
-            Scalars::Binary(data, big_endian) => {
+    /// The file's volume; its voxels mapped where they are the bytes of
+    /// `map` as they stand.
+    fn into_file(
+        self,
+        format: VolumeFormat,
+        file: &str,
+        map: Option<&Arc<Mapping>>,
+    ) -> Result<VolumeFile, DataError> {
+        let mapped = match (&self.scalars, map) {
+            (Scalars::Binary(Cow::Borrowed(data), big_endian), Some(map)) => {
+                let base = map.bytes().as_ptr() as usize;
+                (data.as_ptr() as usize).checked_sub(base).and_then(|at| {
+                    self.stored
+                        .mapped_in(map, at, self.dims, *big_endian, (1.0, 0.0))
+                })
+            }
+            _ => None,
+        };
+        let volume = match (mapped, self.scalars) {
+            (Some(volume), _) => volume?,
+            (None, Scalars::Binary(data, big_endian)) => {
                 self.stored
                     .grid(self.dims, &data, big_endian, (1.0, 0.0), file)?
             }
-            Scalars::Text(values) => {
+            (None, Scalars::Text(values)) => {
                 StructuredVolume::new(self.dims, Voxels::F32(values.into()), Vec3::ZERO, Vec3::ONE)?
             }
         };
@@ -217,7 +251,8 @@ fn legacy(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
                             ("origin", Value::from(origin.to_array().to_vec())),
                         ],
                     };
-                    return grid.into_file(VolumeFormat::VtkLegacy, name);
+                    // Legacy binary is big-endian: read, not mapped.
+                    return grid.into_file(VolumeFormat::VtkLegacy, name, None);
                 }
                 skip_attribute(&mut reader, &key, args, binary, count)
                     .map_err(|why| field(&key, why))?;
@@ -503,7 +538,7 @@ impl Layout {
 
 /// An XML file: its header parsed as XML, its one piece's point array
 /// read inline or from the appended data.
-fn xml(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
+fn xml(bytes: &[u8], name: &str, map: Option<&Arc<Mapping>>) -> Result<VolumeFile, DataError> {
     let field = |f: &str, why: String| bad(name, f, why);
     // Raw appended data is not text, let alone XML: the document is what
     // comes before it, closed.
@@ -780,7 +815,7 @@ fn xml(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
             ("origin", Value::from(origin.to_array().to_vec())),
         ],
     }
-    .into_file(VolumeFormat::VtkXml, name)
+    .into_file(VolumeFormat::VtkXml, name, map)
 }
 
 /// Whether the `<AppendedData ...>` tag at `at` of `bytes` says its data

@@ -1,8 +1,7 @@
 //! Where a grid's numbers live: in a vector of their own, or in a file
 //! mapped read-only into memory, so that a file whose bytes are already
-//! the numbers (raw, uncompressed NIfTI, raw NRRD, in this machine's byte
-//! order)
-//! is never copied. Mapped pages are the page cache's: they cost no memory
+//! the numbers (raw, uncompressed NIfTI and MetaImage, raw NRRD, VTK's raw
+//! appended data, in this machine's byte order) is never copied. Mapped pages are the page cache's: they cost no memory
 //! until read, and the kernel may drop them again under pressure.
 //!
 //! A mapped file must not shrink while it is mapped: reading a page past
@@ -54,7 +53,8 @@ impl Mapping {
         Ok(Self { ptr, len })
     }
 
-    fn bytes(&self) -> &[u8] {
+    /// The whole file's bytes.
+    pub fn bytes(&self) -> &[u8] {
         // SAFETY: `len` readable bytes from `ptr` while the map lives.
         unsafe { std::slice::from_raw_parts(self.ptr.cast::<u8>(), self.len) }
     }

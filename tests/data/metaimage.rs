@@ -61,6 +61,14 @@ fn simpleitk_files_load_with_their_markers_where_itk_puts_them() {
             .find(|(k, _)| *k == "compressed")
             .map(|(_, v)| v.as_bool().unwrap());
         assert_eq!(compressed, Some(name == "compressed.mha"), "{name}");
+        // Uncompressed voxels are mapped where they are aligned for their
+        // type (always for bytes, and in a data file of their own).
+        let mapped = image.volume.voxels().is_mapped();
+        match name.as_str() {
+            "compressed.mha" => assert!(!mapped, "{name}"),
+            "float.mhd" | "turned.mha" | "flat.mha" => assert!(mapped, "{name}"),
+            _ => {}
+        }
         fixtures::marker_lands(name, &image.volume, image.transform(), truth, 1e-3);
         fixtures::kept_in_its_type(name, &image.volume, image.dtype);
     }
@@ -89,6 +97,24 @@ fn a_detached_big_endian_file_read_from_its_end() {
     let image = load_metaimage(&dir.join("end.mhd")).unwrap();
     let values: Vec<f32> = (0..4).map(|i| image.volume.value(i)).collect();
     assert_eq!(values, [-2.0, 300.0, 7.0, -32768.0]);
+    // Big-endian numbers are read (and swapped), not mapped.
+    assert!(!image.volume.voxels().is_mapped());
+    // Little-endian ones after an even skip are mapped from the data file.
+    std::fs::write(
+        dir.join("skip.mhd"),
+        "ObjectType = Image\nNDims = 3\nDimSize = 2 2 1\nElementType = MET_USHORT\n\
+         HeaderSize = 4\nElementDataFile = skip.dat\n",
+    )
+    .unwrap();
+    let mut data = b"skip".to_vec();
+    for v in [2u16, 300, 7, 65535] {
+        data.extend(v.to_le_bytes());
+    }
+    std::fs::write(dir.join("skip.dat"), data).unwrap();
+    let image = load_metaimage(&dir.join("skip.mhd")).unwrap();
+    assert!(image.volume.voxels().is_mapped());
+    let values: Vec<f32> = (0..4).map(|i| image.volume.value(i)).collect();
+    assert_eq!(values, [2.0, 300.0, 7.0, 65535.0]);
 }
 
 #[test]

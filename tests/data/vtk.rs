@@ -290,6 +290,34 @@ fn vti_files_in_each_of_vtks_encodings_load_their_values_where_they_say() {
             );
         }
     }
+    // Raw appended float32 in this machine's byte order, aligned: mapped
+    // from the file, not copied; one byte off its alignment: read.
+    for pad in [0, 1] {
+        let run = with_header(&data());
+        let pieces = piece(&array("format=\"appended\" offset=\"0\"", ""));
+        let start = vti("", plain, &pieces, b"").len() - b"</VTKFile>\n".len();
+        let tag = b"<AppendedData encoding=\"raw\">\n_";
+        // The numbers begin after the tag and the run's 4-byte size.
+        let mut spaces = (4 - (start + tag.len() + 4) % 4) % 4 + pad;
+        let mut appended = Vec::new();
+        while spaces > 0 {
+            appended.push(b' ');
+            spaces -= 1;
+        }
+        appended.extend(tag);
+        appended.extend(&run);
+        appended.extend(b"\n</AppendedData>\n");
+        let path = dir.join(format!("raw{pad}.vti"));
+        std::fs::write(&path, vti("", plain, &pieces, &appended)).unwrap();
+        let image = load_vtk(&path).unwrap_or_else(|e| panic!("raw{pad}.vti: {e}"));
+        assert_eq!(detail(&image, "encoding"), "raw");
+        let got: Vec<f32> = (0..image.volume.voxels().len())
+            .map(|i| image.volume.value(i))
+            .collect();
+        assert_eq!(got, values(), "raw{pad}.vti");
+        let aligned = cfg!(target_endian = "little") && pad == 0;
+        assert_eq!(image.volume.voxels().is_mapped(), aligned, "raw{pad}.vti");
+    }
     // An extent from (2, 0, 1): its first point is 2 and 1 steps along.
     let moved = String::from_utf8(cases[5].1.clone())
         .unwrap()
