@@ -7,6 +7,7 @@ mod cave_stereo;
 mod charts;
 mod raycast;
 mod stereo;
+mod stream;
 mod surfaces;
 
 use anari_library_caveray::render::stereo::RenderFacts;
@@ -34,6 +35,10 @@ pub enum BenchCommand {
     /// its volume on the GPU and the CPU: BVH build, first and later
     /// frames, GPU against CPU (writes JSON, prints a table).
     Surfaces(surfaces::SurfacesArgs),
+    /// A volume past the GPU memory budget, paged: a complete frame
+    /// within the budget, then frames that do not wait for the loader
+    /// converging to it (writes JSON, a chart and a strip of frames).
+    Stream(stream::StreamArgs),
 }
 
 pub fn run(command: BenchCommand) -> Result<(), Failure> {
@@ -44,6 +49,7 @@ pub fn run(command: BenchCommand) -> Result<(), Failure> {
         BenchCommand::CaveStereo(args) => cave_stereo::run(args),
         BenchCommand::Autostereo(args) => autostereo::run(args),
         BenchCommand::Surfaces(args) => surfaces::run(args),
+        BenchCommand::Stream(args) => stream::run(args),
     }
 }
 
