@@ -39,6 +39,27 @@ pub(crate) struct SpaceCache {
 }
 
 impl SpaceCache {
+    /// Forgets what belongs to grids `scene` does not hold.
+    pub fn retain(&mut self, scene: &Scene) {
+        let held = |v: &Arc<StructuredVolume>| scene.grids().any(|g| Arc::ptr_eq(g, v));
+        self.ranges.retain(|(v, _)| held(v));
+        self.spaces.retain(|(v, ..)| held(v));
+    }
+
+    /// The brick ranges of `volume`, made where they are new (and kept
+    /// until an update leaves the volume out).
+    pub fn ranges_of(
+        &mut self,
+        volume: &Arc<StructuredVolume>,
+    ) -> Result<Arc<BrickRanges>, RenderError> {
+        if let Some((_, r)) = self.ranges.iter().find(|(v, _)| Arc::ptr_eq(v, volume)) {
+            return Ok(Arc::clone(r));
+        }
+        let ranges = Arc::new(BrickRanges::new(volume.dims(), |i| volume.value(i))?);
+        self.ranges.push((Arc::clone(volume), Arc::clone(&ranges)));
+        Ok(ranges)
+    }
+
     /// The clear bricks of each of the scene's volumes, in its order,
     /// made only where the grid or the table is new (keeping no others),
     /// and whether they differ from the last call's.
@@ -145,6 +166,26 @@ impl BrickRanges {
 
     pub fn range(&self, i: usize) -> [f32; 2] {
         self.ranges[i]
+    }
+
+    /// The range of every brick holding a vertex of `lo..hi` (a box of
+    /// the grid's vertices): all a sample there can read, and perhaps a
+    /// little more.
+    pub fn covering(&self, lo: UVec3, hi: UVec3) -> [f32; 2] {
+        let last = self.bricks - UVec3::ONE;
+        let b0 = (lo.saturating_sub(UVec3::ONE) / BRICK).min(last);
+        let b1 = (hi.saturating_sub(UVec3::ONE) / BRICK).min(last);
+        let mut out = [f32::INFINITY, f32::NEG_INFINITY];
+        for z in b0.z..=b1.z {
+            for y in b0.y..=b1.y {
+                for x in b0.x..=b1.x {
+                    let i = (x + self.bricks.x * (y + self.bricks.y * z)) as usize;
+                    let [a, b] = self.ranges[i];
+                    out = [out[0].min(a), out[1].max(b)];
+                }
+            }
+        }
+        out
     }
 }
 

@@ -25,7 +25,7 @@ use glam::{Mat4, UVec2, UVec3, Vec3};
 
 use super::context::Context;
 use super::volume_texture::{self, Texel, Writer, LOD_LEVELS};
-use crate::render::empty_space::Visibility;
+use crate::render::empty_space::{BrickRanges, Visibility};
 use crate::render::RenderError;
 use crate::scene::{Scaling, Scene, StructuredVolume};
 
@@ -306,11 +306,8 @@ impl View<'_> {
         (nearest, voxel)
     }
 
-    fn shows(&self, range: Option<[f32; 2]>) -> bool {
-        match range {
-            None => true,
-            Some([lo, hi]) => self.sights.iter().any(|s| s.visible.shows(lo, hi)),
-        }
+    fn shows(&self, [lo, hi]: [f32; 2]) -> bool {
+        self.sights.iter().any(|s| s.visible.shows(lo, hi))
     }
 }
 
@@ -318,21 +315,19 @@ impl View<'_> {
 /// coarse to fine, the refinements that matter most (visible bricks
 /// before clear ones, then the largest voxels on screen), each brick's
 /// children taken together, while the pool has room and the footprint
-/// asks for finer detail. `ranges`: each page's value range where known.
+/// asks for finer detail. `ranges`: the values each block of the grid's
+/// samples read (the empty-space grid's), which say which bricks are clear.
 pub(super) fn select(
     pyramid: &Pyramid,
     texels: UVec3,
     capacity: u32,
-    ranges: &[Option<[f32; 2]>],
+    ranges: &BrickRanges,
     view: &View,
 ) -> Vec<Brick> {
-    let root = pyramid.root();
     if capacity == 0 {
         return Vec::new();
     }
-    let mut chosen = vec![root];
-    let mut heap = BinaryHeap::new();
-    let consider = |b: Brick, clear_above: bool, heap: &mut BinaryHeap<_>| {
+    let consider = |b: Brick, heap: &mut BinaryHeap<_>| {
         if b.level == 0 {
             return;
         }
@@ -341,15 +336,18 @@ pub(super) fn select(
         if b.level <= view.footprint.level(t) {
             return;
         }
-        let clear = clear_above || !view.shows(ranges[pyramid.page(b) as usize]);
+        let visible = view.shows(ranges.covering(lo, hi));
         let size = voxel * (1 << b.level) as f32 / t.max(1e-6);
         // Visible first, then the largest voxels on screen (positive
         // floats order as their bits).
-        heap.push(((!clear, size.to_bits()), clear, pyramid.page(b)));
+        heap.push(((visible, size.to_bits()), pyramid.page(b)));
     };
-    consider(root, false, &mut heap);
+    let root = pyramid.root();
+    let mut chosen = vec![root];
+    let mut heap = BinaryHeap::new();
+    consider(root, &mut heap);
     let mut used = 1u32;
-    while let Some((_, clear, page)) = heap.pop() {
+    while let Some((_, page)) = heap.pop() {
         let b = pyramid.brick(page);
         let children: Vec<Brick> = pyramid.children(b).collect();
         if used + children.len() as u32 > capacity {
@@ -358,7 +356,7 @@ pub(super) fn select(
         used += children.len() as u32;
         for c in children {
             chosen.push(c);
-            consider(c, clear, &mut heap);
+            consider(c, &mut heap);
         }
     }
     chosen
@@ -375,9 +373,6 @@ pub(super) struct Residency {
     page_of: Vec<u32>,
     /// Per slot: the last frame that selected its brick.
     used: Vec<u64>,
-    /// Per page: the value range of the full-detail voxels it covers,
-    /// once built.
-    ranges: Vec<Option<[f32; 2]>>,
     frame: u64,
 }
 
@@ -387,7 +382,6 @@ impl Residency {
             slot_of: vec![NO_SLOT; pages as usize],
             page_of: vec![NO_SLOT; slots as usize],
             used: vec![0; slots as usize],
-            ranges: vec![None; pages as usize],
             frame: 0,
         }
     }
@@ -411,8 +405,7 @@ impl Residency {
     /// A slot for `page`: a free one, else the one whose brick was wanted
     /// longest ago, finest level first among equals; None where every
     /// slot holds a brick this frame wants.
-    pub fn place(&mut self, page: u32, range: [f32; 2]) -> Option<u32> {
-        self.ranges[page as usize] = Some(range);
+    pub fn place(&mut self, page: u32) -> Option<u32> {
         if self.resident(page) {
             return None;
         }
@@ -432,94 +425,64 @@ impl Residency {
         Some(slot)
     }
 
-    /// Keeps a built brick's range, without placing it.
-    pub fn note(&mut self, page: u32, range: [f32; 2]) {
-        self.ranges[page as usize] = Some(range);
-    }
-
-    pub fn ranges(&self) -> &[Option<[f32; 2]>] {
-        &self.ranges
-    }
-
     pub fn slots(&self) -> &[u32] {
         &self.slot_of
     }
 }
 
-/// A brick built by the loader: its texels and the value range of the
-/// full-detail voxels it covers.
+/// A brick built by the loader: its texels.
 pub(super) struct Built {
     pub page: u32,
     pub bytes: Vec<u8>,
-    pub range: [f32; 2],
 }
 
 /// What the bricks are built from: the volume's voxels (full detail) and,
 /// made in one pass over them, its coarser levels as texels in host memory
-/// (a seventh of the voxels' bytes at most, in their format) and the range
-/// of the stored numbers in each block of full-detail voxels a brick side
-/// long.
+/// (a seventh of the voxels' bytes at most, in their format).
 pub(super) struct Chain {
     texel: Texel,
     pyramid: Pyramid,
     texels: UVec3,
     /// Levels 1 and up: their texels, x fastest.
     levels: Vec<Vec<u8>>,
-    /// Per block (as level 0's bricks, without the apron): min and max.
-    ranges: Vec<[f32; 2]>,
 }
 
 impl Chain {
     /// One pass over `volume`'s voxels: level 1 the mean of the (up to 8)
     /// voxels each of its voxels covers, each level after it of the level
-    /// below, and every block's range. None where `stop` says so (asked
-    /// once a slice).
+    /// below. None where `stop` says so (asked once a slice).
     pub fn new(
         volume: &StructuredVolume,
         (texel, pyramid, texels): (Texel, Pyramid, UVec3),
         stop: &dyn Fn() -> bool,
     ) -> Option<Self> {
         let voxels = volume.voxels();
-        let dims = pyramid.dims;
-        let side = pyramid.side;
-        let blocks = pyramid.bricks(0);
-        let mut ranges =
-            vec![[f32::INFINITY, f32::NEG_INFINITY]; blocks.element_product() as usize];
         let one = texel.bytes() as usize;
-        let mut levels = Vec::new();
-        if pyramid.levels() > 1 {
-            let d1 = pyramid.level_dims(1);
-            let mut level = Vec::with_capacity(d1.element_product() as usize * one);
-            let slice = d1.x as usize * d1.y as usize;
+        let mut levels: Vec<Vec<u8>> = Vec::new();
+        for l in 1..pyramid.levels() {
+            let (from, to) = (pyramid.level_dims(l - 1), pyramid.level_dims(l));
+            let below = levels.last();
+            let value = |i: usize| match below {
+                None => texel.read(voxels, i),
+                Some(below) => texel.decode(&below[i * one..(i + 1) * one]),
+            };
+            let mut level = Vec::with_capacity(to.element_product() as usize * one);
+            let slice = to.x as usize * to.y as usize;
             let mut sums = vec![0.0f64; slice];
             let mut counts = vec![0u32; slice];
-            for z in 0..dims.z {
+            for z in 0..from.z {
                 if stop() {
                     return None;
                 }
-                for y in 0..dims.y {
-                    let row = dims.x as usize * (y as usize + dims.y as usize * z as usize);
-                    let out = d1.x as usize * (y / 2) as usize;
-                    for x in 0..dims.x as usize {
-                        let i = row + x;
-                        sums[out + x / 2] += f64::from(texel.read(voxels, i));
+                for y in 0..from.y {
+                    let row = from.x as usize * (y as usize + from.y as usize * z as usize);
+                    let out = to.x as usize * (y / 2) as usize;
+                    for x in 0..from.x as usize {
+                        sums[out + x / 2] += f64::from(value(row + x));
                         counts[out + x / 2] += 1;
                     }
-                    let block = (blocks.y * (z / side.z) + y / side.y) * blocks.x;
-                    for (bx, chunk) in (row..row + dims.x as usize)
-                        .step_by(side.x as usize)
-                        .enumerate()
-                    {
-                        let end = (chunk + side.x as usize).min(row + dims.x as usize);
-                        let r = &mut ranges[block as usize + bx];
-                        for i in chunk..end {
-                            let v = voxels.stored(i);
-                            r[0] = r[0].min(v);
-                            r[1] = r[1].max(v);
-                        }
-                    }
                 }
-                if z % 2 == 1 || z + 1 == dims.z {
+                if z % 2 == 1 || z + 1 == from.z {
                     for (s, c) in sums.iter_mut().zip(counts.iter_mut()) {
                         texel.write((*s / f64::from((*c).max(1))) as f32, &mut level);
                         *s = 0.0;
@@ -528,53 +491,12 @@ impl Chain {
                 }
             }
             levels.push(level);
-            for l in 2..pyramid.levels() {
-                let below = &levels[levels.len() - 1];
-                let (from, to) = (pyramid.level_dims(l - 1), pyramid.level_dims(l));
-                let mut level = Vec::with_capacity(to.element_product() as usize * one);
-                for z in 0..to.z {
-                    for y in 0..to.y {
-                        for x in 0..to.x {
-                            let (mut sum, mut n) = (0.0f64, 0u32);
-                            for k in 0..8u32 {
-                                let p = UVec3::new(
-                                    2 * x + (k & 1),
-                                    2 * y + (k >> 1 & 1),
-                                    2 * z + (k >> 2),
-                                );
-                                if p.cmplt(from).all() {
-                                    let i = p.x as usize
-                                        + from.x as usize
-                                            * (p.y as usize + from.y as usize * p.z as usize);
-                                    sum += f64::from(texel.decode(&below[i * one..(i + 1) * one]));
-                                    n += 1;
-                                }
-                            }
-                            texel.write((sum / f64::from(n.max(1))) as f32, &mut level);
-                        }
-                    }
-                }
-                levels.push(level);
-            }
-        } else {
-            for z in 0..dims.z {
-                for y in 0..dims.y {
-                    let row = dims.x as usize * (y as usize + dims.y as usize * z as usize);
-                    let r = &mut ranges[0];
-                    for i in row..row + dims.x as usize {
-                        let v = voxels.stored(i);
-                        r[0] = r[0].min(v);
-                        r[1] = r[1].max(v);
-                    }
-                }
-            }
         }
         Some(Self {
             texel,
             pyramid,
             texels,
             levels,
-            ranges,
         })
     }
 
@@ -583,9 +505,9 @@ impl Chain {
         self.levels.iter().map(|l| l.len() as u64).sum()
     }
 
-    /// Brick `b`'s texels (full detail copied from the voxels; texels past
-    /// the level's last voxel repeat it) and the range of the stored
-    /// numbers in the blocks it covers (the apron's too), as field values.
+    /// Brick `b`'s texels: full detail copied from the voxels, coarser
+    /// levels from the chain; texels past the level's last voxel repeat
+    /// it.
     pub fn build(&self, volume: &StructuredVolume, b: Brick) -> Built {
         let (texel, texels) = (self.texel, self.texels);
         let p = &self.pyramid;
@@ -611,35 +533,11 @@ impl Chain {
                 }
             }
         }
-        let (from, to) = p.covered(b, texels);
-        let blocks = p.bricks(0);
-        let (b0, b1) = (from / p.side, (to - UVec3::ONE) / p.side);
-        let (mut min, mut max) = (f32::INFINITY, f32::NEG_INFINITY);
-        for z in b0.z..=b1.z {
-            for y in b0.y..=b1.y {
-                for x in b0.x..=b1.x {
-                    let [lo, hi] = self.ranges[(x + blocks.x * (y + blocks.y * z)) as usize];
-                    min = min.min(lo);
-                    max = max.max(hi);
-                }
-            }
-        }
         Built {
             page: p.page(b),
             bytes,
-            range: field_range(volume.scaling(), min, max),
         }
     }
-}
-
-/// Stored numbers `min..=max` as field values (a negative slope swaps
-/// them).
-fn field_range(scaling: Scaling, min: f32, max: f32) -> [f32; 2] {
-    if min > max {
-        return [min, max];
-    }
-    let (a, b) = (scaling.apply(min), scaling.apply(max));
-    [a.min(b), a.max(b)]
 }
 
 /// Builds the bricks a paged volume asks for on a thread of its own: first
@@ -922,7 +820,7 @@ impl PagedVolume {
     pub fn stream(
         &mut self,
         ctx: &Context,
-        view: &View,
+        (view, ranges): (&View, &BrickRanges),
         wait: StreamWait,
         until: Instant,
     ) -> Result<Streaming, RenderError> {
@@ -933,7 +831,7 @@ impl PagedVolume {
                 &self.pyramid,
                 self.pool.texels,
                 self.pool.slots,
-                self.residency.ranges(),
+                ranges,
                 view,
             );
             self.residency.want(&self.pyramid, &selection);
@@ -965,10 +863,9 @@ impl PagedVolume {
                 // A brick an earlier frame asked for and this one does not
                 // leaves the slots to those it does.
                 if !selected.contains(&b.page) {
-                    self.residency.note(b.page, b.range);
                     continue;
                 }
-                if let Some(slot) = self.residency.place(b.page, b.range) {
+                if let Some(slot) = self.residency.place(b.page) {
                     writer.put(0, self.pool.place(slot), self.pool.texels, &b.bytes)?;
                     uploaded += 1;
                     self.dirty = true;
@@ -1180,18 +1077,6 @@ mod tests {
         let last = (at(8, 0, 0) + at(8, 1, 0) + at(8, 0, 1) + at(8, 1, 1)) / 4.0;
         assert!((values[1] - last).abs() < 1e-4, "{} {last}", values[1]);
         assert_eq!(values[1], values[2]);
-        // The range holds every full-detail voxel it covers (it is the
-        // range of the blocks they lie in).
-        let (from, to) = p.covered(b, texels);
-        for z in from.z..to.z {
-            for y in from.y..to.y {
-                for x in from.x..to.x {
-                    let v = at(x, y, z);
-                    assert!(built.range[0] <= v && v <= built.range[1], "{v}");
-                }
-            }
-        }
-        assert!(built.range[0] >= 0.0 && built.range[1] <= 96.0);
         // Level 2 is the mean of level 1's voxels: (0, 0, 0) of level 1's
         // (0..2, 0..2, 0..2).
         let chain = Chain::new(&volume, (Texel::Float, p.clone(), texels), &|| false).unwrap();
@@ -1244,7 +1129,7 @@ mod tests {
         let dims = UVec3::new(256, 64, 64);
         let p = Pyramid::new(dims, UVec3::splat(63));
         let texels = UVec3::splat(64);
-        let ranges = vec![None; p.count() as usize];
+        let ranges = BrickRanges::new(dims, |_| 50.0).unwrap();
         let sights = [sight(0.0)];
         let eyes = [Vec3::new(-100.0, 32.0, 32.0)];
         let view = view_of(&eyes, &sights, 0.0);
@@ -1266,20 +1151,30 @@ mod tests {
     }
 
     #[test]
-    fn clear_bricks_are_refined_last() {
-        let dims = UVec3::new(126, 63, 63);
+    fn clear_bricks_are_refined_after_those_that_show() {
+        // Values 0 where x < 200, 100 beyond: the table shows 50 and up,
+        // so the level-1 brick nearest the eye (full-detail x 0..128) is
+        // clear.
+        let dims = UVec3::new(256, 64, 64);
+        let ranges = BrickRanges::new(dims, |i| if i % 256 < 200 { 0.0 } else { 100.0 }).unwrap();
         let p = Pyramid::new(dims, UVec3::splat(63));
         let texels = UVec3::splat(64);
-        let mut ranges = vec![None; p.count() as usize];
-        // Level 0 has two bricks; the root covers both.
-        assert_eq!(p.levels(), 2);
         let sights = [sight(50.0)];
+        // The eye nearer the clear half: distance alone would refine it
+        // first.
         let eyes = [Vec3::new(-100.0, 32.0, 32.0)];
         let view = view_of(&eyes, &sights, 0.0);
-        // Root known clear: its children go last, but go where room is.
-        ranges[p.page(p.root()) as usize] = Some([0.0, 10.0]);
-        assert_eq!(select(&p, texels, 3, &ranges, &view).len(), 3);
-        assert_eq!(select(&p, texels, 2, &ranges, &view).len(), 1);
+        let some = select(&p, texels, 14, &ranges, &view);
+        let fine: Vec<&Brick> = some.iter().filter(|b| b.level == 0).collect();
+        assert_eq!(fine.len(), 8, "{some:?}");
+        // The refined level-1 brick is one that shows (its voxels reach
+        // x >= 200): level-0 bricks from x = 2 on.
+        assert!(fine.iter().all(|b| b.at.x >= 2), "{some:?}");
+        // With room for all, clear bricks come too.
+        assert_eq!(
+            select(&p, texels, p.count(), &ranges, &view).len() as u32,
+            p.count()
+        );
     }
 
     #[test]
@@ -1288,14 +1183,14 @@ mod tests {
         let mut r = Residency::new(p.count(), 2);
         let [a, b, c] = [0, 1, 2];
         r.want(&p, &[]);
-        assert_eq!(r.place(a, [0.0; 2]), Some(0));
-        assert_eq!(r.place(b, [0.0; 2]), Some(1));
+        assert_eq!(r.place(a), Some(0));
+        assert_eq!(r.place(b), Some(1));
         // A frame that wants both leaves no room for c.
         r.want(&p, &[p.brick(a), p.brick(b)]);
-        assert_eq!(r.place(c, [0.0; 2]), None);
+        assert_eq!(r.place(c), None);
         // One that wants a and c evicts b.
         r.want(&p, &[p.brick(a), p.brick(c)]);
-        assert_eq!(r.place(c, [0.0; 2]), Some(1));
+        assert_eq!(r.place(c), Some(1));
         assert!(r.resident(a) && r.resident(c) && !r.resident(b));
         let table = p.table(r.slots());
         assert_eq!(&table[..2], &[2, 4]);

@@ -336,6 +336,7 @@ impl GpuScene {
         wait: StreamWait,
     ) -> Result<Streaming, RenderError> {
         let mut total = Streaming::default();
+        self.space_cache.retain(scene);
         let until = Instant::now()
             + match wait {
                 StreamWait::Complete => std::time::Duration::ZERO,
@@ -383,7 +384,9 @@ impl GpuScene {
                 },
                 sights: &sights,
             };
-            total.add(paged.stream(ctx, &view, wait, until)?);
+            // The bricks the empty-space grid finds clear are refined last.
+            let ranges = self.space_cache.ranges_of(volume)?;
+            total.add(paged.stream(ctx, (&view, &ranges), wait, until)?);
             if paged.dirty {
                 if let Some(at) = self.page_offsets.get(g).copied().flatten() {
                     let words = paged.table();
