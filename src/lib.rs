@@ -1,5 +1,6 @@
 pub mod capi;
 pub mod cave;
+pub mod cluster;
 pub mod data;
 pub mod device;
 pub mod engine;

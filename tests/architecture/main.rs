@@ -18,6 +18,7 @@ const MAY_IMPORT: &[(&str, &[&str])] = &[
     ("data", &["scene", "geometry"]),
     ("cave", &["data", "scene", "geometry"]),
     ("output", &["cave", "render", "scene", "geometry"]),
+    ("cluster", &[]),
 ];
 
 type Module = Vec<String>;

@@ -1,6 +1,7 @@
 //! caveray: render, inspect and benchmark CAVE rigs.
 
 mod bench;
+mod cluster;
 mod inspect;
 mod options;
 mod progress;

@@ -17,8 +17,9 @@ use anari_library_caveray::render::{Backend, Frame, FrameDesc, RenderSettings, R
 use anari_library_caveray::scene::Scene;
 use clap::{Args, ValueEnum};
 use glam::UVec2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
+use crate::cluster::{Cluster, Share};
 use crate::options::{RenderOptions, Strategy};
 use crate::progress::Progress;
 use crate::report::{write_json, RendererInfo, VolumeInfo};
@@ -103,6 +104,10 @@ pub struct RenderReport {
     /// What the volumes took on the GPU, where it rendered.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu_memory: Option<GpuMemory>,
+    /// Under MPI: each rank's walls and times, and the frame's time (the
+    /// slowest rank's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cluster: Option<ClusterReport>,
     pub views: Vec<ViewRecord>,
     pub contact_sheets: Vec<String>,
 }
@@ -113,23 +118,38 @@ pub struct HeadInfo {
     pub orientation_xyzw: [f64; 4],
 }
 
-/// One wall and eye: rendered, or why not.
 #[derive(Serialize)]
+pub struct ClusterReport {
+    pub ranks: Vec<RankTimes>,
+    /// The frame's time: the slowest rank's render.
+    pub frame_ms: f64,
+}
+
+#[derive(Serialize)]
+pub struct RankTimes {
+    pub rank: usize,
+    pub walls: Vec<String>,
+    pub render_ms: f64,
+    pub barrier_ms: f64,
+}
+
+/// One wall and eye: rendered, or why not.
+#[derive(Serialize, Deserialize)]
 pub struct ViewRecord {
     pub wall: String,
-    pub eye: &'static str,
+    pub eye: String,
     #[serde(flatten)]
     pub outcome: Outcome,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum Outcome {
     Rendered(Rendered),
     Skipped { error: String },
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct Rendered {
     pub width: u32,
     pub height: u32,
@@ -150,7 +170,7 @@ pub struct Rendered {
     pub layers: Option<LayerRecord>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct LayerRecord {
     pub layers: u32,
     pub layer_format: String,
@@ -261,6 +281,9 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     let settings = args.render.settings();
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", args.out.display())))?;
+    let cluster = Cluster::join()?;
+    let mine = anari_library_caveray::cluster::assign(rig.walls.len(), cluster.size())
+        .swap_remove(cluster.rank());
     let mut renderer = args.render.renderer()?;
 
     let start = Instant::now();
@@ -273,7 +296,12 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     let upload_ms = start.elapsed().as_secs_f64() * 1e3;
 
     let views = rig.views(&head);
-    let mut progress = Progress::new(views.len());
+    let mut progress = Progress::new(
+        views
+            .iter()
+            .filter(|(w, ..)| mine.iter().any(|&i| std::ptr::eq(*w, &rig.walls[i])))
+            .count(),
+    );
     let mut records = Vec::new();
     let mut images: Vec<(usize, Eye, image::RgbaImage)> = Vec::new();
     let job = ViewJob {
@@ -282,6 +310,9 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
         strategy: args.render.strategy,
     };
     for (wall_index, wall) in rig.walls.iter().enumerate() {
+        if !mine.contains(&wall_index) {
+            continue;
+        }
         let size = wall_size(wall.resolution, args.scale);
         let wall_views: Vec<&(_, Eye, _)> = views
             .iter()
@@ -305,7 +336,9 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
                 })?;
                 for (eye, frame, rendered) in frames {
                     let image = frame_to_rgba(&frame);
-                    write(&image, &args.out.join(&rendered.file))?;
+                    if cluster.is_root() {
+                        write(&image, &args.out.join(&rendered.file))?;
+                    }
                     progress.step(&format!(
                         "{}_{} {}x{} {:.1} ms (re-projection, {} layers)",
                         wall.name,
@@ -316,20 +349,28 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
                         reprojection.layers
                     ));
                     images.push((wall_index, eye, image));
-                    records.push(ViewRecord {
-                        wall: wall.name.clone(),
-                        eye: eye.name(),
-                        outcome: Outcome::Rendered(rendered),
-                    });
+                    records.push((
+                        wall_index,
+                        ViewRecord {
+                            wall: wall.name.clone(),
+                            eye: eye.name().to_string(),
+                            outcome: Outcome::Rendered(rendered),
+                        },
+                    ));
                 }
             }
             Err(reason) => {
                 for (_, eye, view) in &wall_views {
                     let label = format!("{}_{}", wall.name, eye.name());
-                    let record = |outcome| ViewRecord {
-                        wall: wall.name.clone(),
-                        eye: eye.name(),
-                        outcome,
+                    let record = |outcome| {
+                        (
+                            wall_index,
+                            ViewRecord {
+                                wall: wall.name.clone(),
+                                eye: eye.name().to_string(),
+                                outcome,
+                            },
+                        )
                     };
                     let rays = view
                         .as_ref()
@@ -350,7 +391,9 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
                         rendered.fallback = Some(reason.clone());
                     }
                     let image = frame_to_rgba(&frame);
-                    write(&image, &args.out.join(&rendered.file))?;
+                    if cluster.is_root() {
+                        write(&image, &args.out.join(&rendered.file))?;
+                    }
                     progress.step(&format!(
                         "{label} {}x{} {:.1} ms",
                         size.x, size.y, rendered.ms
@@ -362,6 +405,63 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
         }
     }
 
+    let render_ms = start.elapsed().as_secs_f64() * 1e3;
+    let waited = Instant::now();
+    cluster.barrier()?;
+    let share = Share::of(
+        cluster.rank(),
+        mine.iter().map(|&i| rig.walls[i].name.clone()).collect(),
+        (render_ms, waited.elapsed().as_secs_f64() * 1e3),
+        &records,
+        &images,
+    )?;
+    let shares = cluster.gather(&share)?;
+    if !cluster.is_root() {
+        return Ok(());
+    }
+    for other in shares.iter().filter(|s| s.rank != share.rank) {
+        for (i, (wall_index, eye, w, h)) in other.images.iter().enumerate() {
+            let image = image::RgbaImage::from_raw(*w, *h, other.pixels[i].clone())
+                .ok_or_else(|| Failure::Runtime(format!("rank {}: a short image", other.rank)))?;
+            let eye = Eye::ALL
+                .into_iter()
+                .find(|e| e.name() == eye)
+                .ok_or_else(|| Failure::Runtime(format!("rank {}: eye '{eye}'", other.rank)))?;
+            images.push((*wall_index, eye, image));
+        }
+        for (wall_index, value) in &other.records {
+            let record = serde_json::from_value(value.clone())
+                .map_err(|e| Failure::Runtime(format!("rank {}: {e}", other.rank)))?;
+            if let ViewRecord {
+                outcome: Outcome::Rendered(r),
+                ..
+            } = &record
+            {
+                let at = images
+                    .iter()
+                    .rposition(|(w, e, _)| w == wall_index && e.name() == record.eye);
+                if let Some(at) = at {
+                    write(&images[at].2, &args.out.join(&r.file))?;
+                }
+            }
+            records.push((*wall_index, record));
+        }
+    }
+    // In the rig's wall order, each wall's eyes as rendered.
+    records.sort_by_key(|(wall_index, _)| *wall_index);
+    let cluster_report = (cluster.size() > 1).then(|| ClusterReport {
+        frame_ms: shares.iter().map(|s| s.render_ms).fold(0.0, f64::max),
+        ranks: shares
+            .iter()
+            .map(|s| RankTimes {
+                rank: s.rank,
+                walls: s.walls.clone(),
+                render_ms: s.render_ms,
+                barrier_ms: s.barrier_ms,
+            })
+            .collect(),
+    });
+    let records: Vec<ViewRecord> = records.into_iter().map(|(_, r)| r).collect();
     let contact_sheets = write_sheets(&rig, &images, &args.out)?;
     let report = RenderReport {
         rig: rig.name.clone(),
@@ -379,6 +479,7 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
         upload_ms,
         total_ms: start.elapsed().as_secs_f64() * 1e3,
         gpu_memory: GpuMemory::of(&renderer),
+        cluster: cluster_report,
         views: records,
         contact_sheets,
     };
@@ -591,7 +692,7 @@ fn print_summary(report: &RenderReport) {
         "wall", "eye", "size", "ms", "Mrays/s", "Msamples/s"
     );
     for v in &report.views {
-        let (wall, eye) = (&v.wall, v.eye);
+        let (wall, eye) = (&v.wall, &v.eye);
         let r = match &v.outcome {
             Outcome::Skipped { error } => {
                 println!("{wall:<10} {eye:<6} skipped: {error}");
@@ -619,6 +720,22 @@ fn print_summary(report: &RenderReport) {
         "upload {:.1} ms, total {:.1} ms; images, contact sheets and timings.json are in the output folder",
         report.upload_ms, report.total_ms
     );
+    if let Some(c) = &report.cluster {
+        println!(
+            "{} MPI ranks; the frame took {:.1} ms (the slowest rank's render)",
+            c.ranks.len(),
+            c.frame_ms
+        );
+        for r in &c.ranks {
+            println!(
+                "  rank {}: {} in {:.1} ms, {:.1} ms at the barrier",
+                r.rank,
+                r.walls.join(", "),
+                r.render_ms,
+                r.barrier_ms
+            );
+        }
+    }
     if let Some(m) = report.gpu_memory.as_ref().filter(|m| m.paged) {
         let mib = |b: u64| b as f64 / f64::from(1 << 20);
         println!(

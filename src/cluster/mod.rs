@@ -1,0 +1,22 @@
+//! Beyond one machine: a CAVE's views shared out over the processes of an
+//! MPI job (one per node, each driving its GPU), kept in step by a barrier
+//! that plays the swap lock's part, their images and timings gathered on
+//! rank 0. Which process renders which wall (`assign`) is plain
+//! arithmetic, built always; talking to MPI (`mpi`) only with the `mpi`
+//! feature, so a build without it is unchanged.
+
+mod assign;
+#[cfg(feature = "mpi")]
+pub mod mpi;
+
+pub use assign::assign;
+
+/// Processes in the job that started this one, as the launcher says
+/// (OpenMPI's `mpirun`, or a PMI launcher), where it says one; without
+/// the `mpi` feature such a job cannot be joined, and each of its
+/// processes would render every view.
+pub fn launched_size() -> Option<usize> {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.parse().ok())
+}
