@@ -129,3 +129,100 @@ fn four_ranks_render_the_cave_as_one_process_does() {
     assert_eq!(views, expected);
     assert!(single.get("cluster").is_none());
 }
+
+/// `bench cave-stereo` along the shipped walk under `mpirun -np 2` (the
+/// GPU's re-projection, on lavapipe here): each rank times its walls and
+/// waits at a barrier every frame; rank 0's report holds every wall of
+/// every frame, as one process's does, and each rank's times.
+#[test]
+fn two_ranks_time_the_cave_walk_frame_by_frame() {
+    let dir = scratch("mpi_cave_stereo");
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/cologne_5wall.toml");
+    let json = |name: &str| dir.join(name);
+    let run = |launcher: Option<u32>, out: &Path| {
+        let caveray = env!("CARGO_BIN_EXE_caveray");
+        let args = [
+            "bench",
+            "cave-stereo",
+            "--config",
+            config.to_str().unwrap(),
+            "--scale",
+            "0.02",
+            "--frames",
+            "2",
+            "--volume",
+            "phantom:24",
+            "--json",
+            out.to_str().unwrap(),
+        ];
+        let mut command = match launcher {
+            None => Command::new(caveray),
+            Some(n) => {
+                let mut c = Command::new("mpirun");
+                c.args(["--oversubscribe", "-np", &n.to_string(), caveray]);
+                c
+            }
+        };
+        let result = command
+            .args(args)
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+            .output()
+            .unwrap();
+        assert!(
+            result.status.success(),
+            "{launcher:?}: {}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap();
+        report
+    };
+    let one = run(None, &json("one.json"));
+    let two = run(Some(2), &json("two.json"));
+    // The walls of each frame and whether they see the volume are the
+    // rig's geometry; which path the planner takes depends on timings.
+    let seen = |r: &serde_json::Value| -> Vec<Vec<(String, bool)>> {
+        r["timeline"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| {
+                f["walls"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|w| {
+                        (
+                            w["wall"].as_str().unwrap().to_string(),
+                            w["path"] != "not visible",
+                        )
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    assert_eq!(seen(&two), seen(&one));
+    assert_eq!(seen(&one).len(), 2);
+    let cluster = &two["cluster"];
+    let ranks = cluster["ranks"].as_array().unwrap();
+    assert_eq!(ranks.len(), 2);
+    for r in ranks {
+        assert_eq!(r["render_ms"].as_array().unwrap().len(), 2, "{r}");
+        assert_eq!(r["barrier_ms"].as_array().unwrap().len(), 2, "{r}");
+    }
+    let frame_ms: Vec<f64> = cluster["frame_ms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for (i, ms) in frame_ms.iter().enumerate() {
+        let slowest = ranks
+            .iter()
+            .map(|r| r["render_ms"][i].as_f64().unwrap())
+            .fold(0.0, f64::max);
+        assert_eq!(*ms, slowest);
+    }
+    assert!(one.get("cluster").is_none());
+}

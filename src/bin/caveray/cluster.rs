@@ -70,17 +70,36 @@ impl Cluster {
 
     /// Every rank's share, on rank 0 in rank order (empty elsewhere).
     pub fn gather(&self, share: &Share) -> Result<Vec<Share>, Failure> {
+        if self.size() == 1 {
+            return Ok(vec![share.clone()]);
+        }
+        self.gather_bytes(&share.to_bytes()?)?
+            .iter()
+            .map(|b| Share::from_bytes(b))
+            .collect()
+    }
+
+    /// Every rank's `bytes`, on rank 0 in rank order (empty elsewhere).
+    pub fn gather_bytes(&self, bytes: &[u8]) -> Result<Vec<Vec<u8>>, Failure> {
         #[cfg(feature = "mpi")]
         if let Some(w) = &self.world {
-            let bytes = share.to_bytes()?;
-            return w
-                .gather(&bytes)
-                .map_err(Failure::Runtime)?
-                .iter()
-                .map(|b| Share::from_bytes(b))
-                .collect();
+            return w.gather(bytes).map_err(Failure::Runtime);
         }
-        Ok(vec![share.clone()])
+        Ok(vec![bytes.to_vec()])
+    }
+
+    /// Every rank's `value`, on rank 0 in rank order (empty elsewhere),
+    /// as JSON over the wire.
+    pub fn gather_json<T: Serialize + serde::de::DeserializeOwned>(
+        &self,
+        value: &T,
+    ) -> Result<Vec<T>, Failure> {
+        let json = |e: serde_json::Error| Failure::Runtime(format!("a rank's share: {e}"));
+        let bytes = serde_json::to_vec(value).map_err(json)?;
+        self.gather_bytes(&bytes)?
+            .iter()
+            .map(|b| serde_json::from_slice(b).map_err(json))
+            .collect()
     }
 }
 
@@ -135,7 +154,6 @@ impl Share {
     }
 
     /// A JSON header (its length first, 8 bytes) and the images' bytes.
-    #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
     fn to_bytes(&self) -> Result<Vec<u8>, Failure> {
         let head = serde_json::to_vec(self).map_err(|e| Failure::Runtime(e.to_string()))?;
         let mut out = (head.len() as u64).to_le_bytes().to_vec();
@@ -146,7 +164,6 @@ impl Share {
         Ok(out)
     }
 
-    #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
     fn from_bytes(bytes: &[u8]) -> Result<Self, Failure> {
         let bad = |why: &str| Failure::Runtime(format!("a rank's share is malformed: {why}"));
         let len = bytes

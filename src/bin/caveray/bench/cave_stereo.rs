@@ -10,6 +10,7 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use anari_library_caveray::cave::{pose_along, Eye, HeadPose, PathKey, Rig, ScenePlacement, Wall};
 use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
@@ -25,10 +26,11 @@ use anari_library_caveray::render::{
 use anari_library_caveray::scene::Scene;
 use clap::Args;
 use glam::UVec2;
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 
 use super::charts::{self, heatmap};
 use super::{mean, runtime, GPU};
+use crate::cluster::Cluster;
 use crate::options::{shading, step_factor};
 use crate::progress::Progress;
 use crate::render::wall_size;
@@ -106,6 +108,10 @@ struct CaveStereoReport {
     /// Why visible wall-frames rendered in two passes, most frequent first.
     fallbacks: Vec<Fallback>,
     timeline: Vec<FrameRecord>,
+    /// Under MPI: which walls each rank rendered, and per frame each
+    /// rank's render time and barrier wait.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    cluster: Option<ClusterTimes>,
     dssim_plot: String,
     speedup_plot: String,
     heatmap: Option<String>,
@@ -165,24 +171,59 @@ struct Fallback {
 }
 
 #[derive(Serialize)]
+struct ClusterTimes {
+    ranks: Vec<RankFrames>,
+    /// Per frame, the slowest rank's render: the frame's time.
+    frame_ms: Vec<f64>,
+}
+
+/// One rank's walls and timed frames, as it sends them to rank 0.
+#[derive(Serialize, Deserialize)]
+struct RankFrames {
+    rank: usize,
+    walls: Vec<String>,
+    /// Per timed frame: its walls' renders, then its wait at the barrier.
+    render_ms: Vec<f64>,
+    barrier_ms: Vec<f64>,
+    /// Its walls' records (sent to rank 0, which merges them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    timeline: Vec<FrameRecord>,
+}
+
+/// A wall-frame's path or plan: one of a few fixed names. (A named type,
+/// so that serde reads it with `known_name` instead of borrowing it from
+/// the input, which it does for fields spelt `&str`.)
+type PathName = &'static str;
+
+/// One of the names a wall-frame's path or plan takes, read back.
+fn known_name<'de, D: Deserializer<'de>>(d: D) -> Result<PathName, D::Error> {
+    let name = String::deserialize(d)?;
+    ["reprojected", "two-pass", "not visible"]
+        .into_iter()
+        .find(|k| *k == name)
+        .ok_or_else(|| serde::de::Error::custom(format!("unknown path '{name}'")))
+}
+
+#[derive(Serialize, Deserialize)]
 struct FrameRecord {
     t: f64,
     head: [f64; 3],
     walls: Vec<WallFrame>,
 }
 
-#[derive(Serialize, Clone)]
+#[derive(Serialize, Deserialize, Clone)]
 struct WallFrame {
     wall: String,
     /// reprojected, two-pass or not visible.
-    path: &'static str,
+    #[serde(deserialize_with = "known_name")]
+    path: PathName,
     #[serde(skip_serializing_if = "Option::is_none")]
     reason: Option<String>,
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     measured: Option<Measured>,
 }
 
-#[derive(Serialize, Clone, Copy)]
+#[derive(Serialize, Deserialize, Clone, Copy)]
 struct Measured {
     layers: u32,
     families: u32,
@@ -199,7 +240,8 @@ struct Measured {
     dssim: f64,
     /// The planner's path, whether it was a probe, what it expected the
     /// path to take and the relative error of that (measured / expected - 1).
-    planned: &'static str,
+    #[serde(deserialize_with = "known_name")]
+    planned: PathName,
     probe: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     expected_ms: Option<f64>,
@@ -256,6 +298,10 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
     let loaded = args.volume.with_volume(&name).load()?;
     let placement = loaded.placement(rig.scene)?;
     let scene = loaded.placed(rig.scene, &rig.viewer.frame, rig.units)?;
+    let cluster = Cluster::join()?;
+    let mine = anari_library_caveray::cluster::assign(rig.walls.len(), cluster.size())
+        .swap_remove(cluster.rank());
+    let own: Vec<(&Wall, UVec2)> = mine.iter().map(|&i| (&rig.walls[i], sizes[i])).collect();
     let mut gpu = GpuRenderer::new().map_err(|e| {
         Failure::Runtime(format!("{e} (re-projection runs on the GPU renderer only)"))
     })?;
@@ -295,19 +341,28 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
     let seeding = std::iter::repeat_n(Phase::Seeding, PairCosts::RUN);
     for phase in std::iter::once(Phase::Warming).chain(seeding) {
         bench.phase = phase;
-        for (wall, size) in rig.walls.iter().zip(&sizes) {
-            bench.wall(wall, *size, &first)?;
+        for &(wall, size) in &own {
+            bench.wall(wall, size, &first)?;
         }
     }
+    // The ranks start the timed frames together.
+    cluster.barrier()?;
     bench.phase = Phase::Timed;
     let mut progress = Progress::new(times.len());
     let mut timeline = Vec::with_capacity(times.len());
+    let (mut render_ms, mut barrier_ms) = (Vec::new(), Vec::new());
     for &t in &times {
         let head = pose(&keys, t);
-        let mut walls = Vec::with_capacity(rig.walls.len());
-        for (wall, size) in rig.walls.iter().zip(&sizes) {
-            walls.push(bench.wall(wall, *size, &head)?);
+        let mut walls = Vec::with_capacity(own.len());
+        let started = Instant::now();
+        for &(wall, size) in &own {
+            walls.push(bench.wall(wall, size, &head)?);
         }
+        render_ms.push(started.elapsed().as_secs_f64() * 1e3);
+        // The swap lock: every rank's walls of this frame are done.
+        let waited = Instant::now();
+        cluster.barrier()?;
+        barrier_ms.push(waited.elapsed().as_secs_f64() * 1e3);
         let done = walls.iter().filter(|w| w.path == "reprojected").count();
         let seen = walls.iter().filter(|w| w.path != "not visible").count();
         progress.step(&format!(
@@ -319,6 +374,33 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
             walls,
         });
     }
+    let mut ranks = cluster.gather_json(&RankFrames {
+        rank: cluster.rank(),
+        walls: own.iter().map(|(w, _)| w.name.clone()).collect(),
+        render_ms,
+        barrier_ms,
+        timeline,
+    })?;
+    if !cluster.is_root() {
+        return Ok(());
+    }
+    // Every rank's walls of each frame, in the rig's order.
+    let mut timeline = std::mem::take(&mut ranks[0].timeline);
+    for rank in &mut ranks[1..] {
+        for (frame, theirs) in timeline.iter_mut().zip(std::mem::take(&mut rank.timeline)) {
+            frame.walls.extend(theirs.walls);
+        }
+    }
+    let order = |name: &str| rig.walls.iter().position(|w| w.name == name);
+    for frame in &mut timeline {
+        frame.walls.sort_by_key(|w| order(&w.wall));
+    }
+    let cluster_times = (cluster.size() > 1).then(|| ClusterTimes {
+        frame_ms: (0..times.len())
+            .map(|i| ranks.iter().map(|r| r.render_ms[i]).fold(0.0, f64::max))
+            .collect(),
+        ranks,
+    });
     let heatmap_file = match bench.worst.take() {
         Some((_, two_pass, reprojected)) => {
             let file = file_name(&args.json, "worst.png");
@@ -334,7 +416,7 @@ pub fn run(args: CaveStereoArgs) -> Result<(), Failure> {
         &name,
         RendererInfo::Gpu(Adapter::of(&gpu)),
         timeline,
-        heatmap_file,
+        (cluster_times, heatmap_file),
     );
     write_json(&report, &args.json)?;
     for (file, svg) in [
@@ -560,7 +642,7 @@ fn summarise(
     volume: &str,
     renderer: RendererInfo,
     timeline: Vec<FrameRecord>,
-    heatmap: Option<String>,
+    (cluster, heatmap): (Option<ClusterTimes>, Option<String>),
 ) -> CaveStereoReport {
     let all: Vec<(f64, &WallFrame)> = timeline
         .iter()
@@ -661,6 +743,7 @@ fn summarise(
         walls,
         fallbacks,
         timeline,
+        cluster,
         dssim_plot: stem("dssim.svg"),
         speedup_plot: stem("speedup.svg"),
         heatmap,
@@ -745,6 +828,22 @@ fn speedup_chart(report: &CaveStereoReport) -> String {
 }
 
 fn print_table(report: &CaveStereoReport) {
+    if let Some(c) = &report.cluster {
+        println!(
+            "{} MPI ranks; a frame took {:.1} ms on average (the slowest rank's walls)",
+            c.ranks.len(),
+            mean(c.frame_ms.iter().copied())
+        );
+        for r in &c.ranks {
+            println!(
+                "  rank {}: {} in {:.1} ms a frame, {:.1} ms at the barrier",
+                r.rank,
+                r.walls.join(", "),
+                mean(r.render_ms.iter().copied()),
+                mean(r.barrier_ms.iter().copied())
+            );
+        }
+    }
     println!(
         "stereo by re-projection on {} along {} ({} frames over {:.1} s, scale {}, {}), on {}",
         report.rig,
