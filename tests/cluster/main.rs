@@ -15,20 +15,10 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-fn render(launcher: Option<u32>, out: &Path) {
-    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/cologne_5wall.toml");
+/// The tool with `args`, alone or as `n` ranks under `mpirun`; fails the
+/// test if it fails.
+fn caveray(launcher: Option<u32>, args: &[&str]) {
     let caveray = env!("CARGO_BIN_EXE_caveray");
-    let args = [
-        "render",
-        "--config",
-        config.to_str().unwrap(),
-        "--scale",
-        "0.03",
-        "--backend",
-        "cpu",
-        "--out",
-        out.to_str().unwrap(),
-    ];
     let mut command = match launcher {
         None => Command::new(caveray),
         Some(n) => {
@@ -50,6 +40,28 @@ fn render(launcher: Option<u32>, out: &Path) {
         run.status.success(),
         "{launcher:?}: {}",
         String::from_utf8_lossy(&run.stderr)
+    );
+}
+
+fn config() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/cologne_5wall.toml")
+}
+
+fn render(launcher: Option<u32>, out: &Path) {
+    let config = config();
+    caveray(
+        launcher,
+        &[
+            "render",
+            "--config",
+            config.to_str().unwrap(),
+            "--scale",
+            "0.03",
+            "--backend",
+            "cpu",
+            "--out",
+            out.to_str().unwrap(),
+        ],
     );
 }
 
@@ -137,46 +149,27 @@ fn four_ranks_render_the_cave_as_one_process_does() {
 #[test]
 fn two_ranks_time_the_cave_walk_frame_by_frame() {
     let dir = scratch("mpi_cave_stereo");
-    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("cave_configs/cologne_5wall.toml");
+    let config = config();
     let json = |name: &str| dir.join(name);
-    let run = |launcher: Option<u32>, out: &Path| {
-        let caveray = env!("CARGO_BIN_EXE_caveray");
-        let args = [
-            "bench",
-            "cave-stereo",
-            "--config",
-            config.to_str().unwrap(),
-            "--scale",
-            "0.02",
-            "--frames",
-            "2",
-            "--volume",
-            "phantom:24",
-            "--json",
-            out.to_str().unwrap(),
-        ];
-        let mut command = match launcher {
-            None => Command::new(caveray),
-            Some(n) => {
-                let mut c = Command::new("mpirun");
-                c.args(["--oversubscribe", "-np", &n.to_string(), caveray]);
-                c
-            }
-        };
-        let result = command
-            .args(args)
-            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .output()
-            .unwrap();
-        assert!(
-            result.status.success(),
-            "{launcher:?}: {}",
-            String::from_utf8_lossy(&result.stderr)
+    let run = |launcher: Option<u32>, out: &Path| -> serde_json::Value {
+        caveray(
+            launcher,
+            &[
+                "bench",
+                "cave-stereo",
+                "--config",
+                config.to_str().unwrap(),
+                "--scale",
+                "0.02",
+                "--frames",
+                "2",
+                "--volume",
+                "phantom:24",
+                "--json",
+                out.to_str().unwrap(),
+            ],
         );
-        let report: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap();
-        report
+        serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap()
     };
     let one = run(None, &json("one.json"));
     let two = run(Some(2), &json("two.json"));

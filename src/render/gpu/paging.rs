@@ -880,7 +880,8 @@ impl PagedVolume {
                 && self.residency.resident(root)
                 && (Instant::now() >= until || uploaded >= limit);
             if done || late || got == 0 {
-                writer.finish()?;
+                // What is staged (under UPLOAD_BYTES) goes with the
+                // frame's own submission: no wait here.
                 return Ok(Streaming {
                     wanted: selection.len() as u32,
                     resident,

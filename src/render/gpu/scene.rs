@@ -152,7 +152,8 @@ impl GpuScene {
     pub fn volume(&self, i: usize) -> &wgpu::TextureView {
         self.placed
             .get(i)
-            .map_or(&self.no_volume, |&g| self.grids[g].1.view())
+            .and_then(|&g| self.grids.get(g))
+            .map_or(&self.no_volume, |(_, t)| t.view())
     }
 
     /// The first volume's texture, if the scene has one in one texture.
@@ -243,40 +244,54 @@ impl GpuScene {
         // Grids no longer in the scene, or laid out differently now, go
         // before new ones are made, so that replacing a large volume does
         // not need room for both.
-        let before = self.grids.len();
+        let before: Vec<*const StructuredVolume> =
+            self.grids.iter().map(|(v, _)| Arc::as_ptr(v)).collect();
         self.grids.retain(|(v, g)| {
             wanted
                 .iter()
                 .zip(&layouts)
                 .any(|(w, l)| Arc::ptr_eq(v, w) && g.fits(l))
         });
-        let mut changed = self.grids.len() != before;
         let mut grids = Vec::with_capacity(wanted.len());
+        let mut made_new = 0;
         for (volume, layout) in wanted.into_iter().zip(&layouts) {
             let kept = self
                 .grids
                 .iter()
                 .position(|(v, _)| Arc::ptr_eq(v, volume))
                 .map(|i| self.grids.swap_remove(i));
-            let grid = match kept {
-                Some(g) => g,
-                None => {
-                    changed = true;
-                    self.uploads.volumes += 1;
-                    let on_gpu = match layout {
-                        Layout::Whole { .. } => {
-                            OnGpu::Whole(volume_texture::upload(ctx, volume, self.mips)?)
-                        }
-                        Layout::Paged { pool, .. } => {
-                            OnGpu::Paged(Box::new(PagedVolume::new(ctx, volume, *pool)?))
-                        }
-                    };
-                    (Arc::clone(volume), on_gpu)
+            made_new += u32::from(kept.is_none());
+            let made = match (kept, layout) {
+                (Some(g), _) => Ok(g.1),
+                (None, Layout::Whole { .. }) => {
+                    volume_texture::upload(ctx, volume, self.mips).map(OnGpu::Whole)
+                }
+                (None, Layout::Paged { pool, .. }) => {
+                    PagedVolume::new(ctx, volume, *pool).map(|p| OnGpu::Paged(Box::new(p)))
                 }
             };
-            grids.push(grid);
+            match made {
+                Ok(on_gpu) => grids.push((Arc::clone(volume), on_gpu)),
+                Err(e) => {
+                    // What is on the GPU stays, unbound until an upload
+                    // succeeds.
+                    self.grids.extend(grids);
+                    self.placed.clear();
+                    self.generation += 1;
+                    return Err(e);
+                }
+            }
         }
+        self.uploads.volumes += made_new;
         self.grids = grids;
+        // New textures, or the same in another order: bind groups go stale.
+        let mut changed = made_new > 0
+            || self.grids.len() != before.len()
+            || self
+                .grids
+                .iter()
+                .zip(&before)
+                .any(|((v, _), b)| Arc::as_ptr(v) != *b);
         let placed: Vec<usize> = scene
             .volumes()
             .iter()
