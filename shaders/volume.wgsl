@@ -530,6 +530,34 @@ fn enter_exit(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f, near: f32, far: f32) -> 
     return vec2f(max(max(max(tn.x, tn.y), tn.z), near), min(min(min(tf.x, tf.y), tf.z), far));
 }
 
+// Under data-parallel rendering: the ray o + t d in the parts' frame.
+fn part_frame(o: vec3f, d: vec3f) -> array<vec3f, 2> {
+    let q = vec4f(o, 1.0);
+    return array<vec3f, 2>(
+        vec3f(dot(params.part_x, q), dot(params.part_y, q), dot(params.part_z, q)),
+        vec3f(dot(params.part_x.xyz, d), dot(params.part_y.xyz, d), dot(params.part_z.xyz, d)),
+    );
+}
+
+// Where step k of a march from t0 over len is sampled, as
+// march_plan::sample_t: the parts split the steps by it.
+fn part_sample_t(t0: f32, len: f32, step: f32, k: u32) -> f32 {
+    let start = f32(k) * step;
+    return t0 + start + 0.5 * max(min(step, len - start), 0.0);
+}
+
+// The first of the n steps sampled at or beyond r.
+fn part_first_at(r: f32, t0: f32, len: f32, n: u32, step: f32) -> u32 {
+    var k = u32(clamp(ceil((r - t0) / step - 0.5), 0.0, f32(n)));
+    while k > 0u && part_sample_t(t0, len, step, k - 1u) >= r {
+        k--;
+    }
+    while k < n && part_sample_t(t0, len, step, k) < r {
+        k++;
+    }
+    return k;
+}
+
 fn march(ray: Ray) -> Marched {
     return march_segment(ray, params.t_near, params.t_far, Marched(vec4f(0.0), bitcast<f32>(0x7f800000u)));
 }
@@ -562,6 +590,15 @@ fn march_segment(ray: Ray, start: f32, stop: f32, carried: Marched) -> Marched {
             t1 = max(t1, spans[v].y);
         }
     }
+    // A data-parallel part lays its steps along the whole's span.
+    var owned = vec2f(0.0);
+    if params.has_part != 0u {
+        let f = part_frame(o, d);
+        let whole = enter_exit(f[0], f[1], params.whole_lo, params.whole_hi, near, far);
+        t0 = whole.x;
+        t1 = whole.y;
+        owned = enter_exit(f[0], f[1], params.owned_lo, params.owned_hi, -bitcast<f32>(0x7f800000u), bitcast<f32>(0x7f800000u));
+    }
     // Clip planes (n, d) keep dot(n, o + t d) < d, as the reference does.
     for (var i = 0u; i < params.clip_count; i++) {
         let plane = params.clip[i];
@@ -576,15 +613,28 @@ fn march_segment(ray: Ray, start: f32, stop: f32, carried: Marched) -> Marched {
         }
     }
     if FILTERED && params.lod > 0.0 && t1 > t0 {
+        // Steps that lengthen with the level are not split by sample: a
+        // part marches its own stretch.
+        if params.has_part != 0u {
+            return march_lod(o, d, &spans, max(t0, owned.x), min(t1, owned.y), carried);
+        }
         return march_lod(o, d, &spans, t0, t1, carried);
     }
     if t1 > t0 {
         let len = t1 - t0;
         // f32 to u32 saturates; the cap holds where t has lost its precision.
-        let n = min(u32(ceil(len / step)), params.max_steps);
+        var n = u32(ceil(len / step));
+        var k = 0u;
+        if params.has_part != 0u && owned.y > owned.x {
+            let first = part_first_at(owned.x, t0, len, n, step);
+            n = max(part_first_at(owned.y, t0, len, n, step), first);
+            k = first;
+        } else if params.has_part != 0u {
+            n = 0u;
+        }
+        n = min(n, k + min(params.max_steps, 0xffffffffu - k));
         // Up to here, the last look at the bricks said some could show.
         var busy_until = -bitcast<f32>(0x7f800000u);
-        var k = 0u;
         while k < n {
             let start = f32(k) * step;
             k++;

@@ -1,15 +1,23 @@
 //! Beyond one machine: a CAVE's views shared out over the processes of an
 //! MPI job (one per node, each driving its GPU), kept in step by a barrier
 //! that plays the swap lock's part, their images and timings gathered on
-//! rank 0. Which process renders which wall (`assign`) is plain
+//! rank 0; or one volume cut into bricks over the processes (`split`),
+//! each rendering its own region (`region`) of every view, the partial
+//! images composited in visibility order (`composite`). All of it is plain
 //! arithmetic, built always; talking to MPI (`mpi`) only with the `mpi`
 //! feature, so a build without it is unchanged.
 
 mod assign;
+mod composite;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+mod region;
+mod split;
 
 pub use assign::assign;
+pub use composite::{band, composite, Partial};
+pub use region::Region;
+pub use split::{Brick, Split};
 
 /// Processes in the job that started this one, as the launcher says
 /// (OpenMPI's `mpirun`, or a PMI launcher), where it says one; without

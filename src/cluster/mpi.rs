@@ -44,6 +44,26 @@ extern "C" {
         root: c_int,
         comm: *mut c_void,
     ) -> c_int;
+    fn MPI_Alltoall(
+        send: *const c_void,
+        send_count: c_int,
+        send_type: *mut c_void,
+        recv: *mut c_void,
+        recv_count: c_int,
+        recv_type: *mut c_void,
+        comm: *mut c_void,
+    ) -> c_int;
+    fn MPI_Alltoallv(
+        send: *const c_void,
+        send_counts: *const c_int,
+        send_displacements: *const c_int,
+        send_type: *mut c_void,
+        recv: *mut c_void,
+        recv_counts: *const c_int,
+        recv_displacements: *const c_int,
+        recv_type: *mut c_void,
+        comm: *mut c_void,
+    ) -> c_int;
 }
 
 /// MPI_COMM_WORLD: the address of Open MPI's predefined communicator
@@ -175,6 +195,81 @@ impl World {
             .iter()
             .zip(&displacements)
             .map(|(&n, &at)| all[at as usize..(at + n) as usize].to_vec())
+            .collect())
+    }
+}
+
+impl World {
+    /// Every rank sends `to[j]` to rank j and gets back, in rank order,
+    /// what each rank sent it (direct-send). Refused where a rank would
+    /// send or receive more than MPI's int counts hold.
+    pub fn exchange(&self, to: &[Vec<u8>]) -> Result<Vec<Vec<u8>>, String> {
+        if to.len() != self.size {
+            return Err(format!(
+                "an exchange needs a message for each of {} ranks, got {}",
+                self.size,
+                to.len()
+            ));
+        }
+        let lens: Vec<u8> = to
+            .iter()
+            .flat_map(|m| (m.len() as u64).to_le_bytes())
+            .collect();
+        let mut got = vec![0u8; 8 * self.size];
+        // SAFETY: 8 bytes to and from each rank, within both buffers.
+        check("MPI_Alltoall", unsafe {
+            MPI_Alltoall(
+                lens.as_ptr().cast(),
+                8,
+                byte(),
+                got.as_mut_ptr().cast(),
+                8,
+                byte(),
+                world(),
+            )
+        })?;
+        let got: Vec<u64> = got
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+            .collect();
+        let counts =
+            |lens: &mut dyn Iterator<Item = u64>| -> Result<(Vec<c_int>, Vec<c_int>), String> {
+                let (mut counts, mut at) = (Vec::new(), Vec::new());
+                let mut total: u64 = 0;
+                for n in lens {
+                    at.push(c_int::try_from(total).map_err(|_| "passes MPI's int counts")?);
+                    counts.push(c_int::try_from(n).map_err(|_| "passes MPI's int counts")?);
+                    total += n;
+                }
+                c_int::try_from(total).map_err(|_| "passes MPI's int counts")?;
+                Ok((counts, at))
+            };
+        let too_big = |e: String| format!("an exchange of {e}");
+        let (send_counts, send_at) =
+            counts(&mut to.iter().map(|m| m.len() as u64)).map_err(too_big)?;
+        let (recv_counts, recv_at) = counts(&mut got.iter().copied()).map_err(too_big)?;
+        let send: Vec<u8> = to.concat();
+        let mut recv = vec![0u8; got.iter().sum::<u64>() as usize];
+        // SAFETY: the counts and displacements lie within `send` and
+        // `recv`, which hold their sums; every rank's counts agree with the
+        // lengths exchanged above.
+        check("MPI_Alltoallv", unsafe {
+            MPI_Alltoallv(
+                send.as_ptr().cast(),
+                send_counts.as_ptr(),
+                send_at.as_ptr(),
+                byte(),
+                recv.as_mut_ptr().cast(),
+                recv_counts.as_ptr(),
+                recv_at.as_ptr(),
+                byte(),
+                world(),
+            )
+        })?;
+        Ok(recv_counts
+            .iter()
+            .zip(&recv_at)
+            .map(|(&n, &at)| recv[at as usize..(at + n) as usize].to_vec())
             .collect())
     }
 }

@@ -32,6 +32,9 @@ pub(crate) struct MarchPlan {
     pub termination: f32,
     pub depth_threshold: f32,
     pub clip_planes: Vec<Vec4>,
+    /// Under data-parallel rendering: where steps are laid and which this
+    /// renderer takes.
+    pub part: Option<PartPlan>,
     /// Straight RGBA.
     pub background: Vec4,
     pub light: Vec3,
@@ -99,6 +102,85 @@ impl VolumePlan {
     }
 }
 
+/// The point along a march from `t0` over `len` at which step `k` is
+/// sampled: the middle of its segment, every segment a full step but the
+/// last. The renderers and [`PartPlan::owned_steps`] compute it alike, so
+/// that two ranks agree on which of them takes a sample.
+pub(crate) fn sample_t(t0: f32, len: f32, step: f32, k: u32) -> f32 {
+    let start = k as f32 * step;
+    t0 + start + 0.5 * step.min(len - start).max(0.0)
+}
+
+/// A data-parallel renderer's share (settings::Part), as marches read it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PartPlan {
+    pub to_box: [Vec4; 3],
+    pub whole: (Vec3, Vec3),
+    pub owned: (Vec3, Vec3),
+}
+
+impl PartPlan {
+    fn frame(&self, o: Vec3, d: Vec3) -> (Vec3, Vec3) {
+        let [x, y, z] = &self.to_box;
+        let q = o.extend(1.0);
+        (
+            Vec3::new(x.dot(q), y.dot(q), z.dot(q)),
+            Vec3::new(
+                x.truncate().dot(d),
+                y.truncate().dot(d),
+                z.truncate().dot(d),
+            ),
+        )
+    }
+
+    /// The whole's span along the ray `o + t d` within `clip`: where one
+    /// renderer of the whole would lay its steps.
+    pub fn whole_span(&self, o: Vec3, d: Vec3, clip: (f32, f32)) -> Option<(f32, f32)> {
+        let (q, qd) = self.frame(o, d);
+        crate::geometry::enter_exit(q, qd, self.whole.0, self.whole.1, clip)
+    }
+
+    /// Of the `n` steps of a march from `t0` over `len`, the ones
+    /// `[first, end)` whose sample points lie in the owned box (a point on
+    /// a face between two parts goes to the farther one).
+    pub fn owned_steps(
+        &self,
+        (o, d): (Vec3, Vec3),
+        (t0, len, n): (f32, f32, u32),
+        step: f32,
+    ) -> (u32, u32) {
+        let (q, qd) = self.frame(o, d);
+        let Some((r0, r1)) = crate::geometry::enter_exit(
+            q,
+            qd,
+            self.owned.0,
+            self.owned.1,
+            (f32::NEG_INFINITY, f32::INFINITY),
+        ) else {
+            return (0, 0);
+        };
+        // The first step sampled at or beyond r: the estimate, then the
+        // same comparison the march makes.
+        let first_at = |r: f32| {
+            let guess = ((r - t0) / step - 0.5).ceil();
+            let mut k = if guess.is_nan() {
+                0
+            } else {
+                guess.clamp(0.0, n as f32) as u32
+            };
+            while k > 0 && sample_t(t0, len, step, k - 1) >= r {
+                k -= 1;
+            }
+            while k < n && sample_t(t0, len, step, k) < r {
+                k += 1;
+            }
+            k
+        };
+        let first = first_at(r0);
+        (first, first_at(r1).max(first))
+    }
+}
+
 impl MarchPlan {
     pub fn new(
         scene: &Scene,
@@ -139,6 +221,11 @@ impl MarchPlan {
             termination: settings.termination,
             depth_threshold: settings.depth_threshold,
             clip_planes: settings.clip_planes.as_slice().to_vec(),
+            part: settings.part.map(|p| PartPlan {
+                to_box: p.to_box,
+                whole: p.whole,
+                owned: p.owned,
+            }),
             background: settings.background,
             light: settings.light.normalize(),
             // Emission-absorption alone is the transfer function's colour, as

@@ -28,8 +28,8 @@ pub use gpu::{GpuRenderer, PassClock, StreamWait, Streaming, Uploads};
 pub use hits::{HitChannel, HitRecord, PixelHit};
 pub use progress::{Done, Progress, Watch};
 pub use settings::{
-    check_step_factor, BackgroundImage, ClipPlanes, Lamp, RenderSettings, Sampling, Shading, Spot,
-    SurfaceShading, LOD_MAX, MAX_CLIP_PLANES, MAX_DIRECTIONS, MAX_LAMPS, MAX_STEPS_PER_RAY,
+    check_step_factor, BackgroundImage, ClipPlanes, Lamp, Part, RenderSettings, Sampling, Shading,
+    Spot, SurfaceShading, LOD_MAX, MAX_CLIP_PLANES, MAX_DIRECTIONS, MAX_LAMPS, MAX_STEPS_PER_RAY,
     STEP_FACTOR_RANGE,
 };
 

@@ -119,6 +119,19 @@ fn unit_normal(plane: Vec4) -> Vec4 {
         .as_vec4()
 }
 
+/// One renderer's share of a data-parallel job: boxes in a frame that an
+/// affine map takes world points to. Every rank lays its steps along each
+/// ray as one renderer of the whole would (from where the ray enters
+/// `whole`) and takes only the samples whose points lie in `owned`, so
+/// that the ranks' samples together are that renderer's, each taken once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Part {
+    /// World point to the boxes' frame: rows x, y, z applied to (p, 1).
+    pub to_box: [Vec4; 3],
+    pub whole: (Vec3, Vec3),
+    pub owned: (Vec3, Vec3),
+}
+
 /// How surfaces are shaded.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SurfaceShading {
@@ -336,6 +349,9 @@ pub struct RenderSettings {
     /// (0 takes the first sample that contributes anything).
     pub depth_threshold: f32,
     pub clip_planes: ClipPlanes,
+    /// Under data-parallel rendering, the part of the volumes this
+    /// renderer draws.
+    pub part: Option<Part>,
     /// Color times strength of the light, multiplying every lit sample
     /// (a host's directional light; 1 without one; unused unless
     /// [`Shading::lights`]).
@@ -377,6 +393,7 @@ impl Default for RenderSettings {
             light: Vec3::new(0.3, 0.5, 0.8).normalize(),
             depth_threshold: 0.5,
             clip_planes: ClipPlanes::default(),
+            part: None,
             light_color: Vec3::ONE,
             ambient: Vec3::splat(super::shapes::AMBIENT_SCALE),
             surface_shading: SurfaceShading::default(),
@@ -431,6 +448,16 @@ impl RenderSettings {
             }
         }
         check_step_factor(self.step_factor)?;
+        if let Some(part) = &self.part {
+            let finite = part.to_box.iter().all(|r| r.is_finite());
+            let boxed =
+                |(lo, hi): (Vec3, Vec3)| lo.is_finite() && hi.is_finite() && lo.cmple(hi).all();
+            if !(finite && boxed(part.whole) && boxed(part.owned)) {
+                return Err(RenderError::Settings(format!(
+                    "a data-parallel part needs a finite frame and boxes with lo <= hi, got {part:?}"
+                )));
+            }
+        }
         if !(self.sampling_rate.is_finite() && self.sampling_rate > 0.0) {
             return Err(RenderError::Settings(format!(
                 "sampling rate must be finite and positive, got {:?}",

@@ -123,6 +123,8 @@ pub enum VolumeError {
     NonFiniteVoxel { index: usize },
     #[error("a scaling of stored values must be finite with a slope other than 0, got {slope} * v + {intercept}")]
     BadScaling { slope: f32, intercept: f32 },
+    #[error("vertices {}..={} are not a box within a grid of {}x{}x{}", .lo, .hi, .dims.x, .dims.y, .dims.z)]
+    BadBox { lo: UVec3, hi: UVec3, dims: UVec3 },
 }
 
 /// How a volume is sampled between its grid vertices.
@@ -271,6 +273,41 @@ impl StructuredVolume {
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let extent = (self.dims - UVec3::ONE).as_vec3() * self.spacing;
         (self.origin, self.origin + extent)
+    }
+
+    /// Vertices `lo..=hi` of this grid as a grid of their own, in the same
+    /// place: a copy of just those numbers (of a mapped file, only the
+    /// pages that hold them are read), with the same scaling and filter.
+    pub fn cropped(&self, lo: UVec3, hi: UVec3) -> Result<Self, VolumeError> {
+        if lo.cmpgt(hi).any() || hi.cmpge(self.dims).any() {
+            return Err(VolumeError::BadBox {
+                lo,
+                hi,
+                dims: self.dims,
+            });
+        }
+        let dims = hi - lo + UVec3::ONE;
+        let (w, h) = (self.dims.x as usize, self.dims.y as usize);
+        fn rows<T: bytemuck::Pod>(v: &[T], lo: UVec3, dims: UVec3, w: usize, h: usize) -> Vec<T> {
+            let mut out = Vec::with_capacity(dims.x as usize * dims.y as usize * dims.z as usize);
+            for z in lo.z..lo.z + dims.z {
+                for y in lo.y..lo.y + dims.y {
+                    let at = (z as usize * h + y as usize) * w + lo.x as usize;
+                    out.extend_from_slice(&v[at..at + dims.x as usize]);
+                }
+            }
+            out
+        }
+        let voxels = match &*self.voxels {
+            Voxels::U8(v) => Voxels::U8(rows(v, lo, dims, w, h).into()),
+            Voxels::U16(v) => Voxels::U16(rows(v, lo, dims, w, h).into()),
+            Voxels::I16(v) => Voxels::I16(rows(v, lo, dims, w, h).into()),
+            Voxels::F32(v) => Voxels::F32(rows(v, lo, dims, w, h).into()),
+        };
+        let origin = self.origin + lo.as_vec3() * self.spacing;
+        Ok(Self::new(dims, voxels, origin, self.spacing)?
+            .with_scaling(self.scaling)?
+            .with_filter(self.filter))
     }
 
     /// The same grid moved and scaled so that its bounding box is centred

@@ -18,7 +18,7 @@ const MAY_IMPORT: &[(&str, &[&str])] = &[
     ("data", &["scene", "geometry"]),
     ("cave", &["data", "scene", "geometry"]),
     ("output", &["cave", "render", "scene", "geometry"]),
-    ("cluster", &[]),
+    ("cluster", &["render", "scene", "geometry"]),
 ];
 
 type Module = Vec<String>;

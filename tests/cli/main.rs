@@ -7,6 +7,7 @@ mod bench_autostereo;
 mod bench_cave_stereo;
 mod bench_gpu;
 mod bench_stereo;
+mod data_parallel;
 mod deps;
 mod examples;
 mod inspect;

@@ -1,9 +1,15 @@
 //! `caveray render` as an MPI job (built with `--features mpi`, run by
 //! scripts/test): `mpirun --oversubscribe -np 4` shares the Cologne CAVE's
 //! walls out over four ranks, which gather on rank 0 the same images the
-//! single process renders, and the timings of each rank.
+//! single process renders, and the timings of each rank; or cuts the
+//! volume into four bricks, one per rank, whose partial images are
+//! composited by direct-send into the single process's image.
 
 #![cfg(feature = "mpi")]
+
+#[path = "../common/cts.rs"]
+#[allow(dead_code)]
+mod cts;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -140,6 +146,81 @@ fn four_ranks_render_the_cave_as_one_process_does() {
         .collect();
     assert_eq!(views, expected);
     assert!(single.get("cluster").is_none());
+}
+
+#[test]
+fn four_ranks_composite_their_bricks_into_the_single_image() {
+    let (one, four) = (scratch("mpi_dp_one"), scratch("mpi_dp_four"));
+    let config = config();
+    let run = |launcher: Option<u32>, out: &Path, parts: &[&str]| {
+        let mut args = vec![
+            "render",
+            "--config",
+            config.to_str().unwrap(),
+            "--scale",
+            "0.04",
+            "--backend",
+            "cpu",
+            "--volume",
+            "phantom:48",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(parts);
+        caveray(launcher, &args);
+    };
+    run(None, &one, &[]);
+    run(Some(4), &four, &["--parts", "4"]);
+    let mut compared = 0;
+    for wall in ["front", "left", "right", "floor", "ceiling"] {
+        for eye in ["left", "right"] {
+            let name = format!("{wall}_{eye}.png");
+            let (a, b) = (pixels(&one.join(&name)), pixels(&four.join(&name)));
+            let (w, h) = a.dimensions();
+            let (ssim, _) = cts::score(a.as_raw(), b.as_raw(), w as usize, h as usize);
+            let largest = a
+                .as_raw()
+                .iter()
+                .zip(b.as_raw())
+                .map(|(x, y)| x.abs_diff(*y))
+                .max();
+            // Measured: SSIM 1.00000, at most one level apart.
+            assert!(
+                ssim >= 0.999 && largest <= Some(2),
+                "{name}: SSIM {ssim}, {largest:?}"
+            );
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 10);
+    let timings: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(four.join("timings.json")).unwrap()).unwrap();
+    let dp = &timings["data_parallel"];
+    assert_eq!(dp["ranks"], 4, "{dp}");
+    assert_eq!(dp["counts"], serde_json::json!([2, 2, 1]));
+    // Each view: every rank's render and compositing time, and the bytes
+    // it sent: three bands of its float partial image, and (but rank 0)
+    // its composited band in 8 bits.
+    let width = timings["views"][0]["width"].as_u64().unwrap();
+    let height = timings["views"][0]["height"].as_u64().unwrap();
+    let band = |r: u64| (height * (r + 1) / 4 - height * r / 4) * width;
+    for cost in dp["costs"].as_array().unwrap() {
+        assert_eq!(cost["render_ms"].as_array().unwrap().len(), 4, "{cost}");
+        assert_eq!(cost["composite_ms"].as_array().unwrap().len(), 4, "{cost}");
+        let sent: Vec<u64> = cost["bytes_sent"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b.as_u64().unwrap())
+            .collect();
+        let expected: Vec<u64> = (0..4)
+            .map(|r| {
+                let others: u64 = (0..4).filter(|&j| j != r).map(|j| 16 * band(j)).sum();
+                others + if r == 0 { 0 } else { 4 * band(r) }
+            })
+            .collect();
+        assert_eq!(sent, expected);
+    }
 }
 
 /// `bench cave-stereo` along the shipped walk under `mpirun -np 2` (the

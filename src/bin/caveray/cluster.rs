@@ -88,6 +88,16 @@ impl Cluster {
         Ok(vec![bytes.to_vec()])
     }
 
+    /// Sends `to[j]` to rank j; returns what each rank sent this one, in
+    /// rank order (direct-send). Alone, its own message.
+    pub fn exchange(&self, to: Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>, Failure> {
+        #[cfg(feature = "mpi")]
+        if let Some(w) = &self.world {
+            return w.exchange(&to).map_err(Failure::Runtime);
+        }
+        Ok(to)
+    }
+
     /// Every rank's `value`, on rank 0 in rank order (empty elsewhere),
     /// as JSON over the wire.
     pub fn gather_json<T: Serialize + serde::de::DeserializeOwned>(

@@ -2,6 +2,7 @@
 
 mod bench;
 mod cluster;
+mod data_parallel;
 mod inspect;
 mod options;
 mod progress;

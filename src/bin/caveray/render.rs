@@ -20,6 +20,7 @@ use glam::UVec2;
 use serde::{Deserialize, Serialize};
 
 use crate::cluster::{Cluster, Share};
+use crate::data_parallel::{Bricks, DataParallelReport};
 use crate::options::{RenderOptions, Strategy};
 use crate::progress::Progress;
 use crate::report::{write_json, RendererInfo, VolumeInfo};
@@ -52,6 +53,12 @@ pub struct RenderArgs {
     /// For a multi-view display: trilinear or tricubic.
     #[arg(long, default_value = "trilinear")]
     iso_filter: anari_library_caveray::render::iso::IsoFilter,
+    /// Data-parallel: cut the volume into this many bricks, render each
+    /// brick's region of every view on its own and composite the partial
+    /// images front to back. Under mpirun one brick per rank (N must equal
+    /// -np); alone, the bricks in turn.
+    #[arg(long)]
+    parts: Option<usize>,
 }
 
 /// How the two eyes of a wall are rendered.
@@ -108,6 +115,10 @@ pub struct RenderReport {
     /// slowest rank's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cluster: Option<ClusterReport>,
+    /// Under --parts: the bricks, and each view's render, compositing
+    /// time and bytes sent, per process.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub data_parallel: Option<DataParallelReport>,
     pub views: Vec<ViewRecord>,
     pub contact_sheets: Vec<String>,
 }
@@ -233,6 +244,7 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
                 "--head",
                 "--head-ypr",
                 "--time",
+                "--parts",
             ],
             ["does", "do"],
             "not apply to a multi-view display, which renders an isosurface per view on the CPU \
@@ -245,6 +257,13 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
             ["applies", "apply"],
             "to multi-view displays only, not to a rig",
         )?;
+    }
+    if args.parts.is_some() && args.stereo.stereo == StereoMethod::Reprojection {
+        return Err(Failure::Usage(
+            "--parts renders every eye of every wall from its bricks; re-projection stereo \
+             needs one renderer to see the whole volume (use --stereo two-pass)"
+                .into(),
+        ));
     }
     if args.stereo.stereo == StereoMethod::TwoPass {
         given.refuse(
@@ -282,13 +301,26 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", args.out.display())))?;
     let cluster = Cluster::join()?;
-    let mine = anari_library_caveray::cluster::assign(rig.walls.len(), cluster.size())
-        .swap_remove(cluster.rank());
+    let bricks = args
+        .parts
+        .map(|n| Bricks::new(&scene, &settings, n, &cluster))
+        .transpose()?;
+    // View-parallel: the walls shared out; data-parallel: every rank sees
+    // every wall.
+    let mine = match bricks {
+        Some(_) => (0..rig.walls.len()).collect(),
+        None => anari_library_caveray::cluster::assign(rig.walls.len(), cluster.size())
+            .swap_remove(cluster.rank()),
+    };
     let mut renderer = args.render.renderer()?;
 
     let start = Instant::now();
+    let uploaded = match &bricks {
+        Some(b) => b.scenes().next().unwrap_or(&scene),
+        None => &scene,
+    };
     let fell_back = renderer
-        .upload_for(args.render.backend, &scene)
+        .upload_for(args.render.backend, uploaded)
         .map_err(|e| Failure::Runtime(e.to_string()))?;
     if let Some(why) = fell_back {
         eprintln!("caveray: {why}");
@@ -304,6 +336,7 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     );
     let mut records = Vec::new();
     let mut images: Vec<(usize, Eye, image::RgbaImage)> = Vec::new();
+    let mut costs = Vec::new();
     let job = ViewJob {
         scene: &scene,
         settings: &settings,
@@ -384,9 +417,30 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
                             continue;
                         }
                     };
-                    let (frame, mut rendered) = progress.within(1, &label, |counter| {
-                        job.single(&mut renderer, &label, &rays, size, counter)
-                    })?;
+                    let (frame, mut rendered) = match &bricks {
+                        None => progress.within(1, &label, |counter| {
+                            job.single(&mut renderer, &label, &rays, size, counter)
+                        })?,
+                        Some(b) => {
+                            let t = Instant::now();
+                            let (frame, cost) = progress.within(1, &label, |counter| {
+                                b.render_view(&mut renderer, &rays, size, &cluster, counter)
+                            })?;
+                            costs.push(cost);
+                            let Some(frame) = frame else {
+                                progress.step(&format!("{label}: bricks sent"));
+                                continue;
+                            };
+                            let rendered = Rendered::new(
+                                size,
+                                t.elapsed().as_secs_f64() * 1e3,
+                                frame.samples,
+                                format!("{label}.png"),
+                                format!("data-parallel ({} bricks)", b.len()),
+                            );
+                            (frame, rendered)
+                        }
+                    };
                     if args.stereo.stereo == StereoMethod::Reprojection && *eye != Eye::Mono {
                         rendered.fallback = Some(reason.clone());
                     }
@@ -405,51 +459,62 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
         }
     }
 
-    let render_ms = start.elapsed().as_secs_f64() * 1e3;
-    let waited = Instant::now();
-    cluster.barrier()?;
-    let share = Share::of(
-        cluster.rank(),
-        mine.iter().map(|&i| rig.walls[i].name.clone()).collect(),
-        (render_ms, waited.elapsed().as_secs_f64() * 1e3),
-        &records,
-        &images,
-    )?;
-    let shares = cluster.gather(&share)?;
-    if !cluster.is_root() {
-        return Ok(());
-    }
-    for other in shares.iter().filter(|s| s.rank != share.rank) {
-        for (i, (wall_index, eye, w, h)) in other.images.iter().enumerate() {
-            let image = image::RgbaImage::from_raw(*w, *h, other.pixels[i].clone())
-                .ok_or_else(|| Failure::Runtime(format!("rank {}: a short image", other.rank)))?;
-            let eye = Eye::ALL
-                .into_iter()
-                .find(|e| e.name() == eye)
-                .ok_or_else(|| Failure::Runtime(format!("rank {}: eye '{eye}'", other.rank)))?;
-            images.push((*wall_index, eye, image));
+    let data_parallel = match &bricks {
+        Some(_) if !cluster.is_root() => return Ok(()),
+        Some(b) => Some(b.report(cluster.size(), costs)),
+        None => None,
+    };
+    // View-parallel: every rank's images and records to rank 0.
+    let mut shares = Vec::new();
+    if bricks.is_none() {
+        let render_ms = start.elapsed().as_secs_f64() * 1e3;
+        let waited = Instant::now();
+        cluster.barrier()?;
+        let share = Share::of(
+            cluster.rank(),
+            mine.iter().map(|&i| rig.walls[i].name.clone()).collect(),
+            (render_ms, waited.elapsed().as_secs_f64() * 1e3),
+            &records,
+            &images,
+        )?;
+        shares = cluster.gather(&share)?;
+        if !cluster.is_root() {
+            return Ok(());
         }
-        for (wall_index, value) in &other.records {
-            let record = serde_json::from_value(value.clone())
-                .map_err(|e| Failure::Runtime(format!("rank {}: {e}", other.rank)))?;
-            if let ViewRecord {
-                outcome: Outcome::Rendered(r),
-                ..
-            } = &record
-            {
-                let at = images
-                    .iter()
-                    .rposition(|(w, e, _)| w == wall_index && e.name() == record.eye);
-                if let Some(at) = at {
-                    write(&images[at].2, &args.out.join(&r.file))?;
-                }
+        for other in shares.iter().filter(|s| s.rank != share.rank) {
+            for (i, (wall_index, eye, w, h)) in other.images.iter().enumerate() {
+                let image = image::RgbaImage::from_raw(*w, *h, other.pixels[i].clone())
+                    .ok_or_else(|| {
+                        Failure::Runtime(format!("rank {}: a short image", other.rank))
+                    })?;
+                let eye = Eye::ALL
+                    .into_iter()
+                    .find(|e| e.name() == eye)
+                    .ok_or_else(|| Failure::Runtime(format!("rank {}: eye '{eye}'", other.rank)))?;
+                images.push((*wall_index, eye, image));
             }
-            records.push((*wall_index, record));
+            for (wall_index, value) in &other.records {
+                let record = serde_json::from_value(value.clone())
+                    .map_err(|e| Failure::Runtime(format!("rank {}: {e}", other.rank)))?;
+                if let ViewRecord {
+                    outcome: Outcome::Rendered(r),
+                    ..
+                } = &record
+                {
+                    let at = images
+                        .iter()
+                        .rposition(|(w, e, _)| w == wall_index && e.name() == record.eye);
+                    if let Some(at) = at {
+                        write(&images[at].2, &args.out.join(&r.file))?;
+                    }
+                }
+                records.push((*wall_index, record));
+            }
         }
     }
     // In the rig's wall order, each wall's eyes as rendered.
     records.sort_by_key(|(wall_index, _)| *wall_index);
-    let cluster_report = (cluster.size() > 1).then(|| ClusterReport {
+    let cluster_report = (bricks.is_none() && cluster.size() > 1).then(|| ClusterReport {
         frame_ms: shares.iter().map(|s| s.render_ms).fold(0.0, f64::max),
         ranks: shares
             .iter()
@@ -480,6 +545,7 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
         total_ms: start.elapsed().as_secs_f64() * 1e3,
         gpu_memory: GpuMemory::of(&renderer),
         cluster: cluster_report,
+        data_parallel,
         views: records,
         contact_sheets,
     };

@@ -78,7 +78,12 @@ pub(super) fn march_segment(
         None => Some((a, b)),
         Some((lo, hi)) => Some((a.min(lo), b.max(hi))),
     });
-    let range = union.and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
+    // A data-parallel part lays its steps along the whole's span.
+    let laid = match &plan.part {
+        Some(part) => part.whole_span(origin, dir, clip),
+        None => union,
+    };
+    let range = laid.and_then(|r| clip_to_planes(r, origin, dir, &plan.clip_planes));
     // On the packet path (one trilinear volume) the ray's grid point is
     // go + gd t, and its bricks need no span checks.
     let one = field.packet.as_ref().map(|grid| {
@@ -103,13 +108,20 @@ pub(super) fn march_segment(
     if let Some((t0, t1)) = range {
         let len = t1 - t0;
         // `as` saturates; the cap holds where t has lost its precision.
-        let n = ((len / plan.step).ceil() as u32).min(plan.max_steps);
-        let mut k = 0;
+        let n = (len / plan.step).ceil() as u32;
+        // A part takes its share of the whole's steps, as many at most as
+        // a ray takes (its index into them may be past that).
+        let (mut k, n) = match &plan.part {
+            Some(part) => part.owned_steps((origin, dir), (t0, len, n), plan.step),
+            None => (0, n),
+        };
+        let n = n.min(k.saturating_add(plan.max_steps));
         // Up to here, the last look at the bricks said some could show.
         let mut busy_until = f32::NEG_INFINITY;
         'ray: while k < n {
             // Every segment is a full step but the last; each is sampled
             // at its midpoint and its opacity corrected for its length.
+            // As march_plan::sample_t, which parts split the steps by.
             let start = k as f32 * plan.step;
             let seg = plan.step.min(len - start).max(0.0);
             let t = t0 + start + 0.5 * seg;

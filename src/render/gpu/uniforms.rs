@@ -218,6 +218,21 @@ uniform! {
         /// Words per pixel of samples_out: the samples taken, then, where
         /// the frame asks for hits, the pixel's HitRecord (render/hits.rs).
         pixel_words: u32,
+        /// Under data-parallel rendering (`has_part`, render::Part): world
+        /// point to the parts' frame (rows applied to (p, 1)), the box the
+        /// steps are laid along, and the box whose samples this renderer
+        /// takes.
+        part_x: [f32; 4],
+        part_y: [f32; 4],
+        part_z: [f32; 4],
+        whole_lo: [f32; 3],
+        has_part: u32,
+        whole_hi: [f32; 3],
+        _part_pad: u32,
+        owned_lo: [f32; 3],
+        _owned_pad: u32,
+        owned_hi: [f32; 3],
+        _owned_hi_pad: u32,
         /// Clip planes (n, d): keep dot(n, p) < d.
         clip: [[f32; 4]; MAX_CLIP_PLANES],
         volumes: [VolumeSlot; MAX_VOLUMES],
@@ -473,6 +488,17 @@ impl RayUniforms {
             t_near: rays.t_near,
             t_far: rays.t_far,
             clip_count: plan.clip_planes.len() as u32,
+            part_x: plan.part.map_or([0.0; 4], |p| p.to_box[0].to_array()),
+            part_y: plan.part.map_or([0.0; 4], |p| p.to_box[1].to_array()),
+            part_z: plan.part.map_or([0.0; 4], |p| p.to_box[2].to_array()),
+            whole_lo: plan.part.map_or([0.0; 3], |p| v(p.whole.0)),
+            has_part: u32::from(plan.part.is_some()),
+            whole_hi: plan.part.map_or([0.0; 3], |p| v(p.whole.1)),
+            owned_lo: plan.part.map_or([0.0; 3], |p| v(p.owned.0)),
+            owned_hi: plan.part.map_or([0.0; 3], |p| v(p.owned.1)),
+            _part_pad: 0,
+            _owned_pad: 0,
+            _owned_hi_pad: 0,
             volume_count: plan.volumes.len() as u32,
             has_background_image: u32::from(plan.has_background_image),
             light_color: plan.light_color.to_array(),
