@@ -1,5 +1,5 @@
 //! The few MPI calls a CAVE cluster needs (init, rank and size, barrier,
-//! gather), declared by hand against Open MPI's C ABI (Debian's
+//! gather, and the all-to-all of direct-send compositing), declared by hand against Open MPI's C ABI (Debian's
 //! `libopenmpi-dev`): there its handles are the addresses of its
 //! predefined objects (`MPI_COMM_WORLD` is `&ompi_mpi_comm_world`).
 //! Errors abort the job, as MPI's default handler does.
