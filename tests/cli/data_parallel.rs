@@ -112,6 +112,10 @@ fn compare(backend: &str, parts: &str, counts: [u64; 3]) {
             counts.iter().product::<u64>() as usize
         );
         assert_eq!(c["bytes_sent"], serde_json::json!([0]));
+        assert_eq!(
+            c["samples"].as_array().unwrap().len(),
+            counts.iter().product::<u64>() as usize
+        );
     }
     assert!(report["views"][0]["path"]
         .as_str()

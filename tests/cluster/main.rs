@@ -207,6 +207,7 @@ fn four_ranks_composite_their_bricks_into_the_single_image() {
     for cost in dp["costs"].as_array().unwrap() {
         assert_eq!(cost["render_ms"].as_array().unwrap().len(), 4, "{cost}");
         assert_eq!(cost["composite_ms"].as_array().unwrap().len(), 4, "{cost}");
+        assert_eq!(cost["samples"].as_array().unwrap().len(), 4, "{cost}");
         let sent: Vec<u64> = cost["bytes_sent"]
             .as_array()
             .unwrap()

@@ -47,6 +47,8 @@ pub struct BrickInfo {
 pub struct ViewCost {
     /// Each brick's render, in brick order.
     pub render_ms: Vec<f64>,
+    /// Each brick's volume samples.
+    pub samples: Vec<u64>,
     /// Each compositing process's time: the exchange, its band and the
     /// gather (alone: the whole frame).
     pub composite_ms: Vec<f64>,
@@ -198,14 +200,14 @@ impl Bricks {
         let desc = FrameDesc::new(size).with_color(ColorFormat::Rgba32F);
         let mut partials = Vec::with_capacity(self.mine.len());
         let mut render_ms = Vec::with_capacity(self.mine.len());
-        let mut samples = 0;
+        let mut samples = Vec::with_capacity(self.mine.len());
         for (i, scene, settings) in &self.mine {
             let t = Instant::now();
             let frame = renderer
                 .render_until(scene, rays, settings, &desc, counter)
                 .map_err(|e| Failure::Runtime(format!("brick {i}: {e}")))?;
             render_ms.push(t.elapsed().as_secs_f64() * 1e3);
-            samples += frame.samples;
+            samples.push(frame.samples);
             let ColorData::Rgba32F(color) = frame.color else {
                 return Err(Failure::Runtime(
                     "internal: a partial image not in floats".into(),
@@ -237,9 +239,10 @@ impl Bricks {
                 .map_err(Failure::Runtime)?;
             let mut frame = Frame::from_linear(&out, linear, None)
                 .map_err(|e| Failure::Runtime(e.to_string()))?;
-            frame.samples = samples;
+            frame.samples = samples.iter().sum();
             let cost = ViewCost {
                 render_ms,
+                samples,
                 composite_ms: vec![t.elapsed().as_secs_f64() * 1e3],
                 bytes_sent: vec![0],
             };
@@ -287,6 +290,7 @@ impl Bricks {
         let bands = cluster.gather_bytes(&bytes)?;
         let mut cost = ViewCost {
             render_ms,
+            samples,
             composite_ms: vec![t.elapsed().as_secs_f64() * 1e3],
             bytes_sent: vec![
                 sent + if cluster.is_root() {
@@ -302,6 +306,7 @@ impl Bricks {
         }
         cost = ViewCost {
             render_ms: costs.iter().flat_map(|c| c.render_ms.clone()).collect(),
+            samples: costs.iter().flat_map(|c| c.samples.clone()).collect(),
             composite_ms: costs.iter().flat_map(|c| c.composite_ms.clone()).collect(),
             bytes_sent: costs.iter().flat_map(|c| c.bytes_sent.clone()).collect(),
         };
@@ -310,7 +315,7 @@ impl Bricks {
             color: ColorData::Rgba8(bands.concat()),
             depth: None,
             hits: None,
-            samples,
+            samples: cost.samples.iter().sum(),
         };
         Ok((Some(frame), cost))
     }
