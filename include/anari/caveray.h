@@ -54,6 +54,18 @@ extern "C" {
  * "caveray.warp" (ANARI_STRING, the warp applied: none for the image of
  * this very camera). */
 #define CAVERAY_EXTENSION_FRAME_DEADLINE "ANARI_CAVERAY_FRAME_DEADLINE"
+/* The device as one rank of a data-parallel MPI job (a build with the mpi
+ * feature): device parameter "caveray.mpi" (ANARI_STRING "world") joins
+ * MPI_COMM_WORLD, initialising MPI unless the host did (then finalising it
+ * at exit). Each rank's world holds its part of the volumes (a field of its
+ * brick with a one-voxel apron, placed by its origin) and says which box of
+ * world space it owns: world parameter "caveray.region" (ANARI_FLOAT32_BOX3;
+ * default the bounds of its volumes). Every rank renders every frame, with
+ * the same camera (one view), in the same order; each renders the samples
+ * in its box of the steps one renderer of all the boxes would take, and the
+ * partial images are composited (direct-send) so that every rank maps the
+ * whole frame. Color only: no depth or hit channels, no deadline. */
+#define CAVERAY_EXTENSION_DEVICE_MPI "ANARI_CAVERAY_DEVICE_MPI"
 
 /* The parameters of ANARI's "perspective" camera that show one wall from
  * one eye: a symmetric frustum widened to contain the wall, cropped back to

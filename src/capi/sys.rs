@@ -103,6 +103,7 @@ pub const CAVERAY_EXTENSION_CAMERA_OFF_AXIS: &[u8; 30] = b"ANARI_CAVERAY_CAMERA_
 pub const CAVERAY_EXTENSION_RENDERER_SHADING: &[u8; 31] = b"ANARI_CAVERAY_RENDERER_SHADING\0";
 pub const CAVERAY_EXTENSION_FRAME_STEREO_PAIR: &[u8; 32] = b"ANARI_CAVERAY_FRAME_STEREO_PAIR\0";
 pub const CAVERAY_EXTENSION_FRAME_DEADLINE: &[u8; 29] = b"ANARI_CAVERAY_FRAME_DEADLINE\0";
+pub const CAVERAY_EXTENSION_DEVICE_MPI: &[u8; 25] = b"ANARI_CAVERAY_DEVICE_MPI\0";
 pub type ANARILibrary = *mut ::std::os::raw::c_void;
 pub type ANARIDevice = *mut ::std::os::raw::c_void;
 pub type ANARIObject = *mut ::std::os::raw::c_void;

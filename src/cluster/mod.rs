@@ -3,19 +3,22 @@
 //! that plays the swap lock's part, their images and timings gathered on
 //! rank 0; or one volume cut into bricks over the processes (`split`),
 //! each rendering its own region (`region`) of every view, the partial
-//! images composited in visibility order (`composite`). All of it is plain
-//! arithmetic, built always; talking to MPI (`mpi`) only with the `mpi`
-//! feature, so a build without it is unchanged.
+//! images composited in visibility order (`composite`), by the tool or by
+//! a device whose frames are a job's (`Ranks`). All but the talking is
+//! plain arithmetic, built always; talking to MPI (`mpi`) only with the
+//! `mpi` feature, so a build without it is unchanged.
 
 mod assign;
 mod composite;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+mod ranks;
 mod region;
 mod split;
 
 pub use assign::assign;
 pub use composite::{band, composite, Partial};
+pub use ranks::Ranks;
 pub use region::Region;
 pub use split::{Brick, Split};
 

@@ -19,6 +19,32 @@ extern "C" {
     static mut ompi_mpi_byte: Predefined;
     fn MPI_Initialized(flag: *mut c_int) -> c_int;
     fn MPI_Init(argc: *mut c_int, argv: *mut *mut *mut c_char) -> c_int;
+    fn MPI_Init_thread(
+        argc: *mut c_int,
+        argv: *mut *mut *mut c_char,
+        required: c_int,
+        provided: *mut c_int,
+    ) -> c_int;
+    fn MPI_Finalized(flag: *mut c_int) -> c_int;
+    fn MPI_Allgather(
+        send: *const c_void,
+        send_count: c_int,
+        send_type: *mut c_void,
+        recv: *mut c_void,
+        recv_count: c_int,
+        recv_type: *mut c_void,
+        comm: *mut c_void,
+    ) -> c_int;
+    fn MPI_Allgatherv(
+        send: *const c_void,
+        send_count: c_int,
+        send_type: *mut c_void,
+        recv: *mut c_void,
+        recv_counts: *const c_int,
+        displacements: *const c_int,
+        recv_type: *mut c_void,
+        comm: *mut c_void,
+    ) -> c_int;
     fn MPI_Finalize() -> c_int;
     fn MPI_Comm_rank(comm: *mut c_void, rank: *mut c_int) -> c_int;
     fn MPI_Comm_size(comm: *mut c_void, size: *mut c_int) -> c_int;
@@ -85,11 +111,15 @@ fn check(what: &str, code: c_int) -> Result<(), String> {
     }
 }
 
+/// MPI_THREAD_SERIALIZED: calls from any thread, one at a time.
+const THREAD_SERIALIZED: c_int = 2;
+
 /// This process's place in MPI_COMM_WORLD; MPI is finalised when it is
-/// dropped.
+/// dropped, if this process's `join` started it.
 pub struct World {
     rank: usize,
     size: usize,
+    finalise: bool,
 }
 
 impl World {
@@ -108,6 +138,57 @@ impl World {
                 MPI_Init(std::ptr::null_mut(), std::ptr::null_mut()),
             )?;
         }
+        Self::place(true)
+    }
+
+    /// Joins the MPI job from a library inside a host: with the host's
+    /// MPI where it initialised it (left to the host to finalise), else
+    /// initialised here for calls from one thread at a time (a render
+    /// thread), and finalised when the process exits, on its main thread.
+    pub fn share() -> Result<Self, String> {
+        let (mut started, mut ended) = (0, 0);
+        // SAFETY: MPI's initialisation queries, with valid pointers.
+        unsafe {
+            check("MPI_Initialized", MPI_Initialized(&mut started))?;
+            check("MPI_Finalized", MPI_Finalized(&mut ended))?;
+        }
+        if ended != 0 {
+            return Err("MPI was finalised already in this process".into());
+        }
+        if started == 0 {
+            let mut provided = 0;
+            // SAFETY: null argc/argv are allowed since MPI-2.
+            check("MPI_Init_thread", unsafe {
+                MPI_Init_thread(
+                    std::ptr::null_mut(),
+                    std::ptr::null_mut(),
+                    THREAD_SERIALIZED,
+                    &mut provided,
+                )
+            })?;
+            if provided < THREAD_SERIALIZED {
+                return Err(format!(
+                    "this MPI provides thread level {provided}, below MPI_THREAD_SERIALIZED, which rendering threads need"
+                ));
+            }
+            extern "C" fn finalise_at_exit() {
+                let mut ended = 0;
+                // SAFETY: at exit, after every call of this process.
+                unsafe {
+                    if MPI_Finalized(&mut ended) == 0 && ended == 0 {
+                        MPI_Finalize();
+                    }
+                }
+            }
+            // SAFETY: registering a plain function to run at exit.
+            unsafe {
+                libc::atexit(finalise_at_exit);
+            }
+        }
+        Self::place(false)
+    }
+
+    fn place(finalise: bool) -> Result<Self, String> {
         let (mut rank, mut size) = (0, 0);
         // SAFETY: the world communicator, valid after MPI_Init.
         unsafe {
@@ -117,6 +198,7 @@ impl World {
         Ok(Self {
             rank: rank as usize,
             size: size as usize,
+            finalise,
         })
     }
 
@@ -274,11 +356,70 @@ impl World {
     }
 }
 
+impl World {
+    /// Every rank's `bytes`, on every rank in rank order.
+    pub fn all_gather(&self, bytes: &[u8]) -> Result<Vec<Vec<u8>>, String> {
+        let len = (bytes.len() as u64).to_le_bytes();
+        let mut lens = vec![0u8; 8 * self.size];
+        // SAFETY: 8 bytes from each rank into `lens`, 8 per rank.
+        check("MPI_Allgather", unsafe {
+            MPI_Allgather(
+                len.as_ptr().cast(),
+                8,
+                byte(),
+                lens.as_mut_ptr().cast(),
+                8,
+                byte(),
+                world(),
+            )
+        })?;
+        let mut counts = Vec::with_capacity(self.size);
+        let mut at = Vec::with_capacity(self.size);
+        let mut total: u64 = 0;
+        for c in lens.chunks_exact(8) {
+            let n = u64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
+            let int = |v: u64| {
+                c_int::try_from(v).map_err(|_| {
+                    format!("gathering {v} bytes on every rank passes MPI's int counts")
+                })
+            };
+            at.push(int(total)?);
+            counts.push(int(n)?);
+            total += n;
+        }
+        c_int::try_from(total).map_err(|_| {
+            format!("gathering {total} bytes on every rank passes MPI's int counts")
+        })?;
+        let mut all = vec![0u8; total as usize];
+        // SAFETY: each rank's bytes land at its displacement within `all`,
+        // which holds their sum; every rank agrees on the counts above.
+        check("MPI_Allgatherv", unsafe {
+            MPI_Allgatherv(
+                bytes.as_ptr().cast(),
+                bytes.len() as c_int,
+                byte(),
+                all.as_mut_ptr().cast(),
+                counts.as_ptr(),
+                at.as_ptr(),
+                byte(),
+                world(),
+            )
+        })?;
+        Ok(counts
+            .iter()
+            .zip(&at)
+            .map(|(&n, &at)| all[at as usize..(at + n) as usize].to_vec())
+            .collect())
+    }
+}
+
 impl Drop for World {
     fn drop(&mut self) {
-        // SAFETY: once, after every collective of this process.
-        unsafe {
-            MPI_Finalize();
+        if self.finalise {
+            // SAFETY: once, after every collective of this process.
+            unsafe {
+                MPI_Finalize();
+            }
         }
     }
 }

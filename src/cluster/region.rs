@@ -64,6 +64,12 @@ impl Region {
         }
     }
 
+    /// The box's corners in its own frame (the world's, for
+    /// [`Region::world`]).
+    pub fn corners(&self) -> (Vec3, Vec3) {
+        (self.lo.as_vec3(), self.hi.as_vec3())
+    }
+
     /// How far along the ray `o + t d` (t >= 0) it enters the region, if it
     /// meets it.
     pub fn entry(&self, o: Vec3, d: Vec3) -> Option<f32> {

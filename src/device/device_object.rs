@@ -29,6 +29,11 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
           "milliseconds a frame waits for the bricks of paged volumes (unset: until all it selected \
            are resident); past it the frame renders coarser levels where bricks are missing, reports \
            renderProgress below 1, and later frames refine"),
+        p("caveray.mpi", &[T::STRING], false, DefaultValue::None,
+          "\"world\": every rank of the MPI job (MPI_COMM_WORLD, initialised here unless the host did) \
+           renders its world's region (the world's caveray.region) of each frame and the frames are \
+           composited, every rank getting the whole image (ANARI_CAVERAY_DEVICE_MPI; needs a build \
+           with the mpi feature)"),
         p("pairStereoFrames", &[T::BOOL], false, DefaultValue::Bool(true),
           "render two frames that show the eyes of one wall in one re-projection pass when the first \
            renders, keeping the second's image for its render (ANARI_CAVERAY_FRAME_STEREO_PAIR)"),

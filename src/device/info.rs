@@ -76,6 +76,8 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_TRANSFORM_SAMPLER,
     EXT_CURVATURE,
     EXT_MULTI_VIEW,
+    #[cfg(feature = "mpi")]
+    super::table::EXT_DEVICE_MPI,
 ];
 
 /// Frame channels (`anariGetObjectInfo(FRAME, "channel")`).

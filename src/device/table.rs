@@ -150,6 +150,9 @@ pub const EXT_MATRIX_VSNRAY: &str = "ANARI_VSNRAY_CAMERA_MATRIX";
 pub const EXT_MATRIX: &str = "ANARI_CAVERAY_CAMERA_MATRIX";
 pub const EXT_OFF_AXIS: &str = "ANARI_CAVERAY_CAMERA_OFF_AXIS";
 pub const EXT_SHADING: &str = "ANARI_CAVERAY_RENDERER_SHADING";
+/// The device as one rank of a data-parallel MPI job (`caveray.mpi`).
+#[cfg(feature = "mpi")]
+pub const EXT_DEVICE_MPI: &str = "ANARI_CAVERAY_DEVICE_MPI";
 pub const EXT_BACKGROUND: &str = "ANARI_KHR_RENDERER_BACKGROUND_COLOR";
 pub const EXT_BACKGROUND_IMAGE: &str = "ANARI_KHR_RENDERER_BACKGROUND_IMAGE";
 pub const EXT_COMPLETION: &str = "ANARI_KHR_FRAME_COMPLETION_CALLBACK";

@@ -8,7 +8,7 @@ use super::group::GroupModel;
 use super::instance::InstanceModel;
 use super::object::{ObjectRef, State, Unready};
 use super::table::Read;
-use super::table::{object_list, SubtypeInfo};
+use super::table::{object_list, p, DefaultValue, SubtypeInfo};
 use super::types::DataType as T;
 use crate::scene::Uniforms;
 use crate::scene::MAX_VOLUMES;
@@ -23,6 +23,10 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
         object_list("surface", &[T::SURFACE, T::OBJECT], "ARRAY1D of ANARI_SURFACE (isosurfaces)"),
         object_list("light", &[T::LIGHT, T::OBJECT], "ARRAY1D of ANARI_LIGHT; the first directional light sets the shading's light"),
         object_list("instance", &[T::INSTANCE, T::OBJECT], "ARRAY1D of ANARI_INSTANCE: groups of volumes and surfaces, each placed by its transform"),
+        p("caveray.region", &[T::FLOAT32_BOX3], false, DefaultValue::None,
+          "under the device's caveray.mpi: the box of world space this rank's world owns (lower corner, \
+           upper corner); its samples are this rank's, the ranks' boxes must not overlap, and their \
+           bounding box is the whole; default: the bounds of the world's volumes"),
     ],
     commit: Some(commit),
 };
@@ -53,6 +57,8 @@ pub struct WorldModel {
     pub volumes: Vec<(ObjectRef, Placement)>,
     pub surfaces: Vec<(ObjectRef, Placement)>,
     pub lights: Vec<ObjectRef>,
+    /// `caveray.region`: lower and upper corner.
+    pub region: Option<(glam::Vec3, glam::Vec3)>,
 }
 
 fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
@@ -90,9 +96,23 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
             volumes.len()
         ));
     }
+    let region = match r.set("caveray.region") {
+        None => None,
+        Some(_) => {
+            let [a, b, c, d, e, f] = r.floats::<6>("caveray.region")?;
+            let (lo, hi) = (glam::Vec3::new(a, b, c), glam::Vec3::new(d, e, f));
+            if !(lo.is_finite() && hi.is_finite() && lo.cmplt(hi).all()) {
+                return Err(format!(
+                    "'caveray.region' must be a box with its lower corner below its upper one on every axis, got {lo} to {hi}"
+                ));
+            }
+            Some((lo, hi))
+        }
+    };
     Ok(Some(State::ready(WorldModel {
         volumes,
         surfaces,
         lights: r.objects("light", T::LIGHT)?,
+        region,
     })))
 }

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use glam::{UVec2, Vec2};
+use glam::{UVec2, Vec2, Vec3};
+
+use crate::cluster::Ranks;
 
 use crate::geometry::{MatrixCamera, MultiViewDisplay, RayGen};
 use crate::render::iso::{IsoSurface, MultiViewMethod};
@@ -98,6 +100,23 @@ pub struct Inputs {
     /// The host set the frame's `accumulation`: renders of unchanged
     /// inputs refine the image (src/engine/accumulation.rs).
     pub accumulate: bool,
+    /// Under the device's `caveray.mpi`: this rank's share of a
+    /// data-parallel frame (src/engine/data_parallel.rs).
+    pub share: Option<Share>,
+}
+
+/// A rank's share of a data-parallel frame: the job's ranks and the box of
+/// world space this rank's world owns.
+#[derive(Clone)]
+pub struct Share {
+    pub ranks: Arc<Ranks>,
+    pub region: (Vec3, Vec3),
+}
+
+impl PartialEq for Share {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.ranks, &other.ranks) && self.region == other.region
+    }
 }
 
 impl PartialEq for Inputs {
@@ -121,6 +140,7 @@ impl PartialEq for Inputs {
             && self.gpu_budget == other.gpu_budget
             && self.stream_wait == other.stream_wait
             && self.accumulate == other.accumulate
+            && self.share == other.share
     }
 }
 

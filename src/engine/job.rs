@@ -77,7 +77,10 @@ impl FrameRenders {
         let samples = self.slot.image_samples();
         // An image rendered before all its bricks were resident is not
         // kept: the render again refines it.
+        // Every rank of a data-parallel frame renders: its collectives
+        // wait for all of them.
         let unchanged = self.last.as_deref() == Some(&*inputs)
+            && inputs.share.is_none()
             && samples.is_some()
             && self.slot.lock().progress.is_none_or(|p| p >= 1.0);
         self.last = Some(Arc::clone(&inputs));
@@ -134,6 +137,7 @@ impl RenderJob {
     pub fn wants_partner(&self) -> bool {
         !self.unchanged
             && self.sample.is_none()
+            && self.inputs.share.is_none()
             && !self.slot.keeps(&self.inputs)
             && self.inputs.backend != Backend::Cpu
     }

@@ -46,6 +46,7 @@
 //! joins them, so it never waits for a deadline.
 
 mod accumulation;
+mod data_parallel;
 mod deadline;
 mod inputs;
 mod job;
@@ -63,7 +64,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 pub use deadline::{Background, Present, Warper};
-pub use inputs::{EyeView, Inputs, PanelViews, Unrenderable, Views};
+pub use inputs::{EyeView, Inputs, PanelViews, Share, Unrenderable, Views};
 pub use job::{BackgroundRender, FrameRenders, Partner, RenderJob};
 pub use pairing::{OwnEye, Unpaired};
 pub use slot::{FrameSlot, Kept, ShownImage, SlotState, DISCARDED};

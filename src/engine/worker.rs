@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use super::data_parallel;
 use super::deadline::{Shot, WARP_LAYERS};
 use super::inputs::Views;
 use super::job::RenderJob;
@@ -234,6 +235,25 @@ fn run(
     let inputs = &job.inputs;
     // A panic must neither kill the thread nor leave the host waiting.
     let result = catch_unwind(AssertUnwindSafe(|| -> Result<Frame, String> {
+        let say = |severity, message| report(note(severity, StatusCode::NoError, message));
+        if let Some(share) = &inputs.share {
+            // Even an empty world or a missing renderer takes its part in
+            // the frame's collectives.
+            let r = renderer_for(renderer, inputs.backend, &say).and_then(|r| {
+                r.set_gpu_budget(inputs.gpu_budget);
+                r.set_stream_wait(inputs.stream_wait);
+                if let Some(scene) = &inputs.scene {
+                    if let Some(why) = r
+                        .upload_for(inputs.backend, scene)
+                        .map_err(|e| e.to_string())?
+                    {
+                        say(Severity::Warning, why.to_string());
+                    }
+                }
+                Ok(r)
+            });
+            return data_parallel::render(r, &job, share);
+        }
         if inputs.scene.is_none() && inputs.surfaces.is_empty() {
             return Ok(Frame::background(
                 &inputs.desc,
@@ -241,7 +261,6 @@ fn run(
                 inputs.settings.background_image.as_deref(),
             ));
         }
-        let say = |severity, message| report(note(severity, StatusCode::NoError, message));
         let r = renderer_for(renderer, inputs.backend, &say)?;
         r.set_gpu_budget(inputs.gpu_budget);
         r.set_stream_wait(inputs.stream_wait);

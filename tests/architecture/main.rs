@@ -12,8 +12,11 @@ const MAY_IMPORT: &[(&str, &[&str])] = &[
     ("geometry", &[]),
     ("scene", &["geometry"]),
     ("render", &["scene", "geometry"]),
-    ("engine", &["render", "scene", "geometry"]),
-    ("device", &["engine", "render", "scene", "geometry"]),
+    ("engine", &["cluster", "render", "scene", "geometry"]),
+    (
+        "device",
+        &["engine", "cluster", "render", "scene", "geometry"],
+    ),
     ("capi", &["device", "engine", "render", "scene", "geometry"]),
     ("data", &["scene", "geometry"]),
     ("cave", &["data", "scene", "geometry"]),

@@ -159,3 +159,51 @@ fn step_factor_and_sampling_rate_take_exactly_the_range_hosts_are_told() {
         d.release(r);
     }
 }
+
+/// `caveray.mpi` takes "world" alone, and a build without the mpi feature
+/// says how to get one; a world's `caveray.region` must be a box.
+#[test]
+fn the_mpi_mode_and_a_worlds_region_are_checked() {
+    let mut d = device();
+    d.set_param(Subject::Device, "caveray.mpi", string("universe"));
+    d.commit(Subject::Device);
+    let errors = messages(&mut d, Severity::Error);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("'caveray.mpi': is 'universe'; the one value is \"world\"")),
+        "{errors:?}"
+    );
+    #[cfg(not(feature = "mpi"))]
+    {
+        d.set_param(Subject::Device, "caveray.mpi", string("world"));
+        d.commit(Subject::Device);
+        let errors = messages(&mut d, Severity::Error);
+        assert!(
+            errors.iter().any(|e| e.contains(
+                "this caveray was built without the mpi feature (cargo build --features mpi); frames render alone"
+            )),
+            "{errors:?}"
+        );
+    }
+    let world = d.new_object(DataType::WORLD, "");
+    let inverted: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, -1.0, 1.0]
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    d.set_param(
+        Subject::Object(world),
+        "caveray.region",
+        Input::Bytes(DataType::FLOAT32_BOX3, inverted),
+    );
+    d.commit(Subject::Object(world));
+    let errors = messages(&mut d, Severity::Error);
+    assert!(
+        errors.iter().any(|e| {
+            e.contains(
+            "'caveray.region' must be a box with its lower corner below its upper one on every axis"
+        )
+        }),
+        "{errors:?}"
+    );
+}

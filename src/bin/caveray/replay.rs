@@ -19,6 +19,7 @@ use clap::Args;
 use glam::UVec2;
 use serde::Serialize;
 
+use crate::cluster::Cluster;
 use crate::progress::Progress;
 use crate::render::wall_size;
 use crate::scene::VolumeArgs;
@@ -106,10 +107,25 @@ struct Report {
     layer_steps: u32,
     grid_spacing: u32,
     modes: Vec<&'static str>,
-    runs: Vec<Run>,
+    /// Every run, in the order of the paths and views asked for.
+    runs: Vec<serde_json::Value>,
+    /// Under MPI: each rank's views and its waits at the barrier that
+    /// keeps the displays' refreshes in step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    cluster: Option<Vec<RankWaits>>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, serde::Deserialize)]
+struct RankWaits {
+    rank: usize,
+    views: Vec<String>,
+    /// Displayed frames (barriers) this rank took part in.
+    frames: usize,
+    barrier_mean_ms: f64,
+    barrier_max_ms: f64,
+}
+
+#[derive(Clone, Serialize)]
 struct Run {
     view: String,
     path: String,
@@ -120,7 +136,7 @@ struct Run {
     refreshes: Vec<RefreshSummary>,
 }
 
-#[derive(Serialize)]
+#[derive(Clone, Serialize)]
 struct ModeSummary {
     mode: &'static str,
     mean_dssim: f64,
@@ -225,14 +241,38 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
         .first()
         .map_or(UVec2::splat(1024), |w| w.resolution);
     let duration = |keys: &[PathKey]| keys.last().map_or(0.0, |k| k.time);
+    // Under mpirun the views are shared out over the ranks, and every
+    // displayed frame ends at a barrier (the swap lock); a rank with fewer
+    // views keeps the lock through its idle turns.
+    let cluster = Cluster::join()?;
+    let mine = anari_library_caveray::cluster::assign(displays.len(), cluster.size())
+        .swap_remove(cluster.rank());
+    let turns = displays.len().div_ceil(cluster.size());
+    let refreshes_of = |keys: &[PathKey]| (duration(keys) * args.hz).round() as u64;
     let total: u64 = paths
         .iter()
-        .map(|(_, k)| (duration(k) * args.hz).round() as u64 * displays.len() as u64)
+        .map(|(_, k)| refreshes_of(k) * mine.len() as u64)
         .sum();
     let mut progress = Progress::new(total as usize);
     let mut runs = Vec::new();
-    for (path_name, keys) in &paths {
-        for (view_name, display) in &displays {
+    let mut waits: Vec<f64> = Vec::new();
+    let mut lock_failed = None;
+    let mut swap_lock = |waits: &mut Vec<f64>| {
+        let t = std::time::Instant::now();
+        if let Err(e) = cluster.barrier() {
+            lock_failed.get_or_insert(e);
+        }
+        waits.push(t.elapsed().as_secs_f64() * 1e3);
+    };
+    for (path_index, (path_name, keys)) in paths.iter().enumerate() {
+        for turn in 0..turns {
+            let Some(&view_index) = mine.get(turn) else {
+                for _ in 0..refreshes_of(keys) {
+                    swap_lock(&mut waits);
+                }
+                continue;
+            };
+            let (view_name, display) = &displays[view_index];
             let resolution = match display {
                 Display::Hmd => hmd_resolution,
                 Display::Wall(w) => w.resolution,
@@ -267,6 +307,7 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
                     "{path_name} {view_name} t={:.3} s age {:.1} ms, worst DSSIM {worst:.4}",
                     r.summary.time, r.summary.age_ms
                 ));
+                swap_lock(&mut waits);
             };
             let refreshes = timeline
                 .run(&mut renderer, &scene, &settings, &view_at, &mut each)
@@ -279,10 +320,38 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
                 &refreshes,
             )?;
             write_strip(&args.out.join(format!("{name}.png")), &strip)?;
-            runs.push(summarise(view_name, path_name, size, &modes, refreshes));
+            runs.push((
+                (path_index, view_index),
+                summarise(view_name, path_name, size, &modes, refreshes),
+            ));
         }
     }
-    print_summary(&runs);
+    if let Some(e) = lock_failed {
+        return Err(e);
+    }
+    let local: Vec<Run> = runs.iter().map(|(_, r)| r).cloned().collect();
+    print_summary(&local);
+    let json = |e: serde_json::Error| Failure::Runtime(e.to_string());
+    let placed: Vec<((usize, usize), serde_json::Value)> = runs
+        .into_iter()
+        .map(|(at, r)| serde_json::to_value(r).map(|v| (at, v)))
+        .collect::<Result<_, _>>()
+        .map_err(json)?;
+    let waited = RankWaits {
+        rank: cluster.rank(),
+        views: mine.iter().map(|&i| displays[i].0.clone()).collect(),
+        frames: waits.len(),
+        barrier_mean_ms: waits.iter().sum::<f64>() / waits.len().max(1) as f64,
+        barrier_max_ms: waits.iter().copied().fold(0.0, f64::max),
+    };
+    let everyone = cluster.gather_json(&(placed, waited))?;
+    if !cluster.is_root() {
+        return Ok(());
+    }
+    let ranks = everyone.len();
+    let (mut all, waits): (Vec<_>, Vec<_>) = everyone.into_iter().unzip();
+    let mut all: Vec<((usize, usize), serde_json::Value)> = all.drain(..).flatten().collect();
+    all.sort_by_key(|(at, _)| *at);
     let report = Report {
         config: args.config.display().to_string(),
         volume: loaded.name.clone(),
@@ -296,7 +365,8 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
         layer_steps: args.layer_steps,
         grid_spacing: args.grid_spacing,
         modes: modes.iter().map(|m| m.name()).collect(),
-        runs,
+        runs: all.into_iter().map(|(_, r)| r).collect(),
+        cluster: (ranks > 1).then_some(waits),
     };
     crate::report::write_json(&report, &args.json)?;
     println!("wrote {} and {}", args.json.display(), args.out.display());

@@ -66,8 +66,14 @@ impl Device {
         if let Some(Some(kept)) = kept {
             return kept;
         }
-        let taken = snapshot::take(frame, self.backend(), self.gpu_budget(), self.stream_wait())
-            .map(Arc::new);
+        let taken = snapshot::take(
+            frame,
+            self.backend(),
+            self.gpu_budget(),
+            self.stream_wait(),
+            self.ranks(),
+        )
+        .map(Arc::new);
         frame.with_frame(|f| f.snapshot = Some((epoch, taken.clone())));
         taken
     }

@@ -8,6 +8,7 @@ mod arrays;
 mod frames;
 mod params;
 
+use crate::cluster::Ranks;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -92,6 +93,8 @@ pub struct Device {
     /// `pairStereoFrames`: frames that show the two eyes of one wall are
     /// found and rendered together.
     pairing: bool,
+    /// `caveray.mpi`: the MPI job whose ranks composite every frame.
+    ranks: Option<Arc<Ranks>>,
     statuses: Vec<Status>,
     /// Completion callbacks a call made due (a render refused at once),
     /// to be called by the caller once the device is unlocked.
@@ -123,6 +126,7 @@ impl Device {
             gpu_budget: None,
             stream_wait: StreamWait::Complete,
             pairing: true,
+            ranks: None,
             statuses: Vec::new(),
             due: Vec::new(),
             epoch: 0,
@@ -166,6 +170,11 @@ impl Device {
 
     pub fn stream_wait(&self) -> StreamWait {
         self.stream_wait
+    }
+
+    /// The MPI job frames are composited over (`caveray.mpi`), if any.
+    pub fn ranks(&self) -> Option<&Arc<Ranks>> {
+        self.ranks.as_ref()
     }
 
     pub(super) fn status(

@@ -286,6 +286,7 @@ impl Device {
                 }
             },
         };
+        self.join_ranks();
         if let Some(b) = self.committed.string("backend") {
             match b.parse() {
                 Ok(b) => self.backend = b,
@@ -298,6 +299,39 @@ impl Device {
                     );
                 }
             }
+        }
+    }
+
+    /// `caveray.mpi`: "world" makes every frame one of a data-parallel job
+    /// over MPI_COMM_WORLD (joined once; the job stays for the device's
+    /// life); unset, frames render alone.
+    fn join_ranks(&mut self) {
+        let wanted = self.committed.string("caveray.mpi").map(str::to_owned);
+        let refuse = |d: &mut Self, why: String| {
+            d.error(
+                StatusCode::InvalidArgument,
+                None,
+                format!("anariCommitParameters: device parameter 'caveray.mpi': {why}; frames render alone"),
+            );
+            d.ranks = None;
+        };
+        match wanted.as_deref() {
+            None => self.ranks = None,
+            Some("world") if self.ranks.is_some() => {}
+            Some("world") => {
+                #[cfg(feature = "mpi")]
+                match crate::cluster::Ranks::world() {
+                    Ok(r) => self.ranks = Some(std::sync::Arc::new(r)),
+                    Err(e) => refuse(self, format!("cannot join the MPI job: {e}")),
+                }
+                #[cfg(not(feature = "mpi"))]
+                refuse(
+                    self,
+                    "this caveray was built without the mpi feature (cargo build --features mpi)"
+                        .into(),
+                );
+            }
+            Some(other) => refuse(self, format!("is '{other}'; the one value is \"world\"")),
         }
     }
 }

@@ -10,7 +10,7 @@ mod surfaces;
 
 use std::sync::Arc;
 
-use glam::Mat4;
+use glam::{Mat4, Vec3};
 
 use super::camera::CameraModel;
 use super::frame::{self, color_format};
@@ -19,7 +19,8 @@ use super::object::{ObjectCell, ObjectRef};
 use super::types::{kind_name, DataType};
 use super::volume::VolumeModel;
 use super::world::WorldModel;
-use crate::engine::{Deadline, Inputs, Unrenderable};
+use crate::cluster::Ranks;
+use crate::engine::{Deadline, Inputs, Share, Unrenderable, Views};
 use crate::render::{Backend, FrameDesc, RenderSettings, StreamWait};
 use crate::render::{Lamp, MAX_LAMPS};
 use crate::scene::{ObjectIds, PlacedVolume, Scene, StructuredVolume};
@@ -44,6 +45,7 @@ pub fn take(
     backend: Backend,
     gpu_budget: Option<u64>,
     stream_wait: StreamWait,
+    ranks: Option<&Arc<Ranks>>,
 ) -> Result<FrameSnapshot, String> {
     let params = frame
         .lock()
@@ -126,6 +128,41 @@ pub fn take(
         ),
     };
     let surfaces = surfaces.iso;
+    let share = match ranks {
+        None => None,
+        Some(ranks) => {
+            let refuse = |what: &str| {
+                Err(format!(
+                    "a data-parallel frame (the device's caveray.mpi) {what}"
+                ))
+            };
+            if !matches!(views, Views::Mono(_)) {
+                return refuse("takes a camera with one view: no stereo pair or multi-view panel");
+            }
+            if depth || !hit_channels.is_empty() {
+                return refuse("composites color only: unset channel.depth and the hit channels");
+            }
+            if deadline.is_some() {
+                return refuse("has no deadline: unset caveray.deadline");
+            }
+            if settings.background_image.is_some() {
+                return refuse("is composited over the background color, not an image");
+            }
+            if !surfaces.is_empty() {
+                return refuse("composites volumes and surfaces of primitives, not isosurfaces");
+            }
+            // A world with nothing and no region sends an empty box, which
+            // every rank then refuses together.
+            let region = world_model
+                .region
+                .or_else(|| scene.as_ref().map(Scene::bounds))
+                .unwrap_or((Vec3::ZERO, Vec3::ZERO));
+            Some(Share {
+                ranks: Arc::clone(ranks),
+                region,
+            })
+        }
+    };
     let mut desc =
         FrameDesc::new(size).with_color(color_type.and_then(color_format).unwrap_or_default());
     desc.depth = depth;
@@ -139,7 +176,8 @@ pub fn take(
         backend,
         gpu_budget,
         stream_wait,
-        accumulate,
+        accumulate: accumulate && share.is_none(),
+        share,
     };
     inputs.check().map_err(|e| match e {
         Unrenderable::VolumesAndSurfaces => format!(
