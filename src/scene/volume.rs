@@ -1,4 +1,4 @@
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::{UVec3, Vec3};
 use thiserror::Error;
@@ -149,7 +149,7 @@ impl Filter {
 
 /// A structured regular grid: vertex-centred samples, x fastest, covering
 /// [origin, origin + (dims - 1) * spacing].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct StructuredVolume {
     dims: UVec3,
     /// Shared, so the same grid placed elsewhere costs no copy.
@@ -157,9 +157,24 @@ pub struct StructuredVolume {
     origin: Vec3,
     spacing: Vec3,
     scaling: Scaling,
-    /// Smallest and largest stored number.
-    stored_range: (f32, f32),
+    /// Smallest and largest stored number, found when first asked (with
+    /// the voxels, shared by the grid's copies): a mapped file's pages are
+    /// read only when something needs them, so a cluster rank cropping its
+    /// brick out of a grid reads the brick alone.
+    stored_range: Arc<OnceLock<(f32, f32)>>,
     filter: Filter,
+}
+
+/// Grids are equal by what they hold; the range is derived from it.
+impl PartialEq for StructuredVolume {
+    fn eq(&self, other: &Self) -> bool {
+        self.dims == other.dims
+            && self.voxels == other.voxels
+            && self.origin == other.origin
+            && self.spacing == other.spacing
+            && self.scaling == other.scaling
+            && self.filter == other.filter
+    }
 }
 
 impl StructuredVolume {
@@ -190,18 +205,13 @@ impl StructuredVolume {
                 return Err(VolumeError::NonFiniteVoxel { index });
             }
         }
-        let stored_range =
-            (0..voxels.len()).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), i| {
-                let v = voxels.stored(i);
-                (lo.min(v), hi.max(v))
-            });
         Self {
             dims,
             scaling: voxels.fixed_point(),
             voxels: Arc::new(voxels),
             origin: Vec3::ZERO,
             spacing: Vec3::ONE,
-            stored_range,
+            stored_range: Arc::default(),
             filter: Filter::Linear,
         }
         .with_geometry(origin, spacing)
@@ -263,10 +273,14 @@ impl StructuredVolume {
     }
     /// Smallest and largest voxel value.
     pub fn value_range(&self) -> (f32, f32) {
-        let (a, b) = (
-            self.scaling.apply(self.stored_range.0),
-            self.scaling.apply(self.stored_range.1),
-        );
+        let (lo, hi) = *self.stored_range.get_or_init(|| {
+            let v = &self.voxels;
+            (0..v.len()).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), i| {
+                let x = v.stored(i);
+                (lo.min(x), hi.max(x))
+            })
+        });
+        let (a, b) = (self.scaling.apply(lo), self.scaling.apply(hi));
         (a.min(b), a.max(b))
     }
     /// World-space box of the grid's vertices.
@@ -319,5 +333,60 @@ impl StructuredVolume {
         self.spacing *= scale;
         self.origin = centre - 0.5 * (hi - lo) * scale;
         self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cropped_grid_holds_its_box_in_place() {
+        let dims = UVec3::new(5, 4, 3);
+        let v: Vec<u16> = (0..60).collect();
+        let grid = StructuredVolume::new(
+            dims,
+            Voxels::U16(v.into()),
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(0.5, 1.0, 2.0),
+        )
+        .and_then(|g| {
+            g.with_scaling(Scaling {
+                slope: 2.0,
+                intercept: 1.0,
+            })
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+        let part = grid
+            .cropped(UVec3::new(1, 1, 1), UVec3::new(3, 2, 2))
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(part.dims(), UVec3::new(3, 2, 2));
+        assert_eq!(part.origin(), Vec3::new(1.5, 3.0, 5.0));
+        assert_eq!(part.scaling(), grid.scaling());
+        // Voxel (1, 1, 1) of the grid is 1 + 5 + 20 = 26; (3, 2, 2) is 53.
+        assert_eq!(part.value(0), grid.value(26));
+        assert_eq!(part.value(11), grid.value(53));
+        assert_eq!(part.value_range(), (53.0, 107.0));
+        assert_eq!(grid.value_range(), (1.0, 119.0));
+        // The range, found when asked, does not make grids unequal.
+        let copy = StructuredVolume::new(
+            dims,
+            Voxels::U16((0..60).collect::<Vec<u16>>().into()),
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(0.5, 1.0, 2.0),
+        )
+        .and_then(|g| {
+            g.with_scaling(Scaling {
+                slope: 2.0,
+                intercept: 1.0,
+            })
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(copy, grid);
+        assert!(matches!(
+            grid.cropped(UVec3::new(2, 0, 0), UVec3::new(1, 3, 2)),
+            Err(VolumeError::BadBox { .. })
+        ));
+        assert!(grid.cropped(UVec3::ZERO, UVec3::new(5, 3, 2)).is_err());
     }
 }

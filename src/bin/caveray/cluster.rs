@@ -98,6 +98,26 @@ impl Cluster {
         Ok(to)
     }
 
+    /// Every rank's `value`, on every rank in rank order, as JSON over the
+    /// wire.
+    pub fn all_gather_json<T: Serialize + serde::de::DeserializeOwned>(
+        &self,
+        value: &T,
+    ) -> Result<Vec<T>, Failure> {
+        let json = |e: serde_json::Error| Failure::Runtime(format!("a rank's share: {e}"));
+        let bytes = serde_json::to_vec(value).map_err(json)?;
+        #[cfg(feature = "mpi")]
+        if let Some(w) = &self.world {
+            return w
+                .all_gather(&bytes)
+                .map_err(Failure::Runtime)?
+                .iter()
+                .map(|b| serde_json::from_slice(b).map_err(json))
+                .collect();
+        }
+        Ok(vec![serde_json::from_slice(&bytes).map_err(json)?])
+    }
+
     /// Every rank's `value`, on rank 0 in rank order (empty elsewhere),
     /// as JSON over the wire.
     pub fn gather_json<T: Serialize + serde::de::DeserializeOwned>(

@@ -15,7 +15,7 @@ use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ColorData, ColorFormat, Frame, FrameDesc, Progress as ViewProgress, RenderSettings, Renderer,
 };
-use anari_library_caveray::scene::{PlacedVolume, Scene};
+use anari_library_caveray::scene::{PlacedVolume, Scene, StructuredVolume};
 use glam::{UVec2, Vec4};
 use serde::Serialize;
 
@@ -68,6 +68,39 @@ pub struct DataParallelReport {
     pub costs: Vec<ViewCost>,
 }
 
+fn mismatch(parts: usize, ranks: usize) -> Failure {
+    Failure::Usage(format!(
+        "--parts: {parts} bricks over {ranks} MPI ranks: under mpirun each rank renders one brick, so --parts must equal -np"
+    ))
+}
+
+/// The value range of `volume` from this rank's brick of `parts` and every
+/// other rank's: each reads only the voxels of its brick.
+pub fn value_range(
+    volume: &StructuredVolume,
+    parts: usize,
+    cluster: &Cluster,
+) -> Result<(f32, f32), Failure> {
+    // Every rank takes the same branch: the refusals are the same on all.
+    if cluster.size() != parts {
+        return Err(mismatch(parts, cluster.size()));
+    }
+    let split = Split::new(volume.dims(), parts)
+        .map_err(|why| Failure::Usage(format!("--parts: {why}")))?;
+    let brick = &split.bricks[cluster.rank()];
+    let (lo, hi) = brick.stored;
+    let mine = volume
+        .cropped(lo, hi)
+        .map_err(|e| Failure::Runtime(e.to_string()))?
+        .value_range();
+    let all: Vec<(f32, f32)> = cluster.all_gather_json(&mine)?;
+    Ok(all
+        .into_iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), (lo, hi)| {
+            (a.min(lo), b.max(hi))
+        }))
+}
+
 impl Bricks {
     /// `scene`'s one volume cut into `parts` bricks: the ones `cluster`'s
     /// rank draws (alone: all of them), each a scene of its stored voxels
@@ -87,10 +120,7 @@ impl Bricks {
             )));
         };
         if cluster.size() > 1 && cluster.size() != parts {
-            return Err(usage(format!(
-                "{parts} bricks over {} MPI ranks: under mpirun each rank renders one brick, so --parts must equal -np",
-                cluster.size()
-            )));
+            return Err(mismatch(parts, cluster.size()));
         }
         if settings.background_image.is_some() {
             return Err(usage(

@@ -295,12 +295,22 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
             .map_err(|e| Failure::Usage(format!("wall \"{}\": {e}", wall.name)))?;
     }
     let head = args.head.pose(&rig)?;
+    let cluster = Cluster::join()?;
     let loaded = args.volume.load()?;
-    let scene = loaded.placed(rig.scene, &rig.viewer.frame, rig.units)?;
+    // A rank of a data-parallel job reads its brick alone: the value range
+    // the transfer function spans comes from every rank's brick.
+    let range = match args.parts {
+        Some(n) if cluster.size() > 1 => Some(crate::data_parallel::value_range(
+            &loaded.volume,
+            n,
+            &cluster,
+        )?),
+        _ => None,
+    };
+    let scene = loaded.placed_in(rig.scene, &rig.viewer.frame, rig.units, range)?;
     let settings = args.render.settings();
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Failure::Runtime(format!("cannot create {}: {e}", args.out.display())))?;
-    let cluster = Cluster::join()?;
     let bricks = args
         .parts
         .map(|n| Bricks::new(&scene, &settings, n, &cluster))

@@ -355,6 +355,19 @@ impl Loaded {
         frame: &HeadFrame,
         world: Units,
     ) -> Result<Scene, Failure> {
+        self.placed_in(default, frame, world, None)
+    }
+
+    /// `placed`, with the volume's value range given (`range`) rather than
+    /// read from every voxel: a cluster rank knows it from the ranks'
+    /// bricks.
+    pub fn placed_in(
+        &self,
+        default: ScenePlacement,
+        frame: &HeadFrame,
+        world: Units,
+        range: Option<(f32, f32)>,
+    ) -> Result<Scene, Failure> {
         let runtime = |e: &dyn std::fmt::Display| Failure::Runtime(e.to_string());
         let placement = self.placement(default)?;
         let (lo, hi) = self.bounds();
@@ -383,7 +396,7 @@ impl Loaded {
             .with_unit_distance(self.tf.unit_distance() * size / 2.0)
             .map_err(|e| runtime(&e))?;
         if self.stretch_tf {
-            let (lo, hi) = volume.value_range();
+            let (lo, hi) = range.unwrap_or_else(|| volume.value_range());
             if lo < hi {
                 tf = tf.with_value_range(lo, hi).map_err(|e| runtime(&e))?;
             }
