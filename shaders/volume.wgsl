@@ -548,7 +548,7 @@ fn part_sample_t(t0: f32, len: f32, step: f32, k: u32) -> f32 {
 
 // The first of the n steps sampled at or beyond r.
 fn part_first_at(r: f32, t0: f32, len: f32, n: u32, step: f32) -> u32 {
-    var k = u32(clamp(ceil((r - t0) / step - 0.5), 0.0, f32(n)));
+    var k = min(u32(clamp(ceil((r - t0) / step - 0.5), 0.0, f32(n))), n);
     while k > 0u && part_sample_t(t0, len, step, k - 1u) >= r {
         k--;
     }

@@ -55,16 +55,19 @@ extern "C" {
  * this very camera). */
 #define CAVERAY_EXTENSION_FRAME_DEADLINE "ANARI_CAVERAY_FRAME_DEADLINE"
 /* The device as one rank of a data-parallel MPI job (a build with the mpi
- * feature): device parameter "caveray.mpi" (ANARI_STRING "world") joins
- * MPI_COMM_WORLD, initialising MPI unless the host did (then finalising it
- * at exit). Each rank's world holds its part of the volumes (a field of its
- * brick with a one-voxel apron, placed by its origin) and says which box of
- * world space it owns: world parameter "caveray.region" (ANARI_FLOAT32_BOX3;
- * default the bounds of its volumes). Every rank renders every frame, with
- * the same camera (one view), in the same order; each renders the samples
- * in its box of the steps one renderer of all the boxes would take, and the
- * partial images are composited (direct-send) so that every rank maps the
- * whole frame. Color only: no depth or hit channels, no deadline. */
+ * feature): device parameter "caveray.mpi" (ANARI_STRING "world") joins the
+ * job on a duplicate of MPI_COMM_WORLD, with the host's MPI (initialised at
+ * MPI_THREAD_SERIALIZED or more) or initialising MPI itself (then
+ * finalising it at exit). Each rank's world holds its part of the volumes
+ * (a field of its brick with a one-voxel apron, placed by its origin) and
+ * says which box of world space it owns: world parameter "caveray.region"
+ * (ANARI_FLOAT32_BOX3; default the bounds of its volumes). Every rank
+ * renders every frame, with the same camera (one view), in the same order;
+ * each renders the samples in its box of the steps one renderer of all the
+ * boxes would take, and the partial images are composited (direct-send) so
+ * that every rank maps the whole frame. Volumes and color only: no depth or
+ * hit channels, surfaces or deadline. A rank that cannot render a frame
+ * says so in its exchanges, and every rank fails it. */
 #define CAVERAY_EXTENSION_DEVICE_MPI "ANARI_CAVERAY_DEVICE_MPI"
 
 /* The parameters of ANARI's "perspective" camera that show one wall from

@@ -72,6 +72,31 @@ pub fn composite(
     Ok(out)
 }
 
+/// Direct-send's messages from one rank: band j of its partial image of a
+/// frame `width` wide (four floats a pixel), for rank j of `ranks`, as
+/// little-endian bytes.
+pub fn bands_of(partial: &[f32], width: u32, ranks: usize) -> Vec<Vec<u8>> {
+    let row = 4 * width as usize;
+    let height = (partial.len() / row.max(1)) as u32;
+    (0..ranks)
+        .map(|j| {
+            let rows = band(height, ranks, j);
+            partial[row * rows.start as usize..row * rows.end as usize]
+                .iter()
+                .flat_map(|f| f.to_le_bytes())
+                .collect()
+        })
+        .collect()
+}
+
+/// The floats of a message `bands_of` made.
+pub fn floats_of(bytes: &[u8]) -> Vec<f32> {
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
 /// The rows rank `rank` of `ranks` composites under direct-send: bands as
 /// even as whole rows allow, in rank order.
 pub fn band(height: u32, ranks: usize, rank: usize) -> Range<u32> {
@@ -123,6 +148,16 @@ mod tests {
             color: &red[..3],
         }];
         assert!(composite(&look(-1.0, 1.0), 1, 0..1, &short, bg).is_err());
+    }
+
+    #[test]
+    fn a_partials_bands_travel_as_bytes_and_back() {
+        let partial: Vec<f32> = (0..4 * 3 * 5).map(|i| i as f32 * 0.5).collect();
+        let bands = bands_of(&partial, 3, 2);
+        assert_eq!(bands.len(), 2);
+        // Rows 0-1 to rank 0, rows 2-4 to rank 1.
+        assert_eq!(floats_of(&bands[0]), partial[..24]);
+        assert_eq!(floats_of(&bands[1]), partial[24..]);
     }
 
     #[test]

@@ -17,7 +17,7 @@ mod region;
 mod split;
 
 pub use assign::assign;
-pub use composite::{band, composite, Partial};
+pub use composite::{band, bands_of, composite, floats_of, Partial};
 pub use ranks::Ranks;
 pub use region::Region;
 pub use split::{Brick, Split};

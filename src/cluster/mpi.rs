@@ -1,8 +1,11 @@
 //! The few MPI calls a CAVE cluster needs (init, rank and size, barrier,
-//! gather, and the all-to-all of direct-send compositing), declared by hand against Open MPI's C ABI (Debian's
-//! `libopenmpi-dev`): there its handles are the addresses of its
-//! predefined objects (`MPI_COMM_WORLD` is `&ompi_mpi_comm_world`).
-//! Errors abort the job, as MPI's default handler does.
+//! gather, and the all-to-all of direct-send compositing), declared by
+//! hand against Open MPI's C ABI (Debian's `libopenmpi-dev`): there its
+//! handles are pointers, the predefined ones the addresses of its objects
+//! (`MPI_COMM_WORLD` is `&ompi_mpi_comm_world`). Errors abort the job, as
+//! MPI's default handler does; where a rank refuses a collective (a size
+//! past MPI's int counts) every rank learns of it first, so that none is
+//! left waiting.
 
 use std::ffi::{c_char, c_int, c_void};
 use std::ptr::addr_of_mut;
@@ -26,6 +29,9 @@ extern "C" {
         provided: *mut c_int,
     ) -> c_int;
     fn MPI_Finalized(flag: *mut c_int) -> c_int;
+    fn MPI_Query_thread(provided: *mut c_int) -> c_int;
+    fn MPI_Comm_dup(comm: *mut c_void, duplicate: *mut *mut c_void) -> c_int;
+    fn MPI_Abort(comm: *mut c_void, code: c_int) -> c_int;
     fn MPI_Allgather(
         send: *const c_void,
         send_count: c_int,
@@ -114,16 +120,24 @@ fn check(what: &str, code: c_int) -> Result<(), String> {
 /// MPI_THREAD_SERIALIZED: calls from any thread, one at a time.
 const THREAD_SERIALIZED: c_int = 2;
 
-/// This process's place in MPI_COMM_WORLD; MPI is finalised when it is
-/// dropped, if this process's `join` started it.
+/// This process's place in a communicator of the job: MPI_COMM_WORLD for
+/// the tool, a duplicate of it for a device inside a host (so that its
+/// collectives never meet the host's).
 pub struct World {
     rank: usize,
     size: usize,
-    finalise: bool,
+    comm: *mut c_void,
 }
 
+// SAFETY: the communicator is a handle MPI lets any thread use; callers
+// make one call at a time (cluster::Ranks' turn), as
+// MPI_THREAD_SERIALIZED asks.
+unsafe impl Send for World {}
+unsafe impl Sync for World {}
+
 impl World {
-    /// Joins the MPI job: once per process.
+    /// Joins the MPI job as its program: once per process, ended by
+    /// [`World::end`].
     pub fn join() -> Result<Self, String> {
         let mut started = 0;
         // SAFETY: MPI's own initialisation queries, with valid pointers;
@@ -138,13 +152,15 @@ impl World {
                 MPI_Init(std::ptr::null_mut(), std::ptr::null_mut()),
             )?;
         }
-        Self::place(true)
+        Self::place(world())
     }
 
-    /// Joins the MPI job from a library inside a host: with the host's
-    /// MPI where it initialised it (left to the host to finalise), else
-    /// initialised here for calls from one thread at a time (a render
-    /// thread), and finalised when the process exits, on its main thread.
+    /// Joins the MPI job from a library inside a host, on a duplicate of
+    /// MPI_COMM_WORLD: with the host's MPI where it initialised it (left
+    /// to the host to finalise; it must allow calls from other threads,
+    /// MPI_THREAD_SERIALIZED at least), else initialised here for calls
+    /// from one thread at a time (a render thread), and finalised at exit
+    /// (or when the library is unloaded).
     pub fn share() -> Result<Self, String> {
         let (mut started, mut ended) = (0, 0);
         // SAFETY: MPI's initialisation queries, with valid pointers.
@@ -155,7 +171,22 @@ impl World {
         if ended != 0 {
             return Err("MPI was finalised already in this process".into());
         }
-        if started == 0 {
+        let low = |provided: c_int| {
+            format!(
+                "this process's MPI provides thread level {provided}, below MPI_THREAD_SERIALIZED (2), \
+                 which rendering threads need: initialise it with MPI_Init_thread"
+            )
+        };
+        if started != 0 {
+            let mut provided = 0;
+            // SAFETY: a query with a valid pointer.
+            check("MPI_Query_thread", unsafe {
+                MPI_Query_thread(&mut provided)
+            })?;
+            if provided < THREAD_SERIALIZED {
+                return Err(low(provided));
+            }
+        } else {
             let mut provided = 0;
             // SAFETY: null argc/argv are allowed since MPI-2.
             check("MPI_Init_thread", unsafe {
@@ -167,9 +198,7 @@ impl World {
                 )
             })?;
             if provided < THREAD_SERIALIZED {
-                return Err(format!(
-                    "this MPI provides thread level {provided}, below MPI_THREAD_SERIALIZED, which rendering threads need"
-                ));
+                return Err(low(provided));
             }
             extern "C" fn finalise_at_exit() {
                 let mut ended = 0;
@@ -185,21 +214,59 @@ impl World {
                 libc::atexit(finalise_at_exit);
             }
         }
-        Self::place(false)
+        let mut comm = std::ptr::null_mut();
+        // SAFETY: a collective on the world communicator, every rank's
+        // device joining alike.
+        check("MPI_Comm_dup", unsafe { MPI_Comm_dup(world(), &mut comm) })?;
+        Self::place(comm)
     }
 
-    fn place(finalise: bool) -> Result<Self, String> {
+    fn place(comm: *mut c_void) -> Result<Self, String> {
         let (mut rank, mut size) = (0, 0);
-        // SAFETY: the world communicator, valid after MPI_Init.
+        // SAFETY: a communicator valid after MPI_Init.
         unsafe {
-            check("MPI_Comm_rank", MPI_Comm_rank(world(), &mut rank))?;
-            check("MPI_Comm_size", MPI_Comm_size(world(), &mut size))?;
+            check("MPI_Comm_rank", MPI_Comm_rank(comm, &mut rank))?;
+            check("MPI_Comm_size", MPI_Comm_size(comm, &mut size))?;
         }
         Ok(Self {
             rank: rank as usize,
             size: size as usize,
-            finalise,
+            comm,
         })
+    }
+
+    /// Ends the program's part in the job: MPI is finalised where the
+    /// program succeeded; where it failed, the whole job is aborted, as a
+    /// rank that stopped between collectives leaves the others waiting.
+    pub fn end(&self, succeeded: bool) {
+        // SAFETY: once, after every call of this process.
+        unsafe {
+            if succeeded {
+                MPI_Finalize();
+            } else {
+                MPI_Abort(self.comm, 1);
+            }
+        }
+    }
+
+    /// Whether every rank says `ok`: so that a refusal on one rank is every
+    /// rank's.
+    fn agree(&self, ok: bool) -> Result<bool, String> {
+        let mine = [u8::from(ok)];
+        let mut all = vec![0u8; self.size];
+        // SAFETY: one byte from each rank into `all`, one per rank.
+        check("MPI_Allgather", unsafe {
+            MPI_Allgather(
+                mine.as_ptr().cast(),
+                1,
+                byte(),
+                all.as_mut_ptr().cast(),
+                1,
+                byte(),
+                self.comm,
+            )
+        })?;
+        Ok(all.iter().all(|&b| b == 1))
     }
 
     pub fn rank(&self) -> usize {
@@ -217,7 +284,7 @@ impl World {
     /// Waits until every rank is here.
     pub fn barrier(&self) -> Result<(), String> {
         // SAFETY: a collective on the world communicator.
-        check("MPI_Barrier", unsafe { MPI_Barrier(world()) })
+        check("MPI_Barrier", unsafe { MPI_Barrier(self.comm) })
     }
 
     /// Every rank's `bytes`, on rank 0 in rank order (empty elsewhere).
@@ -236,28 +303,21 @@ impl World {
                 8,
                 byte(),
                 0,
-                world(),
+                self.comm,
             )
         })?;
-        let lens: Vec<u64> = lens
-            .chunks_exact(8)
-            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-            .collect();
-        let total: u64 = lens.iter().sum();
-        let fits = |n: u64| n <= c_int::MAX as u64;
-        if !fits(bytes.len() as u64) || !fits(total) {
-            return Err(format!(
-                "gathering {total} bytes on rank 0 passes MPI's int counts"
-            ));
+        let laid = layout(&lengths(&lens), "gathering on rank 0").and_then(|l| {
+            c_int::try_from(bytes.len())
+                .map(|_| l)
+                .map_err(|_| format!("gathering {} bytes passes MPI's int counts", bytes.len()))
+        });
+        if !self.agree(laid.is_ok())? {
+            return Err(laid.err().unwrap_or_else(|| {
+                "another rank's share passes MPI's int counts: nothing is gathered".into()
+            }));
         }
-        let counts: Vec<c_int> = lens.iter().map(|&n| n as c_int).collect();
-        let mut displacements = Vec::with_capacity(counts.len());
-        let mut at = 0;
-        for &n in &counts {
-            displacements.push(at);
-            at += n;
-        }
-        let mut all = vec![0u8; total as usize];
+        let (counts, at) = laid?;
+        let mut all = vec![0u8; total(&counts)];
         // SAFETY: each rank sends its bytes; the root receives them at
         // the displacements, within `all`, which holds their sum.
         check("MPI_Gatherv", unsafe {
@@ -267,21 +327,15 @@ impl World {
                 byte(),
                 all.as_mut_ptr().cast(),
                 counts.as_ptr(),
-                displacements.as_ptr(),
+                at.as_ptr(),
                 byte(),
                 0,
-                world(),
+                self.comm,
             )
         })?;
-        Ok(counts
-            .iter()
-            .zip(&displacements)
-            .map(|(&n, &at)| all[at as usize..(at + n) as usize].to_vec())
-            .collect())
+        Ok(pieces(&all, &counts, &at))
     }
-}
 
-impl World {
     /// Every rank sends `to[j]` to rank j and gets back, in rank order,
     /// what each rank sent it (direct-send). Refused where a rank would
     /// send or receive more than MPI's int counts hold.
@@ -307,31 +361,19 @@ impl World {
                 got.as_mut_ptr().cast(),
                 8,
                 byte(),
-                world(),
+                self.comm,
             )
         })?;
-        let got: Vec<u64> = got
-            .chunks_exact(8)
-            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-            .collect();
-        let counts =
-            |lens: &mut dyn Iterator<Item = u64>| -> Result<(Vec<c_int>, Vec<c_int>), String> {
-                let (mut counts, mut at) = (Vec::new(), Vec::new());
-                let mut total: u64 = 0;
-                for n in lens {
-                    at.push(c_int::try_from(total).map_err(|_| "passes MPI's int counts")?);
-                    counts.push(c_int::try_from(n).map_err(|_| "passes MPI's int counts")?);
-                    total += n;
-                }
-                c_int::try_from(total).map_err(|_| "passes MPI's int counts")?;
-                Ok((counts, at))
-            };
-        let too_big = |e: String| format!("an exchange of {e}");
-        let (send_counts, send_at) =
-            counts(&mut to.iter().map(|m| m.len() as u64)).map_err(too_big)?;
-        let (recv_counts, recv_at) = counts(&mut got.iter().copied()).map_err(too_big)?;
+        let laid = layout(&lengths(&lens), "an exchange")
+            .and_then(|send| layout(&lengths(&got), "an exchange").map(|recv| (send, recv)));
+        if !self.agree(laid.is_ok())? {
+            return Err(laid.err().unwrap_or_else(|| {
+                "another rank's exchange passes MPI's int counts: nothing is sent".into()
+            }));
+        }
+        let ((send_counts, send_at), (recv_counts, recv_at)) = laid?;
         let send: Vec<u8> = to.concat();
-        let mut recv = vec![0u8; got.iter().sum::<u64>() as usize];
+        let mut recv = vec![0u8; total(&recv_counts)];
         // SAFETY: the counts and displacements lie within `send` and
         // `recv`, which hold their sums; every rank's counts agree with the
         // lengths exchanged above.
@@ -345,18 +387,12 @@ impl World {
                 recv_counts.as_ptr(),
                 recv_at.as_ptr(),
                 byte(),
-                world(),
+                self.comm,
             )
         })?;
-        Ok(recv_counts
-            .iter()
-            .zip(&recv_at)
-            .map(|(&n, &at)| recv[at as usize..(at + n) as usize].to_vec())
-            .collect())
+        Ok(pieces(&recv, &recv_counts, &recv_at))
     }
-}
 
-impl World {
     /// Every rank's `bytes`, on every rank in rank order.
     pub fn all_gather(&self, bytes: &[u8]) -> Result<Vec<Vec<u8>>, String> {
         let len = (bytes.len() as u64).to_le_bytes();
@@ -370,27 +406,11 @@ impl World {
                 lens.as_mut_ptr().cast(),
                 8,
                 byte(),
-                world(),
+                self.comm,
             )
         })?;
-        let mut counts = Vec::with_capacity(self.size);
-        let mut at = Vec::with_capacity(self.size);
-        let mut total: u64 = 0;
-        for c in lens.chunks_exact(8) {
-            let n = u64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
-            let int = |v: u64| {
-                c_int::try_from(v).map_err(|_| {
-                    format!("gathering {v} bytes on every rank passes MPI's int counts")
-                })
-            };
-            at.push(int(total)?);
-            counts.push(int(n)?);
-            total += n;
-        }
-        c_int::try_from(total).map_err(|_| {
-            format!("gathering {total} bytes on every rank passes MPI's int counts")
-        })?;
-        let mut all = vec![0u8; total as usize];
+        let (counts, at) = layout(&lengths(&lens), "gathering on every rank")?;
+        let mut all = vec![0u8; total(&counts)];
         // SAFETY: each rank's bytes land at its displacement within `all`,
         // which holds their sum; every rank agrees on the counts above.
         check("MPI_Allgatherv", unsafe {
@@ -402,24 +422,47 @@ impl World {
                 counts.as_ptr(),
                 at.as_ptr(),
                 byte(),
-                world(),
+                self.comm,
             )
         })?;
-        Ok(counts
-            .iter()
-            .zip(&at)
-            .map(|(&n, &at)| all[at as usize..(at + n) as usize].to_vec())
-            .collect())
+        Ok(pieces(&all, &counts, &at))
     }
 }
 
-impl Drop for World {
-    fn drop(&mut self) {
-        if self.finalise {
-            // SAFETY: once, after every collective of this process.
-            unsafe {
-                MPI_Finalize();
-            }
-        }
+/// The byte counts, 8 little-endian bytes each, that ranks told each other.
+fn lengths(bytes: &[u8]) -> Vec<u64> {
+    bytes
+        .chunks_exact(8)
+        .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+        .collect()
+}
+
+/// MPI's counts and displacements for pieces `lens` long, one after
+/// another; refused where their total passes its int counts.
+fn layout(lens: &[u64], what: &str) -> Result<(Vec<c_int>, Vec<c_int>), String> {
+    let sum: u64 = lens.iter().sum();
+    if sum > c_int::MAX as u64 {
+        return Err(format!("{what} of {sum} bytes passes MPI's int counts"));
     }
+    let counts: Vec<c_int> = lens.iter().map(|&n| n as c_int).collect();
+    let mut at = Vec::with_capacity(counts.len());
+    let mut next = 0;
+    for &n in &counts {
+        at.push(next);
+        next += n;
+    }
+    Ok((counts, at))
+}
+
+fn total(counts: &[c_int]) -> usize {
+    counts.iter().map(|&n| n as usize).sum()
+}
+
+/// The pieces at `at`, `counts` long, of what arrived.
+fn pieces(all: &[u8], counts: &[c_int], at: &[c_int]) -> Vec<Vec<u8>> {
+    counts
+        .iter()
+        .zip(at)
+        .map(|(&n, &at)| all[at as usize..(at + n) as usize].to_vec())
+        .collect()
 }

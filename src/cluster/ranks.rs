@@ -9,8 +9,11 @@ use std::sync::{Mutex, MutexGuard};
 pub struct Ranks {
     #[cfg(feature = "mpi")]
     world: super::mpi::World,
-    turn: Mutex<()>,
 }
+
+/// One frame's collectives at a time in this process, whichever device
+/// makes them: MPI_THREAD_SERIALIZED allows no more.
+static TURN: Mutex<()> = Mutex::new(());
 
 impl Ranks {
     /// The job this process was started in, on MPI_COMM_WORLD: the host's
@@ -19,7 +22,6 @@ impl Ranks {
     pub fn world() -> Result<Self, String> {
         Ok(Self {
             world: super::mpi::World::share()?,
-            turn: Mutex::new(()),
         })
     }
 
@@ -41,7 +43,7 @@ impl Ranks {
     /// threads of this process never interleave theirs. (Every rank must
     /// render its data-parallel frames in the same order.)
     pub fn turn(&self) -> MutexGuard<'_, ()> {
-        self.turn.lock().unwrap_or_else(|e| e.into_inner())
+        TURN.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Sends `to[j]` to rank j; returns what each rank sent this one.

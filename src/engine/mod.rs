@@ -63,6 +63,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+pub use data_parallel::cannot_render;
 pub use deadline::{Background, Present, Warper};
 pub use inputs::{EyeView, Inputs, PanelViews, Share, Unrenderable, Views};
 pub use job::{BackgroundRender, FrameRenders, Partner, RenderJob};

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use super::data_parallel;
 use super::deadline::{Shot, WARP_LAYERS};
-use super::inputs::Views;
+use super::inputs::{Inputs, Views};
 use super::job::RenderJob;
 use super::passes::{render_panel, render_surface_views, render_views, KeptPanel};
 use super::slot::{FrameSlot, DISCARDED};
@@ -130,6 +130,26 @@ fn renderer_for<'a>(
     }
 }
 
+/// The renderer `inputs` ask for, with their volumes uploaded.
+fn ready<'a>(
+    renderer: &'a mut Option<(Backend, Renderer)>,
+    inputs: &Inputs,
+    say: &dyn Fn(Severity, String),
+) -> Result<&'a mut Renderer, String> {
+    let r = renderer_for(renderer, inputs.backend, say)?;
+    r.set_gpu_budget(inputs.gpu_budget);
+    r.set_stream_wait(inputs.stream_wait);
+    if let Some(scene) = &inputs.scene {
+        if let Some(why) = r
+            .upload_for(inputs.backend, scene)
+            .map_err(|e| e.to_string())?
+        {
+            say(Severity::Warning, why.to_string());
+        }
+    }
+    Ok(r)
+}
+
 /// A deadline frame's full render: what warps need of its one view, kept
 /// as the frame's newest image.
 fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, report: &Notify) {
@@ -239,20 +259,7 @@ fn run(
         if let Some(share) = &inputs.share {
             // Even an empty world or a missing renderer takes its part in
             // the frame's collectives.
-            let r = renderer_for(renderer, inputs.backend, &say).and_then(|r| {
-                r.set_gpu_budget(inputs.gpu_budget);
-                r.set_stream_wait(inputs.stream_wait);
-                if let Some(scene) = &inputs.scene {
-                    if let Some(why) = r
-                        .upload_for(inputs.backend, scene)
-                        .map_err(|e| e.to_string())?
-                    {
-                        say(Severity::Warning, why.to_string());
-                    }
-                }
-                Ok(r)
-            });
-            return data_parallel::render(r, &job, share);
+            return data_parallel::render(ready(renderer, inputs, &say), &job, share);
         }
         if inputs.scene.is_none() && inputs.surfaces.is_empty() {
             return Ok(Frame::background(
@@ -261,17 +268,7 @@ fn run(
                 inputs.settings.background_image.as_deref(),
             ));
         }
-        let r = renderer_for(renderer, inputs.backend, &say)?;
-        r.set_gpu_budget(inputs.gpu_budget);
-        r.set_stream_wait(inputs.stream_wait);
-        if let Some(scene) = &inputs.scene {
-            if let Some(why) = r
-                .upload_for(inputs.backend, scene)
-                .map_err(|e| e.to_string())?
-            {
-                say(Severity::Warning, why.to_string());
-            }
-        }
+        let r = ready(renderer, inputs, &say)?;
         if let Some(why) = r.fit_surfaces(inputs.backend, &inputs.surfaces) {
             say(Severity::Warning, why.to_string());
         }

@@ -166,7 +166,8 @@ impl PartPlan {
             let mut k = if guess.is_nan() {
                 0
             } else {
-                guess.clamp(0.0, n as f32) as u32
+                // (n as f32 may round up past n.)
+                (guess.clamp(0.0, n as f32) as u32).min(n)
             };
             while k > 0 && sample_t(t0, len, step, k - 1) >= r {
                 k -= 1;

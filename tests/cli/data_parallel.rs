@@ -160,6 +160,10 @@ fn parts_that_cannot_be_are_refused_in_one_line() {
     );
     refuse(&["--parts", "0"], "at least one brick");
     refuse(
+        &["--parts", "2", "--mesh", "0.4"],
+        "every brick would draw the mesh over its part",
+    );
+    refuse(
         &["--parts", "2", "--stereo", "reprojection"],
         "re-projection stereo needs one renderer to see the whole volume",
     );

@@ -375,6 +375,25 @@ fn a_c_host_on_four_ranks_maps_the_whole_volumes_image() {
         stdout
     };
     let d = dir.to_str().unwrap();
+    // Without their regions the bricks' bounds overlap by their aprons:
+    // every rank refuses the frame, and none waits for another.
+    let refused = Command::new("mpirun")
+        .args(["--oversubscribe", "-np", "4", "-x", "LD_LIBRARY_PATH"])
+        .arg(&program)
+        .args([d, "unowned"])
+        .env("LD_LIBRARY_PATH", &path)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&refused.stdout);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success(), "{stdout}");
+    assert_eq!(stdout.matches("FAILED").count(), 4, "{stdout}{stderr}");
+    assert!(
+        stderr.contains("the regions of ranks 0 and 1 overlap"),
+        "{stderr}"
+    );
     run(None, &[d, "whole"]);
     let said = run(Some(4), &[d]);
     // Every rank mapped the composited frame.

@@ -11,7 +11,24 @@ use crate::Failure;
 
 pub struct Cluster {
     #[cfg(feature = "mpi")]
-    world: Option<anari_library_caveray::cluster::mpi::World>,
+    world: Option<&'static anari_library_caveray::cluster::mpi::World>,
+}
+
+/// The job this process joined, ended by [`end`] when the command is done.
+#[cfg(feature = "mpi")]
+static JOINED: std::sync::OnceLock<anari_library_caveray::cluster::mpi::World> =
+    std::sync::OnceLock::new();
+
+/// Ends this process's part in the job it joined, if it joined one: MPI
+/// finalised where the command succeeded, the whole job aborted where it
+/// failed (the other ranks would wait for it forever).
+pub fn end(succeeded: bool) {
+    #[cfg(feature = "mpi")]
+    if let Some(w) = JOINED.get() {
+        w.end(succeeded);
+    }
+    #[cfg(not(feature = "mpi"))]
+    let _ = succeeded;
 }
 
 impl Cluster {
@@ -20,11 +37,14 @@ impl Cluster {
         let launched = anari_library_caveray::cluster::launched_size().filter(|&n| n > 1);
         #[cfg(feature = "mpi")]
         {
-            let world = match launched {
-                Some(_) => Some(
-                    anari_library_caveray::cluster::mpi::World::join().map_err(Failure::Runtime)?,
-                ),
-                None => None,
+            let world = match (launched, JOINED.get()) {
+                (None, _) => None,
+                (Some(_), Some(w)) => Some(w),
+                (Some(_), None) => {
+                    let w = anari_library_caveray::cluster::mpi::World::join()
+                        .map_err(Failure::Runtime)?;
+                    Some(JOINED.get_or_init(|| w))
+                }
             };
             Ok(Self { world })
         }

@@ -9,7 +9,9 @@
 
 use std::time::Instant;
 
-use anari_library_caveray::cluster::{band, composite, Partial, Region, Split};
+use anari_library_caveray::cluster::{
+    band, bands_of, composite, floats_of, Partial, Region, Split,
+};
 use anari_library_caveray::geometry::RayGen;
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
@@ -121,6 +123,11 @@ impl Bricks {
         };
         if cluster.size() > 1 && cluster.size() != parts {
             return Err(mismatch(parts, cluster.size()));
+        }
+        if !scene.shapes().is_empty() {
+            return Err(usage(
+                "cuts a volume alone into bricks: every brick would draw the mesh over its part (leave out --mesh)".into(),
+            ));
         }
         if settings.background_image.is_some() {
             return Err(usage(
@@ -283,14 +290,7 @@ impl Bricks {
         let [mine] = partials.as_slice() else {
             return Err(Failure::Runtime("internal: a rank draws one brick".into()));
         };
-        let px = 4 * size.x as usize;
-        let to: Vec<Vec<u8>> = (0..ranks)
-            .map(|j| {
-                let rows = band(size.y, ranks, j);
-                bytemuck::cast_slice(&mine[px * rows.start as usize..px * rows.end as usize])
-                    .to_vec()
-            })
-            .collect();
+        let to = bands_of(mine, size.x, ranks);
         let sent: u64 = to
             .iter()
             .enumerate()
@@ -298,14 +298,7 @@ impl Bricks {
             .map(|(_, m)| m.len() as u64)
             .sum();
         let got = cluster.exchange(to)?;
-        let floats: Vec<Vec<f32>> = got
-            .iter()
-            .map(|b| {
-                b.chunks_exact(4)
-                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                    .collect()
-            })
-            .collect();
+        let floats: Vec<Vec<f32>> = got.iter().map(|b| floats_of(b)).collect();
         let parts: Vec<Partial<'_>> = floats
             .iter()
             .zip(&self.regions)

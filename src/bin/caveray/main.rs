@@ -172,10 +172,14 @@ fn main() -> ExitCode {
         Command::Bench(command) => bench::run(command),
         Command::Replay(args) => replay::run(args),
     };
-    match result {
+    let succeeded = result.is_ok();
+    let code = match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => fail(f),
-    }
+    };
+    // After the message: a failed rank aborts the job it is in.
+    cluster::end(succeeded);
+    code
 }
 
 /// Clap's message without the usage block, folded onto one line.

@@ -164,10 +164,25 @@ impl Device {
                     Some(&frame),
                     format!("anariRenderFrame: {}: {e}", frame.describe()),
                 );
-                slot.finish(Err(e), Default::default());
-                // Called once the device is unlocked: the callback may
-                // call into it.
-                self.due.extend(on_done);
+                // The other ranks of a data-parallel frame wait for this
+                // one: it takes part in the frame, saying it cannot render.
+                let stand_in = self.ranks().map(|ranks| {
+                    let inputs = crate::engine::cannot_render(Arc::clone(ranks), self.backend());
+                    frame.with_frame(|f| f.renders.job(frame.handle, Arc::new(inputs)))
+                });
+                match stand_in.flatten() {
+                    Some(mut job) => {
+                        slot.start();
+                        job.on_done = on_done;
+                        self.engine.submit(job);
+                    }
+                    None => {
+                        slot.finish(Err(e), Default::default());
+                        // Called once the device is unlocked: the callback
+                        // may call into it.
+                        self.due.extend(on_done);
+                    }
+                }
             }
         }
         Ok(())

@@ -148,11 +148,14 @@ pub fn take(
             if settings.background_image.is_some() {
                 return refuse("is composited over the background color, not an image");
             }
-            if !surfaces.is_empty() {
-                return refuse("composites volumes and surfaces of primitives, not isosurfaces");
+            if !surfaces.is_empty() || scene.as_ref().is_some_and(|s| !s.shapes().is_empty()) {
+                return refuse(
+                    "composites volumes alone: every rank would draw the world's surfaces over its part",
+                );
             }
             // A world with nothing and no region sends an empty box, which
-            // every rank then refuses together.
+            // every rank then refuses together; the bounds of bricks stored
+            // with an apron overlap, which they refuse too.
             let region = world_model
                 .region
                 .or_else(|| scene.as_ref().map(Scene::bounds))

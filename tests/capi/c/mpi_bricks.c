@@ -4,10 +4,12 @@
  * ("caveray.region"), and renders the same oblique camera on a device in
  * MPI mode ("caveray.mpi" = "world"); every rank maps the composited frame
  * and rank 0 writes it to DIR/bricks.rgba. With "whole" one process renders
- * the whole volume on a plain device and writes DIR/whole.rgba. The host
- * links no MPI itself: it learns its rank from the launcher's environment.
+ * the whole volume on a plain device and writes DIR/whole.rgba; with
+ * "unowned" the ranks say no region, so their bricks' bounds (aprons
+ * included) overlap and every rank must refuse the frame. The host links
+ * no MPI itself: it learns its rank from the launcher's environment.
  *
- * Usage: mpi_bricks DIR [whole] */
+ * Usage: mpi_bricks DIR [whole|unowned] */
 #include <anari/anari.h>
 
 #include <math.h>
@@ -39,6 +41,7 @@ int main(int argc, char **argv)
 {
   const char *dir = argc > 1 ? argv[1] : ".";
   int whole = argc > 2 && strcmp(argv[2], "whole") == 0;
+  int unowned = argc > 2 && strcmp(argv[2], "unowned") == 0;
   int rank = whole ? 0 : env_int("OMPI_COMM_WORLD_RANK", 0);
   int ranks = whole ? 1 : env_int("OMPI_COMM_WORLD_SIZE", 1);
   /* Rank r owns the cells between vertices lo and hi along x. */
@@ -102,7 +105,7 @@ int main(int argc, char **argv)
   world = anariNewWorld(dev);
   volumes = anariNewArray1D(dev, &volume, NULL, NULL, ANARI_VOLUME, 1);
   anariSetParameter(dev, world, "volume", ANARI_ARRAY1D, &volumes);
-  if (!whole)
+  if (!whole && !unowned)
     anariSetParameter(dev, world, "caveray.region", ANARI_FLOAT32_BOX3, region);
   anariCommitParameters(dev, world);
 
