@@ -252,21 +252,30 @@ impl World {
     /// Whether every rank says `ok`: so that a refusal on one rank is every
     /// rank's.
     fn agree(&self, ok: bool) -> Result<bool, String> {
-        let mine = [u8::from(ok)];
-        let mut all = vec![0u8; self.size];
-        // SAFETY: one byte from each rank into `all`, one per rank.
+        Ok(self
+            .all_gather_alike(&[u8::from(ok)])?
+            .iter()
+            .all(|&b| b == 1))
+    }
+
+    /// Every rank's `mine`, as long on every rank, one after another.
+    fn all_gather_alike(&self, mine: &[u8]) -> Result<Vec<u8>, String> {
+        let n = c_int::try_from(mine.len()).map_err(|_| "a piece past MPI's int counts")?;
+        let mut all = vec![0u8; mine.len() * self.size];
+        // SAFETY: `mine.len()` bytes from each rank into `all`, which holds
+        // that many per rank.
         check("MPI_Allgather", unsafe {
             MPI_Allgather(
                 mine.as_ptr().cast(),
-                1,
+                n,
                 byte(),
                 all.as_mut_ptr().cast(),
-                1,
+                n,
                 byte(),
                 self.comm,
             )
         })?;
-        Ok(all.iter().all(|&b| b == 1))
+        Ok(all)
     }
 
     pub fn rank(&self) -> usize {
@@ -395,20 +404,7 @@ impl World {
 
     /// Every rank's `bytes`, on every rank in rank order.
     pub fn all_gather(&self, bytes: &[u8]) -> Result<Vec<Vec<u8>>, String> {
-        let len = (bytes.len() as u64).to_le_bytes();
-        let mut lens = vec![0u8; 8 * self.size];
-        // SAFETY: 8 bytes from each rank into `lens`, 8 per rank.
-        check("MPI_Allgather", unsafe {
-            MPI_Allgather(
-                len.as_ptr().cast(),
-                8,
-                byte(),
-                lens.as_mut_ptr().cast(),
-                8,
-                byte(),
-                self.comm,
-            )
-        })?;
+        let lens = self.all_gather_alike(&(bytes.len() as u64).to_le_bytes())?;
         let (counts, at) = layout(&lengths(&lens), "gathering on every rank")?;
         let mut all = vec![0u8; total(&counts)];
         // SAFETY: each rank's bytes land at its displacement within `all`,

@@ -342,21 +342,22 @@ mod tests {
 
     #[test]
     fn a_cropped_grid_holds_its_box_in_place() {
-        let dims = UVec3::new(5, 4, 3);
-        let v: Vec<u16> = (0..60).collect();
-        let grid = StructuredVolume::new(
-            dims,
-            Voxels::U16(v.into()),
-            Vec3::new(1.0, 2.0, 3.0),
-            Vec3::new(0.5, 1.0, 2.0),
-        )
-        .and_then(|g| {
-            g.with_scaling(Scaling {
-                slope: 2.0,
-                intercept: 1.0,
+        let make = || {
+            StructuredVolume::new(
+                UVec3::new(5, 4, 3),
+                Voxels::U16((0..60).collect::<Vec<u16>>().into()),
+                Vec3::new(1.0, 2.0, 3.0),
+                Vec3::new(0.5, 1.0, 2.0),
+            )
+            .and_then(|g| {
+                g.with_scaling(Scaling {
+                    slope: 2.0,
+                    intercept: 1.0,
+                })
             })
-        })
-        .unwrap_or_else(|e| panic!("{e}"));
+            .unwrap_or_else(|e| panic!("{e}"))
+        };
+        let grid = make();
         let part = grid
             .cropped(UVec3::new(1, 1, 1), UVec3::new(3, 2, 2))
             .unwrap_or_else(|e| panic!("{e}"));
@@ -369,20 +370,7 @@ mod tests {
         assert_eq!(part.value_range(), (53.0, 107.0));
         assert_eq!(grid.value_range(), (1.0, 119.0));
         // The range, found when asked, does not make grids unequal.
-        let copy = StructuredVolume::new(
-            dims,
-            Voxels::U16((0..60).collect::<Vec<u16>>().into()),
-            Vec3::new(1.0, 2.0, 3.0),
-            Vec3::new(0.5, 1.0, 2.0),
-        )
-        .and_then(|g| {
-            g.with_scaling(Scaling {
-                slope: 2.0,
-                intercept: 1.0,
-            })
-        })
-        .unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(copy, grid);
+        assert_eq!(make(), grid);
         assert!(matches!(
             grid.cropped(UVec3::new(2, 0, 0), UVec3::new(1, 3, 2)),
             Err(VolumeError::BadBox { .. })
