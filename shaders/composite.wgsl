@@ -93,7 +93,7 @@ var<private> known_color: vec3f;
 
 fn find_next(t_min: f32) {
     next = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
-    if looked < SURFACE_PASSES {
+    if SURFACES && looked < SURFACE_PASSES {
         next = nearest_surface(right_ray.o, right_ray.d, t_min, right_reach);
         looked++;
     }
@@ -205,6 +205,10 @@ fn part_of(s: vec4f, f: f32) -> vec4f {
 // Segment s with distances d behind `acc`, the surfaces in front of its
 // end taken first, a segment that a surface cuts taken in two.
 fn take_segment_among_surfaces(acc: ptr<function, vec4f>, depth: ptr<function, f32>, s: vec4f, d: vec3f) {
+    if !SURFACES {
+        take_segment(acc, depth, s, d);
+        return;
+    }
     var rest = s;
     var first = d.x;
     var crossed = d.z;
@@ -255,22 +259,25 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     behind = stereo.background;
     ended = false;
     known = false;
-    let opaque = right_opaque[id.y * stereo.width + id.x];
-    if params.surface_nodes != 0u && opaque.w >= 0.0 {
-        // first_opaque saw all there is: one opaque surface or none.
-        known = opaque.w < infinite();
-        known_color = opaque.xyz;
-        next = SurfaceHit(infinite(), select(NO_SLOT, 0u, known), vec2f(0.0));
-        next_distance = opaque.w;
-    } else {
-        // Translucent surfaces first: the traversal need look no further
-        // than the opaque one (a little past it, for rounding); distances
-        // run from the eye, t from the ray's origin.
-        if params.surface_nodes != 0u && -opaque.w < infinite() {
-            let from_eye = length(right_ray.o - stereo.right_eye);
-            right_reach = min(right_reach, (-opaque.w - from_eye) * (1.0 + 1e-4) + 1e-6);
+    if SURFACES {
+        let opaque = right_opaque[id.y * stereo.width + id.x];
+        if params.surface_nodes != 0u && opaque.w >= 0.0 {
+            // first_opaque saw all there is: one opaque surface or none.
+            known = opaque.w < infinite();
+            known_color = opaque.xyz;
+            next = SurfaceHit(infinite(), select(NO_SLOT, 0u, known), vec2f(0.0));
+            next_distance = opaque.w;
+        } else {
+            // Translucent surfaces first: the traversal need look no
+            // further than the opaque one (a little past it, for
+            // rounding); distances run from the eye, t from the ray's
+            // origin.
+            if params.surface_nodes != 0u && -opaque.w < infinite() {
+                let from_eye = length(right_ray.o - stereo.right_eye);
+                right_reach = min(right_reach, (-opaque.w - from_eye) * (1.0 + 1e-4) + 1e-6);
+            }
+            find_next(stereo.right_t_near);
         }
-        find_next(stereo.right_t_near);
     }
     var k = 0;
     while k < count && !ended {
@@ -338,7 +345,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         }
         k += chunk;
     }
-    while !ended && next.slot != NO_SLOT {
+    while SURFACES && !ended && next.slot != NO_SLOT {
         take_surface(&acc, &depth);
     }
     let i = id.y * stereo.width + id.x;

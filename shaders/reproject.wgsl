@@ -124,6 +124,9 @@ fn advance(s: ptr<private, Open>, axis: u32, t: f32, lit: vec3f, a: f32) {
 
 // As raycast.wgsl's: shadow and AO rays meet the surfaces.
 fn surface_pass(p: vec3f, d: vec3f, reach: f32) -> f32 {
+    if !SURFACES {
+        return 1.0;
+    }
     let hit = nearest_surface(p, d, 0.0, reach);
     if hit.slot == NO_SLOT {
         return 1.0;
@@ -215,32 +218,17 @@ fn close_family(s: ptr<private, Open>, axis: u32) -> vec2i {
     return vec2i(min((*s).first, (*s).pixel), max((*s).first, (*s).pixel));
 }
 
-@compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main(@builtin(global_invocation_id) invocation: vec3u) {
-    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
-    if id.x >= stereo.cast_pixels.x || id.y >= stereo.cast_pixels.y {
-        return;
-    }
-    left = vec2i(id.xy) + stereo.first;
-    let ray = primary_ray(f32(left.x), f32(left.y));
-    from_right = ray.o - stereo.right_eye;
-    ray_d = ray.d;
-    major_axis = select(0u, 1u, stereo.families == 2u);
-    major = open_family(major_axis, ray.o, ray.d);
-    if BOTH_FAMILIES {
-        rows = open_family(1u, ray.o, ray.d);
-    }
-    // The left eye's march as raycast.wgsl's (so the left eye is the
-    // image it renders alone), up to each surface, a translucent one
-    // composited in its turn, the first opaque one ending it; the pass
-    // after the last looks at no surface. Behind the first opaque
-    // surface the ray marches on through the volumes alone (`behind_it`)
-    // where the right eye sees past it (near its edge): what the left eye
-    // does not see (disocclusion); its surfaces the right eye traces
-    // itself. One call of the march, which the compiler inlines at each.
+// The left ray's march among the surfaces (SURFACES only): up to each
+// surface, a translucent one composited in its turn, the first opaque one
+// ending it; the pass after the last looks at no surface. Behind the first
+// opaque surface the ray marches on through the volumes alone
+// (`behind_it`) where the right eye sees past it (near its edge): what the
+// left eye does not see (disocclusion); its surfaces the right eye traces
+// itself. One call of the march, which the compiler inlines at each.
+// Returns what the ray gathered; `behind` and `surface_depth` get its
+// first opaque surface's color and depth.
+fn march_among_surfaces(ray: Ray, behind: ptr<function, vec4f>, surface_depth: ptr<function, f32>) -> Marched {
     var m = Marched(vec4f(0.0), infinite());
-    var behind = vec4f(0.0);
-    var surface_depth = infinite();
     var start = params.t_near;
     var composited = 0u;
     var behind_it = false;
@@ -265,8 +253,8 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
         let a = surface_alpha(hit);
         let p = ray.o + ray.d * hit.t;
         if a >= 1.0 {
-            behind = vec4f(lit, 1.0);
-            surface_depth = depth_along(p, hit.t);
+            *behind = vec4f(lit, 1.0);
+            *surface_depth = depth_along(p, hit.t);
             if m.color.a >= params.termination {
                 break;
             }
@@ -282,6 +270,34 @@ fn main(@builtin(global_invocation_id) invocation: vec3u) {
             }
         }
         start = hit.t;
+    }
+    return m;
+}
+
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
+fn main(@builtin(global_invocation_id) invocation: vec3u) {
+    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
+    if id.x >= stereo.cast_pixels.x || id.y >= stereo.cast_pixels.y {
+        return;
+    }
+    left = vec2i(id.xy) + stereo.first;
+    let ray = primary_ray(f32(left.x), f32(left.y));
+    from_right = ray.o - stereo.right_eye;
+    ray_d = ray.d;
+    major_axis = select(0u, 1u, stereo.families == 2u);
+    major = open_family(major_axis, ray.o, ray.d);
+    if BOTH_FAMILIES {
+        rows = open_family(1u, ray.o, ray.d);
+    }
+    // The left eye's march as raycast.wgsl's, so that the left eye is the
+    // image it renders alone.
+    var m = Marched(vec4f(0.0), infinite());
+    var behind = vec4f(0.0);
+    var surface_depth = infinite();
+    if SURFACES {
+        m = march_among_surfaces(ray, &behind, &surface_depth);
+    } else {
+        m = march_segment(ray, params.t_near, infinite(), m);
     }
     let major_span = close_family(&major, major_axis);
     var span = select(vec4i(major_span, 1, 0), vec4i(1, 0, major_span), major_axis == 1u);

@@ -7,6 +7,12 @@
 
 const NO_SLOT: u32 = 0xffffffffu;
 
+// Set where the scene has surfaces (variant.rs): every pass that meets
+// them tests it first, so that without surfaces the compiler drops the
+// traversal and the shading. Software Vulkan compiles them for seconds,
+// and a march that merely contains them runs several times slower.
+override SURFACES: bool = true;
+
 struct SurfaceHit {
     // Along the ray; infinite where nothing was hit.
     t: f32,
@@ -294,7 +300,7 @@ fn shown_slot(slot: u32, o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> vec3f {
 // The nearest surface with t in (t_min, t_max) along o + t d.
 fn nearest_surface(o: vec3f, d: vec3f, t_min: f32, t_max: f32) -> SurfaceHit {
     var best = SurfaceHit(infinite(), NO_SLOT, vec2f(0.0));
-    if params.surface_nodes == 0u || !(t_max > t_min) {
+    if !SURFACES || params.surface_nodes == 0u || !(t_max > t_min) {
         return best;
     }
     let inv = vec3f(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));

@@ -7,10 +7,6 @@
 // every surface composited, at t along the ray (a = 1: the opaque one that
 // ends it).
 
-// Set where the scene has surfaces: without, the ray is one march and the
-// compiler drops the traversal (software Vulkan compiles it for seconds).
-override SURFACES: bool = true;
-
 struct Traced {
     // The volumes and the translucent surfaces, premultiplied.
     m: Marched,

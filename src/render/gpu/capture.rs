@@ -7,8 +7,9 @@ use glam::{UVec2, Vec4};
 
 use super::bindings::{binding_table, Kind};
 use super::context::{unprepared, Context, Pass};
-use super::raycast::{RaycastPass, Sampled};
+use super::raycast::RaycastPass;
 use super::resources::floats;
+use super::variant::{Keyed, SceneKey, Uses};
 use crate::render::frame::Frame;
 use crate::render::warp::Layer;
 use crate::render::{FrameDesc, RenderError, RenderSettings, Watch};
@@ -29,7 +30,7 @@ binding_table! {
 
 pub(super) struct CapturePass {
     layout: CaptureLayout,
-    pipelines: Sampled,
+    pipelines: Keyed,
     /// The layer count a pixel (x) and a surface layer's depth (y).
     uniform: wgpu::Buffer,
     /// Layer buffers of `bytes` and the group binding them.
@@ -40,14 +41,15 @@ impl CapturePass {
     pub fn new(ctx: &Context, raycast: &RaycastPass) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let layout = CaptureLayout::new(device);
-        let pipelines = Sampled::new(
-            "capture",
-            "capture",
+        let pipelines = Keyed::new(
+            ("capture", "capture", "main"),
             &[
                 raycast.volume_layout.group(),
                 layout.group(),
                 raycast.band_layout.group(),
             ],
+            Uses::ALL,
+            &[],
         );
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("capture"),
@@ -92,7 +94,9 @@ impl CapturePass {
         );
         let main = raycast.group()?;
         let pass = Pass {
-            pipeline: self.pipelines.pick(ctx, scene, settings)?,
+            pipeline: self
+                .pipelines
+                .get(ctx, SceneKey::of(ctx, scene, settings)?)?,
             groups: &[main, group],
             band: Some(&raycast.band_group),
         };

@@ -6,18 +6,17 @@
 //! reads nothing outside it.
 
 use std::sync::atomic::AtomicBool;
-use std::sync::OnceLock;
 
 use glam::UVec2;
 use wgpu::TextureViewDimension as Dim;
 
-use super::bindings::{binding_table, Kind};
+use super::bindings::{binding_table, GroupLayout, Kind};
 use super::context::{unprepared, Context, Pass, WORKGROUP};
-use super::paging;
-use super::raycast::{RaycastPass, Variants};
+use super::raycast::RaycastPass;
 use super::resources::{color_data, floats};
 use super::shaders::compute_pipeline;
 use super::uniforms::Stereo;
+use super::variant::{Keyed, SceneKey, Uses};
 use crate::render::frame::{ColorFormat, Frame, FrameDesc};
 use crate::render::stereo::{LayerFormat, Reprojection, StereoTimes};
 use crate::render::{RenderError, RenderSettings, Watch};
@@ -58,19 +57,17 @@ binding_table! {
 /// Pipelines for one layer format, and the resources of the last shape.
 pub(super) struct LayersPass {
     format: LayerFormat,
-    /// The left eye's march, for one volume and for several: writing one
-    /// family of lines, and both.
-    reproject: [Variants; 2],
-    /// The same for scenes with a paged volume, compiled when the first
-    /// comes (any count of volumes).
-    reproject_paged: [OnceLock<wgpu::ComputePipeline>; 2],
+    /// The left eye's march, writing one family of lines, and both, each
+    /// compiled for its scenes' key when first needed.
+    reproject: [Keyed; 2],
     clear: wgpu::ComputePipeline,
-    /// The right eye's first opaque surfaces, before the march.
-    first_opaque: wgpu::ComputePipeline,
+    /// The right eye's first opaque surfaces, before the march (worlds
+    /// with surfaces only).
+    first_opaque: Keyed,
     summarise: wgpu::ComputePipeline,
-    composite: wgpu::ComputePipeline,
+    composite: Keyed,
     /// The compositing without the block summary, to measure and check it.
-    composite_every_offset: wgpu::ComputePipeline,
+    composite_every_offset: Keyed,
     writer_layout: ReprojectLayout,
     composite_layout: CompositeLayout,
     target: Option<LayerTarget>,
@@ -131,8 +128,9 @@ struct LayerTarget {
     res: Resources,
     writer: wgpu::BindGroup,
     composite: wgpu::BindGroup,
-    /// The last frame's right eye and left pixels cast, if one was made.
-    last: Option<(FrameDesc, UVec2)>,
+    /// The last frame's right eye, left pixels cast and scene key, if one
+    /// was made.
+    last: Option<(FrameDesc, UVec2, SceneKey)>,
 }
 
 /// Everything of a target but the spans and the bind groups.
@@ -170,43 +168,38 @@ impl LayersPass {
             writer_layout.group(),
             raycast.band_layout.group(),
         ];
-        let pipeline = |label, entry, constants: &[(&str, f64)]| {
-            compute_pipeline(device, label, "reproject", entry, &writer, constants)
-        };
-        let compositing = |label, entry, constants: &[(&str, f64)]| {
-            compute_pipeline(
-                device,
-                label,
-                "composite",
-                entry,
-                &[raycast.volume_layout.group(), composite_layout.group()],
-                constants,
+        let compositing = [raycast.volume_layout.group(), composite_layout.group()];
+        let reproject = |both: bool| {
+            Keyed::new(
+                ("re-projection", "reproject", "main"),
+                &writer,
+                Uses::EXACT,
+                &[("BOTH_FAMILIES", if both { 1.0 } else { 0.0 })],
             )
         };
-        let families = |count: u32| -> Result<Variants, RenderError> {
-            let both = if count == 2 { 1.0 } else { 0.0 };
-            Ok(Variants {
-                one: pipeline(
-                    "re-projection",
-                    "main",
-                    &[("ONE_VOLUME", 1.0), ("BOTH_FAMILIES", both)],
-                )?,
-                several: pipeline("re-projection", "main", &[("BOTH_FAMILIES", both)])?,
-            })
+        let surfaces = |label, entry, fixed: &[(&'static str, f64)]| {
+            Keyed::new(
+                (label, "composite", entry),
+                &compositing,
+                Uses::SURFACES,
+                fixed,
+            )
+        };
+        let plain = |label, module, entry, groups: &[&GroupLayout]| {
+            compute_pipeline(device, label, module, entry, groups, &[("SURFACES", 0.0)])
         };
         Ok(Self {
             format,
-            reproject: [families(1)?, families(2)?],
-            reproject_paged: Default::default(),
-            clear: pipeline("layer clear", "clear", &[])?,
-            first_opaque: compositing("right-eye surfaces", "first_opaque", &[])?,
-            summarise: compositing("span blocks", "summarise", &[])?,
-            composite: compositing("compositing", "main", &[])?,
-            composite_every_offset: compositing(
+            reproject: [reproject(false), reproject(true)],
+            clear: plain("layer clear", "reproject", "clear", &writer)?,
+            first_opaque: surfaces("right-eye surfaces", "first_opaque", &[]),
+            summarise: plain("span blocks", "composite", "summarise", &compositing)?,
+            composite: surfaces("compositing", "main", &[]),
+            composite_every_offset: surfaces(
                 "compositing every offset",
                 "main",
                 &[("EVERY_OFFSET", 1.0)],
-            )?,
+            ),
             writer_layout,
             composite_layout,
             target: None,
@@ -482,11 +475,12 @@ impl LayersPass {
         ctx.queue
             .write_buffer(&res.uniform, 0, bytemuck::bytes_of(&uniform));
         let volume = raycast.group()?;
+        let key = SceneKey::of(ctx, scene, settings)?;
         // Where the right eye's own surfaces end its view, for the march
         // behind the left eye's: a world without surfaces needs none.
         let first_opaque_ms = if surfaces {
             ctx.dispatch(
-                &self.first_opaque,
+                self.first_opaque.get(ctx, key)?,
                 &[volume, &target.composite],
                 [
                     desc.size.x.div_ceil(WORKGROUP),
@@ -498,33 +492,7 @@ impl LayersPass {
             0.0
         };
         let both = plan.family_count() == 2;
-        let pipeline = if paging::any_paged(ctx, scene) {
-            let cell = &self.reproject_paged[usize::from(both)];
-            match cell.get() {
-                Some(p) => p,
-                None => {
-                    let groups = [
-                        raycast.volume_layout.group(),
-                        self.writer_layout.group(),
-                        raycast.band_layout.group(),
-                    ];
-                    let made = compute_pipeline(
-                        &ctx.device,
-                        "re-projection, paged",
-                        "reproject",
-                        "main",
-                        &groups,
-                        &[
-                            ("PAGED", 1.0),
-                            ("BOTH_FAMILIES", if both { 1.0 } else { 0.0 }),
-                        ],
-                    )?;
-                    cell.get_or_init(|| made)
-                }
-            }
-        } else {
-            self.reproject[usize::from(both)].for_scene(scene)
-        };
+        let pipeline = self.reproject[usize::from(both)].get(ctx, key)?;
         let march = Pass {
             pipeline,
             groups: &[volume, &target.writer],
@@ -536,7 +504,7 @@ impl LayersPass {
         if watch.stopped() {
             return Err(RenderError::Stopped);
         }
-        let (right, composite_ms) = self.composite_right((ctx, raycast), desc, cast, false)?;
+        let (right, composite_ms) = self.composite_right((ctx, raycast), desc, cast, key, false)?;
         watch.advance(1);
         Ok((
             right,
@@ -554,10 +522,11 @@ impl LayersPass {
         (ctx, raycast): (&Context, &RaycastPass),
         desc: &FrameDesc,
         cast: UVec2,
+        key: SceneKey,
         every_offset: bool,
     ) -> Result<(Frame, f64), RenderError> {
         let target = self.target.as_mut().ok_or_else(unprepared)?;
-        target.last = Some((*desc, cast));
+        target.last = Some((*desc, cast, key));
         let res = &target.res;
         let groups = [raycast.group()?, &target.composite];
         let summarise_ms = ctx.dispatch(
@@ -575,7 +544,7 @@ impl LayersPass {
             &self.composite
         };
         let composite_ms = ctx.dispatch(
-            pipeline,
+            pipeline.get(ctx, key)?,
             &groups,
             [
                 desc.size.x.div_ceil(WORKGROUP),
@@ -616,8 +585,8 @@ impl LayersPass {
         raycast: &RaycastPass,
     ) -> Result<(Frame, f64), RenderError> {
         let target = self.target.as_ref().ok_or_else(no_layers)?;
-        let (desc, cast) = target.last.ok_or_else(no_layers)?;
-        self.composite_right((ctx, raycast), &desc, cast, true)
+        let (desc, cast, key) = target.last.ok_or_else(no_layers)?;
+        self.composite_right((ctx, raycast), &desc, cast, key, true)
     }
 
     /// Milliseconds a full clear of the last frame's layers takes: the

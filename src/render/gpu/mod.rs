@@ -20,6 +20,7 @@ mod resources;
 mod scene;
 mod shaders;
 mod uniforms;
+mod variant;
 mod volume_texture;
 mod warp;
 
@@ -35,8 +36,9 @@ use self::capture::{layer_bytes, CapturePass};
 use self::context::{unprepared, Context};
 use self::iso::IsoPass;
 use self::layers::{no_layers, LayersPass};
-use self::raycast::{no_filtering, RaycastPass};
+use self::raycast::RaycastPass;
 use self::scene::GpuScene;
+use self::variant::no_filtering;
 use self::warp::WarpPass;
 use super::frame::{ColorData, Frame, FrameDesc};
 use super::march_plan::MarchPlan;

@@ -8,22 +8,19 @@ use crate::render::Watch;
 use glam::UVec2;
 use wgpu::TextureViewDimension as Dim;
 
-use std::sync::OnceLock;
-
-use super::bindings::{binding_table, GroupLayout, Kind};
+use super::bindings::{binding_table, Kind};
 use super::context::{unprepared, Context, Pass, BAND_STRIDE, WORKGROUP};
-use super::paging;
 use super::resources::{color_data, floats, BrickSlot, OutputBuffers, SurfaceSlot};
 use super::scene::GpuScene;
-use super::shaders::compute_pipeline;
 use super::uniforms::{self, RayUniforms};
+use super::variant::{Keyed, SceneKey, Uses};
 use super::volume_texture::TextureSlot;
 use crate::geometry::RayGen;
 use crate::render::frame::{Frame, FrameDesc};
 use crate::render::hits::{self, HitRecord};
 use crate::render::march_plan::MarchPlan;
 use crate::render::settings::MAX_DIRECTIONS;
-use crate::render::{RenderError, RenderSettings, Sampling};
+use crate::render::{RenderError, RenderSettings};
 use crate::scene::Scene;
 
 binding_table! {
@@ -81,100 +78,10 @@ binding_table! {
     }
 }
 
-/// A marching pipeline for scenes of one volume and of several.
-pub(super) struct Variants {
-    pub one: wgpu::ComputePipeline,
-    pub several: wgpu::ComputePipeline,
-}
-
-impl Variants {
-    pub fn for_scene(&self, scene: &Scene) -> &wgpu::ComputePipeline {
-        if scene.volumes().len() == 1 {
-            &self.one
-        } else {
-            &self.several
-        }
-    }
-}
-
-/// A marching shader's pipelines, each compiled the first time a frame
-/// needs it: exact or hardware-filtered sampling (where the adapter
-/// filters 32-bit floats), one volume or several, with surfaces or
-/// without, with paged volumes or without. Each override lets the compiler drop what a scene does not
-/// use: software Vulkan takes seconds for each pipeline that traverses
-/// surfaces, and a fraction of one for a volume's march alone.
-pub(super) struct Sampled {
-    label: &'static str,
-    module: &'static str,
-    groups: Vec<GroupLayout>,
-    /// Indexed by paged * 8 + filtered * 4 + one volume * 2 + surfaces.
-    variants: [OnceLock<wgpu::ComputePipeline>; 16],
-}
-
-impl Sampled {
-    /// Entry point `main` of `module`, its bind groups `groups`.
-    pub fn new(label: &'static str, module: &'static str, groups: &[&GroupLayout]) -> Self {
-        Self {
-            label,
-            module,
-            groups: groups.iter().map(|g| (*g).clone()).collect(),
-            variants: Default::default(),
-        }
-    }
-
-    /// The pipeline for the settings' sampling, the scene's count of
-    /// volumes and whether it has surfaces, compiled if it is the first.
-    pub fn pick(
-        &self,
-        ctx: &Context,
-        scene: &Scene,
-        settings: &RenderSettings,
-    ) -> Result<&wgpu::ComputePipeline, RenderError> {
-        let filtered = match settings.sampling {
-            Sampling::Exact => false,
-            Sampling::Filtered if ctx.filterable => true,
-            Sampling::Filtered => return Err(no_filtering(ctx)),
-        };
-        let one = scene.volumes().len() == 1;
-        let surfaces = !scene.shapes().is_empty();
-        let paged = paging::any_paged(ctx, scene);
-        let cell = &self.variants[usize::from(paged) * 8
-            + usize::from(filtered) * 4
-            + usize::from(one) * 2
-            + usize::from(surfaces)];
-        if let Some(pipeline) = cell.get() {
-            return Ok(pipeline);
-        }
-        let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        let groups: Vec<&GroupLayout> = self.groups.iter().collect();
-        let pipeline = compute_pipeline(
-            &ctx.device,
-            self.label,
-            self.module,
-            "main",
-            &groups,
-            &[
-                ("FILTERED", flag(filtered)),
-                ("ONE_VOLUME", flag(one)),
-                ("SURFACES", flag(surfaces)),
-                ("PAGED", flag(paged)),
-            ],
-        )?;
-        Ok(cell.get_or_init(|| pipeline))
-    }
-}
-
-pub(super) fn no_filtering(ctx: &Context) -> RenderError {
-    RenderError::Settings(format!(
-        "filtered GPU sampling needs 32-bit float textures to filter, which {} does not offer; use exact sampling",
-        ctx.info.name
-    ))
-}
-
 pub(super) struct RaycastPass {
     pub volume_layout: VolumeLayout,
     pub band_layout: BandLayout,
-    pipelines: Sampled,
+    pipelines: Keyed,
     /// Whether the adapter filters 32-bit floats (filtered sampling).
     filterable: bool,
     sampler: wgpu::Sampler,
@@ -198,10 +105,11 @@ impl RaycastPass {
         let filterable = ctx.filterable;
         let volume_layout = VolumeLayout::new(device, filterable);
         let band_layout = BandLayout::new(device);
-        let pipelines = Sampled::new(
-            "raycast",
-            "raycast",
+        let pipelines = Keyed::new(
+            ("raycast", "raycast", "main"),
             &[volume_layout.group(), band_layout.group()],
+            Uses::ALL,
+            &[],
         );
         // Linear where the adapter filters 32-bit floats. Level of detail's
         // sampler blends mip levels too, so that it coarsens smoothly; full
@@ -378,7 +286,9 @@ impl RaycastPass {
         watch.expect(bands.len() as u64);
         let group = self.group()?;
         let pass = Pass {
-            pipeline: self.pipelines.pick(ctx, scene, settings)?,
+            pipeline: self
+                .pipelines
+                .get(ctx, SceneKey::of(ctx, scene, settings)?)?,
             groups: &[group],
             band: Some(&self.band_group),
         };

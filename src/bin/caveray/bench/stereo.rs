@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays};
+use anari_library_caveray::geometry::{MatrixCamera, PrimaryRays, RayGen};
 use anari_library_caveray::output::{Series, XAxis};
 use anari_library_caveray::render::stereo::{
     decide, layer_memory, paper, Bounds, Eyes, HmdStereo, LayerFormat, LayerRequest, Reprojection,
@@ -107,6 +107,11 @@ struct StereoRun {
     t_r_ms: f64,
     t_lr_ms: f64,
     reproject_ms: f64,
+    /// The ray caster over the left pixels the re-projection pass casts
+    /// (the image and the pixels beyond it the right eye sees): the same
+    /// rays and samples, so that `reproject_ms / cast_ms` is the
+    /// re-projection pass's cost per sample against the ray caster's.
+    cast_ms: f64,
     composite_ms: f64,
     /// The compositing reading every ray of the bounding depth range, as
     /// it would without the summary of which blocks wrote where.
@@ -124,6 +129,7 @@ struct ViewSeries {
     t_l_ms: Vec<f64>,
     t_r_ms: Vec<f64>,
     reproject_ms: Vec<f64>,
+    cast_ms: Vec<f64>,
     composite_ms: Vec<f64>,
     composite_every_offset_ms: Vec<f64>,
     clear_ms: Vec<f64>,
@@ -135,6 +141,7 @@ struct ViewResult {
     t_l: f64,
     t_r: f64,
     reproject: f64,
+    cast: f64,
     composite: f64,
     every_offset: f64,
     clear: f64,
@@ -317,6 +324,16 @@ impl Bench<'_> {
             .render_reprojected(self.scene, &left_rays, plan, self.settings, &desc)
             .map_err(runtime)?;
         let clear = self.gpu.time_layer_clear().map_err(runtime)?;
+        let cast = cast_rays(&left_rays, plan);
+        self.gpu
+            .render(
+                self.scene,
+                &cast,
+                self.settings,
+                &FrameDesc::new(plan.plan.cast),
+            )
+            .map_err(runtime)?;
+        let cast = self.gpu.last_pass_ms();
         let (_, every_offset) = self.gpu.composite_every_offset().map_err(runtime)?;
         let dssim = dssim(&stereo.right, &two_pass).map_err(runtime)?;
         Ok((
@@ -324,6 +341,7 @@ impl Bench<'_> {
                 t_l,
                 t_r,
                 reproject: stereo.times.left_ms,
+                cast,
                 composite: stereo.times.composite_ms,
                 every_offset,
                 clear,
@@ -331,6 +349,16 @@ impl Bench<'_> {
             },
             (two_pass, stereo.right),
         ))
+    }
+}
+
+/// The left eye's rays over the pixels the re-projection pass casts.
+fn cast_rays(left: &RayGen, plan: &Reprojection) -> RayGen {
+    let first = plan.plan.first.as_vec2();
+    RayGen {
+        origin: left.origin + first.x * left.origin_dx + first.y * left.origin_dy,
+        direction: left.direction + first.x * left.direction_dx + first.y * left.direction_dy,
+        ..*left
     }
 }
 
@@ -346,6 +374,7 @@ fn summarise(shading: Shading, results: &[ViewResult]) -> StereoRun {
         t_l_ms: all(|r| r.t_l),
         t_r_ms: all(|r| r.t_r),
         reproject_ms: all(|r| r.reproject),
+        cast_ms: all(|r| r.cast),
         composite_ms: all(|r| r.composite),
         composite_every_offset_ms: all(|r| r.every_offset),
         clear_ms: all(|r| r.clear),
@@ -361,6 +390,7 @@ fn summarise(shading: Shading, results: &[ViewResult]) -> StereoRun {
         t_r_ms: t_r,
         t_lr_ms: t_lr,
         reproject_ms: m(&views.reproject_ms),
+        cast_ms: m(&views.cast_ms),
         composite_ms: m(&views.composite_ms),
         composite_every_offset_ms: m(&views.composite_every_offset_ms),
         clear_ms: m(&views.clear_ms),
@@ -417,14 +447,16 @@ fn print_table(report: &StereoReport) {
             .adapter()
             .map_or("", |a| a.pass_clock.name())
     );
+    println!("(/sample: the re-projection pass against the ray caster over the same left pixels)");
     println!(
-        "{:<10} {:<15} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>8} {:>8}",
+        "{:<10} {:<15} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>8} {:>8}",
         "volume",
         "shading",
         "samples",
         "T_l ms",
         "T_r ms",
         "T_l+r ms",
+        "/sample",
         "comp ms",
         "all ms",
         "clear ms",
@@ -435,13 +467,14 @@ fn print_table(report: &StereoReport) {
     for d in &report.datasets {
         for r in &d.runs {
             println!(
-                "{:<10} {:<15} {:>7} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>7.1} {:>8.4} {:>8.4}",
+                "{:<10} {:<15} {:>7} {:>9.1} {:>9.1} {:>9.1} {:>9.2} {:>9.1} {:>9.1} {:>9.1} {:>7.1} {:>8.4} {:>8.4}",
                 d.name,
                 r.shading,
                 r.extra_samples_per_sample,
                 r.t_l_ms,
                 r.t_r_ms,
                 r.t_lr_ms,
+                r.reproject_ms / r.cast_ms,
                 r.composite_ms,
                 r.composite_every_offset_ms,
                 r.clear_ms,
