@@ -238,9 +238,11 @@ pub fn parameter_info(
             .range
             .as_ref()
             .map_or(std::ptr::null(), |r| (&r[0] as *const f32).cast()),
+        // A quantity in the host's own units has no maximum to tell.
         ("maximum", Some(DataType::FLOAT32)) => c
             .range
             .as_ref()
+            .filter(|r| r[1].is_finite())
             .map_or(std::ptr::null(), |r| (&r[1] as *const f32).cast()),
         ("sourceExtension", Some(DataType::STRING)) => s
             .source

@@ -79,7 +79,7 @@ const PARAMS: &[ParamInfo] = &[
             DefaultValue::Floats(&[1.0]),
             "strength of the ambient light on surfaces under directLight: 1 adds a tenth of a surface's color, a fill that keeps the lights' shading",
         )
-        .range(0.0, 1e6),
+        .at_least(0.0),
         p(
             "eyeLightBlendRatio",
             F32,

@@ -25,7 +25,9 @@ pub struct ParamInfo {
     pub names: &'static [&'static str],
     /// For DATA_TYPE parameters: the types understood.
     pub data_types: &'static [T],
-    /// For numbers: the smallest and largest sensible value.
+    /// For numbers: the smallest and largest sensible value; the largest
+    /// is infinite for a quantity in the host's own units (a length, a
+    /// light's strength), which no bound fits every scene.
     pub range: Option<(f32, f32)>,
 }
 
@@ -44,6 +46,11 @@ impl ParamInfo {
     }
     pub const fn range(mut self, lo: f32, hi: f32) -> Self {
         self.range = Some((lo, hi));
+        self
+    }
+    /// A finite number of at least `lo`, without an upper bound.
+    pub const fn at_least(mut self, lo: f32) -> Self {
+        self.range = Some((lo, f32::INFINITY));
         self
     }
 
@@ -247,6 +254,9 @@ impl<'a> Read<'a> {
     pub fn f32_in_range(&self, name: &str) -> Result<f32, String> {
         let x = self.f32(name)?;
         match self.info(name).and_then(|p| p.range) {
+            Some((lo, hi)) if hi == f32::INFINITY && !(x.is_finite() && x >= lo) => Err(format!(
+                "{name} must be a finite number of at least {lo}, got {x:?}"
+            )),
             Some((lo, hi)) if !(lo..=hi).contains(&x) => {
                 Err(format!("{name} must be from {lo} to {hi}, got {x:?}"))
             }

@@ -279,6 +279,19 @@ fn parameter_info_answers_what_settings_uis_ask() {
         lo > 0.0 && lo < 1.0 && hi > 1.0,
         "stepFactor range {lo}..{hi}"
     );
+    // A length in the host's own units: a minimum, and no maximum.
+    let ipd = |info| {
+        s.param_info(
+            ANARI_CAMERA,
+            "perspective",
+            "interpupillaryDistance",
+            ANARI_FLOAT32,
+            info,
+            ANARI_FLOAT32,
+        )
+    };
+    assert_eq!(unsafe { *ipd("minimum").cast::<f32>() }, 0.0);
+    assert!(ipd("maximum").is_null());
     let source = s.param_info(
         ANARI_RENDERER,
         "default",

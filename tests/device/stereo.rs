@@ -131,9 +131,8 @@ fn bad_stereo_parameters_are_refused_at_commit_and_the_extension_is_reported() {
     stereo(&mut h, camera, "left", -0.06);
     let errors = h.messages(Severity::Error);
     assert!(
-        errors
-            .iter()
-            .any(|e| e.contains("interpupillaryDistance must be from 0 to 1, got -0.06")),
+        errors.iter().any(|e| e
+            .contains("interpupillaryDistance must be a finite number of at least 0, got -0.06")),
         "{errors:?}"
     );
     let info = anari_library_caveray::device::info::EXTENSIONS;
@@ -149,8 +148,35 @@ fn one_error(h: &mut Host, code: StatusCode) -> String {
     }
 }
 
+/// Whether the frame renders; its error if not.
+fn try_pixels(h: &mut Host, frame: u64) -> Result<Vec<u8>, String> {
+    h.d.render_frame(frame, None);
+    match h.d.map_frame(frame, "channel.color") {
+        Some(mapped) => {
+            // SAFETY: a mapped RGBA8 frame of SIZE x SIZE pixels, valid
+            // until unmap.
+            let pixels =
+                unsafe { std::slice::from_raw_parts(mapped.ptr, (4 * SIZE * SIZE) as usize) }
+                    .to_vec();
+            h.d.unmap_frame(frame, "channel.color");
+            Ok(pixels)
+        }
+        None => {
+            // The render says why, and the map that it failed.
+            let errors = h.errors();
+            match &errors[..] {
+                [(StatusCode::InvalidOperation, _), (StatusCode::InvalidOperation, map)]
+                    if map.contains("the last render failed") => {}
+                _ => panic!("expected the render's and the map's errors, got {errors:?}"),
+            }
+            Err(errors[0].1.clone())
+        }
+    }
+}
+
 #[test]
-fn an_interpupillary_distance_beyond_the_stated_range_is_refused_at_commit() {
+fn an_interpupillary_distance_is_the_hosts_length_and_only_one_that_cannot_give_an_image_is_refused(
+) {
     let mut h = Host::new();
     let (frame, perspective) = scene(&mut h);
     let off_axis = h.d.new_object(DataType::CAMERA, "offAxis");
@@ -162,46 +188,68 @@ fn an_interpupillary_distance_beyond_the_stated_range_is_refused_at_commit() {
     ] {
         h.set(off_axis, name, DataType::FLOAT32_VEC3, bytes(&corner));
     }
-    let (lo, hi) = anari_library_caveray::device::info::param(
-        DataType::CAMERA,
-        "perspective",
-        "interpupillaryDistance",
-    )
-    .and_then(|p| p.range)
-    .expect("a stated range");
-    assert_eq!((lo, hi), (0.0, 1.0));
-    // The wall, 2 wide, gives the off-axis camera its scale (a rig in
-    // millimetres has eyes 60 apart), so its table states no range.
-    let wall = anari_library_caveray::device::info::param(
-        DataType::CAMERA,
-        "offAxis",
-        "interpupillaryDistance",
-    )
-    .expect("offAxis takes stereo");
-    assert_eq!(wall.range, None);
-    for (camera, most, range) in [
-        (perspective, hi, "0 to 1"),
-        (off_axis, 2.0, "0 to the wall's width (2)"),
-    ] {
+    // The tables tell hosts: at least 0, no maximum (a length in the
+    // host's units; no bound fits every scene).
+    for subtype in ["perspective", "offAxis"] {
+        let range = anari_library_caveray::device::info::param(
+            DataType::CAMERA,
+            subtype,
+            "interpupillaryDistance",
+        )
+        .and_then(|p| p.range);
+        assert_eq!(range, Some((0.0, f32::INFINITY)), "{subtype}");
+    }
+    for camera in [perspective, off_axis] {
         h.set_object(frame, "camera", DataType::CAMERA, camera);
         h.d.commit(Subject::Object(frame));
-        stereo(&mut h, camera, "left", most);
+        stereo(&mut h, camera, "left", 0.06);
         let good = h.pixels(frame);
+        // Eyes 50 units apart around a scene 2 units wide: far apart, and
+        // an image all the same (the off-axis eyes stay in front of the
+        // wall, beyond its sides).
+        stereo(&mut h, camera, "right", 50.0);
+        try_pixels(&mut h, frame).unwrap();
         assert!(h.errors().is_empty());
-        for bad in [50.0f32, 1e30, f32::NAN] {
+        for bad in [-0.06f32, f32::NAN, f32::INFINITY] {
             stereo(&mut h, camera, "left", bad);
             let e = one_error(&mut h, StatusCode::InvalidArgument);
             assert!(
                 e.contains(&format!(
-                    "interpupillaryDistance must be from {range}, got {bad:?}"
+                    "interpupillaryDistance must be a finite number of at least 0, got {bad:?}"
                 )),
                 "{e}"
             );
         }
-        stereo(&mut h, camera, "left", most);
+        // Finite, but the eye 5e29 out: the world spans no float step.
+        stereo(&mut h, camera, "left", 1e30);
+        assert!(h.errors().is_empty());
+        let e = try_pixels(&mut h, frame).unwrap_err();
+        assert!(
+            e.contains("interpupillaryDistance 1e30 puts an eye at")
+                && e.contains("no image of it can be made"),
+            "{e}"
+        );
+        stereo(&mut h, camera, "left", 0.06);
         same(&h.pixels(frame), &good).unwrap();
         assert!(h.errors().is_empty());
     }
+    // Eyes apart along the wall's normal: a distance past twice the eye's
+    // own puts the far eye behind the wall.
+    h.set(
+        off_axis,
+        "eyeAxis",
+        DataType::FLOAT32_VEC3,
+        bytes(&[0.0f32, 0.0, 1.0]),
+    );
+    stereo(&mut h, off_axis, "left", 10.0);
+    let e = try_pixels(&mut h, frame).unwrap_err();
+    assert!(
+        e.contains("interpupillaryDistance 10 along eyeAxis puts the left eye at (0, 0, -2): eye is on or behind the wall"),
+        "{e}"
+    );
+    stereo(&mut h, off_axis, "left", 4.0);
+    try_pixels(&mut h, frame).unwrap();
+    assert!(h.errors().is_empty());
 }
 
 #[test]

@@ -10,7 +10,7 @@ pub mod orthographic;
 pub mod perspective;
 pub mod stereo;
 
-use glam::{DVec2, DVec3, UVec2};
+use glam::{DVec2, DVec3, UVec2, Vec3};
 
 use self::multi_view::MultiViewCamera;
 use self::stereo::{Stereo, StereoMode};
@@ -21,7 +21,7 @@ use super::types::DataType as T;
 use crate::engine::{EyeView, PanelViews, Views};
 use crate::geometry::{
     ImageRegion, MatrixCamera, OffAxisCamera, OrthographicCamera, PinholeCamera, PrimaryRays,
-    RayGen,
+    RayGen, Rounded,
 };
 
 /// The parameters ANARI's perspective and orthographic cameras share,
@@ -324,7 +324,16 @@ impl CameraModel {
                     CameraModel::OffAxis { camera, axis, .. } => {
                         let eye = stereo.along(side, camera.eye(), *axis);
                         let screen = *camera.screen();
-                        let one = OffAxisCamera::new(screen, eye).map_err(|e| e.to_string())?;
+                        // Eyes apart along an axis that leaves the wall's
+                        // plane may put one behind it.
+                        let one = OffAxisCamera::new(screen, eye).map_err(|e| {
+                            format!(
+                                "interpupillaryDistance {} along eyeAxis puts the {} eye at {}: {e}",
+                                Rounded(stereo.ipd),
+                                if side < 0.0 { "left" } else { "right" },
+                                point(eye)
+                            )
+                        })?;
                         let matrix = pair.then(|| off_axis_matrices(&screen, eye)).flatten();
                         (one.ray_gen(eye_size), matrix)
                     }
@@ -345,6 +354,44 @@ impl CameraModel {
         }
     }
 
+    /// Whether the eyes a stereo camera's `interpupillaryDistance` placed
+    /// (the host's, in its own units) can give an image of a world within
+    /// `bounds` in `views`: rays are single precision, so an eye so far
+    /// out that the world spans fewer float steps than the view has
+    /// pixels across sees nothing of it. Other cameras place no eyes.
+    pub fn check_eyes(&self, views: &Views, (lo, hi): (Vec3, Vec3)) -> Result<(), String> {
+        let stereo = match self {
+            CameraModel::Perspective { stereo, .. } | CameraModel::OffAxis { stereo, .. } => stereo,
+            _ => return Ok(()),
+        };
+        let eyes: &[EyeView] = match views {
+            Views::Mono(one) => std::slice::from_ref(one),
+            Views::StereoPair(pair) => pair,
+            Views::Panel(_) => return Ok(()),
+        };
+        let across = (hi - lo).max_element();
+        if stereo.mode == StereoMode::None || !(across.is_finite() && across > 0.0) {
+            return Ok(());
+        }
+        for view in eyes {
+            let eye = view.rays.eye.unwrap_or(view.rays.origin);
+            let largest = eye.abs().max(lo.abs()).max(hi.abs()).max_element();
+            let float_step = largest * f32::EPSILON;
+            let pixels = view.size.max_element() as f32;
+            if !float_step.is_finite() || across < float_step * pixels {
+                return Err(format!(
+                    "interpupillaryDistance {} puts an eye at {}, where single-precision rays step by {}: the world, {} across, would span fewer steps than the view's {} pixels, so no image of it can be made",
+                    Rounded(stereo.ipd),
+                    point(eye.as_dvec3()),
+                    Rounded(f64::from(float_step)),
+                    Rounded(f64::from(across)),
+                    pixels
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The committed state, once the camera makes rays. A perspective
     /// camera is checked with a square frame; its aspect is only known for
     /// certain when a frame renders it.
@@ -352,6 +399,11 @@ impl CameraModel {
         self.ray_gen(UVec2::ONE)?;
         Ok(Some(State::ready(self)))
     }
+}
+
+/// A point as messages show it.
+fn point(p: DVec3) -> String {
+    format!("({}, {}, {})", Rounded(p.x), Rounded(p.y), Rounded(p.z))
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ use crate::device::table::{
     p, DefaultValue, ParamInfo, SubtypeInfo, EXT_OFF_AXIS, EXT_STEREO, VEC3,
 };
 use crate::device::types::DataType as T;
-use crate::geometry::{OffAxisCamera, Rounded, Screen};
+use crate::geometry::{OffAxisCamera, Screen};
 
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::CAMERA,
@@ -22,13 +22,6 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 static PARAMS: [ParamInfo; 7] = {
     let [mode, ipd] = stereo::params();
-    // The wall gives the scale: a rig in millimetres has eyes 60 apart.
-    let ipd = ParamInfo {
-        description:
-            "distance between the eyes of stereoMode, in world units, 0 to the wall's width",
-        range: None,
-        ..ipd
-    };
     [
         p(
             "lowerLeft",
@@ -86,15 +79,6 @@ fn commit(r: &Read<'_>, _warn: &mut dyn FnMut(String)) -> Result<Option<State>, 
     let axis = axis
         .try_normalize()
         .ok_or_else(|| format!("eyeAxis {axis} has no direction"))?;
-    // Eyes farther apart than the wall is wide look past it (a blank
-    // frame), whatever the units.
-    let ipd = r.f32("interpupillaryDistance")?;
-    if !(0.0..=screen.width()).contains(&f64::from(ipd)) {
-        return Err(format!(
-            "interpupillaryDistance must be from 0 to the wall's width ({}), got {ipd:?}",
-            Rounded(screen.width())
-        ));
-    }
     CameraModel::OffAxis {
         camera,
         stereo: Stereo::from_params(r)?,

@@ -27,9 +27,9 @@ pub const fn params() -> [ParamInfo; 2] {
             F32,
             false,
             DefaultValue::Floats(&[0.0635]),
-            "distance between the eyes of stereoMode, in world units, 0 to 1",
+            "distance between the eyes of stereoMode, in world units (0.0635 in a scene of metres, 63.5 in one of millimetres)",
         )
-        .range(0.0, 1.0),
+        .at_least(0.0),
     ]
 }
 
@@ -135,9 +135,10 @@ pub struct Stereo {
 }
 
 impl Stereo {
-    /// The committed `params()`. The distance is held to the range the
-    /// table tells hosts: eyes metres apart in a scene of metres look
-    /// past the whole scene, and the frame comes out blank.
+    /// The committed `params()`. The distance is the host's, in its
+    /// world's units, so no upper bound fits every scene: what cannot
+    /// give an image is refused at render, where the world is known
+    /// (`CameraModel::check_eyes`).
     pub fn from_params(r: &Read<'_>) -> Result<Self, String> {
         Self::read(
             r.string("stereoMode").unwrap_or_default(),

@@ -37,7 +37,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
             DefaultValue::Floats(&[1.0]),
             "strength: lit samples (shading other than none) are multiplied by color times irradiance",
         )
-        .range(0.0, 10.0),
+        .at_least(0.0),
     ],
     commit: Some(commit),
 };

@@ -78,9 +78,8 @@ pub fn take(
     let cannot_be = |role: &'static str| {
         move |o: &ObjectCell| format!("{} cannot be used as the frame's {role}", o.describe())
     };
-    let views = camera
-        .ready::<CameraModel>(cannot_be("camera"))?
-        .views(size)?;
+    let camera_model = camera.ready::<CameraModel>(cannot_be("camera"))?;
+    let views = camera_model.views(size)?;
     let mut settings = renderer.ready::<RenderSettings>(cannot_be("renderer"))?;
     let world_model = world.ready::<WorldModel>(cannot_be("world"))?;
     // The first usable directional light lights the shading.
@@ -127,6 +126,9 @@ pub fn take(
                 .map_err(in_world)?,
         ),
     };
+    if let Some(scene) = &scene {
+        camera_model.check_eyes(&views, scene.bounds())?;
+    }
     let surfaces = surfaces.iso;
     let share = match ranks {
         None => None,
