@@ -19,7 +19,7 @@ use anari_library_caveray::scene::{
     Filter, ObjectIds, PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
 };
 use common::c::{
-    compile, describe, phantom, read_rgba, run_with, scratch, valgrind_available, wall_scene,
+    compile, crop, describe, phantom, read_rgba, run_with, scratch, valgrind_available, wall_scene,
 };
 use common::missing;
 use glam::{DVec3, Mat4, UVec2, UVec3, Vec3, Vec4};
@@ -400,22 +400,7 @@ fn stereo_pairs(backend: &str, valgrind: bool) -> (Frame, Frame, Frame) {
 
 /// Columns `x0..x0 + 48` of a 96 x 48 frame.
 fn half(pair: &Frame, x0: u32) -> Frame {
-    let ColorData::Rgba8(bytes) = &pair.color else {
-        panic!("RGBA8 expected");
-    };
-    let pixels = (0..48u32)
-        .flat_map(|y| {
-            let start = 4 * (y * 96 + x0) as usize;
-            bytes[start..start + 4 * 48].to_vec()
-        })
-        .collect();
-    Frame {
-        size: UVec2::new(48, 48),
-        color: ColorData::Rgba8(pixels),
-        depth: None,
-        hits: None,
-        samples: 0,
-    }
+    crop(pair, UVec2::new(x0, 0), UVec2::new(48, 48))
 }
 
 #[test]

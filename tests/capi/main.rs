@@ -15,3 +15,4 @@ mod hostile_host;
 mod hosts;
 mod info;
 mod python_host;
+mod units_host;

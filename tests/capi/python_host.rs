@@ -15,7 +15,7 @@ use glam::{DVec3, UVec2, UVec3, Vec3, Vec4};
 use serde_json::json;
 
 use crate::common;
-use crate::common::c::{describe, host_command, read_rgba, root, scratch};
+use crate::common::c::{crop, describe, host_command, read_rgba, root, scratch};
 
 fn python() -> Option<PathBuf> {
     let path = std::env::var_os("CAVERAY_PYTHON")
@@ -82,6 +82,9 @@ fn a_pynari_host_renders_what_the_rust_api_renders_on_each_backend() {
         "fovy": fovy,
         "size": [size.x, size.y],
         "gradient": gradient,
+        // A scene of metres: the tori 2 m across, 3 m away, eyes 63.5 mm
+        // apart.
+        "stereo": {"ipd": 0.0635, "modes": ["left", "right", "sideBySide", "topBottom"]},
     });
     let scene_file = dir.join("scene.json");
     std::fs::write(&scene_file, scene.to_string()).unwrap();
@@ -172,5 +175,68 @@ fn a_pynari_host_renders_what_the_rust_api_renders_on_each_backend() {
             differs > 500,
             "{backend}: the volume shows on {differs} pixels"
         );
+        stereo_modes(&out, size, &settings, backend);
+    }
+}
+
+/// The stereo modes the host rendered beside `out`: every eye shows the
+/// tori, the eyes differ, and a sideBySide half is its eye's own image
+/// (the vertical gradient is the same in both halves; exactly so on the
+/// CPU, where the halves are two passes).
+fn stereo_modes(out: &std::path::Path, size: UVec2, settings: &RenderSettings, backend: &str) {
+    let background = settings.background_image.as_ref().unwrap();
+    let read =
+        |mode: &str, frame: UVec2| read_rgba(&out.with_extension(format!("{mode}.rgba")), frame);
+    let modes = [
+        ("left", size, vec![UVec2::ZERO]),
+        ("right", size, vec![UVec2::ZERO]),
+        (
+            "sideBySide",
+            UVec2::new(2 * size.x, size.y),
+            vec![UVec2::ZERO, UVec2::new(size.x, 0)],
+        ),
+        (
+            "topBottom",
+            UVec2::new(size.x, 2 * size.y),
+            vec![UVec2::new(0, size.y), UVec2::ZERO],
+        ),
+    ];
+    let mut eyes = Vec::new();
+    for (mode, frame, corners) in modes {
+        let image = read(mode, frame);
+        for corner in corners {
+            // The tori against the background where the frame holds it.
+            let differs = (0..size.x * size.y)
+                .filter(|i| {
+                    let (x, y) = (corner.x + i % size.x, corner.y + i / size.x);
+                    (image.pixel(x, y) - background.at(x, y, frame))
+                        .abs()
+                        .max_element()
+                        > 0.1
+                })
+                .count();
+            assert!(
+                differs > 500,
+                "{backend} {mode} eye at {corner}: the volume shows on {differs} pixels"
+            );
+        }
+        eyes.push(image);
+    }
+    assert_ne!(
+        eyes[0].color, eyes[1].color,
+        "{backend}: the eyes are equal"
+    );
+    let half = |x0: u32| crop(&eyes[2], UVec2::new(x0, 0), size);
+    for (x0, eye) in [(0, &eyes[0]), (size.x, &eyes[1])] {
+        let s = ssim(&half(x0), eye).unwrap();
+        println!("{backend}: sideBySide half at x {x0}: SSIM {s:.5} against its eye alone");
+        assert!(s > 0.98, "{backend}: sideBySide half at x {x0}: SSIM {s}");
+        if backend == "cpu" {
+            assert_eq!(
+                half(x0).color,
+                eye.color,
+                "{backend}: sideBySide half at x {x0}"
+            );
+        }
     }
 }

@@ -250,3 +250,24 @@ pub fn read_rgba(path: &Path, size: UVec2) -> Frame {
         samples: 0,
     }
 }
+
+/// The `size` pixels of RGBA8 frame `frame` from `origin` on: one eye of
+/// a split stereo frame.
+pub fn crop(frame: &Frame, origin: UVec2, size: UVec2) -> Frame {
+    let anari_library_caveray::render::ColorData::Rgba8(bytes) = &frame.color else {
+        panic!("RGBA8 expected");
+    };
+    let pixels = (origin.y..origin.y + size.y)
+        .flat_map(|y| {
+            let start = 4 * (y * frame.size.x + origin.x) as usize;
+            bytes[start..start + 4 * size.x as usize].to_vec()
+        })
+        .collect();
+    Frame {
+        size,
+        color: anari_library_caveray::render::ColorData::Rgba8(pixels),
+        depth: None,
+        hits: None,
+        samples: 0,
+    }
+}

@@ -9,6 +9,10 @@ SCENE.json (written by tests/capi/python_host.rs) names the voxels (raw
 FLOAT32, x fastest), the grid, the colour map, the camera and the frame
 size. OUT.rgba receives the frame's RGBA8 pixels, bottom row first, as
 channel.color holds them. ANARI_LIBRARY=caveray chooses the device.
+
+With "stereo" in SCENE.json ({"ipd": metres, "modes": [...]}), the camera
+then renders each stereo mode, eyes ipd apart, into OUT.<mode>.rgba: a
+sideBySide frame twice as wide, a topBottom one twice as high.
 """
 
 import json
@@ -67,15 +71,34 @@ def main(scene_path, out_path):
     frame.setParameter("camera", anari.OBJECT, camera)
     frame.setParameter("renderer", anari.OBJECT, renderer)
     frame.commitParameters()
+    if not render(frame, width, height, out_path):
+        return 1
+
+    stereo = scene.get("stereo")
+    if stereo:
+        camera.setParameter("interpupillaryDistance", anari.FLOAT32, stereo["ipd"])
+        for mode in stereo["modes"]:
+            camera.setParameter("stereoMode", anari.STRING, mode)
+            camera.commitParameters()
+            w = 2 * width if mode == "sideBySide" else width
+            h = 2 * height if mode == "topBottom" else height
+            frame.setParameter("size", anari.uint2, (w, h))
+            frame.commitParameters()
+            if not render(frame, w, h, out_path[:-len(".rgba")] + f".{mode}.rgba"):
+                return 1
+    return 0
+
+
+def render(frame, width, height, out_path):
     frame.render()
     pixels = np.array(frame.get("channel.color"), dtype=np.uint8).reshape(-1)
     if pixels.size != 4 * width * height:
         print(f"volume_host: channel.color holds {pixels.size} bytes, "
               f"expected {4 * width * height}", file=sys.stderr)
-        return 1
+        return False
     pixels.tofile(out_path)
     print(f"volume_host: wrote {width}x{height} to {out_path}")
-    return 0
+    return True
 
 
 if __name__ == "__main__":
