@@ -427,6 +427,45 @@ impl Shape {
         }
     }
 
+    /// Bytes its buffers hold (allocated, not only used).
+    pub fn heap_bytes(&self) -> u64 {
+        fn of<T>(v: &Vec<T>) -> u64 {
+            (v.capacity() * size_of::<T>()) as u64
+        }
+        let primitives = match &self.primitives {
+            Primitives::Triangles {
+                positions,
+                triangles,
+                normals,
+            } => of(positions) + of(triangles) + normals.as_ref().map_or(0, of),
+            Primitives::Spheres {
+                positions,
+                radii,
+                spheres,
+            } => of(positions) + of(radii) + of(spheres),
+            Primitives::Cones {
+                positions,
+                cones,
+                radii,
+                caps,
+            } => of(positions) + of(cones) + of(radii) + of(caps),
+            Primitives::Curves {
+                positions,
+                radii,
+                segments,
+            } => of(positions) + of(radii) + of(segments),
+        };
+        let attributes: u64 = self
+            .attributes
+            .iter()
+            .flatten()
+            .map(|a| match a {
+                Attribute::PerVertex(v) | Attribute::PerPrimitive(v) => of(v),
+            })
+            .sum();
+        primitives + of(&self.source) + attributes + self.ids.as_ref().map_or(0, of)
+    }
+
     /// Vertices the host gave.
     pub fn vertices(&self) -> usize {
         match &self.primitives {

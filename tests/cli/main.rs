@@ -5,6 +5,7 @@ mod common;
 
 mod bench_autostereo;
 mod bench_cave_stereo;
+mod bench_check;
 mod bench_gpu;
 mod bench_stereo;
 mod data_parallel;

@@ -196,6 +196,23 @@ impl ShapeSet {
         Ok(Self { traced, prims, bvh })
     }
 
+    /// Bytes the traced form holds beside the shapes themselves: world
+    /// positions, the primitive list and the BVH (allocated, not only
+    /// used).
+    pub fn heap_bytes(&self) -> u64 {
+        fn of<T>(v: &Vec<T>) -> u64 {
+            (v.capacity() * size_of::<T>()) as u64
+        }
+        let world: u64 = self.traced.iter().map(|t| of(&t.world)).sum();
+        world
+            + of(&self.prims)
+            + of(&self.bvh.nodes)
+            + of(&self.bvh.primitive_indices)
+            + of(&self.bvh.primitive_indices_freelist)
+            + of(&self.bvh.primitives_to_nodes)
+            + of(&self.bvh.parents)
+    }
+
     /// Primitives traced.
     pub fn len(&self) -> usize {
         self.prims.len()

@@ -5,6 +5,7 @@
 mod autostereo;
 mod cave_stereo;
 mod charts;
+mod check;
 mod raycast;
 mod stereo;
 mod stream;
@@ -39,6 +40,11 @@ pub enum BenchCommand {
     /// within the budget, then frames that do not wait for the loader
     /// converging to it (writes JSON, a chart and a strip of frames).
     Stream(stream::StreamArgs),
+    /// The ratios that define caveray (stereo pair against one eye,
+    /// packets against scalar, skipping on against off, ...) at tiny
+    /// sizes, against the committed baseline: fails where one is worse
+    /// than its margin or crosses its limit (writes JSON, prints a table).
+    Check(check::CheckArgs),
 }
 
 pub fn run(command: BenchCommand) -> Result<(), Failure> {
@@ -50,6 +56,7 @@ pub fn run(command: BenchCommand) -> Result<(), Failure> {
         BenchCommand::Autostereo(args) => autostereo::run(args),
         BenchCommand::Surfaces(args) => surfaces::run(args),
         BenchCommand::Stream(args) => stream::run(args),
+        BenchCommand::Check(args) => check::run(args),
     }
 }
 
