@@ -72,6 +72,14 @@ pub struct SlotState {
     finisher: Option<ThreadId>,
 }
 
+impl SlotState {
+    /// `FrameSlot::finishes_here` for a caller that holds the lock (the
+    /// mutex is not re-entrant: locking it again would wait for ever).
+    pub fn finishes_here(&self) -> bool {
+        self.busy && self.finisher == Some(std::thread::current().id())
+    }
+}
+
 impl FrameSlot {
     pub fn lock(&self) -> MutexGuard<'_, SlotState> {
         self.state.lock().unwrap_or_else(|e| e.into_inner())
@@ -96,8 +104,7 @@ impl FrameSlot {
     /// finish (a completion callback on the render thread asking about a
     /// frame queued behind its own): waiting for it would never end.
     pub fn finishes_here(&self) -> bool {
-        let s = self.lock();
-        s.busy && s.finisher == Some(std::thread::current().id())
+        self.lock().finishes_here()
     }
 
     /// Whether the last render succeeded; then a render of the same

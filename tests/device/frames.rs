@@ -583,3 +583,46 @@ fn a_background_image_shows_behind_an_empty_world() {
         assert!(h.messages(Severity::Error).is_empty(), "{backend}");
     }
 }
+
+/// A property read with ANARI_WAIT while the frame still renders (the
+/// frame's `duration` right after `anariRenderFrame`, as a benchmark host
+/// reads it) waits for the render and answers; it once locked the frame's
+/// slot twice and waited for ever.
+#[test]
+fn a_property_asked_for_with_wait_during_a_render_waits_for_it() {
+    let (done, finished) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut h = Host::new();
+        let field = h.field(|x| x as f32 / 3.0, None);
+        let volume = h.volume(field);
+        h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
+        let (frame, _camera) = h.frame(volume, 3.0);
+        // Long enough a render that it is still running when asked.
+        let renderer = h.d.new_object(DataType::RENDERER, "default");
+        h.d.set_param(
+            Subject::Object(renderer),
+            "shading",
+            anari_library_caveray::device::Input::String("shadows+ao".into()),
+        );
+        h.d.commit(Subject::Object(renderer));
+        h.set_object(frame, "renderer", DataType::RENDERER, renderer);
+        h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[512u32, 512]));
+        h.d.commit(Subject::Object(frame));
+        let mut answers = Vec::new();
+        for name in ["duration", "numSamples"] {
+            h.d.render_frame(frame, None);
+            answers.push(property(&mut h, frame, name));
+        }
+        let _ = done.send((answers, h.errors()));
+    });
+    let (answers, errors) = finished
+        .recv_timeout(std::time::Duration::from_secs(300))
+        .expect("anariGetProperty with ANARI_WAIT during a render never returned");
+    assert!(
+        matches!(answers[0], Some(Property::Float32(s)) if s > 0.0),
+        "{answers:?}"
+    );
+    // The second render of the unchanged frame is its second sample.
+    assert_eq!(answers[1], Some(Property::Int32(2)));
+    assert!(errors.is_empty(), "{errors:?}");
+}

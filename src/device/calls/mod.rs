@@ -408,7 +408,7 @@ impl Device {
                     });
                 };
                 let s = slot.lock();
-                if wait && s.busy && !slot.finishes_here() {
+                if wait && s.busy && !s.finishes_here() {
                     drop(s);
                     return Err(slot);
                 }
