@@ -1,4 +1,4 @@
-// #import constants, color, iso_bindings, band_bindings
+// #import constants, color, iso_bindings, band
 // Isosurface ray casting, the port of src/render/iso/ (its reference):
 // fixed steps to the first crossing of the iso-value, secant steps within
 // it, the trilinear field (with central differences) or the cubic
@@ -350,8 +350,8 @@ fn shade_hit(g: vec3f, d: vec3f, mt: mat3x3f) -> vec4f {
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main(@builtin(global_invocation_id) invocation: vec3u) {
-    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
+fn main(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_id) local: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let id = vec3u(band_pixel(group, local, groups), 0u);
     if id.x >= iso.width || id.y >= iso.height {
         return;
     }

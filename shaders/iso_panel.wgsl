@@ -23,8 +23,8 @@ fn view_of(packed: u32, c: u32) -> u32 {
 
 // The geometric pass: each pixel's green ray in full.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn geometric(@builtin(global_invocation_id) invocation: vec3u) {
-    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
+fn geometric(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_id) local: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let id = vec3u(band_pixel(group, local, groups), 0u);
     if id.x >= iso.width || id.y >= iso.height {
         return;
     }
@@ -42,8 +42,8 @@ override GREEN_GEOMETRY: bool = false;
 // and blue searched from where their own views' samples in the geometric
 // pass met the surface (search_window), or shading green's hit.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn spectral(@builtin(global_invocation_id) invocation: vec3u) {
-    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
+fn spectral(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_id) local: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let id = vec3u(band_pixel(group, local, groups), 0u);
     if id.x >= iso.width || id.y >= iso.height {
         return;
     }
@@ -186,8 +186,8 @@ fn search_window(x: u32, y: u32, v: u32, tg: f32, margin: f32) -> vec2f {
 
 // One ray a subpixel, from that subpixel's view; depth is green's.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn per_subpixel(@builtin(global_invocation_id) invocation: vec3u) {
-    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
+fn per_subpixel(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_id) local: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let id = vec3u(band_pixel(group, local, groups), 0u);
     if id.x >= iso.width || id.y >= iso.height {
         return;
     }

@@ -1,4 +1,4 @@
-// #import trace, color, band_bindings
+// #import trace, color, band
 // One eye, one invocation per pixel.
 
 // The march's hooks: nothing is recorded.
@@ -6,9 +6,9 @@ fn on_sample(p: vec3f, t: f32, lit: vec3f, a: f32) {}
 fn on_surface(t: f32, lit: vec3f, a: f32) {}
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main(@builtin(global_invocation_id) id: vec3u) {
+fn main(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_id) local: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let size = vec2u(params.width, params.height);
-    let pixel = vec2u(id.x, id.y + band.x);
+    let pixel = band_pixel(group, local, groups);
     if pixel.x >= size.x || pixel.y >= size.y {
         return;
     }

@@ -1,4 +1,4 @@
-// #import volume, surface, color, stereo, reproject_bindings, band_bindings
+// #import volume, surface, color, stereo, reproject_bindings, band
 // The left eye, ray cast over the image plus the pixels the right eye
 // needs beyond its borders, writing each ray's right-eye segments into the
 // re-projection layers, whose storage format is the binding table's.
@@ -275,8 +275,8 @@ fn march_among_surfaces(ray: Ray, behind: ptr<function, vec4f>, surface_depth: p
 }
 
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main(@builtin(global_invocation_id) invocation: vec3u) {
-    let id = vec3u(invocation.x, invocation.y + band.x, 0u);
+fn main(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_id) local: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let id = vec3u(band_pixel(group, local, groups), 0u);
     if id.x >= stereo.cast_pixels.x || id.y >= stereo.cast_pixels.y {
         return;
     }

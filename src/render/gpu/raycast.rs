@@ -73,7 +73,8 @@ binding_table! {
     /// dynamic offset.
     BandResources / BandLayout = "band_bindings" imports [] () {
         /// x: the first row of this band (the frame is cast a band of rows
-        /// at a time, so a discard can stop it between bands).
+        /// at a time, so a discard can stop it between bands); y: the
+        /// stride its workgroups are dealt over it by (band.wgsl).
         band: Kind::dynamic_uniform("vec4u", 16),
     }
 }
@@ -256,20 +257,27 @@ impl RaycastPass {
     /// to the bands buffer, and its workgroups.
     pub fn write_bands(&self, ctx: &Context, size: UVec2) -> Vec<[u32; 3]> {
         let rows = adapter_band_rows(ctx, size);
+        let software = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let first_rows: Vec<u32> = (0..size.y).step_by(rows as usize).collect();
-        let mut words = vec![0u32; first_rows.len() * (BAND_STRIDE / 4) as usize];
-        for (band, first) in first_rows.iter().enumerate() {
-            words[band * (BAND_STRIDE / 4) as usize] = *first;
-        }
-        ctx.queue
-            .write_buffer(&self.bands, 0, bytemuck::cast_slice(&words));
-        first_rows
+        let bands: Vec<[u32; 3]> = first_rows
             .iter()
             .map(|first| {
                 let height = rows.min(size.y - first);
                 [size.x.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP), 1]
             })
-            .collect()
+            .collect();
+        let mut words = vec![0u32; first_rows.len() * (BAND_STRIDE / 4) as usize];
+        for (band, (first, groups)) in first_rows.iter().zip(&bands).enumerate() {
+            let at = band * (BAND_STRIDE / 4) as usize;
+            words[at] = *first;
+            words[at + 1] = match software {
+                true => spread_stride(groups[0] * groups[1]),
+                false => 1,
+            };
+        }
+        ctx.queue
+            .write_buffer(&self.bands, 0, bytemuck::cast_slice(&words));
+        bands
     }
 
     /// Casts the frame the uniforms describe, band by band, watched;
@@ -368,6 +376,24 @@ fn adapter_band_rows(ctx: &Context, size: UVec2) -> u32 {
     band_rows(size, pixels)
 }
 
+/// A stride coprime to `n` near n / golden ratio: tile (i * stride) mod n
+/// for workgroup i visits every tile once, and any run of consecutive
+/// workgroups is spread evenly over the band (band.wgsl). 1 where the
+/// product would not fit the shader's u32 arithmetic.
+fn spread_stride(n: u32) -> u32 {
+    if n <= 2 || n > 1 << 16 {
+        return 1;
+    }
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let start = ((f64::from(n) * 0.618_034).round() as u32).max(1);
+    (start..n).find(|&p| gcd(p, n) == 1).unwrap_or(1)
+}
+
 /// Rows per band of a frame of `size`: whole workgroups, about `pixels`,
 /// and no more than MAX_BANDS bands.
 fn band_rows(size: UVec2, pixels: u32) -> u32 {
@@ -381,6 +407,28 @@ mod tests {
     use super::*;
     use crate::render::gpu::bindings::assert_declared;
     use crate::render::gpu::shaders::compose;
+
+    #[test]
+    fn the_spread_visits_every_tile_once_and_spreads_every_run() {
+        for n in [1u32, 2, 3, 4, 32, 64, 96, 256, 1000, 4096, 65536] {
+            let p = spread_stride(n);
+            let mut seen = vec![false; n as usize];
+            for i in 0..n {
+                let tile = (i * p) % n;
+                assert!(!seen[tile as usize], "n {n}, stride {p}: tile {tile} twice");
+                seen[tile as usize] = true;
+            }
+            // The first half of the workgroups (one of two threads' runs)
+            // reaches into every quarter of the band.
+            if n >= 16 {
+                for quarter in 0..4 {
+                    let hit = (0..n / 2).any(|i| (i * p) % n * 4 / n == quarter);
+                    assert!(hit, "n {n}, stride {p}: quarter {quarter} missed");
+                }
+            }
+        }
+        assert_eq!(spread_stride(1 << 17), 1);
+    }
 
     #[test]
     fn bands_cover_the_frame_in_whole_workgroups() {
