@@ -14,6 +14,20 @@ fn property(h: &mut Host, frame: u64, name: &str) -> Option<Property> {
     h.d.property(Subject::Object(frame), name, true)
 }
 
+/// A default renderer shading by `shading`, set on `frame` (not
+/// committed).
+fn shaded_renderer(h: &mut Host, frame: u64, shading: &str) -> u64 {
+    let r = h.d.new_object(DataType::RENDERER, "default");
+    h.d.set_param(
+        Subject::Object(r),
+        "shading",
+        anari_library_caveray::device::Input::String(shading.into()),
+    );
+    h.d.commit(Subject::Object(r));
+    h.set_object(frame, "renderer", DataType::RENDERER, r);
+    r
+}
+
 #[test]
 fn unchanged_frames_keep_their_image_and_changes_render_anew() {
     let mut h = Host::new();
@@ -385,14 +399,7 @@ fn the_first_directional_light_sets_the_shading_light() {
     h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.5f32]));
     let image = |h: &mut Host, lights: &[u64], shading: &str| {
         let (frame, camera) = h.lit_frame(volume, 3.0, lights);
-        let r = h.d.new_object(DataType::RENDERER, "default");
-        h.d.set_param(
-            Subject::Object(r),
-            "shading",
-            anari_library_caveray::device::Input::String(shading.into()),
-        );
-        h.d.commit(Subject::Object(r));
-        h.set_object(frame, "renderer", DataType::RENDERER, r);
+        let r = shaded_renderer(h, frame, shading);
         h.d.commit(Subject::Object(frame));
         let pixels = h.pixels(frame);
         for o in [frame, camera, r] {
@@ -460,14 +467,7 @@ fn discard_stops_a_render_in_progress() {
         DataType::UINT32_VEC2,
         bytes(&[2048u32, 2048]),
     );
-    let r = h.d.new_object(DataType::RENDERER, "default");
-    h.d.set_param(
-        Subject::Object(r),
-        "shading",
-        anari_library_caveray::device::Input::String("shadows".into()),
-    );
-    h.d.commit(Subject::Object(r));
-    h.set_object(frame, "renderer", DataType::RENDERER, r);
+    shaded_renderer(&mut h, frame, "shadows");
     h.d.commit(Subject::Object(frame));
     h.d.render_frame(frame, None);
     h.d.discard_frame(frame);
@@ -598,14 +598,7 @@ fn a_property_asked_for_with_wait_during_a_render_waits_for_it() {
         h.set(volume, "opacity", DataType::FLOAT32, bytes(&[0.3f32]));
         let (frame, _camera) = h.frame(volume, 3.0);
         // Long enough a render that it is still running when asked.
-        let renderer = h.d.new_object(DataType::RENDERER, "default");
-        h.d.set_param(
-            Subject::Object(renderer),
-            "shading",
-            anari_library_caveray::device::Input::String("shadows+ao".into()),
-        );
-        h.d.commit(Subject::Object(renderer));
-        h.set_object(frame, "renderer", DataType::RENDERER, renderer);
+        shaded_renderer(&mut h, frame, "shadows+ao");
         h.set(frame, "size", DataType::UINT32_VEC2, bytes(&[512u32, 512]));
         h.d.commit(Subject::Object(frame));
         let mut answers = Vec::new();
