@@ -13,7 +13,7 @@ use anari_library_caveray::geometry::PrimaryRays;
 use anari_library_caveray::output::write_png;
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, Renderer, Shading};
-use anari_library_caveray::scene::{ObjectIds, PlacedVolume, Scene, MAX_VOLUMES};
+use anari_library_caveray::scene::{ObjectIds, PlacedVolume, Scene, SpatialField, MAX_VOLUMES};
 use glam::{Mat4, UVec2, Vec3};
 
 /// Each example writes into its own folder, never over the demo's files.
@@ -24,8 +24,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rig = Rig::load("cave_configs/cologne_5wall.toml".as_ref())?;
     let (centre, size) = (rig.scene.centre.as_vec3(), rig.scene.size as f32);
     let manifest = Manifest::locate(None, &["../shared/data/volumes/volumes.toml".into()])?;
-    let head = Arc::new(manifest.load_volume("cthead")?.placed(centre, size));
-    let phantom = Arc::new(shepp_logan(96).placed(centre, size));
+    let head = Arc::new(SpatialField::from(
+        manifest.load_volume("cthead")?.placed(centre, size),
+    ));
+    let phantom = Arc::new(SpatialField::from(shepp_logan(96).placed(centre, size)));
     // The CT's values fill only part of UINT16's range: stretch the preset
     // over them, as `caveray render` does.
     let (lo, hi) = head.value_range();

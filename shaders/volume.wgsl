@@ -1,4 +1,4 @@
-// #import constants, volume_bindings
+// #import constants, volume_bindings, cells
 // Emission-absorption volume ray casting: the march along one primary ray.
 // Mirrors src/render/cpu/ (the reference) operation for operation, so the
 // two agree to rounding; all derived numbers arrive in `params`. Its
@@ -236,6 +236,9 @@ fn lod_level(t: f32) -> f32 {
 // rounded up as the reference rounds them.
 fn sample_volume(v: u32, grid: vec3f) -> f32 {
     samples += 1u;
+    if MESHES && params.volumes[v].sampling == FILTER_CELLS {
+        return mesh_value(v, grid);
+    }
     if FILTERED && params.volumes[v].sampling != FILTER_NEAREST {
         return filtered_value(v, grid, 0.0);
     }
@@ -260,6 +263,9 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
 }
 
 fn classify(v: u32, value: f32) -> vec4f {
+    if MESHES && value <= MESH_OUTSIDE {
+        return vec4f(0.0);
+    }
     let m = params.volumes[v];
     let last = f32(TABLE_SIZE - 1u);
     let t = clamp((value - m.value_lo) * m.value_scale, 0.0, 1.0) * last;
@@ -273,7 +279,7 @@ fn classify(v: u32, value: f32) -> vec4f {
 // A primary sample's color and opacity: under filtered sampling from the
 // stepped table by the texture unit, its opacity already a full step's.
 fn classify_step(v: u32, value: f32) -> vec4f {
-    if !FILTERED {
+    if !FILTERED || (MESHES && value <= MESH_OUTSIDE) {
         return classify(v, value);
     }
     let m = params.volumes[v];
@@ -737,7 +743,7 @@ fn march_lod(
             }
             let g = grid_of(v, p);
             var value: f32;
-            if params.volumes[v].sampling == FILTER_NEAREST {
+            if params.volumes[v].sampling != FILTER_LINEAR {
                 value = sample_volume(v, g);
             } else {
                 samples += 1u;

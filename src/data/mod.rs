@@ -3,6 +3,7 @@
 //! color maps; triangle meshes of volumes' isosurfaces; and the formats with headers that are recognised, to be
 //! refused by name rather than read as raw.
 
+mod cells;
 mod dicom;
 pub mod files;
 mod format;
@@ -22,6 +23,7 @@ pub mod toml_syntax;
 mod volume_file;
 mod vtk;
 
+pub use cells::{grid_cells, tetrahedra, Cut};
 pub use dicom::{load_dicom, parse_dicom};
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};

@@ -31,7 +31,7 @@ use super::{
     spatial_field, surface, volume, world,
 };
 use crate::render::RenderSettings;
-use crate::scene::StructuredVolume;
+use crate::scene::SpatialField;
 
 /// Every extension the device supports (device property `extension`).
 pub const EXTENSIONS: &[&str] = &[
@@ -39,6 +39,7 @@ pub const EXTENSIONS: &[&str] = &[
     EXT_STEREO,
     EXT_ORTHOGRAPHIC,
     "ANARI_KHR_SPATIAL_FIELD_STRUCTURED_REGULAR",
+    "ANARI_KHR_SPATIAL_FIELD_UNSTRUCTURED",
     "ANARI_KHR_VOLUME_TRANSFER_FUNCTION1D",
     EXT_COMPLETION,
     EXT_ACCUMULATION,
@@ -110,6 +111,7 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &camera::off_axis::INFO,
     &camera::multi_view::INFO,
     &spatial_field::structured_regular::INFO,
+    &spatial_field::unstructured::INFO,
     &volume::transfer_function_1d::INFO,
     &light::directional::INFO,
     &light::point::POINT,
@@ -145,7 +147,7 @@ pub fn initial_state(kind: T, implemented: bool) -> State {
         return State::Inert;
     }
     match kind {
-        T::SPATIAL_FIELD => State::uncommitted::<Arc<StructuredVolume>>(),
+        T::SPATIAL_FIELD => State::uncommitted::<Arc<SpatialField>>(),
         T::VOLUME => State::uncommitted::<VolumeModel>(),
         T::WORLD => State::uncommitted::<WorldModel>(),
         T::GROUP => State::uncommitted::<GroupModel>(),

@@ -14,7 +14,7 @@ use glam::{IVec3, UVec3, Vec3, Vec4};
 use super::march_plan::MarchPlan;
 use super::RenderError;
 use crate::render::frame::filled;
-use crate::scene::{Scene, StructuredVolume, TransferFunction, TABLE_SIZE};
+use crate::scene::{Scene, SpatialField, TransferFunction, UnstructuredVolume, TABLE_SIZE};
 
 /// Cells per brick edge.
 pub const BRICK: u32 = 8;
@@ -30,18 +30,14 @@ pub const LEAP_MARGIN: f32 = 0.01;
 /// scenes bring the same `Arc`s: both renderers hold one.
 #[derive(Debug, Default)]
 pub(crate) struct SpaceCache {
-    ranges: Vec<(Arc<StructuredVolume>, Arc<BrickRanges>)>,
-    spaces: Vec<(
-        Arc<StructuredVolume>,
-        Arc<TransferFunction>,
-        Arc<EmptySpace>,
-    )>,
+    ranges: Vec<(Arc<SpatialField>, Arc<BrickRanges>)>,
+    spaces: Vec<(Arc<SpatialField>, Arc<TransferFunction>, Arc<EmptySpace>)>,
 }
 
 impl SpaceCache {
     /// Forgets what belongs to grids `scene` does not hold.
     pub fn retain(&mut self, scene: &Scene) {
-        let held = |v: &Arc<StructuredVolume>| scene.grids().any(|g| Arc::ptr_eq(g, v));
+        let held = |v: &Arc<SpatialField>| scene.grids().any(|g| Arc::ptr_eq(g, v));
         self.ranges.retain(|(v, _)| held(v));
         self.spaces.retain(|(v, ..)| held(v));
     }
@@ -50,12 +46,12 @@ impl SpaceCache {
     /// until an update leaves the volume out).
     pub fn ranges_of(
         &mut self,
-        volume: &Arc<StructuredVolume>,
+        volume: &Arc<SpatialField>,
     ) -> Result<Arc<BrickRanges>, RenderError> {
         if let Some((_, r)) = self.ranges.iter().find(|(v, _)| Arc::ptr_eq(v, volume)) {
             return Ok(Arc::clone(r));
         }
-        let ranges = Arc::new(BrickRanges::new(volume.dims(), |i| volume.value(i))?);
+        let ranges = Arc::new(BrickRanges::of_field(volume)?);
         self.ranges.push((Arc::clone(volume), Arc::clone(&ranges)));
         Ok(ranges)
     }
@@ -79,7 +75,7 @@ impl SpaceCache {
                 .map(|(_, r)| Arc::clone(r));
             let ranges = match known {
                 Some(r) => r,
-                None => Arc::new(BrickRanges::new(volume.dims(), |i| volume.value(i))?),
+                None => Arc::new(BrickRanges::of_field(volume)?),
             };
             let known = next
                 .spaces
@@ -157,6 +153,54 @@ impl BrickRanges {
                                 r[1] = r[1].max(v);
                             }
                         }
+                    }
+                }
+            }
+        }
+        Ok(Self { bricks, ranges })
+    }
+
+    /// The ranges of a field's bricks on its lattice: a grid's from its
+    /// voxels, a mesh's from its cells.
+    pub fn of_field(field: &SpatialField) -> Result<Self, RenderError> {
+        match field {
+            SpatialField::Structured(v) => Self::new(v.dims(), |i| v.value(i)),
+            SpatialField::Unstructured(m) => Self::of_mesh(m),
+        }
+    }
+
+    /// Each cell widens every brick its box reaches on the mesh's
+    /// lattice; bricks no cell reaches stay empty (clear under any table).
+    pub fn of_mesh(mesh: &UnstructuredVolume) -> Result<Self, RenderError> {
+        let (dims, spacing) = mesh.lattice();
+        let origin = mesh.bounds().0;
+        let bricks = bricks_of(dims);
+        let count = bricks.x as usize * bricks.y as usize * bricks.z as usize;
+        let mut ranges = filled(
+            count,
+            [f32::INFINITY, f32::NEG_INFINITY],
+            "the brick ranges",
+        )?;
+        let last = bricks.as_ivec3() - IVec3::ONE;
+        // A sample at lattice point g reads brick floor(g / BRICK); a cell
+        // holds points a hair outside its box (CELL_TOLERANCE), hence the
+        // margin.
+        let brick = |p: Vec3, margin: f32| {
+            let g = (p - origin) / spacing + Vec3::splat(margin);
+            (g / BRICK as f32)
+                .floor()
+                .as_ivec3()
+                .clamp(IVec3::ZERO, last)
+        };
+        for ((lo, hi), (a, b)) in mesh.cell_ranges() {
+            let (b0, b1) = (brick(lo, -0.01), brick(hi, 0.01));
+            for z in b0.z..=b1.z {
+                for y in b0.y..=b1.y {
+                    let row = (z as usize * bricks.y as usize + y as usize) * bricks.x as usize;
+                    for x in b0.x..=b1.x {
+                        let r = &mut ranges[row + x as usize];
+                        r[0] = r[0].min(a);
+                        r[1] = r[1].max(b);
                     }
                 }
             }

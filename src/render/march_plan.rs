@@ -58,6 +58,9 @@ pub(crate) struct VolumePlan {
     pub world_to_grid: [Vec4; 3],
     pub dims: UVec3,
     pub filter: Filter,
+    /// Whether the field is an unstructured mesh, sampled in its cells
+    /// (the lattice then only lays the march and the bricks).
+    pub cells: bool,
     /// Field value mapped to the table's first entry, and 1 / the width
     /// of the transfer function's value range.
     pub value_lo: f32,
@@ -73,6 +76,7 @@ impl VolumePlan {
             world_to_grid: [m.row(0), m.row(1), m.row(2)],
             dims: placed.volume.dims(),
             filter: placed.volume.filter(),
+            cells: placed.volume.unstructured().is_some(),
             value_lo: lo,
             value_scale: (hi - lo).recip(),
             inv_unit_distance: placed.transfer_function.unit_distance().recip(),

@@ -333,7 +333,7 @@ impl Renderer {
     /// copies for its packets, or the GPU's textures (and for paged
     /// volumes their pools, and the coarser levels the host keeps).
     pub fn resident_bytes(&self, scene: &Scene) -> Residency {
-        let host: u64 = scene.grids().map(|v| v.voxels().bytes()).sum();
+        let host: u64 = scene.grids().map(|v| v.bytes()).sum();
         match self {
             Renderer::Gpu(g) => Residency {
                 host: host + g.host_volume_bytes(),

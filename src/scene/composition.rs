@@ -8,7 +8,7 @@ use glam::{DMat4, Mat4, Vec3};
 use thiserror::Error;
 
 use super::placement::{check_affine, transformed_box, ObjectIds};
-use super::{PlacedShape, ShapeError, StructuredVolume, TransferFunction};
+use super::{PlacedShape, ShapeError, SpatialField, TransferFunction};
 
 /// The most volumes one scene composites. The shaders bind one 3D texture
 /// per volume, and eight plus the other textures stay inside the sixteen
@@ -34,7 +34,7 @@ pub enum SceneError {
 /// A volume classified by its transfer function and placed in the world.
 #[derive(Clone, Debug)]
 pub struct PlacedVolume {
-    pub volume: Arc<StructuredVolume>,
+    pub volume: Arc<SpatialField>,
     pub transfer_function: Arc<TransferFunction>,
     /// Object to world: affine (any rotation, scale, shear or mirror) and
     /// invertible.
@@ -48,7 +48,7 @@ impl PlacedVolume {
         check_affine(transform)
     }
 
-    /// World coordinates to grid coordinates (vertex i at i), computed in
+    /// World coordinates to lattice coordinates (vertex i at i), computed in
     /// double precision so that large offsets lose nothing.
     pub fn world_to_grid(&self) -> DMat4 {
         let v = &self.volume;
@@ -57,9 +57,10 @@ impl PlacedVolume {
         object_to_grid * self.transform.as_dmat4().inverse()
     }
 
-    /// The world-space length of the grid's smallest cell edge.
+    /// The world-space length of the field's smallest cell edge (a
+    /// mesh's typical one).
     pub fn smallest_cell(&self) -> f32 {
-        let s = self.volume.spacing();
+        let s = self.volume.cell_edges();
         let m = glam::Mat3::from_mat4(self.transform);
         (m.x_axis * s.x)
             .length()
@@ -84,13 +85,13 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// One volume where its grid says, classified by `transfer_function`.
-    pub fn new(volume: StructuredVolume, transfer_function: TransferFunction) -> Self {
-        Self::shared(Arc::new(volume), Arc::new(transfer_function))
+    /// One volume where its field says, classified by `transfer_function`.
+    pub fn new(volume: impl Into<SpatialField>, transfer_function: TransferFunction) -> Self {
+        Self::shared(Arc::new(volume.into()), Arc::new(transfer_function))
     }
 
     /// `new` with shared parts.
-    pub fn shared(volume: Arc<StructuredVolume>, transfer_function: Arc<TransferFunction>) -> Self {
+    pub fn shared(volume: Arc<SpatialField>, transfer_function: Arc<TransferFunction>) -> Self {
         Self {
             volumes: vec![PlacedVolume {
                 volume,
@@ -155,8 +156,8 @@ impl Scene {
         &self.volumes
     }
 
-    /// The scene's grids, each once however often it is placed.
-    pub fn grids(&self) -> impl Iterator<Item = &Arc<StructuredVolume>> {
+    /// The scene's fields, each once however often it is placed.
+    pub fn grids(&self) -> impl Iterator<Item = &Arc<SpatialField>> {
         let all = &self.volumes;
         all.iter()
             .enumerate()
@@ -202,7 +203,7 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Voxels;
+    use crate::scene::{StructuredVolume, Voxels};
     use glam::UVec3;
 
     fn placed(transform: Mat4) -> PlacedVolume {
@@ -216,7 +217,7 @@ mod tests {
         let tf = TransferFunction::new(vec![glam::Vec4::ONE; 2], vec![0.0, 1.0], (0.0, 1.0), 1.0)
             .unwrap();
         PlacedVolume {
-            volume: Arc::new(volume),
+            volume: Arc::new(volume.into()),
             transfer_function: Arc::new(tf),
             transform,
             ids: ObjectIds::NONE,

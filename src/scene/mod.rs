@@ -4,14 +4,17 @@
 //! volume the same way and none of them depends on another's room.
 
 mod composition;
+mod field;
 mod placement;
 mod sampler;
 mod shapes;
 mod storage;
 mod transfer_function;
+mod unstructured;
 mod volume;
 
 pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
+pub use field::SpatialField;
 pub use placement::{transformed_box, ObjectIds};
 pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};
 pub use shapes::{
@@ -21,4 +24,9 @@ pub use shapes::{
 };
 pub use storage::{Buf, Mapping};
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
+pub use unstructured::{
+    check_counts, CellKind, MeshInput, MeshNode, MeshValues, UnstructuredError, UnstructuredVolume,
+    CELL_TOLERANCE, MAX_MESH_CELLS, MAX_MESH_INDICES, MAX_MESH_VERTICES, MESH_STACK, NEWTON_STEPS,
+    NEWTON_TOLERANCE,
+};
 pub use volume::{Filter, Scaling, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

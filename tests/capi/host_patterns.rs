@@ -135,7 +135,7 @@ fn vtk(valgrind: bool) {
             ids: ObjectIds::NONE,
         },
         PlacedVolume {
-            volume: Arc::new(constant),
+            volume: Arc::new(constant.into()),
             transfer_function: Arc::new(haze_tf),
             transform: turn,
             ids: ObjectIds::NONE,
@@ -278,7 +278,7 @@ fn cts(valgrind: bool) {
         .with_filter(filter);
         let reference = CpuRenderer::new()
             .render(
-                &Scene::shared(Arc::new(volume), Arc::clone(&tf)),
+                &Scene::shared(Arc::new(volume.into()), Arc::clone(&tf)),
                 &rays,
                 &settings,
                 &desc,

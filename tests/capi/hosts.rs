@@ -116,6 +116,35 @@ fn mesh_host(valgrind: bool) {
     assert!(text.matches("PASS").count() >= 10, "mesh host: {text}");
 }
 
+/// An unstructured field as OpenCOVER sends one, then with cell data.
+fn unstructured_host(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_unstructured_host_valgrind"
+    } else {
+        "c_unstructured_host"
+    });
+    let program = dir.join("unstructured_host");
+    compile(&["tests/capi/c/unstructured_host.c"], &program, false, true);
+    let output = run(&program, &[], valgrind);
+    let text = describe(&output);
+    assert!(output.status.success(), "unstructured host: {text}");
+    assert!(!text.contains("FAIL"), "unstructured host: {text}");
+    assert!(
+        text.matches("PASS").count() >= 8,
+        "unstructured host: {text}"
+    );
+}
+
+#[test]
+fn a_host_renders_every_cell_kind_with_vertex_and_cell_data() {
+    unstructured_host(false);
+}
+
+#[test]
+fn the_unstructured_host_is_clean_under_valgrind() {
+    unstructured_host(true);
+}
+
 #[test]
 fn a_host_sees_its_meshes_and_glyphs_through_its_volume() {
     mesh_host(false);

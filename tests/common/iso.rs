@@ -26,7 +26,7 @@ pub fn field(n: u32, transform: Mat4, f: impl Fn(Vec3) -> f32) -> PlacedVolume {
     )
     .unwrap();
     PlacedVolume {
-        volume: Arc::new(volume),
+        volume: Arc::new(volume.into()),
         transfer_function: Arc::new(preset("grey").unwrap()),
         transform,
         ids: ObjectIds::NONE,

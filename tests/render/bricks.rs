@@ -51,16 +51,16 @@ fn a_bricked_volume_renders_as_a_whole_one() {
     let scenes = [
         (
             "float32",
-            Scene::shared(Arc::new(f32_phantom.clone()), Arc::clone(&tf)),
+            Scene::shared(Arc::new(f32_phantom.clone().into()), Arc::clone(&tf)),
         ),
         (
             "uint16",
-            Scene::shared(Arc::new(as_uint16(&f32_phantom)), Arc::clone(&tf)),
+            Scene::shared(Arc::new(as_uint16(&f32_phantom).into()), Arc::clone(&tf)),
         ),
         (
             "nearest",
             Scene::shared(
-                Arc::new(f32_phantom.with_filter(Filter::Nearest)),
+                Arc::new(f32_phantom.with_filter(Filter::Nearest).into()),
                 Arc::clone(&tf),
             ),
         ),
@@ -71,7 +71,11 @@ fn a_bricked_volume_renders_as_a_whole_one() {
     };
     let cpu = CpuRenderer::reference();
     for (name, scene) in &scenes {
-        let voxels = scene.volumes()[0].volume.voxels().len() as u64;
+        let voxels = scene.volumes()[0]
+            .volume
+            .dims()
+            .as_u64vec3()
+            .element_product();
         for shading in ["none", "directional:1"] {
             let settings = exact(shading);
             let expected = cpu.render(scene, &rays, &settings, &desc).unwrap();
@@ -122,7 +126,10 @@ fn a_bricked_volume_renders_as_a_whole_one() {
 fn sixteen_bit_volumes_take_two_bytes_a_voxel_where_the_adapter_allows() {
     let mut gpu = gpu();
     let volume = as_uint16(&shepp_logan(20));
-    let scene = Scene::shared(Arc::new(volume), Arc::new(preset("phantom").unwrap()));
+    let scene = Scene::shared(
+        Arc::new(volume.into()),
+        Arc::new(preset("phantom").unwrap()),
+    );
     gpu.upload(&scene).unwrap();
     let per_voxel = gpu.volume_bytes() as f64 / 8000.0;
     println!("{}: {per_voxel} bytes a voxel", gpu.adapter().name);
@@ -133,7 +140,7 @@ fn sixteen_bit_volumes_take_two_bytes_a_voxel_where_the_adapter_allows() {
 #[test]
 fn a_gpu_budget_too_small_for_one_brick_is_refused_before_upload_and_auto_renders_on_the_cpu() {
     use anari_library_caveray::render::{Backend, RenderError, Renderer};
-    let volume = Arc::new(shepp_logan(20));
+    let volume = Arc::new(shepp_logan(20).into());
     let scene = Scene::shared(Arc::clone(&volume), Arc::new(preset("phantom").unwrap()));
     // The same grid twice takes one texture: 8000 float32 voxels.
     let one = scene.volumes()[0].clone();

@@ -27,13 +27,13 @@ fn shells_tf() -> Arc<TransferFunction> {
 }
 
 fn shells(n: u32) -> Scene {
-    Scene::shared(Arc::new(concentric_shells(n)), shells_tf())
+    Scene::shared(Arc::new(concentric_shells(n).into()), shells_tf())
 }
 
 /// Shells and a turned, shrunken phantom overlapping them.
 fn two_volumes() -> Scene {
     let place = |volume: StructuredVolume, tf: Arc<TransferFunction>, transform| PlacedVolume {
-        volume: Arc::new(volume),
+        volume: Arc::new(volume.into()),
         transfer_function: tf,
         transform,
         ids: ObjectIds::NONE,
@@ -77,7 +77,7 @@ fn cases() -> Vec<(&'static str, Scene, RenderSettings)> {
         ..plain.clone()
     };
     let nearest = Scene::shared(
-        Arc::new(concentric_shells(32).with_filter(Filter::Nearest)),
+        Arc::new(concentric_shells(32).with_filter(Filter::Nearest).into()),
         shells_tf(),
     );
     vec![
@@ -158,7 +158,7 @@ fn a_new_table_over_the_same_grid_finds_its_own_clear_bricks() {
     // First a table that leaves the air and the inner shells' flanks
     // clear, then one that shows every value: bricks kept from the first
     // would cut the second's haze.
-    let grid = Arc::new(concentric_shells(40));
+    let grid = Arc::new(concentric_shells(40).into());
     let narrow = shells_tf();
     let everything = Arc::new(
         TransferFunction::new(

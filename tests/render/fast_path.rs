@@ -26,7 +26,7 @@ fn packets_match_the_scalar_reference_sample_for_sample() {
     let reference = CpuRenderer::reference();
     assert!(!reference.uses_packets());
     let shells = Scene::shared(
-        Arc::new(concentric_shells(40)),
+        Arc::new(concentric_shells(40).into()),
         Arc::new(preset("shells").unwrap().with_unit_distance(0.2).unwrap()),
     );
     let opaque = Scene::new(

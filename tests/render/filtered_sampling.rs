@@ -33,7 +33,7 @@ fn filtered_sampling_stays_close_to_the_exact_path() {
         gpu.adapter().name
     );
     let shells = Scene::shared(
-        Arc::new(concentric_shells(48)),
+        Arc::new(concentric_shells(48).into()),
         Arc::new(preset("shells").unwrap().with_unit_distance(0.2).unwrap()),
     );
     let phantom = Scene::new(shepp_logan(48), preset("phantom").unwrap());
@@ -119,7 +119,7 @@ fn off_axis(
 fn level_of_detail_trades_samples_for_a_measured_likeness() {
     let mut gpu = gpu();
     let scene = Scene::shared(
-        Arc::new(concentric_shells(96)),
+        Arc::new(concentric_shells(96).into()),
         Arc::new(preset("shells").unwrap().with_unit_distance(0.2).unwrap()),
     );
     // Far enough that a pixel covers several voxels at the volume.

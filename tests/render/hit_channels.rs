@@ -149,7 +149,7 @@ fn a_sphere_reports_its_ids_normals_and_albedo_and_the_background_nothing() {
 /// A slab of the phantom's values, id 5, placed directly (instance none).
 fn volume() -> PlacedVolume {
     PlacedVolume {
-        volume: Arc::new(shepp_logan(24)),
+        volume: Arc::new(shepp_logan(24).into()),
         transfer_function: Arc::new(preset("phantom").unwrap()),
         transform: Mat4::IDENTITY,
         ids: ids(5, u32::MAX),

@@ -289,7 +289,7 @@ fn the_gpu_uploads_a_scene_once_and_again_only_when_it_changes() {
     )
     .unwrap();
     let other = Scene::shared(
-        std::sync::Arc::new(volume),
+        std::sync::Arc::new(volume.into()),
         recolored.volumes()[0].transfer_function.clone(),
     );
     let g = gpu

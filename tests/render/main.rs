@@ -19,3 +19,4 @@ mod progress;
 mod ray_casting;
 mod several_volumes;
 mod surfaces;
+mod unstructured;

@@ -45,7 +45,7 @@ fn until_resident(gpu: &mut GpuRenderer, scene: &Scene, frames: usize) -> (Vec<f
 
 fn phantom_scene(n: u32) -> Scene {
     Scene::shared(
-        Arc::new(shepp_logan(n)),
+        Arc::new(shepp_logan(n).into()),
         Arc::new(preset("phantom").unwrap()),
     )
 }

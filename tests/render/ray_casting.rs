@@ -90,7 +90,10 @@ fn an_off_axis_side_wall_of_the_cologne_cave_renders_alike_on_gpu_and_cpu() {
     // the volume at a steep angle.
     let scene = {
         let s = phantom(48);
-        let volume = (*s.volumes()[0].volume)
+        let volume = s.volumes()[0]
+            .volume
+            .structured()
+            .unwrap()
             .clone()
             .placed(Vec3::new(-900.0, 300.0, 0.0), 800.0);
         let tf = (*s.volumes()[0].transfer_function)
@@ -167,7 +170,15 @@ fn nearest_filter_is_nearest_on_both_renderers() {
     let linear = phantom(16);
     let first = &linear.volumes()[0];
     let nearest = Scene::shared(
-        std::sync::Arc::new((*first.volume).clone().with_filter(Filter::Nearest)),
+        std::sync::Arc::new(
+            first
+                .volume
+                .structured()
+                .unwrap()
+                .clone()
+                .with_filter(Filter::Nearest)
+                .into(),
+        ),
         first.transfer_function.clone(),
     );
     let g = gpu.render(&nearest, &rays, &settings, &desc).unwrap();
@@ -338,7 +349,7 @@ fn volumes_in_their_stored_type_render_as_their_values_do() {
     let settings = RenderSettings::default();
     let as_f32 = phantom(24);
     let placed = &as_f32.volumes()[0];
-    let reference = &placed.volume;
+    let reference = placed.volume.structured().unwrap();
     let n = reference.voxels().len();
     // The phantom's values in [0, 1], stored as int16 through a CT-like
     // rescale, and as 8-bit fixed point; the f32 twins hold exactly the
@@ -377,7 +388,10 @@ fn volumes_in_their_stored_type_render_as_their_values_do() {
         ));
         assert_eq!(volume.value_range(), twin.value_range(), "{name}");
         let scene = |v: StructuredVolume| {
-            Scene::shared(std::sync::Arc::new(v), placed.transfer_function.clone())
+            Scene::shared(
+                std::sync::Arc::new(v.into()),
+                placed.transfer_function.clone(),
+            )
         };
         let (own, copy) = (scene(volume), scene(twin));
         let reference_cpu = CpuRenderer::reference();

@@ -13,7 +13,7 @@ use anari_library_caveray::render::{
     ssim, ColorFormat, CpuRenderer, FrameDesc, RenderSettings, Shading,
 };
 use anari_library_caveray::scene::{
-    ObjectIds, PlacedVolume, Scene, StructuredVolume, TransferFunction, Voxels,
+    ObjectIds, PlacedVolume, Scene, SpatialField, StructuredVolume, TransferFunction, Voxels,
 };
 use common::render::{axis_camera, four_cameras, gpu, off_axis_wall, renderers};
 use glam::{Mat4, UVec2, Vec3, Vec4};
@@ -22,7 +22,7 @@ fn colored(rgb: Vec3, opacity: f32, unit: f32) -> Arc<TransferFunction> {
     Arc::new(TransferFunction::new(vec![rgb.extend(1.0)], vec![opacity], (0.0, 1.0), unit).unwrap())
 }
 
-fn place(volume: &Arc<StructuredVolume>, tf: &Arc<TransferFunction>, m: Mat4) -> PlacedVolume {
+fn place(volume: &Arc<SpatialField>, tf: &Arc<TransferFunction>, m: Mat4) -> PlacedVolume {
     PlacedVolume {
         volume: Arc::clone(volume),
         transfer_function: Arc::clone(tf),
@@ -37,7 +37,7 @@ fn overlapping_volumes_mix_per_sample_whatever_their_order() {
     // sample is half red, half blue, and the two absorb together. One box
     // composited after the other would let the front one dominate.
     let (a, unit) = (0.2f32, 0.5f32);
-    let cube = Arc::new(solid_box(16));
+    let cube = Arc::new(solid_box(16).into());
     let red = colored(Vec3::X, a, unit);
     let blue = colored(Vec3::Z, a, unit);
     // Blue moved 1 along +x: x in [-1, 0) red only, [0, 1] both,
@@ -137,12 +137,12 @@ fn a_rotated_volume_renders_as_its_grid_turned() {
     let volume = shepp_logan(20);
     let tf = Arc::new(preset("phantom").unwrap());
     let rotated = Scene::placed(vec![place(
-        &Arc::new(volume.clone()),
+        &Arc::new(volume.clone().into()),
         &tf,
         Mat4::from_rotation_z(std::f32::consts::FRAC_PI_2),
     )])
     .unwrap();
-    let by_hand = Scene::shared(Arc::new(turned_by_hand(&volume)), Arc::clone(&tf));
+    let by_hand = Scene::shared(Arc::new(turned_by_hand(&volume).into()), Arc::clone(&tf));
     let (screen, eye) = off_axis_wall();
     let size = UVec2::new(32, 32);
     let rays = four_cameras(&screen, eye, size)[0].1;
@@ -161,7 +161,7 @@ fn a_rotated_volume_renders_as_its_grid_turned() {
         // And it is not the unrotated volume.
         let settings = RenderSettings::default();
         let a = r.render(&rotated, &rays, &settings, &desc).unwrap();
-        let plain = Scene::shared(Arc::new(volume.clone()), Arc::clone(&tf));
+        let plain = Scene::shared(Arc::new(volume.clone().into()), Arc::clone(&tf));
         let c = r.render(&plain, &rays, &settings, &desc).unwrap();
         assert!(
             ssim(&a, &c).unwrap() < 0.95,
@@ -172,8 +172,8 @@ fn a_rotated_volume_renders_as_its_grid_turned() {
 
 #[test]
 fn overlapping_rotated_volumes_on_the_gpu_match_the_cpu_reference() {
-    let phantom = Arc::new(shepp_logan(24));
-    let cube = Arc::new(solid_box(8));
+    let phantom = Arc::new(shepp_logan(24).into());
+    let cube = Arc::new(solid_box(8).into());
     let scene = Scene::placed(vec![
         place(
             &phantom,

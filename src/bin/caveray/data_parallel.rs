@@ -151,10 +151,16 @@ impl Bricks {
             let (lo, hi) = split.bricks[i].stored;
             let cropped = volume
                 .volume
+                .structured()
+                .ok_or_else(|| {
+                    Failure::Usage(
+                        "data-parallel rendering splits structured grids; this volume is unstructured".into(),
+                    )
+                })?
                 .cropped(lo, hi)
                 .map_err(|e| Failure::Runtime(format!("brick {i}: {e}")))?;
             let brick = Scene::placed(vec![PlacedVolume {
-                volume: cropped.into(),
+                volume: std::sync::Arc::new(cropped.into()),
                 ..volume.clone()
             }])
             .and_then(|s| s.with_shapes(scene.shapes().to_vec()))
@@ -200,7 +206,7 @@ impl Bricks {
             .map(|(_, s, _)| {
                 let v = &s.volumes()[0].volume;
                 let n = v.dims().as_u64vec3();
-                v.voxels().bytes() / (n.x * n.y * n.z).max(1)
+                v.bytes() / (n.x * n.y * n.z).max(1)
             })
             .unwrap_or(1);
         DataParallelReport {

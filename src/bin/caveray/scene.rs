@@ -404,7 +404,7 @@ impl Loaded {
         let transform = placement.transform(frame).as_mat4() * fitted;
         let mesh = self.mesh.shape(&volume, transform)?;
         let scene = Scene::placed(vec![PlacedVolume {
-            volume: volume.into(),
+            volume: std::sync::Arc::new(volume.into()),
             transfer_function: tf.into(),
             transform,
             ids: ObjectIds::NONE,

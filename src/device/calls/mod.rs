@@ -24,7 +24,7 @@ use super::volume::VolumeModel;
 use super::world::WorldModel;
 use crate::engine::{About, Engine, FrameSlot, Note};
 use crate::render::{Backend, StreamWait};
-use crate::scene::StructuredVolume;
+use crate::scene::SpatialField;
 
 pub use frames::{Mapped, OnDone};
 
@@ -399,10 +399,10 @@ impl Device {
                         // A field's voxels in host memory, as stored.
                         "caveray.residentBytes" => {
                             let field = match cell.usable::<VolumeModel>() {
-                                Some(volume) => volume.field.usable::<Arc<StructuredVolume>>(),
-                                None => cell.usable::<Arc<StructuredVolume>>(),
+                                Some(volume) => volume.field.usable::<Arc<SpatialField>>(),
+                                None => cell.usable::<Arc<SpatialField>>(),
                             };
-                            field.map(|f| Property::UInt64(f.voxels().bytes()))
+                            field.map(|f| Property::UInt64(f.bytes()))
                         }
                         _ => None,
                     });
@@ -499,7 +499,7 @@ impl Device {
 
 /// The box around a world's volumes and surfaces, if any is ready.
 fn world_bounds(world: &WorldModel) -> Option<Property> {
-    let grid_of = |field: ObjectRef| Some(field.usable::<Arc<StructuredVolume>>()?.bounds());
+    let grid_of = |field: ObjectRef| Some(field.usable::<Arc<SpatialField>>()?.bounds());
     let box_of = |o: &ObjectRef| -> Option<(glam::Vec3, glam::Vec3)> {
         if let Some(volume) = o.usable::<VolumeModel>() {
             return grid_of(volume.field);

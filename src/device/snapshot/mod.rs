@@ -23,7 +23,7 @@ use crate::cluster::Ranks;
 use crate::engine::{Deadline, Inputs, Share, Unrenderable, Views};
 use crate::render::{Backend, FrameDesc, RenderSettings, StreamWait};
 use crate::render::{Lamp, MAX_LAMPS};
-use crate::scene::{ObjectIds, PlacedVolume, Scene, StructuredVolume};
+use crate::scene::{ObjectIds, PlacedVolume, Scene, SpatialField};
 
 /// The device's count of changes: a snapshot taken at one epoch stands
 /// while the epoch is the same.
@@ -104,7 +104,7 @@ pub fn take(
     let mut placed = Vec::with_capacity(world_model.volumes.len());
     for (v, placement) in &world_model.volumes {
         let model = v.ready::<VolumeModel>(not_ours)?;
-        let volume = model.field.ready::<Arc<StructuredVolume>>(not_ours)?;
+        let volume = model.field.ready::<Arc<SpatialField>>(not_ours)?;
         placed.push(PlacedVolume {
             volume,
             transfer_function: model.transfer_function,

@@ -17,9 +17,7 @@ use crate::device::surface::SurfaceModel;
 use crate::device::world::Placement;
 use crate::render::iso::{IsoSettings, IsoSurface};
 use crate::render::RenderSettings;
-use crate::scene::{
-    ObjectIds, PlacedShape, PlacedVolume, Source, StructuredVolume, TransferFunction,
-};
+use crate::scene::{ObjectIds, PlacedShape, PlacedVolume, Source, SpatialField, TransferFunction};
 
 /// The transfer function a surface's field is placed with: the caster
 /// reads the field alone and never evaluates it. One for all, so the GPU
@@ -93,9 +91,7 @@ pub fn surfaces(
             }
         };
         let coloring = material_model.coloring;
-        let volume = geometry_model
-            .field
-            .ready::<Arc<StructuredVolume>>(not_ours)?;
+        let volume = geometry_model.field.ready::<Arc<SpatialField>>(not_ours)?;
         let placed = PlacedVolume {
             volume,
             transfer_function: unclassified()?,

@@ -1,3 +1,4 @@
 //! Spatial fields: one module per subtype.
 
 pub mod structured_regular;
+pub mod unstructured;

@@ -11,7 +11,7 @@ use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, VEC3};
 use crate::device::types::words;
 use crate::device::types::DataType as T;
-use crate::scene::{Filter, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};
+use crate::scene::{Filter, SpatialField, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};
 
 /// Voxel types a structured regular field accepts; UINT8/UINT16 are read
 /// as their fixed-point twins with a warning.
@@ -84,7 +84,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     let volume = StructuredVolume::new(dims, voxels, r.vec3("origin")?, r.vec3("spacing")?)
         .map_err(|e| e.to_string())?
         .with_filter(filter);
-    Ok(Some(State::ready(Arc::new(volume))))
+    Ok(Some(State::ready(Arc::new(SpatialField::from(volume)))))
 }
 
 /// The grid's dimensions and voxels, converted from the array's type.

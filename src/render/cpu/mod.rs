@@ -22,7 +22,7 @@ use crate::render::empty_space::SpaceCache;
 use crate::render::shapes::{Hit, ShapeSet, MAX_TRANSLUCENT, SURFACE_PASSES};
 use crate::render::warp::LayerBuilder;
 use crate::scene::Coverage;
-use crate::scene::{PlacedShape, PlacedVolume, Scene, StructuredVolume, TransferFunction};
+use crate::scene::{PlacedShape, PlacedVolume, Scene, SpatialField, TransferFunction};
 use packet::Channels;
 use sample::{Converted, Samples};
 
@@ -48,7 +48,7 @@ pub struct CpuRenderer {
 
 #[derive(Debug, Default)]
 struct Prepared {
-    samples: Vec<(Arc<StructuredVolume>, Samples)>,
+    samples: Vec<(Arc<SpatialField>, Samples)>,
     tables: Vec<(Arc<TransferFunction>, Arc<Vec<Vec4>>)>,
     spaces: SpaceCache,
     /// The last scene's surfaces, and their BVH.
@@ -60,7 +60,7 @@ struct Prepared {
 
 #[derive(Debug)]
 struct IsoPrepared {
-    volume: Arc<StructuredVolume>,
+    volume: Arc<SpatialField>,
     values: Arc<Vec<f32>>,
     boxes: Vec<((u32, IsoFilter), CrossingBox)>,
 }
@@ -145,8 +145,12 @@ impl CpuRenderer {
     /// path runs here and needs f32 values it does not hold; then a copy
     /// as f32, where one of at most PACKET_COPY_VOXELS pays for itself in
     /// speed (past that, the memory counts more).
-    fn samples(&self, volume: &Arc<StructuredVolume>) -> Result<Samples, RenderError> {
+    fn samples(&self, volume: &Arc<SpatialField>) -> Result<Samples, RenderError> {
         let own = Samples::Stored(Arc::clone(volume));
+        // A mesh is sampled in its cells, never by the packet path.
+        let Some(volume) = volume.structured() else {
+            return Ok(own);
+        };
         let n = volume.voxels().len();
         if !self.uses_packets() || own.f32_values().is_some() || n > PACKET_COPY_VOXELS {
             return Ok(own);

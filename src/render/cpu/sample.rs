@@ -7,7 +7,7 @@ use crate::render::empty_space::{Along, EmptySpace, Region};
 use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::shapes::ShapeSet;
-use crate::scene::{Filter, Scaling, StructuredVolume, Voxels, TABLE_SIZE};
+use crate::scene::{Filter, Scaling, SpatialField, UnstructuredVolume, Voxels, TABLE_SIZE};
 
 /// One volume as the CPU reads it: its numbers in their stored type (or
 /// an f32 copy made for the packet path) and the scaling that makes them
@@ -28,6 +28,9 @@ enum Numbers<'a> {
     U16(&'a [u16]),
     I16(&'a [i16]),
     F32(&'a [f32]),
+    /// An unstructured field's cells, sampled where lattice points lie in
+    /// them.
+    Mesh(&'a UnstructuredVolume),
 }
 
 impl<'a> Numbers<'a> {
@@ -59,6 +62,7 @@ impl Grid<'_> {
             Numbers::U16(v) => f32::from(v[at]),
             Numbers::I16(v) => f32::from(v[at]),
             Numbers::F32(v) => v[at],
+            Numbers::Mesh(_) => unreachable!("a mesh has no voxels"),
         };
         self.scaling.apply(stored)
     }
@@ -66,6 +70,10 @@ impl Grid<'_> {
     /// Trilinear interpolation between the eight grid vertices around
     /// grid point `g`, or the nearest vertex's value.
     pub fn sample(&self, g: Vec3) -> f32 {
+        if let Numbers::Mesh(mesh) = self.numbers {
+            let (_, spacing) = mesh.lattice();
+            return mesh.sample(mesh.bounds().0 + g * spacing);
+        }
         let hi = self.plan.dims.as_ivec3() - IVec3::ONE;
         let g = g.clamp(Vec3::ZERO, hi.as_vec3());
         // g >= 0 here, so truncation (`as`) is floor, without a libm call.
@@ -94,12 +102,17 @@ impl Grid<'_> {
             Numbers::U16(v) => trilinear(v, strides, f),
             Numbers::I16(v) => trilinear(v, strides, f),
             Numbers::F32(v) => trilinear(v, strides, f),
+            Numbers::Mesh(_) => unreachable!("sampled above"),
         };
         self.scaling.apply(stored)
     }
 
-    /// Post-classification: straight RGBA of a value from the table.
+    /// Post-classification: straight RGBA of a value from the table;
+    /// nothing for NaN (outside every cell of a mesh).
     pub fn classify(&self, v: f32) -> Vec4 {
+        if v.is_nan() {
+            return Vec4::ZERO;
+        }
         let plan = self.plan;
         let last = (TABLE_SIZE - 1) as f32;
         let t = ((v - plan.value_lo) * plan.value_scale).clamp(0.0, 1.0) * last;
@@ -130,8 +143,8 @@ fn trilinear<T: Copy + Into<f32>>(
 pub(super) enum Samples {
     /// Its values as f32: a copy made for the packet path's gathers.
     Copied(Arc<Vec<f32>>),
-    /// The volume's own stored numbers, read through its scaling.
-    Stored(Arc<StructuredVolume>),
+    /// The field's own numbers (a grid's read through its scaling).
+    Stored(Arc<SpatialField>),
 }
 
 impl Samples {
@@ -140,9 +153,12 @@ impl Samples {
     pub fn f32_values(&self) -> Option<&[f32]> {
         match self {
             Samples::Copied(v) => Some(v),
-            Samples::Stored(volume) => match volume.voxels() {
-                Voxels::F32(v) if volume.scaling() == Scaling::IDENTITY => Some(v),
-                _ => None,
+            Samples::Stored(field) => match field.structured() {
+                Some(volume) => match volume.voxels() {
+                    Voxels::F32(v) if volume.scaling() == Scaling::IDENTITY => Some(v),
+                    _ => None,
+                },
+                None => None,
             },
         }
     }
@@ -180,7 +196,10 @@ impl<'a> Field<'a> {
                 debug_assert_eq!(c.table.len(), TABLE_SIZE);
                 let (numbers, scaling) = match &c.samples {
                     Samples::Copied(v) => (Numbers::F32(v), Scaling::IDENTITY),
-                    Samples::Stored(volume) => (Numbers::of(volume.voxels()), volume.scaling()),
+                    Samples::Stored(field) => match &**field {
+                        SpatialField::Structured(v) => (Numbers::of(v.voxels()), v.scaling()),
+                        SpatialField::Unstructured(m) => (Numbers::Mesh(m), Scaling::IDENTITY),
+                    },
                 };
                 Grid {
                     plan,

@@ -15,7 +15,9 @@ use super::shaders::compute_pipeline;
 use super::uniforms::Iso;
 use super::volume_texture::VolumeTexture;
 use crate::geometry::RayGen;
-use crate::render::iso::{crossing_box, Coloring, IsoFilter, IsoSettings, MultiViewMethod};
+use crate::render::iso::{
+    crossing_box, Coloring, IsoFilter, IsoSettings, MultiViewMethod, UNSTRUCTURED_ISO,
+};
 use crate::render::{Frame, FrameDesc, RenderError, Watch};
 use crate::scene::{PlacedVolume, Scaling};
 
@@ -81,7 +83,7 @@ struct PanelCache {
 
 /// What a crossing box depends on.
 struct Crossing {
-    volume: std::sync::Arc<crate::scene::StructuredVolume>,
+    volume: std::sync::Arc<crate::scene::SpatialField>,
     isovalue: f32,
     filter: IsoFilter,
 }
@@ -240,11 +242,13 @@ impl IsoPass {
         let bounds = match &self.crossing {
             Some((key, bounds)) if key.matches(placed, settings) => *bounds,
             _ => {
-                let v = &placed.volume;
+                let Some(v) = placed.volume.structured() else {
+                    return Err(RenderError::Settings(UNSTRUCTURED_ISO.into()));
+                };
                 let bounds =
                     crossing_box(v.dims(), |i| v.value(i), settings.isovalue, settings.filter);
                 let key = Crossing {
-                    volume: std::sync::Arc::clone(v),
+                    volume: std::sync::Arc::clone(&placed.volume),
                     isovalue: settings.isovalue,
                     filter: settings.filter,
                 };

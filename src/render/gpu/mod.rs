@@ -13,6 +13,7 @@ mod capture;
 mod context;
 mod iso;
 mod layers;
+mod mesh;
 mod modules;
 mod paging;
 mod raycast;

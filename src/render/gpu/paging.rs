@@ -27,7 +27,7 @@ use super::context::Context;
 use super::volume_texture::{self, Texel, Writer, LOD_LEVELS};
 use crate::render::empty_space::{BrickRanges, Visibility};
 use crate::render::RenderError;
-use crate::scene::{Scaling, Scene, StructuredVolume};
+use crate::scene::{Scaling, Scene, SpatialField, StructuredVolume};
 
 /// A brick's side in the pool, apron included, unless the adapter's
 /// largest 3D texture is shorter.
@@ -904,12 +904,16 @@ pub(super) enum Layout {
     Whole { bytes: u64 },
     /// Paged through a pool.
     Paged { pool: Pool, bytes: u64 },
+    /// An unstructured field's words in the meshes buffer (gpu/mesh.rs).
+    Cells { bytes: u64 },
 }
 
 impl Layout {
     pub fn bytes(&self) -> u64 {
         match self {
-            Layout::Whole { bytes } | Layout::Paged { bytes, .. } => *bytes,
+            Layout::Whole { bytes } | Layout::Paged { bytes, .. } | Layout::Cells { bytes } => {
+                *bytes
+            }
         }
     }
 }
@@ -922,12 +926,22 @@ impl Layout {
 /// allocated, where a pool could not hold even the coarsest brick.
 pub(super) fn layouts(ctx: &Context, scene: &Scene) -> Result<Vec<Layout>, RenderError> {
     let max = ctx.limits.max_texture_dimension_3d;
-    let grids: Vec<&Arc<StructuredVolume>> = scene.grids().collect();
+    let fields: Vec<&Arc<SpatialField>> = scene.grids().collect();
+    // Meshes go whole into one buffer, whatever the budget says of grids.
+    let mesh_words: u64 = fields
+        .iter()
+        .filter_map(|f| f.unstructured())
+        .map(super::mesh::word_count)
+        .sum();
+    super::mesh::check(ctx, mesh_words)?;
+    let grids: Vec<Option<&StructuredVolume>> = fields.iter().map(|f| f.structured()).collect();
     let whole: Vec<u64> = grids
         .iter()
         .map(|g| {
-            let texel = Texel::of(g.voxels(), ctx.norm16);
-            g.dims().as_u64vec3().element_product() * texel.bytes()
+            g.map_or(0, |g| {
+                let texel = Texel::of(g.voxels(), ctx.norm16);
+                g.dims().as_u64vec3().element_product() * texel.bytes()
+            })
         })
         .collect();
     let must_page =
@@ -937,7 +951,12 @@ pub(super) fn layouts(ctx: &Context, scene: &Scene) -> Result<Vec<Layout>, Rende
         .is_some_and(|budget| whole.iter().sum::<u64>() > budget);
     let total: u64 = whole.iter().sum();
     let mut out = Vec::with_capacity(grids.len());
-    for (g, &bytes) in grids.iter().zip(&whole) {
+    for ((field, g), &bytes) in fields.iter().zip(&grids).zip(&whole) {
+        let Some(g) = g else {
+            let words = field.unstructured().map_or(0, super::mesh::word_count);
+            out.push(Layout::Cells { bytes: 4 * words });
+            continue;
+        };
         if !over && !must_page(g) {
             out.push(Layout::Whole { bytes });
             continue;

@@ -55,6 +55,10 @@ binding_table! {
         /// The paged volumes' page tables (src/render/gpu/paging.rs);
         /// volume v's from params.volumes[v].page_offset on.
         pages: Kind::storage("array<u32>"),
+        /// The unstructured volumes' cells, BVHs, positions and values
+        /// (src/render/gpu/mesh.rs); volume v's from
+        /// params.volumes[v].mesh_offset on.
+        meshes: Kind::storage("array<u32>"),
         /// Linear where the adapter filters 32-bit floats (filtered
         /// sampling).
         linear: Kind::sampler(filterable),
@@ -224,6 +228,7 @@ impl RaycastPass {
             volume7: volume(7),
             bricks: scene.bricks().as_entire_binding(),
             pages: scene.pages().as_entire_binding(),
+            meshes: scene.meshes().as_entire_binding(),
             linear: wgpu::BindingResource::Sampler(&self.sampler),
             linear_mips: wgpu::BindingResource::Sampler(&self.mip_sampler),
             surfaces: scene.surfaces()[0].as_entire_binding(),

@@ -12,6 +12,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::context::Context;
+use super::mesh;
 use super::paging::{self, Footprint, Layout, PagedVolume, Sight, StreamWait, Streaming, View};
 use super::resources::{self, BrickSlot, SurfaceSlot};
 use super::volume_texture::{self, PageSlot, TextureSlot, VolumeTexture};
@@ -20,32 +21,38 @@ use crate::render::empty_space::{EmptySpace, SpaceCache, Visibility};
 use crate::render::march_plan::MarchPlan;
 use crate::render::shapes::ShapeSet;
 use crate::render::{BackgroundImage, FrameDesc, RenderError, Sampling};
-use crate::scene::{Filter, PlacedShape, Scene, StructuredVolume, TransferFunction, MAX_VOLUMES};
+use crate::scene::{Filter, PlacedShape, Scene, SpatialField, TransferFunction, MAX_VOLUMES};
 
-/// A grid on the GPU: one texture, or paged.
+/// A field on the GPU: one texture, paged, or a mesh's words in the
+/// meshes buffer.
 enum OnGpu {
     Whole(VolumeTexture),
     Paged(Box<PagedVolume>),
+    Cells,
 }
 
 impl OnGpu {
-    fn view(&self) -> &wgpu::TextureView {
+    fn view<'a>(&'a self, stand_in: &'a wgpu::TextureView) -> &'a wgpu::TextureView {
         match self {
             OnGpu::Whole(t) => &t.view,
             OnGpu::Paged(p) => &p.view,
+            OnGpu::Cells => stand_in,
         }
     }
 
+    /// Bytes of its own texture or pool (a mesh's are the meshes
+    /// buffer's).
     fn bytes(&self) -> u64 {
         match self {
             OnGpu::Whole(t) => t.bytes,
             OnGpu::Paged(p) => p.bytes(),
+            OnGpu::Cells => 0,
         }
     }
 
     fn fits(&self, layout: &Layout) -> bool {
         match (self, layout) {
-            (OnGpu::Whole(_), Layout::Whole { .. }) => true,
+            (OnGpu::Whole(_), Layout::Whole { .. }) | (OnGpu::Cells, Layout::Cells { .. }) => true,
             (OnGpu::Paged(p), Layout::Paged { pool, .. }) => p.pool == *pool,
             _ => false,
         }
@@ -68,13 +75,17 @@ pub(super) struct GpuScene {
     /// them faster, so full detail does not pay for them before).
     mips: bool,
     /// The scene's grids on the GPU, each once (Scene::grids order).
-    grids: Vec<(Arc<StructuredVolume>, OnGpu)>,
+    grids: Vec<(Arc<SpatialField>, OnGpu)>,
     /// Per scene volume, its grid's index in `grids`.
     placed: Vec<usize>,
     /// The paged grids' page tables, one after the other, and where each
     /// grid's starts (by index in `grids`).
     pages: wgpu::Buffer,
     page_offsets: Vec<Option<u32>>,
+    /// The meshes' words one after the other (mesh.rs), and where each
+    /// mesh begins (by index in `grids`).
+    meshes: wgpu::Buffer,
+    mesh_offsets: Vec<Option<u32>>,
     /// Bound where a scene has fewer than MAX_VOLUMES volumes.
     no_volume: wgpu::TextureView,
     /// One row per volume slot; which transfer function each row holds.
@@ -116,12 +127,15 @@ impl GpuScene {
             resources::words_buffer(ctx, &[]),
         ];
         let pages = resources::words_u32_buffer(ctx, "pages", &[]);
+        let meshes = resources::words_u32_buffer(ctx, "meshes", &[]);
         Self {
             mips: false,
             grids: Vec::new(),
             placed: Vec::new(),
             pages,
             page_offsets: Vec::new(),
+            meshes,
+            mesh_offsets: Vec::new(),
             no_volume,
             table,
             table_view,
@@ -153,19 +167,23 @@ impl GpuScene {
         self.placed
             .get(i)
             .and_then(|&g| self.grids.get(g))
-            .map_or(&self.no_volume, |(_, t)| t.view())
+            .map_or(&self.no_volume, |(_, t)| t.view(&self.no_volume))
     }
 
     /// The first volume's texture, if the scene has one in one texture.
     pub fn first_volume(&self) -> Option<&VolumeTexture> {
         match self.grids.get(*self.placed.first()?)?.1 {
             OnGpu::Whole(ref t) => Some(t),
-            OnGpu::Paged(_) => None,
+            OnGpu::Paged(_) | OnGpu::Cells => None,
         }
     }
 
     pub fn pages(&self) -> &wgpu::Buffer {
         &self.pages
+    }
+
+    pub fn meshes(&self) -> &wgpu::Buffer {
+        &self.meshes
     }
 
     pub fn table_view(&self) -> &wgpu::TextureView {
@@ -228,7 +246,8 @@ impl GpuScene {
     pub fn use_mips(&mut self) {
         if !self.mips {
             self.mips = true;
-            self.grids.retain(|(_, g)| matches!(g, OnGpu::Paged(_)));
+            self.grids
+                .retain(|(_, g)| matches!(g, OnGpu::Paged(_) | OnGpu::Cells));
             self.placed.clear();
             self.generation += 1;
         }
@@ -240,11 +259,11 @@ impl GpuScene {
     /// and their bricks as frames stream them.
     pub fn upload(&mut self, ctx: &Context, scene: &Scene) -> Result<(), RenderError> {
         let layouts = paging::layouts(ctx, scene)?;
-        let wanted: Vec<&Arc<StructuredVolume>> = scene.grids().collect();
+        let wanted: Vec<&Arc<SpatialField>> = scene.grids().collect();
         // Grids no longer in the scene, or laid out differently now, go
         // before new ones are made, so that replacing a large volume does
         // not need room for both.
-        let before: Vec<*const StructuredVolume> =
+        let before: Vec<*const SpatialField> =
             self.grids.iter().map(|(v, _)| Arc::as_ptr(v)).collect();
         self.grids.retain(|(v, g)| {
             wanted
@@ -261,14 +280,17 @@ impl GpuScene {
                 .position(|(v, _)| Arc::ptr_eq(v, volume))
                 .map(|i| self.grids.swap_remove(i));
             made_new += u32::from(kept.is_none());
-            let made = match (kept, layout) {
-                (Some(g), _) => Ok(g.1),
-                (None, Layout::Whole { .. }) => {
-                    volume_texture::upload(ctx, volume, self.mips).map(OnGpu::Whole)
+            let made = match (kept, layout, &**volume) {
+                (Some(g), ..) => Ok(g.1),
+                (None, Layout::Whole { .. }, SpatialField::Structured(v)) => {
+                    volume_texture::upload(ctx, v, self.mips).map(OnGpu::Whole)
                 }
-                (None, Layout::Paged { pool, .. }) => {
-                    PagedVolume::new(ctx, volume, *pool).map(|p| OnGpu::Paged(Box::new(p)))
+                (None, Layout::Paged { pool, .. }, SpatialField::Structured(v)) => {
+                    PagedVolume::new(ctx, &Arc::new(v.clone()), *pool)
+                        .map(|p| OnGpu::Paged(Box::new(p)))
                 }
+                // Laid out with the others once all are made.
+                (None, ..) => Ok(OnGpu::Cells),
             };
             match made {
                 Ok(on_gpu) => grids.push((Arc::clone(volume), on_gpu)),
@@ -306,6 +328,7 @@ impl GpuScene {
         self.placed = placed;
         if changed {
             self.lay_out_pages(ctx);
+            self.lay_out_meshes(ctx);
             self.generation += 1;
         }
         for (row, placed) in scene.volumes().iter().enumerate() {
@@ -326,7 +349,7 @@ impl GpuScene {
             .grids
             .iter_mut()
             .map(|(_, g)| match g {
-                OnGpu::Whole(_) => None,
+                OnGpu::Whole(_) | OnGpu::Cells => None,
                 OnGpu::Paged(p) => {
                     let at = words.len() as u32;
                     words.extend(p.table());
@@ -336,6 +359,24 @@ impl GpuScene {
             })
             .collect();
         self.pages = resources::words_u32_buffer(ctx, "pages", &words);
+    }
+
+    /// The meshes buffer for the meshes now held (their sizes were
+    /// checked when they were laid out).
+    fn lay_out_meshes(&mut self, ctx: &Context) {
+        let mut words = Vec::new();
+        self.mesh_offsets = self
+            .grids
+            .iter()
+            .map(|(v, _)| {
+                v.unstructured().map(|m| {
+                    let at = words.len() as u32;
+                    mesh::pack(m, &mut words);
+                    at
+                })
+            })
+            .collect();
+        self.meshes = resources::words_u32_buffer(ctx, "meshes", &words);
     }
 
     /// Streams the paged volumes' bricks for a frame cast along `rays`:
@@ -424,7 +465,11 @@ impl GpuScene {
             .map(|&g| match &self.grids[g].1 {
                 OnGpu::Whole(t) => TextureSlot {
                     to_value: t.to_value,
-                    pages: None,
+                    ..TextureSlot::default()
+                },
+                OnGpu::Cells => TextureSlot {
+                    mesh: Some(self.mesh_offsets[g].unwrap_or(0)),
+                    ..TextureSlot::default()
                 },
                 OnGpu::Paged(p) => TextureSlot {
                     to_value: p.to_value,
@@ -434,6 +479,7 @@ impl GpuScene {
                         side: p.pool.side,
                         atlas: p.pool.atlas.to_array(),
                     }),
+                    mesh: None,
                 },
             })
             .collect()
@@ -447,7 +493,12 @@ impl GpuScene {
         } else {
             0
         };
-        self.grids.iter().map(|(_, g)| g.bytes()).sum::<u64>() + pages
+        let meshes = if self.mesh_offsets.iter().any(Option::is_some) {
+            self.meshes.size()
+        } else {
+            0
+        };
+        self.grids.iter().map(|(_, g)| g.bytes()).sum::<u64>() + pages + meshes
     }
 
     /// Bytes the paged grids keep in host memory: their coarser levels.
@@ -456,7 +507,7 @@ impl GpuScene {
             .iter()
             .map(|(_, g)| match g {
                 OnGpu::Paged(p) => p.host_bytes(),
-                OnGpu::Whole(_) => 0,
+                OnGpu::Whole(_) | OnGpu::Cells => 0,
             })
             .sum()
     }

@@ -36,7 +36,9 @@ use crate::render::shapes::{MAX_TRANSLUCENT, MIN_ROUGHNESS, SURFACE_PASSES};
 use crate::render::stereo::Reprojection;
 use crate::render::warp::SOLID;
 use crate::render::{Lamp, RenderSettings, Spot, SurfaceShading, MAX_LAMPS};
-use crate::scene::{Filter, MAX_VOLUMES, TABLE_SIZE};
+use crate::scene::{
+    Filter, CELL_TOLERANCE, MAX_VOLUMES, MESH_STACK, NEWTON_STEPS, NEWTON_TOLERANCE, TABLE_SIZE,
+};
 
 /// The WGSL type of a uniform field's Rust type.
 trait WgslType {
@@ -138,6 +140,9 @@ uniform! {
         brick_side: [u32; 3],
         /// Its page table's first word in `pages`.
         page_offset: u32,
+        /// An unstructured volume's first word in `meshes`.
+        mesh_offset: u32,
+        _pad: [u32; 3],
     }
 }
 
@@ -422,7 +427,11 @@ impl VolumeSlot {
             world_to_grid_y: y,
             world_to_grid_z: z,
             dims: plan.dims.to_array(),
-            sampling: plan.filter.code(),
+            sampling: if plan.cells {
+                FILTER_CELLS
+            } else {
+                plan.filter.code()
+            },
             value_lo: plan.value_lo,
             value_scale: plan.value_scale,
             inv_unit_distance: plan.inv_unit_distance,
@@ -434,6 +443,8 @@ impl VolumeSlot {
             atlas_bricks,
             brick_side,
             page_offset,
+            mesh_offset: texture.mesh.unwrap_or(0),
+            _pad: [0; 3],
         }
     }
 }
@@ -600,6 +611,10 @@ fn lamp_slots(lamps: &[Lamp]) -> [LampSlot; MAX_LAMPS] {
     slots
 }
 
+/// The sampling code of an unstructured volume: inside its cells
+/// (shaders/volume.wgsl `mesh_value`), past Filter's codes 0 and 1.
+const FILTER_CELLS: u32 = 2;
+
 /// Which lights the surfaces see besides the point and spot lights: the
 /// directional light, a light at the eye (the world has none), or none.
 const SURFACE_LIT_DIRECTIONAL: u32 = 0;
@@ -650,6 +665,9 @@ fn constants() -> String {
         ("FORMAT_RGBA32F", ColorFormat::Rgba32F.code()),
         ("FILTER_LINEAR", Filter::Linear.code()),
         ("FILTER_NEAREST", Filter::Nearest.code()),
+        ("FILTER_CELLS", FILTER_CELLS),
+        ("MESH_STACK", MESH_STACK as u32),
+        ("NEWTON_STEPS", NEWTON_STEPS),
         ("BRICK", BRICK),
         ("LOD_LEVELS", LOD_LEVELS),
         ("KIND_TRIANGLE", KIND_TRIANGLE),
@@ -687,6 +705,8 @@ fn constants() -> String {
     out += &format!("const PI: f32 = {:?}f;\n", std::f32::consts::PI);
     out += &format!("const LEAP_MARGIN: f32 = {LEAP_MARGIN:?}f;\n");
     out += &format!("const SOLID: f32 = {SOLID:?}f;\n");
+    out += &format!("const NEWTON_TOLERANCE: f32 = {NEWTON_TOLERANCE:?}f;\n");
+    out += &format!("const CELL_TOLERANCE: f32 = {CELL_TOLERANCE:?}f;\n");
     out
 }
 

@@ -30,6 +30,9 @@ pub(super) struct SceneKey {
     pub one_volume: bool,
     /// Samples are filtered by the texture unit (`FILTERED`).
     pub filtered: bool,
+    /// A volume is an unstructured mesh (`MESHES`): without, the cells'
+    /// traversal and shape functions are dropped.
+    pub meshes: bool,
 }
 
 /// Which fields of the key a pass's shader depends on: the others are
@@ -41,6 +44,7 @@ pub(super) struct Uses {
     pub paged: bool,
     pub one_volume: bool,
     pub filtered: bool,
+    pub meshes: bool,
 }
 
 impl Uses {
@@ -50,6 +54,7 @@ impl Uses {
         paged: true,
         one_volume: true,
         filtered: true,
+        meshes: true,
     };
     /// A pass that marches with exact sampling only (the stereo passes).
     pub const EXACT: Uses = Uses {
@@ -62,6 +67,7 @@ impl Uses {
         paged: false,
         one_volume: false,
         filtered: false,
+        meshes: false,
     };
 }
 
@@ -82,6 +88,10 @@ impl SceneKey {
             paged: paging::any_paged(ctx, scene),
             one_volume: scene.volumes().len() == 1,
             filtered,
+            meshes: scene
+                .volumes()
+                .iter()
+                .any(|v| v.volume.unstructured().is_some()),
         })
     }
 
@@ -92,6 +102,7 @@ impl SceneKey {
             paged: self.paged && uses.paged,
             one_volume: self.one_volume && uses.one_volume,
             filtered: self.filtered && uses.filtered,
+            meshes: self.meshes && uses.meshes,
         }
     }
 
@@ -100,16 +111,18 @@ impl SceneKey {
             | usize::from(self.paged) << 1
             | usize::from(self.one_volume) << 2
             | usize::from(self.filtered) << 3
+            | usize::from(self.meshes) << 4
     }
 
     /// The override constants that select this variant.
-    pub fn constants(self) -> [(&'static str, f64); 4] {
+    pub fn constants(self) -> [(&'static str, f64); 5] {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         [
             ("SURFACES", flag(self.surfaces)),
             ("PAGED", flag(self.paged)),
             ("ONE_VOLUME", flag(self.one_volume)),
             ("FILTERED", flag(self.filtered)),
+            ("MESHES", flag(self.meshes)),
         ]
     }
 }
@@ -121,7 +134,7 @@ pub(super) fn no_filtering(ctx: &Context) -> RenderError {
     ))
 }
 
-const VARIANTS: usize = 16;
+const VARIANTS: usize = 32;
 
 /// One entry point of a shader, compiled for each scene key the first
 /// time a frame needs it, with the pass's own fixed constants besides.
@@ -188,6 +201,7 @@ mod tests {
                 paged: i & 2 != 0,
                 one_volume: i & 4 != 0,
                 filtered: i & 8 != 0,
+                meshes: i & 16 != 0,
             };
             assert_eq!(key.index(), i);
             assert!(seen.insert(key.constants().map(|(_, v)| v.to_bits())));
@@ -201,6 +215,7 @@ mod tests {
             paged: true,
             one_volume: true,
             filtered: true,
+            meshes: true,
         };
         assert_eq!(all.seen_by(Uses::ALL), all);
         assert!(!all.seen_by(Uses::EXACT).filtered);

@@ -134,6 +134,8 @@ pub(super) struct TextureSlot {
     /// Texel to field value.
     pub to_value: Scaling,
     pub pages: Option<PageSlot>,
+    /// An unstructured field's first word in the meshes buffer.
+    pub mesh: Option<u32>,
 }
 
 impl Default for TextureSlot {
@@ -141,6 +143,7 @@ impl Default for TextureSlot {
         Self {
             to_value: Scaling::IDENTITY,
             pages: None,
+            mesh: None,
         }
     }
 }

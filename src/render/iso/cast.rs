@@ -43,10 +43,17 @@ pub struct Caster<'a> {
 }
 
 /// The volume's values as f32, which a [`Caster`] reads.
+/// Why isosurface rendering refuses a mesh: it walks a grid's cells.
+pub const UNSTRUCTURED_ISO: &str =
+    "isosurfaces are drawn of structured fields only; this volume is an unstructured field";
+
 pub fn values(placed: &PlacedVolume) -> Result<Vec<f32>, RenderError> {
-    let mut values = filled(placed.volume.voxels().len(), 0.0f32, "the volume as f32")?;
+    let Some(volume) = placed.volume.structured() else {
+        return Err(RenderError::Settings(UNSTRUCTURED_ISO.into()));
+    };
+    let mut values = filled(volume.voxels().len(), 0.0f32, "the volume as f32")?;
     for (i, v) in values.iter_mut().enumerate() {
-        *v = placed.volume.value(i);
+        *v = volume.value(i);
     }
     Ok(values)
 }

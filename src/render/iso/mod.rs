@@ -11,7 +11,7 @@ mod surfaces;
 
 use glam::{Vec3, Vec4};
 
-pub use cast::{cast, cast_by, values, Caster, IsoHit};
+pub use cast::{cast, cast_by, values, Caster, IsoHit, UNSTRUCTURED_ISO};
 pub use field::{crossing_box, curvatures, IsoField, IsoFilter, Sample};
 pub use multiview::{
     render_display, render_display_by, subpixels_differing, MultiViewMethod, Panel,

@@ -115,7 +115,7 @@ fn secant_steps_put_the_hit_far_closer_than_the_march_step() {
 #[test]
 fn the_bspline_reproduces_linear_fields_and_their_gradient() {
     let linear = field(|p| 0.3 * p.x - 0.2 * p.y + 0.7 * p.z + 0.1);
-    let voxels = match linear.volume.voxels() {
+    let voxels = match linear.volume.structured().unwrap().voxels() {
         Voxels::F32(v) => v.clone(),
         _ => unreachable!(),
     };
@@ -207,7 +207,7 @@ fn rays_that_miss_show_the_background_and_bad_settings_fail() {
 #[test]
 fn the_crossing_box_holds_the_surface_and_nothing_far_from_it() {
     let placed = ball();
-    let v = &placed.volume;
+    let v = placed.volume.structured().unwrap();
     let value = |i| v.value(i);
     // The ball of radius 0.5 is 0.5 * 47 / 2 = 11.75 cells around the
     // grid's centre, 23.5: from 11.75 to 35.25 on each axis.

@@ -117,7 +117,7 @@ pub fn run(args: StreamArgs) -> Result<(), Failure> {
     let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
     let scene = loaded.placed(at(Vec3::ZERO, size), &protocol_frame(), PROTOCOL_UNITS)?;
     let grid = &scene.volumes()[0].volume;
-    let voxel_bytes = grid.voxels().bytes();
+    let voxel_bytes = grid.bytes();
     let settings = RenderSettings::default();
 
     let open = || -> Result<GpuRenderer, Failure> {

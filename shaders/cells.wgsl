@@ -1,0 +1,217 @@
+// #import constants, volume_bindings
+// Unstructured volumes: the field inside the cells of a mesh, read from
+// its words in `meshes` (layout in src/render/gpu/mesh.rs). Mirrors
+// src/scene/unstructured.rs: the cells' BVH finds the cells whose boxes
+// hold a point, barycentric coordinates place it in a tetrahedron and
+// Newton's method inverts VTK's shape functions in the other kinds.
+
+// Set where a volume of the scene is a mesh: without it the traversal
+// and the shape functions are dropped.
+override MESHES: bool = false;
+
+// What a sample outside every cell reads: classify() makes it clear. A
+// finite stand-in for the reference's NaN, which WGSL lets compilers
+// assume away.
+const MESH_OUTSIDE: f32 = -3.0e38;
+
+fn mesh_word(at: u32) -> u32 {
+    return meshes[at];
+}
+
+fn mesh_f32(at: u32) -> f32 {
+    return bitcast<f32>(meshes[at]);
+}
+
+fn mesh_vec3(at: u32) -> vec3f {
+    return vec3f(mesh_f32(at), mesh_f32(at + 1u), mesh_f32(at + 2u));
+}
+
+fn cell_vertices(kind: u32) -> u32 {
+    switch kind {
+        case 0u: { return 4u; }
+        case 1u: { return 8u; }
+        case 2u: { return 6u; }
+        default: { return 5u; }
+    }
+}
+
+// Vertex i's weight at parametric point r (x) and its derivatives along
+// r, s and t (yzw), by VTK's interpolation functions.
+fn cell_shape(kind: u32, i: u32, r: vec3f) -> vec4f {
+    switch kind {
+        case 0u: {
+            switch i {
+                case 0u: { return vec4f(1.0 - r.x - r.y - r.z, -1.0, -1.0, -1.0); }
+                case 1u: { return vec4f(r.x, 1.0, 0.0, 0.0); }
+                case 2u: { return vec4f(r.y, 0.0, 1.0, 0.0); }
+                default: { return vec4f(r.z, 0.0, 0.0, 1.0); }
+            }
+        }
+        case 2u: {
+            // Wedge: triangle 0 1 2 at t = 0, 3 4 5 above.
+            let j = i % 3u;
+            var tri = vec3f(1.0 - r.x - r.y, -1.0, -1.0);
+            if j == 1u {
+                tri = vec3f(r.x, 1.0, 0.0);
+            } else if j == 2u {
+                tri = vec3f(r.y, 0.0, 1.0);
+            }
+            var h = 1.0 - r.z;
+            var dh = -1.0;
+            if i >= 3u {
+                h = r.z;
+                dh = 1.0;
+            }
+            return vec4f(tri.x * h, tri.y * h, tri.z * h, tri.x * dh);
+        }
+        default: {
+            // Hexahedron, and the pyramid's base (its apex is vertex 4).
+            if kind == 3u && i == 4u {
+                return vec4f(r.z, 0.0, 0.0, 1.0);
+            }
+            let k = i % 4u;
+            let cx = k == 1u || k == 2u;
+            let cy = k >= 2u;
+            let cz = kind == 1u && i >= 4u;
+            let a = select(1.0 - r.x, r.x, cx);
+            let b = select(1.0 - r.y, r.y, cy);
+            let c = select(1.0 - r.z, r.z, cz);
+            let sa = select(-1.0, 1.0, cx);
+            let sb = select(-1.0, 1.0, cy);
+            let sc = select(-1.0, 1.0, cz);
+            return vec4f(a * b * c, sa * b * c, a * sb * c, a * b * sc);
+        }
+    }
+}
+
+fn cell_holds(kind: u32, r: vec3f) -> bool {
+    let eps = CELL_TOLERANCE;
+    let unit = all(r >= vec3f(-eps)) && all(r <= vec3f(1.0 + eps));
+    switch kind {
+        case 0u: { return all(r >= vec3f(-eps)) && r.x + r.y + r.z <= 1.0 + eps; }
+        case 2u: { return unit && r.x + r.y <= 1.0 + eps; }
+        default: { return unit; }
+    }
+}
+
+struct CellHit {
+    inside: bool,
+    value: f32,
+}
+
+// The field at p if cell c (BVH order) of the mesh at word m holds it.
+fn cell_value(m: u32, c: u32, p: vec3f) -> CellHit {
+    let miss = CellHit(false, 0.0);
+    let word = mesh_word(m + mesh_word(m + 1u) + c);
+    let kind = word & 3u;
+    let first = m + mesh_word(m + 2u) + (word >> 2u);
+    let positions = m + mesh_word(m + 3u);
+    let n = cell_vertices(kind);
+    var lo = vec3f(3.0e38);
+    var hi = vec3f(-3.0e38);
+    for (var k = 0u; k < n; k++) {
+        let q = mesh_vec3(positions + 3u * mesh_word(first + k));
+        lo = min(lo, q);
+        hi = max(hi, q);
+    }
+    let margin = (hi - lo) * CELL_TOLERANCE;
+    if any(p < lo - margin) || any(p > hi + margin) {
+        return miss;
+    }
+    var r: vec3f;
+    if kind == 0u {
+        let v0 = mesh_vec3(positions + 3u * mesh_word(first));
+        let a = mesh_vec3(positions + 3u * mesh_word(first + 1u)) - v0;
+        let b = mesh_vec3(positions + 3u * mesh_word(first + 2u)) - v0;
+        let c3 = mesh_vec3(positions + 3u * mesh_word(first + 3u)) - v0;
+        let det = dot(a, cross(b, c3));
+        if det == 0.0 {
+            return miss;
+        }
+        let q = p - v0;
+        r = vec3f(dot(q, cross(b, c3)), dot(a, cross(q, c3)), dot(a, cross(b, q))) / det;
+    } else {
+        r = select(select(vec3f(0.5, 0.5, 0.2), vec3f(1.0 / 3.0, 1.0 / 3.0, 0.5), kind == 2u), vec3f(0.5), kind == 1u);
+        for (var step = 0u; step < NEWTON_STEPS; step++) {
+            var x = vec3f(0.0);
+            var jr = vec3f(0.0);
+            var js = vec3f(0.0);
+            var jt = vec3f(0.0);
+            for (var k = 0u; k < n; k++) {
+                let s = cell_shape(kind, k, r);
+                let q = mesh_vec3(positions + 3u * mesh_word(first + k));
+                x += s.x * q;
+                jr += s.y * q;
+                js += s.z * q;
+                jt += s.w * q;
+            }
+            let jac = mat3x3f(jr, js, jt);
+            let det = determinant(jac);
+            if det == 0.0 {
+                return miss;
+            }
+            // The inverse by cofactors: transpose of the adjugate.
+            let inv = transpose(mat3x3f(cross(js, jt), cross(jt, jr), cross(jr, js))) * (1.0 / det);
+            let delta = inv * (x - p);
+            r -= delta;
+            if max(abs(delta.x), max(abs(delta.y), abs(delta.z))) < NEWTON_TOLERANCE {
+                break;
+            }
+        }
+    }
+    if !cell_holds(kind, r) {
+        return miss;
+    }
+    let values = m + mesh_word(m + 4u);
+    if mesh_word(m + 5u) == 0u {
+        return CellHit(true, mesh_f32(values + c));
+    }
+    var sum = 0.0;
+    for (var k = 0u; k < n; k++) {
+        sum += cell_shape(kind, k, r).x * mesh_f32(values + mesh_word(first + k));
+    }
+    return CellHit(true, sum);
+}
+
+// Volume v's mesh at lattice point `grid`: the first cell holding it, or
+// MESH_OUTSIDE.
+fn mesh_value(v: u32, grid: vec3f) -> f32 {
+    let m = params.volumes[v].mesh_offset;
+    let p = mesh_vec3(m + 6u) + grid * mesh_vec3(m + 9u);
+    let nodes = m + mesh_word(m);
+    var stack: array<u32, MESH_STACK>;
+    stack[0] = 0u;
+    var depth = 1u;
+    var value = MESH_OUTSIDE;
+    loop {
+        if depth == 0u {
+            break;
+        }
+        depth -= 1u;
+        let at = nodes + 8u * stack[depth];
+        if any(p < mesh_vec3(at)) || any(p > mesh_vec3(at + 4u)) {
+            continue;
+        }
+        let first = mesh_word(at + 3u);
+        let count = mesh_word(at + 7u);
+        if count == 0u {
+            stack[depth] = first;
+            stack[depth + 1u] = first + 1u;
+            depth += 2u;
+            continue;
+        }
+        var found = false;
+        for (var c = first; c < first + count; c++) {
+            let hit = cell_value(m, c, p);
+            if hit.inside {
+                value = hit.value;
+                found = true;
+                break;
+            }
+        }
+        if found {
+            break;
+        }
+    }
+    return value;
+}

@@ -1,0 +1,154 @@
+//! Unstructured meshes made from structured grids: each cell of a grid as
+//! a hexahedron, or cut into six tetrahedra around its main diagonal
+//! (Kuhn's subdivision, which neighbouring cells share faces under), with
+//! the grid's values at the vertices. A hexahedral mesh samples exactly
+//! as its grid does; tetrahedra linearly. The procedural `tets:N` volume
+//! is the Marschner-Lobb signal on an N^3 lattice cut so.
+
+use glam::{UVec3, Vec3};
+
+use super::procedural::marschner_lobb;
+use crate::scene::{
+    check_counts, MeshInput, MeshValues, StructuredVolume, UnstructuredError, UnstructuredVolume,
+};
+
+/// How a grid's cells become mesh cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cut {
+    Hexahedra,
+    Tetrahedra,
+}
+
+/// The six tetrahedra of a hexahedron (VTK's vertex order): the paths
+/// from vertex 0 to vertex 6 along one edge of each axis.
+const KUHN: [[usize; 4]; 6] = [
+    [0, 1, 2, 6],
+    [0, 1, 5, 6],
+    [0, 3, 2, 6],
+    [0, 3, 7, 6],
+    [0, 4, 5, 6],
+    [0, 4, 7, 6],
+];
+
+/// `grid`'s cells as a mesh, in the grid's place, with its values (its
+/// scaling applied) at the vertices.
+pub fn grid_cells(
+    grid: &StructuredVolume,
+    cut: Cut,
+) -> Result<UnstructuredVolume, UnstructuredError> {
+    let d = grid.dims();
+    let cells = (d - UVec3::ONE)
+        .max(UVec3::ZERO)
+        .as_u64vec3()
+        .element_product();
+    let (per_cell, corners) = match cut {
+        Cut::Hexahedra => (1, 8),
+        Cut::Tetrahedra => (6, 4),
+    };
+    let vertices = d.as_u64vec3().element_product();
+    check_counts(vertices, cells * per_cell * corners, cells * per_cell)?;
+    let id = |x: u32, y: u32, z: u32| x + d.x * (y + d.y * z);
+    let mut input = MeshInput {
+        positions: Vec::with_capacity(vertices as usize),
+        index: Vec::with_capacity((cells * per_cell * corners) as usize),
+        cell_index: Vec::with_capacity((cells * per_cell) as usize),
+        cell_type: Vec::with_capacity((cells * per_cell) as usize),
+    };
+    let mut values = Vec::with_capacity(vertices as usize);
+    for z in 0..d.z {
+        for y in 0..d.y {
+            for x in 0..d.x {
+                input
+                    .positions
+                    .push(grid.origin() + Vec3::new(x as f32, y as f32, z as f32) * grid.spacing());
+                values.push(grid.value(id(x, y, z) as usize));
+            }
+        }
+    }
+    for z in 0..d.z.saturating_sub(1) {
+        for y in 0..d.y.saturating_sub(1) {
+            for x in 0..d.x.saturating_sub(1) {
+                let h = [
+                    id(x, y, z),
+                    id(x + 1, y, z),
+                    id(x + 1, y + 1, z),
+                    id(x, y + 1, z),
+                    id(x, y, z + 1),
+                    id(x + 1, y, z + 1),
+                    id(x + 1, y + 1, z + 1),
+                    id(x, y + 1, z + 1),
+                ];
+                match cut {
+                    Cut::Hexahedra => {
+                        input.cell_index.push(input.index.len() as u32);
+                        input.cell_type.push(12);
+                        input.index.extend(h);
+                    }
+                    Cut::Tetrahedra => {
+                        for tet in KUHN {
+                            input.cell_index.push(input.index.len() as u32);
+                            input.cell_type.push(10);
+                            input.index.extend(tet.map(|k| h[k]));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    UnstructuredVolume::new(input, MeshValues::PerVertex(values))
+}
+
+/// The procedural `tets:N`: the Marschner-Lobb signal at N^3 vertices on
+/// [-1, 1]^3, each cell cut in six tetrahedra (6 (N - 1)^3 of them).
+pub fn tetrahedra(n: u32) -> Result<UnstructuredVolume, UnstructuredError> {
+    grid_cells(&marschner_lobb(n.max(2)), Cut::Tetrahedra)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::shepp_logan;
+
+    #[test]
+    fn hexahedra_sample_as_their_grid_and_tetrahedra_hold_its_vertices() {
+        let grid = shepp_logan(9);
+        let hexes = grid_cells(&grid, Cut::Hexahedra).unwrap();
+        let tets = grid_cells(&grid, Cut::Tetrahedra).unwrap();
+        assert_eq!(hexes.cell_count(), 512);
+        assert_eq!(tets.cell_count(), 6 * 512);
+        assert_eq!(hexes.lattice(), (grid.dims(), grid.spacing()));
+        assert_eq!(tets.lattice(), (grid.dims(), grid.spacing()));
+        // Trilinear inside each hexahedron is the grid's own trilinear.
+        let trilinear = |p: Vec3| {
+            let g = (p - grid.origin()) / grid.spacing();
+            let i = g.floor().as_uvec3().min(grid.dims() - 2);
+            let f = g - i.as_vec3();
+            let at = |x: u32, y: u32, z: u32| {
+                let d = grid.dims();
+                grid.value((x + d.x * (y + d.y * z)) as usize)
+            };
+            let mut sum = 0.0;
+            for c in 0..8u32 {
+                let (bx, by, bz) = (c & 1, (c >> 1) & 1, (c >> 2) & 1);
+                let w = (if bx == 1 { f.x } else { 1.0 - f.x })
+                    * (if by == 1 { f.y } else { 1.0 - f.y })
+                    * (if bz == 1 { f.z } else { 1.0 - f.z });
+                sum += w * at(i.x + bx, i.y + by, i.z + bz);
+            }
+            sum
+        };
+        for k in 0..500 {
+            let t = k as f32 / 500.0;
+            let p = Vec3::new((t * 7.3).fract(), (t * 3.1).fract(), t) * 1.98 - 0.99;
+            assert!((hexes.sample(p) - trilinear(p)).abs() < 1e-5, "{p}");
+        }
+        // Tetrahedra agree with the grid at its vertices.
+        let d = grid.dims();
+        for (x, y, z) in [(0, 0, 0), (3, 5, 2), (8, 8, 8)] {
+            let q = grid.origin() + UVec3::new(x, y, z).as_vec3() * grid.spacing();
+            let value = grid.value((x + d.x * (y + d.y * z)) as usize);
+            assert!((tets.sample(q) - value).abs() < 1e-5);
+        }
+        assert_eq!(tetrahedra(5).unwrap().cell_count(), 6 * 64);
+    }
+}

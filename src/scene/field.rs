@@ -1,0 +1,109 @@
+//! A spatial field as renderers march it: a structured grid, or an
+//! unstructured mesh with the lattice its rays march in.
+
+use glam::{UVec3, Vec3};
+
+use super::unstructured::UnstructuredVolume;
+use super::volume::{Filter, StructuredVolume};
+
+/// What a volume samples. Both kinds have a lattice: a structured grid's
+/// own vertices, or for a mesh a lattice over its box spaced by its
+/// typical cell edge (unstructured.rs). Marches, steps and empty-space
+/// bricks are laid on it; only the sample differs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpatialField {
+    Structured(StructuredVolume),
+    Unstructured(UnstructuredVolume),
+}
+
+impl From<StructuredVolume> for SpatialField {
+    fn from(v: StructuredVolume) -> Self {
+        SpatialField::Structured(v)
+    }
+}
+
+impl From<UnstructuredVolume> for SpatialField {
+    fn from(v: UnstructuredVolume) -> Self {
+        SpatialField::Unstructured(v)
+    }
+}
+
+impl SpatialField {
+    pub fn structured(&self) -> Option<&StructuredVolume> {
+        match self {
+            SpatialField::Structured(v) => Some(v),
+            SpatialField::Unstructured(_) => None,
+        }
+    }
+
+    pub fn unstructured(&self) -> Option<&UnstructuredVolume> {
+        match self {
+            SpatialField::Unstructured(m) => Some(m),
+            SpatialField::Structured(_) => None,
+        }
+    }
+
+    /// Lattice vertices per axis.
+    pub fn dims(&self) -> UVec3 {
+        match self {
+            SpatialField::Structured(v) => v.dims(),
+            SpatialField::Unstructured(m) => m.lattice().0,
+        }
+    }
+
+    /// Where lattice vertex (0, 0, 0) lies.
+    pub fn origin(&self) -> Vec3 {
+        match self {
+            SpatialField::Structured(v) => v.origin(),
+            SpatialField::Unstructured(m) => m.bounds().0,
+        }
+    }
+
+    /// Distance between lattice vertices, per axis.
+    pub fn spacing(&self) -> Vec3 {
+        match self {
+            SpatialField::Structured(v) => v.spacing(),
+            SpatialField::Unstructured(m) => m.lattice().1,
+        }
+    }
+
+    /// The cell edges that set the step: a grid's spacing, a mesh's
+    /// typical edge on every axis.
+    pub fn cell_edges(&self) -> Vec3 {
+        match self {
+            SpatialField::Structured(v) => v.spacing(),
+            SpatialField::Unstructured(m) => Vec3::splat(m.edge()),
+        }
+    }
+
+    /// A grid's filter; a mesh interpolates inside each cell (Linear).
+    pub fn filter(&self) -> Filter {
+        match self {
+            SpatialField::Structured(v) => v.filter(),
+            SpatialField::Unstructured(_) => Filter::Linear,
+        }
+    }
+
+    pub fn value_range(&self) -> (f32, f32) {
+        match self {
+            SpatialField::Structured(v) => v.value_range(),
+            SpatialField::Unstructured(m) => m.value_range(),
+        }
+    }
+
+    /// The box the lattice covers (a mesh's own box).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        match self {
+            SpatialField::Structured(v) => v.bounds(),
+            SpatialField::Unstructured(m) => m.bounds(),
+        }
+    }
+
+    /// Bytes of the numbers held.
+    pub fn bytes(&self) -> u64 {
+        match self {
+            SpatialField::Structured(v) => v.voxels().bytes(),
+            SpatialField::Unstructured(m) => m.bytes(),
+        }
+    }
+}
