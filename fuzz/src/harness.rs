@@ -13,7 +13,7 @@ use anari_library_caveray::capi::sys;
 use anari_library_caveray::cave::{MultiViewDisplay, Rig};
 use anari_library_caveray::data::{
     parse_dicom, parse_metaimage, parse_nifti, parse_nrrd, parse_paraview, parse_raw, parse_vtk,
-    sniff, Manifest, VoxelType,
+    parse_vtk_mesh, sniff, Manifest, VoxelType,
 };
 use anari_library_caveray::device::info::SUBTYPES;
 use anari_library_caveray::device::DataType;
@@ -782,5 +782,228 @@ pub fn capi(data: &[u8]) {
         // unloading waits for it, so that each input ends with all it
         // made freed (the leak check runs between inputs).
         anariUnloadLibrary(lib);
+    }
+}
+
+/// A VTK unstructured grid (`.vtu` or legacy `.vtk`): any bytes.
+pub fn vtk_mesh(data: &[u8]) {
+    if let Ok(m) = parse_vtk_mesh(data, "fuzz.vtu", None) {
+        let (lo, hi) = m.mesh.bounds();
+        let _ = m.mesh.sample(0.5 * (lo + hi));
+    }
+}
+
+/// An `unstructured` field built through the C API from the input: the
+/// first bytes pick how many positions, indices and cells there are and
+/// the element types of the index, cell and data arrays; the rest fill
+/// the arrays. The field is committed, put in a volume and rendered on a
+/// small frame.
+#[allow(clippy::too_many_lines)]
+pub fn unstructured(data: &[u8]) {
+    let mut input = Input(data);
+    let mut byte = || input.take(1).first().copied().unwrap_or(0);
+    let (positions_byte, indices_byte, cells_byte, choice) = (byte(), byte(), byte(), byte());
+    let positions = usize::from(positions_byte % 24) + 1;
+    let indices = usize::from(indices_byte) % 48 + 1;
+    let cells = usize::from(cells_byte % 8) + 1;
+    let index_type = if choice & 1 == 0 {
+        DataType::UINT32
+    } else {
+        DataType::UINT64
+    };
+    let type_type = if choice & 2 == 0 {
+        DataType::UINT8
+    } else {
+        DataType::UINT32
+    };
+    let data_type = [
+        DataType::FLOAT32,
+        DataType::FLOAT64,
+        DataType::UFIXED8,
+        DataType::UFIXED16,
+        DataType::FIXED16,
+    ][usize::from(choice >> 2) % 5];
+    let per_cell = choice & 0x80 != 0;
+    let mut fill = |n: usize| -> Vec<u8> {
+        let mut v = input.take(n).to_vec();
+        v.resize(n, 0);
+        v
+    };
+    // Positions as small floats from bytes, so that cells have volume.
+    let position_bytes: Vec<u8> = fill(3 * positions)
+        .iter()
+        .flat_map(|&b| (f32::from(b % 16) * 0.25).to_ne_bytes())
+        .collect();
+    let index_bytes: Vec<u8> = fill(indices)
+        .iter()
+        .flat_map(|&b| {
+            let v = u64::from(b % (positions as u8 + 2));
+            if index_type == DataType::UINT32 {
+                (v as u32).to_ne_bytes().to_vec()
+            } else {
+                v.to_ne_bytes().to_vec()
+            }
+        })
+        .collect();
+    let starts: Vec<u8> = fill(cells)
+        .iter()
+        .scan(0u64, |at, &b| {
+            let here = *at;
+            *at += u64::from(b % 9);
+            Some(here)
+        })
+        .flat_map(|v| {
+            if index_type == DataType::UINT32 {
+                (v as u32).to_ne_bytes().to_vec()
+            } else {
+                v.to_ne_bytes().to_vec()
+            }
+        })
+        .collect();
+    let types: Vec<u8> = fill(cells)
+        .iter()
+        .flat_map(|&b| {
+            let code = [10u32, 12, 13, 14, 11, 7][usize::from(b) % 6];
+            if type_type == DataType::UINT8 {
+                vec![code as u8]
+            } else {
+                code.to_ne_bytes().to_vec()
+            }
+        })
+        .collect();
+    let values = if per_cell { cells } else { positions };
+    let value_bytes = fill(values * data_type.size());
+    let lib = library();
+    // SAFETY: every array's memory holds its count of its element type
+    // and outlives the device's copy of it (arrays are copied at commit).
+    unsafe {
+        let dev = anariNewDevice(lib, c"default".as_ptr());
+        if dev.is_null() {
+            return;
+        }
+        anariSetParameter(
+            dev,
+            dev,
+            c"backend".as_ptr(),
+            DataType::STRING as i32,
+            c"cpu".as_ptr().cast(),
+        );
+        anariCommitParameters(dev, dev);
+        let array = |bytes: &[u8], ty: DataType, n: usize| {
+            anariNewArray1D(
+                dev,
+                bytes.as_ptr().cast(),
+                None,
+                std::ptr::null(),
+                ty as i32,
+                n as u64,
+            )
+        };
+        let field = anariNewSpatialField(dev, c"unstructured".as_ptr());
+        let arrays = [
+            (
+                c"vertex.position",
+                array(&position_bytes, DataType::FLOAT32_VEC3, positions),
+            ),
+            (c"index", array(&index_bytes, index_type, indices)),
+            (c"cell.index", array(&starts, index_type, cells)),
+            (c"cell.type", array(&types, type_type, cells)),
+            (
+                if per_cell {
+                    c"cell.data"
+                } else {
+                    c"vertex.data"
+                },
+                array(&value_bytes, data_type, values),
+            ),
+        ];
+        for (name, a) in &arrays {
+            anariSetParameter(
+                dev,
+                field,
+                name.as_ptr(),
+                DataType::ARRAY1D as i32,
+                (a as *const sys::ANARIArray1D).cast(),
+            );
+        }
+        anariCommitParameters(dev, field);
+        let volume = anariNewVolume(dev, c"transferFunction1D".as_ptr());
+        anariSetParameter(
+            dev,
+            volume,
+            c"value".as_ptr(),
+            DataType::SPATIAL_FIELD as i32,
+            (&field as *const sys::ANARISpatialField).cast(),
+        );
+        anariCommitParameters(dev, volume);
+        let list = anariNewArray1D(
+            dev,
+            (&volume as *const sys::ANARIVolume).cast(),
+            None,
+            std::ptr::null(),
+            DataType::VOLUME as i32,
+            1,
+        );
+        let world = anariNewWorld(dev);
+        anariSetParameter(
+            dev,
+            world,
+            c"volume".as_ptr(),
+            DataType::ARRAY1D as i32,
+            (&list as *const sys::ANARIArray1D).cast(),
+        );
+        anariCommitParameters(dev, world);
+        let frame = anariNewFrame(dev);
+        let size = [8u32, 8];
+        anariSetParameter(
+            dev,
+            frame,
+            c"size".as_ptr(),
+            DataType::UINT32_VEC2 as i32,
+            size.as_ptr().cast(),
+        );
+        let renderer = anariNewRenderer(dev, c"default".as_ptr());
+        anariCommitParameters(dev, renderer);
+        let camera = anariNewCamera(dev, c"perspective".as_ptr());
+        let eye = [2.0f32, 2.0, 8.0];
+        anariSetParameter(
+            dev,
+            camera,
+            c"position".as_ptr(),
+            DataType::FLOAT32_VEC3 as i32,
+            eye.as_ptr().cast(),
+        );
+        anariCommitParameters(dev, camera);
+        anariSetParameter(
+            dev,
+            frame,
+            c"world".as_ptr(),
+            DataType::WORLD as i32,
+            (&world as *const sys::ANARIWorld).cast(),
+        );
+        anariSetParameter(
+            dev,
+            frame,
+            c"renderer".as_ptr(),
+            DataType::RENDERER as i32,
+            (&renderer as *const sys::ANARIRenderer).cast(),
+        );
+        anariSetParameter(
+            dev,
+            frame,
+            c"camera".as_ptr(),
+            DataType::CAMERA as i32,
+            (&camera as *const sys::ANARICamera).cast(),
+        );
+        anariCommitParameters(dev, frame);
+        anariRenderFrame(dev, frame);
+        anariFrameReady(dev, frame, sys::ANARI_WAIT as u32);
+        for (_, a) in arrays {
+            anariRelease(dev, a);
+        }
+        for o in [field, volume, list, world, frame, renderer, camera] {
+            anariRelease(dev, o);
+        }
+        anariRelease(dev, dev);
     }
 }

@@ -22,6 +22,7 @@ mod stored;
 pub mod toml_syntax;
 mod volume_file;
 mod vtk;
+mod vtk_mesh;
 
 pub use cells::{grid_cells, tetrahedra, Cut};
 pub use dicom::{load_dicom, parse_dicom};
@@ -39,6 +40,7 @@ pub use procedural::{concentric_shells, marschner_lobb, shepp_logan, solid_box};
 pub use raw::{load_raw, parse_raw, raw_size, VoxelType};
 pub use volume_file::VolumeFile;
 pub use vtk::{load_vtk, parse_vtk};
+pub use vtk_mesh::{is_vtk_mesh, load_vtk_mesh, parse_vtk_mesh, MeshFile};
 
 use thiserror::Error;
 

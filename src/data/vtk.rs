@@ -424,15 +424,15 @@ fn three(args: &[&str]) -> Option<[f64; 3]> {
     v.try_into().ok()
 }
 
-fn text<'a>(line: &'a [u8], file: &str) -> Result<&'a str, DataError> {
+pub(super) fn text<'a>(line: &'a [u8], file: &str) -> Result<&'a str, DataError> {
     std::str::from_utf8(line)
         .map_err(|_| bad(file, "header", "a header line is not text (UTF-8)".into()))
 }
 
 /// A position in a file's bytes, read as lines, words or raw bytes.
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
+pub(super) struct Reader<'a> {
+    pub(super) bytes: &'a [u8],
+    pub(super) at: usize,
 }
 
 impl<'a> Reader<'a> {
@@ -441,7 +441,7 @@ impl<'a> Reader<'a> {
     }
 
     /// The next line, without its end; `None` at the end of the file.
-    fn line(&mut self) -> Option<&'a [u8]> {
+    pub(super) fn line(&mut self) -> Option<&'a [u8]> {
         let rest = self.rest();
         if rest.is_empty() {
             return None;
@@ -453,7 +453,7 @@ impl<'a> Reader<'a> {
     }
 
     /// Moves past a `LOOKUP_TABLE` line, which may follow `SCALARS`.
-    fn lookup_table(&mut self) {
+    pub(super) fn lookup_table(&mut self) {
         let before = self.at;
         let table = self.line().and_then(|l| l.trim_ascii_start().get(..12));
         if !table.is_some_and(|k| k.eq_ignore_ascii_case(b"LOOKUP_TABLE")) {
@@ -462,7 +462,7 @@ impl<'a> Reader<'a> {
     }
 
     /// The next whitespace-separated word.
-    fn word(&mut self) -> Option<&'a [u8]> {
+    pub(super) fn word(&mut self) -> Option<&'a [u8]> {
         let rest = self.rest();
         let start = rest.iter().position(|b| !b.is_ascii_whitespace())?;
         let len = rest[start..]
@@ -474,7 +474,7 @@ impl<'a> Reader<'a> {
     }
 
     /// The next `n` bytes.
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+    pub(super) fn take(&mut self, n: usize) -> Option<&'a [u8]> {
         let taken = self.rest().get(..n)?;
         self.at += n;
         Some(taken)
@@ -482,7 +482,7 @@ impl<'a> Reader<'a> {
 
     /// The next `n` numbers as text; their buffer no larger than the
     /// text can fill (a number and a space a value), whatever `n` is.
-    fn numbers(&mut self, n: usize) -> Result<Vec<f32>, String> {
+    pub(super) fn numbers(&mut self, n: usize) -> Result<Vec<f32>, String> {
         let most = n.min(self.rest().len().div_ceil(2));
         let mut values = Vec::new();
         values
@@ -518,11 +518,11 @@ impl<'a> Reader<'a> {
 
 /// How an XML file stores its binary arrays.
 #[derive(Clone, Copy)]
-struct Layout {
+pub(super) struct Layout {
     /// The bytes of a header word (`header_type`): 4 or 8.
-    word: usize,
-    big_endian: bool,
-    zlib: bool,
+    pub(super) word: usize,
+    pub(super) big_endian: bool,
+    pub(super) zlib: bool,
 }
 
 impl Layout {
@@ -820,7 +820,7 @@ fn xml(bytes: &[u8], name: &str, map: Option<&Arc<Mapping>>) -> Result<VolumeFil
 
 /// Whether the `<AppendedData ...>` tag at `at` of `bytes` says its data
 /// is raw (else base64), and the data: what follows the `_` after it.
-fn appended_data(bytes: &[u8], at: usize) -> Result<(bool, &[u8]), String> {
+pub(super) fn appended_data(bytes: &[u8], at: usize) -> Result<(bool, &[u8]), String> {
     let rest = bytes.get(at..).unwrap_or_default();
     let close = rest
         .iter()
@@ -846,7 +846,7 @@ fn appended_data(bytes: &[u8], at: usize) -> Result<(bool, &[u8]), String> {
 
 /// Where a binary array's bytes come from: raw appended data, or base64
 /// text decoded as it is taken.
-enum Stream<'a> {
+pub(super) enum Stream<'a> {
     Raw {
         bytes: &'a [u8],
         at: usize,
@@ -863,7 +863,7 @@ enum Stream<'a> {
 }
 
 impl<'a> Stream<'a> {
-    fn base64(text: &'a [u8]) -> Self {
+    pub(super) fn base64(text: &'a [u8]) -> Self {
         let text = text.trim_ascii();
         let text = if text.iter().any(u8::is_ascii_whitespace) {
             Cow::Owned(
@@ -941,7 +941,7 @@ impl<'a> Stream<'a> {
 /// The `want` bytes of a binary array from `stream`, at its header: one
 /// word giving their size, or, compressed, the number of blocks, their
 /// size, the last one's and each one's compressed size, then the blocks.
-fn array_bytes<'a>(
+pub(super) fn array_bytes<'a>(
     stream: &mut Stream<'a>,
     layout: Layout,
     want: usize,
@@ -1013,6 +1013,9 @@ fn array_bytes<'a>(
 }
 
 /// The elements named `tag` in `node`.
-fn child<'a, 'i>(node: roxmltree::Node<'a, 'i>, tag: &str) -> Vec<roxmltree::Node<'a, 'i>> {
+pub(super) fn child<'a, 'i>(
+    node: roxmltree::Node<'a, 'i>,
+    tag: &str,
+) -> Vec<roxmltree::Node<'a, 'i>> {
     node.children().filter(|n| n.has_tag_name(tag)).collect()
 }

@@ -536,3 +536,31 @@ fn a_gpu_memory_budget_pages_what_is_past_it_and_refuses_what_holds_no_brick() {
     }
     remove(&dir);
 }
+
+/// `tets:N` renders every wall as an unstructured volume, and `--array`
+/// is refused for what is not a mesh file (tests/data/vtk_mesh.rs inspects
+/// the files meshio writes).
+#[test]
+fn tetrahedra_render_on_every_wall_and_array_needs_a_mesh_file() {
+    let dir = scratch("tets");
+    let out = render_in(&dir, None, &["--volume", "tets:8", "--backend", "cpu"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let walls = std::fs::read_dir(dir.join("out"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with("_left.png"))
+        .count();
+    assert!(walls >= 5, "{walls} left-eye images");
+    let out = render_in(&dir, None, &["--volume", "tets:8", "--array", "f"]);
+    assert!(!out.status.success());
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("--array names an array of a VTK unstructured grid; 'tets:8' is not one"),
+        "{said}"
+    );
+    remove(&dir);
+}

@@ -10,3 +10,4 @@ mod nifti;
 mod nrrd;
 mod volumes;
 mod vtk;
+mod vtk_mesh;

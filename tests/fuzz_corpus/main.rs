@@ -16,7 +16,7 @@ const LIMIT: Duration = Duration::from_secs(30);
 
 type Target = fn(&[u8]);
 
-const TARGETS: [(&str, Target); 10] = [
+const TARGETS: [(&str, Target); 12] = [
     ("rig", harness::rig),
     ("display", harness::display),
     ("paraview", harness::paraview),
@@ -27,6 +27,8 @@ const TARGETS: [(&str, Target); 10] = [
     ("metaimage", harness::metaimage),
     ("vtk", harness::vtk),
     ("dicom", harness::dicom),
+    ("vtk_mesh", harness::vtk_mesh),
+    ("unstructured", harness::unstructured),
 ];
 
 /// Every file under fuzz/<kind>/<target>/, sorted.

@@ -192,6 +192,9 @@ fn vn(v: &[f64], digits: usize) -> String {
 
 /// What a volume file's header says, and its values' range.
 fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
+    if crate::scene::is_mesh_file(path) {
+        return inspect_mesh(path, json);
+    }
     if !VolumeFormat::of(path).is_some_and(|f| f.readable()) {
         return Err(Failure::Usage(format!(
             "{}: caveray inspect reads volume files with a header: NIfTI (.nii, .nii.gz, \
@@ -238,6 +241,61 @@ fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
     };
     println!("  index to world ({space}, {}):", file.units);
     print_map(&rows, (lo, hi));
+    Ok(())
+}
+
+/// What a VTK unstructured grid holds: its cells by kind, its box, its
+/// arrays and the sampled one's range.
+fn inspect_mesh(path: &Path, json: bool) -> Result<(), Failure> {
+    let file = anari_library_caveray::data::load_vtk_mesh(path, None)
+        .map_err(|e| Failure::Usage(e.to_string()))?;
+    let mesh = &file.mesh;
+    let (lo, hi) = mesh.bounds();
+    let (vlo, vhi) = mesh.value_range();
+    let cells: Vec<(&str, u64)> = mesh
+        .cell_counts()
+        .iter()
+        .map(|(k, n)| (k.name(), *n))
+        .collect();
+    let arrays: Vec<String> = file
+        .arrays
+        .iter()
+        .map(|(name, at_cells)| format!("{name} ({})", if *at_cells { "cells" } else { "points" }))
+        .collect();
+    if json {
+        let by_kind: serde_json::Map<String, serde_json::Value> = cells
+            .iter()
+            .map(|(k, n)| (k.to_string(), serde_json::Value::from(*n)))
+            .collect();
+        let doc = serde_json::json!({
+            "file": path.display().to_string(),
+            "format": format!("VTK unstructured grid ({})", file.flavour),
+            "cells": by_kind,
+            "skipped_cells": file.skipped,
+            "points": mesh.vertex_count(),
+            "bounds": [lo.to_array(), hi.to_array()],
+            "arrays": arrays,
+            "array": file.array,
+            "value_range": [vlo, vhi],
+        });
+        println!("{doc:#}");
+        return Ok(());
+    }
+    println!(
+        "{}: VTK unstructured grid ({})",
+        path.display(),
+        file.flavour
+    );
+    for (kind, n) in &cells {
+        println!("  {kind:<13} {n}");
+    }
+    if file.skipped > 0 {
+        println!("  left out      {} cells of lower dimension", file.skipped);
+    }
+    println!("  points        {}", mesh.vertex_count());
+    println!("  bounds        {lo} to {hi}");
+    println!("  arrays        {}", arrays.join(", "));
+    println!("  value range   {vlo} to {vhi} ({})", file.array);
     Ok(())
 }
 

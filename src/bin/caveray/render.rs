@@ -301,7 +301,12 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     // the transfer function spans comes from every rank's brick.
     let range = match args.parts {
         Some(n) if cluster.size() > 1 => Some(crate::data_parallel::value_range(
-            &loaded.volume,
+            loaded.volume.structured().ok_or_else(|| {
+                Failure::Usage(
+                    "data-parallel rendering splits structured grids; this volume is unstructured"
+                        .into(),
+                )
+            })?,
             n,
             &cluster,
         )?),

@@ -4,13 +4,14 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
-    concentric_shells, isosurface_mesh, load_paraview, load_raw, load_volume_file, marschner_lobb,
-    preset, shepp_logan, solid_box, DataError, Manifest, Orientation, VolumeFormat, VoxelType,
+    concentric_shells, is_vtk_mesh, isosurface_mesh, load_paraview, load_raw, load_volume_file,
+    load_vtk_mesh, marschner_lobb, preset, shepp_logan, solid_box, tetrahedra, DataError, Manifest,
+    Orientation, VolumeFormat, VoxelType,
 };
 use anari_library_caveray::geometry::{Units, VolumeAxis};
 use anari_library_caveray::scene::{
     transformed_box, AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume,
-    Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction,
+    Scene, Shape, ShapeInput, SpatialField, StructuredVolume, SurfaceMaterial, TransferFunction,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -25,11 +26,17 @@ const SHARED_MANIFEST: &str = "../shared/data/volumes/volumes.toml";
 
 #[derive(Args, Clone)]
 pub struct VolumeArgs {
-    /// phantom[:N], shells[:N], marschner-lobb[:N], box[:N], a name from volumes.toml,
-    /// a file with a header (NIfTI, NRRD, MetaImage, VTK image data), a DICOM series'
-    /// folder, or a raw file (then --dims is required). Default: the phantom.
+    /// phantom[:N], shells[:N], marschner-lobb[:N], box[:N], tets[:N] (Marschner-Lobb
+    /// on N^3 vertices cut into 6 (N-1)^3 tetrahedra), a name from volumes.toml, a
+    /// file with a header (NIfTI, NRRD, MetaImage, VTK image data), a VTK unstructured
+    /// grid (.vtu, .vtk), a DICOM series' folder, or a raw file (then --dims is
+    /// required). Default: the phantom.
     #[arg(long)]
     volume: Option<String>,
+    /// The point or cell array of a VTK unstructured grid to render (default: its
+    /// first point array, else its first cell array).
+    #[arg(long)]
+    array: Option<String>,
     /// Raw file dimensions X,Y,Z.
     #[arg(long, value_parser = dims)]
     dims: Option<UVec3>,
@@ -177,7 +184,7 @@ fn dims(s: &str) -> Result<UVec3, String> {
 /// A loaded volume with the transfer function that suits it, not yet placed.
 pub struct Loaded {
     pub name: String,
-    pub volume: StructuredVolume,
+    pub volume: SpatialField,
     /// Where a file with a placement (NIfTI, NRRD) puts its voxels: voxel index
     /// to the file's world, in its units. None: `volume`'s own grid.
     pub index_to_file: Option<glam::Mat4>,
@@ -222,6 +229,11 @@ impl VolumeArgs {
         let spec = self.volume.as_deref().unwrap_or("phantom");
         let mut index_to_file = None;
         let mut metres_per_unit = None;
+        if self.array.is_some() && !Path::new(spec).is_file() {
+            return Err(Failure::Usage(format!(
+                "--array names an array of a VTK unstructured grid; '{spec}' is not one"
+            )));
+        }
         let (name, volume, default_tf, orientation) = if let Some((name, volume)) =
             procedural(spec)?
         {
@@ -231,6 +243,24 @@ impl VolumeArgs {
                 "phantom"
             };
             (name, volume, tf, Orientation::UNKNOWN)
+        } else if is_mesh_file(Path::new(spec)) {
+            if self.has_mesh() {
+                return Err(Failure::Usage(
+                    "--mesh draws a structured grid's isosurface; an unstructured grid has none here"
+                        .into(),
+                ));
+            }
+            let file =
+                load_vtk_mesh(Path::new(spec), self.array.as_deref()).map_err(|e| usage(&e))?;
+            // A mesh is placed by its transform, as a file's own map
+            // places a grid: its cells are not moved.
+            index_to_file = Some(glam::Mat4::IDENTITY);
+            (
+                file_stem(spec),
+                SpatialField::from(file.mesh),
+                "grey",
+                Orientation::UNKNOWN,
+            )
         } else if let Some(format) = VolumeFormat::of(Path::new(spec)).filter(|f| f.readable()) {
             if self.dims.is_some() {
                 return Err(Failure::Usage(format!(
@@ -262,7 +292,7 @@ impl VolumeArgs {
             } else {
                 Orientation::UNKNOWN
             };
-            (file_stem(spec), file.volume, tf, orientation)
+            (file_stem(spec), file.volume.into(), tf, orientation)
         } else if VolumeFormat::of(Path::new(spec)) == Some(VolumeFormat::Gzip) {
             return Err(Failure::Usage(gzipped(spec, self.dims.is_some())));
         } else if self.dims.is_some() || Path::new(spec).is_file() {
@@ -274,7 +304,7 @@ impl VolumeArgs {
             let dtype = VoxelType::parse(&self.dtype).map_err(|e| usage(&e))?;
             let spacing = self.spacing.unwrap_or(glam::DVec3::ONE).as_vec3();
             let volume = load_raw(Path::new(spec), dims, dtype, spacing).map_err(|e| usage(&e))?;
-            (file_stem(spec), volume, "grey", Orientation::UNKNOWN)
+            (file_stem(spec), volume.into(), "grey", Orientation::UNKNOWN)
         } else {
             let manifest =
                 Manifest::locate(self.manifest.as_deref(), &[PathBuf::from(SHARED_MANIFEST)])
@@ -288,7 +318,7 @@ impl VolumeArgs {
             let volume = manifest
                 .load_volume(spec)
                 .map_err(|e| Failure::Runtime(e.to_string()))?;
-            (spec.to_string(), volume, tf, entry.orientation())
+            (spec.to_string(), volume.into(), tf, entry.orientation())
         };
         let tf_spec = self.tf.as_deref().unwrap_or(default_tf);
         let (tf, stretch_tf) = if Path::new(tf_spec).is_file() {
@@ -297,8 +327,10 @@ impl VolumeArgs {
             // numbers of a raw or manifest volume, whose fixed-point
             // values are read as [0, 1], or a file's rescaled values.
             let (mut lo, mut hi) = tf.value_range();
-            if volume.scaling() == volume.voxels().fixed_point() {
-                (lo, hi) = (volume.scaling().apply(lo), volume.scaling().apply(hi));
+            if let Some(volume) = volume.structured() {
+                if volume.scaling() == volume.voxels().fixed_point() {
+                    (lo, hi) = (volume.scaling().apply(lo), volume.scaling().apply(hi));
+                }
             }
             let tf = tf.with_value_range(lo, hi).map_err(|e| usage(&e))?;
             (tf, false)
@@ -377,12 +409,13 @@ impl Loaded {
         // A file's own placement is kept, scaled as a whole so that its
         // box in the file's world fits the rig's; the axes (RAS+ for a
         // NIfTI file) are then turned as any volume's.
-        let (volume, fitted) = match self.index_to_file {
-            None => (
-                self.volume.clone().placed(centre, size),
+        let (volume, fitted) = match (self.index_to_file, &self.volume) {
+            (None, SpatialField::Structured(grid)) => (
+                SpatialField::from(grid.clone().placed(centre, size)),
                 glam::Mat4::IDENTITY,
             ),
-            Some(affine) => {
+            (affine, _) => {
+                let affine = affine.unwrap_or(glam::Mat4::IDENTITY);
                 let scale = size / (hi - lo).max_element().max(f32::MIN_POSITIVE);
                 let fit = glam::Mat4::from_translation(centre)
                     * glam::Mat4::from_scale(glam::Vec3::splat(scale))
@@ -402,9 +435,12 @@ impl Loaded {
             }
         }
         let transform = placement.transform(frame).as_mat4() * fitted;
-        let mesh = self.mesh.shape(&volume, transform)?;
+        let mesh = match volume.structured() {
+            Some(grid) => self.mesh.shape(grid, transform)?,
+            None => None,
+        };
         let scene = Scene::placed(vec![PlacedVolume {
-            volume: std::sync::Arc::new(volume.into()),
+            volume: std::sync::Arc::new(volume),
             transfer_function: tf.into(),
             transform,
             ids: ObjectIds::NONE,
@@ -482,8 +518,9 @@ pub fn at(centre: glam::Vec3, size: f32) -> ScenePlacement {
     }
 }
 
-/// `phantom[:N]`, `shells[:N]`, `marschner-lobb[:N]` or `box[:N]`.
-fn procedural(spec: &str) -> Result<Option<(String, StructuredVolume)>, Failure> {
+/// `phantom[:N]`, `shells[:N]`, `marschner-lobb[:N]`, `box[:N]` or
+/// `tets[:N]`.
+fn procedural(spec: &str) -> Result<Option<(String, SpatialField)>, Failure> {
     let (kind, size) = match spec.split_once(':') {
         Some((k, n)) => {
             let n: u32 = n
@@ -504,9 +541,24 @@ fn procedural(spec: &str) -> Result<Option<(String, StructuredVolume)>, Failure>
         "marschner-lobb" => marschner_lobb,
         "box" => solid_box,
         "shells" => concentric_shells,
+        "tets" => {
+            let mesh = tetrahedra(size).map_err(|e| Failure::Usage(format!("{spec}: {e}")))?;
+            return Ok(Some((format!("{kind}:{size}"), mesh.into())));
+        }
         _ => return Ok(None),
     };
-    Ok(Some((format!("{kind}:{size}"), make(size))))
+    Ok(Some((format!("{kind}:{size}"), make(size).into())))
+}
+
+/// Whether `path` is a VTK unstructured grid, by its first bytes.
+pub fn is_mesh_file(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 4096];
+    let Ok(mut file) = std::fs::File::open(path) else {
+        return false;
+    };
+    let n = file.read(&mut head).unwrap_or(0);
+    path.is_file() && is_vtk_mesh(&head[..n])
 }
 
 fn file_stem(path: &str) -> String {
