@@ -21,7 +21,7 @@ pub enum Cut {
 
 /// The six tetrahedra of a hexahedron (VTK's vertex order): the paths
 /// from vertex 0 to vertex 6 along one edge of each axis.
-const KUHN: [[usize; 4]; 6] = [
+pub const KUHN: [[usize; 4]; 6] = [
     [0, 1, 2, 6],
     [0, 1, 5, 6],
     [0, 3, 2, 6],
@@ -29,6 +29,23 @@ const KUHN: [[usize; 4]; 6] = [
     [0, 4, 5, 6],
     [0, 4, 7, 6],
 ];
+
+/// The vertices of cell (x, y, z) of a grid of `dims` vertices, x
+/// fastest, in VTK's hexahedron order: counter-clockwise at the low z,
+/// then the same above.
+pub fn cell_corners(dims: UVec3, x: u32, y: u32, z: u32) -> [u32; 8] {
+    let id = |x: u32, y: u32, z: u32| x + dims.x * (y + dims.y * z);
+    [
+        id(x, y, z),
+        id(x + 1, y, z),
+        id(x + 1, y + 1, z),
+        id(x, y + 1, z),
+        id(x, y, z + 1),
+        id(x + 1, y, z + 1),
+        id(x + 1, y + 1, z + 1),
+        id(x, y + 1, z + 1),
+    ]
+}
 
 /// `grid`'s cells as a mesh, in the grid's place, with its values (its
 /// scaling applied) at the vertices.
@@ -68,16 +85,7 @@ pub fn grid_cells(
     for z in 0..d.z.saturating_sub(1) {
         for y in 0..d.y.saturating_sub(1) {
             for x in 0..d.x.saturating_sub(1) {
-                let h = [
-                    id(x, y, z),
-                    id(x + 1, y, z),
-                    id(x + 1, y + 1, z),
-                    id(x, y + 1, z),
-                    id(x, y, z + 1),
-                    id(x + 1, y, z + 1),
-                    id(x + 1, y + 1, z + 1),
-                    id(x, y + 1, z + 1),
-                ];
+                let h = cell_corners(d, x, y, z);
                 match cut {
                     Cut::Hexahedra => {
                         input.cell_index.push(input.index.len() as u32);
@@ -108,6 +116,51 @@ pub fn tetrahedra(n: u32) -> Result<UnstructuredVolume, UnstructuredError> {
 mod tests {
     use super::*;
     use crate::data::shepp_logan;
+    use crate::scene::Voxels;
+
+    /// A grid of n^3 unit cells from the origin holding `f` at its vertices.
+    fn unit_grid(n: u32, f: impl Fn(Vec3) -> f32) -> StructuredVolume {
+        let m = n + 1;
+        let values = (0..m * m * m)
+            .map(|i| {
+                f(Vec3::new(
+                    (i % m) as f32,
+                    (i / m % m) as f32,
+                    (i / (m * m)) as f32,
+                ))
+            })
+            .collect::<Vec<f32>>();
+        StructuredVolume::new(
+            UVec3::splat(m),
+            Voxels::F32(values.into()),
+            Vec3::ZERO,
+            Vec3::ONE,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_trilinear_field_on_hexahedra_and_a_linear_one_on_tetrahedra_hold_in_every_cell() {
+        let tri = |p: Vec3| 0.5 + p.x * p.y - 0.3 * p.y * p.z + 0.1 * p.x * p.y * p.z + p.z;
+        let hexes = grid_cells(&unit_grid(5, tri), Cut::Hexahedra).unwrap();
+        let lin = |p: Vec3| 0.5 + 0.2 * p.x - 0.4 * p.y + 0.3 * p.z;
+        let tets = grid_cells(&unit_grid(5, lin), Cut::Tetrahedra).unwrap();
+        assert_eq!(tets.cell_count(), 6 * 125);
+        assert_eq!(hexes.lattice(), (UVec3::splat(6), Vec3::ONE));
+        assert_eq!(hexes.edge(), 1.0);
+        for k in 0..2000u32 {
+            // A low-discrepancy walk through the cube.
+            let t = k as f32 + 0.5;
+            let p = Vec3::new(
+                (t * 0.618_034).fract(),
+                (t * 0.754_878).fract(),
+                (t * 0.569_840).fract(),
+            ) * 5.0;
+            assert!((hexes.sample(p) - tri(p)).abs() < 1e-5, "hex {p}");
+            assert!((tets.sample(p) - lin(p)).abs() < 1e-5, "tet {p}");
+        }
+        assert!(hexes.sample(Vec3::splat(5.2)).is_nan());
+    }
 
     #[test]
     fn hexahedra_sample_as_their_grid_and_tetrahedra_hold_its_vertices() {

@@ -24,7 +24,7 @@ mod volume_file;
 mod vtk;
 mod vtk_mesh;
 
-pub use cells::{grid_cells, tetrahedra, Cut};
+pub use cells::{cell_corners, grid_cells, tetrahedra, Cut, KUHN};
 pub use dicom::{load_dicom, parse_dicom};
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};

@@ -127,28 +127,32 @@ impl Grid<'_> {
 
 /// A legacy file: a few header lines, then keyword lines each followed
 /// by its data, read in order until the first scalars at points.
-fn legacy(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
-    let field = |f: &str, why: String| bad(name, f, why);
-    let mut reader = Reader { bytes, at: 0 };
-    // The magic line and the title, which is anything.
+/// A legacy file's first three lines (the magic line, the title, which
+/// is anything, and ASCII or BINARY): whether it is binary.
+pub(super) fn legacy_header(reader: &mut Reader<'_>, name: &str) -> Result<bool, DataError> {
     reader.line();
     if reader.line().is_none() {
-        return Err(field("header", "the file ends before its title".into()));
+        return Err(bad(name, "header", "the file ends before its title".into()));
     }
-    let binary = match text(reader.line().unwrap_or_default(), name)?
+    match text(reader.line().unwrap_or_default(), name)?
         .trim()
         .to_ascii_uppercase()
         .as_str()
     {
-        "ASCII" => false,
-        "BINARY" => true,
-        other => {
-            return Err(field(
-                "format",
-                format!("'{other}' is neither ASCII nor BINARY"),
-            ))
-        }
-    };
+        "ASCII" => Ok(false),
+        "BINARY" => Ok(true),
+        other => Err(bad(
+            name,
+            "format",
+            format!("'{other}' is neither ASCII nor BINARY"),
+        )),
+    }
+}
+
+fn legacy(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
+    let field = |f: &str, why: String| bad(name, f, why);
+    let mut reader = Reader { bytes, at: 0 };
+    let binary = legacy_header(&mut reader, name)?;
     let mut dataset = false;
     let mut dims = None;
     let (mut spacing, mut origin) = (DVec3::ONE, DVec3::ZERO);
@@ -568,43 +572,8 @@ fn xml(bytes: &[u8], name: &str, map: Option<&Arc<Mapping>>) -> Result<VolumeFil
             format!("'{kind}': caveray reads ImageData (.vti)"),
         ));
     }
-    let big_endian = match root.attribute("byte_order") {
-        None | Some("LittleEndian") => false,
-        Some("BigEndian") => true,
-        Some(other) => {
-            return Err(field(
-                "byte_order",
-                format!("'{other}' is neither LittleEndian nor BigEndian"),
-            ))
-        }
-    };
-    let word = match root.attribute("header_type") {
-        None | Some("UInt32") => 4,
-        Some("UInt64") => 8,
-        Some(other) => {
-            return Err(field(
-                "header_type",
-                format!("'{other}' is neither UInt32 nor UInt64"),
-            ))
-        }
-    };
-    let zlib = match root.attribute("compressor") {
-        None | Some("") => false,
-        Some("vtkZLibDataCompressor") => true,
-        Some(other) => {
-            return Err(field(
-                "compressor",
-                format!(
-                    "'{other}': caveray reads zlib (vtkZLibDataCompressor) or uncompressed data"
-                ),
-            ))
-        }
-    };
-    let layout = Layout {
-        word,
-        big_endian,
-        zlib,
-    };
+    let layout = xml_layout(root, name)?;
+    let big_endian = layout.big_endian;
     let Some(image) = child(root, "ImageData").into_iter().next() else {
         return Err(field("ImageData", "missing".into()));
     };
@@ -809,13 +778,55 @@ fn xml(bytes: &[u8], name: &str, map: Option<&Arc<Mapping>>) -> Result<VolumeFil
         details: vec![
             ("flavour", Value::from("xml")),
             ("encoding", Value::from(encoding)),
-            ("compressed", Value::from(zlib)),
+            ("compressed", Value::from(layout.zlib)),
             ("array", Value::from(array_name)),
             ("spacing", Value::from(spacing.to_array().to_vec())),
             ("origin", Value::from(origin.to_array().to_vec())),
         ],
     }
     .into_file(VolumeFormat::VtkXml, name, map)
+}
+
+/// How an XML file's root says its binary arrays are stored.
+pub(super) fn xml_layout(root: roxmltree::Node<'_, '_>, name: &str) -> Result<Layout, DataError> {
+    let field = |f: &str, why: String| bad(name, f, why);
+    let big_endian = match root.attribute("byte_order") {
+        None | Some("LittleEndian") => false,
+        Some("BigEndian") => true,
+        Some(other) => {
+            return Err(field(
+                "byte_order",
+                format!("'{other}' is neither LittleEndian nor BigEndian"),
+            ))
+        }
+    };
+    let word = match root.attribute("header_type") {
+        None | Some("UInt32") => 4,
+        Some("UInt64") => 8,
+        Some(other) => {
+            return Err(field(
+                "header_type",
+                format!("'{other}' is neither UInt32 nor UInt64"),
+            ))
+        }
+    };
+    let zlib = match root.attribute("compressor") {
+        None | Some("") => false,
+        Some("vtkZLibDataCompressor") => true,
+        Some(other) => {
+            return Err(field(
+                "compressor",
+                format!(
+                    "'{other}': caveray reads zlib (vtkZLibDataCompressor) or uncompressed data"
+                ),
+            ))
+        }
+    };
+    Ok(Layout {
+        word,
+        big_endian,
+        zlib,
+    })
 }
 
 /// Whether the `<AppendedData ...>` tag at `at` of `bytes` says its data

@@ -16,7 +16,9 @@ use glam::Vec3;
 
 use super::files::{self, find};
 use super::stored::out_of_memory;
-use super::vtk::{appended_data, array_bytes, child, text, Layout, Reader, Stream};
+use super::vtk::{
+    appended_data, array_bytes, child, legacy_header, text, xml_layout, Reader, Stream,
+};
 use super::{bad, DataError};
 use crate::scene::{check_counts, MeshInput, MeshValues, UnstructuredVolume};
 
@@ -87,8 +89,6 @@ fn solid(code: u64) -> Option<usize> {
 /// A VTK cell type's name, for refusals.
 fn cell_name(code: u64) -> String {
     match code {
-        20 => "quadratic edge".into(),
-        21..=23 => "quadratic surface cell".into(),
         24 => "quadratic tetrahedron".into(),
         25 => "quadratic hexahedron".into(),
         26 => "quadratic wedge".into(),
@@ -275,46 +275,42 @@ impl Kind {
         }
     }
 
-    /// The number in `b` (`bytes()` long).
-    fn value(self, b: &[u8], big_endian: bool) -> f64 {
+    /// The little-endian bits of the number in `b` (`bytes()` long).
+    fn bits(b: &[u8], big_endian: bool) -> u64 {
         let mut w = [0u8; 8];
         w[..b.len()].copy_from_slice(b);
         if big_endian {
             w[..b.len()].reverse();
         }
+        u64::from_le_bytes(w)
+    }
+
+    /// Whether a signed integer's sign bit is set.
+    fn negative(self, raw: u64) -> bool {
+        matches!(self, Kind::Int(n, true) if raw >> (8 * n - 1) & 1 == 1)
+    }
+
+    /// The number in `b` (`bytes()` long).
+    fn value(self, b: &[u8], big_endian: bool) -> f64 {
+        let raw = Self::bits(b, big_endian);
         match self {
-            Kind::Float(4) => f64::from(f32::from_le_bytes([w[0], w[1], w[2], w[3]])),
-            Kind::Float(_) => f64::from_le_bytes(w),
-            Kind::Int(n, signed) => {
-                let raw = u64::from_le_bytes(w);
-                if signed && n < 8 && raw >> (8 * n - 1) & 1 == 1 {
-                    (raw as i64 - (1i64 << (8 * n))) as f64
-                } else if signed {
-                    raw as i64 as f64
-                } else {
-                    raw as f64
-                }
+            Kind::Float(4) => f64::from(f32::from_bits(raw as u32)),
+            Kind::Float(_) => f64::from_bits(raw),
+            Kind::Int(n, _) if self.negative(raw) => {
+                // Sign-extended from n bytes.
+                (raw | u64::MAX.checked_shl(8 * n as u32).unwrap_or(0)) as i64 as f64
             }
+            Kind::Int(..) => raw as f64,
         }
     }
 
-    /// The whole number in `b`; negative ones wrap to huge (and are then
-    /// refused as indices).
+    /// The whole number in `b`; a negative or fractional one is u64::MAX
+    /// (and then refused as an index).
     fn whole(self, b: &[u8], big_endian: bool) -> u64 {
+        let raw = Self::bits(b, big_endian);
         match self {
-            Kind::Int(..) => {
-                let v = self.value(b, big_endian);
-                if v < 0.0 {
-                    u64::MAX
-                } else {
-                    let mut w = [0u8; 8];
-                    w[..b.len()].copy_from_slice(b);
-                    if big_endian {
-                        w[..b.len()].reverse();
-                    }
-                    u64::from_le_bytes(w)
-                }
-            }
+            Kind::Int(..) if self.negative(raw) => u64::MAX,
+            Kind::Int(..) => raw,
             Kind::Float(_) => {
                 let v = self.value(b, big_endian);
                 if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 {
@@ -420,29 +416,8 @@ fn xml(bytes: &[u8], name: &str) -> Result<Parts, DataError> {
             format!("'{kind}': this reader takes UnstructuredGrid (.vtu)"),
         ));
     }
-    let big_endian = root.attribute("byte_order") == Some("BigEndian");
-    let word = if root.attribute("header_type") == Some("UInt64") {
-        8
-    } else {
-        4
-    };
-    let zlib = match root.attribute("compressor") {
-        None | Some("") => false,
-        Some("vtkZLibDataCompressor") => true,
-        Some(other) => {
-            return Err(field(
-                "compressor",
-                format!(
-                    "'{other}': caveray reads zlib (vtkZLibDataCompressor) or uncompressed data"
-                ),
-            ))
-        }
-    };
-    let layout = Layout {
-        word,
-        big_endian,
-        zlib,
-    };
+    let layout = xml_layout(root, name)?;
+    let big_endian = layout.big_endian;
     let grid = child(root, "UnstructuredGrid")
         .into_iter()
         .next()
@@ -587,24 +562,7 @@ fn xml(bytes: &[u8], name: &str) -> Result<Parts, DataError> {
 fn legacy(bytes: &[u8], name: &str) -> Result<Parts, DataError> {
     let field = |f: &str, why: String| bad(name, f, why);
     let mut reader = Reader { bytes, at: 0 };
-    reader.line();
-    if reader.line().is_none() {
-        return Err(field("header", "the file ends before its title".into()));
-    }
-    let binary = match text(reader.line().unwrap_or_default(), name)?
-        .trim()
-        .to_ascii_uppercase()
-        .as_str()
-    {
-        "ASCII" => false,
-        "BINARY" => true,
-        other => {
-            return Err(field(
-                "format",
-                format!("'{other}' is neither ASCII nor BINARY"),
-            ))
-        }
-    };
+    let binary = legacy_header(&mut reader, name)?;
     // `n` numbers of `kind` from the reader: text or big-endian binary.
     let numbers = |reader: &mut Reader<'_>,
                    n: u64,

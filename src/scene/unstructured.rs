@@ -386,7 +386,8 @@ pub struct UnstructuredVolume {
     /// Per cell in BVH order: its first entry in `index` << 2 | its
     /// kind's code.
     cells: Vec<u32>,
-    values: Placement,
+    /// Per vertex, or per cell in BVH order.
+    values: MeshValues,
     nodes: Vec<MeshNode>,
     /// Cells of each kind, in VTK's code order (10, 12, 13, 14).
     kinds: [u64; 4],
@@ -397,13 +398,6 @@ pub struct UnstructuredVolume {
     lattice_dims: UVec3,
     lattice_spacing: Vec3,
     value_range: (f32, f32),
-}
-
-/// Values and where they sit; per-cell values in BVH order.
-#[derive(Clone, Debug, PartialEq)]
-enum Placement {
-    PerVertex(Vec<f32>),
-    PerCell(Vec<f32>),
 }
 
 impl PartialEq for UnstructuredVolume {
@@ -601,15 +595,15 @@ impl UnstructuredVolume {
                 .map(|&c| cell_index[c as usize] << 2 | kinds_of[c as usize].code()),
         );
         let values = match values {
-            MeshValues::PerVertex(v) => Placement::PerVertex(v),
             MeshValues::PerCell(v) => {
                 let mut sorted = reserve::<f32>(n, "cell values")?;
                 sorted.extend(order.iter().map(|&c| v[c as usize]));
-                Placement::PerCell(sorted)
+                MeshValues::PerCell(sorted)
             }
+            per_vertex => per_vertex,
         };
         let value_range = match &values {
-            Placement::PerVertex(v) => {
+            MeshValues::PerVertex(v) => {
                 index
                     .iter()
                     .fold((f32::INFINITY, f32::NEG_INFINITY), |r, &i| {
@@ -617,7 +611,7 @@ impl UnstructuredVolume {
                         (r.0.min(x), r.1.max(x))
                     })
             }
-            Placement::PerCell(v) => v.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |r, &x| {
+            MeshValues::PerCell(v) => v.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |r, &x| {
                 (r.0.min(x), r.1.max(x))
             }),
         };
@@ -663,7 +657,7 @@ impl UnstructuredVolume {
 
     /// Whether values sit at vertices (else one per cell).
     pub fn per_vertex(&self) -> bool {
-        matches!(self.values, Placement::PerVertex(_))
+        matches!(self.values, MeshValues::PerVertex(_))
     }
 
     /// The median shortest edge of the cells: the step is laid by it as
@@ -686,7 +680,7 @@ impl UnstructuredVolume {
     /// Bytes held: positions, indices, cells, values and BVH.
     pub fn bytes(&self) -> u64 {
         let values = match &self.values {
-            Placement::PerVertex(v) | Placement::PerCell(v) => v.len(),
+            MeshValues::PerVertex(v) | MeshValues::PerCell(v) => v.len(),
         };
         (12 * self.positions.len()
             + 4 * (self.index.len() + self.cells.len() + values)
@@ -713,7 +707,7 @@ impl UnstructuredVolume {
     /// The values: per vertex, or per cell in BVH order.
     pub fn values(&self) -> &[f32] {
         match &self.values {
-            Placement::PerVertex(v) | Placement::PerCell(v) => v,
+            MeshValues::PerVertex(v) | MeshValues::PerCell(v) => v,
         }
     }
 
@@ -736,12 +730,12 @@ impl UnstructuredVolume {
                 let p = self.positions[i as usize];
                 lo = lo.min(p);
                 hi = hi.max(p);
-                if let Placement::PerVertex(v) = &self.values {
+                if let MeshValues::PerVertex(v) = &self.values {
                     a = a.min(v[i as usize]);
                     b = b.max(v[i as usize]);
                 }
             }
-            if let Placement::PerCell(v) = &self.values {
+            if let MeshValues::PerCell(v) = &self.values {
                 (a, b) = (v[c], v[c]);
             }
             ((lo, hi), (a, b))
@@ -794,8 +788,8 @@ impl UnstructuredVolume {
             return None;
         }
         match &self.values {
-            Placement::PerCell(values) => Some(values[c]),
-            Placement::PerVertex(values) => {
+            MeshValues::PerCell(values) => Some(values[c]),
+            MeshValues::PerVertex(values) => {
                 let (w, _) = kind.shape(r);
                 Some(
                     ids.iter()
@@ -1077,74 +1071,6 @@ mod tests {
         }
     }
 
-    /// Hexahedra tiling an n^3 grid of unit cells, `tets`: each cut in
-    /// six tetrahedra around its main diagonal (Kuhn) instead.
-    pub(crate) fn tiled(n: u32, tets: bool, f: impl Fn(Vec3) -> f32) -> UnstructuredVolume {
-        let m = n + 1;
-        let id = |x: u32, y: u32, z: u32| x + m * (y + m * z);
-        let mut positions = Vec::new();
-        for z in 0..m {
-            for y in 0..m {
-                for x in 0..m {
-                    positions.push(Vec3::new(x as f32, y as f32, z as f32));
-                }
-            }
-        }
-        let mut input = MeshInput {
-            positions,
-            ..MeshInput::default()
-        };
-        for z in 0..n {
-            for y in 0..n {
-                for x in 0..n {
-                    let h = [
-                        id(x, y, z),
-                        id(x + 1, y, z),
-                        id(x + 1, y + 1, z),
-                        id(x, y + 1, z),
-                        id(x, y, z + 1),
-                        id(x + 1, y, z + 1),
-                        id(x + 1, y + 1, z + 1),
-                        id(x, y + 1, z + 1),
-                    ];
-                    if tets {
-                        // Paths 0 -> 6 through one, then two axes.
-                        for (a, b) in [(1, 2), (1, 5), (3, 2), (3, 7), (4, 5), (4, 7)] {
-                            input.cell_index.push(input.index.len() as u32);
-                            input.cell_type.push(10);
-                            input.index.extend([h[0], h[a], h[b], h[6]]);
-                        }
-                    } else {
-                        input.cell_index.push(input.index.len() as u32);
-                        input.cell_type.push(12);
-                        input.index.extend(h);
-                    }
-                }
-            }
-        }
-        let values = input.positions.iter().map(|&p| f(p)).collect();
-        UnstructuredVolume::new(input, MeshValues::PerVertex(values))
-            .unwrap_or_else(|e| panic!("{e}"))
-    }
-
-    #[test]
-    fn a_trilinear_field_on_hexahedra_and_a_linear_one_on_tetrahedra_hold_in_every_cell() {
-        let tri = |p: Vec3| 0.5 + p.x * p.y - 0.3 * p.y * p.z + 0.1 * p.x * p.y * p.z + p.z;
-        let hexes = tiled(5, false, tri);
-        let lin = |p: Vec3| 0.5 + 0.2 * p.x - 0.4 * p.y + 0.3 * p.z;
-        let tets = tiled(5, true, lin);
-        assert_eq!(tets.cell_count(), 6 * 125);
-        assert_eq!(hexes.lattice(), (UVec3::splat(6), Vec3::ONE));
-        assert_eq!(hexes.edge(), 1.0);
-        let mut rng = Numbers(5);
-        for _ in 0..2000 {
-            let p = rng.point() * 5.0;
-            assert!((hexes.sample(p) - tri(p)).abs() < 1e-5, "hex {p}");
-            assert!((tets.sample(p) - lin(p)).abs() < 1e-5, "tet {p}");
-        }
-        assert!(hexes.sample(Vec3::splat(5.2)).is_nan());
-    }
-
     #[test]
     fn bad_meshes_are_refused_with_the_array_the_element_and_the_reason() {
         let tet = || MeshInput {
@@ -1228,7 +1154,19 @@ mod tests {
 
     #[test]
     fn the_bvh_stays_within_the_traversal_stack() {
-        let mesh = tiled(12, true, |p| p.x);
+        // The boxes of a 20^3 grid's cells, six tetrahedra's worth each.
+        let mut boxes = Vec::new();
+        for i in 0..20 * 20 * 20 {
+            let lo = Vec3::new((i % 20) as f32, (i / 20 % 20) as f32, (i / 400) as f32);
+            boxes.extend(std::iter::repeat_n((lo, lo + Vec3::ONE), 6));
+        }
+        let (nodes, order) = build_bvh(&boxes).unwrap();
+        let mut seen = order.clone();
+        seen.sort_unstable();
+        assert!(
+            seen.iter().copied().eq(0..boxes.len() as u32),
+            "every cell once"
+        );
         fn depth(nodes: &[MeshNode], i: usize) -> usize {
             let n = nodes[i];
             if n.count > 0 {
@@ -1237,9 +1175,9 @@ mod tests {
                 1 + depth(nodes, n.first as usize).max(depth(nodes, n.first as usize + 1))
             }
         }
-        let d = depth(mesh.nodes(), 0);
+        let d = depth(&nodes, 0);
         // Median splits: at most log2(cells / leaf) + 2 levels.
-        let bound = ((mesh.cell_count() as f32 / LEAF_CELLS as f32).log2().ceil() as usize) + 2;
+        let bound = ((boxes.len() as f32 / LEAF_CELLS as f32).log2().ceil() as usize) + 2;
         assert!(d <= bound, "depth {d} > {bound}");
         // The stack holds a path's pending siblings: one per level.
         assert!(((MAX_MESH_CELLS as f32).log2() as usize) + 2 <= MESH_STACK);

@@ -8,7 +8,9 @@ use crate::common;
 
 use std::sync::Arc;
 
-use anari_library_caveray::data::{concentric_shells, grid_cells, preset, shepp_logan, Cut};
+use anari_library_caveray::data::{
+    cell_corners, concentric_shells, grid_cells, preset, shepp_logan, Cut, KUHN,
+};
 use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays, RayGen};
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{ssim, Frame, FrameDesc, RenderSettings, Renderer, Shading};
@@ -17,7 +19,7 @@ use anari_library_caveray::scene::{
     UnstructuredVolume,
 };
 use common::render::{off_axis_wall, renderers};
-use glam::{Mat4, UVec2, Vec3, Vec4};
+use glam::{Mat4, UVec2, UVec3, Vec3, Vec4};
 
 const SIZE: UVec2 = UVec2::new(48, 48);
 
@@ -79,7 +81,6 @@ fn mixed(n: u32, per_cell: bool) -> UnstructuredVolume {
             }
         }
     }
-    let id = |x: u32, y: u32, z: u32| x + m * (y + m * z);
     let cell = |input: &mut MeshInput, vtk: u32, ids: &[u32]| {
         input.cell_index.push(input.index.len() as u32);
         input.cell_type.push(vtk);
@@ -88,16 +89,7 @@ fn mixed(n: u32, per_cell: bool) -> UnstructuredVolume {
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
-                let c = [
-                    id(x, y, z),
-                    id(x + 1, y, z),
-                    id(x + 1, y + 1, z),
-                    id(x, y + 1, z),
-                    id(x, y, z + 1),
-                    id(x + 1, y, z + 1),
-                    id(x + 1, y + 1, z + 1),
-                    id(x, y + 1, z + 1),
-                ];
+                let c = cell_corners(UVec3::splat(m), x, y, z);
                 match (x + 2 * y + 3 * z) % 4 {
                     0 => cell(&mut input, 12, &c),
                     1 => {
@@ -105,14 +97,7 @@ fn mixed(n: u32, per_cell: bool) -> UnstructuredVolume {
                         cell(&mut input, 13, &[c[0], c[2], c[3], c[4], c[6], c[7]]);
                     }
                     2 => {
-                        for t in [
-                            [0, 1, 2, 6],
-                            [0, 1, 5, 6],
-                            [0, 3, 2, 6],
-                            [0, 3, 7, 6],
-                            [0, 4, 5, 6],
-                            [0, 4, 7, 6],
-                        ] {
+                        for t in KUHN {
                             cell(&mut input, 10, &t.map(|k| c[k]));
                         }
                     }
@@ -243,7 +228,6 @@ fn a_mesh_and_a_grid_share_a_scene_and_skipping_leaves_the_mesh_image_alone() {
 fn two_blobs(n: u32) -> UnstructuredVolume {
     let h = 2.0 / n as f32;
     let m = n + 1;
-    let id = |x: u32, y: u32, z: u32| x + m * (y + m * z);
     let mut input = MeshInput::default();
     for z in 0..m {
         for y in 0..m {
@@ -265,24 +249,8 @@ fn two_blobs(n: u32) -> UnstructuredVolume {
                 {
                     continue;
                 }
-                let c = [
-                    id(x, y, z),
-                    id(x + 1, y, z),
-                    id(x + 1, y + 1, z),
-                    id(x, y + 1, z),
-                    id(x, y, z + 1),
-                    id(x + 1, y, z + 1),
-                    id(x + 1, y + 1, z + 1),
-                    id(x, y + 1, z + 1),
-                ];
-                for t in [
-                    [0, 1, 2, 6],
-                    [0, 1, 5, 6],
-                    [0, 3, 2, 6],
-                    [0, 3, 7, 6],
-                    [0, 4, 5, 6],
-                    [0, 4, 7, 6],
-                ] {
+                let c = cell_corners(UVec3::splat(m), x, y, z);
+                for t in KUHN {
                     input.cell_index.push(input.index.len() as u32);
                     input.cell_type.push(10);
                     input.index.extend(t.map(|k| c[k]));
