@@ -1,6 +1,7 @@
 //! A Python host through pynari (PyPI) and the SDK loader it bundles: the
-//! scene of `python/volume_host.py` on each backend against the Rust API's
-//! image of the same numbers. scripts/deps makes the virtual environment
+//! scenes of `python/volume_host.py` (a grid) and
+//! `python/unstructured_host.py` (one hexahedron) on each backend against
+//! the Rust API's image of the same numbers. scripts/deps makes the virtual environment
 //! (target/pynari); CAVERAY_PYTHON may name another interpreter with
 //! pynari and numpy.
 
@@ -238,5 +239,118 @@ fn stereo_modes(out: &std::path::Path, size: UVec2, settings: &RenderSettings, b
                 "{backend}: sideBySide half at x {x0}"
             );
         }
+    }
+}
+
+/// pynari's host of one unstructured hexahedron (python/unstructured_host.py),
+/// `cell.type` as UINT32, on each backend, against the Rust API's image of
+/// the same cell.
+#[test]
+fn a_pynari_host_renders_an_unstructured_hexahedron() {
+    use anari_library_caveray::scene::{MeshInput, MeshValues, UnstructuredVolume};
+    let Some(python) = python() else {
+        common::missing("pynari's virtual environment (target/pynari, made by scripts/deps)");
+        return;
+    };
+    let dir = scratch("python_unstructured_host");
+    // A skewed hexahedron, so that its inverse map needs Newton's steps.
+    let corners: [[f32; 3]; 8] = [
+        [-1.0, -1.0, -1.0],
+        [1.0, -0.8, -1.0],
+        [0.9, 1.0, -0.9],
+        [-1.0, 0.8, -1.0],
+        [-0.9, -1.0, 1.0],
+        [1.0, -1.0, 0.8],
+        [1.0, 1.0, 1.0],
+        [-0.8, 1.0, 1.0],
+    ];
+    let values = [0.0f32, 0.2, 1.0, 0.4, 0.3, 0.6, 0.9, 0.1];
+    let size = UVec2::new(64, 64);
+    let colors = [[0.1f32, 0.2, 0.6, 0.0], [1.0, 0.7, 0.2, 1.0]];
+    let (position, fovy, unit) = ([1.2f32, 1.6, 3.8], 0.8f32, 0.5f32);
+    let scene = json!({
+        "corners": corners,
+        "values": values,
+        "colors": colors,
+        "unit_distance": unit,
+        "position": position,
+        "direction": position.map(|x| -x),
+        "up": [0.0, 1.0, 0.0],
+        "fovy": fovy,
+        "size": [size.x, size.y],
+    });
+    let scene_file = dir.join("scene.json");
+    std::fs::write(&scene_file, scene.to_string()).unwrap();
+
+    let mesh = UnstructuredVolume::new(
+        MeshInput {
+            positions: corners.iter().map(|c| Vec3::from_array(*c)).collect(),
+            index: (0..8).collect(),
+            cell_index: vec![0],
+            cell_type: vec![12],
+        },
+        MeshValues::PerVertex(values.to_vec()),
+    )
+    .unwrap();
+    let tf = TransferFunction::new(
+        colors.iter().map(|c| Vec4::from_array(*c)).collect(),
+        vec![1.0],
+        (0.0, 1.0),
+        unit,
+    )
+    .unwrap();
+    let eye = DVec3::from_array(position.map(f64::from));
+    let camera = PinholeCamera::new(
+        eye,
+        -eye,
+        DVec3::Y,
+        f64::from(fovy),
+        f64::from(size.x) / f64::from(size.y),
+        ImageRegion::FULL,
+    )
+    .unwrap();
+    let reference = CpuRenderer::new()
+        .render(
+            &Scene::new(mesh, tf),
+            &camera.ray_gen(size),
+            &RenderSettings::default(),
+            &FrameDesc::new(size),
+        )
+        .unwrap();
+    let lit = |f: &anari_library_caveray::render::Frame| {
+        (0..size.x * size.y)
+            .filter(|i| f.pixel(i % size.x, i / size.x).truncate().max_element() > 0.1)
+            .count()
+    };
+    assert!(lit(&reference) > 300, "the cell covers part of the frame");
+    for backend in ["cpu", "gpu"] {
+        let out = dir.join(format!("{backend}.rgba"));
+        let output = host_command(&python)
+            .arg(root().join("tests/capi/python/unstructured_host.py"))
+            .arg(&scene_file)
+            .arg(&out)
+            .env("ANARI_LIBRARY", "caveray")
+            .env("CAVERAY_BACKEND", backend)
+            .env("PYTHONDONTWRITEBYTECODE", "1")
+            .output()
+            .expect("python runs");
+        let text = describe(&output);
+        assert!(output.status.success(), "{backend}: {text}");
+        for severity in ["Error", "Warning", "Fatal"] {
+            assert!(
+                !text.contains(&format!("caveray: {severity}")),
+                "{backend}: {text}"
+            );
+        }
+        let image = read_rgba(&out, size);
+        let s = ssim(&image, &reference).unwrap();
+        println!(
+            "{backend}: SSIM {s:.4} against the Rust API's image, {} pixels lit",
+            lit(&image)
+        );
+        assert!(
+            s >= 0.99,
+            "{backend}: SSIM {s:.4} against the Rust API's image"
+        );
     }
 }
