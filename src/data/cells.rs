@@ -116,7 +116,7 @@ pub fn tetrahedra(n: u32) -> Result<UnstructuredVolume, UnstructuredError> {
 mod tests {
     use super::*;
     use crate::data::shepp_logan;
-    use crate::scene::Voxels;
+    use crate::scene::{NearCells, Voxels};
 
     /// A grid of n^3 unit cells from the origin holding `f` at its vertices.
     fn unit_grid(n: u32, f: impl Fn(Vec3) -> f32) -> StructuredVolume {
@@ -203,5 +203,45 @@ mod tests {
             assert!((tets.sample(q) - value).abs() < 1e-5);
         }
         assert_eq!(tetrahedra(5).unwrap().cell_count(), 6 * 64);
+    }
+
+    #[test]
+    fn walking_from_the_last_cell_finds_what_the_bvh_finds() {
+        let lin = |p: Vec3| 0.5 + 0.2 * p.x - 0.4 * p.y + 0.3 * p.z;
+        let tets = grid_cells(&unit_grid(6, lin), Cut::Tetrahedra).unwrap();
+        let cube = shepp_logan(7);
+        let cells = grid_cells(&cube, Cut::Tetrahedra).unwrap();
+        let mut near = NearCells::default();
+        let (mut walked, mut outside) = (0, 0);
+        // Rays in several directions, a step of a sixth of a cell, some
+        // starting and ending outside the mesh.
+        for r in 0..40u32 {
+            let t = r as f32 + 0.5;
+            let start = Vec3::new((t * 0.618).fract(), (t * 0.754).fract(), -0.2) * 6.0;
+            let dir = Vec3::new(0.4 * (t * 0.3).sin(), 0.4 * (t * 0.7).cos(), 1.0).normalize();
+            for k in 0..40 {
+                let p = start + dir * (k as f32 / 6.0);
+                let (got, want) = (tets.sample_near(p, &mut near), tets.sample(p));
+                if want.is_nan() {
+                    assert!(got.is_nan(), "{p}: {got} outside every cell");
+                    outside += 1;
+                } else {
+                    assert!((got - want).abs() < 1e-5, "{p}: {got} vs {want}");
+                    assert!((got - lin(p)).abs() < 1e-5, "{p}: {got} vs {}", lin(p));
+                    walked += 1;
+                }
+            }
+        }
+        assert!(
+            walked > 800 && outside > 100,
+            "{walked} inside, {outside} out"
+        );
+        // Any start is valid, even one past the cells.
+        let mut far = NearCells {
+            last: u32::MAX - 1,
+            entry: 12_345_678,
+        };
+        let p = Vec3::new(0.1, 0.2, 0.3);
+        assert!((cells.sample_near(p, &mut far) - cells.sample(p)).abs() < 1e-6);
     }
 }

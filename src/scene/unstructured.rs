@@ -20,6 +20,8 @@
 use glam::{Mat3, UVec3, Vec3};
 use thiserror::Error;
 
+use super::tet_walk::{TetCells, TetWalk};
+
 /// The most vertex positions, cells and index entries an unstructured
 /// volume takes. A cell's first index shares a word with its type on the
 /// GPU (30 bits of it); 2^28 positions are 3 GiB of them.
@@ -378,6 +380,17 @@ impl MeshNode {
     }
 }
 
+/// Where the samples of one thread's rays were last found in a mesh
+/// (cell numbers in BVH order; any number is a valid start).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NearCells {
+    /// The previous sample's cell.
+    pub last: u32,
+    /// The cell where the last walk from `last` failed, most often the
+    /// previous ray's first: the next ray starts beside it.
+    pub entry: u32,
+}
+
 /// A checked mesh with its values, its cells in BVH order and its BVH.
 #[derive(Clone, Debug)]
 pub struct UnstructuredVolume {
@@ -398,6 +411,8 @@ pub struct UnstructuredVolume {
     lattice_dims: UVec3,
     lattice_spacing: Vec3,
     value_range: (f32, f32),
+    /// The tetrahedra's inverse maps and neighbours (empty without any).
+    walk: TetWalk,
 }
 
 impl PartialEq for UnstructuredVolume {
@@ -616,7 +631,7 @@ impl UnstructuredVolume {
             }),
         };
         let (lattice_dims, lattice_spacing) = lattice(extent, edge);
-        Ok(Self {
+        let mut mesh = Self {
             positions,
             index,
             cells,
@@ -628,7 +643,15 @@ impl UnstructuredVolume {
             lattice_dims,
             lattice_spacing,
             value_range,
-        })
+            walk: TetWalk::default(),
+        };
+        if mesh.kinds[0] > 0 {
+            mesh.walk = TetWalk::new(&mesh).map_err(|_| UnstructuredError::OutOfMemory {
+                bytes: (n as u64).saturating_mul(TetWalk::CELL_BYTES),
+                what: "the tetrahedra's neighbours",
+            })?;
+        }
+        Ok(mesh)
     }
 
     /// The mesh's box.
@@ -677,14 +700,21 @@ impl UnstructuredVolume {
         self.value_range
     }
 
-    /// Bytes held: positions, indices, cells, values and BVH.
+    /// Bytes held: positions, indices, cells, values, BVH and the
+    /// tetrahedra's walk.
     pub fn bytes(&self) -> u64 {
         let values = match &self.values {
             MeshValues::PerVertex(v) | MeshValues::PerCell(v) => v.len(),
         };
+        let walk = if self.kinds[0] > 0 {
+            TetWalk::CELL_BYTES * self.cells.len() as u64
+        } else {
+            0
+        };
         (12 * self.positions.len()
             + 4 * (self.index.len() + self.cells.len() + values)
             + std::mem::size_of::<MeshNode>() * self.nodes.len()) as u64
+            + walk
     }
 
     pub fn nodes(&self) -> &[MeshNode] {
@@ -745,6 +775,40 @@ impl UnstructuredVolume {
     /// The field at `p` (the mesh's own coordinates): interpolated in the
     /// first cell holding it, NaN outside every cell.
     pub fn sample(&self, p: Vec3) -> f32 {
+        self.locate(p).map_or(f32::NAN, |(v, _)| v)
+    }
+
+    /// The field at `p` as [`sample`](Self::sample) gives it, looked for
+    /// first in and around the cells `near` remembers, which it is left
+    /// remembering for the next sample.
+    pub fn sample_near(&self, p: Vec3, near: &mut NearCells) -> f32 {
+        // Strictly inside: within the tolerance a point may lie in two
+        // cells, which would make cell data depend on where a walk began.
+        if let Some((v, c)) = self.walk.walk(p, near.last, 0.0) {
+            near.last = c;
+            return v;
+        }
+        if let Some((v, c)) = self.walk.walk(p, near.entry, 0.0) {
+            *near = NearCells { last: c, entry: c };
+            return v;
+        }
+        // Other cells are tried on their own, their neighbours not known.
+        if self.kinds[0] < self.cells.len() as u64 {
+            if let Some(v) = self.in_cell_checked(near.last as usize, p) {
+                return v;
+            }
+        }
+        match self.locate(p) {
+            Some((v, c)) => {
+                *near = NearCells { last: c, entry: c };
+                v
+            }
+            None => f32::NAN,
+        }
+    }
+
+    /// The field at `p` and the first cell (BVH order) holding it.
+    fn locate(&self, p: Vec3) -> Option<(f32, u32)> {
         let mut stack = [0u32; MESH_STACK];
         let mut depth = 1;
         while depth > 0 {
@@ -761,11 +825,17 @@ impl UnstructuredVolume {
             }
             for c in node.first..node.first + node.count {
                 if let Some(v) = self.in_cell(c as usize, p) {
-                    return v;
+                    return Some((v, c));
                 }
             }
         }
-        f32::NAN
+        None
+    }
+
+    /// [`in_cell`](Self::in_cell) for any number `c`, `None` past the
+    /// cells.
+    fn in_cell_checked(&self, c: usize, p: Vec3) -> Option<f32> {
+        (c < self.cells.len()).then(|| self.in_cell(c, p)).flatten()
     }
 
     /// The field at `p` if cell `c` (BVH order) holds it.
@@ -798,6 +868,30 @@ impl UnstructuredVolume {
                         .sum(),
                 )
             }
+        }
+    }
+}
+
+impl TetCells for UnstructuredVolume {
+    fn len(&self) -> usize {
+        self.cells.len()
+    }
+
+    fn tetrahedron(&self, c: usize) -> Option<[u32; 4]> {
+        match self.cell(c) {
+            (CellKind::Tetrahedron, ids) => Some([ids[0], ids[1], ids[2], ids[3]]),
+            _ => None,
+        }
+    }
+
+    fn position(&self, vertex: u32) -> Vec3 {
+        self.positions[vertex as usize]
+    }
+
+    fn values(&self, c: usize, ids: [u32; 4]) -> [f32; 4] {
+        match &self.values {
+            MeshValues::PerVertex(v) => ids.map(|i| v[i as usize]),
+            MeshValues::PerCell(v) => [v[c]; 4],
         }
     }
 }

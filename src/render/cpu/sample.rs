@@ -1,3 +1,4 @@
+use std::cell::Cell;
 use std::sync::Arc;
 
 use glam::{IVec3, Vec3, Vec4};
@@ -7,7 +8,9 @@ use crate::render::empty_space::{Along, EmptySpace, Region};
 use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::shapes::ShapeSet;
-use crate::scene::{Filter, Scaling, SpatialField, UnstructuredVolume, Voxels, TABLE_SIZE};
+use crate::scene::{
+    Filter, NearCells, Scaling, SpatialField, UnstructuredVolume, Voxels, TABLE_SIZE,
+};
 
 /// One volume as the CPU reads it: its numbers in their stored type (or
 /// an f32 copy made for the packet path) and the scaling that makes them
@@ -19,6 +22,33 @@ pub(super) struct Grid<'a> {
     table: &'a [Vec4],
     /// Where the plan skips: the clear bricks under this table.
     pub space: Option<&'a EmptySpace>,
+}
+
+thread_local! {
+    /// The cell each of the meshes last sampled on this thread (by
+    /// address) was found in: a thread marches one ray at a time, so the
+    /// next sample's cell is found from there (the field is shared by
+    /// all threads, and a ray's state does not reach its samples).
+    static NEAR: Cell<[(usize, NearCells); 4]> = const { Cell::new([(0, NearCells { last: 0, entry: 0 }); 4]) };
+}
+
+/// The mesh's field at `p`, looked for from this thread's last cell in it.
+fn mesh_sample(mesh: &UnstructuredVolume, p: Vec3) -> f32 {
+    let key = std::ptr::from_ref(mesh) as usize;
+    NEAR.with(|near| {
+        let mut slots = near.get();
+        let k = match slots.iter().position(|s| s.0 == key) {
+            Some(k) => k,
+            None => {
+                slots.rotate_right(1);
+                slots[0] = (key, NearCells::default());
+                0
+            }
+        };
+        let v = mesh.sample_near(p, &mut slots[k].1);
+        near.set(slots);
+        v
+    })
 }
 
 /// A volume's numbers as stored.
@@ -72,7 +102,7 @@ impl Grid<'_> {
     pub fn sample(&self, g: Vec3) -> f32 {
         if let Numbers::Mesh(mesh) = self.numbers {
             let (_, spacing) = mesh.lattice();
-            return mesh.sample(mesh.bounds().0 + g * spacing);
+            return mesh_sample(mesh, mesh.bounds().0 + g * spacing);
         }
         let hi = self.plan.dims.as_ivec3() - IVec3::ONE;
         let g = g.clamp(Vec3::ZERO, hi.as_vec3());
