@@ -15,6 +15,7 @@
 use std::collections::TryReserveError;
 
 use glam::{Mat3, Vec3};
+use rayon::prelude::*;
 
 /// No cell: the mesh's boundary, or a cell the walk cannot enter.
 pub const NO_CELL: u32 = u32::MAX;
@@ -58,8 +59,11 @@ pub struct TetWalk {
 }
 
 /// What a walk needs to know of a mesh's cells.
-pub trait TetCells {
+pub trait TetCells: Sync {
     fn len(&self) -> usize;
+    /// How many of the cells are tetrahedra.
+    fn tetrahedra(&self) -> usize;
+
     /// Cell `c`'s four vertex numbers, if it is a tetrahedron.
     fn tetrahedron(&self, c: usize) -> Option<[u32; 4]>;
     fn position(&self, vertex: u32) -> Vec3;
@@ -75,38 +79,42 @@ impl TetWalk {
         let n = cells.len();
         let mut tets = Vec::new();
         tets.try_reserve_exact(n)?;
-        // Each tetrahedron's faces as their sorted vertex numbers and
-        // cell << 2 | the vertex opposite; shared faces sort together.
-        let mut faces: Vec<[u32; 4]> = Vec::new();
+        // Each tetrahedron's faces as their sorted vertex numbers (the
+        // high 96 bits) and cell << 2 | the vertex opposite (the low 32):
+        // shared faces sort together.
+        let mut faces: Vec<u128> = Vec::new();
+        faces.try_reserve_exact(4 * cells.tetrahedra())?;
         for c in 0..n {
             let Some(ids) = cells.tetrahedron(c) else {
                 tets.push(Tet::NONE);
                 continue;
             };
             tets.push(tetrahedron(cells, c, ids));
-            if faces.is_empty() {
-                faces.try_reserve_exact(4 * (n - c))?;
-            }
             for (i, face) in [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]
                 .into_iter()
                 .enumerate()
             {
                 let mut key = face.map(|k| ids[k]);
                 key.sort_unstable();
-                faces.push([key[0], key[1], key[2], (c as u32) << 2 | i as u32]);
+                faces.push(
+                    u128::from(key[0]) << 96
+                        | u128::from(key[1]) << 64
+                        | u128::from(key[2]) << 32
+                        | u128::from((c as u32) << 2 | i as u32),
+                );
             }
         }
-        faces.sort_unstable();
+        faces.par_sort_unstable();
         let mut k = 0;
         while k < faces.len() {
             let mut end = k + 1;
-            while end < faces.len() && faces[end][..3] == faces[k][..3] {
+            while end < faces.len() && faces[end] >> 32 == faces[k] >> 32 {
                 end += 1;
             }
             // Exactly two cells on a face are neighbours; a face of three
             // or more (a non-manifold mesh) is left to the BVH.
             if end - k == 2 {
-                let (a, b) = (faces[k][3], faces[k + 1][3]);
+                let (a, b) = (faces[k] as u32, faces[k + 1] as u32);
                 tets[(a >> 2) as usize].next[(a & 3) as usize] = b >> 2;
                 tets[(b >> 2) as usize].next[(b & 3) as usize] = a >> 2;
             }

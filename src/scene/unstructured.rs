@@ -877,6 +877,10 @@ impl TetCells for UnstructuredVolume {
         self.cells.len()
     }
 
+    fn tetrahedra(&self) -> usize {
+        self.kinds[0] as usize
+    }
+
     fn tetrahedron(&self, c: usize) -> Option<[u32; 4]> {
         match self.cell(c) {
             (CellKind::Tetrahedron, ids) => Some([ids[0], ids[1], ids[2], ids[3]]),
@@ -925,6 +929,107 @@ fn build_bvh(boxes: &[(Vec3, Vec3)]) -> Result<(Vec<MeshNode>, Vec<u32>), Unstru
     let n = boxes.len();
     let mut order = reserve::<u32>(n, "the cell order")?;
     order.extend(0..n as u32);
+    let mut centres = reserve::<Vec3>(n, "the cells' centres")?;
+    centres.extend(boxes.iter().map(|(lo, hi)| 0.5 * (*lo + *hi)));
+    let nodes = subtree(&mut order, 0, boxes, &centres)?;
+    Ok((nodes, order))
+}
+
+/// Subtrees of more cells than this are split on one thread and built on
+/// two.
+const PARALLEL_CELLS: usize = 1 << 16;
+
+/// A node's box, and the axis its cells' centres spread most along.
+fn split_axis(order: &[u32], boxes: &[(Vec3, Vec3)], centres: &[Vec3]) -> (MeshNode, usize) {
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    let (mut clo, mut chi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for &c in order {
+        let (a, b) = boxes[c as usize];
+        lo = lo.min(a);
+        hi = hi.max(b);
+        clo = clo.min(centres[c as usize]);
+        chi = chi.max(centres[c as usize]);
+    }
+    let spread = chi - clo;
+    let axis = if spread.x >= spread.y && spread.x >= spread.z {
+        0
+    } else if spread.y >= spread.z {
+        1
+    } else {
+        2
+    };
+    let node = MeshNode {
+        lo: lo.to_array(),
+        first: 0,
+        hi: hi.to_array(),
+        count: 0,
+    };
+    (node, axis)
+}
+
+/// The BVH over the cells `order` (which it reorders), the first of
+/// them at `base` in the whole order; its root first, every node's two
+/// children side by side.
+fn subtree(
+    order: &mut [u32],
+    base: usize,
+    boxes: &[(Vec3, Vec3)],
+    centres: &[Vec3],
+) -> Result<Vec<MeshNode>, UnstructuredError> {
+    let n = order.len();
+    if n <= PARALLEL_CELLS {
+        return serial_subtree(order, base, boxes, centres);
+    }
+    let (mut root, axis) = split_axis(order, boxes, centres);
+    let mid = n / 2;
+    order.select_nth_unstable_by(mid, |&a, &b| {
+        centres[a as usize][axis].total_cmp(&centres[b as usize][axis])
+    });
+    let (left, right) = order.split_at_mut(mid);
+    let (left, right) = rayon::join(
+        || subtree(left, base, boxes, centres),
+        || subtree(right, base + mid, boxes, centres),
+    );
+    let (left, right) = (left?, right?);
+    // [root, left's root, right's root, left's others, right's others]
+    let mut nodes = reserve::<MeshNode>(1 + left.len() + right.len(), "the cells' BVH")?;
+    let others = 3 + left.len() - 1;
+    let place = |i: u32, root_at: u32, from: usize| {
+        if i == 0 {
+            root_at
+        } else {
+            (from + i as usize - 1) as u32
+        }
+    };
+    root.first = 1;
+    nodes.push(root);
+    for (part, root_at, from) in [(&left, 1, 3), (&right, 2, others)] {
+        let mut top = part[0];
+        if top.count == 0 {
+            top.first = place(top.first, root_at, from);
+        }
+        nodes.push(top);
+    }
+    for (part, root_at, from) in [(&left, 1, 3), (&right, 2, others)] {
+        nodes.extend(part[1..].iter().map(|&node| {
+            let mut node = node;
+            if node.count == 0 {
+                node.first = place(node.first, root_at, from);
+            }
+            node
+        }));
+    }
+    Ok(nodes)
+}
+
+/// [`subtree`] on one thread.
+fn serial_subtree(
+    order: &mut [u32],
+    base: usize,
+    boxes: &[(Vec3, Vec3)],
+    centres: &[Vec3],
+) -> Result<Vec<MeshNode>, UnstructuredError> {
+    let n = order.len();
     let mut nodes = reserve::<MeshNode>((2 * n / LEAF_CELLS).max(1) + 1, "the cells' BVH")?;
     nodes.push(MeshNode {
         lo: [0.0; 3],
@@ -932,58 +1037,31 @@ fn build_bvh(boxes: &[(Vec3, Vec3)]) -> Result<(Vec<MeshNode>, Vec<u32>), Unstru
         hi: [0.0; 3],
         count: 0,
     });
-    let centre = |c: u32| {
-        let (lo, hi) = boxes[c as usize];
-        0.5 * (lo + hi)
-    };
     // (node, first cell, end)
     let mut work = vec![(0usize, 0usize, n)];
     while let Some((node, start, end)) = work.pop() {
-        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        let (mut clo, mut chi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for &c in &order[start..end] {
-            let (a, b) = boxes[c as usize];
-            lo = lo.min(a);
-            hi = hi.max(b);
-            clo = clo.min(centre(c));
-            chi = chi.max(centre(c));
-        }
+        let (mut box_node, axis) = split_axis(&order[start..end], boxes, centres);
         let count = end - start;
         if count <= LEAF_CELLS {
-            nodes[node] = MeshNode {
-                lo: lo.to_array(),
-                first: start as u32,
-                hi: hi.to_array(),
-                count: count as u32,
-            };
+            box_node.first = (base + start) as u32;
+            box_node.count = count as u32;
+            nodes[node] = box_node;
             continue;
         }
-        let spread = chi - clo;
-        let axis = if spread.x >= spread.y && spread.x >= spread.z {
-            0
-        } else if spread.y >= spread.z {
-            1
-        } else {
-            2
-        };
         let mid = start + count / 2;
         order[start..end].select_nth_unstable_by(count / 2, |&a, &b| {
-            centre(a)[axis].total_cmp(&centre(b)[axis])
+            centres[a as usize][axis].total_cmp(&centres[b as usize][axis])
         });
         let child = nodes.len();
         let blank = nodes[node];
         nodes.push(blank);
         nodes.push(blank);
-        nodes[node] = MeshNode {
-            lo: lo.to_array(),
-            first: child as u32,
-            hi: hi.to_array(),
-            count: 0,
-        };
+        box_node.first = child as u32;
+        nodes[node] = box_node;
         work.push((child, start, mid));
         work.push((child + 1, mid, end));
     }
-    Ok((nodes, order))
+    Ok(nodes)
 }
 
 #[cfg(test)]
@@ -1247,13 +1325,15 @@ mod tests {
     }
 
     #[test]
-    fn the_bvh_stays_within_the_traversal_stack() {
-        // The boxes of a 20^3 grid's cells, six tetrahedra's worth each.
+    fn the_bvh_stays_within_the_traversal_stack_and_holds_every_cell_once() {
+        // The boxes of a 30^3 grid's cells, six tetrahedra's worth each:
+        // enough for the top levels to be built on two threads.
         let mut boxes = Vec::new();
-        for i in 0..20 * 20 * 20 {
-            let lo = Vec3::new((i % 20) as f32, (i / 20 % 20) as f32, (i / 400) as f32);
+        for i in 0..30 * 30 * 30 {
+            let lo = Vec3::new((i % 30) as f32, (i / 30 % 30) as f32, (i / 900) as f32);
             boxes.extend(std::iter::repeat_n((lo, lo + Vec3::ONE), 6));
         }
+        assert!(boxes.len() > 2 * PARALLEL_CELLS);
         let (nodes, order) = build_bvh(&boxes).unwrap();
         let mut seen = order.clone();
         seen.sort_unstable();
@@ -1261,15 +1341,40 @@ mod tests {
             seen.iter().copied().eq(0..boxes.len() as u32),
             "every cell once"
         );
-        fn depth(nodes: &[MeshNode], i: usize) -> usize {
+        let holds = |n: &MeshNode, (lo, hi): (Vec3, Vec3)| {
+            Vec3::from(n.lo).cmple(lo).all() && Vec3::from(n.hi).cmpge(hi).all()
+        };
+        // Depth, and the boxes of children and cells within their node's;
+        // every node reached once.
+        fn walk(
+            nodes: &[MeshNode],
+            i: usize,
+            reached: &mut Vec<bool>,
+            check: &dyn Fn(&MeshNode, usize) -> bool,
+        ) -> usize {
+            assert!(!reached[i], "node {i} reached twice");
+            reached[i] = true;
             let n = nodes[i];
             if n.count > 0 {
-                1
-            } else {
-                1 + depth(nodes, n.first as usize).max(depth(nodes, n.first as usize + 1))
+                assert!(check(&n, i), "leaf {i} does not hold its cells");
+                return 1;
             }
+            let (a, b) = (n.first as usize, n.first as usize + 1);
+            for c in [a, b] {
+                let child = (Vec3::from(nodes[c].lo), Vec3::from(nodes[c].hi));
+                assert!(
+                    Vec3::from(n.lo).cmple(child.0).all() && Vec3::from(n.hi).cmpge(child.1).all(),
+                    "node {i} does not hold child {c}"
+                );
+            }
+            1 + walk(nodes, a, reached, check).max(walk(nodes, b, reached, check))
         }
-        let d = depth(&nodes, 0);
+        let check = |n: &MeshNode, _: usize| {
+            (n.first..n.first + n.count).all(|k| holds(n, boxes[order[k as usize] as usize]))
+        };
+        let mut reached = vec![false; nodes.len()];
+        let d = walk(&nodes, 0, &mut reached, &check);
+        assert!(reached.iter().all(|&r| r), "every node reached");
         // Median splits: at most log2(cells / leaf) + 2 levels.
         let bound = ((boxes.len() as f32 / LEAF_CELLS as f32).log2().ceil() as usize) + 2;
         assert!(d <= bound, "depth {d} > {bound}");

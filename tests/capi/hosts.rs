@@ -293,6 +293,68 @@ fn cave_wall_example_renders_both_eyes() {
     );
 }
 
+/// The unstructured benchmark host runs small: the grid and its
+/// tetrahedra report their frames, first frame and peak memory, take
+/// about the same samples and show about the same picture.
+#[test]
+fn the_cells_benchmark_host_reports_both_fields() {
+    let dir = scratch("c_bench_cells");
+    let program = dir.join("bench_cells");
+    compile(&["examples/c/bench_cells.c"], &program, false, true);
+    let mut runs = Vec::new();
+    for field in ["structured", "unstructured"] {
+        let json = dir.join(format!("{field}.json"));
+        let ppm = dir.join(format!("{field}.ppm"));
+        let output = common::c::host_command(&program)
+            .args(["--field", field, "--backend", "cpu", "--size", "48"])
+            .args(["--vertices", "12", "--frames", "2", "--json"])
+            .arg(&json)
+            .arg("--ppm")
+            .arg(&ppm)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "bench_cells: {}",
+            describe(&output)
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(report["benchmark"], "capi-cells");
+        assert_eq!(report["field"], field);
+        assert_eq!(report["ms"].as_array().unwrap().len(), 2);
+        assert!(report["first_frame_ms"].as_f64().unwrap() > 0.0);
+        assert!(report["peak_rss_mib"].as_f64().unwrap() > 1.0);
+        let tets = report["tetrahedra"].as_u64().unwrap();
+        assert_eq!(
+            tets,
+            if field == "structured" {
+                0
+            } else {
+                6 * 11 * 11 * 11
+            }
+        );
+        let ppm = std::fs::read(&ppm).unwrap();
+        // Past the header "P6\n48 48\n255\n": pixels not the background.
+        let lit = ppm[ppm.len() - 48 * 48 * 3..]
+            .chunks(3)
+            .filter(|p| p.iter().any(|&c| c > 40))
+            .count();
+        runs.push((report["last_frame_samples"].as_u64().unwrap(), lit));
+    }
+    let ((grid, grid_lit), (mesh, mesh_lit)) = (runs[0], runs[1]);
+    eprintln!("samples {grid} / {mesh}, lit pixels {grid_lit} / {mesh_lit}");
+    assert!(grid > 0 && grid_lit > 100, "the grid shows: {runs:?}");
+    assert!(
+        (mesh as f64 / grid as f64 - 1.0).abs() < 0.1,
+        "the same samples: {runs:?}"
+    );
+    assert!(
+        (mesh_lit as f64 / grid_lit as f64 - 1.0).abs() < 0.1,
+        "the same picture: {runs:?}"
+    );
+}
+
 /// The benchmark host of examples/c/ runs small, writes its JSON with the
 /// samples the device counted, and skipping changes the samples, not the
 /// picture.

@@ -354,3 +354,62 @@ fn a_pynari_host_renders_an_unstructured_hexahedron() {
         );
     }
 }
+
+/// The directory of the ANARI SDK loader (libanari.so.0) pynari bundles.
+fn sdk_loader_dir(python: &std::path::Path) -> Option<PathBuf> {
+    let out = std::process::Command::new(python)
+        .args([
+            "-c",
+            "import os, pynari; print(os.path.dirname(pynari.__file__))",
+        ])
+        .output()
+        .ok()?;
+    let dir = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+    dir.join("libanari.so.0").exists().then_some(dir)
+}
+
+/// The OpenCOVER-style host of `c/unstructured_host.c`, linked to the SDK's
+/// own loader instead of to caveray: `anariLoadLibrary("caveray")` then
+/// finds the device library by name, and every call goes through the
+/// loader's dispatch.
+#[test]
+fn the_unstructured_host_renders_through_the_sdk_loader() {
+    let Some(python) = python() else {
+        common::missing("pynari's virtual environment (target/pynari, made by scripts/deps)");
+        return;
+    };
+    let Some(loader) = sdk_loader_dir(&python) else {
+        panic!("pynari has no libanari.so.0 beside it: the SDK loader it bundles moved");
+    };
+    let dir = scratch("unstructured_host_sdk_loader");
+    let program = dir.join("unstructured_host");
+    let output = std::process::Command::new("cc")
+        .current_dir(root())
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-g", "-Iinclude"])
+        .arg("tests/capi/c/unstructured_host.c")
+        .arg("-o")
+        .arg(&program)
+        .arg(format!("-L{}", loader.display()))
+        .arg("-l:libanari.so.0")
+        .arg(format!("-Wl,-rpath,{}", loader.display()))
+        .output()
+        .expect("a C compiler (cc) is installed");
+    assert!(output.status.success(), "cc: {}", describe(&output));
+    let linked = std::process::Command::new("ldd")
+        .arg(&program)
+        .output()
+        .expect("ldd runs");
+    let linked = String::from_utf8_lossy(&linked.stdout);
+    assert!(
+        linked.contains("libanari.so.0") && !linked.contains("libanari_library_caveray"),
+        "the host is linked to the loader alone:\n{linked}"
+    );
+    let output = host_command(&program).output().expect("the host runs");
+    let text = describe(&output);
+    assert!(output.status.success(), "unstructured host: {text}");
+    assert!(!text.contains("FAIL"), "unstructured host: {text}");
+    assert!(
+        text.matches("PASS").count() >= 8,
+        "unstructured host: {text}"
+    );
+}

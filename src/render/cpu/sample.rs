@@ -25,28 +25,34 @@ pub(super) struct Grid<'a> {
 }
 
 thread_local! {
-    /// The cell each of the meshes last sampled on this thread (by
-    /// address) was found in: a thread marches one ray at a time, so the
-    /// next sample's cell is found from there (the field is shared by
-    /// all threads, and a ray's state does not reach its samples).
-    static NEAR: Cell<[(usize, NearCells); 4]> = const { Cell::new([(0, NearCells { last: 0, entry: 0 }); 4]) };
+    /// Where this thread last found samples in each of the meshes it
+    /// sampled most recently (by address): a thread marches one ray at a
+    /// time, so the next sample's cell is found from there (the field is
+    /// shared by all threads, and a ray's state does not reach its
+    /// samples). The most recent mesh first.
+    static NEAR: [Cell<(usize, NearCells)>; 4] =
+        const { [const { Cell::new((0, NearCells { last: 0, entry: 0 })) }; 4] };
 }
 
 /// The mesh's field at `p`, looked for from this thread's last cell in it.
 fn mesh_sample(mesh: &UnstructuredVolume, p: Vec3) -> f32 {
     let key = std::ptr::from_ref(mesh) as usize;
-    NEAR.with(|near| {
-        let mut slots = near.get();
-        let k = match slots.iter().position(|s| s.0 == key) {
-            Some(k) => k,
-            None => {
-                slots.rotate_right(1);
-                slots[0] = (key, NearCells::default());
-                0
+    NEAR.with(|slots| {
+        let (first, mut near) = slots[0].get();
+        if first != key {
+            // Bring this mesh's slot (or a fresh one) to the front.
+            let k = slots.iter().position(|s| s.get().0 == key).unwrap_or(3);
+            near = if k < 3 || slots[3].get().0 == key {
+                slots[k].get().1
+            } else {
+                NearCells::default()
+            };
+            for i in (1..=k).rev() {
+                slots[i].set(slots[i - 1].get());
             }
-        };
-        let v = mesh.sample_near(p, &mut slots[k].1);
-        near.set(slots);
+        }
+        let v = mesh.sample_near(p, &mut near);
+        slots[0].set((key, near));
         v
     })
 }

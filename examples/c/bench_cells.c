@@ -1,0 +1,332 @@
+/* A benchmark host for unstructured volumes: what a user of the C API
+ * sees, from the first commit to the frames after. The vertices of an
+ * N^3 grid on [-1, 1]^3 hold the shells of bench_shells.c; the same
+ * vertices are sent either as a structuredRegular field or as an
+ * unstructured one, each grid cell cut into six tetrahedra around its
+ * main diagonal (Kuhn), 6 (N - 1)^3 of them with values per vertex. A
+ * perspective camera circles them at 768^2 and every frame is rendered,
+ * waited for and mapped.
+ *
+ *   cc -std=c99 -O2 -Iinclude examples/c/bench_cells.c -Ltarget/release \
+ *      -lanari_library_caveray -Wl,-rpath,$PWD/target/release -lm -o bench_cells
+ *   ./bench_cells [--field unstructured|structured] [--vertices 57]
+ *                 [--backend auto|cpu|gpu] [--size 768] [--frames 4]
+ *                 [--rate 1] [--json out.json] [--ppm first_frame.ppm]
+ *
+ * Reports the first frame (from the first array handed over to the first
+ * image mapped: the device's checks, its BVH, neighbours and brick
+ * ranges, and the frame), the frames after it, and the process's peak
+ * resident memory, which includes the host's own arrays. */
+#define _POSIX_C_SOURCE 200809L
+#include <anari/anari.h>
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+static void on_status(const void *user, ANARIDevice device, ANARIObject source,
+    ANARIDataType sourceType, ANARIStatusSeverity severity, ANARIStatusCode code,
+    const char *message)
+{
+  (void)user, (void)device, (void)source, (void)sourceType, (void)code;
+  if (severity <= ANARI_SEVERITY_WARNING)
+    fprintf(stderr, "caveray: %s\n", message);
+  else if (severity == ANARI_SEVERITY_INFO)
+    fprintf(stderr, "caveray (info): %s\n", message);
+}
+
+static double now_ms(void)
+{
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+
+/* The shells of caveray's `shells` volume: tents of half-width 0.05 peaking
+ * at 1 on radii 0.3, 0.5, 0.7 and 0.9 of [-1, 1]^3. */
+static float shells(float x, float y, float z)
+{
+  static const float radii[4] = {0.3f, 0.5f, 0.7f, 0.9f};
+  float r = sqrtf(x * x + y * y + z * z), v = 0.0f;
+  int i;
+  for (i = 0; i < 4; ++i) {
+    float t = 1.0f - fabsf(r - radii[i]) / 0.05f;
+    if (t > v)
+      v = t;
+  }
+  return v;
+}
+
+static void cpu_model(char *out, size_t n)
+{
+  char line[512];
+  FILE *f = fopen("/proc/cpuinfo", "r");
+  snprintf(out, n, "unknown");
+  if (!f)
+    return;
+  while (fgets(line, sizeof line, f))
+    if (strncmp(line, "model name", 10) == 0) {
+      char *v = strchr(line, ':');
+      if (v) {
+        v += 1 + (v[1] == ' ');
+        v[strcspn(v, "\n\"\\")] = 0;
+        snprintf(out, n, "%s", v);
+      }
+      break;
+    }
+  fclose(f);
+}
+
+/* The six tetrahedra of a cell (corners in VTK's hexahedron order). */
+static const int KUHN[6][4] = {
+    {0, 1, 2, 6}, {0, 1, 5, 6}, {0, 3, 2, 6}, {0, 3, 7, 6}, {0, 4, 5, 6}, {0, 4, 7, 6}};
+
+static double peak_rss_mib(void)
+{
+  struct rusage u;
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;
+}
+
+int main(int argc, char **argv)
+{
+  const char *backend = "auto", *kind = "unstructured", *json = NULL, *ppm = NULL;
+  unsigned size = 768, n = 57, frames = 4, i;
+  float rate = 1.0f;
+  for (i = 1; i + 1 < (unsigned)argc; i += 2) {
+    const char *k = argv[i], *v = argv[i + 1];
+    if (!strcmp(k, "--backend")) backend = v;
+    else if (!strcmp(k, "--field")) kind = v;
+    else if (!strcmp(k, "--size")) size = (unsigned)atoi(v);
+    else if (!strcmp(k, "--vertices")) n = (unsigned)atoi(v);
+    else if (!strcmp(k, "--frames")) frames = (unsigned)atoi(v);
+    else if (!strcmp(k, "--rate")) rate = (float)atof(v);
+    else if (!strcmp(k, "--json")) json = v;
+    else if (!strcmp(k, "--ppm")) ppm = v;
+    else {
+      fprintf(stderr, "bench_cells: unknown option %s\n", k);
+      return 2;
+    }
+  }
+  int mesh = !strcmp(kind, "unstructured");
+  if ((unsigned)argc % 2 == 0 || size < 1 || size > 8192 || n < 2 || n > 300 || frames < 1
+      || frames > 10000 || !(rate > 0) || (!mesh && strcmp(kind, "structured"))) {
+    fprintf(stderr, "bench_cells: need --field unstructured|structured, --size 1..8192, "
+                    "--vertices 2..300, --frames 1..10000, --rate > 0\n");
+    return 2;
+  }
+
+  /* The host's own arrays, made before the clock starts. */
+  size_t verts = (size_t)n * n * n, cubes = (size_t)(n - 1) * (n - 1) * (n - 1);
+  size_t cells = mesh ? 6 * cubes : 0;
+  float s = 2.0f / (n - 1);
+  float *values = malloc(verts * sizeof *values);
+  float *positions = mesh ? malloc(3 * verts * sizeof *positions) : NULL;
+  uint32_t *index = mesh ? malloc(4 * cells * sizeof *index) : NULL;
+  uint32_t *cell_index = mesh ? malloc(cells * sizeof *cell_index) : NULL;
+  uint8_t *cell_type = mesh ? malloc(cells) : NULL;
+  if (!values || (mesh && (!positions || !index || !cell_index || !cell_type))) {
+    fprintf(stderr, "bench_cells: no memory for %u^3 vertices\n", n);
+    return 1;
+  }
+  for (size_t z = 0; z < n; ++z)
+    for (size_t y = 0; y < n; ++y)
+      for (size_t x = 0; x < n; ++x) {
+        size_t v = (z * n + y) * n + x;
+        values[v] = shells(x * s - 1, y * s - 1, z * s - 1);
+        if (mesh) {
+          positions[3 * v] = x * s - 1;
+          positions[3 * v + 1] = y * s - 1;
+          positions[3 * v + 2] = z * s - 1;
+        }
+      }
+  if (mesh) {
+    size_t c = 0;
+    for (size_t z = 0; z + 1 < n; ++z)
+      for (size_t y = 0; y + 1 < n; ++y)
+        for (size_t x = 0; x + 1 < n; ++x) {
+          size_t o = (z * n + y) * n + x, row = n, slab = (size_t)n * n;
+          uint32_t h[8] = {(uint32_t)o, (uint32_t)(o + 1), (uint32_t)(o + 1 + row),
+              (uint32_t)(o + row), (uint32_t)(o + slab), (uint32_t)(o + 1 + slab),
+              (uint32_t)(o + 1 + row + slab), (uint32_t)(o + row + slab)};
+          for (int t = 0; t < 6; ++t, ++c) {
+            cell_index[c] = (uint32_t)(4 * c);
+            cell_type[c] = 10;
+            for (int k = 0; k < 4; ++k)
+              index[4 * c + k] = h[KUHN[t][k]];
+          }
+        }
+  }
+  double host_mib = peak_rss_mib();
+
+  float colors[4 * 3] = {0.2f, 0.4f, 1.0f, 0.2f, 0.4f, 1.0f, 0.5f, 0.8f, 0.6f, 1.0f, 0.7f, 0.2f};
+  float opacities[11] = {0, 0, 0.0375f, 0.075f, 0.1125f, 0.15f, 0.22f, 0.29f, 0.36f, 0.43f, 0.5f};
+  float origin[3] = {-1, -1, -1}, spacing[3] = {s, s, s};
+  float unit = 0.2f, fovy = 40.0f * 3.14159265f / 180.0f, up[3] = {0, 1, 0}, range[2] = {0, 1};
+  unsigned fsize[2] = {size, size};
+  ANARIDataType color = ANARI_UFIXED8_RGBA_SRGB;
+  int ok = 1;
+
+  ANARILibrary lib = anariLoadLibrary("caveray", on_status, NULL);
+  if (!lib) {
+    fprintf(stderr, "bench_cells: cannot load caveray\n");
+    return 1;
+  }
+  ANARIDevice dev = anariNewDevice(lib, "default");
+  anariSetParameter(dev, dev, "backend", ANARI_STRING, backend);
+  anariCommitParameters(dev, dev);
+
+  double t_start = now_ms();
+  ANARISpatialField field;
+  ANARIArray arrays[5] = {0};
+  if (mesh) {
+    field = anariNewSpatialField(dev, "unstructured");
+    arrays[0] = anariNewArray1D(dev, positions, NULL, NULL, ANARI_FLOAT32_VEC3, verts);
+    arrays[1] = anariNewArray1D(dev, index, NULL, NULL, ANARI_UINT32, 4 * cells);
+    arrays[2] = anariNewArray1D(dev, cell_index, NULL, NULL, ANARI_UINT32, cells);
+    arrays[3] = anariNewArray1D(dev, cell_type, NULL, NULL, ANARI_UINT8, cells);
+    arrays[4] = anariNewArray1D(dev, values, NULL, NULL, ANARI_FLOAT32, verts);
+    anariSetParameter(dev, field, "vertex.position", ANARI_ARRAY1D, &arrays[0]);
+    anariSetParameter(dev, field, "index", ANARI_ARRAY1D, &arrays[1]);
+    anariSetParameter(dev, field, "cell.index", ANARI_ARRAY1D, &arrays[2]);
+    anariSetParameter(dev, field, "cell.type", ANARI_ARRAY1D, &arrays[3]);
+    anariSetParameter(dev, field, "vertex.data", ANARI_ARRAY1D, &arrays[4]);
+  } else {
+    field = anariNewSpatialField(dev, "structuredRegular");
+    arrays[0] = anariNewArray3D(dev, values, NULL, NULL, ANARI_FLOAT32, n, n, n);
+    anariSetParameter(dev, field, "data", ANARI_ARRAY3D, &arrays[0]);
+    anariSetParameter(dev, field, "origin", ANARI_FLOAT32_VEC3, origin);
+    anariSetParameter(dev, field, "spacing", ANARI_FLOAT32_VEC3, spacing);
+  }
+  anariCommitParameters(dev, field);
+
+  ANARIArray1D c = anariNewArray1D(dev, colors, NULL, NULL, ANARI_FLOAT32_VEC3, 4);
+  ANARIArray1D o = anariNewArray1D(dev, opacities, NULL, NULL, ANARI_FLOAT32, 11);
+  ANARIVolume volume = anariNewVolume(dev, "transferFunction1D");
+  anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
+  anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &c);
+  anariSetParameter(dev, volume, "opacity", ANARI_ARRAY1D, &o);
+  anariSetParameter(dev, volume, "valueRange", ANARI_FLOAT32_BOX1, range);
+  anariSetParameter(dev, volume, "unitDistance", ANARI_FLOAT32, &unit);
+  anariCommitParameters(dev, volume);
+
+  ANARIWorld world = anariNewWorld(dev);
+  ANARIArray1D volumes = anariNewArray1D(dev, &volume, NULL, NULL, ANARI_VOLUME, 1);
+  anariSetParameter(dev, world, "volume", ANARI_ARRAY1D, &volumes);
+  anariCommitParameters(dev, world);
+
+  ANARIRenderer renderer = anariNewRenderer(dev, "default");
+  anariSetParameter(dev, renderer, "volumeSamplingRate", ANARI_FLOAT32, &rate);
+  anariCommitParameters(dev, renderer);
+  ANARICamera camera = anariNewCamera(dev, "perspective");
+  anariSetParameter(dev, camera, "fovy", ANARI_FLOAT32, &fovy);
+  anariSetParameter(dev, camera, "up", ANARI_FLOAT32_VEC3, up);
+
+  ANARIFrame frame = anariNewFrame(dev);
+  anariSetParameter(dev, frame, "size", ANARI_UINT32_VEC2, fsize);
+  anariSetParameter(dev, frame, "channel.color", ANARI_DATA_TYPE, &color);
+  anariSetParameter(dev, frame, "world", ANARI_WORLD, &world);
+  anariSetParameter(dev, frame, "renderer", ANARI_RENDERER, &renderer);
+  anariSetParameter(dev, frame, "camera", ANARI_CAMERA, &camera);
+  anariCommitParameters(dev, frame);
+
+  double *ms = calloc(frames + 1, sizeof *ms), sum = 0, lo = 1e300, hi = 0;
+  /* Frame 0 is the first frame: it is timed from t_start. */
+  for (i = 0; i <= frames && ms; ++i) {
+    float a = 2.0f * 3.14159265f * i / (frames + 1), d = 3.2f;
+    float pos[3] = {d * sinf(a), 0.3f, d * cosf(a)}, dir[3] = {-pos[0], -pos[1], -pos[2]};
+    anariSetParameter(dev, camera, "position", ANARI_FLOAT32_VEC3, pos);
+    anariSetParameter(dev, camera, "direction", ANARI_FLOAT32_VEC3, dir);
+    anariCommitParameters(dev, camera);
+    double t0 = i == 0 ? t_start : now_ms();
+    anariRenderFrame(dev, frame);
+    anariFrameReady(dev, frame, ANARI_WAIT);
+    unsigned w, h;
+    ANARIDataType type;
+    const unsigned char *rgba = anariMapFrame(dev, frame, "channel.color", &w, &h, &type);
+    ms[i] = now_ms() - t0;
+    if (!rgba || w != size || h != size) {
+      fprintf(stderr, "bench_cells: frame %u did not map\n", i);
+      ok = 0;
+    } else if (i == 0 && ppm) {
+      FILE *f = fopen(ppm, "wb");
+      if (f) {
+        fprintf(f, "P6\n%u %u\n255\n", w, h);
+        for (unsigned y = h; y-- > 0;)
+          for (unsigned x = 0; x < w; ++x)
+            fwrite(rgba + 4 * ((size_t)y * w + x), 1, 3, f);
+        fclose(f);
+      }
+    }
+    anariUnmapFrame(dev, frame, "channel.color");
+    if (i > 0) {
+      sum += ms[i];
+      lo = ms[i] < lo ? ms[i] : lo;
+      hi = ms[i] > hi ? ms[i] : hi;
+    }
+    fprintf(stderr, "[%u/%u] %.1f ms%s\n", i, frames, ms[i], i ? "" : " (first frame)");
+  }
+  unsigned long long samples = 0;
+  anariGetProperty(dev, frame, "caveray.volumeSamples", ANARI_UINT64, &samples, sizeof samples,
+      ANARI_WAIT);
+  double mean = sum / frames, peak = peak_rss_mib();
+  printf("bench_cells: %s field on %u^3 vertices (%zu tetrahedra) at %ux%u, backend %s, rate "
+         "%g: first frame %.1f ms, then mean %.1f ms (min %.1f, max %.1f) over %u frames; "
+         "peak RSS %.1f MiB (%.1f MiB of it the host's arrays)\n",
+      kind, n, cells, size, size, backend, rate, ms ? ms[0] : 0.0, mean, lo, hi, frames, peak,
+      host_mib);
+
+  if (json && ms) {
+    char model[256];
+    FILE *f = fopen(json, "w");
+    cpu_model(model, sizeof model);
+    if (!f) {
+      fprintf(stderr, "bench_cells: cannot write %s\n", json);
+      ok = 0;
+    } else {
+      fprintf(f, "{\n  \"benchmark\": \"capi-cells\",\n  \"machine\": {\"cpu\": \"%s\", "
+                 "\"threads\": %ld},\n",
+          model, sysconf(_SC_NPROCESSORS_ONLN));
+      fprintf(f, "  \"field\": \"%s\",\n  \"backend\": \"%s\",\n  \"rate\": %g,\n", kind,
+          backend, rate);
+      fprintf(f, "  \"vertices\": [%u, %u, %u],\n  \"tetrahedra\": %zu,\n", n, n, n, cells);
+      fprintf(f, "  \"image\": [%u, %u],\n  \"last_frame_samples\": %llu,\n", size, size,
+          samples);
+      fprintf(f, "  \"first_frame_ms\": %.3f,\n  \"ms\": [", ms[0]);
+      for (i = 1; i <= frames; ++i)
+        fprintf(f, "%s%.3f", i > 1 ? ", " : "", ms[i]);
+      fprintf(f, "],\n  \"mean_ms\": %.3f,\n  \"min_ms\": %.3f,\n  \"max_ms\": %.3f,\n",
+          mean, lo, hi);
+      fprintf(f, "  \"peak_rss_mib\": %.1f,\n  \"host_arrays_mib\": %.1f\n}\n", peak,
+          host_mib);
+      fclose(f);
+    }
+  }
+
+  free(ms);
+  anariRelease(dev, frame);
+  anariRelease(dev, camera);
+  anariRelease(dev, renderer);
+  anariRelease(dev, volumes);
+  anariRelease(dev, world);
+  anariRelease(dev, volume);
+  anariRelease(dev, o);
+  anariRelease(dev, c);
+  anariRelease(dev, field);
+  for (i = 0; i < 5; ++i)
+    if (arrays[i])
+      anariRelease(dev, arrays[i]);
+  anariRelease(dev, dev);
+  anariUnloadLibrary(lib);
+  free(values);
+  free(positions);
+  free(index);
+  free(cell_index);
+  free(cell_type);
+  return ok ? 0 : 1;
+}
