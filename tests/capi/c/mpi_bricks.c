@@ -6,13 +6,16 @@
  * and rank 0 writes it to DIR/bricks.rgba. With "whole" one process renders
  * the whole volume on a plain device and writes DIR/whole.rgba; with
  * "unowned" the ranks say no region, so their bricks' bounds (aprons
- * included) overlap and every rank must refuse the frame. The host links
- * no MPI itself: it learns its rank from the launcher's environment.
+ * included) overlap and every rank must refuse the frame. With "cells"
+ * the slab goes as an unstructured field instead: its cells (apron
+ * included) cut into six tetrahedra each, values at the vertices. The host
+ * links no MPI itself: it learns its rank from the launcher's environment.
  *
- * Usage: mpi_bricks DIR [whole|unowned] */
+ * Usage: mpi_bricks DIR [whole|unowned|ranks] [cells] */
 #include <anari/anari.h>
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,6 +34,64 @@ static float value_at(int i, int j, int k)
   return expf(-a * 18.0f) + 0.8f * expf(-b * 30.0f) + 0.1f * sinf(9.0f * x + 5.0f * z);
 }
 
+/* The six tetrahedra of a cell (corners in VTK's hexahedron order). */
+static const int KUHN[6][4] = {
+    {0, 1, 2, 6}, {0, 1, 5, 6}, {0, 3, 2, 6}, {0, 3, 7, 6}, {0, 4, 5, 6}, {0, 4, 7, 6}};
+
+/* The slab's nx * N * N vertices (x fastest) as an unstructured field of
+ * tetrahedra; the arrays are the device's to free. */
+static ANARISpatialField tetrahedra(ANARIDevice dev, const float *values, int nx, int first,
+    float spacing, ANARIArray1D arrays[5])
+{
+  size_t verts = (size_t)nx * N * N, cells = 6 * (size_t)(nx - 1) * (N - 1) * (N - 1), c = 0;
+  float *p;
+  uint32_t *index, *cell_index;
+  uint8_t *types;
+  float *data;
+  int i, j, k, t, q;
+  ANARISpatialField field = anariNewSpatialField(dev, "unstructured");
+  arrays[0] = anariNewArray1D(dev, NULL, NULL, NULL, ANARI_FLOAT32_VEC3, verts);
+  arrays[1] = anariNewArray1D(dev, NULL, NULL, NULL, ANARI_UINT32, 4 * cells);
+  arrays[2] = anariNewArray1D(dev, NULL, NULL, NULL, ANARI_UINT32, cells);
+  arrays[3] = anariNewArray1D(dev, NULL, NULL, NULL, ANARI_UINT8, cells);
+  arrays[4] = anariNewArray1D(dev, NULL, NULL, NULL, ANARI_FLOAT32, verts);
+  p = anariMapArray(dev, arrays[0]);
+  index = anariMapArray(dev, arrays[1]);
+  cell_index = anariMapArray(dev, arrays[2]);
+  types = anariMapArray(dev, arrays[3]);
+  data = anariMapArray(dev, arrays[4]);
+  for (k = 0; k < N; ++k)
+    for (j = 0; j < N; ++j)
+      for (i = 0; i < nx; ++i) {
+        size_t v = ((size_t)k * N + j) * nx + i;
+        p[3 * v] = (first + i) * spacing;
+        p[3 * v + 1] = j * spacing;
+        p[3 * v + 2] = k * spacing;
+        data[v] = values[v];
+      }
+  for (k = 0; k + 1 < N; ++k)
+    for (j = 0; j + 1 < N; ++j)
+      for (i = 0; i + 1 < nx; ++i) {
+        uint32_t o = (uint32_t)(((size_t)k * N + j) * nx + i), row = nx, slab = nx * N;
+        uint32_t h[8] = {o, o + 1, o + 1 + row, o + row, o + slab, o + 1 + slab,
+            o + 1 + row + slab, o + row + slab};
+        for (t = 0; t < 6; ++t, ++c) {
+          cell_index[c] = (uint32_t)(4 * c);
+          types[c] = 10;
+          for (q = 0; q < 4; ++q)
+            index[4 * c + q] = h[KUHN[t][q]];
+        }
+      }
+  for (i = 0; i < 5; ++i)
+    anariUnmapArray(dev, arrays[i]);
+  anariSetParameter(dev, field, "vertex.position", ANARI_ARRAY1D, &arrays[0]);
+  anariSetParameter(dev, field, "index", ANARI_ARRAY1D, &arrays[1]);
+  anariSetParameter(dev, field, "cell.index", ANARI_ARRAY1D, &arrays[2]);
+  anariSetParameter(dev, field, "cell.type", ANARI_ARRAY1D, &arrays[3]);
+  anariSetParameter(dev, field, "vertex.data", ANARI_ARRAY1D, &arrays[4]);
+  return field;
+}
+
 static int env_int(const char *name, int otherwise)
 {
   const char *v = getenv(name);
@@ -42,6 +103,7 @@ int main(int argc, char **argv)
   const char *dir = argc > 1 ? argv[1] : ".";
   int whole = argc > 2 && strcmp(argv[2], "whole") == 0;
   int unowned = argc > 2 && strcmp(argv[2], "unowned") == 0;
+  int cells = argc > 3 && strcmp(argv[3], "cells") == 0;
   int rank = whole ? 0 : env_int("OMPI_COMM_WORLD_RANK", 0);
   int ranks = whole ? 1 : env_int("OMPI_COMM_WORLD_SIZE", 1);
   /* Rank r owns the cells between vertices lo and hi along x. */
@@ -61,7 +123,8 @@ int main(int argc, char **argv)
   ANARIDataType color_type = ANARI_UFIXED8_RGBA_SRGB;
   ANARILibrary lib;
   ANARIDevice dev;
-  ANARIArray3D data;
+  ANARIArray3D data = NULL;
+  ANARIArray1D mesh[5] = {NULL, NULL, NULL, NULL, NULL};
   ANARIArray1D color, opacity, volumes;
   ANARISpatialField field;
   ANARIVolume volume;
@@ -87,11 +150,15 @@ int main(int argc, char **argv)
   if (!whole)
     anariSetParameter(dev, dev, "caveray.mpi", ANARI_STRING, "world");
   anariCommitParameters(dev, dev);
-  data = anariNewArray3D(dev, voxels, NULL, NULL, ANARI_FLOAT32, nx, N, N);
-  field = anariNewSpatialField(dev, "structuredRegular");
-  anariSetParameter(dev, field, "data", ANARI_ARRAY3D, &data);
-  anariSetParameter(dev, field, "origin", ANARI_FLOAT32_VEC3, origin);
-  anariSetParameter(dev, field, "spacing", ANARI_FLOAT32_VEC3, spacings);
+  if (cells) {
+    field = tetrahedra(dev, voxels, nx, first, spacing, mesh);
+  } else {
+    data = anariNewArray3D(dev, voxels, NULL, NULL, ANARI_FLOAT32, nx, N, N);
+    field = anariNewSpatialField(dev, "structuredRegular");
+    anariSetParameter(dev, field, "data", ANARI_ARRAY3D, &data);
+    anariSetParameter(dev, field, "origin", ANARI_FLOAT32_VEC3, origin);
+    anariSetParameter(dev, field, "spacing", ANARI_FLOAT32_VEC3, spacings);
+  }
   anariCommitParameters(dev, field);
   volume = anariNewVolume(dev, "transferFunction1D");
   color = anariNewArray1D(dev, colors, NULL, NULL, ANARI_FLOAT32_VEC3, 4);
@@ -136,7 +203,8 @@ int main(int argc, char **argv)
   pixels = anariMapFrame(dev, frame, "channel.color", &w, &h, &type);
   ok = pixels && w == SIZE && h == SIZE && type == ANARI_UFIXED8_RGBA_SRGB && status_count == 0;
   if (ok && rank == 0)
-    ok = write_rgba(dir, whole ? "whole" : "bricks", pixels, w, h);
+    ok = write_rgba(dir, whole ? (cells ? "whole_cells" : "whole") : (cells ? "cells" : "bricks"),
+        pixels, w, h);
   anariUnmapFrame(dev, frame, "channel.color");
   printf("rank %d of %d: %s\n", rank, ranks, ok ? "mapped" : "FAILED");
 
@@ -149,7 +217,11 @@ int main(int argc, char **argv)
   anariRelease(dev, color);
   anariRelease(dev, volume);
   anariRelease(dev, field);
-  anariRelease(dev, data);
+  if (data)
+    anariRelease(dev, data);
+  for (i = 0; i < 5; ++i)
+    if (mesh[i])
+      anariRelease(dev, mesh[i]);
   anariRelease(dev, dev);
   anariUnloadLibrary(lib);
   free(voxels);
