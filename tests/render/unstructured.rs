@@ -1,8 +1,9 @@
 //! Unstructured volumes on both renderers: a mesh of hexahedra tiling a
 //! grid renders as the grid, the grid cut into tetrahedra close to it, on
 //! an off-axis wall; the GPU samples every cell kind as the CPU reference
-//! does; meshes sit beside grids in one scene, skip their empty space and
-//! show nothing outside their cells.
+//! does; meshes sit beside grids in one scene, skip their empty space,
+//! show nothing outside their cells, march with surfaces and give the
+//! grid's depth.
 
 use crate::common;
 
@@ -42,7 +43,7 @@ fn hexahedra_tiling_a_grid_render_as_the_grid_and_its_tetrahedra_close_to_it() {
     let tets = Scene::new(grid_cells(&grid, Cut::Tetrahedra).unwrap(), tf);
     for (name, mut r) in renderers() {
         // The GPU's shading rays through meshes do not yet match its
-        // grids' (docs/unstructured.md): it is held to the unshaded image.
+        // grids' (docs/ray_casting.md): it is held to the unshaded image.
         let shadings: &[Shading] = if name == "gpu" {
             &[Shading::None]
         } else {
@@ -300,5 +301,75 @@ fn nothing_shows_outside_the_cells_and_skipping_leaps_over_it() {
             f.samples < full.samples,
             "{name}: skipping took no fewer samples"
         );
+    }
+}
+
+/// Surfaces march with a mesh as with a grid, and the depth channel is
+/// the grid's: hexahedra tiling the shells, an opaque ball in front and a
+/// translucent one inside, on both renderers (unshaded).
+#[test]
+fn surfaces_march_with_a_mesh_and_its_depth_is_the_grids() {
+    use anari_library_caveray::scene::{AlphaMode, ColorSource, OpacitySource, SurfaceMaterial};
+    let material = |color: Vec3, opacity: f32, alpha: AlphaMode| SurfaceMaterial {
+        color: ColorSource::Constant(color),
+        opacity: OpacitySource::Constant(opacity),
+        alpha,
+        pbr: None,
+    };
+    let shapes = || {
+        vec![
+            common::render::balls(
+                vec![Vec3::new(-0.3, 0.25, 0.6)],
+                0.25,
+                material(Vec3::new(0.9, 0.5, 0.2), 1.0, AlphaMode::Opaque),
+            ),
+            common::render::balls(
+                vec![Vec3::new(0.25, -0.2, 0.0)],
+                0.4,
+                material(Vec3::new(0.2, 0.6, 0.9), 0.4, AlphaMode::Blend),
+            ),
+        ]
+    };
+    let grid = concentric_shells(24);
+    let tf = preset("shells").unwrap();
+    let structured = Scene::new(grid.clone(), tf.clone())
+        .with_shapes(shapes())
+        .unwrap();
+    let hexes = Scene::new(grid_cells(&grid, Cut::Hexahedra).unwrap(), tf)
+        .with_shapes(shapes())
+        .unwrap();
+    let desc = FrameDesc::new(SIZE).with_depth();
+    // Depth where a twentieth of the light is taken: the shells give it
+    // too, not only the opaque ball (about 95 pixels).
+    let settings = RenderSettings {
+        depth_threshold: 0.05,
+        ..RenderSettings::default()
+    };
+    for (name, mut r) in renderers() {
+        let t0 = std::time::Instant::now();
+        let draw = |r: &mut Renderer, scene: &Scene| {
+            r.render(scene, &wall_rays(), &settings, &desc)
+                .unwrap_or_else(|e| panic!("{e}"))
+        };
+        let (a, b) = (draw(&mut r, &structured), draw(&mut r, &hexes));
+        let s = ssim(&a, &b).unwrap();
+        let (da, db) = (a.depth.unwrap(), b.depth.unwrap());
+        let finite = da.iter().filter(|d| d.is_finite()).count();
+        let worst = da
+            .iter()
+            .zip(&db)
+            .map(|(x, y)| match (x.is_finite(), y.is_finite()) {
+                (true, true) => (x - y).abs(),
+                (false, false) => 0.0,
+                _ => f32::INFINITY,
+            })
+            .fold(0.0, f32::max);
+        eprintln!(
+            "{name}: SSIM {s:.5}, depth: {finite} pixels, largest difference {worst} ({:?})",
+            t0.elapsed()
+        );
+        assert!(s >= 0.999, "{name}: SSIM {s}");
+        assert!(finite > 150, "{name}: {finite} pixels with a depth");
+        assert!(worst < 1e-3, "{name}: depth differs by {worst}");
     }
 }

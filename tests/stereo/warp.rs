@@ -11,7 +11,7 @@ use std::sync::atomic::AtomicBool;
 
 use anari_library_caveray::cave::Rig;
 use anari_library_caveray::cave::{pose_along, Eye};
-use anari_library_caveray::data::{preset, shepp_logan};
+use anari_library_caveray::data::{grid_cells, preset, shepp_logan, Cut};
 use anari_library_caveray::geometry::{
     ImageRegion, OrthographicCamera, PinholeCamera, PrimaryRays, RayGen,
 };
@@ -271,6 +271,21 @@ fn warps_beat_none_and_layers_the_step(scene: &Scene, source: &Source) {
             assert!(d[3] < d[1] && d[3] < d[2], "{name}: layers not best: {d:?}");
         }
     }
+}
+
+/// An unstructured field (the phantom's cells cut into tetrahedra) is
+/// captured and warped as a grid is.
+#[test]
+fn a_mesh_is_warped_by_every_mode_and_a_step_best_by_the_layers() {
+    let mesh = grid_cells(&shepp_logan(24), Cut::Tetrahedra).unwrap();
+    let scene = Scene::new(mesh, preset("phantom").unwrap());
+    let from = pinhole(DVec3::new(0.0, 0.0, 3.5), DVec3::ZERO);
+    let source = capture(&scene, &from, 4);
+    for mode in WarpMode::ALL {
+        let d = dssim(&shown(&source, &from, mode, &scene), &ideal(&scene, &from)).unwrap();
+        assert!(d < 2e-3, "{}: DSSIM {d} for the same view", mode.name());
+    }
+    warps_beat_none_and_layers_the_step(&scene, &source);
 }
 
 #[test]
