@@ -244,4 +244,29 @@ mod tests {
         let p = Vec3::new(0.1, 0.2, 0.3);
         assert!((cells.sample_near(p, &mut far) - cells.sample(p)).abs() < 1e-6);
     }
+
+    #[test]
+    fn a_box_of_a_mesh_keeps_the_cells_that_reach_it_and_their_values() {
+        let lin = |p: Vec3| 0.5 + 0.2 * p.x - 0.4 * p.y + 0.3 * p.z;
+        let tets = grid_cells(&unit_grid(6, lin), Cut::Tetrahedra).unwrap();
+        let part = tets
+            .cells_within(Vec3::ZERO, Vec3::new(2.0, 6.0, 6.0))
+            .unwrap();
+        // The cells of columns x = 0, 1 and the ones touching x = 2.
+        assert_eq!(part.cell_count(), 6 * 3 * 36);
+        assert_eq!(part.vertex_count(), 4 * 49);
+        for k in 0..500u32 {
+            let t = k as f32 + 0.5;
+            let p = Vec3::new(
+                (t * 0.618_034).fract() * 2.0,
+                (t * 0.754_878).fract() * 6.0,
+                (t * 0.569_840).fract() * 6.0,
+            );
+            assert!((part.sample(p) - lin(p)).abs() < 1e-5, "{p}");
+        }
+        assert!(part.sample(Vec3::new(4.0, 3.0, 3.0)).is_nan());
+        assert!(tets
+            .cells_within(Vec3::splat(7.0), Vec3::splat(8.0))
+            .is_err());
+    }
 }

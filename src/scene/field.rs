@@ -43,6 +43,36 @@ impl SpatialField {
         }
     }
 
+    /// What a brick of the lattice (vertices `lo..=hi`) holds: a grid's
+    /// voxels there, or a mesh's cells whose boxes reach that box.
+    pub fn cropped(&self, lo: UVec3, hi: UVec3) -> Result<SpatialField, String> {
+        match self {
+            SpatialField::Structured(v) => {
+                v.cropped(lo, hi).map(Into::into).map_err(|e| e.to_string())
+            }
+            SpatialField::Unstructured(m) => {
+                let (dims, spacing) = m.lattice();
+                if lo.cmpgt(hi).any() || hi.cmpge(dims).any() {
+                    return Err(format!(
+                        "vertices {lo} to {hi} are not a box of the mesh's {dims} lattice"
+                    ));
+                }
+                let origin = m.bounds().0;
+                m.cells_within(
+                    origin + lo.as_vec3() * spacing,
+                    origin + hi.as_vec3() * spacing,
+                )
+                .map(Into::into)
+                .map_err(|e| match e {
+                    super::UnstructuredError::NoCells => {
+                        "no cell of the mesh reaches it".to_string()
+                    }
+                    e => e.to_string(),
+                })
+            }
+        }
+    }
+
     /// Lattice vertices per axis.
     pub fn dims(&self) -> UVec3 {
         match self {

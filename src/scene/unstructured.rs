@@ -749,6 +749,45 @@ impl UnstructuredVolume {
         (kind, &self.index[start..start + kind.vertices()])
     }
 
+    /// The cells whose boxes reach the box `lo..hi` (the mesh's own
+    /// coordinates), with the vertices they use: what a brick of a split
+    /// mesh holds, so that every point of the box finds its cell.
+    pub fn cells_within(&self, lo: Vec3, hi: Vec3) -> Result<Self, UnstructuredError> {
+        let mut input = MeshInput::default();
+        let mut per_cell = Vec::new();
+        let mut per_vertex = Vec::new();
+        let mut renumber = reserve::<u32>(self.positions.len(), "the kept vertices")?;
+        renumber.resize(self.positions.len(), u32::MAX);
+        for (c, ((a, b), _)) in self.cell_ranges().enumerate() {
+            // A cell holds points a hair outside its box (CELL_TOLERANCE).
+            let margin = (b - a) * CELL_TOLERANCE;
+            if (a - margin).cmpgt(hi).any() || (b + margin).cmplt(lo).any() {
+                continue;
+            }
+            let (kind, ids) = self.cell(c);
+            input.cell_index.push(input.index.len() as u32);
+            input.cell_type.push(u32::from(kind.vtk()));
+            for &i in ids {
+                if renumber[i as usize] == u32::MAX {
+                    renumber[i as usize] = input.positions.len() as u32;
+                    input.positions.push(self.positions[i as usize]);
+                    if let MeshValues::PerVertex(v) = &self.values {
+                        per_vertex.push(v[i as usize]);
+                    }
+                }
+                input.index.push(renumber[i as usize]);
+            }
+            if let MeshValues::PerCell(v) = &self.values {
+                per_cell.push(v[c]);
+            }
+        }
+        let values = match self.values {
+            MeshValues::PerVertex(_) => MeshValues::PerVertex(per_vertex),
+            MeshValues::PerCell(_) => MeshValues::PerCell(per_cell),
+        };
+        Self::new(input, values)
+    }
+
     /// Each cell's box and the range of values a sample in it can take,
     /// in BVH order.
     pub fn cell_ranges(&self) -> impl Iterator<Item = ((Vec3, Vec3), (f32, f32))> + '_ {

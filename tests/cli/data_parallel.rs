@@ -1,7 +1,8 @@
-//! `caveray render --parts N` in one process: the volume cut into bricks,
-//! each brick's samples ray cast on their own and the partial images
-//! composited front to back, make the image one renderer makes of the
-//! whole, on the CPU and on the GPU, whichever way the cuts lie.
+//! `caveray render --parts N` in one process: the volume cut into bricks
+//! (a grid's voxels, or a mesh's cells over its lattice), each brick's
+//! samples ray cast on their own and the partial images composited front
+//! to back, make the image one renderer makes of the whole, on the CPU and
+//! on the GPU, whichever way the cuts lie.
 
 use crate::common;
 
@@ -18,7 +19,7 @@ fn scratch(test: &str) -> PathBuf {
     dir
 }
 
-fn render(out: &Path, extra: &[&str]) -> Value {
+fn render(out: &Path, volume: &str, extra: &[&str]) -> Value {
     let mut args = vec![
         "render",
         "--config",
@@ -26,7 +27,7 @@ fn render(out: &Path, extra: &[&str]) -> Value {
         "--scale",
         "0.04",
         "--volume",
-        "phantom:48",
+        volume,
         "--out",
         out.to_str().unwrap(),
     ];
@@ -63,16 +64,21 @@ fn likeness(one: &Path, parts: &Path) -> (f64, u8) {
 }
 
 fn compare(backend: &str, parts: &str, counts: [u64; 3]) {
-    let dir = scratch(&format!("{backend}-{parts}"));
+    compare_volume("phantom:48", 47, backend, parts, counts);
+}
+
+/// `volume`, of `cells` lattice cells a side, whole and in `parts`.
+fn compare_volume(volume: &str, cells: u64, backend: &str, parts: &str, counts: [u64; 3]) {
+    let dir = scratch(&format!("{backend}-{parts}-{}", volume.replace(':', "_")));
     let (one, split) = (dir.join("one"), dir.join("split"));
-    render(&one, &["--backend", backend]);
-    let report = render(&split, &["--backend", backend, "--parts", parts]);
+    render(&one, volume, &["--backend", backend]);
+    let report = render(&split, volume, &["--backend", backend, "--parts", parts]);
     let (ssim, largest) = likeness(&one, &split);
     // Measured: SSIM 1.00000, at most one level apart (early termination
     // stops each brick's rays on its own).
     assert!(
         ssim >= 0.999 && largest <= 2,
-        "{backend}, {parts} bricks: SSIM {ssim}, {largest} levels"
+        "{volume} on {backend}, {parts} bricks: SSIM {ssim}, {largest} levels"
     );
     let dp = &report["data_parallel"];
     let got: Vec<u64> = dp["counts"]
@@ -83,7 +89,7 @@ fn compare(backend: &str, parts: &str, counts: [u64; 3]) {
         .collect();
     assert_eq!(got, counts, "{dp}");
     assert_eq!(dp["ranks"], 1);
-    // The bricks own every cell once (47 cells a side).
+    // The bricks own every lattice cell once.
     let owned: u64 = dp["bricks"]
         .as_array()
         .unwrap()
@@ -95,7 +101,15 @@ fn compare(backend: &str, parts: &str, counts: [u64; 3]) {
                 .product::<u64>()
         })
         .sum();
-    assert_eq!(owned, 47 * 47 * 47);
+    assert_eq!(owned, cells * cells * cells);
+    // Each brick holds what it stores: a part of the whole, not all of it.
+    let held: Vec<u64> = dp["bricks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["stored_bytes"].as_u64().unwrap())
+        .collect();
+    assert!(held.iter().all(|&b| b > 0), "{held:?}");
     // Per rendered view: each brick's render, the compositing time, and
     // no bytes sent by one process.
     let costs = dp["costs"].as_array().unwrap();
@@ -126,6 +140,13 @@ fn compare(backend: &str, parts: &str, counts: [u64; 3]) {
 fn bricks_side_by_side_and_one_behind_another_composite_to_the_whole_on_the_cpu() {
     compare("cpu", "4", [1, 2, 2]);
     compare("cpu", "8", [2, 2, 2]);
+}
+
+/// A mesh is cut over its lattice: each brick holds the cells whose boxes
+/// reach its stored box, and takes only the samples it owns.
+#[test]
+fn a_meshs_bricks_composite_to_the_whole_mesh() {
+    compare_volume("tets:24", 23, "cpu", "4", [1, 2, 2]);
 }
 
 #[test]

@@ -151,16 +151,10 @@ impl Bricks {
             let (lo, hi) = split.bricks[i].stored;
             let cropped = volume
                 .volume
-                .structured()
-                .ok_or_else(|| {
-                    Failure::Usage(
-                        "data-parallel rendering splits structured grids; this volume is unstructured".into(),
-                    )
-                })?
                 .cropped(lo, hi)
                 .map_err(|e| Failure::Runtime(format!("brick {i}: {e}")))?;
             let brick = Scene::placed(vec![PlacedVolume {
-                volume: std::sync::Arc::new(cropped.into()),
+                volume: std::sync::Arc::new(cropped),
                 ..volume.clone()
             }])
             .and_then(|s| s.with_shapes(scene.shapes().to_vec()))
@@ -200,6 +194,14 @@ impl Bricks {
                 n.x * n.y * n.z
             })
             .collect();
+        // A brick held here by its own bytes; another rank's, by the
+        // bytes per lattice vertex of one held here.
+        let held = |i: usize| {
+            self.mine
+                .iter()
+                .find(|(j, _, _)| *j == i)
+                .map(|(_, s, _)| s.volumes()[0].volume.bytes())
+        };
         let each = self
             .mine
             .first()
@@ -222,7 +224,7 @@ impl Bricks {
                     rank,
                     owned: [b.owned.0.to_array(), b.owned.1.to_array()],
                     stored: [b.stored.0.to_array(), b.stored.1.to_array()],
-                    stored_bytes: n * each,
+                    stored_bytes: held(rank).unwrap_or(n * each),
                 })
                 .collect(),
             costs,

@@ -297,19 +297,13 @@ pub fn run(args: RenderArgs, given: &Given) -> Result<(), Failure> {
     let head = args.head.pose(&rig)?;
     let cluster = Cluster::join()?;
     let loaded = args.volume.load()?;
-    // A rank of a data-parallel job reads its brick alone: the value range
-    // the transfer function spans comes from every rank's brick.
-    let range = match args.parts {
-        Some(n) if cluster.size() > 1 => Some(crate::data_parallel::value_range(
-            loaded.volume.structured().ok_or_else(|| {
-                Failure::Usage(
-                    "data-parallel rendering splits structured grids; this volume is unstructured"
-                        .into(),
-                )
-            })?,
-            n,
-            &cluster,
-        )?),
+    // A rank of a data-parallel job reads its brick of a grid alone: the
+    // value range the transfer function spans comes from every rank's
+    // brick. (Every rank reads the whole of a mesh.)
+    let range = match (args.parts, loaded.volume.structured()) {
+        (Some(n), Some(grid)) if cluster.size() > 1 => {
+            Some(crate::data_parallel::value_range(grid, n, &cluster)?)
+        }
         _ => None,
     };
     let scene = loaded.placed_in(rig.scene, &rig.viewer.frame, rig.units, range)?;
