@@ -98,6 +98,49 @@ impl Host {
         f
     }
 
+    /// The 4^3 field of [`field`](Self::field) as an `unstructured` one:
+    /// its 27 cells cut into six tetrahedra each (Kuhn), values at the
+    /// vertices.
+    pub fn mesh_field(&mut self, value: impl Fn(u32) -> f32) -> u64 {
+        use anari_library_caveray::data::{cell_corners, KUHN};
+        let at = |i: u32| -1.0 + 2.0 * i as f32 / 3.0;
+        let mut positions = Vec::new();
+        let mut values = Vec::new();
+        for i in 0..64u32 {
+            positions.extend([at(i % 4), at(i / 4 % 4), at(i / 16)]);
+            values.push(value(i % 4));
+        }
+        let (mut index, mut cells, mut types) = (Vec::new(), Vec::new(), Vec::new());
+        for c in 0..27u32 {
+            let h = cell_corners(glam::UVec3::splat(4), c % 3, c / 3 % 3, c / 9);
+            for t in KUHN {
+                cells.push(index.len() as u32);
+                types.push(10u8);
+                index.extend(t.map(|k| h[k]));
+            }
+        }
+        let arrays = [
+            (
+                "vertex.position",
+                DataType::FLOAT32_VEC3,
+                64,
+                bytes(&positions),
+            ),
+            ("index", DataType::UINT32, index.len(), bytes(&index)),
+            ("cell.index", DataType::UINT32, cells.len(), bytes(&cells)),
+            ("cell.type", DataType::UINT8, types.len(), types.clone()),
+            ("vertex.data", DataType::FLOAT32, 64, bytes(&values)),
+        ];
+        let f = self.d.new_object(DataType::SPATIAL_FIELD, "unstructured");
+        for (name, element, n, data) in arrays {
+            let a = self.array(DataType::ARRAY1D, element, [n as u64, 1, 1], &data);
+            self.set_object(f, name, DataType::ARRAY1D, a);
+            self.d.release(a);
+        }
+        self.d.commit(Subject::Object(f));
+        f
+    }
+
     /// A frame showing `volume` head-on from `camera_z` on the z axis:
     /// (frame, camera).
     pub fn frame(&mut self, volume: u64, camera_z: f32) -> (u64, u64) {

@@ -2,7 +2,8 @@
 //! model: bad deadlines and warps are refused at commit with their
 //! reasons and the frame stays usable; the first frame shows the
 //! background by its deadline, a still camera then gets its own image,
-//! and a moved camera the newest image warped; a stereo camera is refused
+//! and a moved camera the newest image warped (of a grid and of a mesh);
+//! a stereo camera is refused
 //! for a deadline frame; whole renders have no deadline properties.
 
 use crate::common;
@@ -88,6 +89,16 @@ fn bad_deadlines_and_warps_are_refused_with_their_reasons() {
 
 #[test]
 fn a_deadline_frame_shows_the_background_then_its_own_image_then_a_warp() {
+    background_then_own_image_then_warp(field);
+}
+
+/// The same of an unstructured field (the grid's cells as tetrahedra).
+#[test]
+fn a_deadline_frame_of_a_mesh_shows_its_own_image_then_a_warp() {
+    background_then_own_image_then_warp(|h| h.mesh_field(|x| x as f32 / 3.0));
+}
+
+fn background_then_own_image_then_warp(field: impl Fn(&mut Host) -> u64) {
     // The presenter speaks from its own thread, through the reporter.
     let heard = Arc::new(Mutex::new(Vec::<String>::new()));
     let sink = Arc::clone(&heard);
