@@ -3,8 +3,8 @@
 //! reasons and the frame stays usable; the first frame shows the
 //! background by its deadline, a still camera then gets its own image,
 //! and a moved camera the newest image warped (of a grid and of a mesh);
-//! a stereo camera is refused
-//! for a deadline frame; whole renders have no deadline properties.
+//! a stereo camera is refused for a deadline frame; whole renders have no
+//! deadline properties.
 
 use crate::common;
 
