@@ -1,9 +1,11 @@
 // #import constants, volume_bindings
 // Unstructured volumes: the field inside the cells of a mesh, read from
 // its words in `meshes` (layout in src/render/gpu/mesh.rs). Mirrors
-// src/scene/unstructured.rs: the cells' BVH finds the cells whose boxes
-// hold a point, barycentric coordinates place it in a tetrahedron and
-// Newton's method inverts VTK's shape functions in the other kinds.
+// src/scene/unstructured.rs and tet_walk.rs: a walk from the ray's last
+// cell finds the tetrahedron holding a point, else the cells' BVH finds
+// the cells whose boxes hold it; barycentric coordinates place it in a
+// tetrahedron and Newton's method inverts VTK's shape functions in the
+// other kinds.
 
 // Set where a volume of the scene is a mesh: without it the traversal
 // and the shape functions are dropped.
@@ -173,11 +175,72 @@ fn cell_value(m: u32, c: u32, p: vec3f) -> CellHit {
     return CellHit(true, sum);
 }
 
+// Where this invocation's ray last found a sample in each volume's mesh
+// (a cell number in BVH order): its next sample is looked for from there.
+var<private> mesh_near: array<u32, MAX_VOLUMES>;
+
+struct Walked {
+    found: bool,
+    value: f32,
+    cell: u32,
+}
+
+// The tetrahedron of the mesh at word m strictly holding p, walking from
+// cell `start` across the face opposite the most negative barycentric
+// coordinate (src/scene/tet_walk.rs), and the field there.
+fn mesh_walk(m: u32, start: u32, p: vec3f) -> Walked {
+    let walk = m + mesh_word(m + 12u);
+    let cells = mesh_word(m + 2u) - mesh_word(m + 1u);
+    var c = start;
+    var out = Walked(false, 0.0, 0u);
+    for (var s = 0u; s < WALK_STEPS; s++) {
+        if c >= cells {
+            break;
+        }
+        let w = walk + WALK_WORDS * c;
+        if mesh_word(w + 20u) == 0u {
+            break;
+        }
+        let q = p - mesh_vec3(w);
+        let l1 = dot(mesh_vec3(w + 4u), q);
+        let l2 = dot(mesh_vec3(w + 7u), q);
+        let l3 = dot(mesh_vec3(w + 10u), q);
+        let l0 = 1.0 - l1 - l2 - l3;
+        if min(min(l0, l1), min(l2, l3)) >= 0.0 {
+            out = Walked(true, mesh_f32(w + 3u) + dot(mesh_vec3(w + 13u), q), c);
+            break;
+        }
+        var worst = 0u;
+        var least = l0;
+        if l1 < least {
+            least = l1;
+            worst = 1u;
+        }
+        if l2 < least {
+            least = l2;
+            worst = 2u;
+        }
+        if l3 < least {
+            worst = 3u;
+        }
+        c = mesh_word(w + 16u + worst);
+    }
+    return out;
+}
+
 // Volume v's mesh at lattice point `grid`: the first cell holding it, or
-// MESH_OUTSIDE.
+// MESH_OUTSIDE; where the mesh has tetrahedra, first by a walk from the
+// ray's last cell.
 fn mesh_value(v: u32, grid: vec3f) -> f32 {
     let m = params.volumes[v].mesh_offset;
     let p = mesh_vec3(m + 6u) + grid * mesh_vec3(m + 9u);
+    if mesh_word(m + 12u) != 0u {
+        let walked = mesh_walk(m, mesh_near[v], p);
+        if walked.found {
+            mesh_near[v] = walked.cell;
+            return walked.value;
+        }
+    }
     let nodes = m + mesh_word(m);
     var stack: array<u32, MESH_STACK>;
     stack[0] = 0u;
@@ -205,6 +268,7 @@ fn mesh_value(v: u32, grid: vec3f) -> f32 {
             let hit = cell_value(m, c, p);
             if hit.inside {
                 value = hit.value;
+                mesh_near[v] = c;
                 found = true;
                 break;
             }

@@ -22,7 +22,7 @@ pub const NO_CELL: u32 = u32::MAX;
 
 /// Cells a walk visits before it hands over to the BVH: a step of the
 /// march crosses one or two cells of the mesh it is spaced by.
-const WALK_STEPS: u32 = 8;
+pub const WALK_STEPS: u32 = 8;
 
 /// One tetrahedron as a walk reads it: 80 bytes, one or two cache lines.
 #[derive(Clone, Copy, Debug)]
@@ -121,6 +121,32 @@ impl TetWalk {
             k = end;
         }
         Ok(Self { tets })
+    }
+
+    /// Words per cell in [`words`](Self::words).
+    pub const CELL_WORDS: usize = 21;
+
+    /// Every cell as the GPU's walk reads it, 21 u32 words: the first
+    /// vertex (3 f32), the field there, the three rows of the inverse edge
+    /// matrix (9 f32), the gradient (3 f32), the four neighbours, and 1
+    /// for a tetrahedron a point can lie in (0 for a flat cell or another
+    /// kind, whose NaN rows a shader may not see as NaN).
+    pub fn words(&self) -> impl Iterator<Item = u32> + '_ {
+        self.tets.iter().flat_map(|t| {
+            let usable = t.rows.iter().all(|r| r.is_finite());
+            let rows = if usable { t.rows } else { [Vec3::ZERO; 3] };
+            let floats = t
+                .origin
+                .to_array()
+                .into_iter()
+                .chain([t.value])
+                .chain(rows.into_iter().flat_map(|r| r.to_array()))
+                .chain(t.gradient.to_array());
+            floats
+                .map(f32::to_bits)
+                .chain(t.next)
+                .chain([u32::from(usable)])
+        })
     }
 
     /// The field at `p` and the tetrahedron holding it (within `eps` of

@@ -20,6 +20,7 @@
 use glam::{Mat3, UVec3, Vec3};
 use thiserror::Error;
 
+pub use super::tet_walk::WALK_STEPS;
 use super::tet_walk::{TetCells, TetWalk};
 
 /// The most vertex positions, cells and index entries an unstructured
@@ -280,6 +281,9 @@ impl CellKind {
         r.is_finite().then_some(r)
     }
 }
+
+/// Words per cell of a mesh's walk on the GPU.
+pub const WALK_WORDS: usize = TetWalk::CELL_WORDS;
 
 /// Where an unstructured volume's values live.
 #[derive(Clone, Debug, PartialEq)]
@@ -739,6 +743,12 @@ impl UnstructuredVolume {
         match &self.values {
             MeshValues::PerVertex(v) | MeshValues::PerCell(v) => v,
         }
+    }
+
+    /// The tetrahedra's walk as the GPU reads it
+    /// ([`TetWalk::CELL_WORDS`] a cell), where the mesh has tetrahedra.
+    pub fn walk_words(&self) -> Option<impl Iterator<Item = u32> + '_> {
+        (self.kinds[0] > 0).then(|| self.walk.words())
     }
 
     /// Cell `c` (BVH order): its kind and vertex numbers.

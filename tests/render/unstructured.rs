@@ -42,10 +42,12 @@ fn hexahedra_tiling_a_grid_render_as_the_grid_and_its_tetrahedra_close_to_it() {
     let hexes = Scene::new(grid_cells(&grid, Cut::Hexahedra).unwrap(), tf.clone());
     let tets = Scene::new(grid_cells(&grid, Cut::Tetrahedra).unwrap(), tf);
     for (name, mut r) in renderers() {
-        // The GPU's shading rays through meshes do not yet match its
-        // grids' (docs/ray_casting.md): it is held to the unshaded image.
+        // The GPU's shading rays through cells it finds by its BVH do
+        // not yet match its grids' (docs/ray_casting.md): it is held to
+        // the unshaded image, and to shadows through tetrahedra, which it
+        // finds by walking.
         let shadings: &[Shading] = if name == "gpu" {
-            &[Shading::None]
+            &[Shading::None, Shading::Shadows]
         } else {
             &[Shading::None, Shading::Shadows, Shading::Ao]
         };
@@ -58,7 +60,10 @@ fn hexahedra_tiling_a_grid_render_as_the_grid_and_its_tetrahedra_close_to_it() {
             let hex = ssim(&render(&mut r, &hexes, &settings), &reference).unwrap();
             let tet = ssim(&render(&mut r, &tets, &settings), &reference).unwrap();
             eprintln!("{name} {shading:?}: hexahedra SSIM {hex:.5}, tetrahedra {tet:.5}");
-            assert!(hex >= 0.999, "{name} {shading:?}: hexahedra SSIM {hex}");
+            assert!(
+                hex >= 0.999 || (name == "gpu" && shading != Shading::None),
+                "{name} {shading:?}: hexahedra SSIM {hex}"
+            );
             assert!(tet >= 0.99, "{name} {shading:?}: tetrahedra SSIM {tet}");
         }
     }

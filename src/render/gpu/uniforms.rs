@@ -38,6 +38,7 @@ use crate::render::warp::SOLID;
 use crate::render::{Lamp, RenderSettings, Spot, SurfaceShading, MAX_LAMPS};
 use crate::scene::{
     Filter, CELL_TOLERANCE, MAX_VOLUMES, MESH_STACK, NEWTON_STEPS, NEWTON_TOLERANCE, TABLE_SIZE,
+    WALK_STEPS, WALK_WORDS,
 };
 
 /// The WGSL type of a uniform field's Rust type.
@@ -668,6 +669,8 @@ fn constants() -> String {
         ("FILTER_CELLS", FILTER_CELLS),
         ("MESH_STACK", MESH_STACK as u32),
         ("NEWTON_STEPS", NEWTON_STEPS),
+        ("WALK_STEPS", WALK_STEPS),
+        ("WALK_WORDS", WALK_WORDS as u32),
         ("BRICK", BRICK),
         ("LOD_LEVELS", LOD_LEVELS),
         ("KIND_TRIANGLE", KIND_TRIANGLE),
