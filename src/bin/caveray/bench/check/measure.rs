@@ -288,7 +288,37 @@ fn ray_casting(figures: &mut BTreeMap<String, f64>) -> Result<(), Failure> {
         "gpu.lod_ssim".into(),
         ssim(&coarse[0], &exact).map_err(runtime)?,
     );
+    // An unstructured field against the grid of the same vertices: the
+    // Marschner-Lobb signal on 33^3 vertices, and cut into tetrahedra.
+    let (grid, tets) = (
+        procedural_scene("marschner-lobb:33")?,
+        procedural_scene("tets:33")?,
+    );
+    let (ratio, _) = interleaved(
+        &views,
+        |r| timed(&mut cpu.borrow_mut(), &tets, r, &on),
+        |r| timed(&mut cpu.borrow_mut(), &grid, r, &on),
+    )?;
+    figures.insert("cpu.tets_over_grid".into(), ratio);
+    let (ratio, _) = interleaved(
+        &views,
+        |r| timed(&mut gpu.borrow_mut(), &tets, r, &on),
+        |r| timed(&mut gpu.borrow_mut(), &grid, r, &on),
+    )?;
+    figures.insert("gpu.tets_over_grid".into(), ratio);
     Ok(())
+}
+
+/// A procedural volume (`volume` as `--volume` takes it) in the ray-casting
+/// protocol's place, its longest side the protocol's sphere's diameter.
+fn procedural_scene(volume: &str) -> Result<Scene, Failure> {
+    let volume: VolumeArgs = args(&["--volume", volume])?;
+    let loaded = volume.load()?;
+    loaded.placed(
+        at(Vec3::ZERO, 2.0 * paper::RADIUS_M as f32 / 3f32.sqrt()),
+        &protocol_frame(),
+        PROTOCOL_UNITS,
+    )
 }
 
 /// The CT head in the ray-casting protocol's place, and its isosurface.

@@ -117,6 +117,20 @@ const RULES: &[Rule] = &[
         limit: Some(1.2),
     },
     Rule {
+        name: "cpu.tets_over_grid",
+        what: "an unstructured field on the CPU: a frame of the Marschner-Lobb signal on 33^3 vertices cut into 196,608 tetrahedra over a frame of the same grid (128², 4 views, interleaved, skipping on), median over the views; the tetrahedra are found by walking from cell to cell",
+        better: Better::Lower,
+        margin: Some(1.5),
+        limit: None,
+    },
+    Rule {
+        name: "gpu.tets_over_grid",
+        what: "the same on the GPU (lavapipe): the tetrahedra's frame over the grid's",
+        better: Better::Lower,
+        margin: Some(1.5),
+        limit: None,
+    },
+    Rule {
         name: "gpu.skipping_speedup",
         what: "the same on the GPU (lavapipe)",
         better: Better::Higher,
