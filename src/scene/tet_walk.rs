@@ -149,10 +149,11 @@ impl TetWalk {
         })
     }
 
-    /// The field at `p` and the tetrahedron holding it (within `eps` of
-    /// its barycentric coordinates), walking from cell `start`; `None`
-    /// where the walk gives up.
-    pub fn walk(&self, p: Vec3, start: u32, eps: f32) -> Option<(f32, u32)> {
+    /// The field at `p` and the tetrahedron strictly holding it (within
+    /// a tolerance a point may lie in two cells, which would make cell
+    /// data depend on where a walk began), walking from cell `start`;
+    /// `None` where the walk gives up.
+    pub fn walk(&self, p: Vec3, start: u32) -> Option<(f32, u32)> {
         let mut c = start;
         for _ in 0..WALK_STEPS {
             let t = self.tets.get(c as usize)?;
@@ -160,7 +161,7 @@ impl TetWalk {
             let l = [0.0, t.rows[0].dot(q), t.rows[1].dot(q), t.rows[2].dot(q)];
             let l0 = 1.0 - l[1] - l[2] - l[3];
             // Written so that NaN (no tetrahedron) is never inside.
-            if l0 >= -eps && l[1] >= -eps && l[2] >= -eps && l[3] >= -eps {
+            if l0 >= 0.0 && l[1] >= 0.0 && l[2] >= 0.0 && l[3] >= 0.0 {
                 return Some((t.value + t.gradient.dot(q), c));
             }
             let mut worst = 0;

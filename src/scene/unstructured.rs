@@ -831,13 +831,11 @@ impl UnstructuredVolume {
     /// first in and around the cells `near` remembers, which it is left
     /// remembering for the next sample.
     pub fn sample_near(&self, p: Vec3, near: &mut NearCells) -> f32 {
-        // Strictly inside: within the tolerance a point may lie in two
-        // cells, which would make cell data depend on where a walk began.
-        if let Some((v, c)) = self.walk.walk(p, near.last, 0.0) {
+        if let Some((v, c)) = self.walk.walk(p, near.last) {
             near.last = c;
             return v;
         }
-        if let Some((v, c)) = self.walk.walk(p, near.entry, 0.0) {
+        if let Some((v, c)) = self.walk.walk(p, near.entry) {
             *near = NearCells { last: c, entry: c };
             return v;
         }

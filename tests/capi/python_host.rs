@@ -5,7 +5,7 @@
 //! (target/pynari); CAVERAY_PYTHON may name another interpreter with
 //! pynari and numpy.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anari_library_caveray::geometry::{ImageRegion, PinholeCamera, PrimaryRays};
 use anari_library_caveray::render::{
@@ -23,6 +23,30 @@ fn python() -> Option<PathBuf> {
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join("target/pynari/bin/python"));
     path.exists().then_some(path)
+}
+
+/// Runs `tests/capi/python/SCRIPT` with the scene file and output path on
+/// `backend`, and checks that it succeeded and that caveray said no error
+/// or warning: its status messages reach the host's callback, which
+/// pynari prints as "caveray: <severity>: ...".
+fn run_host(python: &Path, script: &str, scene: &Path, out: &Path, backend: &str) {
+    let output = host_command(python)
+        .arg(root().join("tests/capi/python").join(script))
+        .arg(scene)
+        .arg(out)
+        .env("ANARI_LIBRARY", "caveray")
+        .env("CAVERAY_BACKEND", backend)
+        .env("PYTHONDONTWRITEBYTECODE", "1")
+        .output()
+        .expect("python runs");
+    let text = describe(&output);
+    assert!(output.status.success(), "{script} on {backend}: {text}");
+    for severity in ["Error", "Warning", "Fatal"] {
+        assert!(
+            !text.contains(&format!("caveray: {severity}")),
+            "{script} on {backend}: {text}"
+        );
+    }
 }
 
 /// Two interlocking tori on [-1, 1]^3: 1 on the rings, 0 beyond `minor`.
@@ -136,25 +160,7 @@ fn a_pynari_host_renders_what_the_rust_api_renders_on_each_backend() {
 
     for backend in ["cpu", "gpu"] {
         let out = dir.join(format!("{backend}.rgba"));
-        let output = host_command(&python)
-            .arg(root().join("tests/capi/python/volume_host.py"))
-            .arg(&scene_file)
-            .arg(&out)
-            .env("ANARI_LIBRARY", "caveray")
-            .env("CAVERAY_BACKEND", backend)
-            .env("PYTHONDONTWRITEBYTECODE", "1")
-            .output()
-            .expect("python runs");
-        let text = describe(&output);
-        assert!(output.status.success(), "{backend}: {text}");
-        // caveray's status messages reach the host's callback, which
-        // pynari prints as "caveray: <severity>: ...".
-        for severity in ["Error", "Warning", "Fatal"] {
-            assert!(
-                !text.contains(&format!("caveray: {severity}")),
-                "{backend}: {text}"
-            );
-        }
+        run_host(&python, "volume_host.py", &scene_file, &out, backend);
         let image = read_rgba(&out, size);
         let s = ssim(&image, &reference).unwrap();
         println!("{backend}: SSIM {s:.4} against the Rust API's image");
@@ -325,23 +331,7 @@ fn a_pynari_host_renders_an_unstructured_hexahedron() {
     assert!(lit(&reference) > 300, "the cell covers part of the frame");
     for backend in ["cpu", "gpu"] {
         let out = dir.join(format!("{backend}.rgba"));
-        let output = host_command(&python)
-            .arg(root().join("tests/capi/python/unstructured_host.py"))
-            .arg(&scene_file)
-            .arg(&out)
-            .env("ANARI_LIBRARY", "caveray")
-            .env("CAVERAY_BACKEND", backend)
-            .env("PYTHONDONTWRITEBYTECODE", "1")
-            .output()
-            .expect("python runs");
-        let text = describe(&output);
-        assert!(output.status.success(), "{backend}: {text}");
-        for severity in ["Error", "Warning", "Fatal"] {
-            assert!(
-                !text.contains(&format!("caveray: {severity}")),
-                "{backend}: {text}"
-            );
-        }
+        run_host(&python, "unstructured_host.py", &scene_file, &out, backend);
         let image = read_rgba(&out, size);
         let s = ssim(&image, &reference).unwrap();
         println!(

@@ -40,14 +40,11 @@ fn mesh_sample(mesh: &UnstructuredVolume, p: Vec3) -> f32 {
     NEAR.with(|slots| {
         let (first, mut near) = slots[0].get();
         if first != key {
-            // Bring this mesh's slot (or a fresh one) to the front.
-            let k = slots.iter().position(|s| s.get().0 == key).unwrap_or(3);
-            near = if k < 3 || slots[3].get().0 == key {
-                slots[k].get().1
-            } else {
-                NearCells::default()
-            };
-            for i in (1..=k).rev() {
+            // Bring this mesh's slot to the front, or a fresh one in place
+            // of the least recent.
+            let found = slots.iter().position(|s| s.get().0 == key);
+            near = found.map_or(NearCells::default(), |k| slots[k].get().1);
+            for i in (1..=found.unwrap_or(3)).rev() {
                 slots[i].set(slots[i - 1].get());
             }
         }
