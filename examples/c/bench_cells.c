@@ -12,6 +12,15 @@
  *   ./bench_cells [--field unstructured|structured] [--vertices 57]
  *                 [--backend auto|cpu|gpu] [--size 768] [--frames 4]
  *                 [--rate 1] [--json out.json] [--ppm first_frame.ppm]
+ *                 [--library caveray] [--renderer default] [--still 0|1]
+ *                 [--ppm-dir DIR]
+ *
+ * Built against the SDK's loader instead (-lanari), --library names any
+ * device, so other devices run the same scene in the same process shape.
+ * --still 1 keeps the camera where frame 0 had it, so a device that
+ * accumulates samples over frames does so; --ppm-dir writes frames 1, 2,
+ * 4, 8, ... there (frame_0001.ppm, ...) to see when its image stops
+ * changing.
  *
  * Reports the first frame (from the first array handed over to the first
  * image mapped: the device's checks, its BVH, neighbours and brick
@@ -45,7 +54,8 @@ static double peak_rss_mib(void)
 int main(int argc, char **argv)
 {
   const char *backend = "auto", *kind = "unstructured", *json = NULL, *ppm = NULL;
-  unsigned size = 768, n = 57, frames = 4, i;
+  const char *library = "caveray", *renderer_kind = "default", *ppm_dir = NULL;
+  unsigned size = 768, n = 57, frames = 4, still = 0, i;
   float rate = 1.0f;
   for (i = 1; i + 1 < (unsigned)argc; i += 2) {
     const char *k = argv[i], *v = argv[i + 1];
@@ -57,6 +67,10 @@ int main(int argc, char **argv)
     else if (!strcmp(k, "--rate")) rate = (float)atof(v);
     else if (!strcmp(k, "--json")) json = v;
     else if (!strcmp(k, "--ppm")) ppm = v;
+    else if (!strcmp(k, "--library")) library = v;
+    else if (!strcmp(k, "--renderer")) renderer_kind = v;
+    else if (!strcmp(k, "--still")) still = (unsigned)atoi(v);
+    else if (!strcmp(k, "--ppm-dir")) ppm_dir = v;
     else {
       fprintf(stderr, "bench_cells: unknown option %s\n", k);
       return 2;
@@ -121,9 +135,9 @@ int main(int argc, char **argv)
   ANARIDataType color = ANARI_UFIXED8_RGBA_SRGB;
   int ok = 1;
 
-  ANARILibrary lib = anariLoadLibrary("caveray", on_status, NULL);
+  ANARILibrary lib = anariLoadLibrary(library, on_status, NULL);
   if (!lib) {
-    fprintf(stderr, "bench_cells: cannot load caveray\n");
+    fprintf(stderr, "bench_cells: cannot load %s\n", library);
     return 1;
   }
   ANARIDevice dev = anariNewDevice(lib, "default");
@@ -169,7 +183,7 @@ int main(int argc, char **argv)
   anariSetParameter(dev, world, "volume", ANARI_ARRAY1D, &volumes);
   anariCommitParameters(dev, world);
 
-  ANARIRenderer renderer = anariNewRenderer(dev, "default");
+  ANARIRenderer renderer = anariNewRenderer(dev, renderer_kind);
   anariSetParameter(dev, renderer, "volumeSamplingRate", ANARI_FLOAT32, &rate);
   anariCommitParameters(dev, renderer);
   ANARICamera camera = anariNewCamera(dev, "perspective");
@@ -187,7 +201,7 @@ int main(int argc, char **argv)
   double *ms = calloc(frames + 1, sizeof *ms), sum = 0, lo = 1e300, hi = 0;
   /* Frame 0 is the first frame: it is timed from t_start. */
   for (i = 0; i <= frames && ms; ++i) {
-    float a = 2.0f * 3.14159265f * i / (frames + 1), d = 3.2f;
+    float a = still ? 0.0f : 2.0f * 3.14159265f * i / (frames + 1), d = 3.2f;
     float pos[3] = {d * sinf(a), 0.3f, d * cosf(a)}, dir[3] = {-pos[0], -pos[1], -pos[2]};
     anariSetParameter(dev, camera, "position", ANARI_FLOAT32_VEC3, pos);
     anariSetParameter(dev, camera, "direction", ANARI_FLOAT32_VEC3, dir);
@@ -202,8 +216,13 @@ int main(int argc, char **argv)
     if (!rgba || w != size || h != size) {
       fprintf(stderr, "bench_cells: frame %u did not map\n", i);
       ok = 0;
-    } else if (i == 0 && ppm) {
-      FILE *f = fopen(ppm, "wb");
+    } else if ((i == 0 && ppm) || (ppm_dir && i > 0 && (i & (i - 1)) == 0)) {
+      char name[4096];
+      if (i == 0)
+        snprintf(name, sizeof name, "%s", ppm);
+      else
+        snprintf(name, sizeof name, "%s/frame_%04u.ppm", ppm_dir, i);
+      FILE *f = fopen(name, "wb");
       if (f) {
         fprintf(f, "P6\n%u %u\n255\n", w, h);
         for (unsigned y = h; y-- > 0;)
@@ -224,11 +243,11 @@ int main(int argc, char **argv)
   anariGetProperty(dev, frame, "caveray.volumeSamples", ANARI_UINT64, &samples, sizeof samples,
       ANARI_WAIT);
   double mean = sum / frames, peak = peak_rss_mib();
-  printf("bench_cells: %s field on %u^3 vertices (%zu tetrahedra) at %ux%u, backend %s, rate "
-         "%g: first frame %.1f ms, then mean %.1f ms (min %.1f, max %.1f) over %u frames; "
-         "peak RSS %.1f MiB (%.1f MiB of it the host's arrays)\n",
-      kind, n, cells, size, size, backend, rate, ms ? ms[0] : 0.0, mean, lo, hi, frames, peak,
-      host_mib);
+  printf("bench_cells: %s, %s renderer, %s field on %u^3 vertices (%zu tetrahedra) at %ux%u, "
+         "backend %s, rate %g: first frame %.1f ms, then mean %.1f ms (min %.1f, max %.1f) "
+         "over %u frames; peak RSS %.1f MiB (%.1f MiB of it the host's arrays)\n",
+      library, renderer_kind, kind, n, cells, size, size, backend, rate, ms ? ms[0] : 0.0, mean,
+      lo, hi, frames, peak, host_mib);
 
   if (json && ms) {
     char model[256];
@@ -241,6 +260,8 @@ int main(int argc, char **argv)
       fprintf(f, "{\n  \"benchmark\": \"capi-cells\",\n  \"machine\": {\"cpu\": \"%s\", "
                  "\"threads\": %ld},\n",
           model, sysconf(_SC_NPROCESSORS_ONLN));
+      fprintf(f, "  \"library\": \"%s\",\n  \"renderer\": \"%s\",\n  \"still\": %u,\n",
+          library, renderer_kind, still);
       fprintf(f, "  \"field\": \"%s\",\n  \"backend\": \"%s\",\n  \"rate\": %g,\n", kind,
           backend, rate);
       fprintf(f, "  \"vertices\": [%u, %u, %u],\n  \"tetrahedra\": %zu,\n", n, n, n, cells);

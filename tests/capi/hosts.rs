@@ -353,6 +353,22 @@ fn the_cells_benchmark_host_reports_both_fields() {
         (mesh_lit as f64 / grid_lit as f64 - 1.0).abs() < 0.1,
         "the same picture: {runs:?}"
     );
+
+    // Held still, the camera gives the same frame again, and the frames
+    // at powers of two are written where a peer's accumulation is judged.
+    let frames = dir.join("still");
+    std::fs::create_dir_all(&frames).unwrap();
+    let output = common::c::host_command(&program)
+        .args(["--backend", "cpu", "--size", "32", "--vertices", "8"])
+        .args(["--frames", "3", "--still", "1", "--renderer", "default"])
+        .arg("--ppm-dir")
+        .arg(&frames)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "bench_cells: {}", describe(&output));
+    let read = |n: u32| std::fs::read(frames.join(format!("frame_{n:04}.ppm"))).unwrap();
+    assert_eq!(read(1), read(2), "a still camera renders the same frame");
+    assert!(!frames.join("frame_0003.ppm").exists());
 }
 
 /// The benchmark host of examples/c/ runs small, writes its JSON with the
