@@ -175,8 +175,9 @@ fn cell_value(m: u32, c: u32, p: vec3f) -> CellHit {
     return CellHit(true, sum);
 }
 
-// Where this invocation's ray last found a sample in each volume's mesh
-// (a cell number in BVH order): its next sample is looked for from there.
+// Where this invocation last found a sample in each volume's mesh (a
+// cell number in BVH order): its next point sample is looked for from
+// there.
 var<private> mesh_near: array<u32, MAX_VOLUMES>;
 
 struct Walked {
@@ -226,6 +227,114 @@ fn mesh_walk(m: u32, start: u32, p: vec3f) -> Walked {
         c = mesh_word(w + 16u + worst);
     }
     return out;
+}
+
+// Where the ray being marched runs through a tetrahedron of a mesh
+// (tet_walk.rs's Stretch): from t_in to t_out, the field a + b t there,
+// leaving into cell `next`. NO_STRETCH holds no t.
+struct Stretch {
+    cell: u32,
+    t_in: f32,
+    t_out: f32,
+    a: f32,
+    b: f32,
+    next: u32,
+}
+
+const NO_STRETCH = Stretch(0xffffffffu, 0.0, -1.0, 0.0, 0.0, 0xffffffffu);
+
+// Per volume: the marched ray in its mesh's coordinates, and the stretch
+// of its last sample.
+var<private> mesh_ray_o: array<vec3f, MAX_VOLUMES>;
+var<private> mesh_ray_d: array<vec3f, MAX_VOLUMES>;
+var<private> mesh_stretch_of: array<Stretch, MAX_VOLUMES>;
+
+// Cell c's stretch of the ray o + t d (mesh at word m), NO_STRETCH where
+// the ray misses it or it is no tetrahedron: each barycentric coordinate
+// is linear in t, and the ray leaves where the first falls to 0.
+fn mesh_stretch(m: u32, c: u32, o: vec3f, d: vec3f) -> Stretch {
+    let cells = mesh_word(m + 2u) - mesh_word(m + 1u);
+    if c >= cells {
+        return NO_STRETCH;
+    }
+    let w = m + mesh_word(m + 12u) + WALK_WORDS * c;
+    if mesh_word(w + 20u) == 0u {
+        return NO_STRETCH;
+    }
+    let q = o - mesh_vec3(w);
+    let r1 = mesh_vec3(w + 4u);
+    let r2 = mesh_vec3(w + 7u);
+    let r3 = mesh_vec3(w + 10u);
+    let l = vec3f(dot(r1, q), dot(r2, q), dot(r3, q));
+    let dl = vec3f(dot(r1, d), dot(r2, d), dot(r3, d));
+    var t_in = -bitcast<f32>(0x7f800000u);
+    var t_out = bitcast<f32>(0x7f800000u);
+    var exit = 4u;
+    for (var i = 0u; i < 4u; i++) {
+        var li = 1.0 - l.x - l.y - l.z;
+        var di = -dl.x - dl.y - dl.z;
+        if i > 0u {
+            li = l[i - 1u];
+            di = dl[i - 1u];
+        }
+        if di > 0.0 {
+            t_in = max(t_in, -li / di);
+        } else if di < 0.0 {
+            let at = -li / di;
+            if at < t_out {
+                t_out = at;
+                exit = i;
+            }
+        } else if li < 0.0 {
+            return NO_STRETCH;
+        }
+    }
+    if exit == 4u || !(t_in <= t_out) {
+        return NO_STRETCH;
+    }
+    let g = mesh_vec3(w + 13u);
+    return Stretch(c, t_in, t_out, mesh_f32(w + 3u) + dot(g, q), dot(g, d), mesh_word(w + 16u + exit));
+}
+
+// Starts the march of ray o + t d (world) through volume v's mesh.
+fn mesh_begin(v: u32, o: vec3f, d: vec3f) {
+    let m = params.volumes[v].mesh_offset;
+    let spacing = mesh_vec3(m + 9u);
+    mesh_ray_o[v] = mesh_vec3(m + 6u) + grid_of(v, o) * spacing;
+    mesh_ray_d[v] = grid_direction(v, d) * spacing;
+    mesh_stretch_of[v] = NO_STRETCH;
+}
+
+// Volume v's mesh at lattice point `grid`, t along the marched ray, whose
+// samples come in increasing t: in the tetrahedron of the last sample or
+// one the ray enters after it (UnstructuredVolume::sample_along), else as
+// mesh_value finds it.
+fn mesh_value_along(v: u32, grid: vec3f, t: f32) -> f32 {
+    let m = params.volumes[v].mesh_offset;
+    if mesh_word(m + 12u) == 0u {
+        return mesh_value(v, grid);
+    }
+    let o = mesh_ray_o[v];
+    let d = mesh_ray_d[v];
+    var s = mesh_stretch_of[v];
+    for (var k = 0u; k <= WALK_STEPS && t > s.t_out && s.cell != 0xffffffffu; k++) {
+        s = mesh_stretch(m, s.next, o, d);
+    }
+    if s.t_in <= t && t <= s.t_out {
+        mesh_stretch_of[v] = s;
+        mesh_near[v] = s.cell;
+        return s.a + s.b * t;
+    }
+    let value = mesh_value(v, grid);
+    s = NO_STRETCH;
+    if value != MESH_OUTSIDE {
+        s = mesh_stretch(m, mesh_near[v], o, d);
+        if !(s.t_in <= t && t <= s.t_out) {
+            s = NO_STRETCH;
+        }
+    }
+    mesh_stretch_of[v] = s;
+    return value;
 }
 
 // Volume v's mesh at lattice point `grid`: the first cell holding it, or

@@ -234,6 +234,16 @@ fn lod_level(t: f32) -> f32 {
 // is not filterable everywhere, and the reference does the same (filtered
 // sampling leaves it to the texture unit). Or the nearest vertex, halves
 // rounded up as the reference rounds them.
+// sample_volume for the samples of the ray being marched (mesh_begin),
+// at p, t along it.
+fn sample_along(v: u32, p: vec3f, t: f32) -> f32 {
+    if MESHES && params.volumes[v].sampling == FILTER_CELLS {
+        samples += 1u;
+        return mesh_value_along(v, grid_of(v, p), t);
+    }
+    return sample_volume(v, grid_of(v, p));
+}
+
 fn sample_volume(v: u32, grid: vec3f) -> f32 {
     samples += 1u;
     if MESHES && params.volumes[v].sampling == FILTER_CELLS {
@@ -591,6 +601,9 @@ fn march_segment(ray: Ray, start: f32, stop: f32, carried: Marched) -> Marched {
     var t1 = -t0;
     for (var v = 0u; v < volume_count(); v++) {
         spans[v] = enter_exit(grid_of(v, o), grid_direction(v, d), vec3f(0.0), last_vertex(v), near, far);
+        if MESHES && params.volumes[v].sampling == FILTER_CELLS {
+            mesh_begin(v, o, d);
+        }
         if spans[v].y > spans[v].x {
             t0 = min(t0, spans[v].x);
             t1 = max(t1, spans[v].y);
@@ -664,7 +677,7 @@ fn march_segment(ray: Ray, start: f32, stop: f32, carried: Marched) -> Marched {
                 if span.y <= span.x || t < span.x || t > span.y {
                     continue;
                 }
-                let c = classify_step(v, sample_volume(v, grid_of(v, p)));
+                let c = classify_step(v, sample_along(v, p, t));
                 if c.a > 0.0 {
                     mixture_add(&m, c.rgb, segment_opacity(v, c.a, seg));
                 }

@@ -116,7 +116,7 @@ pub fn tetrahedra(n: u32) -> Result<UnstructuredVolume, UnstructuredError> {
 mod tests {
     use super::*;
     use crate::data::shepp_logan;
-    use crate::scene::{NearCells, Voxels};
+    use crate::scene::{NearCells, RayCells, Voxels};
 
     /// A grid of n^3 unit cells from the origin holding `f` at its vertices.
     fn unit_grid(n: u32, f: impl Fn(Vec3) -> f32) -> StructuredVolume {
@@ -243,6 +243,54 @@ mod tests {
         };
         let p = Vec3::new(0.1, 0.2, 0.3);
         assert!((cells.sample_near(p, &mut far) - cells.sample(p)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn following_a_ray_through_tetrahedra_finds_what_the_bvh_finds() {
+        let lin = |p: Vec3| 0.5 + 0.2 * p.x - 0.4 * p.y + 0.3 * p.z;
+        let tets = grid_cells(&unit_grid(6, lin), Cut::Tetrahedra).unwrap();
+        let mut near = NearCells::default();
+        let (mut followed, mut samples, mut outside) = (0, 0, 0);
+        // Oblique rays; rays along an axis, along the cells' edges, faces
+        // and main diagonals, where exits tie; steps of a sixth of a cell
+        // and leaps of three cells; some rays starting and ending outside.
+        let mut rays: Vec<(Vec3, Vec3)> = (0..30u32)
+            .map(|r| {
+                let t = r as f32 + 0.5;
+                let start = Vec3::new((t * 0.618).fract(), (t * 0.754).fract(), -0.2) * 6.0;
+                let dir = Vec3::new(0.4 * (t * 0.3).sin(), 0.4 * (t * 0.7).cos(), 1.0);
+                (start, dir.normalize())
+            })
+            .collect();
+        rays.push((Vec3::new(2.0, 3.0, -1.0), Vec3::Z));
+        rays.push((Vec3::new(2.5, 3.5, -1.0), Vec3::Z));
+        rays.push((Vec3::new(-1.0, 2.0, 2.0), Vec3::X));
+        rays.push((Vec3::splat(-1.0), Vec3::ONE.normalize()));
+        rays.push((
+            Vec3::new(-1.0, -1.0, 2.5),
+            Vec3::new(1.0, 1.0, 0.0).normalize(),
+        ));
+        for (r, &(start, dir)) in rays.iter().enumerate() {
+            let mut ray = RayCells::new(start, dir);
+            let mut t = 0.0;
+            while t < 9.0 {
+                let p = start + dir * t;
+                let (got, want) = (tets.sample_along(&mut ray, t, &mut near), tets.sample(p));
+                if want.is_nan() {
+                    assert!(got.is_nan(), "ray {r} at {p}: {got} outside every cell");
+                    outside += 1;
+                } else {
+                    assert!((got - want).abs() < 1e-5, "ray {r} at {p}: {got} vs {want}");
+                    samples += 1;
+                    followed += usize::from(ray.cell().is_some());
+                }
+                t += if r % 3 == 0 { 3.0 } else { 1.0 / 6.0 };
+            }
+        }
+        assert!(
+            samples > 500 && outside > 100 && followed == samples,
+            "{samples} inside ({followed} with a cell), {outside} out"
+        );
     }
 
     #[test]

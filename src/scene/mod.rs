@@ -26,8 +26,8 @@ pub use shapes::{
 pub use storage::{Buf, Mapping};
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 pub use unstructured::{
-    check_counts, CellKind, MeshInput, MeshNode, MeshValues, NearCells, UnstructuredError,
-    UnstructuredVolume, CELL_TOLERANCE, MAX_MESH_CELLS, MAX_MESH_INDICES, MAX_MESH_VERTICES,
-    MESH_STACK, NEWTON_STEPS, NEWTON_TOLERANCE, WALK_STEPS, WALK_WORDS,
+    check_counts, CellKind, MeshInput, MeshNode, MeshValues, NearCells, RayCells,
+    UnstructuredError, UnstructuredVolume, CELL_TOLERANCE, MAX_MESH_CELLS, MAX_MESH_INDICES,
+    MAX_MESH_VERTICES, MESH_STACK, NEWTON_STEPS, NEWTON_TOLERANCE, WALK_STEPS, WALK_WORDS,
 };
 pub use volume::{Filter, Scaling, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};

@@ -14,7 +14,7 @@
 
 use std::collections::TryReserveError;
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
 /// No cell: the mesh's boundary, or a cell the walk cannot enter.
@@ -24,31 +24,50 @@ pub const NO_CELL: u32 = u32::MAX;
 /// march crosses one or two cells of the mesh it is spaced by.
 pub const WALK_STEPS: u32 = 8;
 
-/// One tetrahedron as a walk reads it: 80 bytes, one or two cache lines.
+/// One tetrahedron as a walk reads it: 96 bytes, in four-lane vectors
+/// so that its four barycentric coordinates, and how they change along a
+/// ray, are each three vector multiply-adds.
 #[derive(Clone, Copy, Debug)]
 struct Tet {
-    /// The first vertex; every coordinate is taken from it.
-    origin: Vec3,
-    /// The field at `origin`.
-    value: f32,
-    /// Rows of the inverse edge matrix: barycentric coordinates 1 to 3
-    /// of `p` are their dot products with `p - origin`. NaN where the
-    /// cell is flat or no tetrahedron, which no point then lies in.
-    rows: [Vec3; 3],
-    /// The field's gradient: zero for cell data.
-    gradient: Vec3,
+    /// Columns of the map from `q = p - origin` to the barycentric
+    /// coordinates: lambda = `bary[0] q.x + bary[1] q.y + bary[2] q.z +
+    /// (1, 0, 0, 0)`. NaN where the cell is flat or no tetrahedron, which
+    /// no point then lies in.
+    bary: [Vec4; 3],
+    /// The first vertex; every coordinate is taken from it. In `w`, the
+    /// field there.
+    origin: Vec4,
+    /// The field at each vertex less the field at the first: the field is
+    /// `origin.w + dot(change, lambda)` (exactly `origin.w` for cell data).
+    change: Vec4,
     /// The cell across the face opposite each vertex, or NO_CELL.
     next: [u32; 4],
 }
 
 impl Tet {
     const NONE: Tet = Tet {
-        origin: Vec3::ZERO,
-        value: 0.0,
-        rows: [Vec3::NAN; 3],
-        gradient: Vec3::ZERO,
+        bary: [Vec4::NAN; 3],
+        origin: Vec4::ZERO,
+        change: Vec4::ZERO,
         next: [NO_CELL; 4],
     };
+
+    /// The barycentric coordinates at `q` (from the first vertex), and
+    /// their change along `d`.
+    fn lambda(&self, q: Vec3) -> Vec4 {
+        self.bary[0] * q.x + self.bary[1] * q.y + self.bary[2] * q.z + Vec4::X
+    }
+
+    fn lambda_along(&self, d: Vec3) -> Vec4 {
+        self.bary[0] * d.x + self.bary[1] * d.y + self.bary[2] * d.z
+    }
+
+    /// The inverse edge matrix's rows: lambda 1 to 3 are their dot
+    /// products with `q`.
+    fn rows(&self) -> [Vec3; 3] {
+        let [x, y, z] = self.bary;
+        [1, 2, 3].map(|k| Vec3::new(x[k], y[k], z[k]))
+    }
 }
 
 /// The tetrahedra of a mesh, indexed by the mesh's cell numbers, with
@@ -133,15 +152,19 @@ impl TetWalk {
     /// kind, whose NaN rows a shader may not see as NaN).
     pub fn words(&self) -> impl Iterator<Item = u32> + '_ {
         self.tets.iter().flat_map(|t| {
-            let usable = t.rows.iter().all(|r| r.is_finite());
-            let rows = if usable { t.rows } else { [Vec3::ZERO; 3] };
+            let rows = t.rows();
+            let usable = rows.iter().all(|r| r.is_finite());
+            let rows = if usable { rows } else { [Vec3::ZERO; 3] };
+            let gradient = rows
+                .iter()
+                .zip(&t.change.to_array()[1..])
+                .fold(Vec3::ZERO, |g, (r, &f)| g + f * *r);
             let floats = t
                 .origin
                 .to_array()
                 .into_iter()
-                .chain([t.value])
                 .chain(rows.into_iter().flat_map(|r| r.to_array()))
-                .chain(t.gradient.to_array());
+                .chain(gradient.to_array());
             floats
                 .map(f32::to_bits)
                 .chain(t.next)
@@ -157,22 +180,111 @@ impl TetWalk {
         let mut c = start;
         for _ in 0..WALK_STEPS {
             let t = self.tets.get(c as usize)?;
-            let q = p - t.origin;
-            let l = [0.0, t.rows[0].dot(q), t.rows[1].dot(q), t.rows[2].dot(q)];
-            let l0 = 1.0 - l[1] - l[2] - l[3];
+            let l = t.lambda(p - t.origin.truncate());
             // Written so that NaN (no tetrahedron) is never inside.
-            if l0 >= 0.0 && l[1] >= 0.0 && l[2] >= 0.0 && l[3] >= 0.0 {
-                return Some((t.value + t.gradient.dot(q), c));
+            if l.cmpge(Vec4::ZERO).all() {
+                return Some((t.origin.w + t.change.dot(l), c));
             }
-            let mut worst = 0;
-            let mut least = l0;
-            for (i, &x) in l.iter().enumerate().skip(1) {
-                if x < least {
-                    least = x;
-                    worst = i;
-                }
+            // Across the face opposite the most negative coordinate (none
+            // where they are NaN: the walk ends).
+            let worst = l
+                .cmpeq(Vec4::splat(l.min_element()))
+                .bitmask()
+                .trailing_zeros();
+            c = *t.next.get(worst as usize)?;
+        }
+        None
+    }
+}
+
+/// Where a ray `o + t d` runs through one tetrahedron: from `t_in` to
+/// `t_out`, the field along it linear in t, and the cell it leaves into.
+#[derive(Clone, Copy, Debug)]
+pub struct Stretch {
+    pub cell: u32,
+    pub t_in: f32,
+    pub t_out: f32,
+    /// The field is `a + b t` in here.
+    a: f32,
+    b: f32,
+    /// The neighbour across the face the ray leaves by, or NO_CELL.
+    next: u32,
+}
+
+impl Stretch {
+    pub fn value(&self, t: f32) -> f32 {
+        self.a + self.b * t
+    }
+
+    /// Whether `t` lies in here.
+    pub fn holds(&self, t: f32) -> bool {
+        self.t_in <= t && t <= self.t_out
+    }
+}
+
+impl TetWalk {
+    /// Cell `c`'s stretch of the ray `o + t d`; `None` where the ray
+    /// misses it or it is no tetrahedron a point can lie in.
+    ///
+    /// Each barycentric coordinate is linear in t: the ray is inside
+    /// while all four are >= 0, and leaves where the first falls to 0,
+    /// through the face opposite that vertex.
+    pub fn stretch(&self, c: u32, o: Vec3, d: Vec3) -> Option<Stretch> {
+        let t = self.tets.get(c as usize)?;
+        let l = t.lambda(o - t.origin.truncate());
+        let dl = t.lambda_along(d);
+        if (dl.cmpeq(Vec4::ZERO) & l.cmplt(Vec4::ZERO)).any() {
+            // Parallel to a face and outside it.
+            return None;
+        }
+        let at = -l / dl;
+        let leaving = Vec4::select(dl.cmplt(Vec4::ZERO), at, Vec4::INFINITY);
+        let t_out = leaving.min_element();
+        let t_in = Vec4::select(dl.cmpgt(Vec4::ZERO), at, Vec4::NEG_INFINITY).max_element();
+        // A ray with a direction leaves every tetrahedron (the changes
+        // sum to 0); NaN (no tetrahedron) is never in one.
+        if !(t_in <= t_out && t_out < f32::INFINITY) {
+            return None;
+        }
+        let exit = leaving.cmpeq(Vec4::splat(t_out)).bitmask().trailing_zeros();
+        let next = t.next.get(exit as usize).copied().unwrap_or(NO_CELL);
+        self.prefetch(next);
+        Some(Stretch {
+            cell: c,
+            t_in,
+            t_out,
+            a: t.origin.w + t.change.dot(l),
+            b: t.change.dot(dl),
+            next,
+        })
+    }
+
+    /// Asks for cell `c` to be brought into cache: a ray's next cell is
+    /// known a sample's work before it is read, and the walk is a chain
+    /// of loads that each wait on the one before.
+    fn prefetch(&self, c: u32) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(t) = self.tets.get(c as usize) {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let at = std::ptr::from_ref(t).cast::<i8>();
+            // SAFETY: prefetching reads nothing; both addresses lie in `t`.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(at);
+                _mm_prefetch::<_MM_HINT_T0>(at.add(64));
             }
-            c = t.next[worst];
+        }
+    }
+
+    /// The stretch holding `t` of a ray whose last sample was in
+    /// `from`, crossing at most `steps` faces forward; `None` where the
+    /// ray leaves the mesh's tetrahedra (or goes back) first.
+    pub fn follow(&self, from: Stretch, o: Vec3, d: Vec3, t: f32, steps: u32) -> Option<Stretch> {
+        let mut s = from;
+        for _ in 0..=steps {
+            if t <= s.t_out {
+                return (s.t_in <= t).then_some(s);
+            }
+            s = self.stretch(s.next, o, d)?;
         }
         None
     }
@@ -191,18 +303,15 @@ fn tetrahedron(cells: &impl TetCells, c: usize, ids: [u32; 4]) -> Tet {
     if rows.iter().any(|r| !r.is_finite()) {
         return Tet::NONE;
     }
+    // lambda_0 = 1 - lambda_1 - lambda_2 - lambda_3.
+    let first = -(rows[0] + rows[1] + rows[2]);
+    let column = |k: usize| Vec4::new(first[k], rows[0][k], rows[1][k], rows[2][k]);
     let f = cells.values(c, ids);
-    // f(p) = f0 + sum_k (f_k - f0) * lambda_k(p), each lambda_k linear.
-    let gradient = if f.iter().all(|&x| x == f[0]) {
-        Vec3::ZERO
-    } else {
-        (f[1] - f[0]) * rows[0] + (f[2] - f[0]) * rows[1] + (f[3] - f[0]) * rows[2]
-    };
     Tet {
-        origin: v[0],
-        value: f[0],
-        rows,
-        gradient,
+        bary: [column(0), column(1), column(2)],
+        origin: v[0].extend(f[0]),
+        // f(p) = f0 + sum_k (f_k - f0) lambda_k(p).
+        change: Vec4::new(0.0, f[1] - f[0], f[2] - f[0], f[3] - f[0]),
         next: [NO_CELL; 4],
     }
 }

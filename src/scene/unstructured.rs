@@ -21,7 +21,7 @@ use glam::{Mat3, UVec3, Vec3};
 use thiserror::Error;
 
 pub use super::tet_walk::WALK_STEPS;
-use super::tet_walk::{TetCells, TetWalk};
+use super::tet_walk::{Stretch, TetCells, TetWalk};
 
 /// The most vertex positions, cells and index entries an unstructured
 /// volume takes. A cell's first index shares a word with its type on the
@@ -393,6 +393,30 @@ pub struct NearCells {
     /// The cell where the last walk from `last` failed, most often the
     /// previous ray's first: the next ray starts beside it.
     pub entry: u32,
+}
+
+/// One ray `origin + t direction` through a mesh (its own coordinates),
+/// and the tetrahedron its last sample lay in.
+#[derive(Clone, Copy, Debug)]
+pub struct RayCells {
+    origin: Vec3,
+    direction: Vec3,
+    stretch: Option<Stretch>,
+}
+
+impl RayCells {
+    pub fn new(origin: Vec3, direction: Vec3) -> Self {
+        Self {
+            origin,
+            direction,
+            stretch: None,
+        }
+    }
+
+    /// The cell of the ray's last sample, where it was a tetrahedron.
+    pub fn cell(&self) -> Option<u32> {
+        self.stretch.map(|s| s.cell)
+    }
 }
 
 /// A checked mesh with its values, its cells in BVH order and its BVH.
@@ -852,6 +876,32 @@ impl UnstructuredVolume {
             }
             None => f32::NAN,
         }
+    }
+
+    /// The field at `o + t d` (the mesh's own coordinates) as
+    /// [`sample`](Self::sample) gives it, for the samples of one ray in
+    /// increasing t: found by following the ray from the tetrahedron of
+    /// its previous sample through the faces it leaves by, where the
+    /// field is linear in t; else as [`sample_near`](Self::sample_near)
+    /// finds it from `near`.
+    pub fn sample_along(&self, ray: &mut RayCells, t: f32, near: &mut NearCells) -> f32 {
+        let (o, d) = (ray.origin, ray.direction);
+        if let Some(from) = ray.stretch {
+            if let Some(s) = self.walk.follow(from, o, d, t, WALK_STEPS) {
+                ray.stretch = Some(s);
+                return s.value(t);
+            }
+        }
+        let v = self.sample_near(o + d * t, near);
+        ray.stretch = if v.is_nan() {
+            None
+        } else {
+            self.walk.stretch(near.last, o, d).filter(|s| s.holds(t))
+        };
+        if let Some(s) = ray.stretch {
+            near.last = s.cell;
+        }
+        v
     }
 
     /// The field at `p` and the first cell (BVH order) holding it.

@@ -365,7 +365,11 @@ fn the_cells_benchmark_host_reports_both_fields() {
         .arg(&frames)
         .output()
         .unwrap();
-    assert!(output.status.success(), "bench_cells: {}", describe(&output));
+    assert!(
+        output.status.success(),
+        "bench_cells: {}",
+        describe(&output)
+    );
     let read = |n: u32| std::fs::read(frames.join(format!("frame_{n:04}.ppm"))).unwrap();
     assert_eq!(read(1), read(2), "a still camera renders the same frame");
     assert!(!frames.join("frame_0003.ppm").exists());

@@ -1,7 +1,7 @@
 use glam::{IVec3, Vec3, Vec4};
 
 use super::packet::{PacketGrid, LANES};
-use super::sample::{correct, Field, Mixture};
+use super::sample::{correct, Field, MeshRays, Mixture};
 use crate::geometry::{enter_exit, RayGen};
 use crate::render::empty_space::{Along, EmptySpace};
 use crate::render::march_plan::MarchPlan;
@@ -105,6 +105,7 @@ pub(super) fn march_segment(
         None => field.region(&spans, origin + dir * t, dir, t),
     };
     let unlit = !plan.shading.lights();
+    let mut meshes = MeshRays::new(field, origin, dir);
     if let Some((t0, t1)) = range {
         let len = t1 - t0;
         // `as` saturates; the cap holds where t has lost its precision.
@@ -206,13 +207,13 @@ pub(super) fn march_segment(
             }
             k += 1;
             let mut mixture = Mixture::default();
-            for (grid, span) in field.grids.iter().zip(&spans) {
+            for (v, (grid, span)) in field.grids.iter().zip(&spans).enumerate() {
                 let Some((a, b)) = *span else { continue };
                 if t < a || t > b {
                     continue;
                 }
                 samples += 1;
-                let c = grid.classify(grid.sample(grid.plan.grid(p)));
+                let c = grid.classify(meshes.sample(field, v, p, t));
                 if c.w > 0.0 {
                     let a = correct(c.w, seg * grid.plan.inv_unit_distance);
                     mixture.add(c.truncate(), a);
@@ -220,6 +221,9 @@ pub(super) fn march_segment(
             }
             if mixture.is_empty() {
                 continue;
+            }
+            if !unlit {
+                meshes.keep(field);
             }
             let s = shade(field, p, &mut samples);
             let lit = mixture.color() * s * plan.light_color;
@@ -232,6 +236,7 @@ pub(super) fn march_segment(
             }
         }
     }
+    meshes.keep(field);
     samples
 }
 

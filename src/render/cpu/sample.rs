@@ -9,7 +9,8 @@ use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::shapes::ShapeSet;
 use crate::scene::{
-    Filter, NearCells, Scaling, SpatialField, UnstructuredVolume, Voxels, TABLE_SIZE,
+    Filter, NearCells, RayCells, Scaling, SpatialField, UnstructuredVolume, Voxels, MAX_VOLUMES,
+    TABLE_SIZE,
 };
 
 /// One volume as the CPU reads it: its numbers in their stored type (or
@@ -34,8 +35,8 @@ thread_local! {
         const { [const { Cell::new((0, NearCells { last: 0, entry: 0 })) }; 4] };
 }
 
-/// The mesh's field at `p`, looked for from this thread's last cell in it.
-fn mesh_sample(mesh: &UnstructuredVolume, p: Vec3) -> f32 {
+/// `f` given where this thread last found samples of `mesh`.
+fn with_near<R>(mesh: &UnstructuredVolume, f: impl FnOnce(&mut NearCells) -> R) -> R {
     let key = std::ptr::from_ref(mesh) as usize;
     NEAR.with(|slots| {
         let (first, mut near) = slots[0].get();
@@ -48,10 +49,64 @@ fn mesh_sample(mesh: &UnstructuredVolume, p: Vec3) -> f32 {
                 slots[i].set(slots[i - 1].get());
             }
         }
-        let v = mesh.sample_near(p, &mut near);
+        let r = f(&mut near);
         slots[0].set((key, near));
-        v
+        r
     })
+}
+
+/// The mesh's field at `p`, looked for from this thread's last cell in it.
+fn mesh_sample(mesh: &UnstructuredVolume, p: Vec3) -> f32 {
+    with_near(mesh, |near| mesh.sample_near(p, near))
+}
+
+/// One primary ray through the scene's meshes: where it found its last
+/// sample in each, so that the next is found by following the ray
+/// (UnstructuredVolume::sample_along). Grids sample as they always do.
+pub(super) struct MeshRays {
+    rays: [Option<(RayCells, NearCells)>; MAX_VOLUMES],
+}
+
+impl MeshRays {
+    /// The ray `origin + t dir` (world) through `field`'s meshes, each
+    /// starting from where this thread's last ray in it did.
+    pub fn new(field: &Field, origin: Vec3, dir: Vec3) -> Self {
+        let mut rays = [None; MAX_VOLUMES];
+        for (ray, grid) in rays.iter_mut().zip(&field.grids) {
+            if let Numbers::Mesh(mesh) = grid.numbers {
+                let (_, spacing) = mesh.lattice();
+                let o = mesh.bounds().0 + grid.plan.grid(origin) * spacing;
+                let d = grid.plan.grid_direction(dir) * spacing;
+                *ray = Some((RayCells::new(o, d), with_near(mesh, |near| *near)));
+            }
+        }
+        Self { rays }
+    }
+
+    /// Volume `v`'s value at `p`, `t` along the ray.
+    pub fn sample(&mut self, field: &Field, v: usize, p: Vec3, t: f32) -> f32 {
+        let grid = &field.grids[v];
+        match (grid.numbers, &mut self.rays[v]) {
+            (Numbers::Mesh(mesh), Some((ray, near))) => mesh.sample_along(ray, t, near),
+            _ => grid.sample(grid.plan.grid(p)),
+        }
+    }
+
+    /// Leaves this thread's next samples of each mesh (a shading ray's,
+    /// the next ray's) starting where this ray is.
+    pub fn keep(&self, field: &Field) {
+        for (ray, grid) in self.rays.iter().zip(&field.grids) {
+            if let (Numbers::Mesh(mesh), Some((ray, near))) = (grid.numbers, ray) {
+                let last = ray.cell().unwrap_or(near.last);
+                with_near(mesh, |kept| {
+                    *kept = NearCells {
+                        last,
+                        entry: near.entry,
+                    }
+                });
+            }
+        }
+    }
 }
 
 /// A volume's numbers as stored.
@@ -400,7 +455,8 @@ impl Mixture {
 
     /// Straight color; meaningful once any opacity was added.
     pub fn color(&self) -> Vec3 {
-        self.emitted / self.weight
+        // One division, not three: this runs for every sample that shows.
+        self.emitted * (1.0 / self.weight)
     }
 
     pub fn is_empty(&self) -> bool {
