@@ -267,29 +267,23 @@ fn mesh_stretch(m: u32, c: u32, o: vec3f, d: vec3f) -> Stretch {
     let r3 = mesh_vec3(w + 10u);
     let l = vec3f(dot(r1, q), dot(r2, q), dot(r3, q));
     let dl = vec3f(dot(r1, d), dot(r2, d), dot(r3, d));
-    var t_in = -bitcast<f32>(0x7f800000u);
-    var t_out = bitcast<f32>(0x7f800000u);
-    var exit = 4u;
-    for (var i = 0u; i < 4u; i++) {
-        var li = 1.0 - l.x - l.y - l.z;
-        var di = -dl.x - dl.y - dl.z;
-        if i > 0u {
-            li = l[i - 1u];
-            di = dl[i - 1u];
-        }
-        if di > 0.0 {
-            t_in = max(t_in, -li / di);
-        } else if di < 0.0 {
-            let at = -li / di;
-            if at < t_out {
-                t_out = at;
-                exit = i;
-            }
-        } else if li < 0.0 {
-            return NO_STRETCH;
-        }
+    // Per face (opposite vertex 0 to 3): the coordinate and its change.
+    let l4 = vec4f(1.0 - l.x - l.y - l.z, l);
+    let d4 = vec4f(-dl.x - dl.y - dl.z, dl);
+    if any((d4 == vec4f(0.0)) & (l4 < vec4f(0.0))) {
+        // Parallel to a face and outside it.
+        return NO_STRETCH;
     }
-    if exit == 4u || !(t_in <= t_out) {
+    let at = -l4 / d4;
+    let inf = bitcast<f32>(0x7f800000u);
+    let entering = select(vec4f(-inf), at, d4 > vec4f(0.0));
+    let leaving = select(vec4f(inf), at, d4 < vec4f(0.0));
+    let t_in = max(max(entering.x, entering.y), max(entering.z, entering.w));
+    let t_out = min(min(leaving.x, leaving.y), min(leaving.z, leaving.w));
+    // The first face where the ray leaves (4 where it never does).
+    let first = select(vec4u(4u), vec4u(0u, 1u, 2u, 3u), leaving == vec4f(t_out));
+    let exit = min(min(first.x, first.y), min(first.z, first.w));
+    if !(t_in <= t_out) || t_out == inf {
         return NO_STRETCH;
     }
     let g = mesh_vec3(w + 13u);

@@ -231,6 +231,9 @@ impl TetWalk {
     /// through the face opposite that vertex.
     pub fn stretch(&self, c: u32, o: Vec3, d: Vec3) -> Option<Stretch> {
         let t = self.tets.get(c as usize)?;
+        for n in t.next {
+            self.prefetch(n);
+        }
         let l = t.lambda(o - t.origin.truncate());
         let dl = t.lambda_along(d);
         if (dl.cmpeq(Vec4::ZERO) & l.cmplt(Vec4::ZERO)).any() {
@@ -248,7 +251,6 @@ impl TetWalk {
         }
         let exit = leaving.cmpeq(Vec4::splat(t_out)).bitmask().trailing_zeros();
         let next = t.next.get(exit as usize).copied().unwrap_or(NO_CELL);
-        self.prefetch(next);
         Some(Stretch {
             cell: c,
             t_in,
