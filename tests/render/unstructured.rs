@@ -42,11 +42,13 @@ fn hexahedra_tiling_a_grid_render_as_the_grid_and_its_tetrahedra_close_to_it() {
     let hexes = Scene::new(grid_cells(&grid, Cut::Hexahedra).unwrap(), tf.clone());
     let tets = Scene::new(grid_cells(&grid, Cut::Tetrahedra).unwrap(), tf);
     for (name, mut r) in renderers() {
-        // The GPU's shading rays through cells it finds by its BVH do
-        // not yet match its grids' (docs/ray_casting.md): it is held to
-        // the unshaded image, and to shadows through tetrahedra, which it
-        // finds by walking.
-        let shadings: &[Shading] = if name == "gpu" {
+        // Mesa 22's lavapipe (Debian 12's) miscompiles the shading rays
+        // through cells the GPU finds by its BVH (docs/ray_casting.md;
+        // Mesa 25.0.7's lavapipe gives SSIM 1.0 with shadows and AO): there
+        // the GPU is held to the unshaded image, and to shadows through
+        // tetrahedra, which rays find without the BVH.
+        let miscompiled = name == "gpu" && r.describe().contains("Mesa 22.");
+        let shadings: &[Shading] = if miscompiled {
             &[Shading::None, Shading::Shadows]
         } else {
             &[Shading::None, Shading::Shadows, Shading::Ao]
@@ -61,8 +63,9 @@ fn hexahedra_tiling_a_grid_render_as_the_grid_and_its_tetrahedra_close_to_it() {
             let tet = ssim(&render(&mut r, &tets, &settings), &reference).unwrap();
             eprintln!("{name} {shading:?}: hexahedra SSIM {hex:.5}, tetrahedra {tet:.5}");
             assert!(
-                hex >= 0.999 || (name == "gpu" && shading != Shading::None),
-                "{name} {shading:?}: hexahedra SSIM {hex}"
+                hex >= 0.999 || (miscompiled && shading != Shading::None),
+                "{name} {shading:?}: hexahedra SSIM {hex} ({})",
+                r.describe()
             );
             assert!(tet >= 0.99, "{name} {shading:?}: tetrahedra SSIM {tet}");
         }
