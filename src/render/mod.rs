@@ -243,7 +243,10 @@ impl Renderer {
         match self {
             Renderer::Gpu(g) => {
                 let info = g.adapter();
-                format!("GPU: {} ({:?}, {})", info.name, info.backend, info.driver)
+                format!(
+                    "GPU: {} ({:?}, {} {})",
+                    info.name, info.backend, info.driver, info.driver_info
+                )
             }
             Renderer::Cpu(c) => format!(
                 "CPU ({} threads{})",
