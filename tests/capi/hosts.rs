@@ -721,3 +721,18 @@ fn inputs_beyond_the_budgets_are_clean_under_valgrind() {
     }
     budgets(true);
 }
+
+/// Every data type the ANARI SDK's header declares is in caveray's, with
+/// the SDK's number, and the device takes or refuses each by its name.
+#[test]
+fn every_sdk_data_type_is_declared_and_named() {
+    let dir = scratch("c_data_types");
+    let program = dir.join("data_types");
+    compile(&["tests/capi/c/data_types.c"], &program, false, true);
+    let output = run(&program, &[], false);
+    let text = describe(&output);
+    assert!(output.status.success(), "data types: {text}");
+    assert!(!text.contains("FAIL"), "data types: {text}");
+    let passed = text.matches("PASS").count();
+    assert!(passed > 134 + 2 * 100, "only {passed} checks ran: {text}");
+}
