@@ -311,7 +311,7 @@ fn mesh_value_along(v: u32, grid: vec3f, t: f32) -> f32 {
     let o = mesh_ray_o[v];
     let d = mesh_ray_d[v];
     var s = mesh_stretch_of[v];
-    for (var k = 0u; k <= WALK_STEPS && t > s.t_out && s.cell != 0xffffffffu; k++) {
+    for (var k = 0u; k < WALK_STEPS && t > s.t_out && s.cell != 0xffffffffu; k++) {
         s = mesh_stretch(m, s.next, o, d);
     }
     if s.t_in <= t && t <= s.t_out {

@@ -230,10 +230,6 @@ fn lod_level(t: f32) -> f32 {
     return min(level, f32(LOD_LEVELS - 1u));
 }
 
-// Trilinear interpolation of the vertex-centred grid, by hand: R32Float
-// is not filterable everywhere, and the reference does the same (filtered
-// sampling leaves it to the texture unit). Or the nearest vertex, halves
-// rounded up as the reference rounds them.
 // sample_volume for the samples of the ray being marched (mesh_begin),
 // at p, t along it.
 fn sample_along(v: u32, p: vec3f, t: f32) -> f32 {
@@ -244,6 +240,10 @@ fn sample_along(v: u32, p: vec3f, t: f32) -> f32 {
     return sample_volume(v, grid_of(v, p));
 }
 
+// Trilinear interpolation of the vertex-centred grid, by hand: R32Float
+// is not filterable everywhere, and the reference does the same (filtered
+// sampling leaves it to the texture unit). Or the nearest vertex, halves
+// rounded up as the reference rounds them.
 fn sample_volume(v: u32, grid: vec3f) -> f32 {
     samples += 1u;
     if MESHES && params.volumes[v].sampling == FILTER_CELLS {

@@ -216,6 +216,9 @@ int main(int argc, char **argv)
     if (!rgba || w != size || h != size) {
       fprintf(stderr, "bench_cells: frame %u did not map\n", i);
       ok = 0;
+    } else if (type != color && (ppm || ppm_dir)) {
+      if (i == 0)
+        fprintf(stderr, "bench_cells: the device mapped another pixel type; no PPM written\n");
     } else if ((i == 0 && ppm) || (ppm_dir && i > 0 && (i & (i - 1)) == 0)) {
       char name[4096];
       if (i == 0)

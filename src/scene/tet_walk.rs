@@ -1,16 +1,18 @@
-//! Point location by walking from tetrahedron to tetrahedron.
+//! Point location by walking from tetrahedron to tetrahedron, and rays
+//! followed through them.
 //!
 //! Samples along a ray come one after another a cell's width apart, so the
 //! tetrahedron holding a sample is, nearly always, the previous sample's or
-//! one a face or two away from it. Each tetrahedron keeps the inverse of
-//! its edge matrix (its barycentric coordinates are then nine
-//! multiply-adds from its first vertex), the gradient of its linear field,
+//! one a face or two away from it. Each tetrahedron keeps the affine map
+//! from a point to its four barycentric coordinates (three four-lane
+//! multiply-adds from its first vertex), its field's change along them,
 //! and its four face neighbours. A walk starts in the previous cell and
 //! crosses the face opposite the most negative barycentric coordinate until
-//! one cell holds the point; it gives up after a few cells, at the mesh's
-//! boundary, or in any cell that is not a tetrahedron, and the caller then
-//! asks the BVH. Where a walk succeeds its answer is the BVH's to rounding
-//! (conforming meshes: neighbours agree on shared faces).
+//! one cell holds the point; a ray crosses the face its coordinates reach
+//! first. Both give up after a few cells, at the mesh's boundary, or in any
+//! cell that is not a tetrahedron, and the caller then asks the BVH. Where
+//! they succeed their answer is the BVH's to rounding (conforming meshes:
+//! neighbours agree on shared faces).
 
 use std::collections::TryReserveError;
 
@@ -27,7 +29,9 @@ pub const WALK_STEPS: u32 = 8;
 /// One tetrahedron as a walk reads it: 96 bytes, in four-lane vectors
 /// so that its four barycentric coordinates, and how they change along a
 /// ray, are each three vector multiply-adds.
+// Aligned to 32 bytes so that a cell spans two cache lines, never three.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
 struct Tet {
     /// Columns of the map from `q = p - origin` to the barycentric
     /// coordinates: lambda = `bary[0] q.x + bary[1] q.y + bary[2] q.z +
@@ -282,13 +286,13 @@ impl TetWalk {
     /// ray leaves the mesh's tetrahedra (or goes back) first.
     pub fn follow(&self, from: Stretch, o: Vec3, d: Vec3, t: f32, steps: u32) -> Option<Stretch> {
         let mut s = from;
-        for _ in 0..=steps {
+        for _ in 0..steps {
             if t <= s.t_out {
-                return (s.t_in <= t).then_some(s);
+                break;
             }
             s = self.stretch(s.next, o, d)?;
         }
-        None
+        s.holds(t).then_some(s)
     }
 }
 

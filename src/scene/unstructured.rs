@@ -402,6 +402,8 @@ pub struct RayCells {
     origin: Vec3,
     direction: Vec3,
     stretch: Option<Stretch>,
+    /// Samples found by following the ray, not by point location.
+    followed: u32,
 }
 
 impl RayCells {
@@ -410,12 +412,18 @@ impl RayCells {
             origin,
             direction,
             stretch: None,
+            followed: 0,
         }
     }
 
     /// The cell of the ray's last sample, where it was a tetrahedron.
     pub fn cell(&self) -> Option<u32> {
         self.stretch.map(|s| s.cell)
+    }
+
+    /// How many of its samples were found by following it.
+    pub fn followed(&self) -> u32 {
+        self.followed
     }
 }
 
@@ -889,8 +897,12 @@ impl UnstructuredVolume {
         if let Some(from) = ray.stretch {
             if let Some(s) = self.walk.follow(from, o, d, t, WALK_STEPS) {
                 ray.stretch = Some(s);
+                ray.followed += 1;
                 return s.value(t);
             }
+            // The point walk starts where the ray was last, not where the
+            // last point walk ended.
+            near.last = from.cell;
         }
         let v = self.sample_near(o + d * t, near);
         ray.stretch = if v.is_nan() {

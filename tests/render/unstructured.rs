@@ -47,7 +47,7 @@ fn hexahedra_tiling_a_grid_render_as_the_grid_and_its_tetrahedra_close_to_it() {
         // Mesa 25.0.7's lavapipe gives SSIM 1.0 with shadows and AO): there
         // the GPU is held to the unshaded image, and to shadows through
         // tetrahedra, which rays find without the BVH.
-        let miscompiled = name == "gpu" && r.describe().contains("Mesa 22.");
+        let miscompiled = name == "gpu" && r.describe().contains("llvmpipe Mesa 22.");
         let shadings: &[Shading] = if miscompiled {
             &[Shading::None, Shading::Shadows]
         } else {
