@@ -1,4 +1,4 @@
-// #import constants, volume_bindings, cells
+// #import constants, volume_bindings, cells, amr
 // Emission-absorption volume ray casting: the march along one primary ray.
 // Mirrors src/render/cpu/ (the reference) operation for operation, so the
 // two agree to rounding; all derived numbers arrive in `params`. Its
@@ -249,6 +249,9 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
     if MESHES && params.volumes[v].sampling == FILTER_CELLS {
         return mesh_value(v, grid);
     }
+    if AMR && params.volumes[v].sampling == FILTER_AMR {
+        return amr_value(v, grid);
+    }
     if FILTERED && params.volumes[v].sampling != FILTER_NEAREST {
         return filtered_value(v, grid, 0.0);
     }
@@ -273,7 +276,7 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
 }
 
 fn classify(v: u32, value: f32) -> vec4f {
-    if MESHES && value <= MESH_OUTSIDE {
+    if (MESHES || AMR) && value <= MESH_OUTSIDE {
         return vec4f(0.0);
     }
     let m = params.volumes[v];
@@ -289,7 +292,7 @@ fn classify(v: u32, value: f32) -> vec4f {
 // A primary sample's color and opacity: under filtered sampling from the
 // stepped table by the texture unit, its opacity already a full step's.
 fn classify_step(v: u32, value: f32) -> vec4f {
-    if !FILTERED || (MESHES && value <= MESH_OUTSIDE) {
+    if !FILTERED || ((MESHES || AMR) && value <= MESH_OUTSIDE) {
         return classify(v, value);
     }
     let m = params.volumes[v];

@@ -112,6 +112,7 @@ pub static SUBTYPES: &[&SubtypeInfo] = &[
     &camera::multi_view::INFO,
     &spatial_field::structured_regular::INFO,
     &spatial_field::unstructured::INFO,
+    &spatial_field::amr::INFO,
     &volume::transfer_function_1d::INFO,
     &light::directional::INFO,
     &light::point::POINT,

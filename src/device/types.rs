@@ -198,6 +198,20 @@ impl DataType {
                     DataType::ARRAY1D | DataType::ARRAY2D | DataType::ARRAY3D
                 ))
     }
+
+    /// Whether an array declared to hold `self`s may hold an `actual`:
+    /// as a parameter would, and an array of any dimension for any other
+    /// (OpenCOVER's `amr` field sends its ARRAY3D blocks in an array
+    /// declared to hold ARRAY1D).
+    pub fn holds_object(self, actual: DataType) -> bool {
+        let array = |t| {
+            matches!(
+                t,
+                DataType::ARRAY | DataType::ARRAY1D | DataType::ARRAY2D | DataType::ARRAY3D
+            )
+        };
+        self.accepts_object(actual) || (array(self) && array(actual))
+    }
 }
 
 impl fmt::Display for DataType {

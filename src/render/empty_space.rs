@@ -14,7 +14,9 @@ use glam::{IVec3, UVec3, Vec3, Vec4};
 use super::march_plan::MarchPlan;
 use super::RenderError;
 use crate::render::frame::filled;
-use crate::scene::{Scene, SpatialField, TransferFunction, UnstructuredVolume, TABLE_SIZE};
+use crate::scene::{
+    AmrVolume, Scene, SpatialField, TransferFunction, UnstructuredVolume, TABLE_SIZE,
+};
 
 /// Cells per brick edge.
 pub const BRICK: u32 = 8;
@@ -161,11 +163,12 @@ impl BrickRanges {
     }
 
     /// The ranges of a field's bricks on its lattice: a grid's from its
-    /// voxels, a mesh's from its cells.
+    /// voxels, a mesh's or an AMR field's from its cells.
     pub fn of_field(field: &SpatialField) -> Result<Self, RenderError> {
         match field {
             SpatialField::Structured(v) => Self::new(v.dims(), |i| v.value(i)),
             SpatialField::Unstructured(m) => Self::of_mesh(m),
+            SpatialField::Amr(a) => Self::of_amr(a),
         }
     }
 
@@ -173,7 +176,26 @@ impl BrickRanges {
     /// lattice; bricks no cell reaches stay empty (clear under any table).
     pub fn of_mesh(mesh: &UnstructuredVolume) -> Result<Self, RenderError> {
         let (dims, spacing) = mesh.lattice();
-        let origin = mesh.bounds().0;
+        // A cell holds points a hair outside its box (CELL_TOLERANCE),
+        // hence the margin.
+        Self::of_boxes((dims, mesh.bounds().0, spacing), 0.01, mesh.cell_ranges())
+    }
+
+    /// Each cell widens every lattice brick its tent reaches (AMR
+    /// units); bricks no tent reaches stay empty.
+    pub fn of_amr(amr: &AmrVolume) -> Result<Self, RenderError> {
+        let lattice = (amr.lattice().0, amr.amr_bounds().0, amr.lattice_step());
+        Self::of_boxes(lattice, 0.0, amr.cell_ranges())
+    }
+
+    /// Ranges of values over boxes (in the units of the lattice's
+    /// `origin` and `spacing`), each widening every brick it reaches
+    /// (`margin` lattice cells beyond it).
+    fn of_boxes(
+        (dims, origin, spacing): (UVec3, Vec3, Vec3),
+        margin: f32,
+        boxes: impl Iterator<Item = ((Vec3, Vec3), (f32, f32))>,
+    ) -> Result<Self, RenderError> {
         let bricks = bricks_of(dims);
         let count = bricks.x as usize * bricks.y as usize * bricks.z as usize;
         let mut ranges = filled(
@@ -182,9 +204,7 @@ impl BrickRanges {
             "the brick ranges",
         )?;
         let last = bricks.as_ivec3() - IVec3::ONE;
-        // A sample at lattice point g reads brick floor(g / BRICK); a cell
-        // holds points a hair outside its box (CELL_TOLERANCE), hence the
-        // margin.
+        // A sample at lattice point g reads brick floor(g / BRICK).
         let brick = |p: Vec3, margin: f32| {
             let g = (p - origin) / spacing + Vec3::splat(margin);
             (g / BRICK as f32)
@@ -192,8 +212,8 @@ impl BrickRanges {
                 .as_ivec3()
                 .clamp(IVec3::ZERO, last)
         };
-        for ((lo, hi), (a, b)) in mesh.cell_ranges() {
-            let (b0, b1) = (brick(lo, -0.01), brick(hi, 0.01));
+        for ((lo, hi), (a, b)) in boxes {
+            let (b0, b1) = (brick(lo, -margin), brick(hi, margin));
             for z in b0.z..=b1.z {
                 for y in b0.y..=b1.y {
                     let row = (z as usize * bricks.y as usize + y as usize) * bricks.x as usize;

@@ -6,7 +6,7 @@ use glam::{UVec3, Vec3, Vec4};
 use super::settings::{RenderSettings, Shading, AO_DIRECTIONS, MAX_STEPS_PER_RAY};
 use super::RenderError;
 use crate::geometry::RayGen;
-use crate::scene::{Filter, PlacedVolume, Scene};
+use crate::scene::{Filter, PlacedVolume, Scene, SpatialField};
 
 /// Everything both renderers derive from scene and settings before any ray
 /// is cast, so that the CPU reference and the shader share one set of
@@ -49,6 +49,14 @@ pub(crate) struct MarchPlan {
     pub level_of_detail: f32,
 }
 
+/// What a volume's samples read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum FieldKind {
+    Grid,
+    Cells,
+    Amr,
+}
+
 /// How one volume is sampled: where a world point falls in its grid, and
 /// how its values meet its table.
 #[derive(Clone, Debug, PartialEq)]
@@ -58,9 +66,10 @@ pub(crate) struct VolumePlan {
     pub world_to_grid: [Vec4; 3],
     pub dims: UVec3,
     pub filter: Filter,
-    /// Whether the field is an unstructured mesh, sampled in its cells
-    /// (the lattice then only lays the march and the bricks).
-    pub cells: bool,
+    /// What the field's samples read: a grid's vertices, or a mesh's or
+    /// an AMR field's cells (the lattice then only lays the march and the
+    /// bricks).
+    pub kind: FieldKind,
     /// Field value mapped to the table's first entry, and 1 / the width
     /// of the transfer function's value range.
     pub value_lo: f32,
@@ -76,7 +85,11 @@ impl VolumePlan {
             world_to_grid: [m.row(0), m.row(1), m.row(2)],
             dims: placed.volume.dims(),
             filter: placed.volume.filter(),
-            cells: placed.volume.unstructured().is_some(),
+            kind: match &*placed.volume {
+                SpatialField::Structured(_) => FieldKind::Grid,
+                SpatialField::Unstructured(_) => FieldKind::Cells,
+                SpatialField::Amr(_) => FieldKind::Amr,
+            },
             value_lo: lo,
             value_scale: (hi - lo).recip(),
             inv_unit_distance: placed.transfer_function.unit_distance().recip(),

@@ -1,8 +1,9 @@
 //! A spatial field as renderers march it: a structured grid, or an
-//! unstructured mesh with the lattice its rays march in.
+//! unstructured mesh or an AMR field with the lattice its rays march in.
 
 use glam::{UVec3, Vec3};
 
+use super::amr::AmrVolume;
 use super::unstructured::UnstructuredVolume;
 use super::volume::{Filter, StructuredVolume};
 
@@ -14,6 +15,13 @@ use super::volume::{Filter, StructuredVolume};
 pub enum SpatialField {
     Structured(StructuredVolume),
     Unstructured(UnstructuredVolume),
+    Amr(AmrVolume),
+}
+
+impl From<AmrVolume> for SpatialField {
+    fn from(v: AmrVolume) -> Self {
+        SpatialField::Amr(v)
+    }
 }
 
 impl From<StructuredVolume> for SpatialField {
@@ -32,14 +40,21 @@ impl SpatialField {
     pub fn structured(&self) -> Option<&StructuredVolume> {
         match self {
             SpatialField::Structured(v) => Some(v),
-            SpatialField::Unstructured(_) => None,
+            _ => None,
         }
     }
 
     pub fn unstructured(&self) -> Option<&UnstructuredVolume> {
         match self {
             SpatialField::Unstructured(m) => Some(m),
-            SpatialField::Structured(_) => None,
+            _ => None,
+        }
+    }
+
+    pub fn amr(&self) -> Option<&AmrVolume> {
+        match self {
+            SpatialField::Amr(a) => Some(a),
+            _ => None,
         }
     }
 
@@ -70,6 +85,18 @@ impl SpatialField {
                     e => e.to_string(),
                 })
             }
+            SpatialField::Amr(a) => {
+                let dims = a.lattice().0;
+                if lo.cmpgt(hi).any() || hi.cmpge(dims).any() {
+                    return Err(format!(
+                        "vertices {lo} to {hi} are not a box of the AMR field's {dims} lattice"
+                    ));
+                }
+                let (origin, step) = (a.amr_bounds().0, a.lattice_step());
+                a.cells_within(origin + lo.as_vec3() * step, origin + hi.as_vec3() * step)
+                    .map(Into::into)
+                    .map_err(|e| e.to_string())
+            }
         }
     }
 
@@ -78,6 +105,7 @@ impl SpatialField {
         match self {
             SpatialField::Structured(v) => v.dims(),
             SpatialField::Unstructured(m) => m.lattice().0,
+            SpatialField::Amr(a) => a.lattice().0,
         }
     }
 
@@ -86,6 +114,7 @@ impl SpatialField {
         match self {
             SpatialField::Structured(v) => v.origin(),
             SpatialField::Unstructured(m) => m.bounds().0,
+            SpatialField::Amr(a) => a.bounds().0,
         }
     }
 
@@ -94,6 +123,7 @@ impl SpatialField {
         match self {
             SpatialField::Structured(v) => v.spacing(),
             SpatialField::Unstructured(m) => m.lattice().1,
+            SpatialField::Amr(a) => a.lattice().1,
         }
     }
 
@@ -103,14 +133,16 @@ impl SpatialField {
         match self {
             SpatialField::Structured(v) => v.spacing(),
             SpatialField::Unstructured(m) => Vec3::splat(m.edge()),
+            SpatialField::Amr(a) => a.finest_cell(),
         }
     }
 
-    /// A grid's filter; a mesh interpolates inside each cell (Linear).
+    /// A grid's filter; a mesh interpolates inside each cell, an AMR
+    /// field between cell centres (Linear).
     pub fn filter(&self) -> Filter {
         match self {
             SpatialField::Structured(v) => v.filter(),
-            SpatialField::Unstructured(_) => Filter::Linear,
+            SpatialField::Unstructured(_) | SpatialField::Amr(_) => Filter::Linear,
         }
     }
 
@@ -118,14 +150,16 @@ impl SpatialField {
         match self {
             SpatialField::Structured(v) => v.value_range(),
             SpatialField::Unstructured(m) => m.value_range(),
+            SpatialField::Amr(a) => a.value_range(),
         }
     }
 
-    /// The box the lattice covers (a mesh's own box).
+    /// The box the lattice covers (a mesh's or an AMR field's own box).
     pub fn bounds(&self) -> (Vec3, Vec3) {
         match self {
             SpatialField::Structured(v) => v.bounds(),
             SpatialField::Unstructured(m) => m.bounds(),
+            SpatialField::Amr(a) => a.bounds(),
         }
     }
 
@@ -134,6 +168,7 @@ impl SpatialField {
         match self {
             SpatialField::Structured(v) => v.voxels().bytes(),
             SpatialField::Unstructured(m) => m.bytes(),
+            SpatialField::Amr(a) => a.bytes(),
         }
     }
 }

@@ -3,6 +3,7 @@
 //! so the renderers, the data readers and the device all describe a
 //! volume the same way and none of them depends on another's room.
 
+mod amr;
 mod composition;
 mod field;
 mod placement;
@@ -14,6 +15,10 @@ mod transfer_function;
 mod unstructured;
 mod volume;
 
+pub use amr::{
+    amr_slot, AmrBlock, AmrError, AmrInput, AmrLevel, AmrVolume, AMR_ABSENT, AMR_BRICK,
+    AMR_BRICK_CELLS, AMR_EMPTY, MAX_AMR_LEVELS,
+};
 pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use field::SpatialField;
 pub use placement::{transformed_box, ObjectIds};

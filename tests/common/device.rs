@@ -141,6 +141,85 @@ impl Host {
         f
     }
 
+    /// The 4^3 field of [`field`](Self::field) as an `amr` one of two
+    /// levels over the same box: a coarse block of 2^3 cells two units
+    /// wide and a fine block of 4^3 cells under it, cell-centred values
+    /// of the same ramp (value(x) at x = 0..3, interpolated between), in
+    /// OpenCOVER's form (`cellWidth`, an ARRAY3D per block in an array
+    /// declared ARRAY1D) or anari-visionaray's (`refinementRatio`, one
+    /// `data`, `gridOrigin`/`gridSpacing`).
+    pub fn amr_field(&mut self, value: impl Fn(u32) -> f32, opencover: bool) -> u64 {
+        let ramp = |x: f32| {
+            let i = (x.floor() as u32).min(2);
+            let f = x - i as f32;
+            value(i) * (1.0 - f) + value(i + 1) * f
+        };
+        // Fine cell i's centre is x = i (in grid units 0..3, cells 3/4
+        // wide); coarse cell j's is x = 2 j + 0.5 in fine cells.
+        let fine: Vec<f32> = (0..64).map(|i| ramp(((i % 4) as f32) * 1.0)).collect();
+        let coarse: Vec<f32> = (0..8)
+            .map(|j| ramp(((j % 2) as f32 * 2.0 + 0.5).min(3.0)))
+            .collect();
+        let bounds: [i32; 12] = [0, 0, 0, 3, 3, 3, 0, 0, 0, 1, 1, 1];
+        let levels: [i32; 2] = [0, 1];
+        let f = self.d.new_object(DataType::SPATIAL_FIELD, "amr");
+        let list = |h: &mut Self, name: &str, element: DataType, n: u64, data: Vec<u8>| {
+            let a = h.array(DataType::ARRAY1D, element, [n, 1, 1], &data);
+            h.set_object(f, name, DataType::ARRAY1D, a);
+            h.d.release(a);
+        };
+        list(
+            self,
+            "block.bounds",
+            DataType::INT32_BOX3,
+            2,
+            bytes(&bounds),
+        );
+        list(self, "block.level", DataType::INT32, 2, bytes(&levels));
+        // Fine cells 3/4 of a unit wide: the 4^3 field's vertices at
+        // -1, -1/3, 1/3, 1 are the fine cells' centres.
+        let spacing = 2.0f32 / 3.0;
+        let origin = -1.0 - spacing / 2.0;
+        if opencover {
+            list(
+                self,
+                "cellWidth",
+                DataType::FLOAT32,
+                2,
+                bytes(&[1.0f32, 2.0]),
+            );
+            let a = self.array(
+                DataType::ARRAY3D,
+                DataType::FLOAT32,
+                [4, 4, 4],
+                &bytes(&fine),
+            );
+            let b = self.array(
+                DataType::ARRAY3D,
+                DataType::FLOAT32,
+                [2, 2, 2],
+                &bytes(&coarse),
+            );
+            let handles = [a as usize, b as usize];
+            list(self, "block.data", DataType::ARRAY1D, 2, bytes(&handles));
+            self.d.release(a);
+            self.d.release(b);
+        } else {
+            self.set(f, "refinementRatio", DataType::UINT32, bytes(&[2u32]));
+            let all: Vec<f32> = fine.iter().chain(&coarse).copied().collect();
+            list(self, "data", DataType::FLOAT32, 72, bytes(&all));
+        }
+        self.set(f, "gridOrigin", DataType::FLOAT32_VEC3, bytes(&[origin; 3]));
+        self.set(
+            f,
+            "gridSpacing",
+            DataType::FLOAT32_VEC3,
+            bytes(&[spacing; 3]),
+        );
+        self.d.commit(Subject::Object(f));
+        f
+    }
+
     /// A frame showing `volume` head-on from `camera_z` on the z axis:
     /// (frame, camera).
     pub fn frame(&mut self, volume: u64, camera_z: f32) -> (u64, u64) {

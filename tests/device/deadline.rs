@@ -98,6 +98,12 @@ fn a_deadline_frame_of_a_mesh_shows_its_own_image_then_a_warp() {
     background_then_own_image_then_warp(|h| h.mesh_field(|x| x as f32 / 3.0));
 }
 
+/// The same of an AMR field of two levels.
+#[test]
+fn a_deadline_frame_of_an_amr_field_shows_its_own_image_then_a_warp() {
+    background_then_own_image_then_warp(|h| h.amr_field(|x| x as f32 / 3.0, true));
+}
+
 fn background_then_own_image_then_warp(field: impl Fn(&mut Host) -> u64) {
     // The presenter speaks from its own thread, through the reporter.
     let heard = Arc::new(Mutex::new(Vec::<String>::new()));

@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod amr;
 mod cts_volume;
 mod deadline;
 mod frames;

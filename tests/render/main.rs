@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod amr;
 mod autostereo;
 mod bricks;
 mod empty_space;

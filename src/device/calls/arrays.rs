@@ -94,7 +94,7 @@ impl Device {
             let what = format!("{} element {i}", cell.describe());
             let o = self.lookup(h, &what);
             if let Some(o) = &o {
-                if !element.accepts_object(o.kind) {
+                if !element.holds_object(o.kind) {
                     self.error(
                         StatusCode::InvalidArgument,
                         Some(cell),

@@ -9,8 +9,8 @@ use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::shapes::ShapeSet;
 use crate::scene::{
-    Filter, NearCells, RayCells, Scaling, SpatialField, UnstructuredVolume, Voxels, MAX_VOLUMES,
-    TABLE_SIZE,
+    AmrVolume, Filter, NearCells, RayCells, Scaling, SpatialField, UnstructuredVolume, Voxels,
+    MAX_VOLUMES, TABLE_SIZE,
 };
 
 /// One volume as the CPU reads it: its numbers in their stored type (or
@@ -119,6 +119,8 @@ enum Numbers<'a> {
     /// An unstructured field's cells, sampled where lattice points lie in
     /// them.
     Mesh(&'a UnstructuredVolume),
+    /// An AMR field's cells, sampled where lattice points lie among them.
+    Amr(&'a AmrVolume),
 }
 
 impl<'a> Numbers<'a> {
@@ -150,7 +152,7 @@ impl Grid<'_> {
             Numbers::U16(v) => f32::from(v[at]),
             Numbers::I16(v) => f32::from(v[at]),
             Numbers::F32(v) => v[at],
-            Numbers::Mesh(_) => unreachable!("a mesh has no voxels"),
+            Numbers::Mesh(_) | Numbers::Amr(_) => unreachable!("only a grid has voxels"),
         };
         self.scaling.apply(stored)
     }
@@ -161,6 +163,9 @@ impl Grid<'_> {
         if let Numbers::Mesh(mesh) = self.numbers {
             let (_, spacing) = mesh.lattice();
             return mesh_sample(mesh, mesh.bounds().0 + g * spacing);
+        }
+        if let Numbers::Amr(amr) = self.numbers {
+            return amr.sample(amr.amr_bounds().0 + g * amr.lattice_step());
         }
         let hi = self.plan.dims.as_ivec3() - IVec3::ONE;
         let g = g.clamp(Vec3::ZERO, hi.as_vec3());
@@ -190,7 +195,7 @@ impl Grid<'_> {
             Numbers::U16(v) => trilinear(v, strides, f),
             Numbers::I16(v) => trilinear(v, strides, f),
             Numbers::F32(v) => trilinear(v, strides, f),
-            Numbers::Mesh(_) => unreachable!("sampled above"),
+            Numbers::Mesh(_) | Numbers::Amr(_) => unreachable!("sampled above"),
         };
         self.scaling.apply(stored)
     }
@@ -287,6 +292,7 @@ impl<'a> Field<'a> {
                     Samples::Stored(field) => match &**field {
                         SpatialField::Structured(v) => (Numbers::of(v.voxels()), v.scaling()),
                         SpatialField::Unstructured(m) => (Numbers::Mesh(m), Scaling::IDENTITY),
+                        SpatialField::Amr(a) => (Numbers::Amr(a), Scaling::IDENTITY),
                     },
                 };
                 Grid {

@@ -51,7 +51,7 @@ pub(super) fn check(ctx: &Context, total_words: u64) -> Result<(), RenderError> 
         return Err(RenderError::OutOfMemory {
             bytes,
             what: format!(
-                "the unstructured fields' cells on {}, past the {max} bytes one buffer binds (render them on the CPU)",
+                "the unstructured and AMR fields' cells on {}, past the {max} bytes one buffer binds (render them on the CPU)",
                 ctx.info.name
             ),
         });

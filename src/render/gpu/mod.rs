@@ -8,6 +8,7 @@
 //! modules.rs); each pass's bindings are declared once, in its table
 //! (bindings.rs).
 
+mod amr;
 mod bindings;
 mod capture;
 mod context;

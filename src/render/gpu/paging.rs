@@ -918,6 +918,16 @@ impl Layout {
     }
 }
 
+/// Words a mesh or an AMR field takes in the meshes buffer; none for a
+/// grid.
+fn cell_words(field: &SpatialField) -> u64 {
+    match field {
+        SpatialField::Unstructured(m) => super::mesh::word_count(m),
+        SpatialField::Amr(a) => super::amr::word_count(a),
+        SpatialField::Structured(_) => 0,
+    }
+}
+
 /// How each of the scene's grids (Scene::grids order) goes to the GPU:
 /// whole where it fits the adapter's textures and the scene fits the
 /// memory budget; paged otherwise, each paged grid's pool its share of the
@@ -927,12 +937,9 @@ impl Layout {
 pub(super) fn layouts(ctx: &Context, scene: &Scene) -> Result<Vec<Layout>, RenderError> {
     let max = ctx.limits.max_texture_dimension_3d;
     let fields: Vec<&Arc<SpatialField>> = scene.grids().collect();
-    // Meshes go whole into one buffer, whatever the budget says of grids.
-    let mesh_words: u64 = fields
-        .iter()
-        .filter_map(|f| f.unstructured())
-        .map(super::mesh::word_count)
-        .sum();
+    // Meshes and AMR fields go whole into one buffer, whatever the budget
+    // says of grids.
+    let mesh_words: u64 = fields.iter().map(|f| cell_words(f)).sum();
     super::mesh::check(ctx, mesh_words)?;
     let grids: Vec<Option<&StructuredVolume>> = fields.iter().map(|f| f.structured()).collect();
     let whole: Vec<u64> = grids
@@ -953,8 +960,9 @@ pub(super) fn layouts(ctx: &Context, scene: &Scene) -> Result<Vec<Layout>, Rende
     let mut out = Vec::with_capacity(grids.len());
     for ((field, g), &bytes) in fields.iter().zip(&grids).zip(&whole) {
         let Some(g) = g else {
-            let words = field.unstructured().map_or(0, super::mesh::word_count);
-            out.push(Layout::Cells { bytes: 4 * words });
+            out.push(Layout::Cells {
+                bytes: 4 * cell_words(field),
+            });
             continue;
         };
         if !over && !must_page(g) {

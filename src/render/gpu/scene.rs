@@ -12,10 +12,10 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::context::Context;
-use super::mesh;
 use super::paging::{self, Footprint, Layout, PagedVolume, Sight, StreamWait, Streaming, View};
 use super::resources::{self, BrickSlot, SurfaceSlot};
 use super::volume_texture::{self, PageSlot, TextureSlot, VolumeTexture};
+use super::{amr, mesh};
 use crate::geometry::RayGen;
 use crate::render::empty_space::{EmptySpace, SpaceCache, Visibility};
 use crate::render::march_plan::MarchPlan;
@@ -369,11 +369,13 @@ impl GpuScene {
             .grids
             .iter()
             .map(|(v, _)| {
-                v.unstructured().map(|m| {
-                    let at = words.len() as u32;
-                    mesh::pack(m, &mut words);
-                    at
-                })
+                let at = words.len() as u32;
+                match &**v {
+                    SpatialField::Unstructured(m) => mesh::pack(m, &mut words),
+                    SpatialField::Amr(a) => amr::pack(a, &mut words),
+                    SpatialField::Structured(_) => return None,
+                }
+                Some(at)
             })
             .collect();
         self.meshes = resources::words_u32_buffer(ctx, "meshes", &words);

@@ -10,13 +10,14 @@ use super::modules::{ComposeError, Library};
 use super::uniforms;
 use crate::render::RenderError;
 
-const FILES: [(&str, &str); 14] = [
+const FILES: [(&str, &str); 15] = [
     ("volume", include_str!("../../../shaders/volume.wgsl")),
     ("surface", include_str!("../../../shaders/surface.wgsl")),
     ("trace", include_str!("../../../shaders/trace.wgsl")),
     ("color", include_str!("../../../shaders/color.wgsl")),
     ("band", include_str!("../../../shaders/band.wgsl")),
     ("cells", include_str!("../../../shaders/cells.wgsl")),
+    ("amr", include_str!("../../../shaders/amr.wgsl")),
     ("stereo", include_str!("../../../shaders/stereo.wgsl")),
     ("raycast", include_str!("../../../shaders/raycast.wgsl")),
     ("reproject", include_str!("../../../shaders/reproject.wgsl")),

@@ -23,7 +23,7 @@ use crate::render::empty_space::{BRICK, LEAP_MARGIN};
 use crate::render::frame::{ColorFormat, FrameDesc};
 use crate::render::hits::{WHAT_NOTHING, WHAT_VOLUME};
 use crate::render::iso::{same_view_offsets, SAME_VIEW_SAMPLES, SEARCH_MARGIN_STEPS};
-use crate::render::march_plan::{MarchPlan, VolumePlan};
+use crate::render::march_plan::{FieldKind, MarchPlan, VolumePlan};
 use crate::render::settings::{
     Shading, DIRECTIONAL_STEPS, MAX_CLIP_PLANES, SHADOW_AMBIENT, SHADOW_STEPS,
 };
@@ -37,8 +37,8 @@ use crate::render::stereo::Reprojection;
 use crate::render::warp::SOLID;
 use crate::render::{Lamp, RenderSettings, Spot, SurfaceShading, MAX_LAMPS};
 use crate::scene::{
-    Filter, CELL_TOLERANCE, MAX_VOLUMES, MESH_STACK, NEWTON_STEPS, NEWTON_TOLERANCE, TABLE_SIZE,
-    WALK_STEPS, WALK_WORDS,
+    Filter, AMR_ABSENT, AMR_EMPTY, CELL_TOLERANCE, MAX_AMR_LEVELS, MAX_VOLUMES, MESH_STACK,
+    NEWTON_STEPS, NEWTON_TOLERANCE, TABLE_SIZE, WALK_STEPS, WALK_WORDS,
 };
 
 /// The WGSL type of a uniform field's Rust type.
@@ -428,10 +428,10 @@ impl VolumeSlot {
             world_to_grid_y: y,
             world_to_grid_z: z,
             dims: plan.dims.to_array(),
-            sampling: if plan.cells {
-                FILTER_CELLS
-            } else {
-                plan.filter.code()
+            sampling: match plan.kind {
+                FieldKind::Grid => plan.filter.code(),
+                FieldKind::Cells => FILTER_CELLS,
+                FieldKind::Amr => FILTER_AMR,
             },
             value_lo: plan.value_lo,
             value_scale: plan.value_scale,
@@ -615,6 +615,8 @@ fn lamp_slots(lamps: &[Lamp]) -> [LampSlot; MAX_LAMPS] {
 /// The sampling code of an unstructured volume: inside its cells
 /// (shaders/volume.wgsl `mesh_value`), past Filter's codes 0 and 1.
 const FILTER_CELLS: u32 = 2;
+/// The sampling code of an AMR volume: among its cells (shaders/amr.wgsl).
+const FILTER_AMR: u32 = 3;
 
 /// Which lights the surfaces see besides the point and spot lights: the
 /// directional light, a light at the eye (the world has none), or none.
@@ -667,6 +669,10 @@ fn constants() -> String {
         ("FILTER_LINEAR", Filter::Linear.code()),
         ("FILTER_NEAREST", Filter::Nearest.code()),
         ("FILTER_CELLS", FILTER_CELLS),
+        ("FILTER_AMR", FILTER_AMR),
+        ("AMR_ABSENT", AMR_ABSENT),
+        ("AMR_EMPTY", AMR_EMPTY),
+        ("MAX_AMR_LEVELS", MAX_AMR_LEVELS as u32),
         ("MESH_STACK", MESH_STACK as u32),
         ("NEWTON_STEPS", NEWTON_STEPS),
         ("WALK_STEPS", WALK_STEPS),

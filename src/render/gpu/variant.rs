@@ -33,6 +33,8 @@ pub(super) struct SceneKey {
     /// A volume is an unstructured mesh (`MESHES`): without, the cells'
     /// traversal and shape functions are dropped.
     pub meshes: bool,
+    /// A volume is an AMR field (`AMR`): without, its sampling is dropped.
+    pub amr: bool,
 }
 
 /// Which fields of the key a pass's shader depends on: the others are
@@ -45,6 +47,7 @@ pub(super) struct Uses {
     pub one_volume: bool,
     pub filtered: bool,
     pub meshes: bool,
+    pub amr: bool,
 }
 
 impl Uses {
@@ -55,6 +58,7 @@ impl Uses {
         one_volume: true,
         filtered: true,
         meshes: true,
+        amr: true,
     };
     /// A pass that marches with exact sampling only (the stereo passes).
     pub const EXACT: Uses = Uses {
@@ -68,6 +72,7 @@ impl Uses {
         one_volume: false,
         filtered: false,
         meshes: false,
+        amr: false,
     };
 }
 
@@ -92,6 +97,7 @@ impl SceneKey {
                 .volumes()
                 .iter()
                 .any(|v| v.volume.unstructured().is_some()),
+            amr: scene.volumes().iter().any(|v| v.volume.amr().is_some()),
         })
     }
 
@@ -103,6 +109,7 @@ impl SceneKey {
             one_volume: self.one_volume && uses.one_volume,
             filtered: self.filtered && uses.filtered,
             meshes: self.meshes && uses.meshes,
+            amr: self.amr && uses.amr,
         }
     }
 
@@ -112,10 +119,11 @@ impl SceneKey {
             | usize::from(self.one_volume) << 2
             | usize::from(self.filtered) << 3
             | usize::from(self.meshes) << 4
+            | usize::from(self.amr) << 5
     }
 
     /// The override constants that select this variant.
-    pub fn constants(self) -> [(&'static str, f64); 5] {
+    pub fn constants(self) -> [(&'static str, f64); 6] {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         [
             ("SURFACES", flag(self.surfaces)),
@@ -123,6 +131,7 @@ impl SceneKey {
             ("ONE_VOLUME", flag(self.one_volume)),
             ("FILTERED", flag(self.filtered)),
             ("MESHES", flag(self.meshes)),
+            ("AMR", flag(self.amr)),
         ]
     }
 }
@@ -134,7 +143,7 @@ pub(super) fn no_filtering(ctx: &Context) -> RenderError {
     ))
 }
 
-const VARIANTS: usize = 32;
+const VARIANTS: usize = 64;
 
 /// One entry point of a shader, compiled for each scene key the first
 /// time a frame needs it, with the pass's own fixed constants besides.
@@ -162,7 +171,7 @@ impl Keyed {
             groups: groups.iter().map(|g| (*g).clone()).collect(),
             uses,
             fixed: fixed.to_vec(),
-            variants: Default::default(),
+            variants: std::array::from_fn(|_| OnceLock::new()),
         }
     }
 
@@ -202,6 +211,7 @@ mod tests {
                 one_volume: i & 4 != 0,
                 filtered: i & 8 != 0,
                 meshes: i & 16 != 0,
+                amr: i & 32 != 0,
             };
             assert_eq!(key.index(), i);
             assert!(seen.insert(key.constants().map(|(_, v)| v.to_bits())));
@@ -216,6 +226,7 @@ mod tests {
             one_volume: true,
             filtered: true,
             meshes: true,
+            amr: true,
         };
         assert_eq!(all.seen_by(Uses::ALL), all);
         assert!(!all.seen_by(Uses::EXACT).filtered);
