@@ -856,6 +856,39 @@ mod tests {
     }
 
     #[test]
+    fn the_error_along_the_level_boundary_is_no_larger_than_inside_either_level() {
+        let f = |p: Vec3| (0.35 * p.x).sin() * (0.3 * p.y).cos() + (0.25 * p.z).sin();
+        let amr = two_levels(f);
+        let mut seed = 12345u32;
+        let mut next = move || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1 << 24) as f32
+        };
+        let mut worst = |lo: Vec3, hi: Vec3| -> f32 {
+            (0..4000)
+                .map(|_| {
+                    let p = lo + (hi - lo) * Vec3::new(next(), next(), next());
+                    (amr.sample(p) - f(p)).abs()
+                })
+                .fold(0.0, f32::max)
+        };
+        // The fine level spans [8, 24)^3, the coarse [0, 32)^3; the
+        // blend runs from 1.5 fine cells inside the fine box out to the
+        // coarse stencils reaching in.
+        let fine = worst(Vec3::splat(10.0), Vec3::splat(22.0));
+        let coarse = worst(Vec3::new(1.0, 1.0, 1.0), Vec3::new(6.0, 31.0, 31.0));
+        let boundary = worst(Vec3::new(6.0, 10.0, 10.0), Vec3::new(10.0, 22.0, 22.0)).max(worst(
+            Vec3::new(10.0, 22.0, 10.0),
+            Vec3::new(22.0, 26.0, 22.0),
+        ));
+        assert!(
+            boundary <= fine.max(coarse),
+            "boundary {boundary}, fine {fine}, coarse {coarse}"
+        );
+        assert!(fine < coarse, "fine {fine}, coarse {coarse}");
+    }
+
+    #[test]
     fn the_finest_level_wins_inside_it() {
         // Coarse and fine values disagree: inside the fine level (more
         // than 1.5 fine cells from its edge) only the fine one shows.

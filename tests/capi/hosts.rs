@@ -116,6 +116,32 @@ fn mesh_host(valgrind: bool) {
     assert!(text.matches("PASS").count() >= 10, "mesh host: {text}");
 }
 
+/// An `amr` field as OpenCOVER sends one, then in anari-visionaray's form.
+fn amr_host(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_amr_host_valgrind"
+    } else {
+        "c_amr_host"
+    });
+    let program = dir.join("amr_host");
+    compile(&["tests/capi/c/amr_host.c"], &program, false, true);
+    let output = run(&program, &[], valgrind);
+    let text = describe(&output);
+    assert!(output.status.success(), "amr host: {text}");
+    assert!(!text.contains("FAIL"), "amr host: {text}");
+    assert!(text.matches("PASS").count() >= 9, "amr host: {text}");
+}
+
+#[test]
+fn a_host_renders_an_amr_field_in_both_forms() {
+    amr_host(false);
+}
+
+#[test]
+fn the_amr_host_is_clean_under_valgrind() {
+    amr_host(true);
+}
+
 /// An unstructured field as OpenCOVER sends one, then with cell data.
 fn unstructured_host(valgrind: bool) {
     let dir = scratch(if valgrind {
