@@ -927,6 +927,22 @@ pub fn unstructured(data: &[u8]) {
             );
         }
         anariCommitParameters(dev, field);
+        render_small(dev, field);
+        for (_, a) in arrays {
+            anariRelease(dev, a);
+        }
+        anariRelease(dev, field);
+        anariRelease(dev, dev);
+    }
+}
+
+/// Renders `field` in a volume on a small frame of `dev`, releasing what
+/// it made.
+///
+/// # Safety
+/// `dev` and `field` are live handles of the library.
+unsafe fn render_small(dev: sys::ANARIDevice, field: sys::ANARISpatialField) {
+    unsafe {
         let volume = anariNewVolume(dev, c"transferFunction1D".as_ptr());
         anariSetParameter(
             dev,
@@ -998,12 +1014,169 @@ pub fn unstructured(data: &[u8]) {
         anariCommitParameters(dev, frame);
         anariRenderFrame(dev, frame);
         anariFrameReady(dev, frame, sys::ANARI_WAIT as u32);
-        for (_, a) in arrays {
-            anariRelease(dev, a);
-        }
-        for o in [field, volume, list, world, frame, renderer, camera] {
+        for o in [volume, list, world, frame, renderer, camera] {
             anariRelease(dev, o);
         }
+    }
+}
+
+/// An `amr` field's block tables through the C API: the first bytes pick
+/// the levels, the blocks and the form (OpenCOVER's `cellWidth` and an
+/// array per block, or visionaray's `refinementRatio` and one `data`);
+/// each block's level and bounds (small, perhaps negative, perhaps
+/// empty) and its array's element type and size (sometimes not its
+/// bounds') come next, the rest fill the values. The field is committed,
+/// put in a volume and rendered on a small frame.
+pub fn amr(data: &[u8]) {
+    let mut input = Input(data);
+    let levels = usize::from(input.byte() % 4) + 1;
+    let blocks = usize::from(input.byte() % 6) + 1;
+    let form = input.byte();
+    let widths: Vec<f32> = (0..levels)
+        .map(|_| f32::from(input.byte() % 9) * 0.5)
+        .collect();
+    let ratio = u32::from(input.byte() % 5);
+    let mut bounds = Vec::new();
+    let mut block_levels = Vec::new();
+    let mut sizes = Vec::new();
+    for _ in 0..blocks {
+        block_levels.push(i32::from(input.byte() % 6) - 1);
+        let mut b = [0i32; 6];
+        for v in &mut b {
+            *v = i32::from(input.byte() % 16) - 4;
+        }
+        bounds.extend(b);
+        let size = [0, 1, 2].map(|k| (b[k + 3] - b[k] + 1).clamp(0, 12) as u64);
+        // Now and then an array of another size than the bounds hold.
+        let wrong = input.byte();
+        sizes.push(if wrong < 16 {
+            [size[0] + u64::from(wrong % 3), size[1], size[2]]
+        } else {
+            size
+        });
+    }
+    let element = *input.pick(&[
+        DataType::FLOAT32,
+        DataType::FLOAT64,
+        DataType::UFIXED8,
+        DataType::FIXED16,
+        DataType::INT32,
+    ]);
+    let lib = library();
+    // SAFETY: every array's memory holds its count of its element type
+    // and outlives the calls that read it (arrays are read at commit).
+    unsafe {
+        let dev = anariNewDevice(lib, c"default".as_ptr());
+        if dev.is_null() {
+            return;
+        }
+        anariSetParameter(
+            dev,
+            dev,
+            c"backend".as_ptr(),
+            DataType::STRING as i32,
+            c"cpu".as_ptr().cast(),
+        );
+        anariCommitParameters(dev, dev);
+        let list = |bytes: &[u8], ty: DataType, n: usize| {
+            anariNewArray1D(
+                dev,
+                bytes.as_ptr().cast(),
+                None,
+                std::ptr::null(),
+                ty as i32,
+                n as u64,
+            )
+        };
+        let mut fill = |n: u64| -> Vec<u8> {
+            let n = (n as usize).min(1 << 16);
+            let mut v = input.take(n);
+            v.resize(n, 0x3f);
+            v
+        };
+        let field = anariNewSpatialField(dev, c"amr".as_ptr());
+        let mut arrays = Vec::new();
+        let set = |name: &std::ffi::CStr, a: sys::ANARIArray1D| {
+            anariSetParameter(
+                dev,
+                field,
+                name.as_ptr(),
+                DataType::ARRAY1D as i32,
+                (&a as *const sys::ANARIArray1D).cast(),
+            );
+            a
+        };
+        let bound_bytes: Vec<u8> = bounds.iter().flat_map(|v| v.to_ne_bytes()).collect();
+        let level_bytes: Vec<u8> = block_levels.iter().flat_map(|v| v.to_ne_bytes()).collect();
+        let ratio = ratio;
+        arrays.push(set(
+            c"block.bounds",
+            list(&bound_bytes, DataType::INT32_BOX3, blocks),
+        ));
+        arrays.push(set(
+            c"block.level",
+            list(&level_bytes, DataType::INT32, blocks),
+        ));
+        let mut blocks_made = Vec::new();
+        let mut kept = Vec::new();
+        if form & 1 == 0 {
+            let width_bytes: Vec<u8> = widths.iter().flat_map(|v| v.to_ne_bytes()).collect();
+            arrays.push(set(
+                c"cellWidth",
+                list(&width_bytes, DataType::FLOAT32, levels),
+            ));
+            // Shared arrays read the host's memory until released.
+            kept.push(width_bytes);
+            for size in &sizes {
+                let n = size.iter().product::<u64>();
+                let bytes = fill(n * element.size() as u64);
+                let a = anariNewArray3D(
+                    dev,
+                    bytes.as_ptr().cast(),
+                    None,
+                    std::ptr::null(),
+                    element as i32,
+                    size[0],
+                    size[1],
+                    size[2],
+                );
+                kept.push(bytes);
+                blocks_made.push(a as usize);
+            }
+            let handles: Vec<u8> = blocks_made.iter().flat_map(|h| h.to_ne_bytes()).collect();
+            let declared = if form & 2 == 0 {
+                DataType::ARRAY1D
+            } else {
+                DataType::ARRAY3D
+            };
+            arrays.push(set(
+                c"block.data",
+                list(&handles, declared, blocks_made.len()),
+            ));
+            kept.push(handles);
+        } else {
+            anariSetParameter(
+                dev,
+                field,
+                c"refinementRatio".as_ptr(),
+                DataType::UINT32 as i32,
+                (&ratio as *const u32).cast(),
+            );
+            let n: u64 = sizes.iter().map(|s| s.iter().product::<u64>()).sum();
+            let bytes = fill(n * element.size() as u64);
+            arrays.push(set(c"data", list(&bytes, element, n as usize)));
+            kept.push(bytes);
+        }
+        anariCommitParameters(dev, field);
+        render_small(dev, field);
+        for a in arrays {
+            anariRelease(dev, a);
+        }
+        for h in blocks_made {
+            anariRelease(dev, h as sys::ANARIArray3D);
+        }
+        anariRelease(dev, field);
         anariRelease(dev, dev);
+        drop(kept);
     }
 }

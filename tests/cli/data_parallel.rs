@@ -149,6 +149,13 @@ fn a_meshs_bricks_composite_to_the_whole_mesh() {
     compare_volume("tets:24", 23, "cpu", "4", [1, 2, 2]);
 }
 
+/// An AMR field is cut over its lattice too: each brick holds the cells
+/// whose tents reach its stored box.
+#[test]
+fn an_amr_fields_bricks_composite_to_the_whole_field() {
+    compare_volume("amr:32", 32, "cpu", "4", [1, 2, 2]);
+}
+
 #[test]
 fn bricks_composite_to_the_whole_on_the_gpu() {
     compare("gpu", "8", [2, 2, 2]);

@@ -16,7 +16,7 @@ const LIMIT: Duration = Duration::from_secs(30);
 
 type Target = fn(&[u8]);
 
-const TARGETS: [(&str, Target); 12] = [
+const TARGETS: [(&str, Target); 13] = [
     ("rig", harness::rig),
     ("display", harness::display),
     ("paraview", harness::paraview),
@@ -29,6 +29,7 @@ const TARGETS: [(&str, Target); 12] = [
     ("dicom", harness::dicom),
     ("vtk_mesh", harness::vtk_mesh),
     ("unstructured", harness::unstructured),
+    ("amr", harness::amr),
 ];
 
 /// Every file under fuzz/<kind>/<target>/, sorted.

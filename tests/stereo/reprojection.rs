@@ -251,6 +251,35 @@ fn a_mesh_reprojects_like_two_pass() {
     assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
 }
 
+/// An AMR field of three levels re-projects as a grid does.
+#[test]
+fn an_amr_field_reprojects_like_two_pass() {
+    use anari_library_caveray::data::{refined, smooth_waves};
+    let mut gpu = common::render::gpu();
+    let scene = Scene::new(
+        refined(32, 3, smooth_waves).unwrap(),
+        preset("phantom").unwrap(),
+    );
+    let pair = hmd(96, 12.0, 0.4);
+    let settings = RenderSettings::default();
+    let desc = FrameDesc::new(pair.size);
+    let (left, right) = two_pass(&mut gpu, &scene, &pair, &settings, &desc);
+    let stereo = reprojected(
+        &mut gpu,
+        &scene,
+        &pair,
+        &settings,
+        &desc,
+        LayerFormat::Rgba16F,
+    );
+    assert_eq!(stereo.left.color, left.color, "the left eye");
+    let d = dssim(&stereo.right, &right).unwrap();
+    let unmoved = dssim(&left, &right).unwrap();
+    eprintln!("amr: DSSIM {d:.4}, left image as the right one {unmoved:.4}");
+    assert!(d < 0.02, "DSSIM {d}");
+    assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
+}
+
 #[test]
 fn cave_front_wall_with_a_level_head_matches_two_pass() {
     let rig = common::rig("cologne_5wall");

@@ -288,6 +288,23 @@ fn a_mesh_is_warped_by_every_mode_and_a_step_best_by_the_layers() {
     warps_beat_none_and_layers_the_step(&scene, &source);
 }
 
+/// An AMR field of three levels is captured and warped as a grid is.
+#[test]
+fn an_amr_field_is_warped_by_every_mode_and_a_step_best_by_the_layers() {
+    use anari_library_caveray::data::{refined, smooth_waves};
+    let scene = Scene::new(
+        refined(32, 3, smooth_waves).unwrap(),
+        preset("phantom").unwrap(),
+    );
+    let from = pinhole(DVec3::new(0.0, 0.0, 3.5), DVec3::ZERO);
+    let source = capture(&scene, &from, 4);
+    for mode in WarpMode::ALL {
+        let d = dssim(&shown(&source, &from, mode, &scene), &ideal(&scene, &from)).unwrap();
+        assert!(d < 2e-3, "{}: DSSIM {d} for the same view", mode.name());
+    }
+    warps_beat_none_and_layers_the_step(&scene, &source);
+}
+
 #[test]
 fn surfaces_in_the_volume_are_warped_by_every_mode_and_a_step_best_by_the_layers() {
     use anari_library_caveray::scene::{AlphaMode, ColorSource, OpacitySource, SurfaceMaterial};

@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
     concentric_shells, is_vtk_mesh, isosurface_mesh, load_paraview, load_raw, load_volume_file,
-    load_vtk_mesh, marschner_lobb, preset, shepp_logan, solid_box, tetrahedra, DataError, Manifest,
+    load_vtk_mesh, marschner_lobb, preset, refined, shepp_logan, smooth_waves, solid_box,
+    tetrahedra, DataError, Manifest,
     Orientation, VolumeFormat, VoxelType,
 };
 use anari_library_caveray::geometry::{Units, VolumeAxis};
@@ -518,8 +519,8 @@ pub fn at(centre: glam::Vec3, size: f32) -> ScenePlacement {
     }
 }
 
-/// `phantom[:N]`, `shells[:N]`, `marschner-lobb[:N]`, `box[:N]` or
-/// `tets[:N]`.
+/// `phantom[:N]`, `shells[:N]`, `marschner-lobb[:N]`, `box[:N]`,
+/// `tets[:N]` or `amr[:N]`.
 fn procedural(spec: &str) -> Result<Option<(String, SpatialField)>, Failure> {
     let (kind, size) = match spec.split_once(':') {
         Some((k, n)) => {
@@ -544,6 +545,14 @@ fn procedural(spec: &str) -> Result<Option<(String, SpatialField)>, Failure> {
         "tets" => {
             let mesh = tetrahedra(size).map_err(|e| Failure::Usage(format!("{spec}: {e}")))?;
             return Ok(Some((format!("{kind}:{size}"), mesh.into())));
+        }
+        "amr" => {
+            // Whole blocks on every level: the finest cells a multiple
+            // of 16 across.
+            let n = (size / 16).max(1) * 16;
+            let amr = refined(n, 3, smooth_waves)
+                .map_err(|e| Failure::Usage(format!("{spec}: {e}")))?;
+            return Ok(Some((format!("{kind}:{n}"), amr.into())));
         }
         _ => return Ok(None),
     };
