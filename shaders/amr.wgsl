@@ -44,8 +44,9 @@ fn amr_value(v: u32, grid: vec3f) -> f32 {
     var remaining = 1.0;
     var acc = 0.0;
     for (var k = 0u; k < levels; k++) {
-        let level = mesh_word(a + 11u + 2u * k);
-        let u = x / mesh_f32(a + 12u + 2u * k) - vec3f(0.5);
+        let at = a + 11u + 8u * k;
+        let level = mesh_word(at);
+        let u = clamp(x / mesh_f32(at + 1u) - vec3f(0.5), mesh_vec3(at + 2u), mesh_vec3(at + 5u));
         let i0f = floor(u);
         let f = u - i0f;
         let i0 = vec3i(i0f);

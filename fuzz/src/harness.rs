@@ -1108,7 +1108,6 @@ pub fn amr(data: &[u8]) {
         };
         let bound_bytes: Vec<u8> = bounds.iter().flat_map(|v| v.to_ne_bytes()).collect();
         let level_bytes: Vec<u8> = block_levels.iter().flat_map(|v| v.to_ne_bytes()).collect();
-        let ratio = ratio;
         arrays.push(set(
             c"block.bounds",
             list(&bound_bytes, DataType::INT32_BOX3, blocks),

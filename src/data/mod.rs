@@ -6,6 +6,7 @@
 mod cells;
 mod dicom;
 pub mod files;
+mod flash;
 mod format;
 mod manifest;
 mod mesh;
@@ -27,6 +28,9 @@ mod vtk_mesh;
 
 pub use cells::{cell_corners, grid_cells, tetrahedra, Cut, KUHN};
 pub use dicom::{load_dicom, parse_dicom};
+pub use flash::is_hdf5;
+#[cfg(feature = "hdf5")]
+pub use flash::{load_flash, FlashFile};
 pub use format::{sniff, VolumeFormat, SNIFF_BYTES};
 pub use manifest::{Manifest, ManifestEntry};
 pub use mesh::{isosurface_mesh, Mesh, MeshError};

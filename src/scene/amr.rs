@@ -22,11 +22,14 @@
 //!   Deep inside a level alpha is 1 and coarser levels are not read: the
 //!   finest data wins. Across a level's edge it falls to 0 over one cell,
 //!   so the coarser level's value takes over without a seam.
-//! - What no complete stencil covers (the outer half cell of the data,
-//!   or levels sent without the coarse data under them) is filled by the
-//!   basis method (tent weights of the present cells, levels blended by
+//! - What no complete stencil covers (levels sent without the coarse
+//!   data under them, gaps between blocks) is filled by the basis method (tent weights of the present cells, levels blended by
 //!   their weight sums): continuous, first order.
-//! - Outside every cell's tent: NaN, like a mesh outside its cells.
+//! - Each level's stencil is clamped to the centres of the field's box
+//!   at that level, so that at the box's faces every level reads as a
+//!   grid clamped to its edge, and cells beyond the box count as present
+//!   for the interior flag. Where no cell's tent reaches (a gap between
+//!   blocks): NaN, like a mesh outside its cells.
 //!
 //! The basis method alone (what anari-visionaray samples) does not
 //! reproduce a linear field across a level boundary: a smooth field
@@ -167,6 +170,11 @@ pub struct AmrVolume {
     /// The cells' box in AMR units.
     lo: Vec3,
     hi: Vec3,
+    /// Per level, the range its stencils' lower corners are clamped to
+    /// (its cell-centre coordinates x / w - 1/2): the first to the last
+    /// centre of the whole field's box at that level, so that at the
+    /// box's faces every level reads as a grid clamped to its edge.
+    clamps: Vec<(Vec3, Vec3)>,
     lattice_dims: UVec3,
     lattice_step: Vec3,
     value_range: (f32, f32),
@@ -322,10 +330,29 @@ fn find(table: &[u32], probes: u32, level: u32, b: IVec3) -> Option<usize> {
     None
 }
 
+/// Per level of width `w`, the cells of the box `lo..hi` (AMR units):
+/// those a clamped stencil reads.
+fn level_cells(widths: &[f32], (lo, hi): (Vec3, Vec3)) -> Vec<(IVec3, IVec3)> {
+    widths
+        .iter()
+        .map(|&w| {
+            let c0 = (lo / w).floor().as_ivec3();
+            let c1 = ((hi / w).ceil().as_ivec3() - IVec3::ONE).max(c0);
+            (c0, c1)
+        })
+        .collect()
+}
+
 /// Marks every present cell whose 26 neighbours at its level are present
-/// too: a 3x3x3 erosion of presence, separable, over each brick padded by
-/// one cell from its neighbours.
-fn mark_interior(bricks: &mut [u32], keys: &[(u32, IVec3)], table: &[u32], probes: u32) {
+/// too, or lie beyond the field's box (where clamped stencils never
+/// reach): a 3x3x3 erosion of presence, separable, over each brick padded
+/// by one cell from its neighbours.
+fn mark_interior(
+    bricks: &mut [u32],
+    keys: &[(u32, IVec3)],
+    (table, probes): (&[u32], u32),
+    cells: &[(IVec3, IVec3)],
+) {
     const P: usize = AMR_BRICK as usize + 2;
     let idx = |x: usize, y: usize, z: usize| x + P * (y + P * z);
     let mut flags = vec![false; bricks.len()];
@@ -347,8 +374,12 @@ fn mark_interior(bricks: &mut [u32], keys: &[(u32, IVec3)], table: &[u32], probe
                     let c = IVec3::new(x as i32, y as i32, z as i32) - IVec3::ONE;
                     let d = (c + IVec3::splat(AMR_BRICK)) / AMR_BRICK;
                     let n = (d.x + 3 * d.y + 9 * d.z) as usize;
-                    a[idx(x, y, z)] =
-                        near[n].is_some_and(|m| present(bricks[m * AMR_BRICK_CELLS + local_of(c)]));
+                    let (c0, c1) = cells[level as usize];
+                    let cell = key * AMR_BRICK + c;
+                    let beyond = cell.cmplt(c0).any() || cell.cmpgt(c1).any();
+                    a[idx(x, y, z)] = beyond
+                        || near[n]
+                            .is_some_and(|m| present(bricks[m * AMR_BRICK_CELLS + local_of(c)]));
                 }
             }
         }
@@ -476,13 +507,26 @@ impl AmrVolume {
                 }
             }
         }
-        mark_interior(&mut bricks, &keys, &table, probes);
+        // The blocks' box, which clamps every level's stencils.
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for b in &input.blocks {
+            let w = input.widths[b.level as usize];
+            lo = lo.min(b.lo.as_vec3() * w);
+            hi = hi.max((b.hi + IVec3::ONE).as_vec3() * w);
+        }
+        let cells = level_cells(&input.widths, (lo, hi));
+        mark_interior(&mut bricks, &keys, (&table, probes), &cells);
+        let clamps = cells
+            .iter()
+            .map(|&(c0, c1)| (c0.as_vec3(), c1.as_vec3()))
+            .collect();
         let mut volume = Self::assemble(
             input.widths,
             bricks,
             keys,
             (table, probes),
             (input.origin, input.spacing),
+            clamps,
         )?;
         volume.blocks = input.blocks.len();
         volume.dropped = dropped;
@@ -496,6 +540,7 @@ impl AmrVolume {
         keys: Vec<(u32, IVec3)>,
         (table, probes): (Vec<u32>, u32),
         (origin, spacing): (Vec3, Vec3),
+        clamps: Vec<(Vec3, Vec3)>,
     ) -> Result<Self, AmrError> {
         let mut levels: Vec<AmrLevel> = widths
             .iter()
@@ -561,6 +606,7 @@ impl AmrVolume {
             spacing,
             lo,
             hi,
+            clamps,
             lattice_dims,
             lattice_step,
             value_range: (vlo, vhi),
@@ -593,6 +639,7 @@ impl AmrVolume {
             keys,
             table,
             (self.origin, self.spacing),
+            self.clamps.clone(),
         )?;
         v.blocks = self.blocks;
         Ok(v)
@@ -629,7 +676,8 @@ impl AmrVolume {
     }
 
     fn stencil(&self, level: u32, x: Vec3) -> Stencil {
-        let u = x / self.widths[level as usize] - Vec3::splat(0.5);
+        let (c0, c1) = self.clamps[level as usize];
+        let u = (x / self.widths[level as usize] - Vec3::splat(0.5)).clamp(c0, c1);
         let i0f = u.floor();
         let f = u - i0f;
         let i0 = i0f.as_ivec3();
@@ -784,6 +832,11 @@ impl AmrVolume {
         self.probes
     }
 
+    /// Per level, the range its stencils' lower corners are clamped to.
+    pub fn clamps(&self) -> &[(Vec3, Vec3)] {
+        &self.clamps
+    }
+
     /// Bytes held: the bricks and the hash.
     pub fn bytes(&self) -> u64 {
         4 * (self.bricks.len() + self.table.len()) as u64 + 16 * self.keys.len() as u64
@@ -917,7 +970,8 @@ mod tests {
         let between = mixed.sample(Vec3::new(9.0, 16.0, 16.0));
         assert!(between > 5.0 && between < 9.0, "{between}");
         assert_eq!(amr.sample(Vec3::splat(16.0)), 1.0);
-        assert!(amr.sample(Vec3::splat(40.0)).is_nan());
+        // Beyond the box, as at its face.
+        assert_eq!(amr.sample(Vec3::splat(40.0)), 1.0);
         assert_eq!(amr.value_range(), (1.0, 1.0));
     }
 

@@ -559,7 +559,7 @@ fn tetrahedra_render_on_every_wall_and_array_needs_a_mesh_file() {
     assert!(!out.status.success());
     let said = String::from_utf8_lossy(&out.stderr);
     assert!(
-        said.contains("--array names an array of a VTK unstructured grid; 'tets:8' is not one"),
+        said.contains("--array names an array of a VTK unstructured grid or a variable of a FLASH file; 'tets:8' is neither"),
         "{said}"
     );
     remove(&dir);

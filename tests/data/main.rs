@@ -5,6 +5,7 @@ mod common;
 
 mod dicom;
 mod fixtures;
+mod flash;
 mod metaimage;
 mod nifti;
 mod nrrd;

@@ -195,6 +195,9 @@ fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
     if crate::scene::is_mesh_file(path) {
         return inspect_mesh(path, json);
     }
+    if crate::scene::is_hdf5_file(path) {
+        return inspect_flash(path, json);
+    }
     if !VolumeFormat::of(path).is_some_and(|f| f.readable()) {
         return Err(Failure::Usage(format!(
             "{}: caveray inspect reads volume files with a header: NIfTI (.nii, .nii.gz, \
@@ -297,6 +300,76 @@ fn inspect_mesh(path: &Path, json: bool) -> Result<(), Failure> {
     println!("  arrays        {}", arrays.join(", "));
     println!("  value range   {vlo} to {vhi} ({})", file.array);
     Ok(())
+}
+
+/// What a FLASH file holds: its variables, levels, blocks and box.
+#[cfg(feature = "hdf5")]
+fn inspect_flash(path: &Path, json: bool) -> Result<(), Failure> {
+    let file = anari_library_caveray::data::load_flash(path, None)
+        .map_err(|e| Failure::Usage(e.to_string()))?;
+    let amr = &file.amr;
+    let (lo, hi) = amr.bounds();
+    let (vlo, vhi) = amr.value_range();
+    let levels: Vec<serde_json::Value> = amr
+        .levels()
+        .iter()
+        .enumerate()
+        .map(|(l, level)| {
+            serde_json::json!({
+                "level": l,
+                "cell_width": level.width,
+                "cells": level.cells,
+                "bounds": [level.lo.to_array(), level.hi.to_array()],
+            })
+        })
+        .collect();
+    if json {
+        let doc = serde_json::json!({
+            "file": path.display().to_string(),
+            "format": "FLASH (HDF5)",
+            "variables": file.variables,
+            "variable": file.variable,
+            "blocks": amr.block_count(),
+            "leaf_blocks": file.leaves,
+            "block_cells": file.block_cells,
+            "levels": levels,
+            "bounds": [lo.to_array(), hi.to_array()],
+            "finest_cell": amr.finest_cell().to_array(),
+            "value_range": [vlo, vhi],
+            "bytes": amr.bytes(),
+        });
+        println!("{doc:#}");
+        return Ok(());
+    }
+    println!("{}: FLASH (HDF5)", path.display());
+    println!("  variables     {}", file.variables.join(", "));
+    let [x, y, z] = file.block_cells;
+    let leaves = file
+        .leaves
+        .map_or(String::new(), |n| format!(", {n} of them leaves"));
+    println!(
+        "  blocks        {} of {x}x{y}x{z} cells{leaves}",
+        amr.block_count()
+    );
+    for (l, level) in amr.levels().iter().enumerate() {
+        if level.cells == 0 {
+            continue;
+        }
+        println!(
+            "  level {l:<7} cells {} wide: {} cells within {} to {}",
+            level.width, level.cells, level.lo, level.hi
+        );
+    }
+    println!("  bounds        {lo} to {hi}");
+    println!("  finest cell   {}", amr.finest_cell());
+    println!("  value range   {vlo} to {vhi} ({})", file.variable);
+    println!("  held          {} bytes", amr.bytes());
+    Ok(())
+}
+
+#[cfg(not(feature = "hdf5"))]
+fn inspect_flash(path: &Path, _: bool) -> Result<(), Failure> {
+    crate::scene::load_flash_file(&path.display().to_string(), None).map(|_| ())
 }
 
 /// A voxel-to-world map's rows and a value range.

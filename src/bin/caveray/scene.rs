@@ -4,10 +4,9 @@ use std::path::{Path, PathBuf};
 
 use anari_library_caveray::cave::{HeadFrame, ScenePlacement};
 use anari_library_caveray::data::{
-    concentric_shells, is_vtk_mesh, isosurface_mesh, load_paraview, load_raw, load_volume_file,
-    load_vtk_mesh, marschner_lobb, preset, refined, shepp_logan, smooth_waves, solid_box,
-    tetrahedra, DataError, Manifest,
-    Orientation, VolumeFormat, VoxelType,
+    concentric_shells, is_hdf5, is_vtk_mesh, isosurface_mesh, load_paraview, load_raw,
+    load_volume_file, load_vtk_mesh, marschner_lobb, preset, refined, shepp_logan, smooth_waves,
+    solid_box, tetrahedra, DataError, Manifest, Orientation, VolumeFormat, VoxelType,
 };
 use anari_library_caveray::geometry::{Units, VolumeAxis};
 use anari_library_caveray::scene::{
@@ -232,7 +231,7 @@ impl VolumeArgs {
         let mut metres_per_unit = None;
         if self.array.is_some() && !Path::new(spec).is_file() {
             return Err(Failure::Usage(format!(
-                "--array names an array of a VTK unstructured grid; '{spec}' is not one"
+                "--array names an array of a VTK unstructured grid or a variable of a FLASH file; '{spec}' is neither"
             )));
         }
         let (name, volume, default_tf, orientation) = if let Some((name, volume)) =
@@ -244,6 +243,22 @@ impl VolumeArgs {
                 "phantom"
             };
             (name, volume, tf, Orientation::UNKNOWN)
+        } else if is_hdf5_file(Path::new(spec)) {
+            if self.has_mesh() {
+                return Err(Failure::Usage(
+                    "--mesh draws a structured grid's isosurface; an AMR field has none here"
+                        .into(),
+                ));
+            }
+            // Placed by its own origin and spacing, as a mesh by its
+            // positions.
+            index_to_file = Some(glam::Mat4::IDENTITY);
+            (
+                file_stem(spec),
+                SpatialField::from(load_flash_file(spec, self.array.as_deref())?),
+                "grey",
+                Orientation::UNKNOWN,
+            )
         } else if is_mesh_file(Path::new(spec)) {
             if self.has_mesh() {
                 return Err(Failure::Usage(
@@ -550,13 +565,44 @@ fn procedural(spec: &str) -> Result<Option<(String, SpatialField)>, Failure> {
             // Whole blocks on every level: the finest cells a multiple
             // of 16 across.
             let n = (size / 16).max(1) * 16;
-            let amr = refined(n, 3, smooth_waves)
-                .map_err(|e| Failure::Usage(format!("{spec}: {e}")))?;
+            let amr =
+                refined(n, 3, smooth_waves).map_err(|e| Failure::Usage(format!("{spec}: {e}")))?;
             return Ok(Some((format!("{kind}:{n}"), amr.into())));
         }
         _ => return Ok(None),
     };
     Ok(Some((format!("{kind}:{size}"), make(size).into())))
+}
+
+/// Whether `path` is an HDF5 file (FLASH's), by its first bytes.
+pub fn is_hdf5_file(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && is_hdf5(&head)
+}
+
+/// A FLASH file's AMR field, `variable` or its first.
+#[cfg(feature = "hdf5")]
+pub fn load_flash_file(
+    spec: &str,
+    variable: Option<&str>,
+) -> Result<anari_library_caveray::scene::AmrVolume, Failure> {
+    anari_library_caveray::data::load_flash(Path::new(spec), variable)
+        .map(|f| f.amr)
+        .map_err(|e| Failure::Usage(e.to_string()))
+}
+
+#[cfg(not(feature = "hdf5"))]
+pub fn load_flash_file(
+    spec: &str,
+    _: Option<&str>,
+) -> Result<anari_library_caveray::scene::AmrVolume, Failure> {
+    Err(Failure::Usage(format!(
+        "{spec} is an HDF5 file; this caveray was built without HDF5 (cargo build --features hdf5, with Debian's libhdf5-dev) and cannot read FLASH files"
+    )))
 }
 
 /// Whether `path` is a VTK unstructured grid, by its first bytes.

@@ -7,8 +7,8 @@
 //!   longest probe run; a + 3: where the hash begins; a + 4: where the
 //!   bricks begin;
 //! - a + 5..8: the lattice's origin, a + 8..11: its step (f32, AMR units);
-//! - a + 11 on, two words a level, finest first: its number and its cell
-//!   width (f32);
+//! - a + 11 on, eight words a level, finest first: its number, its cell
+//!   width (f32) and the range its stencils are clamped to (6 f32);
 //! - the hash, four words a slot (scene::amr);
 //! - the bricks, AMR_BRICK_CELLS words each.
 
@@ -19,12 +19,12 @@ const HEADER: usize = 11;
 
 /// Words `amr` takes in the buffer.
 pub(super) fn word_count(amr: &AmrVolume) -> u64 {
-    (HEADER + 2 * amr.order().len() + amr.table().len() + amr.brick_words().len()) as u64
+    (HEADER + 8 * amr.order().len() + amr.table().len() + amr.brick_words().len()) as u64
 }
 
 /// Appends `amr`'s words to `words`.
 pub(super) fn pack(amr: &AmrVolume, words: &mut Vec<u32>) {
-    let levels = 2 * amr.order().len();
+    let levels = 8 * amr.order().len();
     let table = amr.table().len();
     words.extend([
         amr.order().len() as u32,
@@ -36,7 +36,10 @@ pub(super) fn pack(amr: &AmrVolume, words: &mut Vec<u32>) {
     words.extend(amr.amr_bounds().0.to_array().map(f32::to_bits));
     words.extend(amr.lattice_step().to_array().map(f32::to_bits));
     for &level in amr.order() {
+        let (c0, c1) = amr.clamps()[level as usize];
         words.extend([level, amr.widths()[level as usize].to_bits()]);
+        words.extend(c0.to_array().map(f32::to_bits));
+        words.extend(c1.to_array().map(f32::to_bits));
     }
     words.extend_from_slice(amr.table());
     words.extend_from_slice(amr.brick_words());
