@@ -1,15 +1,20 @@
-/* A benchmark host for unstructured volumes: what a user of the C API
- * sees, from the first commit to the frames after. The vertices of an
- * N^3 grid on [-1, 1]^3 hold the shells of bench_shells.c; the same
+/* A benchmark host for unstructured and AMR volumes: what a user of the
+ * C API sees, from the first commit to the frames after. The vertices of
+ * an N^3 grid on [-1, 1]^3 hold the shells of bench_shells.c; the same
  * vertices are sent either as a structuredRegular field or as an
  * unstructured one, each grid cell cut into six tetrahedra around its
- * main diagonal (Kuhn), 6 (N - 1)^3 of them with values per vertex. A
- * perspective camera circles them at 768^2 and every frame is rendered,
- * waited for and mapped.
+ * main diagonal (Kuhn), 6 (N - 1)^3 of them with values per vertex. Or
+ * `--field amr`: the shells at the cell centres of two levels in
+ * anari-visionaray's form (refinementRatio per level, block.bounds,
+ * block.level, one data array, gridOrigin, gridSpacing), blocks of 8^3
+ * cells: level 1 over the whole box, F / 2 cells across, level 0 (the
+ * finest, F = 2 (N - 1) rounded down to a multiple of 16) over its middle
+ * half, the parents kept. A perspective camera circles them at 768^2
+ * and every frame is rendered, waited for and mapped.
  *
  *   cc -std=c99 -O2 -Iinclude examples/c/bench_cells.c -Ltarget/release \
  *      -lanari_library_caveray -Wl,-rpath,$PWD/target/release -lm -o bench_cells
- *   ./bench_cells [--field unstructured|structured] [--vertices 57]
+ *   ./bench_cells [--field unstructured|structured|amr] [--vertices 57]
  *                 [--backend auto|cpu|gpu] [--size 768] [--frames 4]
  *                 [--rate 1] [--json out.json] [--ppm first_frame.ppm]
  *                 [--library caveray] [--renderer default] [--still 0|1]
@@ -76,11 +81,11 @@ int main(int argc, char **argv)
       return 2;
     }
   }
-  int mesh = !strcmp(kind, "unstructured");
-  if ((unsigned)argc % 2 == 0 || size < 1 || size > 8192 || n < 2 || n > 300 || frames < 1
-      || frames > 10000 || !(rate > 0) || (!mesh && strcmp(kind, "structured"))) {
-    fprintf(stderr, "bench_cells: need --field unstructured|structured, --size 1..8192, "
-                    "--vertices 2..300, --frames 1..10000, --rate > 0\n");
+  int mesh = !strcmp(kind, "unstructured"), amr = !strcmp(kind, "amr");
+  if ((unsigned)argc % 2 == 0 || size < 1 || size > 8192 || n < (amr ? 9 : 2) || n > 300 || frames < 1
+      || frames > 10000 || !(rate > 0) || (!mesh && !amr && strcmp(kind, "structured"))) {
+    fprintf(stderr, "bench_cells: need --field unstructured|structured|amr, --size 1..8192, "
+                    "--vertices 2..300 (9.. for amr), --frames 1..10000, --rate > 0\n");
     return 2;
   }
 
@@ -125,6 +130,40 @@ int main(int argc, char **argv)
           }
         }
   }
+  /* AMR: F finest cells across; blocks of 8^3, the coarse level first. */
+  unsigned fine = (2 * (n - 1)) / 16 * 16, per = fine / 16, nblocks = 2 * per * per * per;
+  int32_t *amr_bounds = amr ? malloc(6 * nblocks * sizeof *amr_bounds) : NULL;
+  int32_t *amr_levels = amr ? malloc(nblocks * sizeof *amr_levels) : NULL;
+  float *amr_data = amr ? malloc((size_t)nblocks * 512 * sizeof *amr_data) : NULL;
+  if (amr && (!amr_bounds || !amr_levels || !amr_data)) {
+    fprintf(stderr, "bench_cells: no memory for the AMR blocks\n");
+    return 1;
+  }
+  if (amr) {
+    size_t b = 0, at = 0;
+    for (int level = 1; level >= 0; --level) {
+      /* Level 1 covers cells 0..F/2 of its own; level 0 the middle half,
+       * fine cells F/4..3F/4. */
+      unsigned first = level ? 0 : fine / 4, w = level ? 2 : 1;
+      float h = 2.0f / fine;
+      for (unsigned bz = 0; bz < per; ++bz)
+        for (unsigned by = 0; by < per; ++by)
+          for (unsigned bx = 0; bx < per; ++bx, ++b) {
+            int32_t lo[3] = {(int32_t)(first + 8 * bx), (int32_t)(first + 8 * by),
+                (int32_t)(first + 8 * bz)};
+            for (int k = 0; k < 3; ++k) {
+              amr_bounds[6 * b + k] = lo[k];
+              amr_bounds[6 * b + 3 + k] = lo[k] + 7;
+            }
+            amr_levels[b] = level;
+            for (int z = 0; z < 8; ++z)
+              for (int y = 0; y < 8; ++y)
+                for (int x = 0; x < 8; ++x)
+                  amr_data[at++] = shells((lo[0] + x + 0.5f) * w * h - 1,
+                      (lo[1] + y + 0.5f) * w * h - 1, (lo[2] + z + 0.5f) * w * h - 1);
+          }
+    }
+  }
   double host_mib = peak_rss_mib();
 
   float colors[4 * 3] = {0.2f, 0.4f, 1.0f, 0.2f, 0.4f, 1.0f, 0.5f, 0.8f, 0.6f, 1.0f, 0.7f, 0.2f};
@@ -147,7 +186,23 @@ int main(int argc, char **argv)
   double t_start = now_ms();
   ANARISpatialField field;
   ANARIArray arrays[5] = {0};
-  if (mesh) {
+  if (amr) {
+    uint32_t ratios[2] = {2, 2};
+    float amr_origin[3] = {-1, -1, -1}, amr_spacing[3];
+    for (int k = 0; k < 3; ++k)
+      amr_spacing[k] = 2.0f / fine;
+    field = anariNewSpatialField(dev, "amr");
+    arrays[0] = anariNewArray1D(dev, ratios, NULL, NULL, ANARI_UINT32, 2);
+    arrays[1] = anariNewArray1D(dev, amr_bounds, NULL, NULL, ANARI_INT32_BOX3, nblocks);
+    arrays[2] = anariNewArray1D(dev, amr_levels, NULL, NULL, ANARI_INT32, nblocks);
+    arrays[3] = anariNewArray1D(dev, amr_data, NULL, NULL, ANARI_FLOAT32, (uint64_t)nblocks * 512);
+    anariSetParameter(dev, field, "refinementRatio", ANARI_ARRAY1D, &arrays[0]);
+    anariSetParameter(dev, field, "block.bounds", ANARI_ARRAY1D, &arrays[1]);
+    anariSetParameter(dev, field, "block.level", ANARI_ARRAY1D, &arrays[2]);
+    anariSetParameter(dev, field, "data", ANARI_ARRAY1D, &arrays[3]);
+    anariSetParameter(dev, field, "gridOrigin", ANARI_FLOAT32_VEC3, amr_origin);
+    anariSetParameter(dev, field, "gridSpacing", ANARI_FLOAT32_VEC3, amr_spacing);
+  } else if (mesh) {
     field = anariNewSpatialField(dev, "unstructured");
     arrays[0] = anariNewArray1D(dev, positions, NULL, NULL, ANARI_FLOAT32_VEC3, verts);
     arrays[1] = anariNewArray1D(dev, index, NULL, NULL, ANARI_UINT32, 4 * cells);
@@ -301,5 +356,8 @@ int main(int argc, char **argv)
   free(index);
   free(cell_index);
   free(cell_type);
+  free(amr_bounds);
+  free(amr_levels);
+  free(amr_data);
   return ok ? 0 : 1;
 }

@@ -319,6 +319,39 @@ fn cave_wall_example_renders_both_eyes() {
     );
 }
 
+/// The benchmark host's AMR field (anari-visionaray's form) runs small
+/// and shows the shells.
+#[test]
+fn the_cells_benchmark_host_reports_an_amr_field() {
+    let dir = scratch("c_bench_cells_amr");
+    let program = dir.join("bench_cells");
+    compile(&["examples/c/bench_cells.c"], &program, false, true);
+    let (json, ppm) = (dir.join("amr.json"), dir.join("amr.ppm"));
+    let output = common::c::host_command(&program)
+        .args(["--field", "amr", "--backend", "cpu", "--size", "48"])
+        .args(["--vertices", "17", "--frames", "2", "--json"])
+        .arg(&json)
+        .arg("--ppm")
+        .arg(&ppm)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "bench_cells: {}",
+        describe(&output)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["field"], "amr");
+    assert_eq!(report["ms"].as_array().unwrap().len(), 2);
+    let ppm = std::fs::read(&ppm).unwrap();
+    let lit = ppm[ppm.len() - 48 * 48 * 3..]
+        .chunks(3)
+        .filter(|p| p.iter().any(|&c| c > 40))
+        .count();
+    assert!(lit > 48 * 48 / 10, "{lit} pixels show the shells");
+}
+
 /// The unstructured benchmark host runs small: the grid and its
 /// tetrahedra report their frames, first frame and peak memory, take
 /// about the same samples and show about the same picture.
