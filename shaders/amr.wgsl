@@ -46,10 +46,12 @@ fn amr_value(v: u32, grid: vec3f) -> f32 {
     for (var k = 0u; k < levels; k++) {
         let at = a + 11u + 8u * k;
         let level = mesh_word(at);
-        let u = clamp(x / mesh_f32(at + 1u) - vec3f(0.5), mesh_vec3(at + 2u), mesh_vec3(at + 5u));
+        let u = clamp(x * mesh_f32(at + 1u) - vec3f(0.5), mesh_vec3(at + 2u), mesh_vec3(at + 5u));
         let i0f = floor(u);
         let f = u - i0f;
         let i0 = vec3i(i0f);
+        var words: array<u32, 8>;
+        var all = 1u;
         var last = vec3i(0);
         var brick = AMR_NONE;
         var alpha = 0.0;
@@ -68,6 +70,8 @@ fn amr_value(v: u32, grid: vec3f) -> f32 {
                 let l = c & vec3i(7);
                 word = mesh_word(brick + u32(l.x + 8 * (l.y + 8 * l.z)));
             }
+            words[n] = word;
+            all &= word;
             if word != AMR_ABSENT {
                 let wv = select(vec3f(1.0) - f, f, d == vec3u(1u));
                 let weight = wv.x * wv.y * wv.z;
@@ -79,6 +83,21 @@ fn amr_value(v: u32, grid: vec3f) -> f32 {
             }
         }
         basis[k] = vec2f(weights, sum);
+        // Eight interior cells: the level's trilinear value is all that is
+        // left to take (the reference's form of it).
+        if (all & 1u) == 1u {
+            var v: array<f32, 8>;
+            for (var n = 0u; n < 8u; n++) {
+                v[n] = bitcast<f32>(words[n] & ~1u);
+            }
+            let x00 = v[0] + (v[1] - v[0]) * f.x;
+            let x10 = v[2] + (v[3] - v[2]) * f.x;
+            let x01 = v[4] + (v[5] - v[4]) * f.x;
+            let x11 = v[6] + (v[7] - v[6]) * f.x;
+            let y0 = x00 + (x10 - x00) * f.y;
+            let y1 = x01 + (x11 - x01) * f.y;
+            return acc + remaining * (y0 + (y1 - y0) * f.z);
+        }
         if alpha > 0.0 {
             acc += remaining * alpha * sum;
             remaining *= 1.0 - alpha;

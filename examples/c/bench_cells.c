@@ -9,8 +9,13 @@
  * block.level, one data array, gridOrigin, gridSpacing), blocks of 8^3
  * cells: level 1 over the whole box, F / 2 cells across, level 0 (the
  * finest, F = 2 (N - 1) rounded down to a multiple of 16) over its middle
- * half, the parents kept. A perspective camera circles them at 768^2
- * and every frame is rendered, waited for and mapped.
+ * half, the parents kept; with --amr-units 1 in cell units as OpenCOVER
+ * sends them (gridSpacing 1, the finest cell one unit, the whole scene
+ * scaled to match: camera and unitDistance), so that a device whose step
+ * is one unit (anari-visionaray's AMR step ignores gridSpacing) takes
+ * the same samples at the same volumeSamplingRate. A perspective camera
+ * circles them at 768^2 and every frame is rendered, waited for and
+ * mapped.
  *
  *   cc -std=c99 -O2 -Iinclude examples/c/bench_cells.c -Ltarget/release \
  *      -lanari_library_caveray -Wl,-rpath,$PWD/target/release -lm -o bench_cells
@@ -18,7 +23,7 @@
  *                 [--backend auto|cpu|gpu] [--size 768] [--frames 4]
  *                 [--rate 1] [--json out.json] [--ppm first_frame.ppm]
  *                 [--library caveray] [--renderer default] [--still 0|1]
- *                 [--ppm-dir DIR]
+ *                 [--ppm-dir DIR] [--amr-units 0|1]
  *
  * Built against the SDK's loader instead (-lanari), --library names any
  * device, so other devices run the same scene in the same process shape.
@@ -60,7 +65,7 @@ int main(int argc, char **argv)
 {
   const char *backend = "auto", *kind = "unstructured", *json = NULL, *ppm = NULL;
   const char *library = "caveray", *renderer_kind = "default", *ppm_dir = NULL;
-  unsigned size = 768, n = 57, frames = 4, still = 0, i;
+  unsigned size = 768, n = 57, frames = 4, still = 0, amr_units = 0, i;
   float rate = 1.0f;
   for (i = 1; i + 1 < (unsigned)argc; i += 2) {
     const char *k = argv[i], *v = argv[i + 1];
@@ -76,6 +81,7 @@ int main(int argc, char **argv)
     else if (!strcmp(k, "--renderer")) renderer_kind = v;
     else if (!strcmp(k, "--still")) still = (unsigned)atoi(v);
     else if (!strcmp(k, "--ppm-dir")) ppm_dir = v;
+    else if (!strcmp(k, "--amr-units")) amr_units = (unsigned)atoi(v);
     else {
       fprintf(stderr, "bench_cells: unknown option %s\n", k);
       return 2;
@@ -169,7 +175,9 @@ int main(int argc, char **argv)
   float colors[4 * 3] = {0.2f, 0.4f, 1.0f, 0.2f, 0.4f, 1.0f, 0.5f, 0.8f, 0.6f, 1.0f, 0.7f, 0.2f};
   float opacities[11] = {0, 0, 0.0375f, 0.075f, 0.1125f, 0.15f, 0.22f, 0.29f, 0.36f, 0.43f, 0.5f};
   float origin[3] = {-1, -1, -1}, spacing[3] = {s, s, s};
-  float unit = 0.2f, fovy = 40.0f * 3.14159265f / 180.0f, up[3] = {0, 1, 0}, range[2] = {0, 1};
+  /* World units per unit of the scene on [-1, 1]^3. */
+  float scale = amr && amr_units ? fine / 2.0f : 1.0f;
+  float unit = 0.2f * scale, fovy = 40.0f * 3.14159265f / 180.0f, up[3] = {0, 1, 0}, range[2] = {0, 1};
   unsigned fsize[2] = {size, size};
   ANARIDataType color = ANARI_UFIXED8_RGBA_SRGB;
   int ok = 1;
@@ -188,9 +196,9 @@ int main(int argc, char **argv)
   ANARIArray arrays[5] = {0};
   if (amr) {
     uint32_t ratios[2] = {2, 2};
-    float amr_origin[3] = {-1, -1, -1}, amr_spacing[3];
+    float amr_origin[3] = {-scale, -scale, -scale}, amr_spacing[3];
     for (int k = 0; k < 3; ++k)
-      amr_spacing[k] = 2.0f / fine;
+      amr_spacing[k] = 2.0f * scale / fine;
     field = anariNewSpatialField(dev, "amr");
     arrays[0] = anariNewArray1D(dev, ratios, NULL, NULL, ANARI_UINT32, 2);
     arrays[1] = anariNewArray1D(dev, amr_bounds, NULL, NULL, ANARI_INT32_BOX3, nblocks);
@@ -257,7 +265,8 @@ int main(int argc, char **argv)
   /* Frame 0 is the first frame: it is timed from t_start. */
   for (i = 0; i <= frames && ms; ++i) {
     float a = still ? 0.0f : 2.0f * 3.14159265f * i / (frames + 1), d = 3.2f;
-    float pos[3] = {d * sinf(a), 0.3f, d * cosf(a)}, dir[3] = {-pos[0], -pos[1], -pos[2]};
+    float pos[3] = {scale * d * sinf(a), scale * 0.3f, scale * d * cosf(a)};
+    float dir[3] = {-pos[0], -pos[1], -pos[2]};
     anariSetParameter(dev, camera, "position", ANARI_FLOAT32_VEC3, pos);
     anariSetParameter(dev, camera, "direction", ANARI_FLOAT32_VEC3, dir);
     anariCommitParameters(dev, camera);

@@ -155,6 +155,8 @@ pub struct AmrLevel {
 #[derive(Clone, Debug, PartialEq)]
 pub struct AmrVolume {
     widths: Vec<f32>,
+    /// 1 / width per level: what a sample multiplies by.
+    inverse_widths: Vec<f32>,
     /// Levels holding cells, finest first.
     order: Vec<u32>,
     /// AMR_BRICK_CELLS words per brick, x fastest.
@@ -419,10 +421,47 @@ fn erode(from: &[bool], to: &mut [bool], axis: usize) {
     }
 }
 
-/// The eight cells around a point at one level, and its place among them.
+/// The eight cells around a point at one level (x fastest), and its
+/// place among them.
 struct Stencil {
     words: [u32; 8],
     f: Vec3,
+}
+
+impl Stencil {
+    /// Trilinear interpolation of the eight values.
+    fn trilinear(&self) -> f32 {
+        let v = self.words.map(value);
+        let f = self.f;
+        let x00 = v[0] + (v[1] - v[0]) * f.x;
+        let x10 = v[2] + (v[3] - v[2]) * f.x;
+        let x01 = v[4] + (v[5] - v[4]) * f.x;
+        let x11 = v[6] + (v[7] - v[6]) * f.x;
+        let y0 = x00 + (x10 - x00) * f.y;
+        let y1 = x01 + (x11 - x01) * f.y;
+        y0 + (y1 - y0) * f.z
+    }
+
+    /// The trilinear weights summed over the interior cells (alpha) and
+    /// over the present ones, and the present ones' weighted values.
+    fn sums(&self) -> (f32, f32, f32) {
+        let (mut alpha, mut weights, mut sum) = (0.0, 0.0, 0.0);
+        for (n, &w) in self.words.iter().enumerate() {
+            if !present(w) {
+                continue;
+            }
+            let wx = if n & 1 == 1 { self.f.x } else { 1.0 - self.f.x };
+            let wy = if n & 2 == 2 { self.f.y } else { 1.0 - self.f.y };
+            let wz = if n & 4 == 4 { self.f.z } else { 1.0 - self.f.z };
+            let weight = wx * wy * wz;
+            weights += weight;
+            sum += weight * value(w);
+            if w & 1 == 1 {
+                alpha += weight;
+            }
+        }
+        (alpha, weights, sum)
+    }
 }
 
 impl AmrVolume {
@@ -596,6 +635,7 @@ impl AmrVolume {
             lattice_step[k] = extent[k] / cells;
         }
         Ok(Self {
+            inverse_widths: widths.iter().map(|w| w.recip()).collect(),
             widths,
             order,
             bricks,
@@ -677,18 +717,20 @@ impl AmrVolume {
 
     fn stencil(&self, level: u32, x: Vec3) -> Stencil {
         let (c0, c1) = self.clamps[level as usize];
-        let u = (x / self.widths[level as usize] - Vec3::splat(0.5)).clamp(c0, c1);
-        let i0f = u.floor();
-        let f = u - i0f;
-        let i0 = i0f.as_ivec3();
+        let u = (x * self.inverse_widths[level as usize] - Vec3::splat(0.5)).clamp(c0, c1);
+        // floor without libm's call: truncate, then one down where that
+        // rounded up (below 0).
+        let t = u.as_ivec3();
+        let i0 = IVec3::select(u.cmplt(t.as_vec3()), t - IVec3::ONE, t);
+        let f = u - i0.as_vec3();
         let mut words = [AMR_ABSENT; 8];
         let (b0, b1) = (brick_of(i0), brick_of(i0 + IVec3::ONE));
         if b0 == b1 {
             if let Some(k) = find(&self.table, self.probes, level, b0) {
                 let base = k * AMR_BRICK_CELLS + local_of(i0);
+                let cells = &self.bricks[base..=base + 73];
                 for (n, w) in words.iter_mut().enumerate() {
-                    let off = (n & 1) + 8 * (n >> 1 & 1) + 64 * (n >> 2);
-                    *w = self.bricks[base + off];
+                    *w = cells[(n & 1) + 8 * (n >> 1 & 1) + 64 * (n >> 2)];
                 }
             }
         } else {
@@ -707,30 +749,19 @@ impl AmrVolume {
         Stencil { words, f }
     }
 
-    /// The field at `x` (AMR units); NaN beyond every cell's tent.
+    /// The field at `x` (AMR units); NaN where no cell's tent reaches.
     pub fn sample(&self, x: Vec3) -> f32 {
         let mut remaining = 1.0;
         let mut acc = 0.0;
-        // The basis method's sums per level, for what no complete
-        // stencil covers.
-        let mut basis = [(0.0f32, 0.0f32); MAX_AMR_LEVELS];
-        for (slot, &level) in basis.iter_mut().zip(&self.order) {
+        for &level in &self.order {
             let s = self.stencil(level, x);
-            let (mut alpha, mut weights, mut sum) = (0.0, 0.0, 0.0);
-            for (n, &w) in s.words.iter().enumerate() {
-                let wx = if n & 1 == 1 { s.f.x } else { 1.0 - s.f.x };
-                let wy = if n & 2 == 2 { s.f.y } else { 1.0 - s.f.y };
-                let wz = if n & 4 == 4 { s.f.z } else { 1.0 - s.f.z };
-                let weight = wx * wy * wz;
-                if present(w) {
-                    weights += weight;
-                    sum += weight * value(w);
-                    if w & 1 == 1 {
-                        alpha += weight;
-                    }
-                }
+            // Eight interior cells (the interior bit set in all, which an
+            // absent cell's word lacks): alpha is 1, the level's trilinear
+            // value all that is left to take.
+            if s.words.iter().fold(1, |a, &w| a & w) == 1 {
+                return acc + remaining * s.trilinear();
             }
-            *slot = (weights, sum);
+            let (alpha, _, sum) = s.sums();
             if alpha > 0.0 {
                 // Every cell is present: `sum` is the trilinear value.
                 acc += remaining * alpha * sum;
@@ -740,8 +771,11 @@ impl AmrVolume {
                 }
             }
         }
+        // What no whole stencil covered: the basis method, each level's
+        // tents blended by their weight sums.
         let (mut left, mut filled) = (1.0, 0.0);
-        for &(weights, sum) in &basis[..self.order.len()] {
+        for &level in &self.order {
+            let (_, weights, sum) = self.stencil(level, x).sums();
             filled += left * sum;
             left *= 1.0 - weights;
         }

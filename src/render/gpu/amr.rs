@@ -7,8 +7,8 @@
 //!   longest probe run; a + 3: where the hash begins; a + 4: where the
 //!   bricks begin;
 //! - a + 5..8: the lattice's origin, a + 8..11: its step (f32, AMR units);
-//! - a + 11 on, eight words a level, finest first: its number, its cell
-//!   width (f32) and the range its stencils are clamped to (6 f32);
+//! - a + 11 on, eight words a level, finest first: its number, 1 / its
+//!   cell width (f32) and the range its stencils are clamped to (6 f32);
 //! - the hash, four words a slot (scene::amr);
 //! - the bricks, AMR_BRICK_CELLS words each.
 
@@ -37,7 +37,7 @@ pub(super) fn pack(amr: &AmrVolume, words: &mut Vec<u32>) {
     words.extend(amr.lattice_step().to_array().map(f32::to_bits));
     for &level in amr.order() {
         let (c0, c1) = amr.clamps()[level as usize];
-        words.extend([level, amr.widths()[level as usize].to_bits()]);
+        words.extend([level, amr.widths()[level as usize].recip().to_bits()]);
         words.extend(c0.to_array().map(f32::to_bits));
         words.extend(c1.to_array().map(f32::to_bits));
     }
