@@ -357,7 +357,6 @@ fn mark_interior(
 ) {
     const P: usize = AMR_BRICK as usize + 2;
     let idx = |x: usize, y: usize, z: usize| x + P * (y + P * z);
-    let mut flags = vec![false; bricks.len()];
     let mut a = [false; P * P * P];
     let mut b = [false; P * P * P];
     for (k, &(level, key)) in keys.iter().enumerate() {
@@ -393,14 +392,14 @@ fn mark_interior(
             for y in 0..AMR_BRICK as usize {
                 for x in 0..AMR_BRICK as usize {
                     let i = base + x + 8 * (y + 8 * z);
-                    flags[i] = b[idx(x + 1, y + 1, z + 1)];
+                    // The flag is the lowest bit, which presence does not
+                    // read (an absent word's is clear, a present value's
+                    // was cleared on input): marked in place.
+                    if present(bricks[i]) {
+                        bricks[i] = (bricks[i] & !1) | u32::from(b[idx(x + 1, y + 1, z + 1)]);
+                    }
                 }
             }
-        }
-    }
-    for (w, f) in bricks.iter_mut().zip(flags) {
-        if present(*w) {
-            *w = (*w & !1) | u32::from(f);
         }
     }
 }
