@@ -873,32 +873,13 @@ pub fn unstructured(data: &[u8]) {
         .collect();
     let values = if per_cell { cells } else { positions };
     let value_bytes = fill(values * data_type.size());
-    let lib = library();
+    let Some(dev) = cpu_device() else {
+        return;
+    };
+    let array = |bytes: &[u8], ty: DataType, n: usize| array1d(dev, bytes, ty, n);
     // SAFETY: every array's memory holds its count of its element type
     // and outlives the device's copy of it (arrays are copied at commit).
     unsafe {
-        let dev = anariNewDevice(lib, c"default".as_ptr());
-        if dev.is_null() {
-            return;
-        }
-        anariSetParameter(
-            dev,
-            dev,
-            c"backend".as_ptr(),
-            DataType::STRING as i32,
-            c"cpu".as_ptr().cast(),
-        );
-        anariCommitParameters(dev, dev);
-        let array = |bytes: &[u8], ty: DataType, n: usize| {
-            anariNewArray1D(
-                dev,
-                bytes.as_ptr().cast(),
-                None,
-                std::ptr::null(),
-                ty as i32,
-                n as u64,
-            )
-        };
         let field = anariNewSpatialField(dev, c"unstructured".as_ptr());
         let arrays = [
             (
@@ -933,6 +914,43 @@ pub fn unstructured(data: &[u8]) {
         }
         anariRelease(dev, field);
         anariRelease(dev, dev);
+    }
+}
+
+/// A device of the library on the CPU backend, `None` if none is made.
+fn cpu_device() -> Option<sys::ANARIDevice> {
+    let lib = library();
+    // SAFETY: the library is loaded; the strings are NUL-terminated.
+    unsafe {
+        let dev = anariNewDevice(lib, c"default".as_ptr());
+        if dev.is_null() {
+            return None;
+        }
+        anariSetParameter(
+            dev,
+            dev,
+            c"backend".as_ptr(),
+            DataType::STRING as i32,
+            c"cpu".as_ptr().cast(),
+        );
+        anariCommitParameters(dev, dev);
+        Some(dev)
+    }
+}
+
+/// An ARRAY1D of `n` `ty`s over `bytes`, which must hold them and
+/// outlive the array's use.
+fn array1d(dev: sys::ANARIDevice, bytes: &[u8], ty: DataType, n: usize) -> sys::ANARIArray1D {
+    // SAFETY: `dev` is live; the caller keeps `bytes` while the array is.
+    unsafe {
+        anariNewArray1D(
+            dev,
+            bytes.as_ptr().cast(),
+            None,
+            std::ptr::null(),
+            ty as i32,
+            n as u64,
+        )
     }
 }
 
@@ -1062,32 +1080,13 @@ pub fn amr(data: &[u8]) {
         DataType::FIXED16,
         DataType::INT32,
     ]);
-    let lib = library();
+    let Some(dev) = cpu_device() else {
+        return;
+    };
+    let list = |bytes: &[u8], ty: DataType, n: usize| array1d(dev, bytes, ty, n);
     // SAFETY: every array's memory holds its count of its element type
     // and outlives the calls that read it (arrays are read at commit).
     unsafe {
-        let dev = anariNewDevice(lib, c"default".as_ptr());
-        if dev.is_null() {
-            return;
-        }
-        anariSetParameter(
-            dev,
-            dev,
-            c"backend".as_ptr(),
-            DataType::STRING as i32,
-            c"cpu".as_ptr().cast(),
-        );
-        anariCommitParameters(dev, dev);
-        let list = |bytes: &[u8], ty: DataType, n: usize| {
-            anariNewArray1D(
-                dev,
-                bytes.as_ptr().cast(),
-                None,
-                std::ptr::null(),
-                ty as i32,
-                n as u64,
-            )
-        };
         let mut fill = |n: u64| -> Vec<u8> {
             let n = (n as usize).min(1 << 16);
             let mut v = input.take(n);

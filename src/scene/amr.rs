@@ -46,8 +46,8 @@ use glam::{IVec3, UVec3, Vec3};
 use thiserror::Error;
 
 /// Cells per brick edge, and cells per brick.
-pub const AMR_BRICK: i32 = 8;
-pub const AMR_BRICK_CELLS: usize = 512;
+const AMR_BRICK: i32 = 8;
+const AMR_BRICK_CELLS: usize = 512;
 /// What a cell no block holds reads: a quiet NaN whose interior bit
 /// (the lowest) is clear.
 pub const AMR_ABSENT: u32 = 0x7fc0_0000;
@@ -143,7 +143,6 @@ pub enum AmrError {
 #[derive(Clone, Debug, PartialEq)]
 pub struct AmrLevel {
     pub width: f32,
-    pub bricks: usize,
     /// Cells holding a value.
     pub cells: u64,
     /// The inclusive bounds of those cells in the level's index space
@@ -198,7 +197,7 @@ fn reserve<T>(n: u64, what: &'static str) -> Result<Vec<T>, AmrError> {
 }
 
 /// The hash's slot for a brick: the same mixing as shaders/amr.wgsl.
-pub fn amr_slot(level: u32, b: IVec3, mask: u32) -> u32 {
+fn amr_slot(level: u32, b: IVec3, mask: u32) -> u32 {
     let h = (b.x as u32).wrapping_mul(0x9e37_79b1)
         ^ (b.y as u32).wrapping_mul(0x85eb_ca77)
         ^ (b.z as u32).wrapping_mul(0xc2b2_ae3d)
@@ -584,7 +583,6 @@ impl AmrVolume {
             .iter()
             .map(|&width| AmrLevel {
                 width,
-                bricks: 0,
                 cells: 0,
                 lo: IVec3::MAX,
                 hi: IVec3::MIN,
@@ -593,7 +591,6 @@ impl AmrVolume {
         let (mut vlo, mut vhi) = (f32::INFINITY, f32::NEG_INFINITY);
         for (k, &(level, b)) in keys.iter().enumerate() {
             let l = &mut levels[level as usize];
-            l.bricks += 1;
             let words = &bricks[k * AMR_BRICK_CELLS..(k + 1) * AMR_BRICK_CELLS];
             for (i, &w) in words.iter().enumerate() {
                 if !present(w) {
@@ -821,15 +818,7 @@ impl AmrVolume {
         self.value_range
     }
 
-    pub fn origin(&self) -> Vec3 {
-        self.origin
-    }
-
-    pub fn spacing(&self) -> Vec3 {
-        self.spacing
-    }
-
-    /// Per level as given: its width, bricks, cells and their bounds.
+    /// Per level as given: its width, cells and their bounds.
     pub fn levels(&self) -> &[AmrLevel] {
         &self.levels
     }

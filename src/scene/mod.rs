@@ -16,8 +16,7 @@ mod unstructured;
 mod volume;
 
 pub use amr::{
-    amr_slot, AmrBlock, AmrError, AmrInput, AmrLevel, AmrVolume, AMR_ABSENT, AMR_BRICK,
-    AMR_BRICK_CELLS, AMR_EMPTY, MAX_AMR_LEVELS,
+    AmrBlock, AmrError, AmrInput, AmrLevel, AmrVolume, AMR_ABSENT, AMR_EMPTY, MAX_AMR_LEVELS,
 };
 pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use field::SpatialField;

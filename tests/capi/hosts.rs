@@ -100,36 +100,31 @@ fn misuse_is_clean_under_valgrind() {
     misuse(true);
 }
 
-/// Surfaces beside a volume as visualization hosts send them.
-fn mesh_host(valgrind: bool) {
-    let dir = scratch(if valgrind {
-        "c_mesh_host_valgrind"
-    } else {
-        "c_mesh_host"
-    });
-    let program = dir.join("mesh_host");
-    compile(&["tests/capi/c/mesh_host.c"], &program, false, true);
+/// Runs tests/capi/c/NAME.c, a host that prints PASS/FAIL per check
+/// (under valgrind if asked): it must pass at least `checks` of them and
+/// fail none.
+fn checking_host(name: &str, checks: usize, valgrind: bool) {
+    let dir = scratch(&format!(
+        "c_{name}{}",
+        if valgrind { "_valgrind" } else { "" }
+    ));
+    let program = dir.join(name);
+    compile(&[&format!("tests/capi/c/{name}.c")], &program, false, true);
     let output = run(&program, &[], valgrind);
     let text = describe(&output);
-    assert!(output.status.success(), "mesh host: {text}");
-    assert!(!text.contains("FAIL"), "mesh host: {text}");
-    assert!(text.matches("PASS").count() >= 10, "mesh host: {text}");
+    assert!(output.status.success(), "{name}: {text}");
+    assert!(!text.contains("FAIL"), "{name}: {text}");
+    assert!(text.matches("PASS").count() >= checks, "{name}: {text}");
+}
+
+/// Surfaces beside a volume as visualization hosts send them.
+fn mesh_host(valgrind: bool) {
+    checking_host("mesh_host", 10, valgrind);
 }
 
 /// An `amr` field as OpenCOVER sends one, then in anari-visionaray's form.
 fn amr_host(valgrind: bool) {
-    let dir = scratch(if valgrind {
-        "c_amr_host_valgrind"
-    } else {
-        "c_amr_host"
-    });
-    let program = dir.join("amr_host");
-    compile(&["tests/capi/c/amr_host.c"], &program, false, true);
-    let output = run(&program, &[], valgrind);
-    let text = describe(&output);
-    assert!(output.status.success(), "amr host: {text}");
-    assert!(!text.contains("FAIL"), "amr host: {text}");
-    assert!(text.matches("PASS").count() >= 9, "amr host: {text}");
+    checking_host("amr_host", 9, valgrind);
 }
 
 #[test]
@@ -144,21 +139,7 @@ fn the_amr_host_is_clean_under_valgrind() {
 
 /// An unstructured field as OpenCOVER sends one, then with cell data.
 fn unstructured_host(valgrind: bool) {
-    let dir = scratch(if valgrind {
-        "c_unstructured_host_valgrind"
-    } else {
-        "c_unstructured_host"
-    });
-    let program = dir.join("unstructured_host");
-    compile(&["tests/capi/c/unstructured_host.c"], &program, false, true);
-    let output = run(&program, &[], valgrind);
-    let text = describe(&output);
-    assert!(output.status.success(), "unstructured host: {text}");
-    assert!(!text.contains("FAIL"), "unstructured host: {text}");
-    assert!(
-        text.matches("PASS").count() >= 8,
-        "unstructured host: {text}"
-    );
+    checking_host("unstructured_host", 8, valgrind);
 }
 
 #[test]

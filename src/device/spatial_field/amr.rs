@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use glam::IVec3;
 
+use super::{reserve, values};
 use crate::device::array::Array;
 use crate::device::object::State;
 use crate::device::table::Read;
@@ -311,52 +312,6 @@ fn block_data(r: &Read<'_>, blocks: &[AmrBlock], needed: u64) -> Result<Vec<f32>
                     array.describe()
                 ))
             }
-        }
-    }
-    Ok(out)
-}
-
-fn reserve<T>(n: u64, what: &str) -> Result<Vec<T>, String> {
-    let oom = || {
-        format!(
-            "cannot allocate {} bytes for the field's {what}",
-            n.saturating_mul(std::mem::size_of::<T>() as u64)
-        )
-    };
-    let n = usize::try_from(n).map_err(|_| oom())?;
-    let mut v = Vec::new();
-    v.try_reserve_exact(n).map_err(|_| oom())?;
-    Ok(v)
-}
-
-/// `n` values as f32, fixed-point types mapped to [0, 1] or [-1, 1] as
-/// a structured field maps them.
-fn values(a: &Array, name: &str, n: u64) -> Result<Vec<f32>, String> {
-    let mut out = reserve(n, "cells")?;
-    let n = n as usize;
-    let bytes = a.bytes();
-    match a.element() {
-        T::FLOAT32 => out.extend(words::<4>(bytes).take(n).map(f32::from_ne_bytes)),
-        T::FLOAT64 => out.extend(
-            words::<8>(bytes)
-                .take(n)
-                .map(|w| f64::from_ne_bytes(w) as f32),
-        ),
-        T::UFIXED8 => out.extend(bytes.iter().take(n).map(|&b| f32::from(b) / 255.0)),
-        T::UFIXED16 => out.extend(
-            words::<2>(bytes)
-                .take(n)
-                .map(|w| f32::from(u16::from_ne_bytes(w)) / 65535.0),
-        ),
-        T::FIXED16 => out.extend(
-            words::<2>(bytes)
-                .take(n)
-                .map(|w| (f32::from(i16::from_ne_bytes(w)) / 32767.0).max(-1.0)),
-        ),
-        other => {
-            return Err(format!(
-                "{name} holds {other}; it needs FLOAT32, FLOAT64, UFIXED8, UFIXED16 or FIXED16"
-            ))
         }
     }
     Ok(out)

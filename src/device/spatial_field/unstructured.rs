@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::reserve;
 use crate::device::array::Array;
 use crate::device::object::State;
 use crate::device::table::Read;
@@ -149,19 +150,6 @@ fn past_positions(index: usize, value: u64, positions: usize) -> String {
     .to_string()
 }
 
-/// Reserved fallibly: a mesh too large for this machine fails its
-/// commit, not the host.
-fn reserve<T>(n: usize, what: &str) -> Result<Vec<T>, String> {
-    let mut v = Vec::new();
-    v.try_reserve_exact(n).map_err(|_| {
-        format!(
-            "cannot allocate {} bytes for the field's {what}",
-            n.saturating_mul(std::mem::size_of::<T>())
-        )
-    })?;
-    Ok(v)
-}
-
 fn positions(a: &Array) -> Result<Vec<Vec3>, String> {
     if a.element() != T::FLOAT32_VEC3 {
         return Err(format!(
@@ -170,7 +158,7 @@ fn positions(a: &Array) -> Result<Vec<Vec3>, String> {
         ));
     }
     let n = a.dims()[0] as usize;
-    let mut out = reserve(n, "vertex positions")?;
+    let mut out = reserve(n as u64, "vertex positions")?;
     out.extend(words::<12>(a.bytes()).take(n).map(|w| {
         let f = |k: usize| f32::from_ne_bytes([w[k], w[k + 1], w[k + 2], w[k + 3]]);
         Vec3::new(f(0), f(4), f(8))
@@ -182,7 +170,7 @@ fn positions(a: &Array) -> Result<Vec<Vec3>, String> {
 /// whatever it indexes (`past` says so).
 fn indices(a: &Array, name: &str, past: impl Fn(usize, u64) -> String) -> Result<Vec<u32>, String> {
     let n = a.dims()[0] as usize;
-    let mut out = reserve(n, name)?;
+    let mut out = reserve(n as u64, name)?;
     match a.element() {
         T::UINT32 => out.extend(words::<4>(a.bytes()).take(n).map(u32::from_ne_bytes)),
         T::UINT64 => {
@@ -198,7 +186,7 @@ fn indices(a: &Array, name: &str, past: impl Fn(usize, u64) -> String) -> Result
 
 fn cell_types(a: &Array) -> Result<Vec<u32>, String> {
     let n = a.dims()[0] as usize;
-    let mut out = reserve(n, "cell types")?;
+    let mut out = reserve(n as u64, "cell types")?;
     match a.element() {
         T::UINT8 => out.extend(a.bytes().iter().take(n).map(|&b| u32::from(b))),
         T::UINT32 => out.extend(words::<4>(a.bytes()).take(n).map(u32::from_ne_bytes)),
@@ -211,35 +199,7 @@ fn cell_types(a: &Array) -> Result<Vec<u32>, String> {
     Ok(out)
 }
 
-/// Values as f32, fixed-point types mapped to [0, 1] or [-1, 1] as a
-/// structured field maps them.
+/// A value array's entries, one per element.
 fn values(a: &Array, name: &str) -> Result<Vec<f32>, String> {
-    let n = a.dims()[0] as usize;
-    let mut out = reserve(n, name)?;
-    let bytes = a.bytes();
-    match a.element() {
-        T::UFIXED8 => out.extend(bytes.iter().take(n).map(|&b| f32::from(b) / 255.0)),
-        T::UFIXED16 => out.extend(
-            words::<2>(bytes)
-                .take(n)
-                .map(|w| f32::from(u16::from_ne_bytes(w)) / 65535.0),
-        ),
-        T::FIXED16 => out.extend(
-            words::<2>(bytes)
-                .take(n)
-                .map(|w| (f32::from(i16::from_ne_bytes(w)) / 32767.0).max(-1.0)),
-        ),
-        T::FLOAT32 => out.extend(words::<4>(bytes).take(n).map(f32::from_ne_bytes)),
-        T::FLOAT64 => out.extend(
-            words::<8>(bytes)
-                .take(n)
-                .map(|w| f64::from_ne_bytes(w) as f32),
-        ),
-        other => {
-            return Err(format!(
-                "'{name}' holds {other}; it needs UFIXED8, FIXED16, UFIXED16, FLOAT32 or FLOAT64"
-            ))
-        }
-    }
-    Ok(out)
+    super::values(a, &format!("'{name}'"), a.dims()[0])
 }
