@@ -1,4 +1,4 @@
-// #import constants, volume_bindings, cells, amr
+// #import constants, volume_bindings, cells, amr, nanovdb
 // Emission-absorption volume ray casting: the march along one primary ray.
 // Mirrors src/render/cpu/ (the reference) operation for operation, so the
 // two agree to rounding; all derived numbers arrive in `params`. Its
@@ -251,6 +251,9 @@ fn sample_volume(v: u32, grid: vec3f) -> f32 {
     }
     if AMR && params.volumes[v].sampling == FILTER_AMR {
         return amr_value(v, grid);
+    }
+    if VDB && params.volumes[v].sampling == FILTER_VDB {
+        return vdb_value(v, grid);
     }
     if FILTERED && params.volumes[v].sampling != FILTER_NEAREST {
         return filtered_value(v, grid, 0.0);

@@ -15,7 +15,7 @@ use super::march_plan::MarchPlan;
 use super::RenderError;
 use crate::render::frame::filled;
 use crate::scene::{
-    AmrVolume, Scene, SpatialField, TransferFunction, UnstructuredVolume, TABLE_SIZE,
+    AmrVolume, NanoVdbGrid, Scene, SpatialField, TransferFunction, UnstructuredVolume, TABLE_SIZE,
 };
 
 /// Cells per brick edge.
@@ -169,6 +169,7 @@ impl BrickRanges {
             SpatialField::Structured(v) => Self::new(v.dims(), |i| v.value(i)),
             SpatialField::Unstructured(m) => Self::of_mesh(m),
             SpatialField::Amr(a) => Self::of_amr(a),
+            SpatialField::NanoVdb(g) => Self::of_nanovdb(g),
         }
     }
 
@@ -186,6 +187,14 @@ impl BrickRanges {
     pub fn of_amr(amr: &AmrVolume) -> Result<Self, RenderError> {
         let lattice = (amr.lattice().0, amr.amr_bounds().0, amr.lattice_step());
         Self::of_boxes(lattice, 0.0, amr.cell_ranges())
+    }
+
+    /// The tree's leaves and tiles, and the background, each widen the
+    /// lattice bricks a sample of theirs can reach: a sample reads the
+    /// voxels around it, one beyond the box it lies in.
+    pub fn of_nanovdb(grid: &NanoVdbGrid) -> Result<Self, RenderError> {
+        let lattice = (grid.lattice().0, Vec3::ZERO, Vec3::ONE);
+        Self::of_boxes(lattice, 1.0, grid.value_boxes().into_iter())
     }
 
     /// Ranges of values over boxes (in the units of the lattice's

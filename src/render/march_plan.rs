@@ -55,6 +55,7 @@ pub(crate) enum FieldKind {
     Grid,
     Cells,
     Amr,
+    Vdb,
 }
 
 /// How one volume is sampled: where a world point falls in its grid, and
@@ -89,6 +90,7 @@ impl VolumePlan {
                 SpatialField::Structured(_) => FieldKind::Grid,
                 SpatialField::Unstructured(_) => FieldKind::Cells,
                 SpatialField::Amr(_) => FieldKind::Amr,
+                SpatialField::NanoVdb(_) => FieldKind::Vdb,
             },
             value_lo: lo,
             value_scale: (hi - lo).recip(),

@@ -1,9 +1,11 @@
 //! A spatial field as renderers march it: a structured grid, or an
-//! unstructured mesh or an AMR field with the lattice its rays march in.
+//! unstructured mesh, an AMR field or a NanoVDB grid with the lattice
+//! its rays march in.
 
 use glam::{UVec3, Vec3};
 
 use super::amr::AmrVolume;
+use super::nanovdb::NanoVdbGrid;
 use super::unstructured::UnstructuredVolume;
 use super::volume::{Filter, StructuredVolume};
 
@@ -16,6 +18,13 @@ pub enum SpatialField {
     Structured(StructuredVolume),
     Unstructured(UnstructuredVolume),
     Amr(AmrVolume),
+    NanoVdb(NanoVdbGrid),
+}
+
+impl From<NanoVdbGrid> for SpatialField {
+    fn from(v: NanoVdbGrid) -> Self {
+        SpatialField::NanoVdb(v)
+    }
 }
 
 impl From<AmrVolume> for SpatialField {
@@ -54,6 +63,13 @@ impl SpatialField {
     pub fn amr(&self) -> Option<&AmrVolume> {
         match self {
             SpatialField::Amr(a) => Some(a),
+            _ => None,
+        }
+    }
+
+    pub fn nanovdb(&self) -> Option<&NanoVdbGrid> {
+        match self {
+            SpatialField::NanoVdb(g) => Some(g),
             _ => None,
         }
     }
@@ -97,6 +113,7 @@ impl SpatialField {
                     .map(Into::into)
                     .map_err(|e| e.to_string())
             }
+            SpatialField::NanoVdb(g) => g.window_of(lo, hi).map(Into::into),
         }
     }
 
@@ -106,6 +123,7 @@ impl SpatialField {
             SpatialField::Structured(v) => v.dims(),
             SpatialField::Unstructured(m) => m.lattice().0,
             SpatialField::Amr(a) => a.lattice().0,
+            SpatialField::NanoVdb(g) => g.lattice().0,
         }
     }
 
@@ -115,6 +133,7 @@ impl SpatialField {
             SpatialField::Structured(v) => v.origin(),
             SpatialField::Unstructured(m) => m.bounds().0,
             SpatialField::Amr(a) => a.bounds().0,
+            SpatialField::NanoVdb(g) => g.bounds().0,
         }
     }
 
@@ -124,6 +143,7 @@ impl SpatialField {
             SpatialField::Structured(v) => v.spacing(),
             SpatialField::Unstructured(m) => m.lattice().1,
             SpatialField::Amr(a) => a.lattice().1,
+            SpatialField::NanoVdb(g) => g.lattice().1,
         }
     }
 
@@ -134,15 +154,17 @@ impl SpatialField {
             SpatialField::Structured(v) => v.spacing(),
             SpatialField::Unstructured(m) => Vec3::splat(m.edge()),
             SpatialField::Amr(a) => a.finest_cell(),
+            SpatialField::NanoVdb(g) => g.voxel_size(),
         }
     }
 
-    /// A grid's filter; a mesh interpolates inside each cell, an AMR
-    /// field between cell centres (Linear).
+    /// A grid's or a NanoVDB grid's filter; a mesh interpolates inside
+    /// each cell, an AMR field between cell centres (Linear).
     pub fn filter(&self) -> Filter {
         match self {
             SpatialField::Structured(v) => v.filter(),
             SpatialField::Unstructured(_) | SpatialField::Amr(_) => Filter::Linear,
+            SpatialField::NanoVdb(g) => g.filter(),
         }
     }
 
@@ -151,6 +173,7 @@ impl SpatialField {
             SpatialField::Structured(v) => v.value_range(),
             SpatialField::Unstructured(m) => m.value_range(),
             SpatialField::Amr(a) => a.value_range(),
+            SpatialField::NanoVdb(g) => g.value_range(),
         }
     }
 
@@ -160,6 +183,7 @@ impl SpatialField {
             SpatialField::Structured(v) => v.bounds(),
             SpatialField::Unstructured(m) => m.bounds(),
             SpatialField::Amr(a) => a.bounds(),
+            SpatialField::NanoVdb(g) => g.bounds(),
         }
     }
 
@@ -169,6 +193,7 @@ impl SpatialField {
             SpatialField::Structured(v) => v.voxels().bytes(),
             SpatialField::Unstructured(m) => m.bytes(),
             SpatialField::Amr(a) => a.bytes(),
+            SpatialField::NanoVdb(g) => g.bytes(),
         }
     }
 }

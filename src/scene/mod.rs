@@ -6,6 +6,7 @@
 mod amr;
 mod composition;
 mod field;
+mod nanovdb;
 mod placement;
 mod sampler;
 mod shapes;
@@ -20,6 +21,11 @@ pub use amr::{
 };
 pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use field::SpatialField;
+pub use nanovdb::{
+    half_to_f32, NanoVdbError, NanoVdbGrid, RootTile, VdbValues, LEAF_OFF_TABLE,
+    LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, NANOVDB_MAGIC, NANOVDB_MAJOR, UPPER_OFF_CHILD_MASK,
+    UPPER_OFF_TABLE,
+};
 pub use placement::{transformed_box, ObjectIds};
 pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};
 pub use shapes::{

@@ -3,6 +3,8 @@
 
 use std::sync::Arc;
 
+use anari_library_caveray::scene::StructuredVolume;
+
 use anari_library_caveray::device::{
     DataType, Device, Input, Severity, Status, StatusCode, Subject,
 };
@@ -88,6 +90,43 @@ impl Host {
             "spacing",
             DataType::FLOAT32_VEC3,
             bytes(&[2.0f32 / 3.0; 3]),
+        );
+        if let Some(filter) = filter {
+            self.d
+                .set_param(Subject::Object(f), "filter", Input::String(filter.into()));
+        }
+        self.d.commit(Subject::Object(f));
+        self.d.release(data);
+        f
+    }
+
+    /// `volume`'s FLOAT32 voxels as a `structuredRegular` field.
+    pub fn structured_field(&mut self, volume: &StructuredVolume, filter: Option<&str>) -> u64 {
+        let d = volume.dims();
+        let values: Vec<f32> = (0..volume.voxels().len())
+            .map(|i| volume.value(i))
+            .collect();
+        let data = self.array(
+            DataType::ARRAY3D,
+            DataType::FLOAT32,
+            [d.x as u64, d.y as u64, d.z as u64],
+            &bytes(&values),
+        );
+        let f = self
+            .d
+            .new_object(DataType::SPATIAL_FIELD, "structuredRegular");
+        self.set_object(f, "data", DataType::ARRAY3D, data);
+        self.set(
+            f,
+            "origin",
+            DataType::FLOAT32_VEC3,
+            bytes(&volume.origin().to_array()),
+        );
+        self.set(
+            f,
+            "spacing",
+            DataType::FLOAT32_VEC3,
+            bytes(&volume.spacing().to_array()),
         );
         if let Some(filter) = filter {
             self.d
@@ -254,6 +293,25 @@ impl Host {
         if !lights.is_empty() {
             self.set_objects(world, "light", DataType::LIGHT, lights);
         }
+        self.d.release(list);
+        self.world_frame(world, camera_z)
+    }
+
+    /// Renders a world of `instances` head-on from z = 3 and returns RGBA8
+    /// pixels.
+    pub fn render_instances(&mut self, instances: &[u64]) -> Vec<u8> {
+        let world = self.d.new_object(DataType::WORLD, "");
+        self.set_objects(world, "instance", DataType::INSTANCE, instances);
+        let (frame, camera) = self.world_frame(world, 3.0);
+        let pixels = self.pixels(frame);
+        self.d.release(frame);
+        self.d.release(camera);
+        pixels
+    }
+
+    /// A frame of `world` (released: the frame keeps it) seen from
+    /// `camera_z` on the z axis: (frame, camera).
+    fn world_frame(&mut self, world: u64, camera_z: f32) -> (u64, u64) {
         self.d.commit(Subject::Object(world));
         let renderer = self.d.new_object(DataType::RENDERER, "default");
         self.d.commit(Subject::Object(renderer));
@@ -277,7 +335,7 @@ impl Host {
         self.set_object(frame, "renderer", DataType::RENDERER, renderer);
         self.set_object(frame, "camera", DataType::CAMERA, camera);
         self.d.commit(Subject::Object(frame));
-        for h in [renderer, world, list] {
+        for h in [renderer, world] {
             self.d.release(h);
         }
         (frame, camera)

@@ -5,6 +5,7 @@ pub mod c;
 pub mod cts;
 pub mod device;
 pub mod iso;
+pub mod nanovdb;
 pub mod render;
 
 use std::path::{Path, PathBuf};

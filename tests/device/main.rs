@@ -9,6 +9,7 @@ mod cts_volume;
 mod deadline;
 mod frames;
 mod isosurface;
+mod nanovdb;
 mod params;
 mod scene_graph;
 mod stereo;

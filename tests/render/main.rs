@@ -15,6 +15,7 @@ mod filtered_sampling;
 mod hit_channels;
 mod isosurface;
 mod known_answers;
+mod nanovdb;
 mod out_of_core;
 mod progress;
 mod ray_casting;

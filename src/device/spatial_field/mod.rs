@@ -2,6 +2,7 @@
 //! arrays the subtypes share.
 
 pub mod amr;
+pub mod nanovdb;
 pub mod structured_regular;
 pub mod unstructured;
 

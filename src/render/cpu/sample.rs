@@ -9,8 +9,8 @@ use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::shapes::ShapeSet;
 use crate::scene::{
-    AmrVolume, Filter, NearCells, RayCells, Scaling, SpatialField, UnstructuredVolume, Voxels,
-    MAX_VOLUMES, TABLE_SIZE,
+    AmrVolume, Filter, NanoVdbGrid, NearCells, RayCells, Scaling, SpatialField, UnstructuredVolume,
+    Voxels, MAX_VOLUMES, TABLE_SIZE,
 };
 
 /// One volume as the CPU reads it: its numbers in their stored type (or
@@ -121,6 +121,8 @@ enum Numbers<'a> {
     Mesh(&'a UnstructuredVolume),
     /// An AMR field's cells, sampled where lattice points lie among them.
     Amr(&'a AmrVolume),
+    /// A NanoVDB grid's tree, sampled at the lattice's index points.
+    Vdb(&'a NanoVdbGrid),
 }
 
 impl<'a> Numbers<'a> {
@@ -152,7 +154,9 @@ impl Grid<'_> {
             Numbers::U16(v) => f32::from(v[at]),
             Numbers::I16(v) => f32::from(v[at]),
             Numbers::F32(v) => v[at],
-            Numbers::Mesh(_) | Numbers::Amr(_) => unreachable!("only a grid has voxels"),
+            Numbers::Mesh(_) | Numbers::Amr(_) | Numbers::Vdb(_) => {
+                unreachable!("only a grid has voxels")
+            }
         };
         self.scaling.apply(stored)
     }
@@ -166,6 +170,9 @@ impl Grid<'_> {
         }
         if let Numbers::Amr(amr) = self.numbers {
             return amr.sample(amr.amr_bounds().0 + g * amr.lattice_step());
+        }
+        if let Numbers::Vdb(grid) = self.numbers {
+            return grid.sample(g);
         }
         let hi = self.plan.dims.as_ivec3() - IVec3::ONE;
         let g = g.clamp(Vec3::ZERO, hi.as_vec3());
@@ -195,7 +202,7 @@ impl Grid<'_> {
             Numbers::U16(v) => trilinear(v, strides, f),
             Numbers::I16(v) => trilinear(v, strides, f),
             Numbers::F32(v) => trilinear(v, strides, f),
-            Numbers::Mesh(_) | Numbers::Amr(_) => unreachable!("sampled above"),
+            Numbers::Mesh(_) | Numbers::Amr(_) | Numbers::Vdb(_) => unreachable!("sampled above"),
         };
         self.scaling.apply(stored)
     }
@@ -293,6 +300,7 @@ impl<'a> Field<'a> {
                         SpatialField::Structured(v) => (Numbers::of(v.voxels()), v.scaling()),
                         SpatialField::Unstructured(m) => (Numbers::Mesh(m), Scaling::IDENTITY),
                         SpatialField::Amr(a) => (Numbers::Amr(a), Scaling::IDENTITY),
+                        SpatialField::NanoVdb(g) => (Numbers::Vdb(g), Scaling::IDENTITY),
                     },
                 };
                 Grid {

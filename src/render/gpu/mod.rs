@@ -16,6 +16,7 @@ mod iso;
 mod layers;
 mod mesh;
 mod modules;
+mod nanovdb;
 mod paging;
 mod raycast;
 mod resources;

@@ -918,12 +918,13 @@ impl Layout {
     }
 }
 
-/// Words a mesh or an AMR field takes in the meshes buffer; none for a
-/// grid.
+/// Words a mesh, an AMR field or a NanoVDB grid takes in the meshes
+/// buffer; none for a grid.
 fn cell_words(field: &SpatialField) -> u64 {
     match field {
         SpatialField::Unstructured(m) => super::mesh::word_count(m),
         SpatialField::Amr(a) => super::amr::word_count(a),
+        SpatialField::NanoVdb(g) => super::nanovdb::word_count(g),
         SpatialField::Structured(_) => 0,
     }
 }

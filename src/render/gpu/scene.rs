@@ -15,7 +15,7 @@ use super::context::Context;
 use super::paging::{self, Footprint, Layout, PagedVolume, Sight, StreamWait, Streaming, View};
 use super::resources::{self, BrickSlot, SurfaceSlot};
 use super::volume_texture::{self, PageSlot, TextureSlot, VolumeTexture};
-use super::{amr, mesh};
+use super::{amr, mesh, nanovdb};
 use crate::geometry::RayGen;
 use crate::render::empty_space::{EmptySpace, SpaceCache, Visibility};
 use crate::render::march_plan::MarchPlan;
@@ -373,6 +373,7 @@ impl GpuScene {
                 match &**v {
                     SpatialField::Unstructured(m) => mesh::pack(m, &mut words),
                     SpatialField::Amr(a) => amr::pack(a, &mut words),
+                    SpatialField::NanoVdb(g) => nanovdb::pack(g, &mut words),
                     SpatialField::Structured(_) => return None,
                 }
                 Some(at)

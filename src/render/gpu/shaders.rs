@@ -10,7 +10,7 @@ use super::modules::{ComposeError, Library};
 use super::uniforms;
 use crate::render::RenderError;
 
-const FILES: [(&str, &str); 15] = [
+const FILES: [(&str, &str); 16] = [
     ("volume", include_str!("../../../shaders/volume.wgsl")),
     ("surface", include_str!("../../../shaders/surface.wgsl")),
     ("trace", include_str!("../../../shaders/trace.wgsl")),
@@ -18,6 +18,7 @@ const FILES: [(&str, &str); 15] = [
     ("band", include_str!("../../../shaders/band.wgsl")),
     ("cells", include_str!("../../../shaders/cells.wgsl")),
     ("amr", include_str!("../../../shaders/amr.wgsl")),
+    ("nanovdb", include_str!("../../../shaders/nanovdb.wgsl")),
     ("stereo", include_str!("../../../shaders/stereo.wgsl")),
     ("raycast", include_str!("../../../shaders/raycast.wgsl")),
     ("reproject", include_str!("../../../shaders/reproject.wgsl")),

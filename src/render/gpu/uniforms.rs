@@ -432,6 +432,7 @@ impl VolumeSlot {
                 FieldKind::Grid => plan.filter.code(),
                 FieldKind::Cells => FILTER_CELLS,
                 FieldKind::Amr => FILTER_AMR,
+                FieldKind::Vdb => FILTER_VDB,
             },
             value_lo: plan.value_lo,
             value_scale: plan.value_scale,
@@ -617,6 +618,9 @@ fn lamp_slots(lamps: &[Lamp]) -> [LampSlot; MAX_LAMPS] {
 const FILTER_CELLS: u32 = 2;
 /// The sampling code of an AMR volume: among its cells (shaders/amr.wgsl).
 const FILTER_AMR: u32 = 3;
+/// The sampling code of a NanoVDB grid: through its tree
+/// (shaders/nanovdb.wgsl).
+const FILTER_VDB: u32 = 4;
 
 /// Which lights the surfaces see besides the point and spot lights: the
 /// directional light, a light at the eye (the world has none), or none.
@@ -670,6 +674,7 @@ fn constants() -> String {
         ("FILTER_NEAREST", Filter::Nearest.code()),
         ("FILTER_CELLS", FILTER_CELLS),
         ("FILTER_AMR", FILTER_AMR),
+        ("FILTER_VDB", FILTER_VDB),
         ("AMR_ABSENT", AMR_ABSENT),
         ("AMR_EMPTY", AMR_EMPTY),
         ("MAX_AMR_LEVELS", MAX_AMR_LEVELS as u32),

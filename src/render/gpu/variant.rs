@@ -35,6 +35,9 @@ pub(super) struct SceneKey {
     pub meshes: bool,
     /// A volume is an AMR field (`AMR`): without, its sampling is dropped.
     pub amr: bool,
+    /// A volume is a NanoVDB grid (`VDB`): without, its tree's reading is
+    /// dropped.
+    pub vdb: bool,
 }
 
 /// Which fields of the key a pass's shader depends on: the others are
@@ -48,6 +51,7 @@ pub(super) struct Uses {
     pub filtered: bool,
     pub meshes: bool,
     pub amr: bool,
+    pub vdb: bool,
 }
 
 impl Uses {
@@ -59,6 +63,7 @@ impl Uses {
         filtered: true,
         meshes: true,
         amr: true,
+        vdb: true,
     };
     /// A pass that marches with exact sampling only (the stereo passes).
     pub const EXACT: Uses = Uses {
@@ -73,6 +78,7 @@ impl Uses {
         filtered: false,
         meshes: false,
         amr: false,
+        vdb: false,
     };
 }
 
@@ -98,6 +104,7 @@ impl SceneKey {
                 .iter()
                 .any(|v| v.volume.unstructured().is_some()),
             amr: scene.volumes().iter().any(|v| v.volume.amr().is_some()),
+            vdb: scene.volumes().iter().any(|v| v.volume.nanovdb().is_some()),
         })
     }
 
@@ -110,6 +117,7 @@ impl SceneKey {
             filtered: self.filtered && uses.filtered,
             meshes: self.meshes && uses.meshes,
             amr: self.amr && uses.amr,
+            vdb: self.vdb && uses.vdb,
         }
     }
 
@@ -120,10 +128,11 @@ impl SceneKey {
             | usize::from(self.filtered) << 3
             | usize::from(self.meshes) << 4
             | usize::from(self.amr) << 5
+            | usize::from(self.vdb) << 6
     }
 
     /// The override constants that select this variant.
-    pub fn constants(self) -> [(&'static str, f64); 6] {
+    pub fn constants(self) -> [(&'static str, f64); 7] {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         [
             ("SURFACES", flag(self.surfaces)),
@@ -132,6 +141,7 @@ impl SceneKey {
             ("FILTERED", flag(self.filtered)),
             ("MESHES", flag(self.meshes)),
             ("AMR", flag(self.amr)),
+            ("VDB", flag(self.vdb)),
         ]
     }
 }
@@ -143,7 +153,7 @@ pub(super) fn no_filtering(ctx: &Context) -> RenderError {
     ))
 }
 
-const VARIANTS: usize = 64;
+const VARIANTS: usize = 128;
 
 /// One entry point of a shader, compiled for each scene key the first
 /// time a frame needs it, with the pass's own fixed constants besides.
@@ -212,6 +222,7 @@ mod tests {
                 filtered: i & 8 != 0,
                 meshes: i & 16 != 0,
                 amr: i & 32 != 0,
+                vdb: i & 64 != 0,
             };
             assert_eq!(key.index(), i);
             assert!(seen.insert(key.constants().map(|(_, v)| v.to_bits())));
@@ -227,6 +238,7 @@ mod tests {
             filtered: true,
             meshes: true,
             amr: true,
+            vdb: true,
         };
         assert_eq!(all.seen_by(Uses::ALL), all);
         assert!(!all.seen_by(Uses::EXACT).filtered);

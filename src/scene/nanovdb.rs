@@ -1,0 +1,956 @@
+//! NanoVDB grids (KHR_SPATIAL_FIELD_NANOVDB): one grid exactly as the
+//! NanoVDB library lays it out in memory, read in place. Layout version
+//! 32 (NanoVDB 32.x keeps its ABI within a major version; the offsets
+//! below are those of PNanoVDB.h, which states them for every version
+//! 32 release).
+//!
+//! A grid is a tree of fixed depth below a root: the root's tiles each
+//! cover 4096^3 voxels and hold an upper node or one value; an upper node
+//! holds 32^3 entries of 128^3 voxels, each a lower node or one value; a
+//! lower node 16^3 entries of 8^3 voxels, each a leaf or one value; a
+//! leaf 8^3 values. Voxels are vertex-centred: voxel (i, j, k)'s value
+//! lies at index point (i, j, k), so linear filtering is trilinear
+//! between the eight voxels around a point, as NanoVDB's own sampler
+//! reads it. Every voxel has a value: where no leaf is, its tile's, and
+//! beyond every tile the background.
+//!
+//! The whole tree is walked once when a grid is made: every offset must
+//! land inside the grid on a node of the level below (nodes of a level
+//! lie in one section, one after another), and no node may be reached
+//! twice, so a blob with offsets past its end, into the wrong level or
+//! in a cycle is refused with the reason, and reading a sample later
+//! never leaves the grid. The GPU reads the same words (gpu/nanovdb.rs).
+//!
+//! Rays march the grid's active box (the root's bounding box) on a
+//! lattice of its voxels; the index-to-world map places the lattice.
+
+use std::sync::Arc;
+
+use glam::{DVec3, IVec3, UVec3, Vec3};
+use thiserror::Error;
+
+use super::volume::Filter;
+
+/// "NanoVDB0", little-endian: the first eight bytes of every grid (and
+/// of a 32.x file's segments).
+pub const NANOVDB_MAGIC: u64 = 0x3042_4456_6f6e_614e;
+/// The layout version read: NanoVDB keeps its ABI within a major version.
+pub const NANOVDB_MAJOR: u32 = 32;
+
+const GRID_SIZE: usize = 672;
+const TREE_SIZE: usize = 64;
+const GRID_OFF_NAME: usize = 40;
+const GRID_OFF_MAP: usize = 296;
+const GRID_OFF_CLASS: usize = 632;
+const GRID_OFF_TYPE: usize = 636;
+const MAP_OFF_MATD: usize = 88;
+const MAP_OFF_VECD: usize = 232;
+const ROOT_OFF_TABLE_SIZE: usize = 24;
+const ROOT_OFF_BACKGROUND: usize = 28;
+const ROOT_SIZE: usize = 64;
+const ROOT_TILE_SIZE: usize = 32;
+const ROOT_TILE_OFF_CHILD: usize = 8;
+const ROOT_TILE_OFF_STATE: usize = 16;
+const ROOT_TILE_OFF_VALUE: usize = 20;
+/// Node layouts shared by every value type read here: where the child
+/// masks and the tables of children and tiles begin (bytes from the
+/// node), and a node's size.
+pub const UPPER_OFF_CHILD_MASK: usize = 4128;
+pub const UPPER_OFF_TABLE: usize = 8256;
+const UPPER_SIZE: usize = 270_400;
+pub const LOWER_OFF_CHILD_MASK: usize = 544;
+pub const LOWER_OFF_TABLE: usize = 1088;
+const LOWER_SIZE: usize = 33_856;
+pub const LEAF_OFF_TABLE: usize = 96;
+/// Voxels a lattice may hold: as many as a structured grid.
+const MAX_LATTICE_VOXELS: u64 = 1 << 32;
+/// Index coordinates are sampled in single precision: the active box
+/// must lie within +-2^24, where every integer is exact.
+const MAX_INDEX: i32 = 1 << 24;
+
+/// NanoVDB's grid type codes, by name, for errors.
+const TYPE_NAMES: [&str; 20] = [
+    "Unknown", "Float", "Double", "Int16", "Int32", "Int64", "Vec3f", "Vec3d", "Mask", "Half",
+    "UInt32", "Boolean", "RGBA8", "Fp4", "Fp8", "Fp16", "FpN", "Vec4f", "Vec4d", "Index",
+];
+const CLASS_NAMES: [&str; 9] = [
+    "Unknown",
+    "LevelSet",
+    "FogVolume",
+    "Staggered",
+    "PointIndex",
+    "PointData",
+    "Topology",
+    "VoxelVolume",
+    "IndexGrid",
+];
+
+/// How a grid's leaves store their values (the scalar grid types read).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VdbValues {
+    Float,
+    /// IEEE binary16.
+    Half,
+    /// Quantized: code * quantum + minimum, per leaf, 4, 8 or 16 bits.
+    Fp4,
+    Fp8,
+    Fp16,
+}
+
+impl VdbValues {
+    fn of(code: u32) -> Result<Self, NanoVdbError> {
+        Ok(match code {
+            1 => VdbValues::Float,
+            9 => VdbValues::Half,
+            13 => VdbValues::Fp4,
+            14 => VdbValues::Fp8,
+            15 => VdbValues::Fp16,
+            other => {
+                return Err(NanoVdbError::GridType {
+                    name: TYPE_NAMES
+                        .get(other as usize)
+                        .map(|n| n.to_string())
+                        .unwrap_or_else(|| format!("type {other}")),
+                })
+            }
+        })
+    }
+
+    /// NanoVDB's name of the type.
+    pub fn name(self) -> &'static str {
+        match self {
+            VdbValues::Float => "Float",
+            VdbValues::Half => "Half",
+            VdbValues::Fp4 => "Fp4",
+            VdbValues::Fp8 => "Fp8",
+            VdbValues::Fp16 => "Fp16",
+        }
+    }
+
+    /// The code the GPU switches on (shaders/nanovdb.wgsl).
+    pub fn code(self) -> u32 {
+        match self {
+            VdbValues::Float => 0,
+            VdbValues::Half => 1,
+            VdbValues::Fp4 => 2,
+            VdbValues::Fp8 => 3,
+            VdbValues::Fp16 => 4,
+        }
+    }
+
+    fn leaf_size(self) -> usize {
+        match self {
+            VdbValues::Float => 2144,
+            VdbValues::Half | VdbValues::Fp16 => 1120,
+            VdbValues::Fp4 => 352,
+            VdbValues::Fp8 => 608,
+        }
+    }
+
+    /// Bits of a quantized code, or None for Float and Half.
+    fn code_bits(self) -> Option<u32> {
+        match self {
+            VdbValues::Fp4 => Some(4),
+            VdbValues::Fp8 => Some(8),
+            VdbValues::Fp16 => Some(16),
+            VdbValues::Float | VdbValues::Half => None,
+        }
+    }
+}
+
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum NanoVdbError {
+    #[error("the blob is {len} bytes; a NanoVDB grid is at least {needed}")]
+    TooShort { len: u64, needed: u64 },
+    #[error("the blob does not start with NanoVDB's magic number 0x304244566f6e614e (\"NanoVDB0\") but with {found:#018x}")]
+    Magic { found: u64 },
+    #[error("the grid is NanoVDB {major}.{minor}.{patch}; caveray reads the version {NANOVDB_MAJOR} layout")]
+    Version { major: u32, minor: u32, patch: u32 },
+    #[error(
+        "the grid holds {name} values; caveray reads scalar grids of Float, Half, Fp4, Fp8 or Fp16"
+    )]
+    GridType { name: String },
+    #[error("the grid's index-to-world map {0}")]
+    Map(String),
+    #[error("{what} at byte {at} reaches byte {end}, past the grid's {size} bytes")]
+    PastEnd {
+        what: String,
+        at: u64,
+        end: u64,
+        size: u64,
+    },
+    #[error("{what} points to byte {at}, which is not a node of the level below it")]
+    NotANode { what: String, at: u64 },
+    #[error("{what} points to the node at byte {at}, which another entry reached already (a cycle or a shared node)")]
+    Twice { what: String, at: u64 },
+    #[error("the grid's active box is empty: it has no active voxels to render")]
+    Empty,
+    #[error("the grid's active box, voxels {lo} to {hi}, reaches past voxel {MAX_INDEX} on an axis, where single precision no longer tells voxels apart")]
+    FarOut { lo: IVec3, hi: IVec3 },
+    #[error(
+        "the grid's active box is {dims} voxels; caveray marches at most {MAX_LATTICE_VOXELS}"
+    )]
+    TooLarge { dims: UVec3 },
+    #[error("cannot allocate {0} bytes for the grid")]
+    Allocation(u64),
+}
+
+/// A root tile as read from the blob: where it starts in index space,
+/// its upper node (a byte offset into the grid) or its one value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RootTile {
+    pub origin: IVec3,
+    pub child: Option<u32>,
+    pub value: f32,
+}
+
+/// What a voxel's lookup found: the leaf holding it (byte offset), or
+/// the one value of the tile or background covering it.
+enum Found {
+    Leaf(usize),
+    Value(f32),
+}
+
+/// A validated NanoVDB grid, sampled in place.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NanoVdbGrid {
+    /// The grid's bytes as little-endian words (a grid is 32-byte
+    /// aligned, its size a multiple of 32).
+    words: Arc<Vec<u32>>,
+    values: VdbValues,
+    class: u32,
+    name: String,
+    filter: Filter,
+    root: usize,
+    tiles: Vec<RootTile>,
+    background: f32,
+    /// The active box's voxels (inclusive), the lattice's first vertex
+    /// and last.
+    active: (IVec3, IVec3),
+    /// The voxels this field's lattice covers: the active box, or a part
+    /// of it once cropped.
+    window: (IVec3, IVec3),
+    /// Index-to-world: world = origin + index * scale.
+    origin: DVec3,
+    scale: DVec3,
+    active_voxels: u64,
+    counts: [u32; 3],
+    value_range: (f32, f32),
+}
+
+/// Little-endian reads that fail past the end, for the walk that checks
+/// the blob.
+struct Bytes<'a> {
+    b: &'a [u8],
+}
+
+impl Bytes<'_> {
+    fn u32(&self, at: usize) -> Option<u32> {
+        let s = self.b.get(at..at.checked_add(4)?)?;
+        Some(u32::from_le_bytes(s.try_into().ok()?))
+    }
+    fn u64(&self, at: usize) -> Option<u64> {
+        let s = self.b.get(at..at.checked_add(8)?)?;
+        Some(u64::from_le_bytes(s.try_into().ok()?))
+    }
+    fn f64(&self, at: usize) -> Option<f64> {
+        self.u64(at).map(f64::from_bits)
+    }
+}
+
+/// IEEE binary16 to f32.
+pub fn half_to_f32(h: u16) -> f32 {
+    let sign = u32::from(h >> 15) << 31;
+    let exp = u32::from((h >> 10) & 0x1f);
+    let man = u32::from(h & 0x3ff);
+    let bits = match (exp, man) {
+        (0, 0) => sign,
+        (0, m) => {
+            // Subnormal: m * 2^-24.
+            let v = m as f32 / 16_777_216.0;
+            return if sign != 0 { -v } else { v };
+        }
+        (31, 0) => sign | 0x7f80_0000,
+        (31, m) => sign | 0x7f80_0000 | (m << 13),
+        (e, m) => sign | ((e + 112) << 23) | (m << 13),
+    };
+    f32::from_bits(bits)
+}
+
+/// The sections nodes of each level lie in: (first byte, count, size).
+struct Sections {
+    upper: (usize, usize, usize),
+    lower: (usize, usize, usize),
+    leaf: (usize, usize, usize),
+}
+
+impl Sections {
+    /// The index of the node at `at` in section `s`, if it is one.
+    fn node(s: (usize, usize, usize), at: usize) -> Option<usize> {
+        let (first, count, size) = s;
+        let d = at.checked_sub(first)?;
+        (d % size == 0 && d / size < count).then_some(d / size)
+    }
+}
+
+impl NanoVdbGrid {
+    /// Reads and checks the grid at the start of `blob`, to be sampled
+    /// with `filter`.
+    pub fn new(blob: &[u8], filter: Filter) -> Result<Self, NanoVdbError> {
+        let b = Bytes { b: blob };
+        let len = blob.len() as u64;
+        let short = || NanoVdbError::TooShort {
+            len,
+            needed: (GRID_SIZE + TREE_SIZE + ROOT_SIZE) as u64,
+        };
+        let magic = b.u64(0).ok_or_else(short)?;
+        if magic != NANOVDB_MAGIC {
+            return Err(NanoVdbError::Magic { found: magic });
+        }
+        let version = b.u32(16).ok_or_else(short)?;
+        let major = version >> 21;
+        if major != NANOVDB_MAJOR {
+            return Err(NanoVdbError::Version {
+                major,
+                minor: (version >> 10) & 0x7ff,
+                patch: version & 0x3ff,
+            });
+        }
+        if blob.len() < GRID_SIZE + TREE_SIZE + ROOT_SIZE {
+            return Err(short());
+        }
+        let values = VdbValues::of(b.u32(GRID_OFF_TYPE).ok_or_else(short)?)?;
+        let class = b.u32(GRID_OFF_CLASS).ok_or_else(short)?;
+        let grid_size = b.u64(32).ok_or_else(short)?;
+        if grid_size > len {
+            return Err(NanoVdbError::PastEnd {
+                what: "the grid's size".into(),
+                at: 32,
+                end: grid_size,
+                size: len,
+            });
+        }
+        if grid_size < (GRID_SIZE + TREE_SIZE + ROOT_SIZE) as u64 || grid_size % 4 != 0 {
+            return Err(NanoVdbError::TooShort {
+                len: grid_size,
+                needed: (GRID_SIZE + TREE_SIZE + ROOT_SIZE) as u64,
+            });
+        }
+        let size = grid_size as usize;
+        let b = Bytes { b: &blob[..size] };
+        let name_bytes = &blob[GRID_OFF_NAME..GRID_OFF_NAME + 256];
+        let name_end = name_bytes.iter().position(|&c| c == 0).unwrap_or(256);
+        let name = String::from_utf8_lossy(&name_bytes[..name_end]).into_owned();
+        let (origin, scale) = map_of(&b)?;
+
+        let past = |what: &str, at: usize, end: u64| NanoVdbError::PastEnd {
+            what: what.to_string(),
+            at: at as u64,
+            end,
+            size: grid_size,
+        };
+        let tree = GRID_SIZE;
+        let section = |k: usize, count_at: usize, node: usize, what: &str| {
+            let off = b.u64(tree + 8 * k).unwrap_or(u64::MAX);
+            let count = u64::from(b.u32(tree + count_at).unwrap_or(0));
+            let first = (tree as u64).saturating_add(off);
+            let end = first.saturating_add(count.saturating_mul(node as u64));
+            if count > 0 && end > grid_size {
+                return Err(past(what, tree + 8 * k, end));
+            }
+            Ok((first.min(grid_size) as usize, count as usize, node))
+        };
+        let sections = Sections {
+            leaf: section(0, 32, values.leaf_size(), "the leaves")?,
+            lower: section(1, 36, LOWER_SIZE, "the lower nodes")?,
+            upper: section(2, 40, UPPER_SIZE, "the upper nodes")?,
+        };
+        let root_off = b.u64(tree + 24).unwrap_or(u64::MAX);
+        let root = (tree as u64).saturating_add(root_off);
+        if root.saturating_add(ROOT_SIZE as u64) > grid_size {
+            return Err(past(
+                "the root",
+                tree + 24,
+                root.saturating_add(ROOT_SIZE as u64),
+            ));
+        }
+        let root = root as usize;
+        let table = u64::from(b.u32(root + ROOT_OFF_TABLE_SIZE).unwrap_or(0));
+        let tiles_end = (root + ROOT_SIZE) as u64 + table * ROOT_TILE_SIZE as u64;
+        if tiles_end > grid_size {
+            return Err(past(
+                "the root's tiles",
+                root + ROOT_OFF_TABLE_SIZE,
+                tiles_end,
+            ));
+        }
+        let value = |at: usize| -> f32 {
+            match values {
+                VdbValues::Half => half_to_f32(b.u32(at).unwrap_or(0) as u16),
+                _ => f32::from_bits(b.u32(at).unwrap_or(0)),
+            }
+        };
+        let background = value(root + ROOT_OFF_BACKGROUND);
+        let active = {
+            let i = |k: usize| b.u32(root + 4 * k).unwrap_or(0) as i32;
+            (IVec3::new(i(0), i(1), i(2)), IVec3::new(i(3), i(4), i(5)))
+        };
+        if active.1.cmplt(active.0).any() {
+            return Err(NanoVdbError::Empty);
+        }
+        let reach = IVec3::splat(MAX_INDEX);
+        if active.0.cmplt(-reach).any() || active.1.cmpgt(reach).any() {
+            return Err(NanoVdbError::FarOut {
+                lo: active.0,
+                hi: active.1,
+            });
+        }
+        let dims =
+            (active.1.as_i64vec3() - active.0.as_i64vec3() + glam::I64Vec3::ONE).as_u64vec3();
+        if dims.x.saturating_mul(dims.y).saturating_mul(dims.z) > MAX_LATTICE_VOXELS {
+            return Err(NanoVdbError::TooLarge {
+                dims: dims
+                    .min(glam::U64Vec3::splat(u64::from(u32::MAX)))
+                    .as_uvec3(),
+            });
+        }
+
+        let mut words = Vec::new();
+        words
+            .try_reserve_exact(size / 4)
+            .map_err(|_| NanoVdbError::Allocation(grid_size))?;
+        words.extend(
+            blob[..size]
+                .chunks_exact(4)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+        );
+
+        // The walk: every child offset onto a node of the level below,
+        // each node once.
+        let mut seen_upper = vec![false; sections.upper.1];
+        let mut seen_lower = vec![false; sections.lower.1];
+        let mut seen_leaf = vec![false; sections.leaf.1];
+        let mut range = (background, background);
+        let mut widen = |v: f32| {
+            if v.is_finite() {
+                range = (range.0.min(v), range.1.max(v));
+            }
+        };
+        let mut tiles = Vec::with_capacity(table as usize);
+        let mut uppers = Vec::new();
+        for t in 0..table as usize {
+            let at = root + ROOT_SIZE + t * ROOT_TILE_SIZE;
+            let key = b.u64(at).unwrap_or(0);
+            let axis = |shift: u32| (((key >> shift) & 0x1f_ffff) as u32).wrapping_shl(12) as i32;
+            let origin = IVec3::new(axis(42), axis(21), axis(0));
+            let child = b.u64(at + ROOT_TILE_OFF_CHILD).unwrap_or(0) as i64;
+            let _state = b.u32(at + ROOT_TILE_OFF_STATE);
+            let tile_value = value(at + ROOT_TILE_OFF_VALUE);
+            let child = if child == 0 {
+                widen(tile_value);
+                None
+            } else {
+                let what = format!("root tile {t}");
+                let node = (root as i64).checked_add(child).filter(|&n| n >= 0);
+                let Some(node) = node.map(|n| n as usize) else {
+                    return Err(NanoVdbError::NotANode {
+                        what,
+                        at: child as u64,
+                    });
+                };
+                let i =
+                    Sections::node(sections.upper, node).ok_or_else(|| NanoVdbError::NotANode {
+                        what: what.clone(),
+                        at: node as u64,
+                    })?;
+                if std::mem::replace(&mut seen_upper[i], true) {
+                    return Err(NanoVdbError::Twice {
+                        what,
+                        at: node as u64,
+                    });
+                }
+                uppers.push(node);
+                Some(node as u32)
+            };
+            tiles.push(RootTile {
+                origin,
+                child,
+                value: tile_value,
+            });
+        }
+        let mut lowers = Vec::new();
+        for &node in &uppers {
+            walk_node(
+                &words,
+                (node, UPPER_OFF_CHILD_MASK, UPPER_OFF_TABLE, 32 * 32 * 32),
+                sections.lower,
+                ("upper", "lower"),
+                &mut seen_lower,
+                &mut lowers,
+                |at| widen(tile_of(&words, values, at)),
+            )?;
+        }
+        let mut leaves = Vec::new();
+        for &node in &lowers {
+            walk_node(
+                &words,
+                (node, LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, 16 * 16 * 16),
+                sections.leaf,
+                ("lower", "leaf"),
+                &mut seen_leaf,
+                &mut leaves,
+                |at| widen(tile_of(&words, values, at)),
+            )?;
+        }
+        let mut grid = Self {
+            words: Arc::new(words),
+            values,
+            class,
+            name,
+            filter,
+            root,
+            tiles,
+            background,
+            active,
+            window: active,
+            origin,
+            scale,
+            active_voxels: b.u64(tree + 56).unwrap_or(0),
+            counts: [
+                uppers.len() as u32,
+                lowers.len() as u32,
+                leaves.len() as u32,
+            ],
+            value_range: range,
+        };
+        for &leaf in &leaves {
+            for n in 0..512 {
+                let v = grid.leaf_value(leaf, n);
+                if v.is_finite() {
+                    grid.value_range = (grid.value_range.0.min(v), grid.value_range.1.max(v));
+                }
+            }
+        }
+        Ok(grid)
+    }
+
+    fn f(&self, byte: usize) -> f32 {
+        f32::from_bits(self.words[byte >> 2])
+    }
+
+    /// The node (or value) holding voxel `ijk`.
+    fn find(&self, ijk: IVec3) -> Found {
+        let key = ijk & IVec3::splat(!4095);
+        let Some(tile) = self.tiles.iter().find(|t| t.origin == key) else {
+            return Found::Value(self.background);
+        };
+        let Some(upper) = tile.child else {
+            return Found::Value(tile.value);
+        };
+        let upper = upper as usize;
+        let u: IVec3 = (ijk & IVec3::splat(4095)) >> 7;
+        let n = ((u.x << 10) | (u.y << 5) | u.z) as usize;
+        let lower = match self.child(upper, UPPER_OFF_CHILD_MASK, UPPER_OFF_TABLE, n) {
+            Ok(c) => c,
+            Err(v) => return Found::Value(v),
+        };
+        let l: IVec3 = (ijk & IVec3::splat(127)) >> 3;
+        let n = ((l.x << 8) | (l.y << 4) | l.z) as usize;
+        match self.child(lower, LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, n) {
+            Ok(leaf) => Found::Leaf(leaf),
+            Err(v) => Found::Value(v),
+        }
+    }
+
+    /// Entry `n` of the internal node at `node`: its child's byte offset,
+    /// or its tile's value.
+    fn child(&self, node: usize, mask: usize, table: usize, n: usize) -> Result<usize, f32> {
+        let word = self.words[(node + mask) / 4 + n / 32];
+        let at = node + table + 8 * n;
+        if word >> (n % 32) & 1 == 1 {
+            Ok(node + self.words[at / 4] as usize)
+        } else {
+            Err(tile_of(&self.words, self.values, at))
+        }
+    }
+
+    /// Value `n` (x * 64 + y * 8 + z) of the leaf at `leaf`.
+    fn leaf_value(&self, leaf: usize, n: usize) -> f32 {
+        let t = leaf + LEAF_OFF_TABLE;
+        match (self.values, self.values.code_bits()) {
+            (VdbValues::Float, _) => self.f(t + 4 * n),
+            (VdbValues::Half, _) => {
+                let w = self.words[(t + 2 * n) / 4];
+                half_to_f32((w >> (16 * (n % 2))) as u16)
+            }
+            (_, Some(bits)) => {
+                let per_word = (32 / bits) as usize;
+                let w = self.words[t / 4 + n / per_word];
+                let code = (w >> ((n % per_word) as u32 * bits)) & ((1u32 << bits) - 1);
+                code as f32 * self.f(t - 12) + self.f(t - 16)
+            }
+            (_, None) => unreachable!("Float and Half are matched above"),
+        }
+    }
+
+    /// Voxel `ijk`'s value.
+    pub fn value(&self, ijk: IVec3) -> f32 {
+        match self.find(ijk) {
+            Found::Leaf(leaf) => {
+                let l = ijk & IVec3::splat(7);
+                self.leaf_value(leaf, ((l.x << 6) | (l.y << 3) | l.z) as usize)
+            }
+            Found::Value(v) => v,
+        }
+    }
+
+    /// The field at index point `p`: the nearest voxel's value, or
+    /// trilinear between the eight around it.
+    pub fn sample_index(&self, p: Vec3) -> f32 {
+        if self.filter == Filter::Nearest {
+            return self.value((p + Vec3::splat(0.5)).floor().as_ivec3());
+        }
+        let p0 = p.floor();
+        let f = p - p0;
+        let i0 = p0.as_ivec3();
+        let l = i0 & IVec3::splat(7);
+        let corners: [f32; 8] = if l.cmplt(IVec3::splat(7)).all() {
+            // The eight voxels share one leaf, or one tile's value.
+            match self.find(i0) {
+                Found::Value(v) => return v,
+                Found::Leaf(leaf) => {
+                    let n = ((l.x << 6) | (l.y << 3) | l.z) as usize;
+                    std::array::from_fn(|c| {
+                        self.leaf_value(leaf, n + 64 * (c & 1) + 8 * (c >> 1 & 1) + (c >> 2))
+                    })
+                }
+            }
+        } else {
+            std::array::from_fn(|c| {
+                self.value(i0 + IVec3::new((c & 1) as i32, (c >> 1 & 1) as i32, (c >> 2) as i32))
+            })
+        };
+        let x00 = mix(corners[0], corners[1], f.x);
+        let x10 = mix(corners[2], corners[3], f.x);
+        let x01 = mix(corners[4], corners[5], f.x);
+        let x11 = mix(corners[6], corners[7], f.x);
+        mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z)
+    }
+
+    /// The field at lattice point `g` (vertex 0 the window's first voxel).
+    pub fn sample(&self, g: Vec3) -> f32 {
+        self.sample_index(self.window.0.as_vec3() + g)
+    }
+
+    /// The field at world point `p`.
+    pub fn sample_world(&self, p: Vec3) -> f32 {
+        let index = (p.as_dvec3() - self.origin) / self.scale;
+        self.sample_index(index.as_vec3())
+    }
+
+    /// The lattice's vertices per axis and their spacing (world units).
+    pub fn lattice(&self) -> (UVec3, Vec3) {
+        let (lo, hi) = self.window;
+        ((hi - lo + IVec3::ONE).as_uvec3(), self.scale.as_vec3())
+    }
+
+    /// The world box of the lattice.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let (lo, hi) = self.window;
+        (
+            (self.origin + lo.as_dvec3() * self.scale).as_vec3(),
+            (self.origin + hi.as_dvec3() * self.scale).as_vec3(),
+        )
+    }
+
+    /// The lattice restricted to its vertices `lo..=hi`: the same grid,
+    /// sampled there as in the whole.
+    pub fn window_of(&self, lo: UVec3, hi: UVec3) -> Result<Self, String> {
+        let dims = self.lattice().0;
+        if lo.cmpgt(hi).any() || hi.cmpge(dims).any() {
+            return Err(format!(
+                "vertices {lo} to {hi} are not a box of the NanoVDB grid's {dims} lattice"
+            ));
+        }
+        let base = self.window.0;
+        Ok(Self {
+            window: (base + lo.as_ivec3(), base + hi.as_ivec3()),
+            ..self.clone()
+        })
+    }
+
+    /// Boxes of lattice vertices (window coordinates, inclusive, possibly
+    /// beyond the window) and the range of the values there: the
+    /// background where no root tile is, then each tile and each leaf of
+    /// the tree that reaches the window.
+    pub fn value_boxes(&self) -> Vec<((Vec3, Vec3), (f32, f32))> {
+        let (w0, w1) = self.window;
+        let mut out = Vec::new();
+        let k0: IVec3 = (w0 - IVec3::ONE) >> 12;
+        let k1: IVec3 = (w1 + IVec3::ONE) >> 12;
+        for z in k0.z..=k1.z {
+            for y in k0.y..=k1.y {
+                for x in k0.x..=k1.x {
+                    let origin = IVec3::new(x, y, z) << 12;
+                    if self.tiles.iter().all(|t| t.origin != origin) {
+                        let lo = (origin - w0).as_vec3();
+                        out.push((
+                            (lo, lo + Vec3::splat(4095.0)),
+                            (self.background, self.background),
+                        ));
+                    }
+                }
+            }
+        }
+        let mut add = |lo: IVec3, span: i32, range: (f32, f32)| {
+            let hi = lo + IVec3::splat(span - 1);
+            // A sample reads one voxel beyond the box it lies in.
+            if (hi + IVec3::ONE).cmplt(w0).any() || (lo - IVec3::ONE).cmpgt(w1).any() {
+                return;
+            }
+            if !(range.0.is_finite() && range.1.is_finite()) {
+                return;
+            }
+            out.push((((lo - w0).as_vec3(), (hi - w0).as_vec3()), range));
+        };
+        for t in &self.tiles {
+            let Some(upper) = t.child else {
+                add(t.origin, 4096, (t.value, t.value));
+                continue;
+            };
+            let upper = upper as usize;
+            for n in 0..32 * 32 * 32usize {
+                let uo = t.origin
+                    + IVec3::new((n >> 10) as i32, (n >> 5 & 31) as i32, (n & 31) as i32) * 128;
+                match self.child(upper, UPPER_OFF_CHILD_MASK, UPPER_OFF_TABLE, n) {
+                    Err(v) => add(uo, 128, (v, v)),
+                    Ok(lower) => {
+                        for m in 0..16 * 16 * 16usize {
+                            let lo = uo
+                                + IVec3::new(
+                                    (m >> 8) as i32,
+                                    (m >> 4 & 15) as i32,
+                                    (m & 15) as i32,
+                                ) * 8;
+                            match self.child(lower, LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, m) {
+                                Err(v) => add(lo, 8, (v, v)),
+                                Ok(leaf) => {
+                                    let mut r = (f32::INFINITY, f32::NEG_INFINITY);
+                                    for k in 0..512 {
+                                        let v = self.leaf_value(leaf, k);
+                                        if v.is_finite() {
+                                            r = (r.0.min(v), r.1.max(v));
+                                        }
+                                    }
+                                    add(lo, 8, r);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    pub fn words(&self) -> &[u32] {
+        &self.words
+    }
+
+    pub fn tiles(&self) -> &[RootTile] {
+        &self.tiles
+    }
+
+    pub fn values(&self) -> VdbValues {
+        self.values
+    }
+
+    /// NanoVDB's name of the grid class (LevelSet, FogVolume, ...).
+    pub fn class_name(&self) -> &'static str {
+        CLASS_NAMES
+            .get(self.class as usize)
+            .copied()
+            .unwrap_or("Unknown")
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn filter(&self) -> Filter {
+        self.filter
+    }
+
+    pub fn background(&self) -> f32 {
+        self.background
+    }
+
+    /// The active box's voxels, inclusive, in index space.
+    pub fn active_box(&self) -> (IVec3, IVec3) {
+        self.active
+    }
+
+    /// The window's first voxel in index space.
+    pub fn window_origin(&self) -> IVec3 {
+        self.window.0
+    }
+
+    pub fn active_voxels(&self) -> u64 {
+        self.active_voxels
+    }
+
+    /// Upper nodes, lower nodes and leaves.
+    pub fn node_counts(&self) -> [u32; 3] {
+        self.counts
+    }
+
+    /// The world size of a voxel.
+    pub fn voxel_size(&self) -> Vec3 {
+        self.scale.as_vec3()
+    }
+
+    pub fn value_range(&self) -> (f32, f32) {
+        self.value_range
+    }
+
+    /// Bytes held: the grid as it came.
+    pub fn bytes(&self) -> u64 {
+        4 * self.words.len() as u64
+    }
+}
+
+/// The value of an internal node's tile entry at byte `at`.
+fn tile_of(words: &[u32], values: VdbValues, at: usize) -> f32 {
+    let w = words[at / 4];
+    match values {
+        VdbValues::Half => half_to_f32(w as u16),
+        _ => f32::from_bits(w),
+    }
+}
+
+/// Checks the children of the internal node `node` (its child mask and
+/// table at those offsets, `entries` entries): each must be a node of
+/// `below`, reached once; each is pushed to `out`, and each tile's
+/// entry offset is handed to `tile`.
+fn walk_node(
+    words: &[u32],
+    (node, mask, table, entries): (usize, usize, usize, usize),
+    below: (usize, usize, usize),
+    (level, child_level): (&str, &str),
+    seen: &mut [bool],
+    out: &mut Vec<usize>,
+    mut tile: impl FnMut(usize),
+) -> Result<(), NanoVdbError> {
+    for n in 0..entries {
+        let at = node + table + 8 * n;
+        if words[(node + mask) / 4 + n / 32] >> (n % 32) & 1 == 0 {
+            tile(at);
+            continue;
+        }
+        let offset = u64::from(words[at / 4]) | u64::from(words[at / 4 + 1]) << 32;
+        let what = format!("the {level} node at byte {node}, entry {n},");
+        let child = (node as u64)
+            .checked_add(offset)
+            .filter(|_| (offset as i64) > 0)
+            .filter(|&c| c <= u64::from(u32::MAX));
+        let Some(child) = child.map(|c| c as usize) else {
+            return Err(NanoVdbError::NotANode {
+                what,
+                at: (node as i64).wrapping_add(offset as i64) as u64,
+            });
+        };
+        let Some(i) = Sections::node(below, child) else {
+            return Err(NanoVdbError::NotANode {
+                what: format!("{what} (a {child_level} node expected)"),
+                at: child as u64,
+            });
+        };
+        if std::mem::replace(&mut seen[i], true) {
+            return Err(NanoVdbError::Twice {
+                what,
+                at: child as u64,
+            });
+        }
+        out.push(child);
+    }
+    Ok(())
+}
+
+/// The index-to-world map as origin and per-axis scale: only maps
+/// without rotation or shear are placed (a volume's instance transform
+/// turns it).
+fn map_of(b: &Bytes<'_>) -> Result<(DVec3, DVec3), NanoVdbError> {
+    let m: Vec<f64> = (0..9)
+        .map(|k| {
+            b.f64(GRID_OFF_MAP + MAP_OFF_MATD + 8 * k)
+                .unwrap_or(f64::NAN)
+        })
+        .collect();
+    let v = DVec3::from_array(std::array::from_fn(|k| {
+        b.f64(GRID_OFF_MAP + MAP_OFF_VECD + 8 * k)
+            .unwrap_or(f64::NAN)
+    }));
+    let scale = DVec3::new(m[0], m[4], m[8]);
+    if !scale.is_finite() || !v.is_finite() || scale.cmple(DVec3::ZERO).any() {
+        return Err(NanoVdbError::Map(format!(
+            "has scale {scale} and translation {v}; both must be finite and the scale positive"
+        )));
+    }
+    let largest = scale.max_element();
+    for (k, &e) in m.iter().enumerate() {
+        if k % 4 != 0 && e.abs() > 1e-9 * largest {
+            return Err(NanoVdbError::Map(format!(
+                "rotates or shears (entry {} of its matrix is {e}); caveray places grids axis-aligned: resample the grid, or turn the volume with an instance transform",
+                k
+            )));
+        }
+    }
+    Ok((v, scale))
+}
+
+fn mix(a: f32, b: f32, t: f32) -> f32 {
+    a + (b - a) * t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_floats_convert_as_ieee_says() {
+        assert_eq!(half_to_f32(0x3c00), 1.0);
+        assert_eq!(half_to_f32(0xc000), -2.0);
+        assert_eq!(half_to_f32(0x7bff), 65504.0);
+        assert_eq!(half_to_f32(0x0001), 5.960_464_5e-8);
+        assert_eq!(half_to_f32(0x8000), -0.0);
+        assert!(half_to_f32(0x7e00).is_nan());
+        assert_eq!(half_to_f32(0x7c00), f32::INFINITY);
+        assert_eq!(half_to_f32(0x3555), 0.333_251_95);
+    }
+
+    #[test]
+    fn a_blob_without_the_magic_number_is_refused_by_name() {
+        let mut blob = vec![0u8; 2048];
+        blob[..8].copy_from_slice(b"OpenVDB!");
+        let e = NanoVdbGrid::new(&blob, Filter::Linear).unwrap_err();
+        assert!(e.to_string().contains("magic number"), "{e}");
+        let e = NanoVdbGrid::new(&blob[..4], Filter::Linear).unwrap_err();
+        assert!(e.to_string().contains("the blob is 4 bytes"), "{e}");
+    }
+
+    #[test]
+    fn another_major_version_is_refused_with_its_number() {
+        let mut blob = vec![0u8; 2048];
+        blob[..8].copy_from_slice(&NANOVDB_MAGIC.to_le_bytes());
+        blob[16..20].copy_from_slice(&((31u32 << 21) | (2 << 10) | 1).to_le_bytes());
+        let e = NanoVdbGrid::new(&blob, Filter::Linear).unwrap_err();
+        assert_eq!(
+            e,
+            NanoVdbError::Version {
+                major: 31,
+                minor: 2,
+                patch: 1
+            }
+        );
+    }
+}
