@@ -1,4 +1,5 @@
-//! Where volumes and transfer functions come from: raw, NIfTI and NRRD files, the
+//! Where volumes and transfer functions come from: raw, NIfTI and NRRD files,
+//! NanoVDB and FLASH files, the
 //! `volumes.toml` manifest, procedural test volumes, presets and ParaView
 //! color maps; triangle meshes of volumes' isosurfaces; and the formats with headers that are recognised, to be
 //! refused by name rather than read as raw.
@@ -13,6 +14,7 @@ mod mesh;
 mod metaimage;
 mod nifti;
 mod nrrd;
+mod nvdb;
 mod open;
 mod orientation;
 mod paraview;
@@ -37,6 +39,7 @@ pub use mesh::{isosurface_mesh, Mesh, MeshError};
 pub use metaimage::{load_metaimage, parse_metaimage};
 pub use nifti::{load_nifti, parse_nifti, parse_nifti_header, Nifti, NiftiHeader};
 pub use nrrd::{load_nrrd, parse_nrrd, parse_nrrd_header, Nrrd, NrrdHeader};
+pub use nvdb::{is_nvdb, load_nvdb, nvdb_entries, parse_nvdb, NvdbEntry, NvdbFile};
 pub use open::load_volume_file;
 pub use orientation::{known_orientation, Orientation};
 pub use paraview::{load_paraview, parse_paraview};

@@ -5,13 +5,14 @@ use crate::scene::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 
 /// Built-in transfer functions over the normalised value range [0, 1]
 /// (callers usually stretch them over the data's range).
-pub const PRESETS: [&str; 6] = [
+pub const PRESETS: [&str; 7] = [
     "phantom",
     "ct-skin-bone",
     "ct-bone",
     "mri",
     "grey",
     "shells",
+    "level-set",
 ];
 
 /// Control points (value, r, g, b, opacity), linearly interpolated.
@@ -60,6 +61,16 @@ const SHELLS: Points = &[
     (1.0, 1.0, 0.7, 0.2, 0.5),
 ];
 const GREY: Points = &[(0.0, 0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0, 1.0)];
+// A signed distance over a range symmetric about 0 (a level set's narrow
+// band): the inside a dim translucent blue, the surface (0.5) bright and
+// opaque, the outside clear.
+const LEVEL_SET: Points = &[
+    (0.0, 0.2, 0.35, 0.7, 0.08),
+    (0.4, 0.3, 0.5, 0.9, 0.2),
+    (0.5, 1.0, 0.85, 0.5, 0.9),
+    (0.6, 0.9, 0.6, 0.3, 0.0),
+    (1.0, 0.9, 0.6, 0.3, 0.0),
+];
 
 /// A built-in transfer function by name (see [`PRESETS`]).
 pub fn preset(name: &str) -> Result<TransferFunction, DataError> {
@@ -70,6 +81,7 @@ pub fn preset(name: &str) -> Result<TransferFunction, DataError> {
         "mri" => MRI,
         "grey" | "gray" => GREY,
         "shells" => SHELLS,
+        "level-set" => LEVEL_SET,
         other => {
             return Err(DataError::UnknownPreset {
                 name: other.to_string(),

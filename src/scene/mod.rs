@@ -23,8 +23,8 @@ pub use composition::{PlacedVolume, Scene, SceneError, MAX_VOLUMES};
 pub use field::SpatialField;
 pub use nanovdb::{
     half_to_f32, NanoVdbError, NanoVdbGrid, RootTile, VdbValues, LEAF_OFF_TABLE,
-    LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, NANOVDB_MAGIC, NANOVDB_MAJOR, UPPER_OFF_CHILD_MASK,
-    UPPER_OFF_TABLE,
+    LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, NANOVDB_MAGIC, NANOVDB_MAGIC_FILE, NANOVDB_MAGIC_GRID,
+    NANOVDB_MAJOR, UPPER_OFF_CHILD_MASK, UPPER_OFF_TABLE, VDB_TYPE_NAMES,
 };
 pub use placement::{transformed_box, ObjectIds};
 pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};

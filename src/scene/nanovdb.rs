@@ -31,9 +31,13 @@ use thiserror::Error;
 
 use super::volume::Filter;
 
-/// "NanoVDB0", little-endian: the first eight bytes of every grid (and
-/// of a 32.x file's segments).
+/// "NanoVDB0", little-endian: the first eight bytes of a grid (and of a
+/// file's segments) up to NanoVDB 32.5.
 pub const NANOVDB_MAGIC: u64 = 0x3042_4456_6f6e_614e;
+/// "NanoVDB1": a grid's first eight bytes from NanoVDB 32.6 on.
+pub const NANOVDB_MAGIC_GRID: u64 = 0x3142_4456_6f6e_614e;
+/// "NanoVDB2": a file's segments' from NanoVDB 32.6 on.
+pub const NANOVDB_MAGIC_FILE: u64 = 0x3242_4456_6f6e_614e;
 /// The layout version read: NanoVDB keeps its ABI within a major version.
 pub const NANOVDB_MAJOR: u32 = 32;
 
@@ -69,11 +73,36 @@ const MAX_LATTICE_VOXELS: u64 = 1 << 32;
 const MAX_INDEX: i32 = 1 << 24;
 
 /// NanoVDB's grid type codes, by name, for errors.
-const TYPE_NAMES: [&str; 20] = [
-    "Unknown", "Float", "Double", "Int16", "Int32", "Int64", "Vec3f", "Vec3d", "Mask", "Half",
-    "UInt32", "Boolean", "RGBA8", "Fp4", "Fp8", "Fp16", "FpN", "Vec4f", "Vec4d", "Index",
+pub const VDB_TYPE_NAMES: [&str; 27] = [
+    "Unknown",
+    "Float",
+    "Double",
+    "Int16",
+    "Int32",
+    "Int64",
+    "Vec3f",
+    "Vec3d",
+    "Mask",
+    "Half",
+    "UInt32",
+    "Boolean",
+    "RGBA8",
+    "Fp4",
+    "Fp8",
+    "Fp16",
+    "FpN",
+    "Vec4f",
+    "Vec4d",
+    "Index",
+    "OnIndex",
+    "IndexMask",
+    "OnIndexMask",
+    "PointIndex",
+    "Vec3u8",
+    "Vec3u16",
+    "UInt8",
 ];
-const CLASS_NAMES: [&str; 9] = [
+const CLASS_NAMES: [&str; 10] = [
     "Unknown",
     "LevelSet",
     "FogVolume",
@@ -83,6 +112,7 @@ const CLASS_NAMES: [&str; 9] = [
     "Topology",
     "VoxelVolume",
     "IndexGrid",
+    "TensorGrid",
 ];
 
 /// How a grid's leaves store their values (the scalar grid types read).
@@ -107,7 +137,7 @@ impl VdbValues {
             15 => VdbValues::Fp16,
             other => {
                 return Err(NanoVdbError::GridType {
-                    name: TYPE_NAMES
+                    name: VDB_TYPE_NAMES
                         .get(other as usize)
                         .map(|n| n.to_string())
                         .unwrap_or_else(|| format!("type {other}")),
@@ -162,7 +192,7 @@ impl VdbValues {
 pub enum NanoVdbError {
     #[error("the blob is {len} bytes; a NanoVDB grid is at least {needed}")]
     TooShort { len: u64, needed: u64 },
-    #[error("the blob does not start with NanoVDB's magic number 0x304244566f6e614e (\"NanoVDB0\") but with {found:#018x}")]
+    #[error("the blob does not start with a NanoVDB grid's magic number (\"NanoVDB0\" or \"NanoVDB1\") but with {found:#018x}")]
     Magic { found: u64 },
     #[error("the grid is NanoVDB {major}.{minor}.{patch}; caveray reads the version {NANOVDB_MAJOR} layout")]
     Version { major: u32, minor: u32, patch: u32 },
@@ -304,7 +334,7 @@ impl NanoVdbGrid {
             needed: (GRID_SIZE + TREE_SIZE + ROOT_SIZE) as u64,
         };
         let magic = b.u64(0).ok_or_else(short)?;
-        if magic != NANOVDB_MAGIC {
+        if magic != NANOVDB_MAGIC && magic != NANOVDB_MAGIC_GRID {
             return Err(NanoVdbError::Magic { found: magic });
         }
         let version = b.u32(16).ok_or_else(short)?;
@@ -430,12 +460,6 @@ impl NanoVdbGrid {
         let mut seen_upper = vec![false; sections.upper.1];
         let mut seen_lower = vec![false; sections.lower.1];
         let mut seen_leaf = vec![false; sections.leaf.1];
-        let mut range = (background, background);
-        let mut widen = |v: f32| {
-            if v.is_finite() {
-                range = (range.0.min(v), range.1.max(v));
-            }
-        };
         let mut tiles = Vec::with_capacity(table as usize);
         let mut uppers = Vec::new();
         for t in 0..table as usize {
@@ -447,7 +471,6 @@ impl NanoVdbGrid {
             let _state = b.u32(at + ROOT_TILE_OFF_STATE);
             let tile_value = value(at + ROOT_TILE_OFF_VALUE);
             let child = if child == 0 {
-                widen(tile_value);
                 None
             } else {
                 let what = format!("root tile {t}");
@@ -487,7 +510,6 @@ impl NanoVdbGrid {
                 ("upper", "lower"),
                 &mut seen_lower,
                 &mut lowers,
-                |at| widen(tile_of(&words, values, at)),
             )?;
         }
         let mut leaves = Vec::new();
@@ -499,7 +521,6 @@ impl NanoVdbGrid {
                 ("lower", "leaf"),
                 &mut seen_leaf,
                 &mut leaves,
-                |at| widen(tile_of(&words, values, at)),
             )?;
         }
         let mut grid = Self {
@@ -521,16 +542,9 @@ impl NanoVdbGrid {
                 lowers.len() as u32,
                 leaves.len() as u32,
             ],
-            value_range: range,
+            value_range: (0.0, 0.0),
         };
-        for &leaf in &leaves {
-            for n in 0..512 {
-                let v = grid.leaf_value(leaf, n);
-                if v.is_finite() {
-                    grid.value_range = (grid.value_range.0.min(v), grid.value_range.1.max(v));
-                }
-            }
-        }
+        grid.value_range = grid.window_range();
         Ok(grid)
     }
 
@@ -673,10 +687,12 @@ impl NanoVdbGrid {
             ));
         }
         let base = self.window.0;
-        Ok(Self {
+        let mut part = Self {
             window: (base + lo.as_ivec3(), base + hi.as_ivec3()),
             ..self.clone()
-        })
+        };
+        part.value_range = part.window_range();
+        Ok(part)
     }
 
     /// Boxes of lattice vertices (window coordinates, inclusive, possibly
@@ -751,6 +767,21 @@ impl NanoVdbGrid {
             }
         }
         out
+    }
+
+    /// The range of the values a sample in the window can read (finite
+    /// ones): of the leaves and tiles reaching it, and of the background
+    /// where no root tile is.
+    fn window_range(&self) -> (f32, f32) {
+        let (lo, hi) = self.value_boxes().iter().fold(
+            (f32::INFINITY, f32::NEG_INFINITY),
+            |(lo, hi), (_, (a, b))| (lo.min(*a), hi.max(*b)),
+        );
+        if lo > hi {
+            (self.background, self.background)
+        } else {
+            (lo, hi)
+        }
     }
 
     pub fn words(&self) -> &[u32] {
@@ -830,8 +861,7 @@ fn tile_of(words: &[u32], values: VdbValues, at: usize) -> f32 {
 
 /// Checks the children of the internal node `node` (its child mask and
 /// table at those offsets, `entries` entries): each must be a node of
-/// `below`, reached once; each is pushed to `out`, and each tile's
-/// entry offset is handed to `tile`.
+/// `below`, reached once; each is pushed to `out`.
 fn walk_node(
     words: &[u32],
     (node, mask, table, entries): (usize, usize, usize, usize),
@@ -839,12 +869,10 @@ fn walk_node(
     (level, child_level): (&str, &str),
     seen: &mut [bool],
     out: &mut Vec<usize>,
-    mut tile: impl FnMut(usize),
 ) -> Result<(), NanoVdbError> {
     for n in 0..entries {
         let at = node + table + 8 * n;
         if words[(node + mask) / 4 + n / 32] >> (n % 32) & 1 == 0 {
-            tile(at);
             continue;
         }
         let offset = u64::from(words[at / 4]) | u64::from(words[at / 4 + 1]) << 32;

@@ -7,6 +7,7 @@ mod dicom;
 mod fixtures;
 mod flash;
 mod metaimage;
+mod nanovdb;
 mod nifti;
 mod nrrd;
 mod volumes;

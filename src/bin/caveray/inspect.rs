@@ -198,6 +198,9 @@ fn inspect_volume(path: &Path, json: bool) -> Result<(), Failure> {
     if crate::scene::is_hdf5_file(path) {
         return inspect_flash(path, json);
     }
+    if crate::scene::is_nvdb_file(path) {
+        return inspect_nvdb(path, json);
+    }
     if !VolumeFormat::of(path).is_some_and(|f| f.readable()) {
         return Err(Failure::Usage(format!(
             "{}: caveray inspect reads volume files with a header: NIfTI (.nii, .nii.gz, \
@@ -299,6 +302,71 @@ fn inspect_mesh(path: &Path, json: bool) -> Result<(), Failure> {
     println!("  bounds        {lo} to {hi}");
     println!("  arrays        {}", arrays.join(", "));
     println!("  value range   {vlo} to {vhi} ({})", file.array);
+    Ok(())
+}
+
+/// What a NanoVDB file holds: its grids, and of the first its type,
+/// class, active voxels, boxes and values.
+fn inspect_nvdb(path: &Path, json: bool) -> Result<(), Failure> {
+    let file = anari_library_caveray::data::load_nvdb(path, None)
+        .map_err(|e| Failure::Usage(e.to_string()))?;
+    let g = &file.grid;
+    let (ilo, ihi) = g.active_box();
+    let (wlo, whi) = g.bounds();
+    let (vlo, vhi) = g.value_range();
+    let [upper, lower, leaves] = g.node_counts();
+    if json {
+        let grids: Vec<serde_json::Value> = file
+            .entries
+            .iter()
+            .map(|e| {
+                serde_json::json!({
+                    "name": e.name,
+                    "type": e.grid_type,
+                    "active_voxels": e.active_voxels,
+                })
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "file": path.display().to_string(),
+            "format": "NanoVDB",
+            "grids": grids,
+            "grid": file.name,
+            "type": g.values().name(),
+            "class": g.class_name(),
+            "active_voxels": g.active_voxels(),
+            "active_box": [ilo.to_array(), ihi.to_array()],
+            "bounds": [wlo.to_array(), whi.to_array()],
+            "voxel_size": g.voxel_size().to_array(),
+            "background": g.background(),
+            "value_range": [vlo, vhi],
+            "nodes": {"upper": upper, "lower": lower, "leaves": leaves},
+            "bytes": g.bytes(),
+        });
+        println!("{doc:#}");
+        return Ok(());
+    }
+    println!("{}: NanoVDB", path.display());
+    for e in &file.entries {
+        println!(
+            "  grid          '{}': {}, {} active voxels",
+            e.name, e.grid_type, e.active_voxels
+        );
+    }
+    println!("  first grid    '{}'", file.name);
+    println!(
+        "  values        {} ({}), background {}",
+        g.values().name(),
+        g.class_name(),
+        g.background()
+    );
+    println!("  active voxels {}", g.active_voxels());
+    println!("  active box    voxels {ilo} to {ihi}");
+    println!("  bounds        {wlo} to {whi}");
+    println!("  voxel size    {}", g.voxel_size());
+    println!("  nodes         {upper} upper, {lower} lower, {leaves} leaves");
+    println!("  value range   {vlo} to {vhi}");
+    println!("  held          {} bytes", g.bytes());
     Ok(())
 }
 

@@ -37,6 +37,9 @@ pub struct VolumeArgs {
     /// first point array, else its first cell array).
     #[arg(long)]
     array: Option<String>,
+    /// The grid of a NanoVDB file (.nvdb) to render, by name (default: its first).
+    #[arg(long)]
+    grid: Option<String>,
     /// Raw file dimensions X,Y,Z.
     #[arg(long, value_parser = dims)]
     dims: Option<UVec3>,
@@ -51,7 +54,7 @@ pub struct VolumeArgs {
     #[arg(long)]
     manifest: Option<PathBuf>,
     /// Transfer function: a preset (phantom, ct-skin-bone, ct-bone, mri,
-    /// grey, shells) or a ParaView color map exported as JSON.
+    /// grey, shells, level-set) or a ParaView color map exported as JSON.
     #[arg(long)]
     tf: Option<String>,
     #[command(flatten)]
@@ -234,6 +237,11 @@ impl VolumeArgs {
                 "--array names an array of a VTK unstructured grid or a variable of a FLASH file; '{spec}' is neither"
             )));
         }
+        if self.grid.is_some() && !is_nvdb_file(Path::new(spec)) {
+            return Err(Failure::Usage(format!(
+                "--grid names a grid of a NanoVDB file; '{spec}' is not one"
+            )));
+        }
         let (name, volume, default_tf, orientation) = if let Some((name, volume)) =
             procedural(spec)?
         {
@@ -243,6 +251,29 @@ impl VolumeArgs {
                 "phantom"
             };
             (name, volume, tf, Orientation::UNKNOWN)
+        } else if is_nvdb_file(Path::new(spec)) {
+            if self.has_mesh() {
+                return Err(Failure::Usage(
+                    "--mesh draws a structured grid's isosurface; a NanoVDB grid has none here"
+                        .into(),
+                ));
+            }
+            let file =
+                anari_library_caveray::data::load_nvdb(Path::new(spec), self.grid.as_deref())
+                    .map_err(|e| usage(&e))?;
+            // Placed by its own index-to-world map.
+            index_to_file = Some(glam::Mat4::IDENTITY);
+            let tf = if file.grid.class_name() == "LevelSet" {
+                "level-set"
+            } else {
+                "shells"
+            };
+            (
+                format!("{}:{}", file_stem(spec), file.name),
+                SpatialField::from(file.grid),
+                tf,
+                Orientation::UNKNOWN,
+            )
         } else if is_hdf5_file(Path::new(spec)) {
             if self.has_mesh() {
                 return Err(Failure::Usage(
@@ -575,6 +606,16 @@ fn procedural(spec: &str) -> Result<Option<(String, SpatialField)>, Failure> {
 }
 
 /// Whether `path` is an HDF5 file (FLASH's), by its first bytes.
+/// Whether `path` is a NanoVDB file (or raw grid buffers).
+pub fn is_nvdb_file(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && anari_library_caveray::data::is_nvdb(&head)
+}
+
 pub fn is_hdf5_file(path: &Path) -> bool {
     use std::io::Read;
     let mut head = [0u8; 8];
