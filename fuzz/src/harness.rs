@@ -1178,3 +1178,79 @@ pub fn amr(data: &[u8]) {
         drop(kept);
     }
 }
+
+/// The NanoVDB grid the `nanovdb` target starts from: the smallest one
+/// with a node of every kind, as the NanoVDB library wrote it
+/// (`tests/writers/nanovdb_grids.cpp DIR seed`), gzipped.
+fn nanovdb_seed() -> Vec<u8> {
+    use std::io::Read;
+    let gz: &[u8] = include_bytes!("../seeds/nanovdb.blob.gz");
+    let mut blob = Vec::new();
+    flate2::read::GzDecoder::new(gz)
+        .read_to_end(&mut blob)
+        .expect("the committed seed unpacks");
+    blob
+}
+
+/// A `nanovdb` field: the first byte picks the filter and whether the
+/// rest is the blob itself or patches to the seed grid (each an offset
+/// (u32), a length (1 to 8) and that many bytes; then perhaps a cut),
+/// so that inputs reach past the header checks into the tree's walk and
+/// the samples.
+pub fn nanovdb(data: &[u8]) {
+    let mut input = Input(data);
+    let mode = input.byte();
+    let blob = if mode & 1 == 0 {
+        input.take(usize::MAX)
+    } else {
+        let mut blob = nanovdb_seed();
+        while !input.done() {
+            let at = u32::from_le_bytes([input.byte(), input.byte(), input.byte(), input.byte()]);
+            let len = usize::from(input.byte() % 8) + 1;
+            let at = at as usize % blob.len();
+            for (k, b) in input.take(len).into_iter().enumerate() {
+                if let Some(slot) = blob.get_mut(at + k) {
+                    *slot = b;
+                }
+            }
+        }
+        if mode & 8 != 0 {
+            let keep = blob.len() * usize::from(mode >> 4) / 16;
+            blob.truncate(keep);
+        }
+        blob
+    };
+    let filter =
+        [None, Some(c"linear"), Some(c"nearest"), Some(c"cubic")][usize::from(mode >> 1 & 3)];
+    let Some(dev) = cpu_device() else {
+        return;
+    };
+    // SAFETY: the array's memory (`blob`) outlives the field's commit,
+    // where it is read; every handle is released.
+    unsafe {
+        let field = anariNewSpatialField(dev, c"nanovdb".as_ptr());
+        let array = array1d(dev, &blob, DataType::UINT8, blob.len());
+        anariSetParameter(
+            dev,
+            field,
+            c"data".as_ptr(),
+            DataType::ARRAY1D as i32,
+            (&array as *const sys::ANARIArray1D).cast(),
+        );
+        if let Some(filter) = filter {
+            anariSetParameter(
+                dev,
+                field,
+                c"filter".as_ptr(),
+                DataType::STRING as i32,
+                filter.as_ptr().cast(),
+            );
+        }
+        anariCommitParameters(dev, field);
+        render_small(dev, field);
+        anariRelease(dev, array);
+        anariRelease(dev, field);
+        anariRelease(dev, dev);
+    }
+    drop(blob);
+}

@@ -677,8 +677,9 @@ impl NanoVdbGrid {
         )
     }
 
-    /// The lattice restricted to its vertices `lo..=hi`: the same grid,
-    /// sampled there as in the whole.
+    /// The lattice restricted to its vertices `lo..=hi`: a grid of the
+    /// nodes a sample there can read (the others dropped, their parents'
+    /// entries made tiles), sampled there as the whole is.
     pub fn window_of(&self, lo: UVec3, hi: UVec3) -> Result<Self, String> {
         let dims = self.lattice().0;
         if lo.cmpgt(hi).any() || hi.cmpge(dims).any() {
@@ -687,12 +688,158 @@ impl NanoVdbGrid {
             ));
         }
         let base = self.window.0;
-        let mut part = Self {
-            window: (base + lo.as_ivec3(), base + hi.as_ivec3()),
-            ..self.clone()
-        };
+        let window = (base + lo.as_ivec3(), base + hi.as_ivec3());
+        // A sample reads the voxels around it: one beyond the window.
+        let words = self
+            .pruned((window.0 - IVec3::ONE, window.1 + IVec3::ONE))
+            .map_err(|e| e.to_string())?;
+        let mut part =
+            Self::new(bytemuck::cast_slice(&words), self.filter).map_err(|e| e.to_string())?;
+        part.window = window;
         part.value_range = part.window_range();
         Ok(part)
+    }
+
+    /// The grid's words with only the nodes that reach the voxels
+    /// `reach` (inclusive): the header, tree and root as they are, then
+    /// the upper nodes, lower nodes and leaves kept, each parent's child
+    /// offsets rewritten and its dropped children's entries made tiles.
+    fn pruned(&self, reach: (IVec3, IVec3)) -> Result<Vec<u32>, NanoVdbError> {
+        let meets = |lo: IVec3, span: i32| {
+            (lo.cmple(reach.1) & (lo + IVec3::splat(span - 1)).cmpge(reach.0)).all()
+        };
+        let w = &self.words;
+        // Kept nodes: (old byte offset, index of the entry or tile naming
+        // it, index of the kept parent).
+        let mut uppers = Vec::new();
+        for (i, t) in self.tiles.iter().enumerate() {
+            if let Some(u) = t.child.filter(|_| meets(t.origin, 4096)) {
+                uppers.push((u as usize, i, 0usize, t.origin));
+            }
+        }
+        let mut lowers = Vec::new();
+        for (k, &(upper, _, _, origin)) in uppers.iter().enumerate() {
+            for n in 0..32 * 32 * 32usize {
+                let o = origin
+                    + IVec3::new((n >> 10) as i32, (n >> 5 & 31) as i32, (n & 31) as i32) * 128;
+                if let Ok(lower) = self.child(upper, UPPER_OFF_CHILD_MASK, UPPER_OFF_TABLE, n) {
+                    if meets(o, 128) {
+                        lowers.push((lower, n, k, o));
+                    }
+                }
+            }
+        }
+        let mut leaves = Vec::new();
+        for (k, &(lower, _, _, origin)) in lowers.iter().enumerate() {
+            for m in 0..16 * 16 * 16usize {
+                let o =
+                    origin + IVec3::new((m >> 8) as i32, (m >> 4 & 15) as i32, (m & 15) as i32) * 8;
+                if let Ok(leaf) = self.child(lower, LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, m) {
+                    if meets(o, 8) {
+                        leaves.push((leaf, m, k, o));
+                    }
+                }
+            }
+        }
+        let head = GRID_SIZE + TREE_SIZE;
+        let root_size = ROOT_SIZE + ROOT_TILE_SIZE * self.tiles.len();
+        let leaf_size = self.values.leaf_size();
+        let upper_at = head + root_size;
+        let lower_at = upper_at + uppers.len() * UPPER_SIZE;
+        let leaf_at = lower_at + lowers.len() * LOWER_SIZE;
+        let size = leaf_at + leaves.len() * leaf_size;
+        let mut out = Vec::new();
+        out.try_reserve_exact(size / 4)
+            .map_err(|_| NanoVdbError::Allocation(size as u64))?;
+        out.extend_from_slice(&w[..head / 4]);
+        out.extend_from_slice(&w[self.root / 4..(self.root + root_size) / 4]);
+        let copy = |out: &mut Vec<u32>, at: usize, len: usize| {
+            out.extend_from_slice(&w[at / 4..(at + len) / 4])
+        };
+        for &(u, ..) in &uppers {
+            copy(&mut out, u, UPPER_SIZE);
+        }
+        for &(l, ..) in &lowers {
+            copy(&mut out, l, LOWER_SIZE);
+        }
+        for &(f, ..) in &leaves {
+            copy(&mut out, f, leaf_size);
+        }
+        let put64 = |out: &mut Vec<u32>, at: usize, v: u64| {
+            out[at / 4] = v as u32;
+            out[at / 4 + 1] = (v >> 32) as u32;
+        };
+        put64(&mut out, 32, size as u64);
+        let tree = GRID_SIZE;
+        put64(&mut out, tree, (leaf_at - tree) as u64);
+        put64(&mut out, tree + 8, (lower_at - tree) as u64);
+        put64(&mut out, tree + 16, (upper_at - tree) as u64);
+        put64(&mut out, tree + 24, (head - tree) as u64);
+        out[(tree + 32) / 4] = leaves.len() as u32;
+        out[(tree + 36) / 4] = lowers.len() as u32;
+        out[(tree + 40) / 4] = uppers.len() as u32;
+        // Every child dropped first, then the kept ones named again.
+        for (i, t) in self.tiles.iter().enumerate() {
+            if t.child.is_some() {
+                put64(
+                    &mut out,
+                    head + ROOT_SIZE + ROOT_TILE_SIZE * i + ROOT_TILE_OFF_CHILD,
+                    0,
+                );
+            }
+        }
+        for k in 0..uppers.len() {
+            drop_children(
+                &mut out,
+                upper_at + k * UPPER_SIZE,
+                UPPER_OFF_CHILD_MASK,
+                UPPER_OFF_TABLE,
+                32 * 32 * 32,
+            );
+        }
+        for k in 0..lowers.len() {
+            drop_children(
+                &mut out,
+                lower_at + k * LOWER_SIZE,
+                LOWER_OFF_CHILD_MASK,
+                LOWER_OFF_TABLE,
+                16 * 16 * 16,
+            );
+        }
+        for (k, &(_, i, ..)) in uppers.iter().enumerate() {
+            let tile = head + ROOT_SIZE + ROOT_TILE_SIZE * i;
+            put64(
+                &mut out,
+                tile + ROOT_TILE_OFF_CHILD,
+                (upper_at + k * UPPER_SIZE - head) as u64,
+            );
+        }
+        let relink = |out: &mut Vec<u32>,
+                      (node, mask, table): (usize, usize, usize),
+                      n: usize,
+                      child: usize| {
+            out[(node + mask) / 4 + n / 32] |= 1 << (n % 32);
+            put64(out, node + table + 8 * n, (child - node) as u64);
+        };
+        for (k, &(_, n, parent, _)) in lowers.iter().enumerate() {
+            let node = upper_at + parent * UPPER_SIZE;
+            relink(
+                &mut out,
+                (node, UPPER_OFF_CHILD_MASK, UPPER_OFF_TABLE),
+                n,
+                lower_at + k * LOWER_SIZE,
+            );
+        }
+        for (k, &(_, m, parent, _)) in leaves.iter().enumerate() {
+            let node = lower_at + parent * LOWER_SIZE;
+            relink(
+                &mut out,
+                (node, LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE),
+                m,
+                leaf_at + k * leaf_size,
+            );
+        }
+        Ok(out)
     }
 
     /// Boxes of lattice vertices (window coordinates, inclusive, possibly
@@ -847,6 +994,19 @@ impl NanoVdbGrid {
     /// Bytes held: the grid as it came.
     pub fn bytes(&self) -> u64 {
         4 * self.words.len() as u64
+    }
+}
+
+/// Makes every child entry of the internal node at byte `node` of `out`
+/// a tile (of 0: a sample never reads it, or the entry is named again).
+fn drop_children(out: &mut [u32], node: usize, mask: usize, table: usize, entries: usize) {
+    for n in 0..entries {
+        let word = &mut out[(node + mask) / 4 + n / 32];
+        if *word >> (n % 32) & 1 == 1 {
+            *word &= !(1 << (n % 32));
+            out[(node + table + 8 * n) / 4] = 0;
+            out[(node + table + 8 * n) / 4 + 1] = 0;
+        }
     }
 }
 

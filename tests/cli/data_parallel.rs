@@ -64,12 +64,16 @@ fn likeness(one: &Path, parts: &Path) -> (f64, u8) {
 }
 
 fn compare(backend: &str, parts: &str, counts: [u64; 3]) {
-    compare_volume("phantom:48", 47, backend, parts, counts);
+    compare_volume("phantom:48", [47; 3], backend, parts, counts);
 }
 
 /// `volume`, of `cells` lattice cells a side, whole and in `parts`.
-fn compare_volume(volume: &str, cells: u64, backend: &str, parts: &str, counts: [u64; 3]) {
-    let dir = scratch(&format!("{backend}-{parts}-{}", volume.replace(':', "_")));
+fn compare_volume(volume: &str, cells: [u64; 3], backend: &str, parts: &str, counts: [u64; 3]) {
+    let name = std::path::Path::new(volume)
+        .file_name()
+        .unwrap()
+        .to_string_lossy();
+    let dir = scratch(&format!("{backend}-{parts}-{}", name.replace(':', "_")));
     let (one, split) = (dir.join("one"), dir.join("split"));
     render(&one, volume, &["--backend", backend]);
     let report = render(&split, volume, &["--backend", backend, "--parts", parts]);
@@ -101,7 +105,7 @@ fn compare_volume(volume: &str, cells: u64, backend: &str, parts: &str, counts: 
                 .product::<u64>()
         })
         .sum();
-    assert_eq!(owned, cells * cells * cells);
+    assert_eq!(owned, cells.iter().product::<u64>());
     // Each brick holds what it stores: a part of the whole, not all of it.
     let held: Vec<u64> = dp["bricks"]
         .as_array()
@@ -146,14 +150,34 @@ fn bricks_side_by_side_and_one_behind_another_composite_to_the_whole_on_the_cpu(
 /// reach its stored box, and takes only the samples it owns.
 #[test]
 fn a_meshs_bricks_composite_to_the_whole_mesh() {
-    compare_volume("tets:24", 23, "cpu", "4", [1, 2, 2]);
+    compare_volume("tets:24", [23; 3], "cpu", "4", [1, 2, 2]);
 }
 
 /// An AMR field is cut over its lattice too: each brick holds the cells
 /// whose tents reach its stored box.
 #[test]
 fn an_amr_fields_bricks_composite_to_the_whole_field() {
-    compare_volume("amr:32", 32, "cpu", "4", [1, 2, 2]);
+    compare_volume("amr:32", [32; 3], "cpu", "4", [1, 2, 2]);
+}
+
+/// A NanoVDB grid is cut over its voxels: each brick samples the tree
+/// within its stored box.
+#[test]
+fn a_nanovdb_grids_bricks_composite_to_the_whole_grid() {
+    let Some(written) = crate::common::nanovdb::grids() else {
+        return;
+    };
+    let grid = &written.grids["fog"];
+    let cells: [u64; 3] = std::array::from_fn(|a| {
+        (grid["hi"][a].as_i64().unwrap() - grid["lo"][a].as_i64().unwrap()) as u64
+    });
+    compare_volume(
+        written.file().to_str().unwrap(),
+        cells,
+        "cpu",
+        "4",
+        [2, 1, 2],
+    );
 }
 
 #[test]

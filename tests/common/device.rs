@@ -100,6 +100,25 @@ impl Host {
         f
     }
 
+    /// A `nanovdb` field of the grid `blob`, with `filter` if given.
+    pub fn nanovdb_field(&mut self, blob: &[u8], filter: Option<&str>) -> u64 {
+        let data = self.array(
+            DataType::ARRAY1D,
+            DataType::UINT8,
+            [blob.len() as u64, 1, 1],
+            blob,
+        );
+        let f = self.d.new_object(DataType::SPATIAL_FIELD, "nanovdb");
+        self.set_object(f, "data", DataType::ARRAY1D, data);
+        if let Some(filter) = filter {
+            self.d
+                .set_param(Subject::Object(f), "filter", Input::String(filter.into()));
+        }
+        self.d.commit(Subject::Object(f));
+        self.d.release(data);
+        f
+    }
+
     /// `volume`'s FLOAT32 voxels as a `structuredRegular` field.
     pub fn structured_field(&mut self, volume: &StructuredVolume, filter: Option<&str>) -> u64 {
         let d = volume.dims();

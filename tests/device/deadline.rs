@@ -104,6 +104,16 @@ fn a_deadline_frame_of_an_amr_field_shows_its_own_image_then_a_warp() {
     background_then_own_image_then_warp(|h| h.amr_field(|x| x as f32 / 3.0, true));
 }
 
+/// The same of a NanoVDB grid (the camera inside its fog).
+#[test]
+fn a_deadline_frame_of_a_nanovdb_grid_shows_its_own_image_then_a_warp() {
+    let Some(written) = crate::common::nanovdb::grids() else {
+        return;
+    };
+    let blob = written.blob("fog8");
+    background_then_own_image_then_warp(|h| h.nanovdb_field(&blob, None));
+}
+
 fn background_then_own_image_then_warp(field: impl Fn(&mut Host) -> u64) {
     // The presenter speaks from its own thread, through the reporter.
     let heard = Arc::new(Mutex::new(Vec::<String>::new()));

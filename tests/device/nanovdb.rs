@@ -7,25 +7,8 @@
 
 use crate::common;
 
-use anari_library_caveray::device::{DataType, Input, Severity, Subject};
+use anari_library_caveray::device::{DataType, Severity, Subject};
 use common::device::{bytes, centre, Host};
-
-fn nanovdb_field(h: &mut Host, blob: &[u8], filter: Option<&str>) -> u64 {
-    let data = h.array(
-        DataType::ARRAY1D,
-        DataType::UINT8,
-        [blob.len() as u64, 1, 1],
-        blob,
-    );
-    let f = h.d.new_object(DataType::SPATIAL_FIELD, "nanovdb");
-    h.set_object(f, "data", DataType::ARRAY1D, data);
-    if let Some(filter) = filter {
-        h.d.set_param(Subject::Object(f), "filter", Input::String(filter.into()));
-    }
-    h.d.commit(Subject::Object(f));
-    h.d.release(data);
-    f
-}
 
 /// The field's image under a table over the fog's densities, the fog
 /// scaled to the host's view (1/6).
@@ -64,7 +47,7 @@ fn a_grid_renders_as_its_values_on_a_structured_grid() {
     };
     let mut h = Host::new();
     for (name, filter) in [("fog", None), ("fog16", None), ("fog", Some("nearest"))] {
-        let vdb = nanovdb_field(&mut h, &written.blob(name), filter);
+        let vdb = h.nanovdb_field(&written.blob(name), filter);
         let dense = written.dense(name);
         let grid = h.structured_field(&dense, filter);
         let (a, b) = (image(&mut h, vdb), image(&mut h, grid));
@@ -96,11 +79,11 @@ fn first_children(blob: &[u8]) -> (usize, usize, usize) {
 /// after checking that the device renders a good field next.
 fn refused(blob: &[u8], good: &[u8]) -> String {
     let mut h = Host::new();
-    let bad = nanovdb_field(&mut h, blob, None);
+    let bad = h.nanovdb_field(blob, None);
     let errors = h.errors();
     assert_eq!(errors.len(), 1, "{errors:?}");
     h.d.release(bad);
-    let field = nanovdb_field(&mut h, good, None);
+    let field = h.nanovdb_field(good, None);
     let pixels = image(&mut h, field);
     assert_ne!(centre(&pixels), [pixels[0], pixels[1], pixels[2]]);
     assert!(h.errors().is_empty());
@@ -174,7 +157,7 @@ fn cubic_reads_as_linear_and_says_so() {
         return;
     };
     let mut h = Host::new();
-    let cubic = nanovdb_field(&mut h, &written.blob("fog8"), Some("cubic"));
+    let cubic = h.nanovdb_field(&written.blob("fog8"), Some("cubic"));
     let warnings = h.messages(Severity::Warning);
     assert!(
         warnings
@@ -182,7 +165,7 @@ fn cubic_reads_as_linear_and_says_so() {
             .any(|w| w.contains("'cubic' is not implemented") && w.contains("linear")),
         "{warnings:?}"
     );
-    let linear = nanovdb_field(&mut h, &written.blob("fog8"), None);
+    let linear = h.nanovdb_field(&written.blob("fog8"), None);
     let (a, b) = (image(&mut h, cubic), image(&mut h, linear));
     common::device::same(&a, &b).unwrap();
 }

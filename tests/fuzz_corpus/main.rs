@@ -16,7 +16,7 @@ const LIMIT: Duration = Duration::from_secs(30);
 
 type Target = fn(&[u8]);
 
-const TARGETS: [(&str, Target); 13] = [
+const TARGETS: [(&str, Target); 14] = [
     ("rig", harness::rig),
     ("display", harness::display),
     ("paraview", harness::paraview),
@@ -30,6 +30,7 @@ const TARGETS: [(&str, Target); 13] = [
     ("vtk_mesh", harness::vtk_mesh),
     ("unstructured", harness::unstructured),
     ("amr", harness::amr),
+    ("nanovdb", harness::nanovdb),
 ];
 
 /// Every file under fuzz/<kind>/<target>/, sorted.

@@ -184,3 +184,42 @@ fn skipping_leaps_over_the_empty_tree_and_leaves_the_image_alone() {
         );
     }
 }
+
+/// A part of a grid (what a data-parallel brick holds) keeps only the
+/// nodes its samples read, and samples there as the whole does.
+#[test]
+fn a_part_of_a_grid_holds_its_nodes_and_samples_as_the_whole() {
+    let Some(written) = common::nanovdb::grids() else {
+        return;
+    };
+    let mut rng = common::Rng::new(7);
+    for name in ["fog_fine", "fog8", "torus"] {
+        let whole = NanoVdbGrid::new(&written.blob(name), Filter::Linear).unwrap();
+        let dims = whole.lattice().0;
+        let lo = dims / 4;
+        let hi = dims / 2;
+        let part = whole.window_of(lo, hi).unwrap();
+        assert_eq!(part.lattice().0, hi - lo + glam::UVec3::ONE);
+        let extent = (hi - lo).as_vec3();
+        let mut worst = 0.0f32;
+        for _ in 0..20_000 {
+            let g = Vec3::new(
+                rng.uniform(0.0, 1.0) as f32,
+                rng.uniform(0.0, 1.0) as f32,
+                rng.uniform(0.0, 1.0) as f32,
+            ) * extent;
+            worst = worst.max((part.sample(g) - whole.sample(g + lo.as_vec3())).abs());
+        }
+        eprintln!(
+            "{name}: part {lo}..{hi} holds {} of {} bytes, nodes {:?} of {:?}; largest difference {worst}",
+            part.bytes(),
+            whole.bytes(),
+            part.node_counts(),
+            whole.node_counts()
+        );
+        // The same voxels, the point rounded once more (lo added apart).
+        assert!(worst < 1e-5, "{name}: {worst}");
+        assert!(part.node_counts()[2] < whole.node_counts()[2], "{name}");
+        assert!(part.bytes() < whole.bytes(), "{name}");
+    }
+}

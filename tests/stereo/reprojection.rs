@@ -280,6 +280,44 @@ fn an_amr_field_reprojects_like_two_pass() {
     assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
 }
 
+/// A NanoVDB grid (the library's fog sphere, Fp8) re-projects as a grid
+/// does.
+#[test]
+fn a_nanovdb_grid_reprojects_like_two_pass() {
+    use anari_library_caveray::scene::{Filter, NanoVdbGrid, ObjectIds, PlacedVolume};
+    use std::sync::Arc;
+    let Some(written) = common::nanovdb::grids() else {
+        return;
+    };
+    let grid = NanoVdbGrid::new(&written.blob("fog8"), Filter::Linear).unwrap();
+    let scene = Scene::placed(vec![PlacedVolume {
+        volume: Arc::new(grid.into()),
+        transfer_function: Arc::new(preset("shells").unwrap()),
+        transform: glam::Mat4::from_scale(Vec3::splat(0.15)),
+        ids: ObjectIds::NONE,
+    }])
+    .unwrap();
+    let mut gpu = common::render::gpu();
+    let pair = hmd(96, 12.0, 0.4);
+    let settings = RenderSettings::default();
+    let desc = FrameDesc::new(pair.size);
+    let (left, right) = two_pass(&mut gpu, &scene, &pair, &settings, &desc);
+    let stereo = reprojected(
+        &mut gpu,
+        &scene,
+        &pair,
+        &settings,
+        &desc,
+        LayerFormat::Rgba16F,
+    );
+    assert_eq!(stereo.left.color, left.color, "the left eye");
+    let d = dssim(&stereo.right, &right).unwrap();
+    let unmoved = dssim(&left, &right).unwrap();
+    eprintln!("nanovdb: DSSIM {d:.4}, left image as the right one {unmoved:.4}");
+    assert!(d < 0.02, "DSSIM {d}");
+    assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
+}
+
 #[test]
 fn cave_front_wall_with_a_level_head_matches_two_pass() {
     let rig = common::rig("cologne_5wall");

@@ -305,6 +305,32 @@ fn an_amr_field_is_warped_by_every_mode_and_a_step_best_by_the_layers() {
     warps_beat_none_and_layers_the_step(&scene, &source);
 }
 
+/// A NanoVDB grid (the library's fog sphere) is captured and warped as a
+/// grid is.
+#[test]
+fn a_nanovdb_grid_is_warped_by_every_mode_and_a_step_best_by_the_layers() {
+    use anari_library_caveray::scene::{Filter, NanoVdbGrid, ObjectIds, PlacedVolume};
+    use std::sync::Arc;
+    let Some(written) = common::nanovdb::grids() else {
+        return;
+    };
+    let grid = NanoVdbGrid::new(&written.blob("fog"), Filter::Linear).unwrap();
+    let scene = Scene::placed(vec![PlacedVolume {
+        volume: Arc::new(grid.into()),
+        transfer_function: Arc::new(preset("shells").unwrap()),
+        transform: glam::Mat4::from_scale(glam::Vec3::splat(0.15)),
+        ids: ObjectIds::NONE,
+    }])
+    .unwrap();
+    let from = pinhole(DVec3::new(0.0, 0.0, 3.5), DVec3::ZERO);
+    let source = capture(&scene, &from, 4);
+    for mode in WarpMode::ALL {
+        let d = dssim(&shown(&source, &from, mode, &scene), &ideal(&scene, &from)).unwrap();
+        assert!(d < 2e-3, "{}: DSSIM {d} for the same view", mode.name());
+    }
+    warps_beat_none_and_layers_the_step(&scene, &source);
+}
+
 #[test]
 fn surfaces_in_the_volume_are_warped_by_every_mode_and_a_step_best_by_the_layers() {
     use anari_library_caveray::scene::{AlphaMode, ColorSource, OpacitySource, SurfaceMaterial};

@@ -5,6 +5,8 @@
 // (its buffer as it lies in memory), NAME.f32 (the library's own value of
 // every voxel of its index box, x fastest) and grids.nvdb (all of them,
 // NanoVDB's file format); stdout gets a JSON object describing each.
+// With `bench` or `seed` after the folder: the benchmarks' larger grid,
+// or the fuzz target's seed, alone.
 #include <nanovdb/util/IO.h>
 #include <nanovdb/util/Primitives.h>
 
@@ -45,6 +47,26 @@ static void describe(const nanovdb::GridHandle<nanovdb::HostBuffer> &handle, con
 
 int main(int argc, char **argv) {
   const std::string dir = argc > 1 ? argv[1] : ".";
+  // `DIR bench`: the benchmarks' grid alone, a fog sphere 240 voxels
+  // across in index space (voxel size 1, origin 0), as DIR/bench.blob.
+  // `DIR seed`: the fuzz target's seed, the smallest grid with every
+  // kind of node (one root tile, upper and lower node, a few leaves).
+  if (argc > 2 && std::string(argv[2]) == "seed") {
+    auto seed = nanovdb::createFogVolumeSphere<float, float>(
+        2.0f, nanovdb::Vec3f(4.0f), 1.0, 1.0, nanovdb::Vec3d(0.0), "seed");
+    std::printf("{\n");
+    describe<float>(seed, "seed", "Float", dir, true);
+    std::printf("}\n");
+    return 0;
+  }
+  if (argc > 2 && std::string(argv[2]) == "bench") {
+    auto bench = nanovdb::createFogVolumeSphere<float, float>(
+        120.0f, nanovdb::Vec3f(0.0f), 1.0, 3.0, nanovdb::Vec3d(0.0), "bench");
+    std::printf("{\n");
+    describe<float>(bench, "bench", "Float", dir, true);
+    std::printf("}\n");
+    return 0;
+  }
   using nanovdb::Fp16;
   using nanovdb::Fp4;
   using nanovdb::Fp8;
