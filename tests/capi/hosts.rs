@@ -104,13 +104,18 @@ fn misuse_is_clean_under_valgrind() {
 /// (under valgrind if asked): it must pass at least `checks` of them and
 /// fail none.
 fn checking_host(name: &str, checks: usize, valgrind: bool) {
+    checking_host_of(name, checks, valgrind, &[]);
+}
+
+/// `checking_host`, the program given `args`.
+fn checking_host_of(name: &str, checks: usize, valgrind: bool, args: &[&std::path::Path]) {
     let dir = scratch(&format!(
         "c_{name}{}",
         if valgrind { "_valgrind" } else { "" }
     ));
     let program = dir.join(name);
     compile(&[&format!("tests/capi/c/{name}.c")], &program, false, true);
-    let output = run(&program, &[], valgrind);
+    let output = run(&program, args, valgrind);
     let text = describe(&output);
     assert!(output.status.success(), "{name}: {text}");
     assert!(!text.contains("FAIL"), "{name}: {text}");
@@ -135,6 +140,30 @@ fn a_host_renders_an_amr_field_in_both_forms() {
 #[test]
 fn the_amr_host_is_clean_under_valgrind() {
     amr_host(true);
+}
+
+/// A `nanovdb` field of a grid the NanoVDB library wrote, from the host's
+/// memory.
+fn nanovdb_host(valgrind: bool) {
+    let Some(written) = crate::common::nanovdb::grids() else {
+        return;
+    };
+    checking_host_of(
+        "nanovdb_host",
+        10,
+        valgrind,
+        &[&written.dir.join("fog.blob")],
+    );
+}
+
+#[test]
+fn a_host_renders_a_nanovdb_grid_from_its_memory() {
+    nanovdb_host(false);
+}
+
+#[test]
+fn the_nanovdb_host_is_clean_under_valgrind() {
+    nanovdb_host(true);
 }
 
 /// An unstructured field as OpenCOVER sends one, then with cell data.
