@@ -1079,9 +1079,14 @@ fn map_of(b: &Bytes<'_>) -> Result<(DVec3, DVec3), NanoVdbError> {
             .unwrap_or(f64::NAN)
     }));
     let scale = DVec3::new(m[0], m[4], m[8]);
-    if !scale.is_finite() || !v.is_finite() || scale.cmple(DVec3::ZERO).any() {
+    // Renderers take the voxel size in single precision.
+    let single = scale.as_vec3();
+    if !single.is_finite()
+        || !v.as_vec3().is_finite()
+        || single.cmplt(Vec3::splat(f32::MIN_POSITIVE)).any()
+    {
         return Err(NanoVdbError::Map(format!(
-            "has scale {scale} and translation {v}; both must be finite and the scale positive"
+            "has scale {scale} and translation {v}; both must be finite in single precision and the scale positive"
         )));
     }
     let largest = scale.max_element();
