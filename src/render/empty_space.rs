@@ -308,14 +308,17 @@ impl Visibility {
             return false;
         }
         let last = (TABLE_SIZE - 1) as f32;
-        let entry = |v: f32| {
-            let t = ((v - self.value_lo) * self.value_scale).clamp(0.0, 1.0) * last;
-            // The interpolation reads entries i and i + 1, i <= size - 2.
-            (t as usize).min(TABLE_SIZE - 2)
-        };
-        // Scale may be negative only in theory; order the entries.
-        let (a, b) = (entry(lo), entry(hi));
-        let (first, last) = (a.min(b), a.max(b) + 1);
+        let t = |v: f32| ((v - self.value_lo) * self.value_scale).clamp(0.0, 1.0) * last;
+        // Scale may be negative only in theory; order the ends.
+        let (a, b) = (t(lo), t(hi));
+        let (ta, tb) = (a.min(b), a.max(b));
+        // A value at t reads entries floor(t) and floor(t) + 1 (at most
+        // size - 2 and size - 1), the second with weight t - floor(t): so
+        // t in ta..=tb reads floor(ta) up to ceil(tb), and a range at an
+        // entry's own value (a constant region at the table's end) reads
+        // that entry alone.
+        let first = (ta as usize).min(TABLE_SIZE - 2);
+        let last = (tb.ceil() as usize).min(TABLE_SIZE - 1);
         self.visible_before[last + 1] > self.visible_before[first]
     }
 }
@@ -544,6 +547,23 @@ mod tests {
             chessboard(&mut d, n);
             assert_eq!(d, brute_force(&occupied, n), "density {density}%");
         }
+    }
+
+    #[test]
+    fn a_range_reads_the_entries_its_interpolation_weighs() {
+        // Clear up to entry 10, visible from entry 11 on; values 0..=255
+        // map to entries 0..=255.
+        let table: Vec<Vec4> = (0..TABLE_SIZE)
+            .map(|i| Vec4::new(1.0, 1.0, 1.0, if i > 10 { 0.5 } else { 0.0 }))
+            .collect();
+        let v = Visibility::new(&table, 0.0, 1.0 / 255.0);
+        // A constant region at entry 10's own value reads entry 10 alone.
+        assert!(!v.shows(10.0, 10.0));
+        assert!(!v.shows(0.0, 10.0));
+        // Past it, entry 11 weighs in.
+        assert!(v.shows(10.0, 10.01));
+        assert!(v.shows(10.5, 10.5));
+        assert!(v.shows(0.0, 255.0));
     }
 
     #[test]

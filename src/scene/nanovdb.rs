@@ -24,6 +24,8 @@
 //! Rays march the grid's active box (the root's bounding box) on a
 //! lattice of its voxels; the index-to-world map places the lattice.
 
+use std::cell::Cell;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use glam::{DVec3, IVec3, UVec3, Vec3};
@@ -235,15 +237,31 @@ pub struct RootTile {
 }
 
 /// What a voxel's lookup found: the leaf holding it (byte offset), or
-/// the one value of the tile or background covering it.
+/// the one value of the tile or background covering it. Either holds for
+/// the whole 8^3 block of voxels around it.
+#[derive(Clone, Copy)]
 enum Found {
     Leaf(usize),
     Value(f32),
 }
 
+/// Ids of grids made, for the lookup cache: never 0.
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+
+thread_local! {
+    /// Per thread, the last 8^3 block a lookup found, with its grid's
+    /// id: a ray's samples fall in the same leaf again and again, and a
+    /// walk from the root costs more than the sample.
+    static LAST_BLOCK: Cell<(u64, IVec3, Found)> = const {
+        Cell::new((0, IVec3::ZERO, Found::Value(0.0)))
+    };
+}
+
 /// A validated NanoVDB grid, sampled in place.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NanoVdbGrid {
+    /// This grid's words' id (its clones share them, and it).
+    id: u64,
     /// The grid's bytes as little-endian words (a grid is 32-byte
     /// aligned, its size a multiple of 32).
     words: Arc<Vec<u32>>,
@@ -524,6 +542,7 @@ impl NanoVdbGrid {
             )?;
         }
         let mut grid = Self {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             words: Arc::new(words),
             values,
             class,
@@ -550,6 +569,20 @@ impl NanoVdbGrid {
 
     fn f(&self, byte: usize) -> f32 {
         f32::from_bits(self.words[byte >> 2])
+    }
+
+    /// `find`, through this thread's last block.
+    fn find_cached(&self, ijk: IVec3) -> Found {
+        let block = ijk & IVec3::splat(!7);
+        LAST_BLOCK.with(|last| {
+            let (id, b, found) = last.get();
+            if id == self.id && b == block {
+                return found;
+            }
+            let found = self.find(ijk);
+            last.set((self.id, block, found));
+            found
+        })
     }
 
     /// The node (or value) holding voxel `ijk`.
@@ -609,7 +642,7 @@ impl NanoVdbGrid {
 
     /// Voxel `ijk`'s value.
     pub fn value(&self, ijk: IVec3) -> f32 {
-        match self.find(ijk) {
+        match self.find_cached(ijk) {
             Found::Leaf(leaf) => {
                 let l = ijk & IVec3::splat(7);
                 self.leaf_value(leaf, ((l.x << 6) | (l.y << 3) | l.z) as usize)
@@ -622,15 +655,15 @@ impl NanoVdbGrid {
     /// trilinear between the eight around it.
     pub fn sample_index(&self, p: Vec3) -> f32 {
         if self.filter == Filter::Nearest {
-            return self.value((p + Vec3::splat(0.5)).floor().as_ivec3());
+            return self.value(floor(p + Vec3::splat(0.5)));
         }
-        let p0 = p.floor();
-        let f = p - p0;
-        let i0 = p0.as_ivec3();
+        let i0 = floor(p);
+        let f = p - i0.as_vec3();
         let l = i0 & IVec3::splat(7);
+        let corner = |c: usize| IVec3::new((c & 1) as i32, (c >> 1 & 1) as i32, (c >> 2) as i32);
         let corners: [f32; 8] = if l.cmplt(IVec3::splat(7)).all() {
             // The eight voxels share one leaf, or one tile's value.
-            match self.find(i0) {
+            match self.find_cached(i0) {
                 Found::Value(v) => return v,
                 Found::Leaf(leaf) => {
                     let n = ((l.x << 6) | (l.y << 3) | l.z) as usize;
@@ -640,8 +673,27 @@ impl NanoVdbGrid {
                 }
             }
         } else {
+            // The stencil reaches into up to seven neighbouring blocks:
+            // each found once.
+            let mut blocks: [Option<Found>; 8] = [None; 8];
             std::array::from_fn(|c| {
-                self.value(i0 + IVec3::new((c & 1) as i32, (c >> 1 & 1) as i32, (c >> 2) as i32))
+                let at = l + corner(c);
+                let b =
+                    usize::from(at.x > 7) | usize::from(at.y > 7) << 1 | usize::from(at.z > 7) << 2;
+                let found = *blocks[b].get_or_insert_with(|| {
+                    if b == 0 {
+                        self.find_cached(i0)
+                    } else {
+                        self.find(i0 + corner(c))
+                    }
+                });
+                match found {
+                    Found::Value(v) => v,
+                    Found::Leaf(leaf) => {
+                        let q = at & IVec3::splat(7);
+                        self.leaf_value(leaf, ((q.x << 6) | (q.y << 3) | q.z) as usize)
+                    }
+                }
             })
         };
         let x00 = mix(corners[0], corners[1], f.x);
@@ -868,7 +920,9 @@ impl NanoVdbGrid {
         let mut add = |lo: IVec3, span: i32, range: (f32, f32)| {
             let hi = lo + IVec3::splat(span - 1);
             // A sample reads one voxel beyond the box it lies in.
-            if (hi + IVec3::ONE).cmplt(w0).any() || (lo - IVec3::ONE).cmpgt(w1).any() {
+            if hi.saturating_add(IVec3::ONE).cmplt(w0).any()
+                || lo.saturating_sub(IVec3::ONE).cmpgt(w1).any()
+            {
                 return;
             }
             if !(range.0.is_finite() && range.1.is_finite()) {
@@ -1099,6 +1153,13 @@ fn map_of(b: &Bytes<'_>) -> Result<(DVec3, DVec3), NanoVdbError> {
         }
     }
     Ok((v, scale))
+}
+
+/// floor(p) per axis, without a libm call: truncation, one less where
+/// it rounded a negative value up.
+fn floor(p: Vec3) -> IVec3 {
+    let t = p.as_ivec3();
+    t - IVec3::select(t.as_vec3().cmpgt(p), IVec3::ONE, IVec3::ZERO)
 }
 
 fn mix(a: f32, b: f32, t: f32) -> f32 {
