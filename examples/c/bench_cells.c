@@ -1,7 +1,7 @@
-/* A benchmark host for unstructured and AMR volumes: what a user of the
- * C API sees, from the first commit to the frames after. The vertices of
- * an N^3 grid on [-1, 1]^3 hold the shells of bench_shells.c; the same
- * vertices are sent either as a structuredRegular field or as an
+/* A benchmark host for unstructured, AMR and NanoVDB volumes: what a
+ * user of the C API sees, from the first commit to the frames after. The
+ * vertices of an N^3 grid on [-1, 1]^3 hold the shells of bench_shells.c;
+ * the same vertices are sent either as a structuredRegular field or as an
  * unstructured one, each grid cell cut into six tetrahedra around its
  * main diagonal (Kuhn), 6 (N - 1)^3 of them with values per vertex. Or
  * `--field amr`: the shells at the cell centres of two levels in
@@ -13,17 +13,20 @@
  * sends them (gridSpacing 1, the finest cell one unit, the whole scene
  * scaled to match: camera and unitDistance), so that a device whose step
  * is one unit (anari-visionaray's AMR step ignores gridSpacing) takes
- * the same samples at the same volumeSamplingRate. A perspective camera
- * circles them at 768^2 and every frame is rendered, waited for and
- * mapped.
+ * the same samples at the same volumeSamplingRate. Or `--field nanovdb`:
+ * the bytes of the NanoVDB grid buffer that --nvdb names, handed over
+ * as they are as a `nanovdb` field (`data`, an ARRAY1D of UINT8; default
+ * filter), the scene scaled to the grid's index box placed by its map.
+ * A perspective camera circles them at 768^2 and every frame is
+ * rendered, waited for and mapped.
  *
  *   cc -std=c99 -O2 -Iinclude examples/c/bench_cells.c -Ltarget/release \
  *      -lanari_library_caveray -Wl,-rpath,$PWD/target/release -lm -o bench_cells
- *   ./bench_cells [--field unstructured|structured|amr] [--vertices 57]
+ *   ./bench_cells [--field unstructured|structured|amr|nanovdb] [--vertices 57]
  *                 [--backend auto|cpu|gpu] [--size 768] [--frames 4]
  *                 [--rate 1] [--json out.json] [--ppm first_frame.ppm]
  *                 [--library caveray] [--renderer default] [--still 0|1]
- *                 [--ppm-dir DIR] [--amr-units 0|1]
+ *                 [--ppm-dir DIR] [--amr-units 0|1] [--nvdb GRID_BUFFER]
  *
  * Built against the SDK's loader instead (-lanari), --library names any
  * device, so other devices run the same scene in the same process shape.
@@ -64,7 +67,7 @@ static double peak_rss_mib(void)
 int main(int argc, char **argv)
 {
   const char *backend = "auto", *kind = "unstructured", *json = NULL, *ppm = NULL;
-  const char *library = "caveray", *renderer_kind = "default", *ppm_dir = NULL;
+  const char *library = "caveray", *renderer_kind = "default", *ppm_dir = NULL, *nvdb = NULL;
   unsigned size = 768, n = 57, frames = 4, still = 0, amr_units = 0, i;
   float rate = 1.0f;
   for (i = 1; i + 1 < (unsigned)argc; i += 2) {
@@ -82,33 +85,90 @@ int main(int argc, char **argv)
     else if (!strcmp(k, "--still")) still = (unsigned)atoi(v);
     else if (!strcmp(k, "--ppm-dir")) ppm_dir = v;
     else if (!strcmp(k, "--amr-units")) amr_units = (unsigned)atoi(v);
+    else if (!strcmp(k, "--nvdb")) nvdb = v;
     else {
       fprintf(stderr, "bench_cells: unknown option %s\n", k);
       return 2;
     }
   }
   int mesh = !strcmp(kind, "unstructured"), amr = !strcmp(kind, "amr");
+  int vdb = !strcmp(kind, "nanovdb");
   if ((unsigned)argc % 2 == 0 || size < 1 || size > 8192 || n < (amr ? 9 : 2) || n > 300 || frames < 1
-      || frames > 10000 || !(rate > 0) || (!mesh && !amr && strcmp(kind, "structured"))) {
-    fprintf(stderr, "bench_cells: need --field unstructured|structured|amr, --size 1..8192, "
-                    "--vertices 2..300 (9.. for amr), --frames 1..10000, --rate > 0\n");
+      || frames > 10000 || !(rate > 0) || (!mesh && !amr && !vdb && strcmp(kind, "structured"))
+      || (vdb && !nvdb)) {
+    fprintf(stderr, "bench_cells: need --field unstructured|structured|amr|nanovdb (nanovdb with "
+                    "--nvdb FILE, a NanoVDB grid buffer), --size 1..8192, --vertices 2..300 "
+                    "(9.. for amr), --frames 1..10000, --rate > 0\n");
     return 2;
+  }
+
+  /* NanoVDB: the grid's bytes, and its box from its header: the root's
+   * index box (vertex-centred voxels, inclusive) through the diagonal of
+   * the map's double-precision matrix and its translation. */
+  uint8_t *grid = NULL;
+  size_t grid_bytes = 0;
+  int32_t vdb_lo[3] = {0, 0, 0}, vdb_hi[3] = {0, 0, 0};
+  float vdb_min[3] = {-1, -1, -1}, vdb_max[3] = {1, 1, 1};
+  if (vdb) {
+    FILE *f = fopen(nvdb, "rb");
+    long end = -1;
+    if (!f || fseek(f, 0, SEEK_END) != 0 || (end = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) {
+      fprintf(stderr, "bench_cells: cannot read %s\n", nvdb);
+      return 1;
+    }
+    grid_bytes = (size_t)end;
+    if (grid_bytes < 736) {
+      fprintf(stderr, "bench_cells: %s is %zu bytes, too short for a NanoVDB grid\n", nvdb,
+          grid_bytes);
+      return 1;
+    }
+    grid = malloc(grid_bytes);
+    if (!grid) {
+      fprintf(stderr, "bench_cells: no memory for the %zu bytes of %s\n", grid_bytes, nvdb);
+      return 1;
+    }
+    size_t got = fread(grid, 1, grid_bytes, f);
+    fclose(f);
+    if (got != grid_bytes) {
+      fprintf(stderr, "bench_cells: cannot read the %zu bytes of %s\n", grid_bytes, nvdb);
+      return 1;
+    }
+    uint64_t root;
+    double mat[9], vec[3];
+    memcpy(&root, grid + 672 + 24, sizeof root);
+    memcpy(mat, grid + 296 + 88, sizeof mat);
+    memcpy(vec, grid + 296 + 232, sizeof vec);
+    if (memcmp(grid, "NanoVDB", 7) || root > grid_bytes - 672 - 24) {
+      fprintf(stderr, "bench_cells: %s is not a NanoVDB grid buffer\n", nvdb);
+      return 1;
+    }
+    memcpy(vdb_lo, grid + 672 + root, sizeof vdb_lo);
+    memcpy(vdb_hi, grid + 672 + root + 12, sizeof vdb_hi);
+    for (int k = 0; k < 3; ++k) {
+      double a = mat[4 * k] * vdb_lo[k] + vec[k], b = mat[4 * k] * vdb_hi[k] + vec[k];
+      if (vdb_lo[k] > vdb_hi[k]) {
+        fprintf(stderr, "bench_cells: %s has no active voxels\n", nvdb);
+        return 1;
+      }
+      vdb_min[k] = (float)(a < b ? a : b);
+      vdb_max[k] = (float)(a < b ? b : a);
+    }
   }
 
   /* The host's own arrays, made before the clock starts. */
   size_t verts = (size_t)n * n * n, cubes = (size_t)(n - 1) * (n - 1) * (n - 1);
   size_t cells = mesh ? 6 * cubes : 0;
   float s = 2.0f / (n - 1);
-  float *values = malloc(verts * sizeof *values);
+  float *values = vdb ? NULL : malloc(verts * sizeof *values);
   float *positions = mesh ? malloc(3 * verts * sizeof *positions) : NULL;
   uint32_t *index = mesh ? malloc(4 * cells * sizeof *index) : NULL;
   uint32_t *cell_index = mesh ? malloc(cells * sizeof *cell_index) : NULL;
   uint8_t *cell_type = mesh ? malloc(cells) : NULL;
-  if (!values || (mesh && (!positions || !index || !cell_index || !cell_type))) {
+  if ((!vdb && !values) || (mesh && (!positions || !index || !cell_index || !cell_type))) {
     fprintf(stderr, "bench_cells: no memory for %u^3 vertices\n", n);
     return 1;
   }
-  for (size_t z = 0; z < n; ++z)
+  for (size_t z = 0; z < n && values; ++z)
     for (size_t y = 0; y < n; ++y)
       for (size_t x = 0; x < n; ++x) {
         size_t v = (z * n + y) * n + x;
@@ -174,9 +234,25 @@ int main(int argc, char **argv)
 
   float colors[4 * 3] = {0.2f, 0.4f, 1.0f, 0.2f, 0.4f, 1.0f, 0.5f, 0.8f, 0.6f, 1.0f, 0.7f, 0.2f};
   float opacities[11] = {0, 0, 0.0375f, 0.075f, 0.1125f, 0.15f, 0.22f, 0.29f, 0.36f, 0.43f, 0.5f};
+  /* A fog grid's core is all 1, hundreds of voxels deep: its ramp (blue
+   * to green) drawn as a rim, its core (orange) kept translucent. */
+  static const float fog_opacities[11] = {
+      0, 0.3f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.3f, 0.2f, 0.1f, 0.05f};
+  if (vdb)
+    memcpy(opacities, fog_opacities, sizeof opacities);
   float origin[3] = {-1, -1, -1}, spacing[3] = {s, s, s};
-  /* World units per unit of the scene on [-1, 1]^3. */
-  float scale = amr && amr_units ? fine / 2.0f : 1.0f;
+  /* World units per unit of the scene on [-1, 1]^3, and its centre. */
+  float scale = amr && amr_units ? fine / 2.0f : 1.0f, centre[3] = {0, 0, 0};
+  if (vdb) {
+    scale = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+      centre[k] = 0.5f * (vdb_min[k] + vdb_max[k]);
+      if (0.5f * (vdb_max[k] - vdb_min[k]) > scale)
+        scale = 0.5f * (vdb_max[k] - vdb_min[k]);
+    }
+    if (!(scale > 0))
+      scale = 1.0f;
+  }
   float unit = 0.2f * scale, fovy = 40.0f * 3.14159265f / 180.0f, up[3] = {0, 1, 0}, range[2] = {0, 1};
   unsigned fsize[2] = {size, size};
   ANARIDataType color = ANARI_UFIXED8_RGBA_SRGB;
@@ -194,7 +270,11 @@ int main(int argc, char **argv)
   double t_start = now_ms();
   ANARISpatialField field;
   ANARIArray arrays[5] = {0};
-  if (amr) {
+  if (vdb) {
+    field = anariNewSpatialField(dev, "nanovdb");
+    arrays[0] = anariNewArray1D(dev, grid, NULL, NULL, ANARI_UINT8, grid_bytes);
+    anariSetParameter(dev, field, "data", ANARI_ARRAY1D, &arrays[0]);
+  } else if (amr) {
     uint32_t ratios[2] = {2, 2};
     float amr_origin[3] = {-scale, -scale, -scale}, amr_spacing[3];
     for (int k = 0; k < 3; ++k)
@@ -265,8 +345,8 @@ int main(int argc, char **argv)
   /* Frame 0 is the first frame: it is timed from t_start. */
   for (i = 0; i <= frames && ms; ++i) {
     float a = still ? 0.0f : 2.0f * 3.14159265f * i / (frames + 1), d = 3.2f;
-    float pos[3] = {scale * d * sinf(a), scale * 0.3f, scale * d * cosf(a)};
-    float dir[3] = {-pos[0], -pos[1], -pos[2]};
+    float dir[3] = {-scale * d * sinf(a), -scale * 0.3f, -scale * d * cosf(a)};
+    float pos[3] = {centre[0] - dir[0], centre[1] - dir[1], centre[2] - dir[2]};
     anariSetParameter(dev, camera, "position", ANARI_FLOAT32_VEC3, pos);
     anariSetParameter(dev, camera, "direction", ANARI_FLOAT32_VEC3, dir);
     anariCommitParameters(dev, camera);
@@ -310,11 +390,17 @@ int main(int argc, char **argv)
   anariGetProperty(dev, frame, "caveray.volumeSamples", ANARI_UINT64, &samples, sizeof samples,
       ANARI_WAIT);
   double mean = sum / frames, peak = peak_rss_mib();
-  printf("bench_cells: %s, %s renderer, %s field on %u^3 vertices (%zu tetrahedra) at %ux%u, "
-         "backend %s, rate %g: first frame %.1f ms, then mean %.1f ms (min %.1f, max %.1f) "
-         "over %u frames; peak RSS %.1f MiB (%.1f MiB of it the host's arrays)\n",
-      library, renderer_kind, kind, n, cells, size, size, backend, rate, ms ? ms[0] : 0.0, mean,
-      lo, hi, frames, peak, host_mib);
+  /* The lattice: the grid's voxels, or the vertices of the other fields. */
+  unsigned dims[3] = {n, n, n};
+  if (vdb)
+    for (int k = 0; k < 3; ++k)
+      dims[k] = (unsigned)((int64_t)vdb_hi[k] - vdb_lo[k] + 1);
+  printf("bench_cells: %s, %s renderer, %s field on %ux%ux%u %s (%zu tetrahedra, %zu grid bytes) "
+         "at %ux%u, backend %s, rate %g: first frame %.1f ms, then mean %.1f ms (min %.1f, "
+         "max %.1f) over %u frames; peak RSS %.1f MiB (%.1f MiB of it the host's arrays)\n",
+      library, renderer_kind, kind, dims[0], dims[1], dims[2], vdb ? "voxels" : "vertices", cells,
+      grid_bytes, size, size, backend, rate, ms ? ms[0] : 0.0, mean, lo, hi, frames, peak,
+      host_mib);
 
   if (json && ms) {
     char model[256];
@@ -331,7 +417,9 @@ int main(int argc, char **argv)
           library, renderer_kind, still);
       fprintf(f, "  \"field\": \"%s\",\n  \"backend\": \"%s\",\n  \"rate\": %g,\n", kind,
           backend, rate);
-      fprintf(f, "  \"vertices\": [%u, %u, %u],\n  \"tetrahedra\": %zu,\n", n, n, n, cells);
+      fprintf(f, "  \"vertices\": [%u, %u, %u],\n  \"tetrahedra\": %zu,\n", dims[0], dims[1],
+          dims[2], cells);
+      fprintf(f, "  \"grid_bytes\": %zu,\n", grid_bytes);
       fprintf(f, "  \"image\": [%u, %u],\n  \"last_frame_samples\": %llu,\n", size, size,
           samples);
       fprintf(f, "  \"first_frame_ms\": %.3f,\n  \"ms\": [", ms[0]);
@@ -368,5 +456,6 @@ int main(int argc, char **argv)
   free(amr_bounds);
   free(amr_levels);
   free(amr_data);
+  free(grid);
   return ok ? 0 : 1;
 }

@@ -362,6 +362,48 @@ fn the_cells_benchmark_host_reports_an_amr_field() {
     assert!(lit > 48 * 48 / 10, "{lit} pixels show the shells");
 }
 
+/// The benchmark host's NanoVDB field (a grid the library wrote) runs
+/// small, reports the grid's bytes and shows the fog.
+#[test]
+fn the_cells_benchmark_host_reports_a_nanovdb_grid() {
+    let Some(written) = common::nanovdb::grids() else {
+        return;
+    };
+    let dir = scratch("c_bench_cells_nanovdb");
+    let program = dir.join("bench_cells");
+    compile(&["examples/c/bench_cells.c"], &program, false, true);
+    let (json, ppm) = (dir.join("vdb.json"), dir.join("vdb.ppm"));
+    let blob = written.dir.join("fog16.blob");
+    let output = common::c::host_command(&program)
+        .args(["--field", "nanovdb", "--backend", "cpu", "--size", "48"])
+        .args(["--frames", "2", "--nvdb"])
+        .arg(&blob)
+        .arg("--json")
+        .arg(&json)
+        .arg("--ppm")
+        .arg(&ppm)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "bench_cells: {}",
+        describe(&output)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["field"], "nanovdb");
+    assert_eq!(
+        report["grid_bytes"].as_u64(),
+        Some(std::fs::metadata(&blob).unwrap().len())
+    );
+    let ppm = std::fs::read(&ppm).unwrap();
+    let lit = ppm[ppm.len() - 48 * 48 * 3..]
+        .chunks(3)
+        .filter(|p| p.iter().any(|&c| c > 40))
+        .count();
+    assert!(lit > 48 * 48 / 10, "{lit} pixels show the fog");
+}
+
 /// The unstructured benchmark host runs small: the grid and its
 /// tetrahedra report their frames, first frame and peak memory, take
 /// about the same samples and show about the same picture.
