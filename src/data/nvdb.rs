@@ -55,15 +55,25 @@ pub fn is_nvdb(head: &[u8]) -> bool {
 
 /// The grids of the file `bytes` (named `file` in errors).
 pub fn nvdb_entries(bytes: &[u8], file: &str) -> Result<Vec<NvdbEntry>, DataError> {
+    let magic = u64_at(bytes, 0)
+        .ok_or_else(|| super::bad(file, "NanoVDB", "the file is shorter than a header".into()))?;
+    type Reader = fn(&[u8], &str) -> Result<Vec<NvdbEntry>, DataError>;
+    let (first, second): (Reader, Reader) = match magic {
+        NANOVDB_MAGIC_FILE => return segments_of(bytes, file),
+        NANOVDB_MAGIC_GRID => return raw_grids(bytes, file),
+        // NanoVDB 32.5 and before start files and grids alike: a grid
+        // has its version at byte 16, a segment a grid's size there.
+        _ if u32_at(bytes, 16).is_some_and(|v| v >> 21 == NANOVDB_MAJOR) => {
+            (raw_grids, segments_of)
+        }
+        _ => (segments_of, raw_grids),
+    };
+    first(bytes, file).or_else(|e| second(bytes, file).map_err(|_| e))
+}
+
+/// The grids of a file of segments.
+fn segments_of(bytes: &[u8], file: &str) -> Result<Vec<NvdbEntry>, DataError> {
     let bad = |why: String| super::bad(file, "NanoVDB", why);
-    let magic = u64_at(bytes, 0).ok_or_else(|| bad("the file is shorter than a header".into()))?;
-    let segments = magic == NANOVDB_MAGIC_FILE
-        || (magic == NANOVDB_MAGIC
-            && u32_at(bytes, 8).is_some_and(|v| v >> 21 == NANOVDB_MAJOR)
-            && u16_at(bytes, 12).is_some_and(|n| n > 0));
-    if !segments {
-        return raw_grids(bytes, file);
-    }
     let mut entries = Vec::new();
     let mut at = 0usize;
     while at < bytes.len() {

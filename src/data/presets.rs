@@ -62,10 +62,11 @@ const SHELLS: Points = &[
 ];
 const GREY: Points = &[(0.0, 0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0, 1.0)];
 // A signed distance over a range symmetric about 0 (a level set's narrow
-// band): the inside a dim translucent blue, the surface (0.5) bright and
-// opaque, the outside clear.
+// band): deep inside (the interior's tiles) and outside clear, the band
+// inside a translucent blue, the surface (0.5) bright and opaque.
 const LEVEL_SET: Points = &[
-    (0.0, 0.2, 0.35, 0.7, 0.08),
+    (0.0, 0.2, 0.35, 0.7, 0.0),
+    (0.1, 0.2, 0.35, 0.7, 0.08),
     (0.4, 0.3, 0.5, 0.9, 0.2),
     (0.5, 1.0, 0.85, 0.5, 0.9),
     (0.6, 0.9, 0.6, 0.3, 0.0),

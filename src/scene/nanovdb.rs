@@ -1,5 +1,6 @@
 //! NanoVDB grids (KHR_SPATIAL_FIELD_NANOVDB): one grid exactly as the
-//! NanoVDB library lays it out in memory, read in place. Layout version
+//! NanoVDB library lays it out in memory, kept as it is (one copy, no
+//! conversion) and read through its own tree. Layout version
 //! 32 (NanoVDB 32.x keeps its ABI within a major version; the offsets
 //! below are those of PNanoVDB.h, which states them for every version
 //! 32 release).
@@ -73,6 +74,9 @@ const MAX_LATTICE_VOXELS: u64 = 1 << 32;
 /// Index coordinates are sampled in single precision: the active box
 /// must lie within +-2^24, where every integer is exact.
 const MAX_INDEX: i32 = 1 << 24;
+/// Where index points are clamped to before floor: far past any tile a
+/// sample reads, well within i32.
+const FAR: f32 = (1u32 << 30) as f32;
 
 /// NanoVDB's grid type codes, by name, for errors.
 pub const VDB_TYPE_NAMES: [&str; 27] = [
@@ -225,15 +229,27 @@ pub enum NanoVdbError {
     TooLarge { dims: UVec3 },
     #[error("cannot allocate {0} bytes for the grid")]
     Allocation(u64),
+    #[error("{what} is at byte {at}, not on the 32-byte boundary NanoVDB aligns every node to")]
+    Misaligned { what: String, at: u64 },
+    #[error("the grid is {0} bytes; caveray reads grids of up to 4 GiB")]
+    Huge(u64),
+    #[error("root tile {tile}'s key {key:#018x} {why}")]
+    BadKey {
+        tile: usize,
+        key: u64,
+        why: &'static str,
+    },
 }
 
 /// A root tile as read from the blob: where it starts in index space,
-/// its upper node (a byte offset into the grid) or its one value.
+/// its upper node (a byte offset into the grid) or its one value, and
+/// its place in the root's table.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RootTile {
     pub origin: IVec3,
     pub child: Option<u32>,
     pub value: f32,
+    pub slot: u32,
 }
 
 /// What a voxel's lookup found: the leaf holding it (byte offset), or
@@ -257,7 +273,7 @@ thread_local! {
     };
 }
 
-/// A validated NanoVDB grid, sampled in place.
+/// A validated NanoVDB grid, sampled through its own tree.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NanoVdbGrid {
     /// This grid's words' id (its clones share them, and it).
@@ -270,7 +286,10 @@ pub struct NanoVdbGrid {
     name: String,
     filter: Filter,
     root: usize,
+    /// The root's tiles a sample can reach (those near the active box).
     tiles: Vec<RootTile>,
+    /// Entries in the root's table.
+    table_len: usize,
     background: f32,
     /// The active box's voxels (inclusive), the lattice's first vertex
     /// and last.
@@ -378,10 +397,22 @@ impl NanoVdbGrid {
                 size: len,
             });
         }
-        if grid_size < (GRID_SIZE + TREE_SIZE + ROOT_SIZE) as u64 || grid_size % 4 != 0 {
+        if grid_size < (GRID_SIZE + TREE_SIZE + ROOT_SIZE) as u64 {
             return Err(NanoVdbError::TooShort {
                 len: grid_size,
                 needed: (GRID_SIZE + TREE_SIZE + ROOT_SIZE) as u64,
+            });
+        }
+        // Offsets are kept in 32 bits (the GPU's addresses are), and
+        // every node lies on a 32-byte boundary, so that the CPU and the
+        // GPU, which reads words, find the same nodes.
+        if grid_size > u64::from(u32::MAX) {
+            return Err(NanoVdbError::Huge(grid_size));
+        }
+        if grid_size % 32 != 0 {
+            return Err(NanoVdbError::Misaligned {
+                what: "the grid's end".into(),
+                at: grid_size,
             });
         }
         let size = grid_size as usize;
@@ -406,6 +437,12 @@ impl NanoVdbGrid {
             if count > 0 && end > grid_size {
                 return Err(past(what, tree + 8 * k, end));
             }
+            if count > 0 && first % 32 != 0 {
+                return Err(NanoVdbError::Misaligned {
+                    what: what.to_string(),
+                    at: first,
+                });
+            }
             Ok((first.min(grid_size) as usize, count as usize, node))
         };
         let sections = Sections {
@@ -421,6 +458,12 @@ impl NanoVdbGrid {
                 tree + 24,
                 root.saturating_add(ROOT_SIZE as u64),
             ));
+        }
+        if root % 32 != 0 {
+            return Err(NanoVdbError::Misaligned {
+                what: "the root".into(),
+                at: root,
+            });
         }
         let root = root as usize;
         let table = u64::from(b.u32(root + ROOT_OFF_TABLE_SIZE).unwrap_or(0));
@@ -478,13 +521,37 @@ impl NanoVdbGrid {
         let mut seen_upper = vec![false; sections.upper.1];
         let mut seen_lower = vec![false; sections.lower.1];
         let mut seen_leaf = vec![false; sections.leaf.1];
-        let mut tiles = Vec::with_capacity(table as usize);
+        let mut tiles = Vec::new();
+        let mut origins = std::collections::HashSet::new();
         let mut uppers = Vec::new();
+        // Samples read the active box and one voxel beyond it: only the
+        // tiles that reach it are looked up.
+        let near = |o: IVec3| {
+            (o.cmple(active.1 + IVec3::ONE) & (o + IVec3::splat(4095)).cmpge(active.0 - IVec3::ONE))
+                .all()
+        };
         for t in 0..table as usize {
             let at = root + ROOT_SIZE + t * ROOT_TILE_SIZE;
             let key = b.u64(at).unwrap_or(0);
-            let axis = |shift: u32| (((key >> shift) & 0x1f_ffff) as u32).wrapping_shl(12) as i32;
+            // Three fields of 20 bits (a coordinate's upper bits), x
+            // highest, each in 21.
+            const FIELDS: u64 = 0xf_ffff | 0xf_ffff << 21 | 0xf_ffff << 42;
+            if key & !FIELDS != 0 {
+                return Err(NanoVdbError::BadKey {
+                    tile: t,
+                    key,
+                    why: "has bits set outside its three 20-bit coordinates",
+                });
+            }
+            let axis = |shift: u32| (((key >> shift) & 0xf_ffff) as u32).wrapping_shl(12) as i32;
             let origin = IVec3::new(axis(42), axis(21), axis(0));
+            if !origins.insert(origin) {
+                return Err(NanoVdbError::BadKey {
+                    tile: t,
+                    key,
+                    why: "is another tile's too",
+                });
+            }
             let child = b.u64(at + ROOT_TILE_OFF_CHILD).unwrap_or(0) as i64;
             let _state = b.u32(at + ROOT_TILE_OFF_STATE);
             let tile_value = value(at + ROOT_TILE_OFF_VALUE);
@@ -513,11 +580,14 @@ impl NanoVdbGrid {
                 uppers.push(node);
                 Some(node as u32)
             };
-            tiles.push(RootTile {
-                origin,
-                child,
-                value: tile_value,
-            });
+            if near(origin) {
+                tiles.push(RootTile {
+                    origin,
+                    child,
+                    value: tile_value,
+                    slot: t as u32,
+                });
+            }
         }
         let mut lowers = Vec::new();
         for &node in &uppers {
@@ -550,6 +620,7 @@ impl NanoVdbGrid {
             filter,
             root,
             tiles,
+            table_len: table as usize,
             background,
             active,
             window: active,
@@ -654,6 +725,9 @@ impl NanoVdbGrid {
     /// The field at index point `p`: the nearest voxel's value, or
     /// trilinear between the eight around it.
     pub fn sample_index(&self, p: Vec3) -> f32 {
+        // Far beyond the grid (2^30 voxels; the active box lies within
+        // 2^24) every voxel is the background: kept in i32.
+        let p = p.clamp(Vec3::splat(-FAR), Vec3::splat(FAR));
         if self.filter == Filter::Nearest {
             return self.value(floor(p + Vec3::splat(0.5)));
         }
@@ -741,9 +815,11 @@ impl NanoVdbGrid {
         }
         let base = self.window.0;
         let window = (base + lo.as_ivec3(), base + hi.as_ivec3());
-        // A sample reads the voxels around it: one beyond the window.
+        // A sample reads the voxels around it, one beyond the window, and
+        // a hit's gradient a step (at most a voxel at the default rates)
+        // each side of it.
         let words = self
-            .pruned((window.0 - IVec3::ONE, window.1 + IVec3::ONE))
+            .pruned((window.0 - IVec3::splat(2), window.1 + IVec3::splat(2)))
             .map_err(|e| e.to_string())?;
         let mut part =
             Self::new(bytemuck::cast_slice(&words), self.filter).map_err(|e| e.to_string())?;
@@ -764,9 +840,9 @@ impl NanoVdbGrid {
         // Kept nodes: (old byte offset, index of the entry or tile naming
         // it, index of the kept parent).
         let mut uppers = Vec::new();
-        for (i, t) in self.tiles.iter().enumerate() {
+        for t in &self.tiles {
             if let Some(u) = t.child.filter(|_| meets(t.origin, 4096)) {
-                uppers.push((u as usize, i, 0usize, t.origin));
+                uppers.push((u as usize, t.slot as usize, 0usize, t.origin));
             }
         }
         let mut lowers = Vec::new();
@@ -794,7 +870,7 @@ impl NanoVdbGrid {
             }
         }
         let head = GRID_SIZE + TREE_SIZE;
-        let root_size = ROOT_SIZE + ROOT_TILE_SIZE * self.tiles.len();
+        let root_size = ROOT_SIZE + ROOT_TILE_SIZE * self.table_len;
         let leaf_size = self.values.leaf_size();
         let upper_at = head + root_size;
         let lower_at = upper_at + uppers.len() * UPPER_SIZE;
@@ -822,6 +898,11 @@ impl NanoVdbGrid {
             out[at / 4 + 1] = (v >> 32) as u32;
         };
         put64(&mut out, 32, size as u64);
+        // No checksum (NanoVDB's "disabled", all ones) and no blind data:
+        // both described the whole grid.
+        put64(&mut out, 8, u64::MAX);
+        put64(&mut out, 640, 0);
+        out[648 / 4] = 0;
         let tree = GRID_SIZE;
         put64(&mut out, tree, (leaf_at - tree) as u64);
         put64(&mut out, tree + 8, (lower_at - tree) as u64);
@@ -831,14 +912,12 @@ impl NanoVdbGrid {
         out[(tree + 36) / 4] = lowers.len() as u32;
         out[(tree + 40) / 4] = uppers.len() as u32;
         // Every child dropped first, then the kept ones named again.
-        for (i, t) in self.tiles.iter().enumerate() {
-            if t.child.is_some() {
-                put64(
-                    &mut out,
-                    head + ROOT_SIZE + ROOT_TILE_SIZE * i + ROOT_TILE_OFF_CHILD,
-                    0,
-                );
-            }
+        for i in 0..self.table_len {
+            put64(
+                &mut out,
+                head + ROOT_SIZE + ROOT_TILE_SIZE * i + ROOT_TILE_OFF_CHILD,
+                0,
+            );
         }
         for k in 0..uppers.len() {
             drop_children(
@@ -925,7 +1004,7 @@ impl NanoVdbGrid {
             {
                 return;
             }
-            if !(range.0.is_finite() && range.1.is_finite()) {
+            if range.0.is_nan() || range.1.is_nan() {
                 return;
             }
             out.push((((lo - w0).as_vec3(), (hi - w0).as_vec3()), range));
@@ -952,10 +1031,12 @@ impl NanoVdbGrid {
                             match self.child(lower, LOWER_OFF_CHILD_MASK, LOWER_OFF_TABLE, m) {
                                 Err(v) => add(lo, 8, (v, v)),
                                 Ok(leaf) => {
+                                    // NaN reads as no value; infinities
+                                    // classify as the table's ends.
                                     let mut r = (f32::INFINITY, f32::NEG_INFINITY);
                                     for k in 0..512 {
                                         let v = self.leaf_value(leaf, k);
-                                        if v.is_finite() {
+                                        if !v.is_nan() {
                                             r = (r.0.min(v), r.1.max(v));
                                         }
                                     }
@@ -970,13 +1051,17 @@ impl NanoVdbGrid {
         out
     }
 
-    /// The range of the values a sample in the window can read (finite
-    /// ones): of the leaves and tiles reaching it, and of the background
-    /// where no root tile is.
+    /// The range of the finite values a sample in the window can read:
+    /// of the leaves and tiles reaching it, and of the background where
+    /// no root tile is.
     fn window_range(&self) -> (f32, f32) {
+        // Finite ends only: a transfer function is stretched over this.
         let (lo, hi) = self.value_boxes().iter().fold(
             (f32::INFINITY, f32::NEG_INFINITY),
-            |(lo, hi), (_, (a, b))| (lo.min(*a), hi.max(*b)),
+            |(lo, hi), &(_, (a, b))| {
+                let keep = |v: f32, or: f32| if v.is_finite() { v } else { or };
+                (lo.min(keep(a, lo)), hi.max(keep(b, hi)))
+            },
         );
         if lo > hi {
             (self.background, self.background)

@@ -229,10 +229,17 @@ fn every_preset_is_valid_and_unknown_ones_list_the_choices() {
             0.0,
             "{name}: empty space stays transparent"
         );
-        assert!(
-            tf.evaluate(1.0).w >= 0.25,
-            "{name}: the densest values are visible"
-        );
+        if name == "level-set" {
+            // A signed distance: its surface is the middle of the range,
+            // its outside the top, as empty as deep inside.
+            assert!(tf.evaluate(0.5).w >= 0.5, "{name}: the surface shows");
+            assert_eq!(tf.evaluate(1.0).w, 0.0, "{name}: the outside is clear");
+        } else {
+            assert!(
+                tf.evaluate(1.0).w >= 0.25,
+                "{name}: the densest values are visible"
+            );
+        }
         let most = tf.table().iter().map(|c| c.w).fold(0.0, f32::max);
         assert!(most >= 0.5, "{name}: something is clearly opaque");
     }

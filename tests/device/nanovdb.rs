@@ -120,6 +120,28 @@ fn blobs_that_are_not_a_grid_are_refused_by_name() {
         e.contains("the lower nodes") && e.contains("past the grid's"),
         "{e}"
     );
+    // The root's offset off the 32-byte grid every node lies on.
+    let e = spoilt(&|b| {
+        let root = u64::from_le_bytes(b[672 + 24..672 + 32].try_into().unwrap());
+        b[672 + 24..672 + 32].copy_from_slice(&(root + 4).to_le_bytes());
+    });
+    assert!(
+        e.contains("the root is at byte") && e.contains("32-byte boundary"),
+        "{e}"
+    );
+    // Root tile keys: a bit past the coordinates, and one key twice.
+    let root = 672 + u64::from_le_bytes(good[672 + 24..672 + 32].try_into().unwrap()) as usize;
+    let key = |t: usize| root + 64 + 32 * t;
+    let e = spoilt(&|b| b[key(0) + 7] |= 0x80);
+    assert!(
+        e.contains("root tile 0's key") && e.contains("outside its three 20-bit"),
+        "{e}"
+    );
+    let e = spoilt(&|b| b.copy_within(key(0)..key(0) + 8, key(1)));
+    assert!(
+        e.contains("root tile 1's key") && e.contains("another tile's too"),
+        "{e}"
+    );
     let (lower, first, second) = first_children(&good);
     // A child pointing at its own node: a cycle.
     let e = spoilt(&|b| b[first..first + 8].copy_from_slice(&0u64.to_le_bytes()));

@@ -1,6 +1,6 @@
 //! The `nanovdb` field (KHR_SPATIAL_FIELD_NANOVDB): one NanoVDB grid in
 //! `data` as the NanoVDB library lays it out in memory, checked and read
-//! in place by scene/nanovdb.rs.
+//! as it is by scene/nanovdb.rs.
 
 use std::sync::Arc;
 
@@ -13,7 +13,7 @@ use crate::scene::{Filter, NanoVdbGrid, SpatialField};
 pub static INFO: SubtypeInfo = SubtypeInfo {
     kind: T::SPATIAL_FIELD,
     subtype: "nanovdb",
-    description: "a NanoVDB grid (Float, Half, Fp4, Fp8 or Fp16 values) read in place through its tree, placed by its index-to-world map",
+    description: "a NanoVDB grid (Float, Half, Fp4, Fp8 or Fp16 values) kept as sent and read through its own tree, placed by its index-to-world map",
     extensions: &["ANARI_KHR_SPATIAL_FIELD_NANOVDB"],
     params: &[
         p(
