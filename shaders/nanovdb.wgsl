@@ -18,11 +18,18 @@ const VDB_LOWER_TABLE: u32 = 272u;
 const VDB_LEAF_TABLE: u32 = 24u;
 
 // What a voxel's lookup found: its leaf's first word, or VDB_NONE and
-// the value of the tile (or background) holding it.
+// the value of the tile (or background) holding it. Either holds for
+// the whole 8^3 block around the voxel.
 struct VdbFound {
     leaf: u32,
     value: f32,
 }
+
+// Per invocation, the last block a lookup found (the grid's first word
+// in w, the block's first voxel in xyz), as the CPU keeps one per
+// thread: a ray's samples fall in the same leaf again and again.
+var<private> vdb_last_key: vec4i = vec4i(0, 0, 0, -1);
+var<private> vdb_last: VdbFound;
 
 // An internal node's tile entry at word e of grid a.
 fn vdb_tile(a: u32, e: u32) -> f32 {
@@ -116,7 +123,12 @@ fn vdb_value(v: u32, grid: vec3f) -> f32 {
     let l = i0 & vec3i(7);
     var c: array<f32, 8>;
     if all(l < vec3i(7)) {
-        let found = vdb_find(a, i0);
+        let key = vec4i(i0 & vec3i(~7), i32(a));
+        if any(key != vdb_last_key) {
+            vdb_last = vdb_find(a, i0);
+            vdb_last_key = key;
+        }
+        let found = vdb_last;
         if found.leaf == VDB_NONE {
             return found.value;
         }
