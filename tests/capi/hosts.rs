@@ -329,55 +329,16 @@ fn cave_wall_example_renders_both_eyes() {
     );
 }
 
-/// The benchmark host's AMR field (anari-visionaray's form) runs small
-/// and shows the shells.
-#[test]
-fn the_cells_benchmark_host_reports_an_amr_field() {
-    let dir = scratch("c_bench_cells_amr");
+/// Runs the cells benchmark host at 48^2 for two frames with `args`:
+/// its JSON report and how many pixels of its first frame show.
+fn bench_cells_small(name: &str, args: &[&std::ffi::OsStr]) -> (serde_json::Value, usize) {
+    let dir = scratch(&format!("c_bench_cells_{name}"));
     let program = dir.join("bench_cells");
     compile(&["examples/c/bench_cells.c"], &program, false, true);
-    let (json, ppm) = (dir.join("amr.json"), dir.join("amr.ppm"));
+    let (json, ppm) = (dir.join("report.json"), dir.join("first.ppm"));
     let output = common::c::host_command(&program)
-        .args(["--field", "amr", "--backend", "cpu", "--size", "48"])
-        .args(["--vertices", "17", "--frames", "2", "--json"])
-        .arg(&json)
-        .arg("--ppm")
-        .arg(&ppm)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "bench_cells: {}",
-        describe(&output)
-    );
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    assert_eq!(report["field"], "amr");
-    assert_eq!(report["ms"].as_array().unwrap().len(), 2);
-    let ppm = std::fs::read(&ppm).unwrap();
-    let lit = ppm[ppm.len() - 48 * 48 * 3..]
-        .chunks(3)
-        .filter(|p| p.iter().any(|&c| c > 40))
-        .count();
-    assert!(lit > 48 * 48 / 10, "{lit} pixels show the shells");
-}
-
-/// The benchmark host's NanoVDB field (a grid the library wrote) runs
-/// small, reports the grid's bytes and shows the fog.
-#[test]
-fn the_cells_benchmark_host_reports_a_nanovdb_grid() {
-    let Some(written) = common::nanovdb::grids() else {
-        return;
-    };
-    let dir = scratch("c_bench_cells_nanovdb");
-    let program = dir.join("bench_cells");
-    compile(&["examples/c/bench_cells.c"], &program, false, true);
-    let (json, ppm) = (dir.join("vdb.json"), dir.join("vdb.ppm"));
-    let blob = written.dir.join("fog16.blob");
-    let output = common::c::host_command(&program)
-        .args(["--field", "nanovdb", "--backend", "cpu", "--size", "48"])
-        .args(["--frames", "2", "--nvdb"])
-        .arg(&blob)
+        .args(["--backend", "cpu", "--size", "48", "--frames", "2"])
+        .args(args)
         .arg("--json")
         .arg(&json)
         .arg("--ppm")
@@ -391,16 +352,46 @@ fn the_cells_benchmark_host_reports_a_nanovdb_grid() {
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["ms"].as_array().unwrap().len(), 2);
+    let ppm = std::fs::read(&ppm).unwrap();
+    // Past the header "P6\n48 48\n255\n": pixels not the background.
+    let lit = ppm[ppm.len() - 48 * 48 * 3..]
+        .chunks(3)
+        .filter(|p| p.iter().any(|&c| c > 40))
+        .count();
+    (report, lit)
+}
+
+/// The benchmark host's AMR field (anari-visionaray's form) runs small
+/// and shows the shells.
+#[test]
+fn the_cells_benchmark_host_reports_an_amr_field() {
+    let args = ["--field", "amr", "--vertices", "17"].map(std::ffi::OsStr::new);
+    let (report, lit) = bench_cells_small("amr", &args);
+    assert_eq!(report["field"], "amr");
+    assert!(lit > 48 * 48 / 10, "{lit} pixels show the shells");
+}
+
+/// The benchmark host's NanoVDB field (a grid the library wrote) runs
+/// small, reports the grid's bytes and shows the fog.
+#[test]
+fn the_cells_benchmark_host_reports_a_nanovdb_grid() {
+    let Some(written) = common::nanovdb::grids() else {
+        return;
+    };
+    let blob = written.dir.join("fog16.blob");
+    let args = [
+        std::ffi::OsStr::new("--field"),
+        "nanovdb".as_ref(),
+        "--nvdb".as_ref(),
+        blob.as_os_str(),
+    ];
+    let (report, lit) = bench_cells_small("nanovdb", &args);
     assert_eq!(report["field"], "nanovdb");
     assert_eq!(
         report["grid_bytes"].as_u64(),
         Some(std::fs::metadata(&blob).unwrap().len())
     );
-    let ppm = std::fs::read(&ppm).unwrap();
-    let lit = ppm[ppm.len() - 48 * 48 * 3..]
-        .chunks(3)
-        .filter(|p| p.iter().any(|&c| c > 40))
-        .count();
     assert!(lit > 48 * 48 / 10, "{lit} pixels show the fog");
 }
 
@@ -414,26 +405,10 @@ fn the_cells_benchmark_host_reports_both_fields() {
     compile(&["examples/c/bench_cells.c"], &program, false, true);
     let mut runs = Vec::new();
     for field in ["structured", "unstructured"] {
-        let json = dir.join(format!("{field}.json"));
-        let ppm = dir.join(format!("{field}.ppm"));
-        let output = common::c::host_command(&program)
-            .args(["--field", field, "--backend", "cpu", "--size", "48"])
-            .args(["--vertices", "12", "--frames", "2", "--json"])
-            .arg(&json)
-            .arg("--ppm")
-            .arg(&ppm)
-            .output()
-            .unwrap();
-        assert!(
-            output.status.success(),
-            "bench_cells: {}",
-            describe(&output)
-        );
-        let report: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let args = ["--field", field, "--vertices", "12"].map(std::ffi::OsStr::new);
+        let (report, lit) = bench_cells_small(field, &args);
         assert_eq!(report["benchmark"], "capi-cells");
         assert_eq!(report["field"], field);
-        assert_eq!(report["ms"].as_array().unwrap().len(), 2);
         assert!(report["first_frame_ms"].as_f64().unwrap() > 0.0);
         assert!(report["peak_rss_mib"].as_f64().unwrap() > 1.0);
         let tets = report["tetrahedra"].as_u64().unwrap();
@@ -445,12 +420,6 @@ fn the_cells_benchmark_host_reports_both_fields() {
                 6 * 11 * 11 * 11
             }
         );
-        let ppm = std::fs::read(&ppm).unwrap();
-        // Past the header "P6\n48 48\n255\n": pixels not the background.
-        let lit = ppm[ppm.len() - 48 * 48 * 3..]
-            .chunks(3)
-            .filter(|p| p.iter().any(|&c| c > 40))
-            .count();
         runs.push((report["last_frame_samples"].as_u64().unwrap(), lit));
     }
     let ((grid, grid_lit), (mesh, mesh_lit)) = (runs[0], runs[1]);

@@ -8,8 +8,13 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-use anari_library_caveray::scene::{StructuredVolume, Voxels};
-use glam::{UVec3, Vec3};
+use std::sync::Arc;
+
+use anari_library_caveray::scene::{
+    Filter, NanoVdbGrid, ObjectIds, PlacedVolume, Scene, SpatialField, StructuredVolume,
+    TransferFunction, Voxels,
+};
+use glam::{Mat4, UVec3, Vec3};
 use serde_json::Value;
 
 pub struct Written {
@@ -26,6 +31,11 @@ impl Written {
 
     pub fn file(&self) -> PathBuf {
         self.dir.join("grids.nvdb")
+    }
+
+    /// Grid `name` sampled with `filter`.
+    pub fn grid(&self, name: &str, filter: Filter) -> NanoVdbGrid {
+        NanoVdbGrid::new(&self.blob(name), filter).unwrap()
     }
 
     /// The grid's index box as a structured grid of the library's values,
@@ -108,4 +118,16 @@ fn write() -> Option<Written> {
         dir,
         grids: serde_json::from_slice(&run.stdout).unwrap(),
     })
+}
+
+/// `volume` under `tf`, scaled by 0.15: the grids' ten-odd units fit the
+/// tests' views of a unit volume.
+pub fn scene(volume: impl Into<SpatialField>, tf: TransferFunction) -> Scene {
+    Scene::placed(vec![PlacedVolume {
+        volume: Arc::new(volume.into()),
+        transfer_function: Arc::new(tf),
+        transform: Mat4::from_scale(Vec3::splat(0.15)),
+        ids: ObjectIds::NONE,
+    }])
+    .unwrap()
 }

@@ -10,12 +10,9 @@ use crate::common;
 use anari_library_caveray::geometry::{OffAxisCamera, PrimaryRays};
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{ssim, Frame, FrameDesc, RenderSettings, Renderer, Shading};
-use anari_library_caveray::scene::{
-    Filter, NanoVdbGrid, ObjectIds, PlacedVolume, Scene, SpatialField, TransferFunction,
-};
+use anari_library_caveray::scene::{Filter, Scene, TransferFunction};
 use common::render::{off_axis_wall, renderers};
-use glam::{IVec3, Mat4, UVec2, Vec3, Vec4};
-use std::sync::Arc;
+use glam::{IVec3, UVec2, Vec3, Vec4};
 
 const SIZE: UVec2 = UVec2::new(48, 48);
 
@@ -57,23 +54,13 @@ fn band_table() -> TransferFunction {
     .unwrap()
 }
 
-fn placed(volume: SpatialField, tf: TransferFunction) -> Scene {
-    Scene::placed(vec![PlacedVolume {
-        volume: Arc::new(volume),
-        transfer_function: Arc::new(tf),
-        transform: Mat4::from_scale(Vec3::splat(0.15)),
-        ids: ObjectIds::NONE,
-    }])
-    .unwrap()
-}
-
 #[test]
 fn every_voxel_reads_as_the_library_reads_it() {
     let Some(written) = common::nanovdb::grids() else {
         return;
     };
     for name in ["fog", "fog16", "fog8", "fog4", "torus"] {
-        let grid = NanoVdbGrid::new(&written.blob(name), Filter::Linear).unwrap();
+        let grid = written.grid(name, Filter::Linear);
         let dense = written.dense(name);
         let info = &written.grids[name];
         assert_eq!(grid.values().name(), info["type"].as_str().unwrap());
@@ -120,14 +107,18 @@ fn grids_render_as_their_values_on_a_structured_grid() {
             ("fog", Filter::Nearest, fog_table()),
             ("torus", Filter::Linear, band_table()),
         ] {
-            let vdb = NanoVdbGrid::new(&written.blob(grid), filter).unwrap();
+            let vdb = written.grid(grid, filter);
             let dense = written.dense(grid).with_filter(filter);
             let settings = RenderSettings {
                 shading: Shading::Shadows,
                 ..RenderSettings::default()
             };
-            let got = render(&mut r, &placed(vdb.into(), table.clone()), &settings);
-            let want = render(&mut r, &placed(dense.into(), table), &settings);
+            let got = render(
+                &mut r,
+                &common::nanovdb::scene(vdb, table.clone()),
+                &settings,
+            );
+            let want = render(&mut r, &common::nanovdb::scene(dense, table), &settings);
             let s = ssim(&got, &want).unwrap();
             eprintln!("{name} {grid} {filter:?}: SSIM {s:.5} against the structured grid");
             assert!(s >= 0.999, "{name} {grid} {filter:?}: SSIM {s}");
@@ -156,8 +147,8 @@ fn skipping_leaps_over_the_empty_tree_and_leaves_the_image_alone() {
         0.3,
     )
     .unwrap();
-    let vdb = NanoVdbGrid::new(&written.blob("fog_fine"), Filter::Linear).unwrap();
-    let scene = placed(vdb.into(), edge);
+    let vdb = written.grid("fog_fine", Filter::Linear);
+    let scene = common::nanovdb::scene(vdb, edge);
     let mut results = Vec::new();
     for (name, mut r) in renderers() {
         let on = render(&mut r, &scene, &RenderSettings::default());
@@ -194,7 +185,7 @@ fn a_part_of_a_grid_holds_its_nodes_and_samples_as_the_whole() {
     };
     let mut rng = common::Rng::new(7);
     for name in ["fog_fine", "fog8", "torus"] {
-        let whole = NanoVdbGrid::new(&written.blob(name), Filter::Linear).unwrap();
+        let whole = written.grid(name, Filter::Linear);
         let dims = whole.lattice().0;
         let lo = dims / 4;
         let hi = dims / 2;

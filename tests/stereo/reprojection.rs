@@ -218,12 +218,36 @@ fn layers_from_an_earlier_frame_never_show() {
     assert!(used.time_layer_clear().unwrap() >= 0.0);
 }
 
+/// The right eye re-projected from the left of a head-mounted pair
+/// matches its own render (`what` names the scene), and the left eye is
+/// the left eye's render.
+fn reprojects_like_two_pass(what: &str, scene: &Scene) {
+    let mut gpu = common::render::gpu();
+    let pair = hmd(96, 12.0, 0.4);
+    let settings = RenderSettings::default();
+    let desc = FrameDesc::new(pair.size);
+    let (left, right) = two_pass(&mut gpu, scene, &pair, &settings, &desc);
+    let stereo = reprojected(
+        &mut gpu,
+        scene,
+        &pair,
+        &settings,
+        &desc,
+        LayerFormat::Rgba16F,
+    );
+    assert_eq!(stereo.left.color, left.color, "the left eye");
+    let d = dssim(&stereo.right, &right).unwrap();
+    let unmoved = dssim(&left, &right).unwrap();
+    eprintln!("{what}: DSSIM {d:.4}, left image as the right one {unmoved:.4}");
+    assert!(d < 0.02, "DSSIM {d}");
+    assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
+}
+
 /// An unstructured field re-projects as a grid does: the phantom's cells
 /// cut into 73,002 tetrahedra (below the size past which lavapipe's mesh
 /// samples go wrong, docs/ray_casting.md), unshaded.
 #[test]
 fn a_mesh_reprojects_like_two_pass() {
-    let mut gpu = common::render::gpu();
     let size = 2.0 / 3f32.sqrt();
     let grid = shepp_logan(24).placed(Vec3::ZERO, size);
     let tf = preset("phantom")
@@ -231,91 +255,31 @@ fn a_mesh_reprojects_like_two_pass() {
         .with_unit_distance(0.5 * size)
         .unwrap();
     let scene = Scene::new(grid_cells(&grid, Cut::Tetrahedra).unwrap(), tf);
-    let pair = hmd(96, 12.0, 0.4);
-    let settings = RenderSettings::default();
-    let desc = FrameDesc::new(pair.size);
-    let (left, right) = two_pass(&mut gpu, &scene, &pair, &settings, &desc);
-    let stereo = reprojected(
-        &mut gpu,
-        &scene,
-        &pair,
-        &settings,
-        &desc,
-        LayerFormat::Rgba16F,
-    );
-    assert_eq!(stereo.left.color, left.color, "the left eye");
-    let d = dssim(&stereo.right, &right).unwrap();
-    let unmoved = dssim(&left, &right).unwrap();
-    eprintln!("tetrahedra: DSSIM {d:.4}, left image as the right one {unmoved:.4}");
-    assert!(d < 0.02, "DSSIM {d}");
-    assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
+    reprojects_like_two_pass("tetrahedra", &scene);
 }
 
 /// An AMR field of three levels re-projects as a grid does.
 #[test]
 fn an_amr_field_reprojects_like_two_pass() {
     use anari_library_caveray::data::{refined, smooth_waves};
-    let mut gpu = common::render::gpu();
     let scene = Scene::new(
         refined(32, 3, smooth_waves).unwrap(),
         preset("phantom").unwrap(),
     );
-    let pair = hmd(96, 12.0, 0.4);
-    let settings = RenderSettings::default();
-    let desc = FrameDesc::new(pair.size);
-    let (left, right) = two_pass(&mut gpu, &scene, &pair, &settings, &desc);
-    let stereo = reprojected(
-        &mut gpu,
-        &scene,
-        &pair,
-        &settings,
-        &desc,
-        LayerFormat::Rgba16F,
-    );
-    assert_eq!(stereo.left.color, left.color, "the left eye");
-    let d = dssim(&stereo.right, &right).unwrap();
-    let unmoved = dssim(&left, &right).unwrap();
-    eprintln!("amr: DSSIM {d:.4}, left image as the right one {unmoved:.4}");
-    assert!(d < 0.02, "DSSIM {d}");
-    assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
+    reprojects_like_two_pass("amr", &scene);
 }
 
 /// A NanoVDB grid (the library's fog sphere, Fp8) re-projects as a grid
 /// does.
 #[test]
 fn a_nanovdb_grid_reprojects_like_two_pass() {
-    use anari_library_caveray::scene::{Filter, NanoVdbGrid, ObjectIds, PlacedVolume};
-    use std::sync::Arc;
+    use anari_library_caveray::scene::Filter;
     let Some(written) = common::nanovdb::grids() else {
         return;
     };
-    let grid = NanoVdbGrid::new(&written.blob("fog8"), Filter::Linear).unwrap();
-    let scene = Scene::placed(vec![PlacedVolume {
-        volume: Arc::new(grid.into()),
-        transfer_function: Arc::new(preset("shells").unwrap()),
-        transform: glam::Mat4::from_scale(Vec3::splat(0.15)),
-        ids: ObjectIds::NONE,
-    }])
-    .unwrap();
-    let mut gpu = common::render::gpu();
-    let pair = hmd(96, 12.0, 0.4);
-    let settings = RenderSettings::default();
-    let desc = FrameDesc::new(pair.size);
-    let (left, right) = two_pass(&mut gpu, &scene, &pair, &settings, &desc);
-    let stereo = reprojected(
-        &mut gpu,
-        &scene,
-        &pair,
-        &settings,
-        &desc,
-        LayerFormat::Rgba16F,
-    );
-    assert_eq!(stereo.left.color, left.color, "the left eye");
-    let d = dssim(&stereo.right, &right).unwrap();
-    let unmoved = dssim(&left, &right).unwrap();
-    eprintln!("nanovdb: DSSIM {d:.4}, left image as the right one {unmoved:.4}");
-    assert!(d < 0.02, "DSSIM {d}");
-    assert!(d < 0.5 * unmoved, "DSSIM {d} vs left-as-right {unmoved}");
+    let grid = written.grid("fog8", Filter::Linear);
+    let scene = common::nanovdb::scene(grid, preset("shells").unwrap());
+    reprojects_like_two_pass("nanovdb", &scene);
 }
 
 #[test]

@@ -309,19 +309,12 @@ fn an_amr_field_is_warped_by_every_mode_and_a_step_best_by_the_layers() {
 /// grid is.
 #[test]
 fn a_nanovdb_grid_is_warped_by_every_mode_and_a_step_best_by_the_layers() {
-    use anari_library_caveray::scene::{Filter, NanoVdbGrid, ObjectIds, PlacedVolume};
-    use std::sync::Arc;
+    use anari_library_caveray::scene::Filter;
     let Some(written) = common::nanovdb::grids() else {
         return;
     };
-    let grid = NanoVdbGrid::new(&written.blob("fog"), Filter::Linear).unwrap();
-    let scene = Scene::placed(vec![PlacedVolume {
-        volume: Arc::new(grid.into()),
-        transfer_function: Arc::new(preset("shells").unwrap()),
-        transform: glam::Mat4::from_scale(glam::Vec3::splat(0.15)),
-        ids: ObjectIds::NONE,
-    }])
-    .unwrap();
+    let grid = written.grid("fog", Filter::Linear);
+    let scene = common::nanovdb::scene(grid, preset("shells").unwrap());
     let from = pinhole(DVec3::new(0.0, 0.0, 3.5), DVec3::ZERO);
     let source = capture(&scene, &from, 4);
     for mode in WarpMode::ALL {

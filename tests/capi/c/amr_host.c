@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "expect.h"
+#include "volume_view.h"
 
 #define SIZE 40
 #define COARSE 8 /* cells per axis of the parent, 2 units wide */
@@ -43,31 +44,6 @@ static void fill(float *out, int n, float w, const int lo[3])
 }
 
 /* RGBA8 pixels of one render, into `out` (SIZE x SIZE). */
-static int render(ANARIDevice dev, ANARIFrame frame, uint8_t *out)
-{
-  uint32_t w = 0, h = 0;
-  ANARIDataType type;
-  const uint8_t *p;
-  anariRenderFrame(dev, frame);
-  anariFrameReady(dev, frame, ANARI_WAIT);
-  p = anariMapFrame(dev, frame, "channel.color", &w, &h, &type);
-  if (!p || w != SIZE || h != SIZE)
-    return 0;
-  memcpy(out, p, 4 * SIZE * SIZE);
-  anariUnmapFrame(dev, frame, "channel.color");
-  return 1;
-}
-
-static int lit(const uint8_t *p, int x0, int x1)
-{
-  int n = 0, x, y;
-  for (y = 0; y < SIZE; ++y)
-    for (x = x0; x < x1; ++x)
-      if (p[4 * (y * SIZE + x) + 3] > 40)
-        n++;
-  return n;
-}
-
 int main(void)
 {
   /* The parent covers [0, 16)^3 in finest cells; two children side by
@@ -84,24 +60,15 @@ int main(void)
   static float fine[2][FINE * FINE * FINE];
   static float all[COARSE * COARSE * COARSE + 2 * FINE * FINE * FINE];
   static uint8_t first[4 * SIZE * SIZE], second[4 * SIZE * SIZE];
-  float eye[3] = {8, 8, 40}, up[3] = {0, 1, 0}, dir[3] = {0, 0, -1};
-  float range[2] = {0, 2}, opacity[2] = {0.0f, 0.8f};
-  float tf_colors[6] = {0.2f, 0.4f, 1, 1, 0.6f, 0.2f}, background[4] = {0, 0, 0, 0};
-  unsigned size[2] = {SIZE, SIZE};
+  float eye[3] = {8, 8, 40}, range[2] = {0, 2};
   uint32_t ratio = 2;
-  ANARIDataType color_type = ANARI_UFIXED8_VEC4;
   int i, mid, edge, n = 0;
   ANARILibrary lib;
   ANARIDevice dev;
   ANARIArray1D width_array, bounds_array, level_array, bad_level_array, data_list, all_array;
-  ANARIArray1D volumes, tf_color, tf_opacity;
   ANARIArray3D blocks[BLOCKS];
   ANARISpatialField field;
-  ANARIVolume volume;
-  ANARIWorld world;
-  ANARIRenderer renderer;
-  ANARICamera camera;
-  ANARIFrame frame;
+  VolumeView view;
 
   fill(coarse, COARSE, 2.0f, bounds[0]);
   fill(fine[0], FINE, 1.0f, bounds[1]);
@@ -143,38 +110,12 @@ int main(void)
   for (i = 0; i < BLOCKS; ++i)
     anariRelease(dev, blocks[i]);
 
-  tf_color = anariNewArray1D(dev, tf_colors, NULL, NULL, ANARI_FLOAT32_VEC3, 2);
-  tf_opacity = anariNewArray1D(dev, opacity, NULL, NULL, ANARI_FLOAT32, 2);
-  volume = anariNewVolume(dev, "transferFunction1D");
-  anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
-  anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &tf_color);
-  anariSetParameter(dev, volume, "opacity", ANARI_ARRAY1D, &tf_opacity);
-  anariSetParameter(dev, volume, "valueRange", ANARI_FLOAT32_BOX1, range);
-  anariCommitParameters(dev, volume);
-  volumes = anariNewArray1D(dev, &volume, NULL, NULL, ANARI_VOLUME, 1);
-  world = anariNewWorld(dev);
-  anariSetParameter(dev, world, "volume", ANARI_ARRAY1D, &volumes);
-  anariCommitParameters(dev, world);
-  renderer = anariNewRenderer(dev, "default");
-  anariSetParameter(dev, renderer, "background", ANARI_FLOAT32_VEC4, background);
-  anariCommitParameters(dev, renderer);
-  camera = anariNewCamera(dev, "perspective");
-  anariSetParameter(dev, camera, "position", ANARI_FLOAT32_VEC3, eye);
-  anariSetParameter(dev, camera, "direction", ANARI_FLOAT32_VEC3, dir);
-  anariSetParameter(dev, camera, "up", ANARI_FLOAT32_VEC3, up);
-  anariCommitParameters(dev, camera);
-  frame = anariNewFrame(dev);
-  anariSetParameter(dev, frame, "size", ANARI_UINT32_VEC2, size);
-  anariSetParameter(dev, frame, "channel.color", ANARI_DATA_TYPE, &color_type);
-  anariSetParameter(dev, frame, "world", ANARI_WORLD, &world);
-  anariSetParameter(dev, frame, "renderer", ANARI_RENDERER, &renderer);
-  anariSetParameter(dev, frame, "camera", ANARI_CAMERA, &camera);
-  anariCommitParameters(dev, frame);
+  view = volume_view(dev, field, range, eye, SIZE);
   expect_quiet("the scene commits");
 
-  check("the OpenCOVER form renders", render(dev, frame, first));
-  mid = lit(first, SIZE / 3, 2 * SIZE / 3);
-  edge = lit(first, 0, SIZE / 8);
+  check("the OpenCOVER form renders", render_rgba(dev, view.frame, SIZE, first));
+  mid = lit_columns(first, SIZE, SIZE / 3, 2 * SIZE / 3);
+  edge = lit_columns(first, SIZE, 0, SIZE / 8);
   printf("     lit in the middle third %d, at the left edge %d\n", mid, edge);
   check("the dense middle shows and the thin edge does not", mid > 100 && edge < mid / 10);
   expect_quiet("the render");
@@ -187,7 +128,7 @@ int main(void)
   anariSetParameter(dev, field, "data", ANARI_ARRAY1D, &all_array);
   anariCommitParameters(dev, field);
   expect_quiet("the visionaray form commits");
-  check("the visionaray form renders", render(dev, frame, second));
+  check("the visionaray form renders", render_rgba(dev, view.frame, SIZE, second));
   check("both forms give the same image", memcmp(first, second, sizeof first) == 0);
 
   anariRelease(dev, width_array);
@@ -196,15 +137,8 @@ int main(void)
   anariRelease(dev, bad_level_array);
   anariRelease(dev, data_list);
   anariRelease(dev, all_array);
-  anariRelease(dev, tf_color);
-  anariRelease(dev, tf_opacity);
-  anariRelease(dev, volumes);
   anariRelease(dev, field);
-  anariRelease(dev, volume);
-  anariRelease(dev, world);
-  anariRelease(dev, renderer);
-  anariRelease(dev, camera);
-  anariRelease(dev, frame);
+  volume_view_release(dev, &view);
   anariRelease(dev, dev);
   anariUnloadLibrary(lib);
   printf("%s: %d failure(s)\n", failures ? "FAIL" : "PASS", failures);
