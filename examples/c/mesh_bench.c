@@ -11,11 +11,18 @@
  *
  * The scene: a closed bumpy UV sphere (708 x 708 quads, radius
  * 1 + 0.1 sin(8 theta) sin(8 phi)), indexed `triangle` geometry with
- * vertex.position, vertex.normal (analytic) and primitive.index; `matte`
- * material color (0.8, 0.7, 0.6); one `directional` light (-1,-1,-1);
- * renderer `default`, background (0.1, 0.1, 0.1, 1); perspective camera at
- * (0, 0, 3.5) looking down -z, fovy 60 deg, aspect 1; frame 768 x 768,
- * channel.color UFIXED8_RGBA_SRGB, channel.depth FLOAT32.
+ * vertex.position, vertex.color (FLOAT32_VEC4, from the analytic normal)
+ * and primitive.index, 1 001 112 triangles; beside it 1024 spheres (a
+ * `sphere` geometry, radius 0.04, on a 32 x 32 grid of a shell of radius
+ * 1.35); `matte` material whose color is the attribute "color" for the
+ * mesh and (0.8, 0.7, 0.6) for the spheres; one `directional` light
+ * (-1,-1,-1); renderer `default`, background (0.1, 0.1, 0.1, 1);
+ * perspective camera at (0, 0, 3.5) looking down -z, fovy 60 deg, aspect
+ * 1; frame 768 x 768, channel.color UFIXED8_RGBA_SRGB, channel.depth
+ * FLOAT32.  The arrays are the host's own memory, shared with the device
+ * (anariNewArray1D with a pointer), held until the end: 26 MB for the
+ * mesh, as a host that keeps its data does.  MESH_BENCH_NORMALS=1 adds
+ * vertex.normal (analytic, 6 MB more).
  *
  * Timings (CLOCK_MONOTONIC):
  *   first_frame_ms : commit of geometry/surface/world/frame + the first
@@ -29,6 +36,8 @@
  *                    at z = 3.5 exactly (frames is forced even).
  *   duration_property_ms : median of the frame's `duration` property
  *                    (FLOAT32 seconds in the ANARI spec) over those renders.
+ *   peak_rss_mb    : the process's peak resident memory (getrusage) at
+ *                    the end, host arrays included (host_arrays_mb).
  *
  * With library "caveray" the device parameter backend = "cpu" is set (see
  * caveray's docs/c_api.md) unless MESH_BENCH_BACKEND names another value
@@ -47,12 +56,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
 
 #define N_THETA 708
 #define N_PHI 708
 #define IMG 768
+#define N_SPHERES 32 /* per side of the grid */
 
 static double now_ms(void)
 {
@@ -185,18 +196,14 @@ int main(int argc, char **argv)
   /* pole bands: one non-degenerate triangle per quad */
   const uint32_t nt = 2u * N_THETA * N_PHI - 2u * N_PHI;
 
+  const int withNormals = getenv("MESH_BENCH_NORMALS") && atoi(getenv("MESH_BENCH_NORMALS"));
   double t_up0 = now_ms();
-  ANARIArray1D aPos =
-      anariNewArray1D(d, NULL, NULL, NULL, ANARI_FLOAT32_VEC3, nv);
-  ANARIArray1D aNrm =
-      anariNewArray1D(d, NULL, NULL, NULL, ANARI_FLOAT32_VEC3, nv);
-  ANARIArray1D aIdx =
-      anariNewArray1D(d, NULL, NULL, NULL, ANARI_UINT32_VEC3, nt);
-  float *pos = (float *)anariMapArray(d, aPos);
-  float *nrm = (float *)anariMapArray(d, aNrm);
-  uint32_t *idx = (uint32_t *)anariMapArray(d, aIdx);
-  if (!pos || !nrm || !idx) {
-    fprintf(stderr, "anariMapArray failed\n");
+  float *pos = (float *)malloc(sizeof(float) * 3 * nv);
+  float *nrm = (float *)malloc(sizeof(float) * 3 * nv);
+  float *col = (float *)malloc(sizeof(float) * 4 * nv);
+  uint32_t *idx = (uint32_t *)malloc(sizeof(uint32_t) * 3 * nt);
+  if (!pos || !nrm || !col || !idx) {
+    fprintf(stderr, "out of memory\n");
     return 1;
   }
   for (uint32_t i = 0; i <= N_THETA; i++) {
@@ -219,6 +226,15 @@ int main(int argc, char **argv)
     const uint32_t last = N_THETA * (N_PHI + 1);
     memcpy(pos + 3 * (last + j), pos + 3 * last, 3 * sizeof(float));
     memcpy(nrm + 3 * (last + j), nrm + 3 * last, 3 * sizeof(float));
+  }
+  for (uint32_t v = 0; v < nv; v++) {
+    for (int c = 0; c < 3; c++)
+      col[4 * v + c] = 0.5f + 0.45f * nrm[3 * v + c];
+    col[4 * v + 3] = 1.f;
+  }
+  if (!withNormals) {
+    free(nrm);
+    nrm = NULL;
   }
   uint32_t t = 0;
   for (uint32_t i = 0; i < N_THETA; i++) {
@@ -246,31 +262,66 @@ int main(int argc, char **argv)
     fprintf(stderr, "internal error: %u triangles, expected %u\n", t, nt);
     return 1;
   }
-  anariUnmapArray(d, aPos);
-  anariUnmapArray(d, aNrm);
-  anariUnmapArray(d, aIdx);
+  /* 1024 small spheres on a shell around the mesh */
+  const uint32_t ns = N_SPHERES * N_SPHERES;
+  float *spos = (float *)malloc(sizeof(float) * 3 * ns);
+  if (!spos) {
+    fprintf(stderr, "out of memory\n");
+    return 1;
+  }
+  for (uint32_t i = 0; i < N_SPHERES; i++)
+    for (uint32_t j = 0; j < N_SPHERES; j++) {
+      const double th = M_PI * (i + 0.5) / N_SPHERES, ph = 2.0 * M_PI * j / N_SPHERES;
+      float *p = spos + 3 * (i * N_SPHERES + j);
+      p[0] = (float)(1.35 * sin(th) * cos(ph));
+      p[1] = (float)(1.35 * cos(th));
+      p[2] = (float)(1.35 * sin(th) * sin(ph));
+    }
+  const double hostMB = (sizeof(float) * (3.0 + 4.0 + (nrm ? 3.0 : 0.0)) * nv
+                            + sizeof(uint32_t) * 3.0 * nt + sizeof(float) * 3.0 * ns)
+      / 1e6;
+
+  ANARIArray1D aPos = anariNewArray1D(d, pos, NULL, NULL, ANARI_FLOAT32_VEC3, nv);
+  ANARIArray1D aCol = anariNewArray1D(d, col, NULL, NULL, ANARI_FLOAT32_VEC4, nv);
+  ANARIArray1D aNrm =
+      nrm ? anariNewArray1D(d, nrm, NULL, NULL, ANARI_FLOAT32_VEC3, nv) : NULL;
+  ANARIArray1D aIdx = anariNewArray1D(d, idx, NULL, NULL, ANARI_UINT32_VEC3, nt);
+  ANARIArray1D aSph = anariNewArray1D(d, spos, NULL, NULL, ANARI_FLOAT32_VEC3, ns);
   double t_up1 = now_ms();
 
   ANARIGeometry geom = anariNewGeometry(d, "triangle");
   anariSetParameter(d, geom, "vertex.position", ANARI_ARRAY1D, &aPos);
-  anariSetParameter(d, geom, "vertex.normal", ANARI_ARRAY1D, &aNrm);
+  anariSetParameter(d, geom, "vertex.color", ANARI_ARRAY1D, &aCol);
+  if (aNrm)
+    anariSetParameter(d, geom, "vertex.normal", ANARI_ARRAY1D, &aNrm);
   anariSetParameter(d, geom, "primitive.index", ANARI_ARRAY1D, &aIdx);
 
+  ANARIGeometry sgeom = anariNewGeometry(d, "sphere");
+  anariSetParameter(d, sgeom, "vertex.position", ANARI_ARRAY1D, &aSph);
+  float sradius = 0.04f;
+  anariSetParameter(d, sgeom, "radius", ANARI_FLOAT32, &sradius);
+
   ANARIMaterial mat = anariNewMaterial(d, "matte");
+  anariSetParameter(d, mat, "color", ANARI_STRING, "color");
+  ANARIMaterial smat = anariNewMaterial(d, "matte");
   float color[3] = {0.8f, 0.7f, 0.6f};
-  anariSetParameter(d, mat, "color", ANARI_FLOAT32_VEC3, color);
+  anariSetParameter(d, smat, "color", ANARI_FLOAT32_VEC3, color);
 
   ANARISurface surf = anariNewSurface(d);
   anariSetParameter(d, surf, "geometry", ANARI_GEOMETRY, &geom);
   anariSetParameter(d, surf, "material", ANARI_MATERIAL, &mat);
+  ANARISurface ssurf = anariNewSurface(d);
+  anariSetParameter(d, ssurf, "geometry", ANARI_GEOMETRY, &sgeom);
+  anariSetParameter(d, ssurf, "material", ANARI_MATERIAL, &smat);
 
   ANARILight light = anariNewLight(d, "directional");
   float ldir[3] = {-1.f, -1.f, -1.f};
   anariSetParameter(d, light, "direction", ANARI_FLOAT32_VEC3, ldir);
 
   ANARIWorld world = anariNewWorld(d);
+  ANARISurface surfaces[2] = {surf, ssurf};
   ANARIArray1D aSurf =
-      anariNewArray1D(d, &surf, NULL, NULL, ANARI_SURFACE, 1);
+      anariNewArray1D(d, surfaces, NULL, NULL, ANARI_SURFACE, 2);
   ANARIArray1D aLight =
       anariNewArray1D(d, &light, NULL, NULL, ANARI_LIGHT, 1);
   anariSetParameter(d, world, "surface", ANARI_ARRAY1D, &aSurf);
@@ -308,8 +359,11 @@ int main(int argc, char **argv)
   /* ---- (a) world commit + first frame ---- */
   double t0 = now_ms();
   anariCommitParameters(d, geom);
+  anariCommitParameters(d, sgeom);
   anariCommitParameters(d, mat);
+  anariCommitParameters(d, smat);
   anariCommitParameters(d, surf);
+  anariCommitParameters(d, ssurf);
   anariCommitParameters(d, light);
   anariCommitParameters(d, world);
   anariCommitParameters(d, frame);
@@ -422,11 +476,18 @@ int main(int argc, char **argv)
       frames);
   for (int i = 0; i < nc; i++)
     printf("%s%.2f", i ? ", " : "", msCopy[i]);
+  struct rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
   printf("], \"array_fill_ms\": %.2f, \"load_device_ms\": %.2f, "
-         "\"hit_pixels\": %llu, \"anari_errors\": %d}\n",
+         "\"hit_pixels\": %llu, \"spheres\": %u, \"normals\": %s, "
+         "\"host_arrays_mb\": %.1f, \"peak_rss_mb\": %.1f, \"anari_errors\": %d}\n",
       t_up1 - t_up0,
       t_load1 - t_load0,
       (unsigned long long)hitPixels,
+      ns,
+      nrm ? "true" : "false",
+      hostMB,
+      usage.ru_maxrss / 1024.0,
       g_errors);
   fflush(stdout);
 
@@ -440,12 +501,24 @@ int main(int argc, char **argv)
   anariRelease(d, aLight);
   anariRelease(d, light);
   anariRelease(d, surf);
+  anariRelease(d, ssurf);
   anariRelease(d, mat);
+  anariRelease(d, smat);
   anariRelease(d, geom);
+  anariRelease(d, sgeom);
   anariRelease(d, aPos);
-  anariRelease(d, aNrm);
+  anariRelease(d, aCol);
+  if (aNrm)
+    anariRelease(d, aNrm);
   anariRelease(d, aIdx);
+  anariRelease(d, aSph);
   anariRelease(d, d);
   anariUnloadLibrary(lib);
+  /* Shared arrays: the host's memory outlives the device's use of it. */
+  free(pos);
+  free(nrm);
+  free(col);
+  free(idx);
+  free(spos);
   return 0;
 }

@@ -1,6 +1,6 @@
 use glam::{UVec2, Vec4};
 
-use super::encoding::{linear_to_srgb, srgb_to_linear, to_unorm8};
+use super::encoding::{linear_to_srgb, srgb8, srgb_to_linear, to_unorm8};
 use super::hits::PixelHit;
 use super::settings::BackgroundImage;
 use super::RenderError;
@@ -246,8 +246,8 @@ impl Frame {
         let encode = |srgb: bool| -> Result<Vec<u8>, RenderError> {
             let mut out = filled(color.len(), 0u8, "the frame's 8-bit color")?;
             for (o, c) in out.chunks_exact_mut(4).zip(color.chunks_exact(4)) {
-                let rgb = |x: f32| if srgb { linear_to_srgb(x) } else { x };
-                o.copy_from_slice(&[rgb(c[0]), rgb(c[1]), rgb(c[2]), c[3]].map(to_unorm8));
+                let rgb = |x: f32| if srgb { srgb8(x) } else { to_unorm8(x) };
+                o.copy_from_slice(&[rgb(c[0]), rgb(c[1]), rgb(c[2]), to_unorm8(c[3])]);
             }
             Ok(out)
         };

@@ -14,6 +14,7 @@ mod march_plan;
 mod progress;
 mod settings;
 pub mod shapes;
+pub mod simd;
 pub mod stereo;
 pub mod warp;
 

@@ -105,6 +105,9 @@ pub struct Shape {
     pub attributes: [Option<Attribute>; 5],
     /// The host's `primitive.id`, by host primitive index.
     pub ids: Option<Vec<u32>>,
+    /// The object-space box around every kept primitive, measured once:
+    /// every frame asks for a scene's bounds.
+    bounds: (Vec3, Vec3),
 }
 
 /// A shape as made, and what was dropped from it.
@@ -217,10 +220,13 @@ impl Shape {
                 });
             }
         }
-        let mut kept = Vec::with_capacity(triangles.len());
-        let mut kept_source = Vec::with_capacity(triangles.len());
+        // Kept triangles are moved down in place: a million-triangle mesh
+        // is not copied a second time.
+        let (mut triangles, mut source) = (triangles, source);
+        let mut kept = 0;
         let mut flat = 0;
-        for (tri, &host) in triangles.iter().zip(&source) {
+        for i in 0..triangles.len().min(source.len()) {
+            let (tri, host) = (&triangles[i], source[i]);
             for &v in tri {
                 let Some(&p) = positions.get(v as usize) else {
                     return Err(ShapeError::IndexOutOfRange {
@@ -245,20 +251,24 @@ impl Shape {
                 flat += 1;
                 continue;
             }
-            kept.push(*tri);
-            kept_source.push(host);
+            (triangles[kept], source[kept]) = (triangles[i], host);
+            kept += 1;
         }
+        triangles.truncate(kept);
+        source.truncate(kept);
         Ok(Made {
             shape: Shape {
                 primitives: Primitives::Triangles {
                     positions,
-                    triangles: kept,
+                    triangles,
                     normals,
                 },
-                source: kept_source,
+                source,
                 attributes: input.attributes,
                 ids: input.ids,
-            },
+                bounds: (Vec3::ZERO, Vec3::ZERO),
+            }
+            .measured(),
             dropped: dropped(flat, "triangles of zero area"),
         })
     }
@@ -311,7 +321,9 @@ impl Shape {
                 source,
                 attributes: input.attributes,
                 ids: input.ids,
-            },
+                bounds: (Vec3::ZERO, Vec3::ZERO),
+            }
+            .measured(),
             dropped: dropped(thin, "spheres of zero or invalid radius"),
         })
     }
@@ -360,7 +372,9 @@ impl Shape {
                 source,
                 attributes: input.attributes,
                 ids: input.ids,
-            },
+                bounds: (Vec3::ZERO, Vec3::ZERO),
+            }
+            .measured(),
             dropped: dropped(thin, &format!("{noun}s of zero length or invalid radius")),
         })
     }
@@ -401,7 +415,9 @@ impl Shape {
                 source,
                 attributes: input.attributes,
                 ids: input.ids,
-            },
+                bounds: (Vec3::ZERO, Vec3::ZERO),
+            }
+            .measured(),
             dropped: dropped(thin, "curve segments of invalid radius"),
         })
     }
@@ -478,6 +494,15 @@ impl Shape {
 
     /// The object-space box around every kept primitive.
     pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+
+    fn measured(mut self) -> Self {
+        self.bounds = self.measure_bounds();
+        self
+    }
+
+    fn measure_bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::INFINITY;
         let mut hi = Vec3::NEG_INFINITY;
         match &self.primitives {

@@ -97,6 +97,21 @@ pub fn indices(r: &Read<'_>, name: &str, element: T) -> Result<Option<Vec<u32>>,
     })
 }
 
+/// `name` (of `element`, three UINT32s) as vertex triples, read in one
+/// pass: a million triangles' indices are not held twice.
+pub fn triples(r: &Read<'_>, name: &str, element: T) -> Result<Option<Vec<[u32; 3]>>, String> {
+    r.array_of(name, element, |a| {
+        let mut out = Vec::new();
+        out.try_reserve_exact(a.bytes().len() / 12)
+            .map_err(|_| format!("'{name}': cannot hold {} bytes of indices", a.bytes().len()))?;
+        out.extend(a.bytes().chunks_exact(12).map(|c| {
+            let word = |k: usize| u32::from_ne_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]);
+            [word(0), word(4), word(8)]
+        }));
+        Ok(out)
+    })
+}
+
 /// `primitive.index` as vertex pairs, else vertices 2i and 2i + 1.
 pub fn pairs(r: &Read<'_>, vertices: usize) -> Result<Vec<[u32; 2]>, String> {
     let flat = match indices(r, "primitive.index", T::UINT32_VEC2)? {

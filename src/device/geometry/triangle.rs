@@ -29,14 +29,12 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let positions = attributes::positions(r)?;
-    let corners = match attributes::indices(r, "primitive.index", T::UINT32_VEC3)? {
-        Some(i) => i,
-        None => (0..(positions.len() / 3 * 3) as u32).collect(),
+    let triangles = match attributes::triples(r, "primitive.index", T::UINT32_VEC3)? {
+        Some(t) => t,
+        None => (0..(positions.len() / 3) as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect(),
     };
-    let triangles: Vec<[u32; 3]> = corners
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
     let source = (0..triangles.len() as u32).collect();
     let normals = attributes::vec3s(r, "vertex.normal")?;
     let input = attributes::input(r, positions.len(), triangles.len())?;

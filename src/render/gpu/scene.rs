@@ -217,7 +217,7 @@ impl GpuScene {
         if same {
             return Ok(());
         }
-        let packed = ShapeSet::build(shapes)?.pack()?;
+        let packed = ShapeSet::packed(shapes)?;
         (self.surfaces, self.surface_slot) = resources::surfaces_buffers(ctx, &packed)?;
         self.shapes = shapes.to_vec();
         self.uploads.surfaces += u32::from(!shapes.is_empty());

@@ -4,33 +4,40 @@
 //! and its color under the world's light. The volume march stops at that
 //! hit and composites over its color (cpu/march.rs), so one ray sees both.
 //!
-//! The BVH comes from obvhs: its PLOC builder (parallel, on the glam we
-//! use) makes good trees for a million triangles in well under a second,
-//! and its binary nodes (a box, a first index, a count) are plain enough
-//! to hand to a GPU as they are. Triangles are placed in world space once;
-//! spheres and cylinders are tested in object space, so an instance's
-//! shear or uneven scale makes the ellipsoid it should.
+//! The CPU traverses a wide BVH (wide.rs) collapsed from a binned SAH
+//! tree (binned.rs), its boxes and triangles tested eight at a time; the
+//! GPU a binary tree from obvhs's PLOC builder, whose flat nodes (a box,
+//! a first index, a count) go to a storage buffer as they are (packed.rs).
+//! Triangles are placed in world space once; spheres and cylinders are
+//! tested in object space, so an instance's shear or uneven scale makes
+//! the ellipsoid it should.
 
+mod binned;
 mod brdf;
 mod intersect;
 pub mod packed;
+mod wide;
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::Boundable;
+use rayon::prelude::*;
 
 use super::frame::filled;
 use super::hits::HitRecord;
+use super::simd::Level;
 use super::{RenderError, RenderSettings, SurfaceShading};
 use crate::scene::{
     Attribute, ColorSource, Coverage, OpacitySource, PlacedShape, Primitives, Source,
     DEFAULT_ATTRIBUTE,
 };
+use binned::Item;
 use brdf::reflected;
 pub use brdf::MIN_ROUGHNESS;
 use intersect::{cone, curve, sphere, tangent_cone, triangle, End};
+use wide::Wide;
 
 /// The most translucent surfaces one ray composites; those behind them
 /// are passed through.
@@ -87,11 +94,20 @@ pub struct Hit {
     pub normal: Vec3,
 }
 
+/// How a shape set's BVH is kept.
+enum Tree {
+    /// Binary, as obvhs builds it: what the GPU traverses.
+    Binary(Bvh2),
+    /// Eight children to a node, triangles in blocks: what the CPU
+    /// traverses.
+    Wide(Wide),
+}
+
 /// A scene's shapes, ready to trace.
 pub struct ShapeSet {
     traced: Vec<Traced>,
     prims: Vec<Prim>,
-    bvh: Bvh2,
+    tree: Tree,
 }
 
 impl std::fmt::Debug for ShapeSet {
@@ -99,22 +115,39 @@ impl std::fmt::Debug for ShapeSet {
         f.debug_struct("ShapeSet")
             .field("shapes", &self.traced.len())
             .field("primitives", &self.prims.len())
-            .field("nodes", &self.bvh.nodes.len())
+            .field(
+                "nodes",
+                &match &self.tree {
+                    Tree::Binary(bvh) => bvh.nodes.len(),
+                    Tree::Wide(wide) => wide.counts().0,
+                },
+            )
             .finish()
     }
 }
 
 impl ShapeSet {
-    /// The BVH over every kept primitive of `shapes`.
+    /// The wide BVH over every kept primitive of `shapes`, as the CPU
+    /// traverses it.
     pub fn build(shapes: &[PlacedShape]) -> Result<Self, RenderError> {
+        Self::build_as(shapes, true)
+    }
+
+    /// The binary BVH over every kept primitive of `shapes`, as the GPU
+    /// traverses it ([`ShapeSet::pack`]).
+    pub fn build_binary(shapes: &[PlacedShape]) -> Result<Self, RenderError> {
+        Self::build_as(shapes, false)
+    }
+
+    fn build_as(shapes: &[PlacedShape], wide: bool) -> Result<Self, RenderError> {
         let total: usize = shapes.iter().map(|s| s.shape.len()).sum();
         let mut prims = filled(total, Prim { shape: 0, index: 0 }, "the BVH's primitives")?;
         prims.clear();
-        let mut boxes = Vec::new();
+        let mut boxes: Vec<Item> = Vec::new();
         boxes
             .try_reserve_exact(total)
             .map_err(|_| RenderError::OutOfMemory {
-                bytes: (total * std::mem::size_of::<Boxed>()) as u64,
+                bytes: (total * std::mem::size_of::<Item>()) as u64,
                 what: "the BVH's boxes".into(),
             })?;
         let mut traced = Vec::with_capacity(shapes.len());
@@ -137,16 +170,19 @@ impl ShapeSet {
                         Vec3::ZERO,
                         "the triangles' world positions",
                     )?;
-                    for (w, p) in world.iter_mut().zip(positions) {
-                        *w = m.transform_point3(*p);
-                    }
-                    for tri in triangles {
+                    world
+                        .par_iter_mut()
+                        .zip(positions.par_iter())
+                        .for_each(|(w, p)| *w = m.transform_point3(*p));
+                    let base = boxes.len() as u32;
+                    boxes.par_extend(triangles.par_iter().enumerate().map(|(i, tri)| {
                         let [a, b, c] = tri.map(|v| world[v as usize]);
-                        boxes.push(Boxed(Aabb::new(
-                            a.min(b).min(c).into(),
-                            a.max(b).max(c).into(),
-                        )));
-                    }
+                        Item {
+                            lo: a.min(b).min(c),
+                            index: base + i as u32,
+                            hi: a.max(b).max(c),
+                        }
+                    }));
                 }
                 Primitives::Spheres {
                     positions,
@@ -156,7 +192,11 @@ impl ShapeSet {
                     for &v in spheres {
                         let (c, r) = (positions[v as usize], radii[v as usize]);
                         let (lo, hi) = crate::scene::transformed_box(m, (c - r, c + r));
-                        boxes.push(Boxed(Aabb::new(lo.into(), hi.into())));
+                        boxes.push(Item {
+                            lo,
+                            index: boxes.len() as u32,
+                            hi,
+                        });
                     }
                 }
                 Primitives::Cones { .. } | Primitives::Curves { .. } => {
@@ -165,7 +205,11 @@ impl ShapeSet {
                         let r = rp.max(rq);
                         let object = (p.min(q) - r, p.max(q) + r);
                         let (lo, hi) = crate::scene::transformed_box(m, object);
-                        boxes.push(Boxed(Aabb::new(lo.into(), hi.into())));
+                        boxes.push(Item {
+                            lo,
+                            index: boxes.len() as u32,
+                            hi,
+                        });
                     }
                 }
             }
@@ -187,13 +231,43 @@ impl ShapeSet {
                 cuts: fixed.is_none(),
             });
         }
-        let bvh = if boxes.is_empty() {
-            Bvh2::default()
+        let tree = if boxes.is_empty() {
+            Tree::Binary(Bvh2::default())
+        } else if wide {
+            let bvh = binned::build(&mut boxes, wide::LEAF_MAX as usize);
+            drop(boxes);
+            // Triangles whose opacity can hide parts of them are tested
+            // one by one, their coverage looked at per hit.
+            let blocked = |p: u32| {
+                let t = &traced[prims[p as usize].shape as usize];
+                !t.cuts && matches!(t.placed.shape.primitives, Primitives::Triangles { .. })
+            };
+            let triangle = |p: u32| {
+                let prim = prims[p as usize];
+                let t = &traced[prim.shape as usize];
+                match &t.placed.shape.primitives {
+                    Primitives::Triangles { triangles, .. } => {
+                        triangles[prim.index as usize].map(|v| t.world[v as usize])
+                    }
+                    _ => unreachable!("only triangles are blocked"),
+                }
+            };
+            Tree::Wide(Wide::collapse(&bvh, blocked, triangle))
         } else {
+            let boxed: Vec<Boxed> = boxes
+                .iter()
+                .map(|b| Boxed(Aabb::new(b.lo.into(), b.hi.into())))
+                .collect();
+            drop(boxes);
             let mut took = std::time::Duration::ZERO;
-            obvhs::bvh2::builder::build_bvh2(&boxes, obvhs::BvhBuildParams::fast_build(), &mut took)
+            let params = obvhs::BvhBuildParams::fast_build();
+            Tree::Binary(obvhs::bvh2::builder::build_bvh2(&boxed, params, &mut took))
         };
-        Ok(Self { traced, prims, bvh })
+        Ok(Self {
+            traced,
+            prims,
+            tree,
+        })
     }
 
     /// Bytes the traced form holds beside the shapes themselves: world
@@ -204,13 +278,17 @@ impl ShapeSet {
             (v.capacity() * size_of::<T>()) as u64
         }
         let world: u64 = self.traced.iter().map(|t| of(&t.world)).sum();
-        world
-            + of(&self.prims)
-            + of(&self.bvh.nodes)
-            + of(&self.bvh.primitive_indices)
-            + of(&self.bvh.primitive_indices_freelist)
-            + of(&self.bvh.primitives_to_nodes)
-            + of(&self.bvh.parents)
+        let tree = match &self.tree {
+            Tree::Binary(bvh) => {
+                of(&bvh.nodes)
+                    + of(&bvh.primitive_indices)
+                    + of(&bvh.primitive_indices_freelist)
+                    + of(&bvh.primitives_to_nodes)
+                    + of(&bvh.parents)
+            }
+            Tree::Wide(wide) => wide.heap_bytes(),
+        };
+        world + of(&self.prims) + tree
     }
 
     /// Primitives traced.
@@ -224,22 +302,38 @@ impl ShapeSet {
 
     /// The nearest hit with `t` in `(t_min, t_max)` along `o + t d`.
     pub fn hit(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+        self.hit_on(Level::chosen(), o, d, t_min, t_max)
+    }
+
+    /// [`ShapeSet::hit`] with the wide BVH's kernels built for `level`.
+    pub fn hit_on(&self, level: Level, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         if self.prims.is_empty() || t_max.partial_cmp(&t_min) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
-        let ray = Ray::new(o.into(), d.into(), t_min, t_max);
-        let mut found = RayHit::none();
-        let indices = &self.bvh.primitive_indices;
-        let hit = self.bvh.ray_traverse(ray, &mut found, |ray, id| {
-            let prim = self.prims[indices[id] as usize];
-            self.shown(prim, o, d, ray.tmin, ray.tmax)
-                .map_or(f32::INFINITY, |(t, _)| t)
-        });
-        if !hit {
-            return None;
-        }
-        let prim = self.prims[indices[found.primitive_id as usize] as usize];
-        let (t, bary) = self.shown(prim, o, d, t_min, t_max)?;
+        let (prim, t, bary) = match &self.tree {
+            Tree::Wide(wide) => {
+                let mut other =
+                    |p: u32, far: f32| self.shown(self.prims[p as usize], o, d, t_min, far);
+                let found = wide.closest(level, (o, d), (t_min, t_max), &mut other)?;
+                (self.prims[found.prim as usize], found.t, found.bary)
+            }
+            Tree::Binary(bvh) => {
+                let ray = Ray::new(o.into(), d.into(), t_min, t_max);
+                let mut found = RayHit::none();
+                let indices = &bvh.primitive_indices;
+                let hit = bvh.ray_traverse(ray, &mut found, |ray, id| {
+                    let prim = self.prims[indices[id] as usize];
+                    self.shown(prim, o, d, ray.tmin, ray.tmax)
+                        .map_or(f32::INFINITY, |(t, _)| t)
+                });
+                if !hit {
+                    return None;
+                }
+                let prim = self.prims[indices[found.primitive_id as usize] as usize];
+                let (t, bary) = self.shown(prim, o, d, t_min, t_max)?;
+                (prim, t, bary)
+            }
+        };
         let normal = self.normal(prim, o + d * t, bary, d);
         Some(Hit {
             t,

@@ -45,10 +45,11 @@
 //!   however many shapes use it.
 
 use glam::{Vec2, Vec3};
+use obvhs::bvh2::Bvh2;
 
 use std::sync::Arc;
 
-use super::{Hit, ShapeSet};
+use super::{Hit, ShapeSet, Tree};
 use crate::render::RenderError;
 use crate::scene::{
     AlphaMode, OpacitySource, Primitives, Sampler, SamplerKind, Source, SurfaceMaterial,
@@ -108,19 +109,28 @@ fn word(v: Vec3, w: f32) -> [f32; 4] {
 }
 
 impl ShapeSet {
-    /// The layout above, or why a GPU cannot take it.
-    pub fn pack(&self) -> Result<Packed, RenderError> {
+    /// `shapes` in the layout above, over the binary BVH, or why a GPU
+    /// cannot take them.
+    pub fn packed(shapes: &[crate::scene::PlacedShape]) -> Result<Packed, RenderError> {
+        let set = Self::build_binary(shapes)?;
+        match &set.tree {
+            Tree::Binary(bvh) => set.pack(bvh),
+            Tree::Wide(_) => unreachable!("build_binary keeps the binary tree"),
+        }
+    }
+
+    fn pack(&self, bvh: &Bvh2) -> Result<Packed, RenderError> {
         if self.prims.is_empty() {
             return Ok(Packed::default());
         }
-        let depth = self.depth();
+        let depth = Self::depth(bvh);
         if depth > TRAVERSAL_STACK {
             return Err(RenderError::Settings(format!(
                 "the surfaces' BVH is {depth} levels deep; the GPU traverses {TRAVERSAL_STACK} (render this world on the CPU)"
             )));
         }
-        let nodes = self.bvh.nodes.len();
-        let slots = self.bvh.primitive_indices.len();
+        let nodes = bvh.nodes.len();
+        let slots = bvh.primitive_indices.len();
         let shading: usize = self
             .traced
             .iter()
@@ -140,12 +150,12 @@ impl ShapeSet {
         };
         let mut words = reserve(total)?;
         let mut shaded = reserve(shading + texels)?;
-        for n in &self.bvh.nodes {
+        for n in &bvh.nodes {
             let (lo, hi) = (Vec3::from(n.aabb.min), Vec3::from(n.aabb.max));
             words.push(word(lo, bits(n.prim_count)));
             words.push(word(hi, bits(n.first_index)));
         }
-        for &id in &self.bvh.primitive_indices {
+        for &id in &bvh.primitive_indices {
             let prim = self.prims[id as usize];
             let traced = &self.traced[prim.shape as usize];
             let i = prim.index as usize;
@@ -309,8 +319,8 @@ impl ShapeSet {
     }
 
     /// Levels from the root to the deepest leaf, the root's counted.
-    fn depth(&self) -> u32 {
-        let nodes = &self.bvh.nodes;
+    fn depth(bvh: &Bvh2) -> u32 {
+        let nodes = &bvh.nodes;
         let mut deepest = 0;
         let mut stack = vec![(0usize, 1u32)];
         while let Some((i, level)) = stack.pop() {

@@ -4,6 +4,7 @@ use glam::{DVec3, Mat4, UVec2, UVec3, Vec3, Vec4};
 
 use super::*;
 use crate::geometry::{ImageRegion, OrthographicCamera, PrimaryRays};
+use crate::render::simd::Level;
 use crate::render::{ColorFormat, CpuRenderer, Frame, FrameDesc, Render};
 use crate::scene::{
     AlphaMode, Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction,
@@ -257,10 +258,10 @@ fn a_surface_in_a_volume_ends_the_march_and_the_nearer_depth_is_reported() {
     assert_eq!(i.pixel(N - 1, N - 1), alone.pixel(N - 1, N - 1));
 }
 
-#[test]
-fn the_bvh_finds_the_nearest_of_many_primitives() {
-    // A cloud of small triangles and spheres, each ray's answer checked
-    // against testing every primitive.
+/// A cloud of `triangles` small triangles (some of them sharing edges)
+/// and 100 spheres, turned by an instance, and a source of random
+/// numbers in [0, 1].
+fn cloud(triangles: u32) -> ([PlacedShape; 2], impl FnMut() -> f32) {
     let mut seed = 7u32;
     let mut rnd = move || {
         seed ^= seed << 13;
@@ -270,15 +271,18 @@ fn the_bvh_finds_the_nearest_of_many_primitives() {
     };
     let mut p = Vec::new();
     let mut tris = Vec::new();
-    for k in 0..300u32 {
+    for k in 0..triangles / 2 {
         let c = Vec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0;
-        for _ in 0..3 {
+        for _ in 0..4 {
             p.push(c + Vec3::new(rnd(), rnd(), rnd()) * 0.6 - 0.3);
         }
-        tris.push([3 * k, 3 * k + 1, 3 * k + 2]);
+        tris.push([4 * k, 4 * k + 1, 4 * k + 2]);
+        tris.push([4 * k + 2, 4 * k + 1, 4 * k + 3]);
     }
     let n = tris.len();
-    let mesh = Shape::triangles(p, tris, (0..n as u32).collect(), None, input(3 * n, n)).unwrap();
+    let vertices = p.len();
+    let mesh =
+        Shape::triangles(p, tris, (0..n as u32).collect(), None, input(vertices, n)).unwrap();
     let centers: Vec<Vec3> = (0..100)
         .map(|_| Vec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0)
         .collect();
@@ -291,13 +295,21 @@ fn the_bvh_finds_the_nearest_of_many_primitives() {
             Mat4::from_rotation_y(0.3),
         )
     });
+    (placed, rnd)
+}
+
+#[test]
+fn the_bvh_finds_the_nearest_of_many_primitives() {
+    // Each ray's answer checked against testing every primitive, in the
+    // CPU's wide tree and the GPU's binary one.
+    let (placed, mut rnd) = cloud(600);
     let set = ShapeSet::build(&placed).unwrap();
-    assert!(set.len() > 390 && set.len() <= 400);
+    let binary = ShapeSet::build_binary(&placed).unwrap();
+    assert!(set.len() > 680 && set.len() <= 700);
     let mut hits = 0;
     for _ in 0..2000 {
         let o = Vec3::new(rnd(), rnd(), rnd()) * 8.0 - 4.0;
         let d = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize();
-        let got = set.hit(o, d, 0.0, f32::INFINITY);
         let mut best: Option<(f32, u32, u32)> = None;
         for prim in &set.prims {
             if let Some((t, _)) = set.distance(*prim, o, d, 0.0, f32::INFINITY) {
@@ -306,16 +318,45 @@ fn the_bvh_finds_the_nearest_of_many_primitives() {
                 }
             }
         }
-        match (got, best) {
-            (None, None) => {}
-            (Some(h), Some((t, _, _))) => {
-                hits += 1;
-                assert!((h.t - t).abs() < 1e-5, "{} vs {t}", h.t);
+        for (tree, got) in [
+            ("wide", set.hit(o, d, 0.0, f32::INFINITY)),
+            ("binary", binary.hit(o, d, 0.0, f32::INFINITY)),
+        ] {
+            match (got, best) {
+                (None, None) => {}
+                (Some(h), Some((t, _, _))) => {
+                    hits += 1;
+                    // The same arithmetic: the same distance.
+                    assert_eq!(h.t, t, "{tree}");
+                }
+                _ => panic!("{tree} BVH {got:?} against every primitive {best:?}"),
             }
-            _ => panic!("BVH {got:?} against every primitive {best:?}"),
         }
     }
-    assert!(hits > 100, "{hits} rays hit");
+    assert!(hits > 200, "{hits} rays hit");
+}
+
+/// The wide tree's kernels built for each SIMD level this CPU runs find
+/// the same hits to the bit, on a cloud large enough for a tree of
+/// several levels.
+#[test]
+fn every_simd_level_finds_the_same_hits() {
+    let (placed, mut rnd) = cloud(20_000);
+    let set = ShapeSet::build(&placed).unwrap();
+    let levels: Vec<Level> = Level::ALL.into_iter().filter(|l| l.runs()).collect();
+    let mut hits = 0;
+    for _ in 0..3000 {
+        let o = Vec3::new(rnd(), rnd(), rnd()) * 8.0 - 4.0;
+        let d = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize();
+        let t_min = rnd() * 0.5;
+        let reference = set.hit_on(Level::Portable, o, d, t_min, 6.0);
+        hits += u32::from(reference.is_some());
+        for &level in &levels {
+            assert_eq!(set.hit_on(level, o, d, t_min, 6.0), reference, "{level:?}");
+        }
+    }
+    assert!(hits > 500, "{hits} rays hit");
+    eprintln!("levels run here: {levels:?}");
 }
 
 /// Checks every pixel of the orthographic view down -z that `expect`

@@ -378,13 +378,49 @@ fn renderers(figures: &mut BTreeMap<String, f64>) -> Result<(), Failure> {
         "memory.cpu_bytes_per_triangle".into(),
         (own + traced.heap_bytes()) as f64 / triangles as f64,
     );
-    let packed = traced.pack().map_err(runtime)?;
+    let packed = ShapeSet::packed(shapes).map_err(runtime)?;
     let gpu = 16 * (packed.words.len() + packed.shading.len());
     figures.insert(
         "memory.gpu_bytes_per_triangle".into(),
         gpu as f64 / triangles as f64,
     );
+    let binary = ShapeSet::build_binary(shapes).map_err(runtime)?;
+    figures.insert("cpu.wide_over_binary".into(), traversals(&binary, &traced)?);
     Ok(())
+}
+
+/// The same rays' nearest hits in two shape sets (the protocol's four
+/// views, each set four times, interleaved, on one thread): `a`'s fastest
+/// time over `b`'s, median over the views. Both must find the same hits.
+fn traversals(a: &ShapeSet, b: &ShapeSet) -> Result<f64, Failure> {
+    let size = rays_size();
+    let mut ratios = Vec::new();
+    for rays in protocol_views(4)? {
+        let trace = |set: &ShapeSet| {
+            let clock = std::time::Instant::now();
+            let mut hits = Vec::with_capacity((size.x * size.y) as usize);
+            for y in 0..size.y {
+                for x in 0..size.x {
+                    let (o, d) = rays.pixel_ray(x, y);
+                    hits.push(set.hit(o, d, rays.t_near, rays.t_far).map(|h| h.t));
+                }
+            }
+            (clock.elapsed().as_secs_f64(), hits)
+        };
+        let (mut fastest_a, mut fastest_b) = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..4 {
+            let (ta, hits_a) = trace(a);
+            let (tb, hits_b) = trace(b);
+            if hits_a != hits_b {
+                return Err(Failure::Runtime(
+                    "the two BVHs found different hits for the same rays".into(),
+                ));
+            }
+            (fastest_a, fastest_b) = (fastest_a.min(ta), fastest_b.min(tb));
+        }
+        ratios.push(fastest_a / fastest_b);
+    }
+    Ok(median(ratios))
 }
 
 /// The value's bytes, as a host passes them.

@@ -117,6 +117,13 @@ const RULES: &[Rule] = &[
         limit: Some(1.2),
     },
     Rule {
+        name: "cpu.wide_over_binary",
+        what: "the CPU's surface traversal: the nearest hits of the same rays on the CT head's isosurface (stride 4) in the binary BVH the GPU takes over the CPU's wide one (eight children a node, triangles in blocks of eight, the widest SIMD this CPU runs), fastest of four interleaved, median over 4 views, one thread",
+        better: Better::Higher,
+        margin: Some(1.5),
+        limit: Some(1.2),
+    },
+    Rule {
         name: "cpu.tets_over_grid",
         what: "an unstructured field on the CPU: a frame of the Marschner-Lobb signal on 33^3 vertices cut into 196,608 tetrahedra over a frame of the same grid (128², 4 views, interleaved, skipping on), median over the views; the tetrahedra are found by walking from cell to cell",
         better: Better::Lower,

@@ -1,0 +1,648 @@
+//! The CPU's traversal of a shape set: the binary BVH collapsed into nodes
+//! of eight children whose boxes one ray tests at once, over leaves whose
+//! triangles sit in world space eight to a block, also tested at once
+//! (Möller and Trumbore's test with the scalar one's arithmetic, lane by
+//! lane, so both find the same hits to the bit). Spheres, cones, curves,
+//! and triangles whose opacity can hide parts of them stay in a leaf's
+//! list for the caller to test one by one.
+//!
+//! The kernels are plain loops over eight lanes, one body built for each
+//! SIMD level (simd.rs): the compiler turns each loop into one vector
+//! instruction per operation on AVX2 and AVX-512, two on the baseline.
+
+use std::mem::MaybeUninit;
+
+use glam::{Vec2, Vec3};
+use obvhs::bvh2::Bvh2;
+use rayon::prelude::*;
+
+use crate::render::simd::Level;
+
+/// Children per node, triangles per block.
+pub const WIDTH: usize = 8;
+
+/// The most primitives the binary tree's leaves should hold: one block.
+pub const LEAF_MAX: u32 = 8;
+
+/// A child reference with this bit set is a leaf's index.
+const LEAF: u32 = 1 << 31;
+
+/// A child slot with nothing in it (its box is empty and never hit).
+const EMPTY: u32 = u32::MAX;
+
+/// A box's far distance is stretched by this much, so that rounding in
+/// the slab test cannot make a ray miss a box it grazes (Ize, "Robust
+/// BVH Ray Traversal", 2013: 1 + 2 gamma(3)).
+const ROBUST: f32 = 1.0 + 3.0 * f32::EPSILON;
+
+/// Eight children's boxes, an axis at a time, and what each child is.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Node {
+    lo: [[f32; WIDTH]; 3],
+    hi: [[f32; WIDTH]; 3],
+    child: [u32; WIDTH],
+}
+
+const EMPTY_NODE: Node = Node {
+    lo: [[f32::INFINITY; WIDTH]; 3],
+    hi: [[f32::NEG_INFINITY; WIDTH]; 3],
+    child: [EMPTY; WIDTH],
+};
+
+/// Eight triangles in world space: a corner and the two edges from it,
+/// an axis at a time; lanes past the leaf's last triangle have zero edges
+/// (a zero determinant, never hit).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Block {
+    a: [[f32; WIDTH]; 3],
+    e1: [[f32; WIDTH]; 3],
+    e2: [[f32; WIDTH]; 3],
+    /// The shape set's primitive in each lane.
+    prim: [u32; WIDTH],
+}
+
+const EMPTY_BLOCK: Block = Block {
+    a: [[0.0; WIDTH]; 3],
+    e1: [[0.0; WIDTH]; 3],
+    e2: [[0.0; WIDTH]; 3],
+    prim: [EMPTY; WIDTH],
+};
+
+/// A leaf's blocks and its primitives tested one by one.
+#[derive(Clone, Copy, Default)]
+struct Leaf {
+    block: u32,
+    blocks: u32,
+    other: u32,
+    others: u32,
+}
+
+/// The nearest hit a traversal found: the shape set's primitive, the ray
+/// parameter and the barycentrics (a triangle's) or what the caller's
+/// test gave.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Found {
+    pub prim: u32,
+    pub t: f32,
+    pub bary: Vec2,
+}
+
+/// A shape set's wide BVH.
+#[derive(Default)]
+pub struct Wide {
+    nodes: Vec<Node>,
+    blocks: Vec<Block>,
+    leaves: Vec<Leaf>,
+    others: Vec<u32>,
+    /// The root's reference (a node, a leaf, or EMPTY).
+    root: u32,
+    /// Stack entries a traversal may need.
+    stack: usize,
+}
+
+/// What a traversal knows of its ray.
+struct Ray {
+    o: Vec3,
+    d: Vec3,
+    /// 1 / d, with zero components replaced by the smallest normal float
+    /// of their sign so that no slab distance is 0 * inf.
+    inv: [f32; 3],
+    /// Whether each component of d is negative: then the box's far plane
+    /// on that axis is its low one.
+    neg: [bool; 3],
+}
+
+/// `max` and `min` as one compare and select, the same on every level.
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+impl Wide {
+    /// `bvh` collapsed, its primitives numbered as its
+    /// `primitive_indices` hold them: `blocked(p)` says whether primitive
+    /// p is a triangle to test in a block, `triangle(p)` gives its
+    /// world-space corners. Each binary leaf becomes a leaf (binned.rs
+    /// makes them of up to LEAF_MAX primitives). The root's children are
+    /// collapsed on several threads, straight into their parts of arrays
+    /// counted and allocated once.
+    pub fn collapse(
+        bvh: &Bvh2,
+        blocked: impl Fn(u32) -> bool + Sync,
+        triangle: impl Fn(u32) -> [Vec3; 3] + Sync,
+    ) -> Wide {
+        if bvh.nodes.is_empty() {
+            return Wide {
+                root: EMPTY,
+                ..Wide::default()
+            };
+        }
+        let (root, kids) = if bvh.nodes[0].prim_count > 0 {
+            (None, vec![0])
+        } else {
+            let (node, kids) = Self::opened(bvh, 0);
+            (Some(node), kids)
+        };
+        let sizes: Vec<Sizes> = kids
+            .par_iter()
+            .map(|&k| Sizes::of(bvh, k, &blocked))
+            .collect();
+        let total = sizes.iter().fold(Sizes::default(), |a, b| a.plus(b));
+        let top = usize::from(root.is_some());
+        let mut wide = Wide {
+            nodes: vec![EMPTY_NODE; top + total.nodes],
+            blocks: vec![EMPTY_BLOCK; total.blocks],
+            leaves: vec![Leaf::default(); total.leaves],
+            others: vec![0; total.others],
+            root: 0,
+            stack: (WIDTH - 1) * (top + total.deepest) + 1,
+        };
+        // Each part's slices of the arrays, and where they start.
+        let mut parts = Vec::with_capacity(kids.len());
+        let (mut nodes, mut blocks) = (&mut wide.nodes[top..], &mut wide.blocks[..]);
+        let (mut leaves, mut others) = (&mut wide.leaves[..], &mut wide.others[..]);
+        let mut base = Sizes {
+            nodes: top,
+            ..Sizes::default()
+        };
+        for (&k, size) in kids.iter().zip(&sizes) {
+            let (n, rest_n) = std::mem::take(&mut nodes).split_at_mut(size.nodes);
+            let (b, rest_b) = std::mem::take(&mut blocks).split_at_mut(size.blocks);
+            let (l, rest_l) = std::mem::take(&mut leaves).split_at_mut(size.leaves);
+            let (o, rest_o) = std::mem::take(&mut others).split_at_mut(size.others);
+            (nodes, blocks, leaves, others) = (rest_n, rest_b, rest_l, rest_o);
+            parts.push((k, Out::new(n, b, l, o, base)));
+            base = base.plus(size);
+        }
+        let roots: Vec<u32> = parts
+            .into_par_iter()
+            .map(|(k, mut out)| out.part(bvh, k, &blocked, &triangle))
+            .collect();
+        match root {
+            Some(mut node) => {
+                node.child[..roots.len()].copy_from_slice(&roots);
+                wide.nodes[0] = node;
+            }
+            None => wide.root = roots[0],
+        }
+        wide
+    }
+
+    /// A wide node over binary inner node `i`, and the binary nodes its
+    /// slots stand for: the largest child that is no leaf is opened until
+    /// there are eight, so the boxes a ray is likeliest to enter are split
+    /// the finest. Its children are left EMPTY.
+    fn opened(bvh: &Bvh2, i: u32) -> (Node, Vec<u32>) {
+        let nodes = &bvh.nodes;
+        let n = &nodes[i as usize];
+        let mut kids = [0; WIDTH];
+        (kids[0], kids[1]) = (n.first_index, n.first_index + 1);
+        let mut k = 2;
+        while k < WIDTH {
+            let area = |c: u32| nodes[c as usize].aabb.half_area();
+            let open = (0..k)
+                .filter(|&j| nodes[kids[j] as usize].prim_count == 0)
+                .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])));
+            let Some(j) = open else { break };
+            let f = nodes[kids[j] as usize].first_index;
+            (kids[j], kids[k]) = (f, f + 1);
+            k += 1;
+        }
+        let kids = kids[..k].to_vec();
+        let mut node = EMPTY_NODE;
+        for (slot, &c) in kids.iter().enumerate() {
+            let b = &nodes[c as usize].aabb;
+            for axis in 0..3 {
+                node.lo[axis][slot] = b.min[axis];
+                node.hi[axis][slot] = b.max[axis];
+            }
+        }
+        (node, kids)
+    }
+
+    /// Bytes held (allocated, not only used).
+    pub fn heap_bytes(&self) -> u64 {
+        fn of<T>(v: &Vec<T>) -> u64 {
+            (v.capacity() * size_of::<T>()) as u64
+        }
+        of(&self.nodes) + of(&self.blocks) + of(&self.leaves) + of(&self.others)
+    }
+
+    /// Nodes and triangle blocks (for reports).
+    pub fn counts(&self) -> (usize, usize) {
+        (self.nodes.len(), self.blocks.len())
+    }
+
+    /// The nearest hit with `t` in `(t_min, t_max)` along `o + t d`, with
+    /// the kernels built for `level` (the portable ones where this CPU
+    /// does not run it). `other(p, t_max)` tests primitive `p` of a
+    /// leaf's list, giving its first hit in `(t_min, t_max)`.
+    pub fn closest(
+        &self,
+        level: Level,
+        (o, d): (Vec3, Vec3),
+        (t_min, t_max): (f32, f32),
+        other: &mut dyn FnMut(u32, f32) -> Option<(f32, Vec2)>,
+    ) -> Option<Found> {
+        if self.root == EMPTY {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        {
+            if level == Level::Avx512 && level.runs() {
+                // SAFETY: this CPU runs AVX-512 F, VL, DQ, BW, AVX2 and FMA.
+                return unsafe { self.closest_avx512(o, d, t_min, t_max, other) };
+            }
+            if level >= Level::Avx2 && Level::Avx2.runs() {
+                // SAFETY: this CPU runs AVX2 and FMA.
+                return unsafe { self.closest_avx2(o, d, t_min, t_max, other) };
+            }
+        }
+        let _ = level;
+        self.closest_body(o, d, t_min, t_max, other)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
+    unsafe fn closest_avx512(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+        t_max: f32,
+        other: &mut dyn FnMut(u32, f32) -> Option<(f32, Vec2)>,
+    ) -> Option<Found> {
+        self.closest_body(o, d, t_min, t_max, other)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn closest_avx2(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+        t_max: f32,
+        other: &mut dyn FnMut(u32, f32) -> Option<(f32, Vec2)>,
+    ) -> Option<Found> {
+        self.closest_body(o, d, t_min, t_max, other)
+    }
+
+    #[inline(always)]
+    fn closest_body(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+        t_max: f32,
+        other: &mut dyn FnMut(u32, f32) -> Option<(f32, Vec2)>,
+    ) -> Option<Found> {
+        let safe = |c: f32| {
+            if c.abs() < f32::MIN_POSITIVE {
+                1.0 / f32::MIN_POSITIVE.copysign(c)
+            } else {
+                1.0 / c
+            }
+        };
+        let ray = Ray {
+            o,
+            d,
+            inv: [safe(d.x), safe(d.y), safe(d.z)],
+            neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
+        };
+        // Left uninitialised: a ray reads only the entries it wrote, and
+        // zeroing a stack per ray costs more than most traversals.
+        let mut local = [const { MaybeUninit::<(u32, f32)>::uninit() }; 256];
+        let mut heap = Vec::new();
+        let stack: &mut [MaybeUninit<(u32, f32)>] = if self.stack <= local.len() {
+            &mut local
+        } else {
+            heap.resize(self.stack, MaybeUninit::uninit());
+            &mut heap
+        };
+        stack[0] = MaybeUninit::new((self.root, t_min));
+        let mut top = 1;
+        let mut best: Option<Found> = None;
+        let mut far = t_max;
+        while top > 0 {
+            top -= 1;
+            // SAFETY: entries below `top` were all written.
+            let (reference, near) = unsafe { stack[top].assume_init() };
+            if near >= far {
+                continue;
+            }
+            if reference & LEAF == 0 {
+                let node = &self.nodes[reference as usize];
+                let (tn, mut mask) = enter(node, &ray, t_min, far);
+                // The children hit, farthest first on the stack so that
+                // the nearest is taken next.
+                let base = top;
+                while mask != 0 {
+                    let slot = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let entry = (node.child[slot], tn[slot]);
+                    let mut j = top;
+                    // SAFETY: entries from `base` below `top` were written.
+                    while j > base && unsafe { stack[j - 1].assume_init() }.1 < entry.1 {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
+                    }
+                    stack[j] = MaybeUninit::new(entry);
+                    top += 1;
+                }
+                continue;
+            }
+            let leaf = self.leaves[(reference & !LEAF) as usize];
+            let blocks = &self.blocks[leaf.block as usize..(leaf.block + leaf.blocks) as usize];
+            for block in blocks {
+                if let Some((lane, t, u, v)) = cross(block, &ray, t_min, far) {
+                    far = t;
+                    best = Some(Found {
+                        prim: block.prim[lane],
+                        t,
+                        bary: Vec2::new(u, v),
+                    });
+                }
+            }
+            let others = &self.others[leaf.other as usize..(leaf.other + leaf.others) as usize];
+            for &p in others {
+                if let Some((t, bary)) = other(p, far) {
+                    if t < far {
+                        far = t;
+                        best = Some(Found { prim: p, t, bary });
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// What one part of a wide tree holds, counted before it is made.
+#[derive(Clone, Copy, Default)]
+struct Sizes {
+    nodes: usize,
+    blocks: usize,
+    leaves: usize,
+    others: usize,
+    /// Levels of wide nodes to its deepest leaf.
+    deepest: usize,
+}
+
+impl Sizes {
+    fn plus(self, o: &Sizes) -> Sizes {
+        Sizes {
+            nodes: self.nodes + o.nodes,
+            blocks: self.blocks + o.blocks,
+            leaves: self.leaves + o.leaves,
+            others: self.others + o.others,
+            deepest: self.deepest.max(o.deepest),
+        }
+    }
+
+    /// The wide tree of the binary subtree at `i`, as [`Out::part`] will
+    /// make it.
+    fn of(bvh: &Bvh2, i: u32, blocked: &impl Fn(u32) -> bool) -> Sizes {
+        let mut size = Sizes::default();
+        let mut work = vec![(i, 1usize)];
+        let mut pending = Vec::new();
+        while let Some((i, level)) = work.pop() {
+            size.deepest = size.deepest.max(level);
+            if bvh.nodes[i as usize].prim_count == 0 {
+                size.nodes += 1;
+                work.extend(Wide::opened(bvh, i).1.iter().map(|&c| (c, level + 1)));
+                continue;
+            }
+            size.leaves += 1;
+            let mut triangles = 0usize;
+            leaf_primitives(bvh, i, &mut pending, |p| {
+                if blocked(p) {
+                    triangles += 1;
+                } else {
+                    size.others += 1;
+                }
+            });
+            size.blocks += triangles.div_ceil(WIDTH);
+        }
+        size
+    }
+}
+
+/// Every primitive under binary node `i`, in order.
+fn leaf_primitives(bvh: &Bvh2, i: u32, pending: &mut Vec<u32>, mut f: impl FnMut(u32)) {
+    pending.clear();
+    pending.push(i);
+    while let Some(n) = pending.pop() {
+        let n = &bvh.nodes[n as usize];
+        if n.prim_count == 0 {
+            pending.extend([n.first_index + 1, n.first_index]);
+            continue;
+        }
+        let first = n.first_index as usize;
+        for &p in &bvh.primitive_indices[first..first + n.prim_count as usize] {
+            f(p);
+        }
+    }
+}
+
+/// One part's slices of a wide tree's arrays, where they start in the
+/// whole, and how far each is filled.
+struct Out<'a> {
+    nodes: &'a mut [Node],
+    blocks: &'a mut [Block],
+    leaves: &'a mut [Leaf],
+    others: &'a mut [u32],
+    base: Sizes,
+    filled: Sizes,
+}
+
+impl<'a> Out<'a> {
+    fn new(
+        nodes: &'a mut [Node],
+        blocks: &'a mut [Block],
+        leaves: &'a mut [Leaf],
+        others: &'a mut [u32],
+        base: Sizes,
+    ) -> Self {
+        Out {
+            nodes,
+            blocks,
+            leaves,
+            others,
+            base,
+            filled: Sizes::default(),
+        }
+    }
+
+    /// The wide tree of the binary subtree at `i`, written into this
+    /// part's slices (which [`Sizes::of`] measured with the same
+    /// `blocked`); its root's reference.
+    fn part(
+        &mut self,
+        bvh: &Bvh2,
+        i: u32,
+        blocked: &impl Fn(u32) -> bool,
+        triangle: &impl Fn(u32) -> [Vec3; 3],
+    ) -> u32 {
+        let mut root = EMPTY;
+        // (binary node, local wide node and slot that refer to it).
+        let mut work = vec![(i, None::<(usize, usize)>)];
+        let mut pending = Vec::new();
+        while let Some((i, parent)) = work.pop() {
+            let reference = if bvh.nodes[i as usize].prim_count > 0 {
+                self.leaf(bvh, i, (blocked, triangle), &mut pending)
+            } else {
+                let at = self.filled.nodes;
+                self.filled.nodes += 1;
+                let (node, kids) = Wide::opened(bvh, i);
+                for (slot, &c) in kids.iter().enumerate() {
+                    work.push((c, Some((at, slot))));
+                }
+                self.nodes[at] = node;
+                (self.base.nodes + at) as u32
+            };
+            match parent {
+                Some((node, slot)) => self.nodes[node].child[slot] = reference,
+                None => root = reference,
+            }
+        }
+        root
+    }
+
+    /// A leaf of every primitive under binary node `i`; its reference.
+    fn leaf(
+        &mut self,
+        bvh: &Bvh2,
+        i: u32,
+        (blocked, triangle): (&impl Fn(u32) -> bool, &impl Fn(u32) -> [Vec3; 3]),
+        pending: &mut Vec<u32>,
+    ) -> u32 {
+        let (first_block, first_other) = (self.filled.blocks, self.filled.others);
+        let mut lane = WIDTH;
+        let (blocks, others, filled) = (&mut *self.blocks, &mut *self.others, &mut self.filled);
+        leaf_primitives(bvh, i, pending, |p| {
+            if !blocked(p) {
+                others[filled.others] = p;
+                filled.others += 1;
+                return;
+            }
+            if lane == WIDTH {
+                filled.blocks += 1;
+                lane = 0;
+            }
+            let [a, b, c] = triangle(p);
+            let block = &mut blocks[filled.blocks - 1];
+            let (e1, e2) = (b - a, c - a);
+            for axis in 0..3 {
+                block.a[axis][lane] = a[axis];
+                block.e1[axis][lane] = e1[axis];
+                block.e2[axis][lane] = e2[axis];
+            }
+            block.prim[lane] = p;
+            lane += 1;
+        });
+        let at = self.filled.leaves;
+        self.leaves[at] = Leaf {
+            block: (self.base.blocks + first_block) as u32,
+            blocks: (self.filled.blocks - first_block) as u32,
+            other: (self.base.others + first_other) as u32,
+            others: (self.filled.others - first_other) as u32,
+        };
+        self.filled.leaves += 1;
+        LEAF | (self.base.leaves + at) as u32
+    }
+}
+
+/// The entry distance of `ray` into each of `node`'s boxes within
+/// `(t_min, t_max)`, and a bit per box it enters.
+#[inline(always)]
+fn enter(node: &Node, ray: &Ray, t_min: f32, t_max: f32) -> ([f32; WIDTH], u32) {
+    let planes = |axis: usize| {
+        if ray.neg[axis] {
+            (&node.hi[axis], &node.lo[axis])
+        } else {
+            (&node.lo[axis], &node.hi[axis])
+        }
+    };
+    let ((nx, fx), (ny, fy), (nz, fz)) = (planes(0), planes(1), planes(2));
+    let (o, inv) = (ray.o, ray.inv);
+    let mut near = [0f32; WIDTH];
+    let mut far = [0f32; WIDTH];
+    for i in 0..WIDTH {
+        let tx = ((nx[i] - o.x) * inv[0], (fx[i] - o.x) * inv[0]);
+        let ty = ((ny[i] - o.y) * inv[1], (fy[i] - o.y) * inv[1]);
+        let tz = ((nz[i] - o.z) * inv[2], (fz[i] - o.z) * inv[2]);
+        near[i] = max(max(tx.0, ty.0), max(tz.0, t_min));
+        far[i] = min(min(tx.1, ty.1), min(tz.1, t_max)) * ROBUST;
+    }
+    let mut mask = 0;
+    for i in 0..WIDTH {
+        mask |= u32::from(near[i] <= far[i]) << i;
+    }
+    (near, mask)
+}
+
+/// The nearest of `block`'s triangles `ray` crosses within `(t_min,
+/// t_max)`: its lane, distance and barycentrics. The arithmetic is
+/// intersect.rs's `triangle`, operation for operation, and so are the
+/// negated comparisons (a NaN passes them there too).
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+#[inline(always)]
+fn cross(block: &Block, ray: &Ray, t_min: f32, t_max: f32) -> Option<(usize, f32, f32, f32)> {
+    let (o, d) = (ray.o, ray.d);
+    let mut ts = [0f32; WIDTH];
+    let mut us = [0f32; WIDTH];
+    let mut vs = [0f32; WIDTH];
+    for i in 0..WIDTH {
+        let (e1x, e1y, e1z) = (block.e1[0][i], block.e1[1][i], block.e1[2][i]);
+        let (e2x, e2y, e2z) = (block.e2[0][i], block.e2[1][i], block.e2[2][i]);
+        // p = d x e2
+        let px = d.y * e2z - e2y * d.z;
+        let py = d.z * e2x - e2z * d.x;
+        let pz = d.x * e2y - e2x * d.y;
+        let det = (e1x * px) + (e1y * py) + (e1z * pz);
+        let inv = 1.0 / det;
+        let sx = o.x - block.a[0][i];
+        let sy = o.y - block.a[1][i];
+        let sz = o.z - block.a[2][i];
+        let u = ((sx * px) + (sy * py) + (sz * pz)) * inv;
+        // q = s x e1
+        let qx = sy * e1z - e1y * sz;
+        let qy = sz * e1x - e1z * sx;
+        let qz = sx * e1y - e1x * sy;
+        let v = ((d.x * qx) + (d.y * qy) + (d.z * qz)) * inv;
+        let t = ((e2x * qx) + (e2y * qy) + (e2z * qz)) * inv;
+        let ok = det != 0.0
+            && det.abs() < f32::INFINITY
+            && (0.0..=1.0).contains(&u)
+            && !(v < 0.0)
+            && !(u + v > 1.0)
+            && t > t_min
+            && t < t_max;
+        ts[i] = if ok { t } else { f32::INFINITY };
+        (us[i], vs[i]) = (u, v);
+    }
+    let mut lane = WIDTH;
+    let mut nearest = f32::INFINITY;
+    for (i, &t) in ts.iter().enumerate() {
+        if t < nearest {
+            (lane, nearest) = (i, t);
+        }
+    }
+    (lane < WIDTH).then(|| (lane, nearest, us[lane], vs[lane]))
+}
