@@ -12,7 +12,7 @@ impl ObjectCell {
     pub fn derived<T: Any + Clone>(&self) -> Result<T, Unready> {
         let g = self.lock();
         match &g.state {
-            State::Model { of, derived } if *of == TypeId::of::<T>() => match derived {
+            State::Model { of, derived, .. } if *of == TypeId::of::<T>() => match derived {
                 Derived::Ready(v) => v.downcast_ref::<T>().cloned().ok_or(Unready::OtherKind),
                 d => Err(Unready::Unusable(
                     d.ready(&self.describe()).err().unwrap_or_default(),

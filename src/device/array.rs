@@ -1,9 +1,12 @@
 //! ANARI arrays: device-owned memory, or the host's memory shared until the
 //! device no longer needs it.
 
+use std::sync::Arc;
+
 use super::object::{ObjectCell, ObjectRef};
 use super::types::words;
 use super::types::DataType;
+use crate::scene::Lent;
 
 /// Memory the host lent to an array. Dropping it returns the memory to the
 /// host (the C layer calls the host's deleter there, exactly once).
@@ -20,7 +23,10 @@ pub trait HostMemory: Send {
 enum Storage {
     /// u64 words keep every element type aligned.
     Owned(Vec<u64>),
-    Host(Box<dyn HostMemory>),
+    /// The host's memory, which the renderers read in place; `captured`:
+    /// the host gave a deleter, and the memory stays valid until the
+    /// device calls it (when the last reader drops the `Lent`).
+    Host { lent: Arc<Lent>, captured: bool },
 }
 
 pub struct Array {
@@ -46,7 +52,13 @@ impl Array {
     /// An array over the host's memory, which must hold
     /// `element.size() * dims.product()` bytes while the array exists.
     pub fn shared(element: DataType, dims: [u64; 3], memory: Box<dyn HostMemory>) -> Self {
-        Self::new(element, dims, Storage::Host(memory))
+        let len = byte_len(element, dims).unwrap_or(0) as usize;
+        let (ptr, captured) = (memory.ptr(), memory.captured());
+        // SAFETY: the host promised `len` readable bytes at `ptr` until it
+        // releases the array (shared) or the device calls its deleter
+        // (captured: dropping `memory`, when the last reader is gone).
+        let lent = unsafe { Lent::new(ptr, len, Box::new(memory)) };
+        Self::new(element, dims, Storage::Host { lent, captured })
     }
 
     fn new(element: DataType, dims: [u64; 3], storage: Storage) -> Self {
@@ -75,7 +87,7 @@ impl Array {
     pub(crate) fn ptr(&mut self) -> *mut u8 {
         match &mut self.storage {
             Storage::Owned(v) => v.as_mut_ptr().cast(),
-            Storage::Host(m) => m.ptr().cast_mut(),
+            Storage::Host { lent, .. } => lent.bytes().as_ptr().cast_mut(),
         }
     }
 
@@ -87,9 +99,33 @@ impl Array {
                 // SAFETY: the words hold at least `len` initialised bytes.
                 unsafe { std::slice::from_raw_parts(v.as_ptr().cast(), len) }
             }
-            Storage::Host(m) if len == 0 || m.ptr().is_null() => &[],
-            // SAFETY: the host promised `len` readable bytes while the array lives.
-            Storage::Host(m) => unsafe { std::slice::from_raw_parts(m.ptr(), len) },
+            Storage::Host { lent, .. } => &lent.bytes()[..len.min(lent.bytes().len())],
+        }
+    }
+
+    /// The host's memory behind a shared array, for a renderer to read in
+    /// place; `None` for a device-owned array.
+    pub fn lent(&self) -> Option<&Arc<Lent>> {
+        match &self.storage {
+            Storage::Host { lent, .. } => Some(lent),
+            Storage::Owned(_) => None,
+        }
+    }
+
+    /// The host released a shared array nothing uses any more: scenes
+    /// that a render may still be reading, and renderers' caches of past
+    /// scenes, may hold its memory. Waits for those renders; the caches,
+    /// which no later scene can reach without an object that uses the
+    /// array, then read zeros, never the host's freed memory.
+    pub fn retire(&self) {
+        if let Some(Storage::Host {
+            lent,
+            captured: false,
+        }) = Some(&self.storage)
+        {
+            if Arc::strong_count(lent) > 1 {
+                lent.retire();
+            }
         }
     }
 
@@ -100,36 +136,24 @@ impl Array {
 
     /// ANARI's array lifetime: a shared array's memory may be freed by the
     /// host right after it releases its last handle, so an array that is
-    /// still used then copies its elements into memory of its own. Captured
+    /// still used then copies its elements into memory of its own (after
+    /// every render that may read the host's bytes has ended). Captured
     /// and device-owned arrays stay as they are. `Ok(true)` if a copy was
     /// made; `Err` if it could not be allocated, and then the array holds
     /// no elements, never the host's freed memory.
     pub fn privatize(&mut self) -> Result<bool, String> {
-        if !matches!(&self.storage, Storage::Host(m) if !m.captured()) {
+        let Storage::Host {
+            lent,
+            captured: false,
+        } = &self.storage
+        else {
             return Ok(false);
-        }
-        let len = byte_len(self.element, self.dims).unwrap_or(0);
-        let copy = usize::try_from(len.div_ceil(8)).ok().and_then(|words| {
-            let mut v: Vec<u64> = Vec::new();
-            v.try_reserve_exact(words).ok()?;
-            v.resize(words, 0);
-            Some(v)
-        });
-        let Some(mut words) = copy else {
-            self.storage = Storage::Owned(Vec::new());
+        };
+        let copied = lent.privatize();
+        if copied.is_err() {
             self.dims = [0, 1, 1];
-            return Err(format!(
-                "cannot copy {len} bytes of {} before the host frees them; the array is now empty",
-                self.element
-            ));
-        };
-        let bytes = self.bytes();
-        // SAFETY: `words` has room for `len` bytes, and `bytes` is `len` long.
-        unsafe {
-            std::ptr::copy_nonoverlapping(bytes.as_ptr(), words.as_mut_ptr().cast(), bytes.len())
-        };
-        self.storage = Storage::Owned(words);
-        Ok(true)
+        }
+        copied.map_err(|e| format!("{e} ({})", self.element))
     }
 
     /// Handle values stored in an array of objects.

@@ -112,6 +112,10 @@ pub enum State {
     Model {
         of: TypeId,
         derived: Derived<Box<dyn Any + Send>>,
+        /// Objects (arrays) whose memory `derived` reads in place: held
+        /// while it is the committed state, so that a host releasing one
+        /// of them makes the copy the state still needs.
+        holds: Vec<ObjectRef>,
     },
     /// What the device changes in place between commits: an array's
     /// memory, a frame's render slot and channels.
@@ -126,14 +130,21 @@ impl State {
         State::Model {
             of: TypeId::of::<T>(),
             derived: Derived::Uncommitted,
+            holds: Vec::new(),
         }
     }
 
     /// A commit's result.
     pub fn ready<T: Any + Send>(value: T) -> Self {
+        Self::ready_holding(value, Vec::new())
+    }
+
+    /// A commit's result that reads the memory of `holds` in place.
+    pub fn ready_holding<T: Any + Send>(value: T, holds: Vec<ObjectRef>) -> Self {
         State::Model {
             of: TypeId::of::<T>(),
             derived: Derived::Ready(Box::new(value)),
+            holds,
         }
     }
 
@@ -148,6 +159,7 @@ impl State {
             State::Model { of, .. } => Some(State::Model {
                 of: *of,
                 derived: Derived::Invalid(why),
+                holds: Vec::new(),
             }),
             State::Held(_) | State::Inert => None,
         }

@@ -205,11 +205,28 @@ pub const EXT_MULTI_VIEW: &str = "ANARI_CAVERAY_CAMERA_MULTI_VIEW";
 pub struct Read<'a> {
     params: &'a Params,
     table: &'static [ParamInfo],
+    /// What the commit costs the host beyond reading its data in place
+    /// (a copy to change an array's type), said at PERFORMANCE severity.
+    costs: std::cell::RefCell<Vec<String>>,
 }
 
 impl<'a> Read<'a> {
     pub fn new(params: &'a Params, table: &'static [ParamInfo]) -> Self {
-        Self { params, table }
+        Self {
+            params,
+            table,
+            costs: Default::default(),
+        }
+    }
+
+    /// Notes a cost the host should hear of (PERFORMANCE severity).
+    pub fn cost(&self, note: String) {
+        self.costs.borrow_mut().push(note);
+    }
+
+    /// The costs noted, once.
+    pub fn take_costs(&self) -> Vec<String> {
+        std::mem::take(&mut self.costs.borrow_mut())
     }
 
     pub fn params(&self) -> &'a Params {

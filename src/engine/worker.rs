@@ -253,6 +253,14 @@ fn run(
     }
     let mut handed = Duration::ZERO;
     let inputs = &job.inputs;
+    // The render reads hosts' shared arrays in place: a host taking one
+    // back (anariRelease) waits for it to end before its memory is freed.
+    let reading: Vec<_> = inputs
+        .scene
+        .iter()
+        .flat_map(|s| s.lenders())
+        .map(|l| l.reading())
+        .collect();
     // A panic must neither kill the thread nor leave the host waiting.
     let result = catch_unwind(AssertUnwindSafe(|| -> Result<Frame, String> {
         let say = |severity, message| report(note(severity, StatusCode::NoError, message));
@@ -296,6 +304,9 @@ fn run(
         *renderer = None;
         Err(format!("render panicked: {}", panic_message(&panic)))
     });
+    // Before the host hears of the frame: its callback may release an
+    // array, which waits for the readers.
+    drop(reading);
     let discarded = job.stopped();
     let result = match result {
         Err(_) if discarded => Err(DISCARDED.to_owned()),

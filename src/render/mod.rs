@@ -333,11 +333,12 @@ impl Renderer {
     }
 
     /// Bytes `scene`'s volumes hold where this renderer reads them, each
-    /// grid once: their stored voxels in host memory, and the CPU's f32
+    /// grid once: their stored voxels in host memory (none for a host's
+    /// shared array read in place), and the CPU's f32
     /// copies for its packets, or the GPU's textures (and for paged
     /// volumes their pools, and the coarser levels the host keeps).
     pub fn resident_bytes(&self, scene: &Scene) -> Residency {
-        let host: u64 = scene.grids().map(|v| v.bytes()).sum();
+        let host: u64 = scene.grids().map(|v| v.held_bytes()).sum();
         match self {
             Renderer::Gpu(g) => Residency {
                 host: host + g.host_volume_bytes(),

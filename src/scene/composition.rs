@@ -8,6 +8,7 @@ use glam::{DMat4, Mat4, Vec3};
 use thiserror::Error;
 
 use super::placement::{check_affine, transformed_box, ObjectIds};
+use super::storage::Lent;
 use super::{PlacedShape, ShapeError, SpatialField, TransferFunction};
 
 /// The most volumes one scene composites. The shaders bind one 3D texture
@@ -163,6 +164,12 @@ impl Scene {
             .enumerate()
             .filter(|(i, p)| !all[..*i].iter().any(|q| Arc::ptr_eq(&q.volume, &p.volume)))
             .map(|(_, p)| &p.volume)
+    }
+
+    /// The host memory this scene's grids read in place: a render holds
+    /// a [`Lent::reading`] of each while it runs.
+    pub fn lenders(&self) -> impl Iterator<Item = &Arc<Lent>> {
+        self.grids().filter_map(|g| g.lender())
     }
 
     pub fn shapes(&self) -> &[PlacedShape] {

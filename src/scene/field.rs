@@ -2,10 +2,13 @@
 //! unstructured mesh, an AMR field or a NanoVDB grid with the lattice
 //! its rays march in.
 
+use std::sync::Arc;
+
 use glam::{UVec3, Vec3};
 
 use super::amr::AmrVolume;
 use super::nanovdb::NanoVdbGrid;
+use super::storage::Lent;
 use super::unstructured::UnstructuredVolume;
 use super::volume::{Filter, StructuredVolume};
 
@@ -187,7 +190,25 @@ impl SpatialField {
         }
     }
 
-    /// Bytes of the numbers held.
+    /// The host's memory a structured grid reads in place, if it does.
+    pub fn lender(&self) -> Option<&Arc<Lent>> {
+        match self {
+            SpatialField::Structured(v) => v.voxels().lender(),
+            _ => None,
+        }
+    }
+
+    /// Bytes of the numbers held by the device: a grid read in place
+    /// from the host's memory holds none until the host takes its memory
+    /// back (then its copy).
+    pub fn held_bytes(&self) -> u64 {
+        match self {
+            SpatialField::Structured(v) if v.voxels().in_place() => 0,
+            other => other.bytes(),
+        }
+    }
+
+    /// Bytes of the numbers.
     pub fn bytes(&self) -> u64 {
         match self {
             SpatialField::Structured(v) => v.voxels().bytes(),

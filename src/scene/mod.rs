@@ -33,7 +33,7 @@ pub use shapes::{
     Shape, ShapeError, ShapeInput, Source, SurfaceMaterial, Uniforms, ATTRIBUTE_NAMES,
     MAX_PRIMITIVES,
 };
-pub use storage::{Buf, Mapping};
+pub use storage::{Buf, Lent, Mapping, Reading};
 pub use transfer_function::{TransferFunction, TransferFunctionError, TABLE_SIZE};
 pub use unstructured::{
     check_counts, CellKind, MeshInput, MeshNode, MeshValues, NearCells, RayCells,

@@ -3,7 +3,7 @@ use std::sync::{Arc, OnceLock};
 use glam::{UVec3, Vec3};
 use thiserror::Error;
 
-use super::storage::Buf;
+use super::storage::{Buf, Lent};
 
 /// Voxel values as stored, in their own type: the volume's [`Scaling`]
 /// makes them values.
@@ -37,6 +37,21 @@ impl Voxels {
             Voxels::I16(v) => v.is_mapped(),
             Voxels::F32(v) => v.is_mapped(),
         }
+    }
+
+    /// The host's memory these are read from, if they are.
+    pub fn lender(&self) -> Option<&Arc<Lent>> {
+        match self {
+            Voxels::U8(v) => v.lender(),
+            Voxels::U16(v) => v.lender(),
+            Voxels::I16(v) => v.lender(),
+            Voxels::F32(v) => v.lender(),
+        }
+    }
+
+    /// Whether these are the host's memory itself, not a copy.
+    pub fn in_place(&self) -> bool {
+        self.lender().is_some_and(|l| !l.is_copied())
     }
 
     /// Bytes the stored numbers take.

@@ -562,6 +562,75 @@ fn arrays_freed_after_release_are_never_read_under_valgrind() {
     release_then_free(true);
 }
 
+/// A volume read from the host's memory in place (tests/capi/c/in_place_host.c):
+/// not copied while the host holds it (the field holds no bytes, and the
+/// process grows by less than half the voxels), copied once when the host
+/// releases the array while a frame renders it, and every image, before
+/// and after the host frees its memory, the intact scene's.
+fn in_place(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_in_place_valgrind"
+    } else {
+        "c_in_place"
+    });
+    // 160^3 floats (16 MB): large enough that a copy shows in the RSS.
+    let n = if valgrind { 32 } else { 160 };
+    let volume = (
+        anari_library_caveray::data::shepp_logan(n),
+        preset("phantom").unwrap(),
+    );
+    let scene = wall_scene(&dir, if valgrind { 32 } else { 64 }, volume, false);
+    let program = dir.join("in_place_host");
+    compile(&["tests/capi/c/in_place_host.c"], &program, false, true);
+    let output = run(&program, &[&scene.file, &dir], valgrind);
+    assert!(
+        output.status.success(),
+        "in_place_host: {}",
+        describe(&output)
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("copies 1"), "{stdout}");
+    let held = read_rgba(&dir.join("held.rgba"), scene.size);
+    for name in ["held", "freed", "again"] {
+        let image = read_rgba(&dir.join(format!("{name}.rgba")), scene.size);
+        let s = ssim(&image, &scene.reference).unwrap();
+        assert!(s > 0.98, "{name}: SSIM {s:.4} against the intact scene");
+        assert_eq!(
+            image.color, held.color,
+            "{name} differs from the first image"
+        );
+    }
+    if !valgrind {
+        let numbers = |line: &str| -> Vec<i64> {
+            line.split_whitespace()
+                .filter_map(|w| w.parse().ok())
+                .collect()
+        };
+        let line = stdout.lines().find(|l| l.starts_with("grew")).unwrap();
+        let [grew, voxels] = numbers(line)[..] else {
+            panic!("{line}")
+        };
+        assert!(
+            grew < voxels / 2,
+            "the process grew by {grew} KB for {voxels} KB of voxels: they were copied"
+        );
+    }
+}
+
+#[test]
+fn a_shared_volume_is_read_in_place_and_copied_only_when_released() {
+    in_place(false);
+}
+
+#[test]
+fn a_shared_volume_freed_after_release_is_never_read_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    in_place(true);
+}
+
 /// Object parameters a commit refuses for their kind, each closing a loop
 /// back to its own object (tests/capi/c/refused_cycle.c): the refusal says
 /// the parameter was unset, every refused array's deleter runs once its

@@ -322,15 +322,27 @@ impl Device {
                     forget_partner(cell);
                 }
                 // Still a parameter of something: keep what the host may
-                // now free.
-                if Arc::strong_count(cell) > 1 {
+                // now free. Else no render reads it after those under way.
+                if Arc::strong_count(cell) == 1 {
+                    cell.with_array(|a| a.retire());
+                } else {
                     let copied = cell.with_array(|a| a.privatize()).unwrap_or(Ok(false));
-                    if let Err(e) = copied {
-                        self.error(
+                    match copied {
+                        Err(e) => self.error(
                             StatusCode::OutOfMemory,
                             Some(cell),
                             format!("anariRelease: {}: {e}", cell.describe()),
-                        );
+                        ),
+                        Ok(true) => self.status(
+                            Severity::PerformanceWarning,
+                            StatusCode::NoError,
+                            Some(cell),
+                            format!(
+                                "anariRelease: {}: the host's memory is still in use, so it was copied (release shared arrays after the objects that use them to avoid the copy)",
+                                cell.describe()
+                            ),
+                        ),
+                        Ok(false) => {}
                     }
                 }
             }
@@ -396,13 +408,13 @@ impl Device {
                 let Some(slot) = cell.with_frame(|f| f.renders.slot.clone()) else {
                     return Ok(match name {
                         "bounds" => cell.usable::<WorldModel>().and_then(|w| world_bounds(&w)),
-                        // A field's voxels in host memory, as stored.
+                        // A field's voxels the device holds, as stored.
                         "caveray.residentBytes" => {
                             let field = match cell.usable::<VolumeModel>() {
                                 Some(volume) => volume.field.usable::<Arc<SpatialField>>(),
                                 None => cell.usable::<Arc<SpatialField>>(),
                             };
-                            field.map(|f| Property::UInt64(f.bytes()))
+                            field.map(|f| Property::UInt64(f.held_bytes()))
                         }
                         _ => None,
                     });

@@ -4,7 +4,7 @@
 use super::{Device, Input, Subject};
 use crate::device::object::{ObjectRef, Params, Value};
 use crate::device::table::{ParamInfo, Read};
-use crate::device::types::{DataType, StatusCode};
+use crate::device::types::{DataType, Severity, StatusCode};
 use crate::device::{device_object, info};
 use crate::render::StreamWait;
 
@@ -166,22 +166,31 @@ impl Device {
             .iter()
             .find(|p| p.required && params.get(p.name).is_none() && cell.kind != DataType::FRAME);
         let mut warnings = Vec::new();
+        let read = Read::new(&params, subtype.params);
         let derived = match (missing, subtype.commit) {
             (Some(p), _) => Err(format!(
                 "required parameter '{}' ({}) is not set",
                 p.name, p.types[0]
             )),
-            (None, Some(commit)) => commit(&Read::new(&params, subtype.params), &mut |w| {
-                warnings.push(w)
-            }),
+            (None, Some(commit)) => commit(&read, &mut |w| warnings.push(w)),
             (None, None) => Ok(None),
         };
+        let costs = read.take_costs();
+        drop(read);
         let unset = self.drop_never_taken(&cell, subtype.params, &params);
         drop(params);
         for w in warnings {
             self.warn(
                 Some(&cell),
                 format!("anariCommitParameters: {}: {w}", cell.describe()),
+            );
+        }
+        for c in costs {
+            self.status(
+                Severity::PerformanceWarning,
+                StatusCode::NoError,
+                Some(&cell),
+                format!("anariCommitParameters: {}: {c}", cell.describe()),
             );
         }
         if derived.is_ok() && !unset.is_empty() {

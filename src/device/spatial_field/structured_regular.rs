@@ -11,7 +11,7 @@ use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, VEC3};
 use crate::device::types::words;
 use crate::device::types::DataType as T;
-use crate::scene::{Filter, SpatialField, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};
+use crate::scene::{Buf, Filter, SpatialField, StructuredVolume, VolumeError, Voxels, MAX_VOXELS};
 
 /// Voxel types a structured regular field accepts; UINT8/UINT16 are read
 /// as their fixed-point twins with a warning.
@@ -68,7 +68,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
     let (dims, voxels) = r
-        .array("data", |array| read_voxels(array, warn))?
+        .array("data", |array| read_voxels(array, r, warn))?
         .ok_or("parameter 'data' (ARRAY3D) is required")?;
     // Unknown enumeration values fall back to the default (the spec's rule).
     let filter = match r.string("filter") {
@@ -81,14 +81,29 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
             Filter::Linear
         }
     };
+    // Voxels read in place keep their array alive as long as they are
+    // this field's (a release while they are copies them).
+    let holds = match voxels.in_place() {
+        true => r.object("data").cloned().into_iter().collect(),
+        false => Vec::new(),
+    };
     let volume = StructuredVolume::new(dims, voxels, r.vec3("origin")?, r.vec3("spacing")?)
         .map_err(|e| e.to_string())?
         .with_filter(filter);
-    Ok(Some(State::ready(Arc::new(SpatialField::from(volume)))))
+    Ok(Some(State::ready_holding(
+        Arc::new(SpatialField::from(volume)),
+        holds,
+    )))
 }
 
-/// The grid's dimensions and voxels, converted from the array's type.
-fn read_voxels(array: &Array, warn: &mut dyn FnMut(String)) -> Result<(UVec3, Voxels), String> {
+/// The grid's dimensions and voxels: the host's memory read in place
+/// where it is a shared array of a type the renderers sample as stored,
+/// else converted from the array's type (a copy, noted as a cost).
+fn read_voxels(
+    array: &Array,
+    r: &Read<'_>,
+    warn: &mut dyn FnMut(String),
+) -> Result<(UVec3, Voxels), String> {
     let [nx, ny, nz] = array.dims();
     let dims = UVec3::new(dim(nx)?, dim(ny)?, dim(nz)?);
     let count = nx.saturating_mul(ny).saturating_mul(nz);
@@ -96,6 +111,31 @@ fn read_voxels(array: &Array, warn: &mut dyn FnMut(String)) -> Result<(UVec3, Vo
         return Err(VolumeError::TooManyVoxels { dims }.to_string());
     }
     let n = count as usize;
+    if let Some(lent) = array.lent() {
+        let lent = || Arc::clone(lent);
+        let in_place = match array.element() {
+            T::UFIXED8 | T::UINT8 => Buf::lent(lent(), n).map(Voxels::U8),
+            T::UFIXED16 | T::UINT16 => Buf::lent(lent(), n).map(Voxels::U16),
+            T::FIXED16 => Buf::lent(lent(), n).map(Voxels::I16),
+            T::FLOAT32 => Buf::lent(lent(), n).map(Voxels::F32),
+            _ => None,
+        };
+        if let Some(voxels) = in_place {
+            match array.element() {
+                T::UINT8 => warn("UINT8 voxels are read as UFIXED8 (0..255 maps to 0..1)".into()),
+                T::UINT16 => {
+                    warn("UINT16 voxels are read as UFIXED16 (0..65535 maps to 0..1)".into())
+                }
+                _ => {}
+            }
+            return Ok((dims, voxels));
+        }
+        r.cost(format!(
+            "'data' ({}, {} bytes) is copied: the renderers sample {VOXEL_TYPES} from the host's memory in place, aligned to their size",
+            array.element(),
+            array.bytes().len()
+        ));
+    }
     let bytes = array.bytes();
     let voxels = match array.element() {
         T::UFIXED8 => Voxels::U8(gather(n, bytes.iter().copied())?.into()),

@@ -597,9 +597,14 @@ impl Loader {
                 .name("caveray-bricks".into())
                 .spawn(move || {
                     let stop = || shared.lock().stop;
+                    // This thread reads the voxels outside any render: it
+                    // is a reader of a host's memory while it does.
+                    let reading = || volume.voxels().lender().map(|l| l.reading());
+                    let started = reading();
                     let Some(chain) = Chain::new(&volume, (texel, pyramid, texels), &stop) else {
                         return;
                     };
+                    drop(started);
                     {
                         let mut s = shared.lock();
                         s.chaining = false;
@@ -622,7 +627,9 @@ impl Loader {
                                 s = shared.asked.wait(s).unwrap_or_else(|e| e.into_inner());
                             }
                         };
+                        let held = reading();
                         let built = chain.build(&volume, chain.pyramid.brick(page));
+                        drop(held);
                         let mut s = shared.lock();
                         s.busy = None;
                         s.ready_bytes += built.bytes.len();

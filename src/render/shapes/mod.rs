@@ -59,11 +59,83 @@ struct Traced {
     /// Triangle vertices in world space (empty for spheres).
     world: Vec<Vec3>,
     to_object: Mat4,
+    /// Whether the shape is placed as it is (then rays need no map into
+    /// object space: a sphere test is a tenth the work).
+    identity: bool,
     /// Object-space normals to world space (the inverse transpose).
     normal_to_world: Mat3,
     /// Whether its opacity varies over it and can hide parts of it: then
     /// a traversal looks at each hit's.
     cuts: bool,
+}
+
+impl Traced {
+    fn point_to_object(&self, p: Vec3) -> Vec3 {
+        if self.identity {
+            p
+        } else {
+            self.to_object.transform_point3(p)
+        }
+    }
+
+    fn ray_to_object(&self, o: Vec3, d: Vec3) -> (Vec3, Vec3) {
+        if self.identity {
+            (o, d)
+        } else {
+            (
+                self.to_object.transform_point3(o),
+                self.to_object.transform_vector3(d),
+            )
+        }
+    }
+}
+
+/// The wide tree's view of a shape set's primitives: triangles and
+/// spheres are tested in blocks, in world space, unless their opacity
+/// can hide parts of them (then each hit's coverage is looked at) or, for
+/// spheres, an instance places them (then the ray is mapped into object
+/// space).
+struct Kinds<'a> {
+    prims: &'a [Prim],
+    traced: &'a [Traced],
+}
+
+impl wide::Primitives for Kinds<'_> {
+    fn kind(&self, p: u32) -> wide::Kind {
+        let t = &self.traced[self.prims[p as usize].shape as usize];
+        match t.placed.shape.primitives {
+            _ if t.cuts => wide::Kind::Other,
+            Primitives::Triangles { .. } => wide::Kind::Triangle,
+            Primitives::Spheres { .. } if t.identity => wide::Kind::Sphere,
+            _ => wide::Kind::Other,
+        }
+    }
+
+    fn triangle(&self, p: u32) -> [Vec3; 3] {
+        let prim = self.prims[p as usize];
+        let t = &self.traced[prim.shape as usize];
+        match &t.placed.shape.primitives {
+            Primitives::Triangles { triangles, .. } => {
+                triangles[prim.index as usize].map(|v| t.world[v as usize])
+            }
+            _ => unreachable!("kind says which primitives are triangles"),
+        }
+    }
+
+    fn sphere(&self, p: u32) -> (Vec3, f32) {
+        let prim = self.prims[p as usize];
+        match &self.traced[prim.shape as usize].placed.shape.primitives {
+            Primitives::Spheres {
+                positions,
+                radii,
+                spheres,
+            } => {
+                let v = spheres[prim.index as usize] as usize;
+                (positions[v], radii[v])
+            }
+            _ => unreachable!("kind says which primitives are spheres"),
+        }
+    }
 }
 
 /// A BVH primitive: the kept primitive `index` of placed shape `shape`.
@@ -227,6 +299,7 @@ impl ShapeSet {
                 placed: placed.clone(),
                 world,
                 to_object,
+                identity: m == Mat4::IDENTITY,
                 normal_to_world,
                 cuts: fixed.is_none(),
             });
@@ -236,23 +309,11 @@ impl ShapeSet {
         } else if wide {
             let bvh = binned::build(&mut boxes, wide::LEAF_MAX as usize);
             drop(boxes);
-            // Triangles whose opacity can hide parts of them are tested
-            // one by one, their coverage looked at per hit.
-            let blocked = |p: u32| {
-                let t = &traced[prims[p as usize].shape as usize];
-                !t.cuts && matches!(t.placed.shape.primitives, Primitives::Triangles { .. })
+            let prims = Kinds {
+                prims: &prims,
+                traced: &traced,
             };
-            let triangle = |p: u32| {
-                let prim = prims[p as usize];
-                let t = &traced[prim.shape as usize];
-                match &t.placed.shape.primitives {
-                    Primitives::Triangles { triangles, .. } => {
-                        triangles[prim.index as usize].map(|v| t.world[v as usize])
-                    }
-                    _ => unreachable!("only triangles are blocked"),
-                }
-            };
-            Tree::Wide(Wide::collapse(&bvh, blocked, triangle))
+            Tree::Wide(Wide::collapse(&bvh, &prims))
         } else {
             let boxed: Vec<Boxed> = boxes
                 .iter()
@@ -398,18 +459,12 @@ impl ShapeSet {
                 spheres,
             } => {
                 let v = spheres[prim.index as usize] as usize;
-                let (oo, od) = (
-                    traced.to_object.transform_point3(o),
-                    traced.to_object.transform_vector3(d),
-                );
+                let (oo, od) = traced.ray_to_object(o, d);
                 sphere(oo, od, positions[v], radii[v], t_min, t_max)?
             }
             primitives @ (Primitives::Cones { .. } | Primitives::Curves { .. }) => {
                 let [a, b] = Self::ends(primitives, prim.index as usize);
-                let (oo, od) = (
-                    traced.to_object.transform_point3(o),
-                    traced.to_object.transform_vector3(d),
-                );
+                let (oo, od) = traced.ray_to_object(o, d);
                 let (t, s) = match primitives {
                     Primitives::Cones { caps, .. } => {
                         cone(oo, od, (a, b), caps[prim.index as usize], (t_min, t_max))?
@@ -473,11 +528,11 @@ impl ShapeSet {
                 positions, spheres, ..
             } => {
                 let c = positions[spheres[prim.index as usize] as usize];
-                traced.normal_to_world * (traced.to_object.transform_point3(p) - c)
+                traced.normal_to_world * (traced.point_to_object(p) - c)
             }
             primitives @ (Primitives::Cones { .. } | Primitives::Curves { .. }) => {
                 let [a, b] = Self::ends(primitives, prim.index as usize);
-                let q = traced.to_object.transform_point3(p);
+                let q = traced.point_to_object(p);
                 let object = match primitives {
                     Primitives::Cones { .. } => cone_normal(a, b, q, true),
                     _ => curve_normal(a, b, q),

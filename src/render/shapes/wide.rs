@@ -70,13 +70,52 @@ const EMPTY_BLOCK: Block = Block {
     prim: [EMPTY; WIDTH],
 };
 
-/// A leaf's blocks and its primitives tested one by one.
+/// Eight spheres in world space: centres an axis at a time, radii;
+/// lanes past the leaf's last sphere have radius -1 (never hit).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Ball {
+    c: [[f32; WIDTH]; 3],
+    r: [f32; WIDTH],
+    prim: [u32; WIDTH],
+}
+
+const EMPTY_BALL: Ball = Ball {
+    c: [[0.0; WIDTH]; 3],
+    r: [-1.0; WIDTH],
+    prim: [EMPTY; WIDTH],
+};
+
+/// A leaf's triangle blocks, sphere blocks and its primitives tested one
+/// by one.
 #[derive(Clone, Copy, Default)]
 struct Leaf {
     block: u32,
     blocks: u32,
+    ball: u32,
+    balls: u32,
     other: u32,
     others: u32,
+}
+
+/// How a leaf tests a primitive.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// In a block of triangles, corners in world space.
+    Triangle,
+    /// In a block of spheres, centre and radius in world space.
+    Sphere,
+    /// One by one, by the caller's test.
+    Other,
+}
+
+/// What the collapse needs to know of the primitives.
+pub trait Primitives: Sync {
+    fn kind(&self, p: u32) -> Kind;
+    /// A [`Kind::Triangle`]'s corners.
+    fn triangle(&self, p: u32) -> [Vec3; 3];
+    /// A [`Kind::Sphere`]'s centre and radius.
+    fn sphere(&self, p: u32) -> (Vec3, f32);
 }
 
 /// The nearest hit a traversal found: the shape set's primitive, the ray
@@ -94,6 +133,7 @@ pub struct Found {
 pub struct Wide {
     nodes: Vec<Node>,
     blocks: Vec<Block>,
+    balls: Vec<Ball>,
     leaves: Vec<Leaf>,
     others: Vec<u32>,
     /// The root's reference (a node, a leaf, or EMPTY).
@@ -135,17 +175,12 @@ fn min(a: f32, b: f32) -> f32 {
 
 impl Wide {
     /// `bvh` collapsed, its primitives numbered as its
-    /// `primitive_indices` hold them: `blocked(p)` says whether primitive
-    /// p is a triangle to test in a block, `triangle(p)` gives its
-    /// world-space corners. Each binary leaf becomes a leaf (binned.rs
-    /// makes them of up to LEAF_MAX primitives). The root's children are
-    /// collapsed on several threads, straight into their parts of arrays
-    /// counted and allocated once.
-    pub fn collapse(
-        bvh: &Bvh2,
-        blocked: impl Fn(u32) -> bool + Sync,
-        triangle: impl Fn(u32) -> [Vec3; 3] + Sync,
-    ) -> Wide {
+    /// `primitive_indices` hold them and told apart by `prims`. Each
+    /// binary leaf becomes a leaf (binned.rs makes them of up to LEAF_MAX
+    /// primitives). The root's children are collapsed on several
+    /// threads, straight into their parts of arrays counted and allocated
+    /// once.
+    pub fn collapse(bvh: &Bvh2, prims: &impl Primitives) -> Wide {
         if bvh.nodes.is_empty() {
             return Wide {
                 root: EMPTY,
@@ -158,15 +193,13 @@ impl Wide {
             let (node, kids) = Self::opened(bvh, 0);
             (Some(node), kids)
         };
-        let sizes: Vec<Sizes> = kids
-            .par_iter()
-            .map(|&k| Sizes::of(bvh, k, &blocked))
-            .collect();
+        let sizes: Vec<Sizes> = kids.par_iter().map(|&k| Sizes::of(bvh, k, prims)).collect();
         let total = sizes.iter().fold(Sizes::default(), |a, b| a.plus(b));
         let top = usize::from(root.is_some());
         let mut wide = Wide {
             nodes: vec![EMPTY_NODE; top + total.nodes],
             blocks: vec![EMPTY_BLOCK; total.blocks],
+            balls: vec![EMPTY_BALL; total.balls],
             leaves: vec![Leaf::default(); total.leaves],
             others: vec![0; total.others],
             root: 0,
@@ -176,6 +209,7 @@ impl Wide {
         let mut parts = Vec::with_capacity(kids.len());
         let (mut nodes, mut blocks) = (&mut wide.nodes[top..], &mut wide.blocks[..]);
         let (mut leaves, mut others) = (&mut wide.leaves[..], &mut wide.others[..]);
+        let mut balls = &mut wide.balls[..];
         let mut base = Sizes {
             nodes: top,
             ..Sizes::default()
@@ -185,13 +219,14 @@ impl Wide {
             let (b, rest_b) = std::mem::take(&mut blocks).split_at_mut(size.blocks);
             let (l, rest_l) = std::mem::take(&mut leaves).split_at_mut(size.leaves);
             let (o, rest_o) = std::mem::take(&mut others).split_at_mut(size.others);
-            (nodes, blocks, leaves, others) = (rest_n, rest_b, rest_l, rest_o);
-            parts.push((k, Out::new(n, b, l, o, base)));
+            let (s, rest_s) = std::mem::take(&mut balls).split_at_mut(size.balls);
+            (nodes, blocks, leaves, others, balls) = (rest_n, rest_b, rest_l, rest_o, rest_s);
+            parts.push((k, Out::new(n, (b, s), l, o, base)));
             base = base.plus(size);
         }
         let roots: Vec<u32> = parts
             .into_par_iter()
-            .map(|(k, mut out)| out.part(bvh, k, &blocked, &triangle))
+            .map(|(k, mut out)| out.part(bvh, k, prims))
             .collect();
         match root {
             Some(mut node) => {
@@ -240,7 +275,7 @@ impl Wide {
         fn of<T>(v: &Vec<T>) -> u64 {
             (v.capacity() * size_of::<T>()) as u64
         }
-        of(&self.nodes) + of(&self.blocks) + of(&self.leaves) + of(&self.others)
+        of(&self.nodes) + of(&self.blocks) + of(&self.balls) + of(&self.leaves) + of(&self.others)
     }
 
     /// Nodes and triangle blocks (for reports).
@@ -379,6 +414,17 @@ impl Wide {
                     });
                 }
             }
+            let balls = &self.balls[leaf.ball as usize..(leaf.ball + leaf.balls) as usize];
+            for ball in balls {
+                if let Some((lane, t)) = meet(ball, &ray, t_min, far) {
+                    far = t;
+                    best = Some(Found {
+                        prim: ball.prim[lane],
+                        t,
+                        bary: Vec2::ZERO,
+                    });
+                }
+            }
             let others = &self.others[leaf.other as usize..(leaf.other + leaf.others) as usize];
             for &p in others {
                 if let Some((t, bary)) = other(p, far) {
@@ -398,6 +444,7 @@ impl Wide {
 struct Sizes {
     nodes: usize,
     blocks: usize,
+    balls: usize,
     leaves: usize,
     others: usize,
     /// Levels of wide nodes to its deepest leaf.
@@ -409,6 +456,7 @@ impl Sizes {
         Sizes {
             nodes: self.nodes + o.nodes,
             blocks: self.blocks + o.blocks,
+            balls: self.balls + o.balls,
             leaves: self.leaves + o.leaves,
             others: self.others + o.others,
             deepest: self.deepest.max(o.deepest),
@@ -417,7 +465,7 @@ impl Sizes {
 
     /// The wide tree of the binary subtree at `i`, as [`Out::part`] will
     /// make it.
-    fn of(bvh: &Bvh2, i: u32, blocked: &impl Fn(u32) -> bool) -> Sizes {
+    fn of(bvh: &Bvh2, i: u32, prims: &impl Primitives) -> Sizes {
         let mut size = Sizes::default();
         let mut work = vec![(i, 1usize)];
         let mut pending = Vec::new();
@@ -429,15 +477,14 @@ impl Sizes {
                 continue;
             }
             size.leaves += 1;
-            let mut triangles = 0usize;
-            leaf_primitives(bvh, i, &mut pending, |p| {
-                if blocked(p) {
-                    triangles += 1;
-                } else {
-                    size.others += 1;
-                }
+            let (mut triangles, mut spheres) = (0usize, 0usize);
+            leaf_primitives(bvh, i, &mut pending, |p| match prims.kind(p) {
+                Kind::Triangle => triangles += 1,
+                Kind::Sphere => spheres += 1,
+                Kind::Other => size.others += 1,
             });
             size.blocks += triangles.div_ceil(WIDTH);
+            size.balls += spheres.div_ceil(WIDTH);
         }
         size
     }
@@ -465,6 +512,7 @@ fn leaf_primitives(bvh: &Bvh2, i: u32, pending: &mut Vec<u32>, mut f: impl FnMut
 struct Out<'a> {
     nodes: &'a mut [Node],
     blocks: &'a mut [Block],
+    balls: &'a mut [Ball],
     leaves: &'a mut [Leaf],
     others: &'a mut [u32],
     base: Sizes,
@@ -474,7 +522,7 @@ struct Out<'a> {
 impl<'a> Out<'a> {
     fn new(
         nodes: &'a mut [Node],
-        blocks: &'a mut [Block],
+        (blocks, balls): (&'a mut [Block], &'a mut [Ball]),
         leaves: &'a mut [Leaf],
         others: &'a mut [u32],
         base: Sizes,
@@ -482,6 +530,7 @@ impl<'a> Out<'a> {
         Out {
             nodes,
             blocks,
+            balls,
             leaves,
             others,
             base,
@@ -492,20 +541,14 @@ impl<'a> Out<'a> {
     /// The wide tree of the binary subtree at `i`, written into this
     /// part's slices (which [`Sizes::of`] measured with the same
     /// `blocked`); its root's reference.
-    fn part(
-        &mut self,
-        bvh: &Bvh2,
-        i: u32,
-        blocked: &impl Fn(u32) -> bool,
-        triangle: &impl Fn(u32) -> [Vec3; 3],
-    ) -> u32 {
+    fn part(&mut self, bvh: &Bvh2, i: u32, prims: &impl Primitives) -> u32 {
         let mut root = EMPTY;
         // (binary node, local wide node and slot that refer to it).
         let mut work = vec![(i, None::<(usize, usize)>)];
         let mut pending = Vec::new();
         while let Some((i, parent)) = work.pop() {
             let reference = if bvh.nodes[i as usize].prim_count > 0 {
-                self.leaf(bvh, i, (blocked, triangle), &mut pending)
+                self.leaf(bvh, i, prims, &mut pending)
             } else {
                 let at = self.filled.nodes;
                 self.filled.nodes += 1;
@@ -525,43 +568,56 @@ impl<'a> Out<'a> {
     }
 
     /// A leaf of every primitive under binary node `i`; its reference.
-    fn leaf(
-        &mut self,
-        bvh: &Bvh2,
-        i: u32,
-        (blocked, triangle): (&impl Fn(u32) -> bool, &impl Fn(u32) -> [Vec3; 3]),
-        pending: &mut Vec<u32>,
-    ) -> u32 {
-        let (first_block, first_other) = (self.filled.blocks, self.filled.others);
-        let mut lane = WIDTH;
-        let (blocks, others, filled) = (&mut *self.blocks, &mut *self.others, &mut self.filled);
-        leaf_primitives(bvh, i, pending, |p| {
-            if !blocked(p) {
+    fn leaf(&mut self, bvh: &Bvh2, i: u32, prims: &impl Primitives, pending: &mut Vec<u32>) -> u32 {
+        let first = self.filled;
+        let (mut lane, mut ball_lane) = (WIDTH, WIDTH);
+        let (blocks, balls) = (&mut *self.blocks, &mut *self.balls);
+        let (others, filled) = (&mut *self.others, &mut self.filled);
+        leaf_primitives(bvh, i, pending, |p| match prims.kind(p) {
+            Kind::Other => {
                 others[filled.others] = p;
                 filled.others += 1;
-                return;
             }
-            if lane == WIDTH {
-                filled.blocks += 1;
-                lane = 0;
+            Kind::Triangle => {
+                if lane == WIDTH {
+                    filled.blocks += 1;
+                    lane = 0;
+                }
+                let [a, b, c] = prims.triangle(p);
+                let block = &mut blocks[filled.blocks - 1];
+                let (e1, e2) = (b - a, c - a);
+                for axis in 0..3 {
+                    block.a[axis][lane] = a[axis];
+                    block.e1[axis][lane] = e1[axis];
+                    block.e2[axis][lane] = e2[axis];
+                }
+                block.prim[lane] = p;
+                lane += 1;
             }
-            let [a, b, c] = triangle(p);
-            let block = &mut blocks[filled.blocks - 1];
-            let (e1, e2) = (b - a, c - a);
-            for axis in 0..3 {
-                block.a[axis][lane] = a[axis];
-                block.e1[axis][lane] = e1[axis];
-                block.e2[axis][lane] = e2[axis];
+            Kind::Sphere => {
+                if ball_lane == WIDTH {
+                    filled.balls += 1;
+                    ball_lane = 0;
+                }
+                let (c, r) = prims.sphere(p);
+                let ball = &mut balls[filled.balls - 1];
+                for axis in 0..3 {
+                    ball.c[axis][ball_lane] = c[axis];
+                }
+                ball.r[ball_lane] = r;
+                ball.prim[ball_lane] = p;
+                ball_lane += 1;
             }
-            block.prim[lane] = p;
-            lane += 1;
         });
         let at = self.filled.leaves;
+        let (now, base) = (self.filled, self.base);
         self.leaves[at] = Leaf {
-            block: (self.base.blocks + first_block) as u32,
-            blocks: (self.filled.blocks - first_block) as u32,
-            other: (self.base.others + first_other) as u32,
-            others: (self.filled.others - first_other) as u32,
+            block: (base.blocks + first.blocks) as u32,
+            blocks: (now.blocks - first.blocks) as u32,
+            ball: (base.balls + first.balls) as u32,
+            balls: (now.balls - first.balls) as u32,
+            other: (base.others + first.others) as u32,
+            others: (now.others - first.others) as u32,
         };
         self.filled.leaves += 1;
         LEAF | (self.base.leaves + at) as u32
@@ -595,6 +651,53 @@ fn enter(node: &Node, ray: &Ray, t_min: f32, t_max: f32) -> ([f32; WIDTH], u32) 
         mask |= u32::from(near[i] <= far[i]) << i;
     }
     (near, mask)
+}
+
+/// The nearest of `ball`'s spheres `ray` meets within `(t_min, t_max)`:
+/// its lane and distance (the far side from inside). The arithmetic is
+/// intersect.rs's `sphere`, operation for operation.
+#[inline(always)]
+fn meet(ball: &Ball, ray: &Ray, t_min: f32, t_max: f32) -> Option<(usize, f32)> {
+    let (o, d) = (ray.o, ray.d);
+    let a = (d.x * d.x) + (d.y * d.y) + (d.z * d.z);
+    if a == 0.0 {
+        return None;
+    }
+    let mut ts = [0f32; WIDTH];
+    for (i, lane) in ts.iter_mut().enumerate() {
+        let ox = o.x - ball.c[0][i];
+        let oy = o.y - ball.c[1][i];
+        let oz = o.z - ball.c[2][i];
+        let b = (ox * d.x) + (oy * d.y) + (oz * d.z);
+        let f = b / a;
+        let (px, py, pz) = (ox - d.x * f, oy - d.y * f, oz - d.z * f);
+        let r = ball.r[i];
+        let disc = r * r - ((px * px) + (py * py) + (pz * pz));
+        let h = (a * disc).sqrt();
+        let near = (-b - h) / a;
+        let far = (-b + h) / a;
+        let t = if near > t_min && near < t_max {
+            near
+        } else if far > t_min && far < t_max {
+            far
+        } else {
+            f32::INFINITY
+        };
+        // An empty lane (radius -1) and a miss (disc < 0, h NaN) fail.
+        *lane = if r >= 0.0 && disc >= 0.0 {
+            t
+        } else {
+            f32::INFINITY
+        };
+    }
+    let mut lane = WIDTH;
+    let mut nearest = f32::INFINITY;
+    for (i, &t) in ts.iter().enumerate() {
+        if t < nearest {
+            (lane, nearest) = (i, t);
+        }
+    }
+    (lane < WIDTH).then_some((lane, nearest))
 }
 
 /// The nearest of `block`'s triangles `ray` crosses within `(t_min,

@@ -1,13 +1,15 @@
 //! `caveray bench surfaces`: a triangle mesh (a volume's isosurface, from
 //! `--mesh`) alone and inside its volume, on the GPU and the CPU, by the
-//! ray-casting benchmark's protocol views: the BVH's build, the first
-//! frame (build, upload and pipelines included), the mean of the frames
-//! after it, and the GPU's image against the CPU's.
+//! ray-casting benchmark's protocol views: the CPU's BVH build, the bytes
+//! each renderer holds per triangle, the first frame (build, upload and
+//! pipelines included), the mean of the frames after it with its primary
+//! rays a second, and the GPU's image against the CPU's.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anari_library_caveray::render::shapes::ShapeSet;
+use anari_library_caveray::render::simd::Level;
 use anari_library_caveray::render::stereo::{paper, HmdStereo};
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
@@ -56,8 +58,16 @@ struct SurfacesReport {
     volume: String,
     triangles: usize,
     vertices: usize,
-    /// The BVH over the mesh, built on the CPU (both renderers build it).
+    /// The CPU's BVH over the mesh (its wide tree), built on the CPU.
     bvh_build_ms: f64,
+    /// What the CPU holds per triangle to trace the mesh: the shape and
+    /// its wide tree.
+    cpu_bytes_per_triangle: f64,
+    /// The GPU's surface buffers per triangle (binary tree, primitives,
+    /// shading data).
+    gpu_bytes_per_triangle: f64,
+    /// The SIMD level the CPU's kernels ran at.
+    simd: &'static str,
     runs: Vec<Run>,
     /// The first view of the mesh in its volume, GPU against CPU.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -79,6 +89,9 @@ struct Timing {
     /// Each later view, and their mean.
     ms: Vec<f64>,
     mean_ms: f64,
+    /// Primary rays a second at the mean (one a pixel; shading and
+    /// secondary rays not counted).
+    rays_per_second: f64,
 }
 
 pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
@@ -112,9 +125,18 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
     let (triangles, vertices) = shapes
         .first()
         .map_or((0, 0), |s| (s.shape.len(), s.shape.vertices()));
+    let runtime = |e: anari_library_caveray::render::RenderError| Failure::Runtime(e.to_string());
     let t = Instant::now();
-    ShapeSet::build(&shapes).map_err(|e| Failure::Runtime(e.to_string()))?;
+    let traced = ShapeSet::build(&shapes).map_err(runtime)?;
     let bvh_build_ms = t.elapsed().as_secs_f64() * 1e3;
+    let all: usize = shapes.iter().map(|s| s.shape.len()).sum();
+    let own: u64 = shapes.iter().map(|s| s.shape.heap_bytes()).sum();
+    let cpu_bytes_per_triangle = (own + traced.heap_bytes()) as f64 / all.max(1) as f64;
+    drop(traced);
+    let packed = ShapeSet::packed(&shapes).map_err(runtime)?;
+    let gpu_bytes_per_triangle =
+        (16 * (packed.words.len() + packed.shading.len())) as f64 / all.max(1) as f64;
+    drop(packed);
 
     let mut renderers: Vec<Renderer> = Vec::new();
     if !args.no_gpu {
@@ -151,10 +173,12 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
                 ms.push(took);
             }
             let first_ms = ms.remove(0);
+            let mean_ms = mean(ms.iter().copied());
             Ok::<_, Failure>(Timing {
                 first_ms,
-                mean_ms: mean(ms.iter().copied()),
+                mean_ms,
                 ms,
+                rays_per_second: f64::from(image.x * image.y) / (mean_ms / 1e3),
             })
         };
         let mesh_timing = timing(&mesh, "mesh", &mut firsts)?;
@@ -177,23 +201,38 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
         triangles,
         vertices,
         bvh_build_ms,
+        cpu_bytes_per_triangle,
+        gpu_bytes_per_triangle,
+        simd: Level::chosen().name(),
         runs,
         gpu_cpu_ssim,
     };
     write_json(&report, &args.json)?;
     println!(
-        "{} triangles ({} vertices) of {} at {}x{}: BVH built in {:.0} ms",
-        report.triangles, report.vertices, report.volume, args.size, args.size, report.bvh_build_ms
+        "{} triangles ({} vertices) of {} at {}x{}: the CPU's BVH built in {:.0} ms ({}), {:.0} bytes a triangle on the CPU, {:.0} on the GPU",
+        report.triangles,
+        report.vertices,
+        report.volume,
+        args.size,
+        args.size,
+        report.bvh_build_ms,
+        report.simd,
+        report.cpu_bytes_per_triangle,
+        report.gpu_bytes_per_triangle
     );
-    println!("renderer   first mesh ms   mesh ms   first mixed ms   mixed ms");
+    println!("renderer   first mesh ms   mesh ms   Mrays/s   first mixed ms   mixed ms");
     for (run, renderer) in report.runs.iter().zip(&renderers) {
         let name = match renderer {
             Renderer::Gpu(g) => g.adapter().name.clone(),
             Renderer::Cpu(_) => "cpu".to_string(),
         };
         println!(
-            "{name:<10} {:>14.1} {:>9.1} {:>16.1} {:>10.1}",
-            run.mesh.first_ms, run.mesh.mean_ms, run.mixed.first_ms, run.mixed.mean_ms
+            "{name:<10} {:>14.1} {:>9.1} {:>9.2} {:>16.1} {:>10.1}",
+            run.mesh.first_ms,
+            run.mesh.mean_ms,
+            run.mesh.rays_per_second / 1e6,
+            run.mixed.first_ms,
+            run.mixed.mean_ms
         );
     }
     if let Some(s) = report.gpu_cpu_ssim {

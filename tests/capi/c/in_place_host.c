@@ -1,0 +1,190 @@
+/* A volume from the host's own memory, read where it lies: a shared
+ * FLOAT32 array (anariNewArray3D with the host's pointer, no deleter) is
+ * not copied while the host holds it (the field's caveray.residentBytes is
+ * 0, and the process grows by far less than the voxels); when the host
+ * releases the array while a frame renders it, and then scribbles over
+ * its memory and frees it, the device has copied it first (after that
+ * render), said so once at PERFORMANCE severity, and every frame renders
+ * the same image.
+ * Usage: in_place_host SCENE_FILE OUT_DIR. Writes OUT_DIR/held.rgba (the
+ * host's memory) and OUT_DIR/freed.rgba (after it is freed); prints
+ * "grew KB voxels KB" and "copies N"; exit status 0 only if every check
+ * held and the status callback saw no error. */
+#include <anari/anari.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "scene.h"
+#include "status.h"
+
+static int copies = 0;
+
+static void watch_status(const void *program, ANARIDevice d, ANARIObject source,
+    ANARIDataType sourceType, ANARIStatusSeverity severity, ANARIStatusCode code,
+    const char *message)
+{
+  if (severity == ANARI_SEVERITY_PERFORMANCE_WARNING && strstr(message, "was copied"))
+    ++copies;
+  count_status(program, d, source, sourceType, severity, code, message);
+}
+
+/* Resident kilobytes of this process now (Linux). */
+static long resident_kb(void)
+{
+  long pages = 0, resident = 0;
+  FILE *f = fopen("/proc/self/statm", "r");
+  if (!f)
+    return -1;
+  if (fscanf(f, "%ld %ld", &pages, &resident) != 2)
+    resident = -1;
+  fclose(f);
+  return resident < 0 ? -1 : resident * 4;
+}
+
+static ANARIFrame new_frame(ANARIDevice dev, Scene *s, ANARIWorld world)
+{
+  ANARIDataType color_type = ANARI_UFIXED8_VEC4;
+  ANARIRenderer renderer = anariNewRenderer(dev, "default");
+  ANARICamera camera = anariNewCamera(dev, "matrix");
+  ANARIFrame frame = anariNewFrame(dev);
+  anariCommitParameters(dev, renderer);
+  anariSetParameter(dev, camera, "view", ANARI_FLOAT32_MAT4, s->view);
+  anariSetParameter(dev, camera, "proj", ANARI_FLOAT32_MAT4, s->proj);
+  anariCommitParameters(dev, camera);
+  anariSetParameter(dev, frame, "size", ANARI_UINT32_VEC2, s->size);
+  anariSetParameter(dev, frame, "channel.color", ANARI_DATA_TYPE, &color_type);
+  anariSetParameter(dev, frame, "world", ANARI_WORLD, &world);
+  anariSetParameter(dev, frame, "renderer", ANARI_RENDERER, &renderer);
+  anariSetParameter(dev, frame, "camera", ANARI_CAMERA, &camera);
+  anariCommitParameters(dev, frame);
+  anariRelease(dev, camera);
+  anariRelease(dev, renderer);
+  return frame;
+}
+
+static int save(ANARIDevice dev, ANARIFrame frame, const char *dir, const char *name)
+{
+  uint32_t w = 0, h = 0;
+  ANARIDataType type = ANARI_UNKNOWN;
+  const void *pixels = anariMapFrame(dev, frame, "channel.color", &w, &h, &type);
+  int ok = pixels && type == ANARI_UFIXED8_VEC4 && write_rgba(dir, name, pixels, w, h);
+  if (pixels)
+    anariUnmapFrame(dev, frame, "channel.color");
+  return ok;
+}
+
+static uint64_t resident_bytes(ANARIDevice dev, ANARIObject o)
+{
+  uint64_t bytes = UINT64_MAX;
+  if (!anariGetProperty(dev, o, "caveray.residentBytes", ANARI_UINT64, &bytes, sizeof(bytes),
+          ANARI_WAIT))
+    return UINT64_MAX;
+  return bytes;
+}
+
+int main(int argc, char **argv)
+{
+  Scene s;
+  ANARILibrary lib;
+  ANARIDevice dev;
+  ANARIArray3D voxels;
+  ANARIArray1D colors, opacities, volumes;
+  ANARISpatialField field;
+  ANARIVolume volume;
+  ANARIWorld world;
+  ANARIFrame first, second;
+  float *data;
+  size_t count, i;
+  long before, grew;
+  uint64_t held;
+  int ok = 1;
+
+  if (argc != 3 || !scene_load(argv[1], &s)) {
+    fprintf(stderr, "usage: in_place_host SCENE_FILE OUT_DIR\n");
+    return 2;
+  }
+  count = (size_t)s.dims[0] * s.dims[1] * s.dims[2];
+  lib = anariLoadLibrary("caveray", watch_status, "in_place_host");
+  dev = anariNewDevice(lib, "default");
+  /* The CPU renderer: probing a GPU would load a driver, whose memory is
+   * not what this measures. */
+  anariSetParameter(dev, dev, "backend", ANARI_STRING, "cpu");
+  anariCommitParameters(dev, dev);
+
+  data = (float *)malloc(count * sizeof(float));
+  memcpy(data, s.voxels, count * sizeof(float));
+  before = resident_kb();
+  voxels = anariNewArray3D(dev, data, NULL, NULL, ANARI_FLOAT32, s.dims[0], s.dims[1], s.dims[2]);
+  field = anariNewSpatialField(dev, "structuredRegular");
+  anariSetParameter(dev, field, "data", ANARI_ARRAY3D, &voxels);
+  anariSetParameter(dev, field, "origin", ANARI_FLOAT32_VEC3, s.origin);
+  anariSetParameter(dev, field, "spacing", ANARI_FLOAT32_VEC3, s.spacing);
+  anariCommitParameters(dev, field);
+
+  colors = anariNewArray1D(dev, s.colors, NULL, NULL, ANARI_FLOAT32_VEC4, s.ncolors);
+  opacities = anariNewArray1D(dev, s.opacities, NULL, NULL, ANARI_FLOAT32, s.nopacities);
+  volume = anariNewVolume(dev, "transferFunction1D");
+  anariSetParameter(dev, volume, "value", ANARI_SPATIAL_FIELD, &field);
+  anariSetParameter(dev, volume, "color", ANARI_ARRAY1D, &colors);
+  anariSetParameter(dev, volume, "opacity", ANARI_ARRAY1D, &opacities);
+  anariSetParameter(dev, volume, "valueRange", ANARI_FLOAT32_BOX1, s.range);
+  anariSetParameter(dev, volume, "unitDistance", ANARI_FLOAT32, &s.unitDistance);
+  anariCommitParameters(dev, volume);
+  volumes = anariNewArray1D(dev, &volume, NULL, NULL, ANARI_VOLUME, 1);
+  world = anariNewWorld(dev);
+  anariSetParameter(dev, world, "volume", ANARI_ARRAY1D, &volumes);
+  anariCommitParameters(dev, world);
+
+  /* While the host holds its memory, the field holds none of it. */
+  held = resident_bytes(dev, field);
+  if (held != 0) {
+    fprintf(stderr, "in_place_host: the field holds %llu bytes of the host's voxels\n",
+        (unsigned long long)held);
+    ok = 0;
+  }
+  first = new_frame(dev, &s, world);
+  anariRenderFrame(dev, first);
+  anariFrameReady(dev, first, ANARI_WAIT);
+  grew = resident_kb() - before;
+  printf("grew %ld KB voxels %zu KB\n", grew, count * sizeof(float) / 1024);
+  ok &= save(dev, first, argv[2], "held");
+
+  /* Released while a frame renders it, then scribbled over and freed: the
+   * copy waits for that render, and later frames read the copy. */
+  second = new_frame(dev, &s, world);
+  anariRenderFrame(dev, second);
+  anariRelease(dev, voxels);
+  for (i = 0; i < count; ++i)
+    data[i] = NAN;
+  free(data);
+  anariFrameReady(dev, second, ANARI_WAIT);
+  ok &= save(dev, second, argv[2], "freed");
+  anariRenderFrame(dev, first);
+  anariFrameReady(dev, first, ANARI_WAIT);
+  ok &= save(dev, first, argv[2], "again");
+  held = resident_bytes(dev, field);
+  if (held != count * sizeof(float)) {
+    fprintf(stderr, "in_place_host: after the release the field holds %llu bytes, not its copy's %zu\n",
+        (unsigned long long)held, count * sizeof(float));
+    ok = 0;
+  }
+  printf("copies %d\n", copies);
+  if (copies != 1) {
+    fprintf(stderr, "in_place_host: %d PERFORMANCE notes of a copy, not one\n", copies);
+    ok = 0;
+  }
+
+  anariRelease(dev, first);
+  anariRelease(dev, second);
+  anariRelease(dev, world);
+  anariRelease(dev, volumes);
+  anariRelease(dev, volume);
+  anariRelease(dev, colors);
+  anariRelease(dev, opacities);
+  anariRelease(dev, field);
+  anariRelease(dev, dev);
+  anariUnloadLibrary(lib);
+  scene_free(&s);
+  return ok && status_count == 0 ? 0 : 1;
+}
