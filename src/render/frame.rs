@@ -117,6 +117,19 @@ pub enum ColorData {
     Rgba32F(Vec<f32>),
 }
 
+/// Linear straight RGBA as an 8-bit `format` stores it (sRGB or linear
+/// color, linear alpha); a float format keeps no bytes and reads as zeros.
+pub fn encoded(format: ColorFormat, c: [f32; 4]) -> [u8; 4] {
+    let rgb = |x: f32| match format {
+        ColorFormat::Srgba8 => srgb8(x),
+        _ => to_unorm8(x),
+    };
+    match format {
+        ColorFormat::Rgba32F => [0; 4],
+        _ => [rgb(c[0]), rgb(c[1]), rgb(c[2]), to_unorm8(c[3])],
+    }
+}
+
 /// The result of one render: color, optional depth and hits, lower-left
 /// first.
 #[derive(Clone, Debug, PartialEq)]
@@ -243,26 +256,44 @@ impl Frame {
         color: Vec<f32>,
         depth: Option<Vec<f32>>,
     ) -> Result<Frame, RenderError> {
-        let encode = |srgb: bool| -> Result<Vec<u8>, RenderError> {
-            let mut out = filled(color.len(), 0u8, "the frame's 8-bit color")?;
-            for (o, c) in out.chunks_exact_mut(4).zip(color.chunks_exact(4)) {
-                let rgb = |x: f32| if srgb { srgb8(x) } else { to_unorm8(x) };
-                o.copy_from_slice(&[rgb(c[0]), rgb(c[1]), rgb(c[2]), to_unorm8(c[3])]);
-            }
-            Ok(out)
-        };
+        if desc.color == ColorFormat::Rgba32F {
+            return Ok(Frame::of(desc, ColorData::Rgba32F(color), depth));
+        }
+        let mut out = filled(color.len(), 0u8, "the frame's 8-bit color")?;
+        for (o, c) in out.chunks_exact_mut(4).zip(color.chunks_exact(4)) {
+            o.copy_from_slice(&encoded(desc.color, [c[0], c[1], c[2], c[3]]));
+        }
+        Frame::from_encoded(desc, out, depth)
+    }
+
+    /// A frame of `desc`'s 8-bit format from its bytes (4 per pixel, as
+    /// [`encoded`] makes them, lower-left first) and an optional depth
+    /// channel.
+    pub fn from_encoded(
+        desc: &FrameDesc,
+        bytes: Vec<u8>,
+        depth: Option<Vec<f32>>,
+    ) -> Result<Frame, RenderError> {
         let color = match desc.color {
-            ColorFormat::Rgba8 => ColorData::Rgba8(encode(false)?),
-            ColorFormat::Srgba8 => ColorData::Srgba8(encode(true)?),
-            ColorFormat::Rgba32F => ColorData::Rgba32F(color),
+            ColorFormat::Rgba8 => ColorData::Rgba8(bytes),
+            ColorFormat::Srgba8 => ColorData::Srgba8(bytes),
+            ColorFormat::Rgba32F => {
+                return Err(RenderError::Settings(
+                    "a float frame has no 8-bit encoding".into(),
+                ))
+            }
         };
-        Ok(Frame {
+        Ok(Frame::of(desc, color, depth))
+    }
+
+    fn of(desc: &FrameDesc, color: ColorData, depth: Option<Vec<f32>>) -> Frame {
+        Frame {
             size: desc.size,
             color,
             depth,
             hits: None,
             samples: 0,
-        })
+        }
     }
 
     /// Pixel (x, y) (y = 0 is the bottom row) as linear RGBA floats.

@@ -12,7 +12,7 @@ use std::sync::{Arc, Mutex};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::frame::{filled, Frame, FrameDesc};
+use super::frame::{encoded, filled, ColorFormat, Frame, FrameDesc};
 use super::hits::{self, HitRecord};
 use super::iso::{self, IsoFilter, IsoSettings};
 use super::march_plan::MarchPlan;
@@ -286,6 +286,9 @@ impl CpuRenderer {
         // the same voxels while they are in cache, and a tile is small
         // enough that two threads stay busy to the frame's end.
         let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        // An 8-bit frame is encoded pixel by pixel in its tiles: no float
+        // copy of the whole frame is ever held (16 bytes a pixel).
+        let encode = desc.color != ColorFormat::Rgba32F;
         watch.expect((tx * ty) as u64);
         let tiles: Vec<Tile> = (0..tx * ty)
             .into_par_iter()
@@ -294,7 +297,8 @@ impl CpuRenderer {
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
                 let mut out = Tile {
                     index: tile,
-                    color: Vec::with_capacity(4 * TILE * TILE),
+                    color: Vec::with_capacity(if encode { 0 } else { 4 * TILE * TILE }),
+                    bytes: Vec::with_capacity(if encode { 4 * TILE * TILE } else { 0 }),
                     depth: Vec::with_capacity(TILE * TILE),
                     hits: Vec::with_capacity(if desc.hits { TILE * TILE } else { 0 }),
                     samples: 0,
@@ -328,7 +332,12 @@ impl CpuRenderer {
                                 _ => HitRecord::NOTHING,
                             });
                         }
-                        out.color.extend_from_slice(&color.to_array());
+                        if encode {
+                            out.bytes
+                                .extend_from_slice(&encoded(desc.color, color.to_array()));
+                        } else {
+                            out.color.extend_from_slice(&color.to_array());
+                        }
                         out.depth.push(depth);
                         out.samples += u64::from(n);
                     }
@@ -342,7 +351,14 @@ impl CpuRenderer {
         if watch.stopped() {
             return Err(RenderError::Stopped);
         }
-        let mut color = filled(4 * desc.pixels(), 0.0f32, "the frame's color")?;
+        let mut color = match encode {
+            true => Vec::new(),
+            false => filled(4 * desc.pixels(), 0.0f32, "the frame's color")?,
+        };
+        let mut bytes = match encode {
+            true => filled(4 * desc.pixels(), 0u8, "the frame's 8-bit color")?,
+            false => Vec::new(),
+        };
         let mut depth = filled(desc.pixels(), 0.0f32, "the frame's depth")?;
         let mut records = match desc.hits {
             true => filled(desc.pixels(), HitRecord::NOTHING, "the frame's hits")?,
@@ -353,15 +369,17 @@ impl CpuRenderer {
             samples += tile.samples;
             let (x0, y0) = ((tile.index % tx) * TILE, (tile.index / tx) * TILE);
             let tw = (x0 + TILE).min(w) - x0;
-            for (row, (cr, dr)) in tile
-                .color
-                .chunks(4 * tw)
-                .zip(tile.depth.chunks(tw))
-                .enumerate()
-            {
+            for (row, dr) in tile.depth.chunks(tw).enumerate() {
                 let at = (y0 + row) * w + x0;
-                color[4 * at..4 * at + cr.len()].copy_from_slice(cr);
                 depth[at..at + dr.len()].copy_from_slice(dr);
+            }
+            for (row, cr) in tile.color.chunks(4 * tw).enumerate() {
+                let at = 4 * ((y0 + row) * w + x0);
+                color[at..at + cr.len()].copy_from_slice(cr);
+            }
+            for (row, br) in tile.bytes.chunks(4 * tw).enumerate() {
+                let at = 4 * ((y0 + row) * w + x0);
+                bytes[at..at + br.len()].copy_from_slice(br);
             }
             for (row, hr) in tile.hits.chunks(tw).enumerate() {
                 let at = (y0 + row) * w + x0;
@@ -371,7 +389,11 @@ impl CpuRenderer {
         if watch.stopped() {
             return Err(RenderError::Stopped);
         }
-        let mut frame = Frame::from_linear(desc, color, desc.depth.then_some(depth))?;
+        let depth = desc.depth.then_some(depth);
+        let mut frame = match encode {
+            true => Frame::from_encoded(desc, bytes, depth)?,
+            false => Frame::from_linear(desc, color, depth)?,
+        };
         if desc.hits {
             frame.hits = Some(hits::resolve(scene, &records));
         }
@@ -383,7 +405,10 @@ impl CpuRenderer {
 /// One tile's pixels, row by row.
 struct Tile {
     index: usize,
+    /// Linear RGBA, for a float frame.
     color: Vec<f32>,
+    /// Encoded RGBA, for an 8-bit frame.
+    bytes: Vec<u8>,
     depth: Vec<f32>,
     /// Empty unless the frame asks for hits.
     hits: Vec<HitRecord>,
