@@ -538,7 +538,7 @@ impl Host<'_, '_> {
         );
         anariCommitParameters(dev, f);
         anariRenderFrame(dev, f);
-        if self.input.byte() % 4 == 0 {
+        if self.input.byte().is_multiple_of(4) {
             anariDiscardFrame(dev, f);
         }
         anariFrameReady(dev, f, sys::ANARIWaitMask::from(1u32));
@@ -623,7 +623,7 @@ impl Host<'_, '_> {
     /// Retains the device or a handle for the callbacks, which own that
     /// reference from then on.
     unsafe fn hand_over(&mut self) {
-        let h = if self.input.byte() % 4 == 0 {
+        let h = if self.input.byte().is_multiple_of(4) {
             self.dev
         } else {
             self.handle()
@@ -673,7 +673,7 @@ fn second_host(dev: usize, script: &[u8], words: &Words, shared: Vec<usize>) {
                 }
                 3 => host.render(),
                 4 => {
-                    let wait = host.input.byte() % 2 == 0;
+                    let wait = host.input.byte().is_multiple_of(2);
                     host.property(wait)
                 }
                 5 => {

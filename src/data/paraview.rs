@@ -49,7 +49,7 @@ pub fn parse_paraview(text: &str, file: &str) -> Result<TransferFunction, DataEr
             .map(|x| x.as_f64().map(|f| f as f32).filter(|f| f.is_finite()))
             .collect::<Option<_>>()
             .ok_or_else(|| bad(format!("{key} holds something other than finite numbers")))?;
-        if flat.is_empty() || flat.len() % stride != 0 {
+        if flat.is_empty() || !flat.len().is_multiple_of(stride) {
             return Err(bad(format!(
                 "{key} must hold groups of {stride} numbers, got {}",
                 flat.len()

@@ -271,7 +271,11 @@ fn bricks_of(dims: UVec3) -> UVec3 {
 /// when v is on a face between two.
 fn owners(v: usize, b: usize, n: usize) -> std::ops::Range<usize> {
     let hi = (v / b).min(n - 1);
-    let lo = if v % b == 0 && v > 0 { v / b - 1 } else { hi };
+    let lo = if v.is_multiple_of(b) && v > 0 {
+        v / b - 1
+    } else {
+        hi
+    };
     lo..hi + 1
 }
 

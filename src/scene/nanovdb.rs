@@ -437,7 +437,7 @@ impl NanoVdbGrid {
             if count > 0 && end > grid_size {
                 return Err(past(what, tree + 8 * k, end));
             }
-            if count > 0 && first % 32 != 0 {
+            if count > 0 && !first.is_multiple_of(32) {
                 return Err(NanoVdbError::Misaligned {
                     what: what.to_string(),
                     at: first,
@@ -459,7 +459,7 @@ impl NanoVdbGrid {
                 root.saturating_add(ROOT_SIZE as u64),
             ));
         }
-        if root % 32 != 0 {
+        if !root.is_multiple_of(32) {
             return Err(NanoVdbError::Misaligned {
                 what: "the root".into(),
                 at: root,

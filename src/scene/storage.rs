@@ -274,7 +274,7 @@ impl<T: bytemuck::Pod> Buf<T> {
     pub fn mapped(map: Arc<Mapping>, offset: usize, len: usize) -> Option<Self> {
         let bytes = len.checked_mul(std::mem::size_of::<T>())?;
         let end = offset.checked_add(bytes)?;
-        let aligned = (map.ptr as usize + offset) % std::mem::align_of::<T>() == 0;
+        let aligned = (map.ptr as usize + offset).is_multiple_of(std::mem::align_of::<T>());
         (end <= map.len && aligned).then_some(Buf::Mapped {
             map,
             offset,
@@ -291,7 +291,7 @@ impl<T: bytemuck::Pod> Buf<T> {
     /// bytes (and any copy of them) are aligned for `T`; None otherwise.
     pub fn lent(lent: Arc<Lent>, len: usize) -> Option<Self> {
         let bytes = len.checked_mul(std::mem::size_of::<T>())?;
-        let aligned = lent.bytes().as_ptr() as usize % std::mem::align_of::<T>() == 0
+        let aligned = (lent.bytes().as_ptr() as usize).is_multiple_of(std::mem::align_of::<T>())
             && std::mem::align_of::<T>() <= std::mem::align_of::<u64>();
         (bytes <= lent.len && aligned).then_some(Buf::Lent {
             lent,

@@ -296,7 +296,7 @@ pub fn run(args: ReplayArgs) -> Result<(), Failure> {
             let mut k = 0usize;
             let mut each = |r: &Refresh| {
                 k += 1;
-                if k % every == 0 && strip[0].len() < STRIP_FRAMES {
+                if k.is_multiple_of(every) && strip[0].len() < STRIP_FRAMES {
                     strip[0].push(frame_to_rgba(&r.ideal));
                     for (row, s) in strip[1..].iter_mut().zip(&r.shown) {
                         row.push(frame_to_rgba(&s.frame));
