@@ -540,7 +540,7 @@ impl<'a> Out<'a> {
 
     /// The wide tree of the binary subtree at `i`, written into this
     /// part's slices (which [`Sizes::of`] measured with the same
-    /// `blocked`); its root's reference.
+    /// `prims`); its root's reference.
     fn part(&mut self, bvh: &Bvh2, i: u32, prims: &impl Primitives) -> u32 {
         let mut root = EMPTY;
         // (binary node, local wide node and slot that refer to it).
