@@ -166,10 +166,11 @@ impl Scene {
             .map(|(_, p)| &p.volume)
     }
 
-    /// The host memory this scene's grids read in place: a render holds
-    /// a [`Lent::reading`] of each while it runs.
+    /// The host memory this scene's grids and shapes read in place: a
+    /// render holds a [`Lent::reading`] of each while it runs.
     pub fn lenders(&self) -> impl Iterator<Item = &Arc<Lent>> {
-        self.grids().filter_map(|g| g.lender())
+        let shapes = self.shapes.iter().flat_map(|s| s.shape.lenders());
+        self.grids().filter_map(|g| g.lender()).chain(shapes)
     }
 
     pub fn shapes(&self) -> &[PlacedShape] {

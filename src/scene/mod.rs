@@ -29,8 +29,8 @@ pub use nanovdb::{
 pub use placement::{transformed_box, ObjectIds};
 pub use sampler::{Image, Sampler, SamplerError, SamplerKind, Wrap, DEFAULT_ATTRIBUTE, MAX_TEXELS};
 pub use shapes::{
-    AlphaMode, Attribute, ColorSource, Coverage, Made, OpacitySource, Pbr, PlacedShape, Primitives,
-    Shape, ShapeError, ShapeInput, Source, SurfaceMaterial, Uniforms, ATTRIBUTE_NAMES,
+    AlphaMode, Attribute, ColorSource, Coverage, Kept, Made, OpacitySource, Pbr, PlacedShape,
+    Primitives, Shape, ShapeError, ShapeInput, Source, SurfaceMaterial, Uniforms, ATTRIBUTE_NAMES,
     MAX_PRIMITIVES,
 };
 pub use storage::{Buf, Lent, Mapping, Reading};

@@ -10,6 +10,7 @@ use thiserror::Error;
 
 use super::placement::{check_affine, transformed_box, ObjectIds};
 use super::sampler::Sampler;
+use super::storage::{Buf, Lent};
 
 /// The most primitives one shape holds: a primitive's index must fit the
 /// 32 bits the renderers' BVH leaves store.
@@ -50,10 +51,78 @@ pub const ATTRIBUTE_NAMES: [&str; 5] = [
 
 /// An attribute's values, one per vertex (interpolated across each
 /// primitive) or one per primitive (as the host numbered its primitives).
+/// Its values are four floats each, aligned as floats, so that a host's
+/// FLOAT32_VEC4 array is read where it lies.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Attribute {
-    PerVertex(Vec<Vec4>),
-    PerPrimitive(Vec<Vec4>),
+    PerVertex(Buf<[f32; 4]>),
+    PerPrimitive(Buf<[f32; 4]>),
+}
+
+impl Attribute {
+    pub fn per_vertex(values: Vec<Vec4>) -> Self {
+        Attribute::PerVertex(values.iter().map(Vec4::to_array).collect::<Vec<_>>().into())
+    }
+
+    pub fn per_primitive(values: Vec<Vec4>) -> Self {
+        Attribute::PerPrimitive(values.iter().map(Vec4::to_array).collect::<Vec<_>>().into())
+    }
+
+    fn values(&self) -> &Buf<[f32; 4]> {
+        match self {
+            Attribute::PerVertex(v) | Attribute::PerPrimitive(v) => v,
+        }
+    }
+}
+
+/// Which host primitive each kept primitive is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Kept {
+    /// All of the host's `n`, in its order: kept primitive i is host
+    /// primitive i.
+    All(usize),
+    /// Kept primitive i is host primitive `[i]`: some were dropped, or a
+    /// host primitive became several (a quad two triangles).
+    Listed(Vec<u32>),
+}
+
+impl Kept {
+    /// `list` of the host's `n` primitives, kept in order: all of
+    /// them, without a list, where it is as long.
+    fn listed(mut list: Vec<u32>, n: usize) -> Kept {
+        if list.len() == n {
+            Kept::All(n)
+        } else {
+            list.shrink_to_fit();
+            Kept::Listed(list)
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        match self {
+            Kept::All(n) => *n,
+            Kept::Listed(l) => l.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The host's number of kept primitive `kept`.
+    pub fn host(&self, kept: usize) -> Option<u32> {
+        match self {
+            Kept::All(n) => (kept < *n).then_some(kept as u32),
+            Kept::Listed(l) => l.get(kept).copied(),
+        }
+    }
+
+    fn heap_bytes(&self) -> u64 {
+        match self {
+            Kept::All(_) => 0,
+            Kept::Listed(l) => (l.capacity() * size_of::<u32>()) as u64,
+        }
+    }
 }
 
 /// What a shape is made of. Primitives that cannot show (zero area, zero
@@ -61,11 +130,12 @@ pub enum Attribute {
 /// one as the host did, so per-primitive attributes and ids stay right.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Primitives {
+    /// Read from the host's arrays in place where it shares them.
     Triangles {
-        positions: Vec<Vec3>,
-        triangles: Vec<[u32; 3]>,
+        positions: Buf<Vec3>,
+        triangles: Buf<[u32; 3]>,
         /// Per vertex, if the host gave them; else each face's own.
-        normals: Option<Vec<Vec3>>,
+        normals: Option<Buf<Vec3>>,
     },
     Spheres {
         positions: Vec<Vec3>,
@@ -99,8 +169,7 @@ pub enum Primitives {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shape {
     pub primitives: Primitives,
-    /// Host primitive index of each kept primitive.
-    pub source: Vec<u32>,
+    pub kept: Kept,
     /// By slot of [`ATTRIBUTE_NAMES`].
     pub attributes: [Option<Attribute>; 5],
     /// The host's `primitive.id`, by host primitive index.
@@ -198,17 +267,20 @@ fn dropped(count: usize, what: &str) -> Option<String> {
 
 impl Shape {
     /// Triangles over `positions`, each a triple of vertex indices (host
-    /// primitive `source[i]` for triangle i, so quads split in two keep
+    /// primitive `kept.host(i)` for triangle i, so quads split in two keep
     /// their number). Indices must lie in range and the vertices they use
-    /// must be finite; triangles of zero area are dropped.
+    /// must be finite; triangles of zero area are dropped. Buffers read
+    /// from the host's memory stay there unless a triangle is dropped.
     pub fn triangles(
-        positions: Vec<Vec3>,
-        triangles: Vec<[u32; 3]>,
-        source: Vec<u32>,
-        normals: Option<Vec<Vec3>>,
+        positions: impl Into<Buf<Vec3>>,
+        triangles: impl Into<Buf<[u32; 3]>>,
+        kept: Kept,
+        normals: Option<Buf<Vec3>>,
         input: ShapeInput,
     ) -> Result<Made, ShapeError> {
+        use rayon::prelude::*;
         input.check()?;
+        let (positions, triangles) = (positions.into(), triangles.into());
         let count = positions.len();
         if let Some(n) = &normals {
             if n.len() < count {
@@ -220,42 +292,62 @@ impl Shape {
                 });
             }
         }
-        // Kept triangles are moved down in place: a million-triangle mesh
-        // is not copied a second time.
-        let (mut triangles, mut source) = (triangles, source);
-        let mut kept = 0;
-        let mut flat = 0;
-        for i in 0..triangles.len().min(source.len()) {
-            let (tri, host) = (&triangles[i], source[i]);
-            for &v in tri {
-                let Some(&p) = positions.get(v as usize) else {
-                    return Err(ShapeError::IndexOutOfRange {
-                        what: "primitive",
-                        index: host as usize,
-                        vertex: v,
-                        count,
-                    });
-                };
-                if !p.is_finite() {
-                    return Err(ShapeError::NotFinite {
-                        index: v as usize,
-                        position: p,
-                    });
-                }
-            }
+        let n = triangles.len().min(kept.len());
+        let host = |i: usize| kept.host(i).unwrap_or(i as u32) as usize;
+        // Zero area relative to the edges: a sliver of a huge mesh shows.
+        let flat = |tri: &[u32; 3]| {
             let [a, b, c] = tri.map(|v| positions[v as usize]);
             let area2 = (b - a).cross(c - a).length();
-            // Relative to the edges: a sliver of a huge mesh still shows.
             let scale = (b - a).length_squared().max((c - a).length_squared());
-            if area2.is_nan() || area2 <= 1e-12 * scale {
-                flat += 1;
-                continue;
-            }
-            (triangles[kept], source[kept]) = (triangles[i], host);
-            kept += 1;
+            area2.is_nan() || area2 <= 1e-12 * scale
+        };
+        // Checked in chunks on every core; the first bad triangle is the
+        // one reported.
+        const CHUNK: usize = 1 << 16;
+        let checked: Vec<Result<usize, ShapeError>> = triangles[..n]
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut flats = 0;
+                for (j, tri) in chunk.iter().enumerate() {
+                    for &v in tri {
+                        let Some(&p) = positions.get(v as usize) else {
+                            return Err(ShapeError::IndexOutOfRange {
+                                what: "primitive",
+                                index: host(c * CHUNK + j),
+                                vertex: v,
+                                count,
+                            });
+                        };
+                        if !p.is_finite() {
+                            return Err(ShapeError::NotFinite {
+                                index: v as usize,
+                                position: p,
+                            });
+                        }
+                    }
+                    flats += usize::from(flat(tri));
+                }
+                Ok(flats)
+            })
+            .collect();
+        let mut flats = 0;
+        for c in checked {
+            flats += c?;
         }
-        triangles.truncate(kept);
-        source.truncate(kept);
+        let (triangles, kept) = if flats == 0 && n == triangles.len() {
+            (triangles, kept)
+        } else {
+            let mut list = Vec::with_capacity(n - flats);
+            let mut hosts = Vec::with_capacity(n - flats);
+            for (i, tri) in triangles[..n].iter().enumerate() {
+                if !flat(tri) {
+                    list.push(*tri);
+                    hosts.push(host(i) as u32);
+                }
+            }
+            (Buf::from(list), Kept::Listed(hosts))
+        };
         Ok(Made {
             shape: Shape {
                 primitives: Primitives::Triangles {
@@ -263,13 +355,13 @@ impl Shape {
                     triangles,
                     normals,
                 },
-                source,
+                kept,
                 attributes: input.attributes,
                 ids: input.ids,
                 bounds: (Vec3::ZERO, Vec3::ZERO),
             }
             .measured(),
-            dropped: dropped(flat, "triangles of zero area"),
+            dropped: dropped(flats, "triangles of zero area"),
         })
     }
 
@@ -318,7 +410,7 @@ impl Shape {
                     radii,
                     spheres,
                 },
-                source,
+                kept: Kept::listed(source, index.len()),
                 attributes: input.attributes,
                 ids: input.ids,
                 bounds: (Vec3::ZERO, Vec3::ZERO),
@@ -369,7 +461,7 @@ impl Shape {
                     radii: kept_radii,
                     caps: kept_caps,
                 },
-                source,
+                kept: Kept::listed(source, ends.len()),
                 attributes: input.attributes,
                 ids: input.ids,
                 bounds: (Vec3::ZERO, Vec3::ZERO),
@@ -412,7 +504,7 @@ impl Shape {
                     radii,
                     segments,
                 },
-                source,
+                kept: Kept::listed(source, first.len()),
                 attributes: input.attributes,
                 ids: input.ids,
                 bounds: (Vec3::ZERO, Vec3::ZERO),
@@ -424,17 +516,17 @@ impl Shape {
 
     /// Primitives kept.
     pub fn len(&self) -> usize {
-        self.source.len()
+        self.kept.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.source.is_empty()
+        self.kept.is_empty()
     }
 
     /// The id of kept primitive `kept`: the host's `primitive.id` of it
     /// where given, else its index among the host's primitives.
     pub fn primitive_id(&self, kept: u32) -> u32 {
-        let Some(&host) = self.source.get(kept as usize) else {
+        let Some(host) = self.kept.host(kept as usize) else {
             return u32::MAX;
         };
         match &self.ids {
@@ -453,7 +545,11 @@ impl Shape {
                 positions,
                 triangles,
                 normals,
-            } => of(positions) + of(triangles) + normals.as_ref().map_or(0, of),
+            } => {
+                positions.heap_bytes()
+                    + triangles.heap_bytes()
+                    + normals.as_ref().map_or(0, Buf::heap_bytes)
+            }
             Primitives::Spheres {
                 positions,
                 radii,
@@ -475,18 +571,38 @@ impl Shape {
             .attributes
             .iter()
             .flatten()
-            .map(|a| match a {
-                Attribute::PerVertex(v) | Attribute::PerPrimitive(v) => of(v),
-            })
+            .map(|a| a.values().heap_bytes())
             .sum();
-        primitives + of(&self.source) + attributes + self.ids.as_ref().map_or(0, of)
+        primitives + self.kept.heap_bytes() + attributes + self.ids.as_ref().map_or(0, of)
+    }
+
+    /// The host memory it reads in place: a render registers with each.
+    pub fn lenders(&self) -> impl Iterator<Item = &Arc<Lent>> {
+        let primitives: [Option<&Arc<Lent>>; 3] = match &self.primitives {
+            Primitives::Triangles {
+                positions,
+                triangles,
+                normals,
+            } => [
+                positions.lender(),
+                triangles.lender(),
+                normals.as_ref().and_then(Buf::lender),
+            ],
+            _ => [None; 3],
+        };
+        let attributes = self
+            .attributes
+            .iter()
+            .flatten()
+            .filter_map(|a| a.values().lender());
+        primitives.into_iter().flatten().chain(attributes)
     }
 
     /// Vertices the host gave.
     pub fn vertices(&self) -> usize {
         match &self.primitives {
-            Primitives::Triangles { positions, .. }
-            | Primitives::Spheres { positions, .. }
+            Primitives::Triangles { positions, .. } => positions.len(),
+            Primitives::Spheres { positions, .. }
             | Primitives::Cones { positions, .. }
             | Primitives::Curves { positions, .. } => positions.len(),
         }
@@ -764,21 +880,27 @@ mod tests {
             Vec3::splat(f32::NAN),
             Vec3::X * 2.0,
         ];
-        let bad = Shape::triangles(p.clone(), vec![[0, 1, 7]], vec![0], None, input(5, 1));
+        let bad = Shape::triangles(p.clone(), vec![[0, 1, 7]], Kept::All(1), None, input(5, 1));
         assert_eq!(
             bad.err().unwrap().to_string(),
             "primitive 0 refers to vertex 7; there are 5 vertices"
         );
-        let nan = Shape::triangles(p.clone(), vec![[0, 1, 3]], vec![0], None, input(5, 1));
+        let nan = Shape::triangles(p.clone(), vec![[0, 1, 3]], Kept::All(1), None, input(5, 1));
         assert!(nan
             .err()
             .unwrap()
             .to_string()
             .starts_with("vertex 3 is used"));
         // The NaN vertex is unused here; the second triangle is a line.
-        let made =
-            Shape::triangles(p, vec![[0, 1, 2], [0, 1, 4]], vec![0, 1], None, input(5, 2)).unwrap();
-        assert_eq!(made.shape.source, vec![0]);
+        let made = Shape::triangles(
+            p,
+            vec![[0, 1, 2], [0, 1, 4]],
+            Kept::All(2),
+            None,
+            input(5, 2),
+        )
+        .unwrap();
+        assert_eq!(made.shape.kept, Kept::Listed(vec![0]));
         assert_eq!(
             made.dropped.as_deref(),
             Some("1 triangles of zero area dropped")
@@ -795,13 +917,13 @@ mod tests {
             input(2, 2),
         )
         .unwrap();
-        assert_eq!(made.shape.source, vec![1]);
+        assert_eq!(made.shape.kept, Kept::Listed(vec![1]));
         assert_eq!(
             made.shape.bounds(),
             (Vec3::new(0.5, -0.5, -0.5), Vec3::splat(0.5) + Vec3::X)
         );
         let mut short = input(2, 2);
-        short.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::ONE]));
+        short.attributes[0] = Some(Attribute::per_vertex(vec![Vec4::ONE]));
         let e = Shape::spheres(vec![Vec3::ZERO, Vec3::X], vec![1.0, 1.0], vec![0, 1], short);
         assert_eq!(
             e.err().unwrap().to_string(),

@@ -132,6 +132,7 @@ impl Lent {
     }
 
     /// The bytes, where they are now.
+    #[inline]
     pub fn bytes(&self) -> &[u8] {
         let ptr = self.ptr.load(Ordering::SeqCst);
         if self.len == 0 || ptr.is_null() {
@@ -300,6 +301,19 @@ impl<T: bytemuck::Pod> Buf<T> {
         })
     }
 
+    /// Bytes of memory it owns (allocated, not only used): none for
+    /// numbers read where they lie, a host's copied once it took them
+    /// back.
+    pub fn heap_bytes(&self) -> u64 {
+        match self {
+            Buf::Owned(v) => (v.capacity() * std::mem::size_of::<T>()) as u64,
+            Buf::Lent { lent, len, .. } if lent.is_copied() => {
+                (len * std::mem::size_of::<T>()) as u64
+            }
+            Buf::Lent { .. } | Buf::Mapped { .. } => 0,
+        }
+    }
+
     /// The host's bytes these are read from, if they are.
     pub fn lender(&self) -> Option<&Arc<Lent>> {
         match self {
@@ -311,6 +325,7 @@ impl<T: bytemuck::Pod> Buf<T> {
 
 impl<T: bytemuck::Pod> Deref for Buf<T> {
     type Target = [T];
+    #[inline]
     fn deref(&self) -> &[T] {
         match self {
             Buf::Owned(v) => v,

@@ -631,6 +631,66 @@ fn a_shared_volume_freed_after_release_is_never_read_under_valgrind() {
     in_place(true);
 }
 
+/// A triangle mesh from the host's memory (tests/capi/c/in_place_mesh.c):
+/// positions, indices and colors read in place (the geometry holds no
+/// bytes), each copied once when the host releases it mid-render, and
+/// the same image before, during and after.
+fn in_place_mesh(valgrind: bool) {
+    let dir = scratch(if valgrind {
+        "c_in_place_mesh_valgrind"
+    } else {
+        "c_in_place_mesh"
+    });
+    let volume = (
+        anari_library_caveray::data::shepp_logan(16),
+        preset("phantom").unwrap(),
+    );
+    let scene = wall_scene(&dir, if valgrind { 32 } else { 64 }, volume, false);
+    let program = dir.join("in_place_mesh");
+    compile(&["tests/capi/c/in_place_mesh.c"], &program, false, true);
+    let n = if valgrind { "12" } else { "96" };
+    let output = run(
+        &program,
+        &[&scene.file, &dir, std::path::Path::new(n)],
+        valgrind,
+    );
+    assert!(
+        output.status.success(),
+        "in_place_mesh: {}",
+        describe(&output)
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("copies 3"), "{stdout}");
+    let covered: u32 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("covered "))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no coverage in {stdout}"));
+    assert!(covered >= 10, "the mesh covers {covered}% of the frame");
+    let held = read_rgba(&dir.join("mesh_held.rgba"), scene.size);
+    for name in ["mesh_freed", "mesh_again"] {
+        let image = read_rgba(&dir.join(format!("{name}.rgba")), scene.size);
+        assert_eq!(
+            image.color, held.color,
+            "{name} differs from the first image"
+        );
+    }
+}
+
+#[test]
+fn a_shared_mesh_is_read_in_place_and_copied_only_when_released() {
+    in_place_mesh(false);
+}
+
+#[test]
+fn a_shared_mesh_freed_after_release_is_never_read_under_valgrind() {
+    if !valgrind_available() {
+        missing("valgrind is not installed");
+        return;
+    }
+    in_place_mesh(true);
+}
+
 /// Object parameters a commit refuses for their kind, each closing a loop
 /// back to its own object (tests/capi/c/refused_cycle.c): the refusal says
 /// the parameter was unset, every refused array's deleter runs once its

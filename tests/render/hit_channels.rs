@@ -13,8 +13,8 @@ use anari_library_caveray::geometry::{ImageRegion, OrthographicCamera, PrimaryRa
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{CpuRenderer, Frame, FrameDesc, PixelHit, RenderSettings};
 use anari_library_caveray::scene::{
-    AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume, Scene, Shape,
-    ShapeInput, SurfaceMaterial, TransferFunction,
+    AlphaMode, ColorSource, Kept, ObjectIds, OpacitySource, PlacedShape, PlacedVolume, Scene,
+    Shape, ShapeInput, SurfaceMaterial, TransferFunction,
 };
 use common::render::{four_cameras, gpu, off_axis_wall};
 use glam::{DVec3, Mat4, UVec2, Vec3, Vec4};
@@ -291,7 +291,7 @@ fn sheet() -> PlacedShape {
     let made = Shape::triangles(
         positions,
         vec![[0, 1, 2], [0, 2, 3]],
-        vec![0, 1],
+        Kept::All(2),
         None,
         input(4, 2, None),
     )

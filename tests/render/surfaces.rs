@@ -14,7 +14,7 @@ use anari_library_caveray::render::{
     ssim, ColorFormat, CpuRenderer, FrameDesc, Lamp, RenderSettings, Spot, SurfaceShading,
 };
 use anari_library_caveray::scene::{
-    AlphaMode, Attribute, ColorSource, Image, OpacitySource, Pbr, PlacedShape, Sampler,
+    AlphaMode, Attribute, ColorSource, Image, Kept, OpacitySource, Pbr, PlacedShape, Sampler,
     SamplerKind, Scene, Shape, ShapeInput, SurfaceMaterial, Wrap,
 };
 use common::render::{four_cameras, gpu, off_axis_wall};
@@ -87,9 +87,9 @@ fn sheet_colored(
     let made = Shape::triangles(
         positions,
         triangles,
-        (0..count as u32).collect(),
-        Some(normals),
-        input(vertices, count, slot, Some(Attribute::PerVertex(colors))),
+        Kept::All(count),
+        Some(normals.into()),
+        input(vertices, count, slot, Some(Attribute::per_vertex(colors))),
     )
     .unwrap();
     PlacedShape::new(Arc::new(made.shape), material(color), Mat4::IDENTITY)
@@ -152,7 +152,7 @@ fn tubes_in(color: ColorSource) -> PlacedShape {
         vec![[0, 1], [2, 3], [4, 5]],
         vec![[0.12, 0.12], [0.18, 0.0], [0.15, 0.06]],
         vec![[true, false], [true, true], [true, true]],
-        input(6, 3, 2, Some(Attribute::PerPrimitive(colors))),
+        input(6, 3, 2, Some(Attribute::per_primitive(colors))),
     )
     .unwrap();
     PlacedShape::new(
@@ -182,7 +182,7 @@ fn streamline() -> PlacedShape {
         positions,
         radii,
         (0..n as u32 - 1).collect(),
-        input(n, n - 1, 0, Some(Attribute::PerVertex(colors))),
+        input(n, n - 1, 0, Some(Attribute::per_vertex(colors))),
     )
     .unwrap();
     PlacedShape::new(
@@ -421,9 +421,9 @@ fn a_color_map_colors_a_ramp_texel_by_texel() {
         let made = Shape::triangles(
             positions,
             vec![[0, 1, 2], [0, 2, 3]],
-            vec![0, 0],
+            Kept::Listed(vec![0, 0]),
             None,
-            input(4, 1, 1, Some(Attribute::PerVertex(u))),
+            input(4, 1, 1, Some(Attribute::per_vertex(u))),
         )
         .unwrap();
         Scene::of_shapes(vec![PlacedShape::new(
@@ -468,7 +468,7 @@ fn square_at(z: f32, color: Vec3, opacity: f32, alpha: AlphaMode) -> PlacedShape
     let made = Shape::triangles(
         positions,
         vec![[0, 1, 2], [0, 2, 3]],
-        vec![0, 0],
+        Kept::Listed(vec![0, 0]),
         None,
         input(4, 1, 0, None),
     )
@@ -551,16 +551,16 @@ fn ramped_square(material: SurfaceMaterial) -> PlacedShape {
     ];
     let u = [0.0, 1.0, 1.0, 0.0];
     let mut attributes: [Option<Attribute>; 5] = Default::default();
-    attributes[0] = Some(Attribute::PerVertex(
+    attributes[0] = Some(Attribute::per_vertex(
         u.iter().map(|&u| Vec4::new(1.0, 0.0, 0.0, u)).collect(),
     ));
-    attributes[2] = Some(Attribute::PerVertex(
+    attributes[2] = Some(Attribute::per_vertex(
         u.iter().map(|&u| Vec4::new(u, 0.0, 0.0, 1.0)).collect(),
     ));
     let made = Shape::triangles(
         positions,
         vec![[0, 1, 2], [0, 2, 3]],
-        vec![0, 0],
+        Kept::Listed(vec![0, 0]),
         None,
         ShapeInput {
             vertices: 4,

@@ -10,8 +10,9 @@ use anari_library_caveray::data::{
 };
 use anari_library_caveray::geometry::{Units, VolumeAxis};
 use anari_library_caveray::scene::{
-    transformed_box, AlphaMode, ColorSource, ObjectIds, OpacitySource, PlacedShape, PlacedVolume,
-    Scene, Shape, ShapeInput, SpatialField, StructuredVolume, SurfaceMaterial, TransferFunction,
+    transformed_box, AlphaMode, ColorSource, Kept, ObjectIds, OpacitySource, PlacedShape,
+    PlacedVolume, Scene, Shape, ShapeInput, SpatialField, StructuredVolume, SurfaceMaterial,
+    TransferFunction,
 };
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -529,8 +530,8 @@ impl MeshArgs {
         let made = Shape::triangles(
             mesh.positions,
             mesh.triangles,
-            (0..count as u32).collect(),
-            Some(mesh.normals),
+            Kept::All(count),
+            Some(mesh.normals.into()),
             input,
         )
         .map_err(|e| runtime(&e))?;

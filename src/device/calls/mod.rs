@@ -408,13 +408,22 @@ impl Device {
                 let Some(slot) = cell.with_frame(|f| f.renders.slot.clone()) else {
                     return Ok(match name {
                         "bounds" => cell.usable::<WorldModel>().and_then(|w| world_bounds(&w)),
-                        // A field's voxels the device holds, as stored.
+                        // A field's voxels, or a geometry's primitives and
+                        // attributes, that the device holds (not the
+                        // host's memory it reads in place).
                         "caveray.residentBytes" => {
                             let field = match cell.usable::<VolumeModel>() {
                                 Some(volume) => volume.field.usable::<Arc<SpatialField>>(),
                                 None => cell.usable::<Arc<SpatialField>>(),
                             };
-                            field.map(|f| Property::UInt64(f.held_bytes()))
+                            let shape = || match cell.usable::<GeometryModel>()? {
+                                GeometryModel::Shape(shape) => Some(shape.heap_bytes()),
+                                GeometryModel::Iso(_) => None,
+                            };
+                            field
+                                .map(|f| f.held_bytes())
+                                .or_else(shape)
+                                .map(Property::UInt64)
                         }
                         _ => None,
                     });

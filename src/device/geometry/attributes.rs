@@ -7,9 +7,10 @@ use glam::{Vec3, Vec4};
 
 use crate::device::array::Array;
 use crate::device::elements::{colors, COLOR_ELEMENTS, COLOR_TYPES};
+use crate::device::object::ObjectRef;
 use crate::device::table::Read;
 use crate::device::types::{words, DataType as T};
-use crate::scene::{Attribute, ShapeInput, ATTRIBUTE_NAMES};
+use crate::scene::{Attribute, Buf, ShapeInput, ATTRIBUTE_NAMES};
 
 /// Element types an attribute array may hold (every color type); missing
 /// components read as ANARI's (x, 0, 0, 1).
@@ -68,6 +69,44 @@ macro_rules! shape_params {
 }
 pub(crate) use shape_params;
 
+/// The arrays a shape reads from the host's memory in place: its
+/// committed state holds them, so that a host releasing one while the
+/// shape still uses it has it copied first.
+pub type Holds = Vec<ObjectRef>;
+
+/// The elements of array `a` as numbers `N` of its size: where the host
+/// shares the array, its memory read where it lies (and the array added
+/// to `holds`), else a copy.
+fn numbers<N: bytemuck::Pod>(
+    r: &Read<'_>,
+    name: &str,
+    a: &Array,
+    holds: &mut Holds,
+) -> Result<Buf<N>, String> {
+    let size = std::mem::size_of::<N>();
+    let n = a.bytes().len() / size;
+    if let Some(lent) = a.lent() {
+        if let Some(b) = Buf::lent(std::sync::Arc::clone(lent), n) {
+            holds.extend(r.object(name).cloned());
+            return Ok(b);
+        }
+        r.cost(format!(
+            "'{name}' ({} bytes) is copied: its memory is not aligned to {} bytes",
+            a.bytes().len(),
+            std::mem::align_of::<N>()
+        ));
+    }
+    let mut out = Vec::new();
+    out.try_reserve_exact(n)
+        .map_err(|_| format!("'{name}': cannot hold {} bytes", a.bytes().len()))?;
+    out.extend(
+        a.bytes()
+            .chunks_exact(size)
+            .map(bytemuck::pod_read_unaligned::<N>),
+    );
+    Ok(Buf::from(out))
+}
+
 /// An attribute array's elements as Vec4s.
 pub fn vec4s(name: &str, a: &Array) -> Result<Vec<Vec4>, String> {
     colors(a).ok_or_else(|| {
@@ -76,6 +115,38 @@ pub fn vec4s(name: &str, a: &Array) -> Result<Vec<Vec4>, String> {
             a.element()
         )
     })
+}
+
+/// A shape's attribute array: FLOAT32_VEC4 read in place where the host
+/// shares it, other types converted.
+fn attribute(
+    r: &Read<'_>,
+    name: &str,
+    a: &Array,
+    holds: &mut Holds,
+) -> Result<Buf<[f32; 4]>, String> {
+    if a.element() == T::FLOAT32_VEC4 {
+        return numbers(r, name, a, holds);
+    }
+    if a.lent().is_some() {
+        r.cost(format!(
+            "'{name}' ({}) is converted: attributes are read in place as FLOAT32_VEC4",
+            a.element()
+        ));
+    }
+    let values = vec4s(name, a)?;
+    Ok(values.iter().map(Vec4::to_array).collect::<Vec<_>>().into())
+}
+
+/// The array `name` of `element`s as numbers `N` of its size, if set:
+/// in place where the host shares it (see [`numbers`]).
+pub fn shared<N: bytemuck::Pod>(
+    r: &Read<'_>,
+    name: &str,
+    element: T,
+    holds: &mut Holds,
+) -> Result<Option<Buf<N>>, String> {
+    r.array_of(name, element, |a| numbers(r, name, a, holds))
 }
 
 /// The FLOAT32_VEC3 array `name`, if set.
@@ -94,21 +165,6 @@ pub fn f32s(r: &Read<'_>, name: &str) -> Result<Option<Vec<f32>>, String> {
 pub fn indices(r: &Read<'_>, name: &str, element: T) -> Result<Option<Vec<u32>>, String> {
     r.array_of(name, element, |a| {
         Ok(words::<4>(a.bytes()).map(u32::from_ne_bytes).collect())
-    })
-}
-
-/// `name` (of `element`, three UINT32s) as vertex triples, read in one
-/// pass: a million triangles' indices are not held twice.
-pub fn triples(r: &Read<'_>, name: &str, element: T) -> Result<Option<Vec<[u32; 3]>>, String> {
-    r.array_of(name, element, |a| {
-        let mut out = Vec::new();
-        out.try_reserve_exact(a.bytes().len() / 12)
-            .map_err(|_| format!("'{name}': cannot hold {} bytes of indices", a.bytes().len()))?;
-        out.extend(a.bytes().chunks_exact(12).map(|c| {
-            let word = |k: usize| u32::from_ne_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]);
-            [word(0), word(4), word(8)]
-        }));
-        Ok(out)
     })
 }
 
@@ -189,21 +245,33 @@ pub fn vertex_radii(r: &Read<'_>, vertices: usize) -> Result<Vec<f32>, String> {
 
 /// `vertex.position`: required.
 pub fn positions(r: &Read<'_>) -> Result<Vec<Vec3>, String> {
-    vec3s(r, "vertex.position")?
-        .ok_or_else(|| "parameter 'vertex.position' (ARRAY1D of FLOAT32_VEC3) is required".into())
+    vec3s(r, "vertex.position")?.ok_or_else(|| POSITION_REQUIRED.into())
 }
 
+/// `vertex.position`, in place where the host shares it: required.
+pub fn shared_positions(r: &Read<'_>, holds: &mut Holds) -> Result<Buf<Vec3>, String> {
+    shared(r, "vertex.position", T::FLOAT32_VEC3, holds)?.ok_or_else(|| POSITION_REQUIRED.into())
+}
+
+const POSITION_REQUIRED: &str = "parameter 'vertex.position' (ARRAY1D of FLOAT32_VEC3) is required";
+
 /// The attributes and ids of a geometry of `vertices` vertices and
-/// `primitives` host primitives, ready for the shape's checks.
-pub fn input(r: &Read<'_>, vertices: usize, primitives: usize) -> Result<ShapeInput, String> {
+/// `primitives` host primitives, ready for the shape's checks; arrays
+/// read in place join `holds`.
+pub fn input(
+    r: &Read<'_>,
+    vertices: usize,
+    primitives: usize,
+    holds: &mut Holds,
+) -> Result<ShapeInput, String> {
     let mut attributes: [Option<Attribute>; 5] = Default::default();
     for (slot, name) in ATTRIBUTE_NAMES.iter().enumerate() {
         let vertex = format!("vertex.{name}");
         let primitive = format!("primitive.{name}");
-        attributes[slot] = match r.array(&primitive, |a| vec4s(&primitive, a))? {
+        attributes[slot] = match r.array(&primitive, |a| attribute(r, &primitive, a, holds))? {
             Some(v) => Some(Attribute::PerPrimitive(v)),
             None => r
-                .array(&vertex, |a| vec4s(&vertex, a))?
+                .array(&vertex, |a| attribute(r, &vertex, a, holds))?
                 .map(Attribute::PerVertex),
         };
     }

@@ -53,6 +53,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let mut holds = attributes::Holds::new();
     let positions = attributes::positions(r)?;
     let ends = attributes::pairs(r, positions.len())?;
     let radii = attributes::vertex_radii(r, positions.len())?;
@@ -60,8 +61,8 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
     // Out-of-range ends are the shape's to report: read them as 0 here.
     let at = |v: u32| radii.get(v as usize).copied().unwrap_or(0.0);
     let cone_radii = ends.iter().map(|e| [at(e[0]), at(e[1])]).collect();
-    let input = attributes::input(r, positions.len(), ends.len())?;
+    let input = attributes::input(r, positions.len(), ends.len(), &mut holds)?;
     let made = crate::scene::Shape::cones("cone", positions, ends, cone_radii, caps, input)
         .map_err(|e| e.to_string())?;
-    super::made(made, warn)
+    super::made(made, holds, warn)
 }

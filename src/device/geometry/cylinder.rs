@@ -53,6 +53,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let mut holds = attributes::Holds::new();
     let positions = attributes::positions(r)?;
     let ends = attributes::pairs(r, positions.len())?;
     let radii = match attributes::f32s(r, "primitive.radius")? {
@@ -67,7 +68,7 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         None => vec![r.f32("radius")?; ends.len()],
     };
     let caps = attributes::end_caps(r, positions.len(), &ends, warn)?;
-    let input = attributes::input(r, positions.len(), ends.len())?;
+    let input = attributes::input(r, positions.len(), ends.len(), &mut holds)?;
     let made = crate::scene::Shape::cones(
         "cylinder",
         positions,
@@ -77,5 +78,5 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         input,
     )
     .map_err(|e| e.to_string())?;
-    super::made(made, warn)
+    super::made(made, holds, warn)
 }

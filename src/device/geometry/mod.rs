@@ -26,12 +26,18 @@ pub enum GeometryModel {
     Shape(Arc<Shape>),
 }
 
-/// The state of a shape as made, warning of what was dropped.
-fn made(made: Made, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+/// The state of a shape as made, holding the arrays it reads in place,
+/// warning of what was dropped.
+fn made(
+    made: Made,
+    holds: attributes::Holds,
+    warn: &mut dyn FnMut(String),
+) -> Result<Option<State>, String> {
     if let Some(why) = made.dropped {
         warn(format!("{why}: they would not show"));
     }
-    Ok(Some(State::ready(GeometryModel::Shape(Arc::new(
-        made.shape,
-    )))))
+    Ok(Some(State::ready_holding(
+        GeometryModel::Shape(Arc::new(made.shape)),
+        holds,
+    )))
 }

@@ -31,6 +31,7 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let mut holds = attributes::Holds::new();
     let positions = attributes::positions(r)?;
     let corners = match attributes::indices(r, "primitive.index", T::UINT32_VEC4)? {
         Some(i) => i,
@@ -44,9 +45,15 @@ fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, S
         triangles.push([q[0], q[2], q[3]]);
         source.extend([k as u32; 2]);
     }
-    let normals = attributes::vec3s(r, "vertex.normal")?;
-    let input = attributes::input(r, positions.len(), quads)?;
-    let made = crate::scene::Shape::triangles(positions, triangles, source, normals, input)
-        .map_err(|e| e.to_string())?;
-    super::made(made, warn)
+    let normals = attributes::vec3s(r, "vertex.normal")?.map(Into::into);
+    let input = attributes::input(r, positions.len(), quads, &mut holds)?;
+    let made = crate::scene::Shape::triangles(
+        positions,
+        triangles,
+        crate::scene::Kept::Listed(source),
+        normals,
+        input,
+    )
+    .map_err(|e| e.to_string())?;
+    super::made(made, holds, warn)
 }

@@ -43,14 +43,15 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
+    let mut holds = attributes::Holds::new();
     let positions = attributes::positions(r)?;
     let radii = attributes::vertex_radii(r, positions.len())?;
     let index = match attributes::indices(r, "primitive.index", T::UINT32)? {
         Some(i) => i,
         None => (0..positions.len() as u32).collect(),
     };
-    let input = attributes::input(r, positions.len(), index.len())?;
+    let input = attributes::input(r, positions.len(), index.len(), &mut holds)?;
     let made =
         crate::scene::Shape::spheres(positions, radii, index, input).map_err(|e| e.to_string())?;
-    super::made(made, warn)
+    super::made(made, holds, warn)
 }

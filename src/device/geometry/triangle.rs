@@ -5,6 +5,7 @@ use crate::device::object::State;
 use crate::device::table::Read;
 use crate::device::table::{p, DefaultValue, SubtypeInfo, EXT_TRIANGLE};
 use crate::device::types::DataType as T;
+use crate::scene::Kept;
 
 use super::attributes::{self, shape_params};
 
@@ -28,17 +29,26 @@ pub static INFO: SubtypeInfo = SubtypeInfo {
 };
 
 fn commit(r: &Read<'_>, warn: &mut dyn FnMut(String)) -> Result<Option<State>, String> {
-    let positions = attributes::positions(r)?;
-    let triangles = match attributes::triples(r, "primitive.index", T::UINT32_VEC3)? {
+    // Shared arrays are read where the host keeps them.
+    let mut holds = attributes::Holds::new();
+    let positions = attributes::shared_positions(r, &mut holds)?;
+    let triangles = match attributes::shared(r, "primitive.index", T::UINT32_VEC3, &mut holds)? {
         Some(t) => t,
         None => (0..(positions.len() / 3) as u32)
             .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
-            .collect(),
+            .collect::<Vec<_>>()
+            .into(),
     };
-    let source = (0..triangles.len() as u32).collect();
-    let normals = attributes::vec3s(r, "vertex.normal")?;
-    let input = attributes::input(r, positions.len(), triangles.len())?;
-    let made = crate::scene::Shape::triangles(positions, triangles, source, normals, input)
+    let kept = Kept::All(triangles.len());
+    let normals = attributes::shared(r, "vertex.normal", T::FLOAT32_VEC3, &mut holds)?;
+    let input = attributes::input(r, positions.len(), triangles.len(), &mut holds)?;
+    let lent = triangles.lender().is_some();
+    let made = crate::scene::Shape::triangles(positions, triangles, kept, normals, input)
         .map_err(|e| e.to_string())?;
-    super::made(made, warn)
+    if let (true, Some(why)) = (lent, &made.dropped) {
+        r.cost(format!(
+            "'primitive.index' is copied without the triangles left out ({why})"
+        ));
+    }
+    super::made(made, holds, warn)
 }

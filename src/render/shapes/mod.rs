@@ -56,8 +56,9 @@ pub const AMBIENT_SCALE: f32 = 0.1;
 /// that spheres and normals need.
 struct Traced {
     placed: PlacedShape,
-    /// Triangle vertices in world space (empty for spheres).
-    world: Vec<Vec3>,
+    /// Triangle vertices in world space where the placement moves them
+    /// (else empty: the shape's own are read, see [`Traced::world`]).
+    moved: Vec<Vec3>,
     to_object: Mat4,
     /// Whether the shape is placed as it is (then rays need no map into
     /// object space: a sphere test is a tenth the work).
@@ -70,6 +71,14 @@ struct Traced {
 }
 
 impl Traced {
+    /// Triangle vertices in world space (none for other shapes).
+    fn world(&self) -> &[Vec3] {
+        match &self.placed.shape.primitives {
+            Primitives::Triangles { positions, .. } if self.identity => positions,
+            _ => &self.moved,
+        }
+    }
+
     fn point_to_object(&self, p: Vec3) -> Vec3 {
         if self.identity {
             p
@@ -116,7 +125,7 @@ impl wide::Primitives for Kinds<'_> {
         let t = &self.traced[prim.shape as usize];
         match &t.placed.shape.primitives {
             Primitives::Triangles { triangles, .. } => {
-                triangles[prim.index as usize].map(|v| t.world[v as usize])
+                triangles[prim.index as usize].map(|v| t.world()[v as usize])
             }
             _ => unreachable!("kind says which primitives are triangles"),
         }
@@ -230,22 +239,26 @@ impl ShapeSet {
             let to_object = m.inverse();
             let normal_to_world = Mat3::from_mat4(to_object).transpose();
             let shape = &placed.shape;
-            let mut world = Vec::new();
+            let identity = m == Mat4::IDENTITY;
+            let mut moved = Vec::new();
             match &shape.primitives {
                 Primitives::Triangles {
                     positions,
                     triangles,
                     ..
                 } => {
-                    world = filled(
-                        positions.len(),
-                        Vec3::ZERO,
-                        "the triangles' world positions",
-                    )?;
-                    world
-                        .par_iter_mut()
-                        .zip(positions.par_iter())
-                        .for_each(|(w, p)| *w = m.transform_point3(*p));
+                    if !identity {
+                        moved = filled(
+                            positions.len(),
+                            Vec3::ZERO,
+                            "the triangles' world positions",
+                        )?;
+                        moved
+                            .par_iter_mut()
+                            .zip(positions.par_iter())
+                            .for_each(|(w, p)| *w = m.transform_point3(*p));
+                    }
+                    let world: &[Vec3] = if identity { positions } else { &moved };
                     let base = boxes.len() as u32;
                     boxes.par_extend(triangles.par_iter().enumerate().map(|(i, tri)| {
                         let [a, b, c] = tri.map(|v| world[v as usize]);
@@ -297,9 +310,9 @@ impl ShapeSet {
             }
             traced.push(Traced {
                 placed: placed.clone(),
-                world,
+                moved,
                 to_object,
-                identity: m == Mat4::IDENTITY,
+                identity,
                 normal_to_world,
                 cuts: fixed.is_none(),
             });
@@ -338,7 +351,7 @@ impl ShapeSet {
         fn of<T>(v: &Vec<T>) -> u64 {
             (v.capacity() * size_of::<T>()) as u64
         }
-        let world: u64 = self.traced.iter().map(|t| of(&t.world)).sum();
+        let world: u64 = self.traced.iter().map(|t| of(&t.moved)).sum();
         let tree = match &self.tree {
             Tree::Binary(bvh) => {
                 of(&bvh.nodes)
@@ -450,7 +463,7 @@ impl ShapeSet {
         let traced = &self.traced[prim.shape as usize];
         let t = match &traced.placed.shape.primitives {
             Primitives::Triangles { triangles, .. } => {
-                let [a, b, c] = triangles[prim.index as usize].map(|v| traced.world[v as usize]);
+                let [a, b, c] = triangles[prim.index as usize].map(|v| traced.world()[v as usize]);
                 return triangle(o, d, a, b, c).filter(|(t, _)| *t > t_min && *t < t_max);
             }
             Primitives::Spheres {
@@ -519,7 +532,7 @@ impl ShapeSet {
                         traced.normal_to_world * object
                     }
                     None => {
-                        let [a, b, c] = tri.map(|v| traced.world[v as usize]);
+                        let [a, b, c] = tri.map(|v| traced.world()[v as usize]);
                         (b - a).cross(c - a)
                     }
                 }
@@ -560,20 +573,22 @@ impl ShapeSet {
         let index = hit.index as usize;
         match shape.attributes.get(slot).and_then(Option::as_ref) {
             None => DEFAULT_ATTRIBUTE,
-            Some(Attribute::PerPrimitive(values)) => values[shape.source[index] as usize],
+            Some(Attribute::PerPrimitive(values)) => {
+                Vec4::from(values[shape.kept.host(index).unwrap_or(0) as usize])
+            }
             Some(Attribute::PerVertex(values)) => match &shape.primitives {
                 Primitives::Triangles { triangles, .. } => {
-                    let [a, b, c] = triangles[index].map(|v| values[v as usize]);
+                    let [a, b, c] = triangles[index].map(|v| Vec4::from(values[v as usize]));
                     a * (1.0 - hit.bary.x - hit.bary.y) + b * hit.bary.x + c * hit.bary.y
                 }
-                Primitives::Spheres { spheres, .. } => values[spheres[index] as usize],
+                Primitives::Spheres { spheres, .. } => Vec4::from(values[spheres[index] as usize]),
                 Primitives::Cones { cones, .. } => {
-                    let [a, b] = cones[index].map(|v| values[v as usize]);
+                    let [a, b] = cones[index].map(|v| Vec4::from(values[v as usize]));
                     a.lerp(b, hit.bary.x)
                 }
                 Primitives::Curves { segments, .. } => {
                     let v = segments[index] as usize;
-                    values[v].lerp(values[v + 1], hit.bary.x)
+                    Vec4::from(values[v]).lerp(Vec4::from(values[v + 1]), hit.bary.x)
                 }
             },
         }
@@ -598,7 +613,8 @@ impl ShapeSet {
                 let input = s
                     .in_attribute
                     .map_or(DEFAULT_ATTRIBUTE, |slot| self.attribute(hit, slot));
-                let host = self.traced[hit.shape as usize].placed.shape.source[hit.index as usize];
+                let shape = &self.traced[hit.shape as usize].placed.shape;
+                let host = shape.kept.host(hit.index as usize).unwrap_or(0);
                 s.sample(input, host)
             }
         }

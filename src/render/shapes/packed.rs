@@ -165,7 +165,7 @@ impl ShapeSet {
             let index = bits(prim.index);
             match &traced.placed.shape.primitives {
                 Primitives::Triangles { triangles, .. } => {
-                    let [a, b, c] = triangles[i].map(|v| traced.world[v as usize]);
+                    let [a, b, c] = triangles[i].map(|v| traced.world()[v as usize]);
                     words.push(word(a, 0.0));
                     words.push(word(b, header(KIND_TRIANGLE, [false; 2])));
                     words.push(word(c, index));

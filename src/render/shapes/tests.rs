@@ -7,7 +7,7 @@ use crate::geometry::{ImageRegion, OrthographicCamera, PrimaryRays};
 use crate::render::simd::Level;
 use crate::render::{ColorFormat, CpuRenderer, Frame, FrameDesc, Render};
 use crate::scene::{
-    AlphaMode, Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction,
+    AlphaMode, Kept, Scene, Shape, ShapeInput, StructuredVolume, SurfaceMaterial, TransferFunction,
     Voxels,
 };
 
@@ -149,8 +149,8 @@ fn rgb_triangle(z: f32) -> PlacedShape {
         Vec3::new(-1.9, 1.9, z),
     ];
     let mut inp = input(3, 1);
-    inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Y, Vec4::Z]));
-    let made = Shape::triangles(p, vec![[0, 1, 2]], vec![0], None, inp).unwrap();
+    inp.attributes[0] = Some(Attribute::per_vertex(vec![Vec4::X, Vec4::Y, Vec4::Z]));
+    let made = Shape::triangles(p, vec![[0, 1, 2]], Kept::All(1), None, inp).unwrap();
     PlacedShape::new(
         Arc::new(made.shape),
         SurfaceMaterial {
@@ -281,8 +281,7 @@ fn cloud(triangles: u32) -> ([PlacedShape; 3], impl FnMut() -> f32) {
     }
     let n = tris.len();
     let vertices = p.len();
-    let mesh =
-        Shape::triangles(p, tris, (0..n as u32).collect(), None, input(vertices, n)).unwrap();
+    let mesh = Shape::triangles(p, tris, Kept::All(n), None, input(vertices, n)).unwrap();
     let centers: Vec<Vec3> = (0..100)
         .map(|_| Vec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0)
         .collect();
@@ -412,7 +411,7 @@ const HALF_PIXEL: f32 = 2.0 / N as f32;
 fn along_x(radii: [f32; 2]) -> Frame {
     let p = vec![Vec3::new(-1.5, 0.0, 0.0), Vec3::new(1.5, 0.0, 0.0)];
     let mut inp = input(2, 1);
-    inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Z]));
+    inp.attributes[0] = Some(Attribute::per_vertex(vec![Vec4::X, Vec4::Z]));
     let made = Shape::cones("cone", p, vec![[0, 1]], vec![radii], vec![[true; 2]], inp).unwrap();
     let placed = PlacedShape::new(Arc::new(made.shape), attribute_material(), Mat4::IDENTITY);
     render(&Scene::of_shapes(vec![placed]).unwrap(), &unlit_ambient())
@@ -475,7 +474,7 @@ fn a_straight_curve_is_a_capsule_colored_along_its_vertices() {
         Vec3::new(1.2, 0.0, 0.0),
     ];
     let mut inp = input(3, 2);
-    inp.attributes[0] = Some(Attribute::PerVertex(vec![Vec4::X, Vec4::Y, Vec4::Z]));
+    inp.attributes[0] = Some(Attribute::per_vertex(vec![Vec4::X, Vec4::Y, Vec4::Z]));
     let made = Shape::curves(p, vec![0.5; 3], vec![0, 1], inp).unwrap();
     let placed = PlacedShape::new(Arc::new(made.shape), attribute_material(), Mat4::IDENTITY);
     let frame = render(&Scene::of_shapes(vec![placed]).unwrap(), &unlit_ambient());
