@@ -36,6 +36,7 @@ pub use settings::{
 
 use crate::geometry::RayGen;
 use crate::scene::Scene;
+use simd::Level;
 
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum RenderError {
@@ -252,10 +253,10 @@ impl Renderer {
             Renderer::Cpu(c) => format!(
                 "CPU ({} threads{})",
                 rayon::current_num_threads(),
-                if c.uses_packets() {
-                    ", AVX2 packets"
-                } else {
-                    ", scalar"
+                match c.packet_level() {
+                    Some(Level::Avx512) => ", AVX-512 packets",
+                    Some(_) => ", AVX2 packets",
+                    None => ", scalar",
                 }
             ),
         }

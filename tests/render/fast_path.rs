@@ -1,12 +1,13 @@
-//! The CPU renderer's fast path (AVX2 packets of eight samples) held to
-//! the scalar reference, and `auto` choosing the CPU over a software
-//! adapter.
+//! The CPU renderer's fast path (packets of sixteen samples in AVX-512
+//! lanes, or eight in AVX2 lanes) held to the scalar reference and to
+//! each other, and `auto` choosing the CPU over a software adapter.
 
 use crate::common;
 
 use std::sync::Arc;
 
 use anari_library_caveray::data::{concentric_shells, preset, shepp_logan};
+use anari_library_caveray::render::simd::Level;
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
     ssim, AutoChoice, Backend, CpuRenderer, FrameDesc, GpuRenderer, RenderSettings, Renderer,
@@ -23,6 +24,14 @@ fn packets_match_the_scalar_reference_sample_for_sample() {
         fast.uses_packets() || !cfg!(target_arch = "x86_64"),
         "this x86_64 CPU has no AVX2/FMA, so the fast path is not tested here"
     );
+    // Every width this CPU runs, the widest first.
+    let widths: Vec<CpuRenderer> = [Level::Avx512, Level::Avx2]
+        .into_iter()
+        .filter_map(CpuRenderer::with_simd)
+        .collect();
+    if !Level::Avx512.runs() {
+        eprintln!("this CPU has no AVX-512: its packets are not tested here");
+    }
     let reference = CpuRenderer::reference();
     assert!(!reference.uses_packets());
     let shells = Scene::shared(
@@ -50,20 +59,32 @@ fn packets_match_the_scalar_reference_sample_for_sample() {
                     skipping: false,
                     ..Default::default()
                 };
-                let a = fast.render(scene, &rays, &settings, &desc).unwrap();
                 let b = reference.render(scene, &rays, &settings, &desc).unwrap();
-                let s = ssim(&a, &b).unwrap();
-                let what = format!("{name} {camera} {shading}");
-                assert!(s >= 0.9999, "{what}: SSIM {s}");
-                assert_eq!(a.samples, b.samples, "{what}: samples");
-                let (da, db) = (a.depth.unwrap(), b.depth.unwrap());
-                let worst = da
+                let frames: Vec<_> = widths
                     .iter()
-                    .zip(&db)
-                    .filter(|(x, y)| x.is_finite() || y.is_finite())
-                    .map(|(x, y)| (x - y).abs())
-                    .fold(0.0f32, f32::max);
-                assert!(worst < 1e-3, "{what}: depth differs by {worst}");
+                    .map(|w| w.render(scene, &rays, &settings, &desc).unwrap())
+                    .collect();
+                let what = format!("{name} {camera} {shading}");
+                for other in &frames[1..] {
+                    // Each sample alike; the lanes' sums in another order.
+                    let (a, other) = (&frames[0], other);
+                    let s = ssim(a, other).unwrap();
+                    assert!(s >= 0.99995, "{what}: AVX-512 against AVX2: SSIM {s}");
+                    assert_eq!(a.samples, other.samples, "{what}: samples by width");
+                }
+                for a in &frames {
+                    let s = ssim(a, &b).unwrap();
+                    assert!(s >= 0.9999, "{what}: SSIM {s}");
+                    assert_eq!(a.samples, b.samples, "{what}: samples");
+                    let (da, db) = (a.depth.as_ref().unwrap(), b.depth.as_ref().unwrap());
+                    let worst = da
+                        .iter()
+                        .zip(db)
+                        .filter(|(x, y)| x.is_finite() || y.is_finite())
+                        .map(|(x, y)| (x - y).abs())
+                        .fold(0.0f32, f32::max);
+                    assert!(worst < 1e-3, "{what}: depth differs by {worst}");
+                }
             }
         }
     }

@@ -1,6 +1,6 @@
 use glam::{IVec3, Vec3, Vec4};
 
-use super::packet::{PacketGrid, LANES};
+use super::packet::{PacketGrid, Steps};
 use super::sample::{correct, Field, MeshRays, Mixture};
 use crate::geometry::{enter_exit, RayGen};
 use crate::render::empty_space::{Along, EmptySpace};
@@ -91,6 +91,7 @@ pub(super) fn march_segment(
         let gd = g.plan.grid_direction(dir);
         OneVolume {
             grid,
+            lanes: grid.lanes() as u32,
             go: g.plan.grid(origin),
             gd,
             along: Along::new(gd),
@@ -146,24 +147,26 @@ pub(super) fn march_segment(
                     t + region.length
                 };
             }
-            // Full steps, LANES at a time.
-            if let Some(o) = one.as_ref().filter(|_| k + (LANES as u32) < n) {
-                let mut ts = [t; LANES];
-                for (m, t) in ts.iter_mut().enumerate().skip(1) {
-                    *t = t0 + (k + m as u32) as f32 * plan.step + 0.5 * plan.step;
-                }
-                let classified = o.grid.classify(o.go, o.gd, &ts, o.exponent);
+            // Full steps, a packet's lanes at a time.
+            if let Some(o) = one.as_ref().filter(|o| k + o.lanes < n) {
+                // Lane 0's t is this step's.
+                let steps = Steps {
+                    t0,
+                    k,
+                    step: plan.step,
+                };
+                let classified = o.grid.classify(o.go, o.gd, steps, o.exponent);
                 if !classified.any {
                     // Nothing showed: if the next sample's brick is clear,
                     // look for a leap there.
-                    let next = ts[LANES - 1] + plan.step;
+                    let next = steps.t(o.lanes as usize - 1) + plan.step;
                     if o.space
                         .is_some_and(|s| s.clear_at(o.go + o.gd * next, o.hi))
                     {
                         busy_until = f32::NEG_INFINITY;
                     }
-                    k += LANES as u32;
-                    samples += LANES as u32;
+                    k += o.lanes;
+                    samples += o.lanes;
                     continue;
                 }
                 if unlit {
@@ -181,20 +184,22 @@ pub(super) fn march_segment(
                     );
                     acc.color = c.acc;
                     if let Some(l) = c.depth_lane {
-                        acc.depth = rays.depth_at(origin + dir * ts[l], ts[l]);
+                        let t = steps.t(l);
+                        acc.depth = rays.depth_at(origin + dir * t, t);
                     }
                     k += c.used as u32;
                     samples += c.used as u32;
-                    if c.used < LANES || acc.color.w >= plan.termination {
+                    if c.used < o.lanes as usize || acc.color.w >= plan.termination {
                         break 'ray;
                     }
                     continue;
                 }
-                let lanes = ts.iter().zip(classified.alpha).enumerate();
-                for (l, (&t, a)) in lanes {
+                let lanes = classified.alpha.into_iter().take(o.lanes as usize);
+                for (l, a) in lanes.enumerate() {
                     k += 1;
                     samples += 1;
                     if a > 0.0 {
+                        let t = steps.t(l);
                         let p = origin + dir * t;
                         let s = shade(field, p, &mut samples);
                         let lit = classified.color(l) * s * plan.light_color;
@@ -286,6 +291,8 @@ impl Accumulator {
 /// The one trilinear volume of the packet path, seen from one ray.
 struct OneVolume<'a> {
     grid: &'a PacketGrid<'a>,
+    /// Samples per packet.
+    lanes: u32,
     /// The ray's grid point at t = 0 and its change per unit t.
     go: Vec3,
     gd: Vec3,

@@ -16,6 +16,7 @@ use super::frame::{encoded, filled, ColorFormat, Frame, FrameDesc};
 use super::hits::{self, HitRecord};
 use super::iso::{self, IsoFilter, IsoSettings};
 use super::march_plan::MarchPlan;
+use super::simd::Level;
 use super::{Render, RenderError, RenderSettings, Watch};
 use crate::geometry::RayGen;
 use crate::render::empty_space::SpaceCache;
@@ -38,9 +39,10 @@ const PACKET_COPY_VOXELS: usize = 1 << 27;
 
 #[derive(Debug, Default)]
 pub struct CpuRenderer {
-    /// Whether one trilinear volume's primary samples go eight at a time
-    /// through AVX2 lanes where the CPU has them (packet.rs).
-    packets: bool,
+    /// The vector lanes that one trilinear volume's primary samples go
+    /// through, sixteen or eight at a time (packet.rs); none for the
+    /// scalar reference.
+    packets: Option<Level>,
     /// The last scene's voxels as f32 and its tables, kept while scenes
     /// bring the same `Arc`s, as the GPU keeps its uploads.
     cache: Mutex<Prepared>,
@@ -69,12 +71,22 @@ struct IsoPrepared {
 type CrossingBox = (Vec3, Vec3);
 
 impl CpuRenderer {
-    /// The CPU renderer, with AVX2 packets where the CPU has them.
+    /// The CPU renderer, with packets as wide as the CPU's vector unit
+    /// (AVX-512, else AVX2), or as `CAVERAY_SIMD` narrows them.
     pub fn new() -> Self {
         Self {
-            packets: true,
+            packets: packet::level(),
             ..Self::default()
         }
+    }
+
+    /// The CPU renderer with packets at `level` (AVX2 or AVX-512), if
+    /// this CPU runs it: to compare the paths.
+    pub fn with_simd(level: Level) -> Option<Self> {
+        (level >= Level::Avx2 && level.runs()).then(|| Self {
+            packets: Some(level),
+            ..Self::default()
+        })
     }
 
     /// The reference: every sample by the scalar path of docs/ray_casting.md,
@@ -83,10 +95,14 @@ impl CpuRenderer {
         Self::default()
     }
 
-    /// Whether frames of one trilinear volume take the AVX2 packet path
-    /// on this CPU.
+    /// The lanes frames of one trilinear volume take on this CPU, if
+    /// they take the packet path.
+    pub fn packet_level(&self) -> Option<Level> {
+        self.packets
+    }
+
     pub fn uses_packets(&self) -> bool {
-        self.packets && packet::available()
+        self.packets.is_some()
     }
 
     /// `placed`'s values as f32 and its crossing box for `settings`, made
@@ -275,12 +291,12 @@ impl CpuRenderer {
         let plan = MarchPlan::new(scene, rays, settings)?;
         let shapes = self.shape_set(scene)?;
         let data = self.prepare(scene, &plan)?;
-        let channels = match &data[..] {
-            [one] if self.packets && packet::available() => Some(Channels::new(&one.table)),
+        let channels = match (&data[..], self.packets) {
+            ([one], Some(level)) => Some((level, Channels::new(&one.table))),
             _ => None,
         };
-        let field =
-            sample::Field::new(&plan, &data, channels.as_deref()).with_shapes(shapes.as_deref());
+        let packets = channels.as_ref().map(|(level, c)| (*level, &**c));
+        let field = sample::Field::new(&plan, &data, packets).with_shapes(shapes.as_deref());
         let (w, h) = (desc.size.x as usize, desc.size.y as usize);
         // Square tiles, not rows: neighbouring rays in both directions read
         // the same voxels while they are in cache, and a tile is small

@@ -8,6 +8,7 @@ use crate::render::empty_space::{Along, EmptySpace, Region};
 use crate::render::hits::HitRecord;
 use crate::render::march_plan::{MarchPlan, VolumePlan};
 use crate::render::shapes::ShapeSet;
+use crate::render::simd::Level;
 use crate::scene::{
     AmrVolume, Filter, NanoVdbGrid, NearCells, RayCells, Scaling, SpatialField, UnstructuredVolume,
     Voxels, MAX_VOLUMES, TABLE_SIZE,
@@ -285,8 +286,13 @@ pub(super) struct Field<'a> {
 
 impl<'a> Field<'a> {
     /// `data` holds each volume's values and table, in the plan's order;
-    /// `channels`, the first table split for the packet path, if it runs.
-    pub fn new(plan: &'a MarchPlan, data: &'a [Converted], channels: Option<&'a Channels>) -> Self {
+    /// `packets`: the packet path's lanes and the first table split for
+    /// it, if it runs.
+    pub fn new(
+        plan: &'a MarchPlan,
+        data: &'a [Converted],
+        packets: Option<(Level, &'a Channels)>,
+    ) -> Self {
         debug_assert_eq!(plan.volumes.len(), data.len());
         let grids = plan
             .volumes
@@ -312,15 +318,16 @@ impl<'a> Field<'a> {
                 }
             })
             .collect();
-        let packet = match (channels, &plan.volumes[..], data) {
+        let packet = match (packets, &plan.volumes[..], data) {
             // x-neighbour pairs are single loads there: two vertices along x;
             // its gathers address up to 2^31 - 1 voxels.
-            (Some(channels), [one], [c])
+            (Some((level, channels)), [one], [c])
                 if one.filter == Filter::Linear
                     && one.dims.x >= 2
                     && super::packet::addressable(one.dims) =>
             {
                 c.samples.f32_values().map(|values| PacketGrid {
+                    level,
                     values,
                     dims: one.dims.as_ivec3().to_array(),
                     channels,

@@ -11,6 +11,7 @@ use std::sync::Arc;
 use anari_library_caveray::device::{DataType, Device, Input, Property, Severity, Status, Subject};
 use anari_library_caveray::geometry::RayGen;
 use anari_library_caveray::render::shapes::ShapeSet;
+use anari_library_caveray::render::simd::Level;
 use anari_library_caveray::render::stereo::{paper, HmdStereo};
 use anari_library_caveray::render::Render as _;
 use anari_library_caveray::render::{
@@ -255,6 +256,21 @@ fn ray_casting(figures: &mut BTreeMap<String, f64>) -> Result<(), Failure> {
         |r| timed(&mut packets, &scene, r, &off),
     )?;
     figures.insert("cpu.packets_over_scalar".into(), ratio);
+    // The packets' two widths, where this CPU runs AVX-512 (skipping on,
+    // as a host renders).
+    let widths = (
+        CpuRenderer::with_simd(Level::Avx2),
+        CpuRenderer::with_simd(Level::Avx512),
+    );
+    if let (Some(narrow), Some(wide)) = widths {
+        let (mut narrow, mut wide) = (Renderer::Cpu(narrow), Renderer::Cpu(wide));
+        let (ratio, _) = interleaved(
+            &views,
+            |r| timed(&mut narrow, &scene, r, &on),
+            |r| timed(&mut wide, &scene, r, &on),
+        )?;
+        figures.insert("cpu.avx512_over_avx2".into(), ratio);
+    }
     let cpu = std::cell::RefCell::new(packets);
     let (ratio, _) = interleaved(
         &views,

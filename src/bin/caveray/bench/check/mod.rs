@@ -104,10 +104,17 @@ const RULES: &[Rule] = &[
     },
     Rule {
         name: "cpu.packets_over_scalar",
-        what: "the CPU renderer's AVX2 packets against the scalar reference, both marching every step (cthead, 128², 4 views, each way three times, interleaved): the reference's fastest time over the packets', median over the views",
+        what: "the CPU renderer's packets (as wide as the CPU runs) against the scalar reference, both marching every step (cthead, 128², 4 views, each way three times, interleaved): the reference's fastest time over the packets', median over the views",
         better: Better::Higher,
         margin: Some(1.5),
         limit: Some(1.5),
+    },
+    Rule {
+        name: "cpu.avx512_over_avx2",
+        what: "the CPU renderer's packets sixteen samples wide (AVX-512) against eight (AVX2), skipping on (the same views, interleaved): the AVX2 time over the AVX-512 time; measured only on CPUs with AVX-512",
+        better: Better::Higher,
+        margin: Some(1.25),
+        limit: Some(1.0),
     },
     Rule {
         name: "cpu.skipping_speedup",
