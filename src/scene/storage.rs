@@ -132,7 +132,7 @@ impl Lent {
     }
 
     /// The bytes, where they are now.
-    #[inline]
+    #[inline(always)]
     pub fn bytes(&self) -> &[u8] {
         let ptr = self.ptr.load(Ordering::SeqCst);
         if self.len == 0 || ptr.is_null() {
@@ -325,7 +325,8 @@ impl<T: bytemuck::Pod> Buf<T> {
 
 impl<T: bytemuck::Pod> Deref for Buf<T> {
     type Target = [T];
-    #[inline]
+    // Inlined: traversals read vertices through it.
+    #[inline(always)]
     fn deref(&self) -> &[T] {
         match self {
             Buf::Owned(v) => v,
@@ -349,6 +350,7 @@ impl<T: bytemuck::Pod> Deref for Buf<T> {
 
 /// `len` zero numbers without allocating them: a lent buffer whose copy
 /// failed reads as zeros (one shared page-backed map, grown as needed).
+#[cold]
 fn zeros<T: bytemuck::Pod>(len: usize) -> &'static [T] {
     static ZEROS: OnceLock<Option<Mapping>> = OnceLock::new();
     // 16 GiB of address space, no memory until read (and then the zero

@@ -196,20 +196,20 @@ impl Wide {
         let sizes: Vec<Sizes> = kids.par_iter().map(|&k| Sizes::of(bvh, k, prims)).collect();
         let total = sizes.iter().fold(Sizes::default(), |a, b| a.plus(b));
         let top = usize::from(root.is_some());
-        let mut wide = Wide {
-            nodes: vec![EMPTY_NODE; top + total.nodes],
-            blocks: vec![EMPTY_BLOCK; total.blocks],
-            balls: vec![EMPTY_BALL; total.balls],
-            leaves: vec![Leaf::default(); total.leaves],
-            others: vec![0; total.others],
-            root: 0,
-            stack: (WIDTH - 1) * (top + total.deepest) + 1,
-        };
+        // Allocated once and left unwritten: every element is written
+        // exactly once below (the parts fill what Sizes counted, which
+        // they assert), and a million triangles' blocks are 45 MB that a
+        // first fill would write twice.
+        let mut all_nodes = Box::new_uninit_slice(top + total.nodes);
+        let mut all_blocks = Box::new_uninit_slice(total.blocks);
+        let mut all_balls = Box::new_uninit_slice(total.balls);
+        let mut all_leaves = Box::new_uninit_slice(total.leaves);
+        let mut all_others = Box::new_uninit_slice(total.others);
         // Each part's slices of the arrays, and where they start.
         let mut parts = Vec::with_capacity(kids.len());
-        let (mut nodes, mut blocks) = (&mut wide.nodes[top..], &mut wide.blocks[..]);
-        let (mut leaves, mut others) = (&mut wide.leaves[..], &mut wide.others[..]);
-        let mut balls = &mut wide.balls[..];
+        let (mut nodes, mut blocks) = (&mut all_nodes[top..], &mut all_blocks[..]);
+        let (mut leaves, mut others) = (&mut all_leaves[..], &mut all_others[..]);
+        let mut balls = &mut all_balls[..];
         let mut base = Sizes {
             nodes: top,
             ..Sizes::default()
@@ -221,21 +221,48 @@ impl Wide {
             let (o, rest_o) = std::mem::take(&mut others).split_at_mut(size.others);
             let (s, rest_s) = std::mem::take(&mut balls).split_at_mut(size.balls);
             (nodes, blocks, leaves, others, balls) = (rest_n, rest_b, rest_l, rest_o, rest_s);
-            parts.push((k, Out::new(n, (b, s), l, o, base)));
+            parts.push((k, size, Out::new(n, (b, s), l, o, base)));
             base = base.plus(size);
         }
         let roots: Vec<u32> = parts
             .into_par_iter()
-            .map(|(k, mut out)| out.part(bvh, k, prims))
+            .map(|(k, size, mut out)| {
+                let root = out.part(bvh, k, prims);
+                assert!(
+                    out.filled.same_counts(size),
+                    "the wide collapse filled other sizes than it counted"
+                );
+                root
+            })
             .collect();
+        let mut root_ref = 0;
         match root {
             Some(mut node) => {
                 node.child[..roots.len()].copy_from_slice(&roots);
-                wide.nodes[0] = node;
+                all_nodes[0].write(node);
             }
-            None => wide.root = roots[0],
+            None => root_ref = roots[0],
         }
-        wide
+        // SAFETY: the parts wrote every element of their slices (asserted
+        // above), and the root node, where there is one, is written.
+        let (nodes, blocks, balls, leaves, others) = unsafe {
+            (
+                all_nodes.assume_init(),
+                all_blocks.assume_init(),
+                all_balls.assume_init(),
+                all_leaves.assume_init(),
+                all_others.assume_init(),
+            )
+        };
+        Wide {
+            nodes: nodes.into_vec(),
+            blocks: blocks.into_vec(),
+            balls: balls.into_vec(),
+            leaves: leaves.into_vec(),
+            others: others.into_vec(),
+            root: root_ref,
+            stack: (WIDTH - 1) * (top + total.deepest) + 1,
+        }
     }
 
     /// A wide node over binary inner node `i`, and the binary nodes its
@@ -452,6 +479,17 @@ struct Sizes {
 }
 
 impl Sizes {
+    /// The same numbers of every kind of element (not the depth).
+    fn same_counts(&self, o: &Sizes) -> bool {
+        (
+            self.nodes,
+            self.blocks,
+            self.balls,
+            self.leaves,
+            self.others,
+        ) == (o.nodes, o.blocks, o.balls, o.leaves, o.others)
+    }
+
     fn plus(self, o: &Sizes) -> Sizes {
         Sizes {
             nodes: self.nodes + o.nodes,
@@ -509,22 +547,23 @@ fn leaf_primitives(bvh: &Bvh2, i: u32, pending: &mut Vec<u32>, mut f: impl FnMut
 
 /// One part's slices of a wide tree's arrays, where they start in the
 /// whole, and how far each is filled.
+/// Its slices start unwritten; each element is written once.
 struct Out<'a> {
-    nodes: &'a mut [Node],
-    blocks: &'a mut [Block],
-    balls: &'a mut [Ball],
-    leaves: &'a mut [Leaf],
-    others: &'a mut [u32],
+    nodes: &'a mut [MaybeUninit<Node>],
+    blocks: &'a mut [MaybeUninit<Block>],
+    balls: &'a mut [MaybeUninit<Ball>],
+    leaves: &'a mut [MaybeUninit<Leaf>],
+    others: &'a mut [MaybeUninit<u32>],
     base: Sizes,
     filled: Sizes,
 }
 
 impl<'a> Out<'a> {
     fn new(
-        nodes: &'a mut [Node],
-        (blocks, balls): (&'a mut [Block], &'a mut [Ball]),
-        leaves: &'a mut [Leaf],
-        others: &'a mut [u32],
+        nodes: &'a mut [MaybeUninit<Node>],
+        (blocks, balls): (&'a mut [MaybeUninit<Block>], &'a mut [MaybeUninit<Ball>]),
+        leaves: &'a mut [MaybeUninit<Leaf>],
+        others: &'a mut [MaybeUninit<u32>],
         base: Sizes,
     ) -> Self {
         Out {
@@ -556,11 +595,15 @@ impl<'a> Out<'a> {
                 for (slot, &c) in kids.iter().enumerate() {
                     work.push((c, Some((at, slot))));
                 }
-                self.nodes[at] = node;
+                self.nodes[at].write(node);
                 (self.base.nodes + at) as u32
             };
             match parent {
-                Some((node, slot)) => self.nodes[node].child[slot] = reference,
+                Some((node, slot)) => {
+                    // SAFETY: a parent is written before its children are
+                    // taken from `work`.
+                    unsafe { self.nodes[node].assume_init_mut() }.child[slot] = reference
+                }
                 None => root = reference,
             }
         }
@@ -568,23 +611,21 @@ impl<'a> Out<'a> {
     }
 
     /// A leaf of every primitive under binary node `i`; its reference.
+    /// Blocks are filled on the stack and written whole, their unused
+    /// lanes empty.
     fn leaf(&mut self, bvh: &Bvh2, i: u32, prims: &impl Primitives, pending: &mut Vec<u32>) -> u32 {
         let first = self.filled;
-        let (mut lane, mut ball_lane) = (WIDTH, WIDTH);
+        let (mut block, mut lane) = (EMPTY_BLOCK, 0);
+        let (mut ball, mut ball_lane) = (EMPTY_BALL, 0);
         let (blocks, balls) = (&mut *self.blocks, &mut *self.balls);
         let (others, filled) = (&mut *self.others, &mut self.filled);
         leaf_primitives(bvh, i, pending, |p| match prims.kind(p) {
             Kind::Other => {
-                others[filled.others] = p;
+                others[filled.others].write(p);
                 filled.others += 1;
             }
             Kind::Triangle => {
-                if lane == WIDTH {
-                    filled.blocks += 1;
-                    lane = 0;
-                }
                 let [a, b, c] = prims.triangle(p);
-                let block = &mut blocks[filled.blocks - 1];
                 let (e1, e2) = (b - a, c - a);
                 for axis in 0..3 {
                     block.a[axis][lane] = a[axis];
@@ -593,32 +634,45 @@ impl<'a> Out<'a> {
                 }
                 block.prim[lane] = p;
                 lane += 1;
+                if lane == WIDTH {
+                    blocks[filled.blocks].write(block);
+                    filled.blocks += 1;
+                    (block, lane) = (EMPTY_BLOCK, 0);
+                }
             }
             Kind::Sphere => {
-                if ball_lane == WIDTH {
-                    filled.balls += 1;
-                    ball_lane = 0;
-                }
                 let (c, r) = prims.sphere(p);
-                let ball = &mut balls[filled.balls - 1];
                 for axis in 0..3 {
                     ball.c[axis][ball_lane] = c[axis];
                 }
                 ball.r[ball_lane] = r;
                 ball.prim[ball_lane] = p;
                 ball_lane += 1;
+                if ball_lane == WIDTH {
+                    balls[filled.balls].write(ball);
+                    filled.balls += 1;
+                    (ball, ball_lane) = (EMPTY_BALL, 0);
+                }
             }
         });
+        if lane > 0 {
+            self.blocks[self.filled.blocks].write(block);
+            self.filled.blocks += 1;
+        }
+        if ball_lane > 0 {
+            self.balls[self.filled.balls].write(ball);
+            self.filled.balls += 1;
+        }
         let at = self.filled.leaves;
         let (now, base) = (self.filled, self.base);
-        self.leaves[at] = Leaf {
+        self.leaves[at].write(Leaf {
             block: (base.blocks + first.blocks) as u32,
             blocks: (now.blocks - first.blocks) as u32,
             ball: (base.balls + first.balls) as u32,
             balls: (now.balls - first.balls) as u32,
             other: (base.others + first.others) as u32,
             others: (now.others - first.others) as u32,
-        };
+        });
         self.filled.leaves += 1;
         LEAF | (self.base.leaves + at) as u32
     }
