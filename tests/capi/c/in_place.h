@@ -77,4 +77,22 @@ static uint64_t resident_bytes(ANARIDevice dev, ANARIObject o)
   return bytes;
 }
 
+/* Whether `what` (object `o`) holds `expected` bytes; says so where not. */
+static int holds(ANARIDevice dev, ANARIObject o, uint64_t expected, const char *what)
+{
+  uint64_t held = resident_bytes(dev, o);
+  if (held != expected)
+    fprintf(stderr, "%s holds %llu bytes, not %llu\n", what, (unsigned long long)held,
+        (unsigned long long)expected);
+  return held == expected;
+}
+
+/* Renders `frame`, waits for it and saves its color as DIR/NAME.rgba. */
+static int render_saved(ANARIDevice dev, ANARIFrame frame, const char *dir, const char *name)
+{
+  anariRenderFrame(dev, frame);
+  anariFrameReady(dev, frame, ANARI_WAIT);
+  return save(dev, frame, dir, name);
+}
+
 #endif

@@ -31,7 +31,6 @@ int main(int argc, char **argv)
   float *data;
   size_t count, i;
   long before, grew;
-  uint64_t held;
   int ok = 1;
 
   if (argc != 3 || !scene_load(argv[1], &s)) {
@@ -71,18 +70,11 @@ int main(int argc, char **argv)
   anariCommitParameters(dev, world);
 
   /* While the host holds its memory, the field holds none of it. */
-  held = resident_bytes(dev, field);
-  if (held != 0) {
-    fprintf(stderr, "in_place_host: the field holds %llu bytes of the host's voxels\n",
-        (unsigned long long)held);
-    ok = 0;
-  }
+  ok &= holds(dev, field, 0, "in_place_host: the field, while the host holds the voxels,");
   first = new_frame(dev, &s, world);
-  anariRenderFrame(dev, first);
-  anariFrameReady(dev, first, ANARI_WAIT);
+  ok &= render_saved(dev, first, argv[2], "held");
   grew = resident_kb() - before;
   printf("grew %ld KB voxels %zu KB\n", grew, count * sizeof(float) / 1024);
-  ok &= save(dev, first, argv[2], "held");
 
   /* Released while a frame renders it, then scribbled over and freed: the
    * copy waits for that render, and later frames read the copy. */
@@ -94,15 +86,8 @@ int main(int argc, char **argv)
   free(data);
   anariFrameReady(dev, second, ANARI_WAIT);
   ok &= save(dev, second, argv[2], "freed");
-  anariRenderFrame(dev, first);
-  anariFrameReady(dev, first, ANARI_WAIT);
-  ok &= save(dev, first, argv[2], "again");
-  held = resident_bytes(dev, field);
-  if (held != count * sizeof(float)) {
-    fprintf(stderr, "in_place_host: after the release the field holds %llu bytes, not its copy's %zu\n",
-        (unsigned long long)held, count * sizeof(float));
-    ok = 0;
-  }
+  ok &= render_saved(dev, first, argv[2], "again");
+  ok &= holds(dev, field, count * sizeof(float), "in_place_host: the field, after the release,");
   printf("copies %d\n", copies);
   if (copies != 1) {
     fprintf(stderr, "in_place_host: %d PERFORMANCE notes of a copy, not one\n", copies);

@@ -38,7 +38,6 @@ int main(int argc, char **argv)
   uint32_t *index;
   size_t n, vertices, triangles, bytes, i, j;
   long before, grew;
-  uint64_t held;
   int k, ok = 1;
 
   if (argc != 4 || !scene_load(argv[1], &s) || (n = strtoul(argv[3], NULL, 10)) < 2) {
@@ -108,18 +107,11 @@ int main(int argc, char **argv)
   anariCommitParameters(dev, world);
 
   /* While the host holds its memory, the geometry holds none of it. */
-  held = resident_bytes(dev, geometry);
-  if (held != 0) {
-    fprintf(stderr, "in_place_mesh: the geometry holds %llu bytes of the host's arrays\n",
-        (unsigned long long)held);
-    ok = 0;
-  }
+  ok &= holds(dev, geometry, 0, "in_place_mesh: the geometry, while the host holds the arrays,");
   first = new_frame(dev, &s, world);
-  anariRenderFrame(dev, first);
-  anariFrameReady(dev, first, ANARI_WAIT);
+  ok &= render_saved(dev, first, argv[2], "mesh_held");
   grew = resident_kb() - before;
   printf("grew %ld KB arrays %zu KB\n", grew, bytes / 1024);
-  ok &= save(dev, first, argv[2], "mesh_held");
   {
     uint32_t w = 0, h = 0;
     ANARIDataType type = ANARI_UNKNOWN;
@@ -150,15 +142,8 @@ int main(int argc, char **argv)
   free(index);
   anariFrameReady(dev, second, ANARI_WAIT);
   ok &= save(dev, second, argv[2], "mesh_freed");
-  anariRenderFrame(dev, first);
-  anariFrameReady(dev, first, ANARI_WAIT);
-  ok &= save(dev, first, argv[2], "mesh_again");
-  held = resident_bytes(dev, geometry);
-  if (held != bytes) {
-    fprintf(stderr, "in_place_mesh: after the release the geometry holds %llu bytes, not its copies' %zu\n",
-        (unsigned long long)held, bytes);
-    ok = 0;
-  }
+  ok &= render_saved(dev, first, argv[2], "mesh_again");
+  ok &= holds(dev, geometry, bytes, "in_place_mesh: the geometry, after the release,");
   printf("copies %d\n", copies);
   if (copies != 3) {
     fprintf(stderr, "in_place_mesh: %d PERFORMANCE notes of a copy, not three\n", copies);
