@@ -6,6 +6,7 @@
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3, Vec4};
+use rayon::prelude::*;
 use thiserror::Error;
 
 use super::placement::{check_affine, transformed_box, ObjectIds};
@@ -278,7 +279,6 @@ impl Shape {
         normals: Option<Buf<Vec3>>,
         input: ShapeInput,
     ) -> Result<Made, ShapeError> {
-        use rayon::prelude::*;
         input.check()?;
         let (positions, triangles) = (positions.into(), triangles.into());
         let count = positions.len();
@@ -627,10 +627,19 @@ impl Shape {
                 triangles,
                 ..
             } => {
-                for &v in triangles.iter().flatten() {
-                    let p = positions[v as usize];
-                    (lo, hi) = (lo.min(p), hi.max(p));
-                }
+                // On every core: a million triangles' corners.
+                let boxes = triangles.par_chunks(1 << 16).map(|chunk| {
+                    let mut b = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+                    for &v in chunk.iter().flatten() {
+                        let p = positions[v as usize];
+                        b = (b.0.min(p), b.1.max(p));
+                    }
+                    b
+                });
+                (lo, hi) = boxes.reduce(
+                    || (Vec3::INFINITY, Vec3::NEG_INFINITY),
+                    |a, b| (a.0.min(b.0), a.1.max(b.1)),
+                );
             }
             Primitives::Spheres {
                 positions,
