@@ -3,6 +3,7 @@
 //! summary. Compare timings only as ratios taken in one run.
 
 mod autostereo;
+mod bumpy;
 mod cave_stereo;
 mod charts;
 mod check;
@@ -33,8 +34,9 @@ pub enum BenchCommand {
     /// several view counts (writes JSON, prints a table).
     Autostereo(autostereo::AutostereoArgs),
     /// A triangle mesh (a volume's isosurface, --mesh) alone and inside
-    /// its volume on the GPU and the CPU: BVH build, first and later
-    /// frames, GPU against CPU (writes JSON, prints a table).
+    /// its volume, or the C mesh benchmark's million triangles (--bumpy),
+    /// on the GPU and the CPU: BVH build, bytes per triangle, first and
+    /// later frames, GPU against CPU (writes JSON, prints a table).
     Surfaces(surfaces::SurfacesArgs),
     /// A volume past the GPU memory budget, paged: a complete frame
     /// within the budget, then frames that do not wait for the loader

@@ -1,9 +1,10 @@
-//! `caveray bench surfaces`: a triangle mesh (a volume's isosurface, from
-//! `--mesh`) alone and inside its volume, on the GPU and the CPU, by the
-//! ray-casting benchmark's protocol views: the CPU's BVH build, the bytes
-//! each renderer holds per triangle, the first frame (build, upload and
-//! pipelines included), the mean of the frames after it with its primary
-//! rays a second, and the GPU's image against the CPU's.
+//! `caveray bench surfaces`: a triangle mesh alone and inside its volume
+//! (a volume's isosurface, from `--mesh`), or the C mesh benchmark's
+//! million-triangle scene (`--bumpy`), on the GPU and the CPU: the CPU's
+//! BVH build, the bytes each renderer holds per triangle, the first frame
+//! (build, upload and pipelines included), the mean of the frames after
+//! it with its primary rays a second, and the GPU's image against the
+//! CPU's.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,8 +21,8 @@ use clap::Args;
 use glam::{UVec2, Vec3};
 use serde::Serialize;
 
-use super::mean;
 use super::raycast::camera;
+use super::{bumpy, mean};
 use crate::progress::Progress;
 use crate::report::{write_json, Machine, RendererInfo};
 use crate::scene::{at, protocol_frame, VolumeArgs, PROTOCOL_UNITS};
@@ -30,9 +31,15 @@ use crate::Failure;
 #[derive(Args)]
 pub struct SurfacesArgs {
     /// The volume, and with --mesh the isosurface drawn as triangles
-    /// (required; --mesh-stride sets the triangle count).
+    /// (required unless --bumpy; --mesh-stride sets the triangle count).
     #[command(flatten)]
     volume: VolumeArgs,
+    /// Instead of an isosurface, the scene of examples/c/mesh_bench.c (a
+    /// bumpy sphere of 1 001 112 triangles coloured per vertex, 1 024
+    /// spheres around it, seen from 3.5 away with a 60 degree field of
+    /// view): what docs/benchmarks.md compares ANARI devices on.
+    #[arg(long, conflicts_with = "mesh")]
+    bumpy: bool,
     /// Image width and height in pixels.
     #[arg(long, default_value_t = paper::WIDTH)]
     size: u32,
@@ -69,7 +76,8 @@ struct SurfacesReport {
     /// The SIMD level the CPU's kernels ran at.
     simd: &'static str,
     runs: Vec<Run>,
-    /// The first view of the mesh in its volume, GPU against CPU.
+    /// The first view of the mesh in its volume (of the bumpy scene with
+    /// --bumpy), GPU against CPU.
     #[serde(skip_serializing_if = "Option::is_none")]
     gpu_cpu_ssim: Option<f64>,
 }
@@ -77,9 +85,10 @@ struct SurfacesReport {
 #[derive(Serialize)]
 struct Run {
     renderer: RendererInfo,
-    /// The mesh alone, then inside its volume.
+    /// The mesh alone, then inside its volume (not with --bumpy).
     mesh: Timing,
-    mixed: Timing,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mixed: Option<Timing>,
 }
 
 #[derive(Serialize)]
@@ -101,26 +110,37 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
             args.size, args.views
         )));
     }
-    if !args.volume.has_mesh() {
+    if !args.bumpy && !args.volume.has_mesh() {
         return Err(Failure::Usage(
-            "give the mesh with --mesh FRACTION (the volume's isosurface there)".into(),
+            "give the mesh with --mesh FRACTION (the volume's isosurface there), or --bumpy".into(),
         ));
     }
     let image = UVec2::splat(args.size);
     FrameDesc::new(image)
         .validate()
         .map_err(|e| Failure::Usage(format!("--size {}: {e}", args.size)))?;
-    let setup = HmdStereo::protocol(args.size, paper::SPAN_PX);
-    let radius = setup.radius.unwrap_or(paper::RADIUS_M);
-    let cameras = (0..args.views)
-        .map(|i| camera(i, args.views, &setup, radius, image))
-        .collect::<Result<Vec<_>, _>>()?;
-    let loaded = args.volume.load()?.with_stored_axes();
-    let (lo, hi) = loaded.bounds();
-    let extent = hi - lo;
-    let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
-    let mixed = loaded.placed(at(Vec3::ZERO, size), &protocol_frame(), PROTOCOL_UNITS)?;
-    let shapes = mixed.shapes().to_vec();
+    let mut settings = RenderSettings::default();
+    let (name, shapes, mixed, cameras) = if args.bumpy {
+        settings.background = bumpy::BACKGROUND;
+        let cameras = (0..args.views)
+            .map(|i| bumpy::camera(i, args.views, image))
+            .collect::<Result<Vec<_>, _>>()?;
+        let name = "bumpy sphere and 1024 spheres".to_string();
+        (name, bumpy::shapes()?, None, cameras)
+    } else {
+        let setup = HmdStereo::protocol(args.size, paper::SPAN_PX);
+        let radius = setup.radius.unwrap_or(paper::RADIUS_M);
+        let cameras = (0..args.views)
+            .map(|i| camera(i, args.views, &setup, radius, image))
+            .collect::<Result<Vec<_>, _>>()?;
+        let loaded = args.volume.load()?.with_stored_axes();
+        let (lo, hi) = loaded.bounds();
+        let extent = hi - lo;
+        let size = extent.max_element() * (2.0 * radius as f32) / extent.length();
+        let mixed = loaded.placed(at(Vec3::ZERO, size), &protocol_frame(), PROTOCOL_UNITS)?;
+        let shapes = mixed.shapes().to_vec();
+        (loaded.name.clone(), shapes, Some(mixed), cameras)
+    };
     let mesh = Scene::of_shapes(shapes.clone()).map_err(|e| Failure::Runtime(e.to_string()))?;
     let (triangles, vertices) = shapes
         .first()
@@ -149,9 +169,11 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
     if !args.no_cpu {
         renderers.push(Renderer::Cpu(CpuRenderer::new()));
     }
-    let settings = RenderSettings::default();
-    let mut progress = Progress::new(renderers.len() * 2 * cameras.len());
+    let scenes = 1 + usize::from(mixed.is_some());
+    let mut progress = Progress::new(renderers.len() * scenes * cameras.len());
     let mut runs = Vec::new();
+    // The view the two renderers' images are compared on.
+    let kept = if mixed.is_some() { "mixed" } else { "mesh" };
     let mut firsts: Vec<Frame> = Vec::new();
     for renderer in &mut renderers {
         let name = match renderer {
@@ -167,7 +189,7 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
                     .map_err(|e| Failure::Runtime(e.to_string()))?;
                 let took = t.elapsed().as_secs_f64() * 1e3;
                 progress.step(&format!("{name} {what} view {i} {took:.1} ms"));
-                if i == 0 && what == "mixed" {
+                if i == 0 && what == kept {
                     keep.push(frame);
                 }
                 ms.push(took);
@@ -182,7 +204,10 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
             })
         };
         let mesh_timing = timing(&mesh, "mesh", &mut firsts)?;
-        let mixed_timing = timing(&mixed, "mixed", &mut firsts)?;
+        let mixed_timing = match &mixed {
+            Some(mixed) => Some(timing(mixed, "mixed", &mut firsts)?),
+            None => None,
+        };
         runs.push(Run {
             renderer: RendererInfo::of(renderer),
             mesh: mesh_timing,
@@ -197,7 +222,7 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
         benchmark: "surfaces",
         machine: Machine::this(),
         image: image.to_array(),
-        volume: loaded.name.clone(),
+        volume: name,
         triangles,
         vertices,
         bvh_build_ms,
@@ -220,23 +245,33 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
         report.cpu_bytes_per_triangle,
         report.gpu_bytes_per_triangle
     );
-    println!("renderer   first mesh ms   mesh ms   Mrays/s   first mixed ms   mixed ms");
+    print!("renderer   first mesh ms   mesh ms   Mrays/s");
+    println!(
+        "{}",
+        if mixed.is_some() {
+            "   first mixed ms   mixed ms"
+        } else {
+            ""
+        }
+    );
     for (run, renderer) in report.runs.iter().zip(&renderers) {
         let name = match renderer {
             Renderer::Gpu(g) => g.adapter().name.clone(),
             Renderer::Cpu(_) => "cpu".to_string(),
         };
-        println!(
-            "{name:<10} {:>14.1} {:>9.1} {:>9.2} {:>16.1} {:>10.1}",
+        print!(
+            "{name:<10} {:>14.1} {:>9.1} {:>9.2}",
             run.mesh.first_ms,
             run.mesh.mean_ms,
             run.mesh.rays_per_second / 1e6,
-            run.mixed.first_ms,
-            run.mixed.mean_ms
         );
+        match &run.mixed {
+            Some(m) => println!(" {:>16.1} {:>10.1}", m.first_ms, m.mean_ms),
+            None => println!(),
+        }
     }
     if let Some(s) = report.gpu_cpu_ssim {
-        println!("GPU against CPU, first view in the volume: SSIM {s:.4}");
+        println!("GPU against CPU, first view of the {kept}: SSIM {s:.4}");
     }
     println!("written to {}", args.json.display());
     Ok(())
