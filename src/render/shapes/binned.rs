@@ -1,7 +1,8 @@
 //! The CPU's BVH builder: top-down, each node split where the surface
-//! area heuristic over 16 bins of its primitives' centres is least, the
-//! two halves of a large node built on two threads. A subtree of at most
-//! `leaf` primitives is a leaf. It makes a tree the wide collapse takes
+//! area heuristic over 16 bins of its primitives' centres is least (a
+//! large node's bins filled from a sample), the two halves of a large
+//! node built on two threads, each into its own range of one node array.
+//! A subtree of at most `leaf` primitives is a leaf. It makes a tree the wide collapse takes
 //! (wide.rs) in a fraction of the time and memory of a PLOC build (the
 //! GPU's), whose finer tree the wide nodes would flatten anyway.
 
@@ -64,7 +65,13 @@ pub fn build(items: &mut [Item], leaf: usize) -> Bvh2 {
         .par_chunks(CHUNK)
         .map(Span::of)
         .reduce(|| Span::EMPTY, Span::joined);
-    let nodes = subtree(items, span, 0, leaf.max(1));
+    // A tree whose every split leaves both sides non-empty has at most
+    // 2n - 1 nodes. Each subtree fills a range of that bound from its
+    // start, so threads write in place and nothing is joined after; the
+    // unused rest stays zero pages the allocator never touched.
+    let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * items.len() - 1);
+    let (root, rest) = nodes.split_first_mut().expect("at least one item");
+    subtree(items, span, 0, leaf.max(1), (root, rest, 1));
     Bvh2 {
         nodes,
         primitive_indices: items.iter().map(|i| i.index).collect(),
@@ -117,63 +124,53 @@ impl Span {
     }
 }
 
-/// The nodes of the subtree over `order` (which starts at `offset` of the
-/// whole, and spans `span`), its root first; reorders `order` so each
-/// leaf's primitives are contiguous.
-fn subtree(order: &mut [Item], span: Span, offset: usize, leaf: usize) -> Vec<Bvh2Node> {
+/// Where a subtree's nodes go: its root, and a range of at least
+/// 2n - 2 nodes for the rest, which starts at this index of the whole.
+type Place<'a> = (&'a mut Bvh2Node, &'a mut [Bvh2Node], usize);
+
+/// The subtree over `order` (which starts at `offset` of the whole, and
+/// spans `span`), written to `place`; reorders `order` so each leaf's
+/// primitives are contiguous.
+fn subtree(order: &mut [Item], span: Span, offset: usize, leaf: usize, place: Place) {
+    let (root, rest, base) = place;
+    let aabb = |span: &Span| Aabb::new(span.bounds.lo, span.bounds.hi);
     if order.len() >= PARALLEL {
         if let Some((mid, l_span, r_span)) = split(order, &span, leaf) {
             let (left, right) = order.split_at_mut(mid);
-            let (l, r) = rayon::join(
-                || subtree(left, l_span, offset, leaf),
-                || subtree(right, r_span, offset + mid, leaf),
+            // The two roots side by side, then each side's other nodes.
+            let (roots, rest) = rest.split_at_mut(2);
+            let (l_rest, r_rest) = rest.split_at_mut(2 * mid - 2);
+            let [l_root, r_root] = roots else {
+                unreachable!("two roots")
+            };
+            let r_base = base + 2 * mid;
+            rayon::join(
+                || subtree(left, l_span, offset, leaf, (l_root, l_rest, base + 2)),
+                || subtree(right, r_span, offset + mid, leaf, (r_root, r_rest, r_base)),
             );
-            return joined(span.bounds, l, r);
+            *root = Bvh2Node::new(aabb(&span), 0, base as u32);
+            return;
         }
     }
-    // (node, range in `order`, its span), the node already pushed.
-    let mut nodes = vec![Bvh2Node::default()];
-    let mut work = vec![(0usize, 0usize, order.len(), span)];
+    // (node, range in `order`, its span); `None` is the root.
+    let mut used = 0;
+    let mut work = vec![(None, 0usize, order.len(), span)];
     while let Some((node, start, end, span)) = work.pop() {
-        let aabb = Aabb::new(span.bounds.lo, span.bounds.hi);
-        nodes[node] = match split(&mut order[start..end], &span, leaf) {
-            None => Bvh2Node::new(aabb, (end - start) as u32, (offset + start) as u32),
+        let made = match split(&mut order[start..end], &span, leaf) {
+            None => Bvh2Node::new(aabb(&span), (end - start) as u32, (offset + start) as u32),
             Some((mid, l_span, r_span)) => {
-                let first = nodes.len();
-                nodes.extend([Bvh2Node::default(); 2]);
-                work.push((first, start, start + mid, l_span));
-                work.push((first + 1, start + mid, end, r_span));
-                Bvh2Node::new(aabb, 0, first as u32)
+                let first = used;
+                used += 2;
+                work.push((Some(first), start, start + mid, l_span));
+                work.push((Some(first + 1), start + mid, end, r_span));
+                Bvh2Node::new(aabb(&span), 0, (base + first) as u32)
             }
         };
-    }
-    nodes
-}
-
-/// A root over subtrees `l` and `r` (each root first), their nodes after
-/// it and their child indices moved to match.
-fn joined(bounds: Bounds, l: Vec<Bvh2Node>, r: Vec<Bvh2Node>) -> Vec<Bvh2Node> {
-    let (ln, rn) = (l.len(), r.len());
-    // Local index k > 0 of the left subtree lands at 2 + k, of the right
-    // at 2 + (ln - 1) + k; the roots at 1 and 2.
-    let moved = |n: Bvh2Node, shift: usize| {
-        if n.prim_count > 0 {
-            n
-        } else {
-            Bvh2Node {
-                first_index: n.first_index + shift as u32,
-                ..n
-            }
+        match node {
+            None => *root = made,
+            Some(i) => rest[i] = made,
         }
-    };
-    let mut nodes = Vec::with_capacity(1 + ln + rn);
-    let aabb = Aabb::new(bounds.lo, bounds.hi);
-    nodes.push(Bvh2Node::new(aabb, 0, 1));
-    nodes.push(moved(l[0], 2));
-    nodes.push(moved(r[0], 1 + ln));
-    nodes.extend(l[1..].iter().map(|&n| moved(n, 2)));
-    nodes.extend(r[1..].iter().map(|&n| moved(n, 1 + ln)));
-    nodes
+    }
 }
 
 /// Per bin of one axis: the span of the primitives whose centres fall in
@@ -201,35 +198,115 @@ fn split(order: &mut [Item], span: &Span, leaf: usize) -> Option<(usize, Span, S
         let (l, r) = order.split_at(n / 2);
         return Some((n / 2, Span::of(l), Span::of(r)));
     }
-    let scale = BINS as f32 * (1.0 - 1e-6) / width;
-    let top = (BINS - 1) as f32;
-    let bin = |item: &Item| {
-        let at = (corners(item).2[axis] - lo) * scale;
+    // Twice the centre, against twice the lowest: one add an item.
+    let binner = Binner {
+        lo: 2.0 * lo,
+        scale: 0.5 * BINS as f32 * (1.0 - 1e-6) / width,
+    };
+    // The axis a constant in each loop: its coordinate is one load.
+    match axis {
+        0 => binned::<0>(order, leaf, binner),
+        1 => binned::<1>(order, leaf, binner),
+        _ => binned::<2>(order, leaf, binner),
+    }
+}
+
+/// Where an item's centre falls among the bins of one axis.
+#[derive(Clone, Copy)]
+struct Binner {
+    lo: f32,
+    scale: f32,
+}
+
+impl Binner {
+    #[inline(always)]
+    fn bin<const AXIS: usize>(self, item: &Item) -> usize {
+        let at = (item.lo[AXIS] + item.hi[AXIS] - self.lo) * self.scale;
         // max first: a NaN becomes bin 0. In [0, BINS - 1], so the
         // conversion is exact.
         // SAFETY: a finite float in [0, 15] fits a u32.
-        unsafe { at.max(0.0).min(top).to_int_unchecked::<u32>() as usize }
-    };
+        unsafe { at.max(0.0).min((BINS - 1) as f32).to_int_unchecked::<u32>() as usize }
+    }
+}
+
+/// [`split`] along axis `AXIS`, its centres spread over the bins by
+/// `binner`.
+fn binned<const AXIS: usize>(
+    order: &mut [Item],
+    leaf: usize,
+    binner: Binner,
+) -> Option<(usize, Span, Span)> {
+    let n = order.len();
+    let bin = move |item: &Item| binner.bin::<AXIS>(item);
+    // Neighbours mostly share a bin: two sets of bins, alternately
+    // filled, keep each update from waiting for the last one's store.
     let fill = |items: &[Item]| {
         let mut bins: Bins = [Span::EMPTY; BINS];
-        for item in items {
+        let mut odd: Bins = [Span::EMPTY; BINS];
+        let pairs = items.chunks_exact(2);
+        let last = pairs.remainder();
+        for pair in pairs {
+            bins[bin(&pair[0])].add(&pair[0]);
+            odd[bin(&pair[1])].add(&pair[1]);
+        }
+        for item in last {
             bins[bin(item)].add(item);
+        }
+        for (x, y) in bins.iter_mut().zip(odd) {
+            *x = x.joined(y);
         }
         bins
     };
-    let bins = if n >= 2 * CHUNK {
-        order.par_chunks(CHUNK).map(fill).reduce(
-            || [Span::EMPTY; BINS],
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    *x = x.joined(y);
-                }
-                a
-            },
-        )
-    } else {
-        fill(order)
+    let all = |order: &[Item]| {
+        if n >= 2 * CHUNK {
+            order.par_chunks(CHUNK).map(fill).reduce(
+                || [Span::EMPTY; BINS],
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(b) {
+                        *x = x.joined(y);
+                    }
+                    a
+                },
+            )
+        } else {
+            fill(order)
+        }
     };
+    if n > SAMPLED {
+        // A large node's split is chosen from a sample of its primitives,
+        // and the partition measures the two sides exactly: every
+        // primitive is read once, not twice. Counts are all that is
+        // sampled, so blocks are not rounded.
+        let mut bins: Bins = [Span::EMPTY; BINS];
+        for item in order.iter().step_by(n / SAMPLES) {
+            bins[bin(item)].add(item);
+        }
+        if let Some((b, _, _)) = cheapest(&bins, 1) {
+            return Some(partition::<AXIS, true>(order, bin, b));
+        }
+        // Too few sampled bins apart: every primitive binned.
+        let bins = all(order);
+        let (b, _, _) = cheapest(&bins, leaf)?;
+        return Some(partition::<AXIS, true>(order, bin, b));
+    }
+    let bins = all(order);
+    let Some((b, left, right)) = cheapest(&bins, leaf) else {
+        let (l, r) = order.split_at(n / 2);
+        return Some((n / 2, Span::of(l), Span::of(r)));
+    };
+    let (mid, _, _) = partition::<AXIS, false>(order, bin, b);
+    Some((mid, left, right))
+}
+
+/// Nodes of more primitives than this choose their split from
+/// [`SAMPLES`] of them.
+const SAMPLED: usize = 1 << 13;
+const SAMPLES: usize = 1 << 11;
+
+/// The first bin of the right side where the surface area heuristic over
+/// `bins` is least, with the two sides' spans; `None` where every
+/// primitive lies in one bin.
+fn cheapest(bins: &Bins, leaf: usize) -> Option<(usize, Span, Span)> {
     // Costs of the right sides, swept from the last bin.
     let mut right = [Span::EMPTY; BINS];
     let mut acc = Span::EMPTY;
@@ -255,27 +332,43 @@ fn split(order: &mut [Item], span: &Span, leaf: usize) -> Option<(usize, Span, S
             best = Some((cost, b, acc));
         }
     }
-    let Some((_, b, left)) = best else {
-        let (l, r) = order.split_at(n / 2);
-        return Some((n / 2, Span::of(l), Span::of(r)));
-    };
-    // Partition: primitives of bins below the split first, each pair on
-    // the wrong sides swapped once.
-    let (mut a, mut z) = (0, n);
+    best.map(|(_, b, left)| (b, left, right[b]))
+}
+
+/// `order` partitioned: primitives of bins below `split` first, each pair
+/// on the wrong sides swapped once. Returns where the right side starts
+/// and, with `SPANS`, the two sides' spans (else empty spans).
+fn partition<const AXIS: usize, const SPANS: bool>(
+    order: &mut [Item],
+    bin: impl Fn(&Item) -> usize,
+    split: usize,
+) -> (usize, Span, Span) {
+    let (mut left, mut right) = (Span::EMPTY, Span::EMPTY);
+    let (mut a, mut z) = (0, order.len());
     loop {
-        while a < z && bin(&order[a]) < b {
+        while a < z && bin(&order[a]) < split {
+            if SPANS {
+                left.add(&order[a]);
+            }
             a += 1;
         }
-        while a < z && bin(&order[z - 1]) >= b {
+        while a < z && bin(&order[z - 1]) >= split {
+            if SPANS {
+                right.add(&order[z - 1]);
+            }
             z -= 1;
         }
         if a + 1 >= z {
             break;
         }
         order.swap(a, z - 1);
+        if SPANS {
+            left.add(&order[a]);
+            right.add(&order[z - 1]);
+        }
         (a, z) = (a + 1, z - 1);
     }
-    Some((a, left, right[b]))
+    (a, left, right)
 }
 
 #[cfg(test)]

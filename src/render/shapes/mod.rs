@@ -16,6 +16,7 @@ mod binned;
 mod brdf;
 mod intersect;
 pub mod packed;
+mod pages;
 mod wide;
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
@@ -207,6 +208,19 @@ impl std::fmt::Debug for ShapeSet {
     }
 }
 
+/// An empty vector with room for `n`, in huge pages where it is large,
+/// or an error if the memory cannot be had.
+fn reserved<T>(n: usize, what: &str) -> Result<Vec<T>, RenderError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| RenderError::OutOfMemory {
+            bytes: (n as u64).saturating_mul(size_of::<T>() as u64),
+            what: what.into(),
+        })?;
+    pages::ask_huge(v.spare_capacity_mut());
+    Ok(v)
+}
+
 impl ShapeSet {
     /// The wide BVH over every kept primitive of `shapes`, as the CPU
     /// traverses it.
@@ -222,15 +236,8 @@ impl ShapeSet {
 
     fn build_as(shapes: &[PlacedShape], wide: bool) -> Result<Self, RenderError> {
         let total: usize = shapes.iter().map(|s| s.shape.len()).sum();
-        let mut prims = filled(total, Prim { shape: 0, index: 0 }, "the BVH's primitives")?;
-        prims.clear();
-        let mut boxes: Vec<Item> = Vec::new();
-        boxes
-            .try_reserve_exact(total)
-            .map_err(|_| RenderError::OutOfMemory {
-                bytes: (total * std::mem::size_of::<Item>()) as u64,
-                what: "the BVH's boxes".into(),
-            })?;
+        let mut prims: Vec<Prim> = reserved(total, "the BVH's primitives")?;
+        let mut boxes: Vec<Item> = reserved(total, "the BVH's boxes")?;
         let mut traced = Vec::with_capacity(shapes.len());
         for (s, placed) in shapes.iter().enumerate() {
             let m = placed.transform;

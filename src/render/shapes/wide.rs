@@ -16,6 +16,7 @@ use glam::{Vec2, Vec3};
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
 
+use super::pages::ask_huge;
 use crate::render::simd::Level;
 
 /// Children per node, triangles per block.
@@ -205,6 +206,8 @@ impl Wide {
         let mut all_balls = Box::new_uninit_slice(total.balls);
         let mut all_leaves = Box::new_uninit_slice(total.leaves);
         let mut all_others = Box::new_uninit_slice(total.others);
+        ask_huge(&mut all_nodes);
+        ask_huge(&mut all_blocks);
         // Each part's slices of the arrays, and where they start.
         let mut parts = Vec::with_capacity(kids.len());
         let (mut nodes, mut blocks) = (&mut all_nodes[top..], &mut all_blocks[..]);
