@@ -101,6 +101,8 @@ pub fn all(out: &Path) -> Result<BTreeMap<String, f64>, Failure> {
         "0.05",
         "--frames",
         "16",
+        "--fastest-of",
+        "3",
         "--volume-up",
         "+z",
         "--volume-front",
