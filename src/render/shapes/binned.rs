@@ -59,8 +59,10 @@ fn corners(item: &Item) -> (Vec3A, Vec3A, Vec3A) {
 }
 
 /// The tree over `items` (at least one), their numbers in its leaves'
-/// `primitive_indices`; `items` end up in leaf order.
+/// `primitive_indices`; `items` end up in leaf order. `leaf` is rounded
+/// down to a power of two.
 pub fn build(items: &mut [Item], leaf: usize) -> Bvh2 {
+    let leaf = 1 << leaf.max(1).ilog2();
     let span = items
         .par_chunks(CHUNK)
         .map(Span::of)
@@ -71,7 +73,7 @@ pub fn build(items: &mut [Item], leaf: usize) -> Bvh2 {
     // unused rest stays zero pages the allocator never touched.
     let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * items.len() - 1);
     let (root, rest) = nodes.split_first_mut().expect("at least one item");
-    subtree(items, span, 0, leaf.max(1), (root, rest, 1));
+    subtree(items, span, 0, leaf, (root, rest, 1));
     Bvh2 {
         nodes,
         primitive_indices: items.iter().map(|i| i.index).collect(),
@@ -307,32 +309,38 @@ const SAMPLES: usize = 1 << 11;
 /// `bins` is least, with the two sides' spans; `None` where every
 /// primitive lies in one bin.
 fn cheapest(bins: &Bins, leaf: usize) -> Option<(usize, Span, Span)> {
-    // Costs of the right sides, swept from the last bin.
-    let mut right = [Span::EMPTY; BINS];
-    let mut acc = Span::EMPTY;
+    // Leaves are tested a block of `leaf` at a time: counting blocks, not
+    // primitives, favours sides that fill whole blocks (Embree's block
+    // size), so leaves are full and hold fewer empty lanes. `leaf` is a
+    // power of two: a shift, not a divide, in the sweep.
+    let shift = leaf.trailing_zeros();
+    let blocks = |n: usize| ((n + leaf - 1) >> shift) as f32;
+    // The right sides' costs, swept from the last bin; boxes and counts
+    // only, the spans made for the chosen split alone.
+    let mut right = [(0.0f32, 0usize); BINS];
+    let (mut acc, mut count) = (Bounds::EMPTY, 0);
     for b in (1..BINS).rev() {
-        acc = acc.joined(bins[b]);
-        right[b] = acc;
+        acc.grow(bins[b].bounds.lo, bins[b].bounds.hi);
+        count += bins[b].count;
+        right[b] = (acc.half_area() * blocks(count), count);
     }
-    let mut acc = Span::EMPTY;
-    let mut best: Option<(f32, usize, Span)> = None;
+    let (mut acc, mut count) = (Bounds::EMPTY, 0);
+    let mut best: Option<(f32, usize)> = None;
     for b in 1..BINS {
-        acc = acc.joined(bins[b - 1]);
-        let r = &right[b];
-        if acc.count == 0 || r.count == 0 {
+        acc.grow(bins[b - 1].bounds.lo, bins[b - 1].bounds.hi);
+        count += bins[b - 1].count;
+        let (r_cost, r_count) = right[b];
+        if count == 0 || r_count == 0 {
             continue;
         }
-        // Leaves are tested a block of `leaf` at a time: counting blocks,
-        // not primitives, favours sides that fill whole blocks (Embree's
-        // block size), so leaves are full and hold fewer empty lanes.
-        let blocks = |n: usize| n.div_ceil(leaf) as f32;
-        let cost =
-            acc.bounds.half_area() * blocks(acc.count) + r.bounds.half_area() * blocks(r.count);
-        if best.is_none_or(|(c, _, _)| cost < c) {
-            best = Some((cost, b, acc));
+        let cost = acc.half_area() * blocks(count) + r_cost;
+        if best.is_none_or(|(c, _)| cost < c) {
+            best = Some((cost, b));
         }
     }
-    best.map(|(_, b, left)| (b, left, right[b]))
+    let (_, b) = best?;
+    let side = |bins: &[Span]| bins.iter().fold(Span::EMPTY, |a, &s| a.joined(s));
+    Some((b, side(&bins[..b]), side(&bins[b..])))
 }
 
 /// `order` partitioned: primitives of bins below `split` first, each pair

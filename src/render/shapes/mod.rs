@@ -108,28 +108,45 @@ impl Traced {
 struct Kinds<'a> {
     prims: &'a [Prim],
     traced: &'a [Traced],
+    /// Per traced shape, its kind and, for triangles, the world-space
+    /// positions and the index triples: found once, not per primitive.
+    shapes: Vec<ShapeKind<'a>>,
+}
+
+/// A traced shape's kind, and its triangles' world positions and index
+/// triples (empty unless it is tested as triangles).
+type ShapeKind<'a> = (wide::Kind, &'a [Vec3], &'a [[u32; 3]]);
+
+impl<'a> Kinds<'a> {
+    fn new(prims: &'a [Prim], traced: &'a [Traced]) -> Self {
+        let shapes = traced
+            .iter()
+            .map(|t| match &t.placed.shape.primitives {
+                _ if t.cuts => (wide::Kind::Other, &[][..], &[][..]),
+                Primitives::Triangles { triangles, .. } => {
+                    (wide::Kind::Triangle, t.world(), &triangles[..])
+                }
+                Primitives::Spheres { .. } if t.identity => (wide::Kind::Sphere, &[][..], &[][..]),
+                _ => (wide::Kind::Other, &[][..], &[][..]),
+            })
+            .collect();
+        Self {
+            prims,
+            traced,
+            shapes,
+        }
+    }
 }
 
 impl wide::Primitives for Kinds<'_> {
     fn kind(&self, p: u32) -> wide::Kind {
-        let t = &self.traced[self.prims[p as usize].shape as usize];
-        match t.placed.shape.primitives {
-            _ if t.cuts => wide::Kind::Other,
-            Primitives::Triangles { .. } => wide::Kind::Triangle,
-            Primitives::Spheres { .. } if t.identity => wide::Kind::Sphere,
-            _ => wide::Kind::Other,
-        }
+        self.shapes[self.prims[p as usize].shape as usize].0
     }
 
     fn triangle(&self, p: u32) -> [Vec3; 3] {
         let prim = self.prims[p as usize];
-        let t = &self.traced[prim.shape as usize];
-        match &t.placed.shape.primitives {
-            Primitives::Triangles { triangles, .. } => {
-                triangles[prim.index as usize].map(|v| t.world()[v as usize])
-            }
-            _ => unreachable!("kind says which primitives are triangles"),
-        }
+        let (_, world, triangles) = self.shapes[prim.shape as usize];
+        triangles[prim.index as usize].map(|v| world[v as usize])
     }
 
     fn sphere(&self, p: u32) -> (Vec3, f32) {
@@ -329,10 +346,7 @@ impl ShapeSet {
         } else if wide {
             let bvh = binned::build(&mut boxes, wide::LEAF_MAX as usize);
             drop(boxes);
-            let prims = Kinds {
-                prims: &prims,
-                traced: &traced,
-            };
+            let prims = Kinds::new(&prims, &traced);
             Tree::Wide(Wide::collapse(&bvh, &prims))
         } else {
             let boxed: Vec<Boxed> = boxes

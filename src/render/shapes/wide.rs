@@ -189,7 +189,13 @@ impl Wide {
             };
         }
         let (root, kids) = if bvh.nodes[0].prim_count > 0 {
-            (None, vec![0])
+            (
+                None,
+                Kids {
+                    kids: [0; WIDTH],
+                    len: 1,
+                },
+            )
         } else {
             let (node, kids) = Self::opened(bvh, 0);
             (Some(node), kids)
@@ -272,7 +278,7 @@ impl Wide {
     /// slots stand for: the largest child that is no leaf is opened until
     /// there are eight, so the boxes a ray is likeliest to enter are split
     /// the finest. Its children are left EMPTY.
-    fn opened(bvh: &Bvh2, i: u32) -> (Node, Vec<u32>) {
+    fn opened(bvh: &Bvh2, i: u32) -> (Node, Kids) {
         let nodes = &bvh.nodes;
         let n = &nodes[i as usize];
         let mut kids = [0; WIDTH];
@@ -288,16 +294,15 @@ impl Wide {
             (kids[j], kids[k]) = (f, f + 1);
             k += 1;
         }
-        let kids = kids[..k].to_vec();
         let mut node = EMPTY_NODE;
-        for (slot, &c) in kids.iter().enumerate() {
+        for (slot, &c) in kids[..k].iter().enumerate() {
             let b = &nodes[c as usize].aabb;
             for axis in 0..3 {
                 node.lo[axis][slot] = b.min[axis];
                 node.hi[axis][slot] = b.max[axis];
             }
         }
-        (node, kids)
+        (node, Kids { kids, len: k })
     }
 
     /// Bytes held (allocated, not only used).
@@ -545,6 +550,20 @@ fn leaf_primitives(bvh: &Bvh2, i: u32, pending: &mut Vec<u32>, mut f: impl FnMut
         for &p in &bvh.primitive_indices[first..first + n.prim_count as usize] {
             f(p);
         }
+    }
+}
+
+/// The binary nodes a wide node's slots stand for.
+struct Kids {
+    kids: [u32; WIDTH],
+    len: usize,
+}
+
+impl std::ops::Deref for Kids {
+    type Target = [u32];
+
+    fn deref(&self) -> &[u32] {
+        &self.kids[..self.len]
     }
 }
 
