@@ -62,7 +62,9 @@ pub(super) fn march_segment(
 ) -> u32 {
     let mut samples = 0;
     let plan = field.plan;
-    if acc.color.w >= plan.termination {
+    // Surfaces alone: nothing to march between them (and a ray's mesh
+    // state, set up below, would be made and dropped per pixel).
+    if acc.color.w >= plan.termination || (field.grids.is_empty() && plan.part.is_none()) {
         return 0;
     }
     let clip = (start.max(rays.t_near), rays.t_far.min(stop));

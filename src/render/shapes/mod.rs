@@ -405,12 +405,13 @@ impl ShapeSet {
         if self.prims.is_empty() || t_max.partial_cmp(&t_min) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
-        let (prim, t, bary) = match &self.tree {
+        let (prim, t, bary, facing) = match &self.tree {
             Tree::Wide(wide) => {
                 let mut other =
                     |p: u32, far: f32| self.shown(self.prims[p as usize], o, d, t_min, far);
                 let found = wide.closest(level, (o, d), (t_min, t_max), &mut other)?;
-                (self.prims[found.prim as usize], found.t, found.bary)
+                let prim = self.prims[found.prim as usize];
+                (prim, found.t, found.bary, found.facing)
             }
             Tree::Binary(bvh) => {
                 let ray = Ray::new(o.into(), d.into(), t_min, t_max);
@@ -426,10 +427,10 @@ impl ShapeSet {
                 }
                 let prim = self.prims[indices[found.primitive_id as usize] as usize];
                 let (t, bary) = self.shown(prim, o, d, t_min, t_max)?;
-                (prim, t, bary)
+                (prim, t, bary, None)
             }
         };
-        let normal = self.normal(prim, o + d * t, bary, d);
+        let normal = self.normal(prim, o + d * t, bary, d, facing);
         Some(Hit {
             t,
             shape: prim.shape,
@@ -539,21 +540,23 @@ impl ShapeSet {
     }
 
     /// The world-space unit normal at `p` on `prim`, facing against `d`.
-    fn normal(&self, prim: Prim, p: Vec3, bary: Vec2, d: Vec3) -> Vec3 {
+    fn normal(&self, prim: Prim, p: Vec3, bary: Vec2, d: Vec3, facing: Option<Vec3>) -> Vec3 {
         let traced = &self.traced[prim.shape as usize];
         let n = match &traced.placed.shape.primitives {
             Primitives::Triangles {
                 triangles, normals, ..
             } => {
-                let tri = triangles[prim.index as usize];
-                match normals {
-                    Some(n) => {
-                        let [a, b, c] = tri.map(|v| n[v as usize]);
+                let tri = || triangles[prim.index as usize];
+                match (normals, facing) {
+                    (Some(n), _) => {
+                        let [a, b, c] = tri().map(|v| n[v as usize]);
                         let object = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
                         traced.normal_to_world * object
                     }
-                    None => {
-                        let [a, b, c] = tri.map(|v| traced.world()[v as usize]);
+                    // The traversal's block had it, as computed below.
+                    (None, Some(facing)) => facing,
+                    (None, None) => {
+                        let [a, b, c] = tri().map(|v| traced.world()[v as usize]);
                         (b - a).cross(c - a)
                     }
                 }

@@ -121,12 +121,16 @@ pub trait Primitives: Sync {
 
 /// The nearest hit a traversal found: the shape set's primitive, the ray
 /// parameter and the barycentrics (a triangle's) or what the caller's
-/// test gave.
+/// test gave, and for a triangle its facing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Found {
     pub prim: u32,
     pub t: f32,
     pub bary: Vec2,
+    /// A triangle's (b - a) x (c - a) in world space, taken from its
+    /// block while that is in cache: the shading then need not fetch its
+    /// three vertices again.
+    pub facing: Option<Vec3>,
 }
 
 /// A shape set's wide BVH.
@@ -442,10 +446,13 @@ impl Wide {
             for block in blocks {
                 if let Some((lane, t, u, v)) = cross(block, &ray, t_min, far) {
                     far = t;
+                    let edge =
+                        |e: &[[f32; WIDTH]; 3]| Vec3::new(e[0][lane], e[1][lane], e[2][lane]);
                     best = Some(Found {
                         prim: block.prim[lane],
                         t,
                         bary: Vec2::new(u, v),
+                        facing: Some(edge(&block.e1).cross(edge(&block.e2))),
                     });
                 }
             }
@@ -457,6 +464,7 @@ impl Wide {
                         prim: ball.prim[lane],
                         t,
                         bary: Vec2::ZERO,
+                        facing: None,
                     });
                 }
             }
@@ -465,7 +473,12 @@ impl Wide {
                 if let Some((t, bary)) = other(p, far) {
                     if t < far {
                         far = t;
-                        best = Some(Found { prim: p, t, bary });
+                        best = Some(Found {
+                            prim: p,
+                            t,
+                            bary,
+                            facing: None,
+                        });
                     }
                 }
             }
