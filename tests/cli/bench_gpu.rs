@@ -34,6 +34,7 @@ fn the_gpu_benchmark_script_writes_every_report_with_its_adapter() {
         "cave-stereo",
         "autostereo",
         "surfaces",
+        "surfaces bumpy",
     ] {
         assert!(
             summary.contains(&format!("== {name}: caveray bench")),
@@ -49,6 +50,7 @@ fn the_gpu_benchmark_script_writes_every_report_with_its_adapter() {
         "cave_stereo",
         "autostereo",
         "surfaces",
+        "surfaces_bumpy",
     ] {
         let path = out.join(format!("{file}.json"));
         let text =
