@@ -296,10 +296,7 @@ fn binned<const AXIS: usize>(
         if let Some((b, _, _)) = cheapest(&bins, 1) {
             return Some(partition::<AXIS, true>(order, bin, b));
         }
-        // Too few sampled bins apart: every primitive binned.
-        let bins = all(order);
-        let (b, _, _) = cheapest(&bins, leaf)?;
-        return Some(partition::<AXIS, true>(order, bin, b));
+        // The sample fell in one bin: every primitive is binned below.
     }
     let bins = all(order);
     let Some((b, left, right)) = cheapest(&bins, leaf) else {
@@ -431,6 +428,27 @@ mod tests {
             index,
             hi: Vec3::ONE,
         }));
+        holds_each_once(items);
+        // Every eighth at one corner: the root's sample falls in one bin,
+        // and the root bins every primitive instead.
+        let corner = |index: u32| {
+            let c = if index.is_multiple_of(8) {
+                Vec3::ZERO
+            } else {
+                Vec3::splat(1.0) + Vec3::new(rnd(), rnd(), rnd()) * 10.0
+            };
+            Item {
+                lo: c,
+                index,
+                hi: c + 0.01,
+            }
+        };
+        holds_each_once((0..16_384).map(corner).collect());
+    }
+
+    /// `items`' tree holds every one of them in exactly one leaf, every
+    /// node's box around its children's, no leaf over eight.
+    fn holds_each_once(mut items: Vec<Item>) {
         let given = items.clone();
         let bvh = build(&mut items, 8);
         let items = given;
