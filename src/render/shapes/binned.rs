@@ -58,16 +58,19 @@ fn corners(item: &Item) -> (Vec3A, Vec3A, Vec3A) {
     (lo, hi, (lo + hi) * 0.5)
 }
 
-/// The tree over `items` (at least one), their numbers in its leaves'
+/// The tree over `items`, their numbers in its leaves'
 /// `primitive_indices`; `items` end up in leaf order. `leaf` is rounded
-/// down to a power of two.
-pub fn build(items: &mut [Item], leaf: usize) -> Bvh2 {
+/// down to a power of two. `None` where the nodes' memory cannot be had.
+pub fn build(items: &mut [Item], leaf: usize) -> Option<Bvh2> {
     build_by(items, leaf, SAMPLED, STRIDE)
 }
 
 /// [`build`], nodes of more than `sampled` primitives choosing their
 /// split from every `stride`th.
-fn build_by(items: &mut [Item], leaf: usize, sampled: usize, stride: usize) -> Bvh2 {
+fn build_by(items: &mut [Item], leaf: usize, sampled: usize, stride: usize) -> Option<Bvh2> {
+    if items.is_empty() {
+        return Some(Bvh2::default());
+    }
     let rules = Rules {
         leaf: 1 << leaf.max(1).ilog2(),
         sampled,
@@ -81,14 +84,16 @@ fn build_by(items: &mut [Item], leaf: usize, sampled: usize, stride: usize) -> B
     // 2n - 1 nodes. Each subtree fills a range of that bound from its
     // start, so threads write in place and nothing is joined after; the
     // unused rest stays zero pages the allocator never touched.
-    let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * items.len() - 1);
-    let (root, rest) = nodes.split_first_mut().expect("at least one item");
+    let mut nodes = bytemuck::try_zeroed_slice_box::<Bvh2Node>(2 * items.len() - 1)
+        .ok()?
+        .into_vec();
+    let (root, rest) = nodes.split_first_mut()?;
     subtree(items, span, 0, rules, (root, rest, 1));
-    Bvh2 {
+    Some(Bvh2 {
         nodes,
         primitive_indices: items.iter().map(|i| i.index).collect(),
         ..Bvh2::default()
-    }
+    })
 }
 
 /// Ranges at least this long are binned on several threads, in chunks of
@@ -444,13 +449,15 @@ mod tests {
             }
         };
         holds_each_once((0..16_384).map(corner).collect());
+        // None: an empty tree.
+        assert!(build(&mut [], 8).is_some_and(|b| b.nodes.is_empty()));
     }
 
     /// `items`' tree holds every one of them in exactly one leaf, every
     /// node's box around its children's, no leaf over eight.
     fn holds_each_once(mut items: Vec<Item>) {
         let given = items.clone();
-        let bvh = build(&mut items, 8);
+        let bvh = build(&mut items, 8).expect("memory for the nodes");
         let items = given;
         let mut seen = vec![0u32; items.len()];
         let mut stack = vec![0usize];
@@ -539,7 +546,7 @@ mod tests {
         }
         let cost = |sampled: usize, stride: usize| {
             let mut order = items.clone();
-            let bvh = build_by(&mut order, 8, sampled, stride);
+            let bvh = build_by(&mut order, 8, sampled, stride).expect("memory for the nodes");
             sah_cost(&bvh, 8, first_other)
         };
         let every = cost(usize::MAX, STRIDE);

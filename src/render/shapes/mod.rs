@@ -344,7 +344,13 @@ impl ShapeSet {
         let tree = if boxes.is_empty() {
             Tree::Binary(Bvh2::default())
         } else if wide {
-            let bvh = binned::build(&mut boxes, wide::LEAF_MAX as usize);
+            let n = boxes.len();
+            let bvh = binned::build(&mut boxes, wide::LEAF_MAX as usize).ok_or_else(|| {
+                RenderError::OutOfMemory {
+                    bytes: (2 * n * size_of::<obvhs::bvh2::node::Bvh2Node>()) as u64,
+                    what: "the BVH's nodes".into(),
+                }
+            })?;
             drop(boxes);
             let prims = Kinds::new(&prims, &traced);
             Tree::Wide(Wide::collapse(&bvh, &prims))
