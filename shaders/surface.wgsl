@@ -26,6 +26,11 @@ fn infinite() -> f32 {
     return bitcast<f32>(0x7f800000u);
 }
 
+// A box's far distance is stretched by this much (1 + 2 gamma(3), Ize
+// 2013), so that rounding cannot make a ray miss a box it grazes: a ray
+// through a mesh's corner meets the boxes of the triangles there.
+const ROBUST: f32 = 1.0000004;
+
 // Where o + t d enters box [lo, hi] within (t_min, t_max), or infinity.
 fn box_entry(o: vec3f, inv: vec3f, lo: vec3f, hi: vec3f, t_min: f32, t_max: f32) -> f32 {
     let ta = (lo - o) * inv;
@@ -33,7 +38,7 @@ fn box_entry(o: vec3f, inv: vec3f, lo: vec3f, hi: vec3f, t_min: f32, t_max: f32)
     let tn = min(ta, tb);
     let tf = max(ta, tb);
     let near = max(max(max(tn.x, tn.y), tn.z), t_min);
-    let far = min(min(min(tf.x, tf.y), tf.z), t_max);
+    let far = min(min(min(tf.x, tf.y), tf.z), t_max) * ROBUST;
     if near <= far {
         return near;
     }
@@ -66,29 +71,49 @@ fn normal_to_world(shape: u32, n: vec3f) -> vec3f {
     return vec3f(dot(shape_word(shape, 3u).xyz, n), dot(shape_word(shape, 4u).xyz, n), dot(shape_word(shape, 5u).xyz, n));
 }
 
-// Möller and Trumbore's test from either side: (t, weights of b and c),
-// t infinite on a miss.
-fn hit_triangle(o: vec3f, d: vec3f, a: vec3f, b: vec3f, c: vec3f) -> vec3f {
+// The watertight test from either side (intersect.rs's
+// sheared_triangle): (t, weights of b and c), t infinite on a miss.
+fn hit_triangle(o: vec3f, d: vec3f, a_world: vec3f, b_world: vec3f, c_world: vec3f) -> vec3f {
     let miss = vec3f(infinite(), 0.0, 0.0);
-    let e1 = b - a;
-    let e2 = c - a;
-    let p = cross(d, e2);
-    let det = dot(e1, p);
+    let m = abs(d);
+    var kz = 2u;
+    if m.x >= m.y && m.x >= m.z {
+        kz = 0u;
+    } else if m.y >= m.z {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kz + 2u) % 3u;
+    if d[kz] < 0.0 {
+        let swap = kx;
+        kx = ky;
+        ky = swap;
+    }
+    let sx = d[kx] / d[kz];
+    let sy = d[ky] / d[kz];
+    let sz = 1.0 / d[kz];
+    let a = a_world - o;
+    let b = b_world - o;
+    let c = c_world - o;
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return miss;
+    }
+    let det = u + v + w;
     if det == 0.0 || !(abs(det) < infinite()) {
         return miss;
     }
+    let t = u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz]);
     let inv = 1.0 / det;
-    let s = o - a;
-    let u = dot(s, p) * inv;
-    if !(u >= 0.0 && u <= 1.0) {
-        return miss;
-    }
-    let q = cross(s, e1);
-    let v = dot(d, q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return miss;
-    }
-    return vec3f(dot(e2, q) * inv, u, v);
+    return vec3f(t * inv, v * inv, w * inv);
 }
 
 // The first t in (t_min, t_max) on the sphere at c of radius r, d of

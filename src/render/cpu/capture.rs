@@ -72,7 +72,7 @@ impl CpuRenderer {
                                 s,
                                 &field,
                                 rays,
-                                (o, dir),
+                                ((o, dir), None),
                                 Vec4::ZERO,
                                 settings,
                                 Some(&mut builder),

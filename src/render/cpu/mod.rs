@@ -43,6 +43,10 @@ pub struct CpuRenderer {
     /// through, sixteen or eight at a time (packet.rs); none for the
     /// scalar reference.
     packets: Option<Level>,
+    /// Whether camera rays find their first surface a few neighbours at
+    /// a time (shapes::ShapeSet::hits); the reference takes them one by
+    /// one.
+    surface_packets: bool,
     /// The last scene's voxels as f32 and its tables, kept while scenes
     /// bring the same `Arc`s, as the GPU keeps its uploads.
     cache: Mutex<Prepared>,
@@ -76,6 +80,7 @@ impl CpuRenderer {
     pub fn new() -> Self {
         Self {
             packets: packet::level(),
+            surface_packets: true,
             ..Self::default()
         }
     }
@@ -85,8 +90,18 @@ impl CpuRenderer {
     pub fn with_simd(level: Level) -> Option<Self> {
         (level >= Level::Avx2 && level.runs()).then(|| Self {
             packets: Some(level),
+            surface_packets: true,
             ..Self::default()
         })
+    }
+
+    /// This renderer with camera rays traced to their first surface
+    /// together (`true`) or one by one: to compare the two.
+    pub fn with_surface_packets(self, on: bool) -> Self {
+        Self {
+            surface_packets: on,
+            ..self
+        }
     }
 
     /// The reference: every sample by the scalar path of docs/ray_casting.md,
@@ -99,6 +114,11 @@ impl CpuRenderer {
     /// they take the packet path.
     pub fn packet_level(&self) -> Option<Level> {
         self.packets
+    }
+
+    /// Whether camera rays find their first surface in packets.
+    pub fn uses_surface_packets(&self) -> bool {
+        self.surface_packets
     }
 
     pub fn uses_packets(&self) -> bool {
@@ -319,6 +339,12 @@ impl CpuRenderer {
                     hits: Vec::with_capacity(if desc.hits { TILE * TILE } else { 0 }),
                     samples: 0,
                 };
+                // The camera rays' first surfaces, found a few neighbours at
+                // a time (shapes/wide.rs's packets), row by row.
+                let firsts = match shapes.as_deref() {
+                    Some(s) if self.surface_packets => s.camera_hits(rays, (x0, y0), (x1, y1)),
+                    _ => Vec::new(),
+                };
                 for y in y0..y1 {
                     for x in x0..x1 {
                         // Per pixel: one slow tile must not hold up a stop.
@@ -326,6 +352,7 @@ impl CpuRenderer {
                             return out;
                         }
                         let (o, dir) = rays.pixel_ray(x as u32, y as u32);
+                        let first = firsts.get((y - y0) * (x1 - x0) + (x - x0)).copied();
                         let bg = match &settings.background_image {
                             Some(image) => image.at(x as u32, y as u32, desc.size),
                             None => plan.background,
@@ -337,7 +364,8 @@ impl CpuRenderer {
                                 (ray.color, ray.depth, ray.samples, None)
                             }
                             Some(s) => {
-                                through_surfaces(s, &field, rays, (o, dir), bg, settings, None)
+                                let ray = ((o, dir), first);
+                                through_surfaces(s, &field, rays, ray, bg, settings, None)
                             }
                         };
                         if desc.hits {
@@ -451,7 +479,7 @@ fn through_surfaces(
     shapes: &ShapeSet,
     field: &sample::Field,
     rays: &RayGen,
-    (o, dir): (glam::Vec3, glam::Vec3),
+    ((o, dir), known): ((glam::Vec3, glam::Vec3), Option<Option<Hit>>),
     bg: glam::Vec4,
     settings: &RenderSettings,
     mut layers: Option<&mut LayerBuilder>,
@@ -462,8 +490,14 @@ fn through_surfaces(
     let mut from = rays.t_near;
     let mut composited = 0;
     let mut first = None;
+    let mut known = known;
     for _ in 0..SURFACE_PASSES {
-        let hit = shapes.hit(o, dir, from, rays.t_far);
+        // The first surface may have been found with the pixel's
+        // neighbours, between the same bounds.
+        let hit = match known.take() {
+            Some(hit) => hit,
+            None => shapes.hit(o, dir, from, rays.t_far),
+        };
         let stop = hit.map_or(f32::INFINITY, |h| h.t);
         samples += march::march_segment(
             field,

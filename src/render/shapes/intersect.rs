@@ -2,27 +2,72 @@
 
 use glam::{Vec2, Vec3};
 
+/// A ray direction's frame for the watertight triangle test (Woop,
+/// Benthin and Wald, "Watertight Ray/Triangle Intersection", 2013): the
+/// axis along which it is longest becomes z, and a shear turns the ray
+/// into that axis. Computed once per ray.
+#[derive(Clone, Copy, Debug)]
+pub struct Shear {
+    /// The axes that become x, y and z; x and y swapped where d points
+    /// down z, so that a triangle's winding keeps its sign.
+    pub k: [usize; 3],
+    /// d[kx] / d[kz], d[ky] / d[kz] and 1 / d[kz].
+    pub s: [f32; 3],
+}
+
+impl Shear {
+    pub fn of(d: Vec3) -> Shear {
+        let m = d.abs();
+        let kz = if m.x >= m.y && m.x >= m.z {
+            0
+        } else if m.y >= m.z {
+            1
+        } else {
+            2
+        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        Shear {
+            k: [kx, ky, kz],
+            s: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
+        }
+    }
+}
+
 /// Where `o + t d` crosses triangle (a, b, c), from either side, with the
-/// weights of b and c there (Möller and Trumbore's test).
+/// weights of b and c there.
 pub fn triangle(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<(f32, Vec2)> {
-    let (e1, e2) = (b - a, c - a);
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
+    sheared_triangle(o, &Shear::of(d), [a, b, c])
+}
+
+/// [`triangle`] with the ray's shear given. Each edge's function is
+/// computed from its two corners alone, in the ray's frame, so a ray
+/// through an edge two triangles share is inside at least one of them
+/// (both when it lies exactly on it): no pixel sees through a closed mesh.
+/// wide.rs repeats this arithmetic operation for operation, lane by lane.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn sheared_triangle(o: Vec3, shear: &Shear, [a, b, c]: [Vec3; 3]) -> Option<(f32, Vec2)> {
+    let [kx, ky, kz] = shear.k;
+    let [sx, sy, sz] = shear.s;
+    let (a, b, c) = (a - o, b - o, c - o);
+    let (ax, ay) = (a[kx] - sx * a[kz], a[ky] - sy * a[kz]);
+    let (bx, by) = (b[kx] - sx * b[kz], b[ky] - sy * b[kz]);
+    let (cx, cy) = (c[kx] - sx * c[kz], c[ky] - sy * c[kz]);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return None;
     }
+    let det = u + v + w;
+    if det == 0.0 || !(det.abs() < f32::INFINITY) {
+        return None;
+    }
+    let t = u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz]);
     let inv = 1.0 / det;
-    let s = o - a;
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    Some((e2.dot(q) * inv, Vec2::new(u, v)))
+    Some((t * inv, Vec2::new(v * inv, w * inv)))
 }
 
 /// The first `t` in `(t_min, t_max)` where `o + t d` meets the sphere at

@@ -7,11 +7,13 @@
 //! The CPU traverses a wide BVH (wide.rs) collapsed from a binned SAH
 //! tree (binned.rs), its boxes and triangles tested eight at a time; the
 //! GPU a binary tree from obvhs's PLOC builder, whose flat nodes (a box,
-//! a first index, a count) go to a storage buffer as they are (packed.rs).
+//! a first index, a count) go to a storage buffer as they are (packed.rs),
+//! and whose traversal binary.rs also runs here, for tests and benchmarks.
 //! Triangles are placed in world space once; spheres and cylinders are
 //! tested in object space, so an instance's shear or uneven scale makes
 //! the ellipsoid it should.
 
+mod binary;
 mod binned;
 mod brdf;
 mod intersect;
@@ -22,7 +24,6 @@ mod wide;
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
-use obvhs::ray::{Ray, RayHit};
 use obvhs::Boundable;
 use rayon::prelude::*;
 
@@ -30,6 +31,7 @@ use super::frame::filled;
 use super::hits::HitRecord;
 use super::simd::Level;
 use super::{RenderError, RenderSettings, SurfaceShading};
+use crate::geometry::RayGen;
 use crate::scene::{
     Attribute, ColorSource, Coverage, OpacitySource, PlacedShape, Primitives, Source,
     DEFAULT_ATTRIBUTE,
@@ -38,6 +40,9 @@ use binned::Item;
 use brdf::reflected;
 pub use brdf::MIN_ROUGHNESS;
 use intersect::{cone, curve, sphere, tangent_cone, triangle, End};
+
+/// The most rays [`ShapeSet::hits`] traces together.
+pub const PACKET: usize = wide::WIDTH;
 use wide::Wide;
 
 /// The most translucent surfaces one ray composites; those behind them
@@ -420,30 +425,110 @@ impl ShapeSet {
                 (prim, found.t, found.bary, found.facing)
             }
             Tree::Binary(bvh) => {
-                let ray = Ray::new(o.into(), d.into(), t_min, t_max);
-                let mut found = RayHit::none();
                 let indices = &bvh.primitive_indices;
-                let hit = bvh.ray_traverse(ray, &mut found, |ray, id| {
-                    let prim = self.prims[indices[id] as usize];
-                    self.shown(prim, o, d, ray.tmin, ray.tmax)
-                        .map_or(f32::INFINITY, |(t, _)| t)
-                });
-                if !hit {
-                    return None;
-                }
-                let prim = self.prims[indices[found.primitive_id as usize] as usize];
-                let (t, bary) = self.shown(prim, o, d, t_min, t_max)?;
-                (prim, t, bary, None)
+                let prim_at = |j: u32| self.prims[indices[j as usize] as usize];
+                let (j, t, bary) = binary::closest(
+                    bvh,
+                    (o, d),
+                    (t_min, t_max),
+                    packed::TRAVERSAL_STACK as usize,
+                    |j, far| self.shown(prim_at(j), o, d, t_min, far),
+                )?;
+                (prim_at(j), t, bary, None)
             }
         };
+        Some(self.finished(prim, (t, bary, facing), (o, d)))
+    }
+
+    /// The nearest hits of up to [`PACKET`] rays, each with `t` in
+    /// `(t_min, t_max)`: [`ShapeSet::hit`]'s answers (but which of two
+    /// primitives met at the very same distance), found together, which
+    /// is faster for neighbouring camera rays.
+    pub fn hits(&self, rays: &[(Vec3, Vec3)], t_min: f32, t_max: f32) -> [Option<Hit>; PACKET] {
+        self.hits_on(Level::chosen(), rays, t_min, t_max)
+    }
+
+    /// [`ShapeSet::hits`] with the wide BVH's kernels built for `level`.
+    pub fn hits_on(
+        &self,
+        level: Level,
+        rays: &[(Vec3, Vec3)],
+        t_min: f32,
+        t_max: f32,
+    ) -> [Option<Hit>; PACKET] {
+        let mut out = [None; PACKET];
+        let rays = &rays[..rays.len().min(PACKET)];
+        let Tree::Wide(wide) = &self.tree else {
+            for (hit, &(o, d)) in out.iter_mut().zip(rays) {
+                *hit = self.hit_on(level, o, d, t_min, t_max);
+            }
+            return out;
+        };
+        if self.prims.is_empty() || t_max.partial_cmp(&t_min) != Some(std::cmp::Ordering::Greater) {
+            return out;
+        }
+        let mut other = |i: usize, p: u32, far: f32| {
+            let (o, d) = rays[i];
+            self.shown(self.prims[p as usize], o, d, t_min, far)
+        };
+        let found = wide.closest_packet(level, rays, (t_min, t_max), &mut other);
+        for ((hit, found), &ray) in out.iter_mut().zip(found).zip(rays) {
+            *hit = found.map(|f| {
+                let prim = self.prims[f.prim as usize];
+                self.finished(prim, (f.t, f.bary, f.facing), ray)
+            });
+        }
+        out
+    }
+
+    /// The first surface of each camera ray of `rays`' pixels `from..to`
+    /// (a tile), row by row: [`ShapeSet::hits`] on blocks of 4 x 2
+    /// pixels, whose rays are close enough to go down the tree together.
+    pub fn camera_hits(
+        &self,
+        rays: &RayGen,
+        (x0, y0): (usize, usize),
+        (x1, y1): (usize, usize),
+    ) -> Vec<Option<Hit>> {
+        const BLOCK: (usize, usize) = (4, 2);
+        let w = x1 - x0;
+        let mut out = vec![None; w * (y1 - y0)];
+        let mut pixels = Vec::with_capacity(PACKET);
+        let mut ray = Vec::with_capacity(PACKET);
+        for by in (y0..y1).step_by(BLOCK.1) {
+            for bx in (x0..x1).step_by(BLOCK.0) {
+                pixels.clear();
+                ray.clear();
+                for y in by..(by + BLOCK.1).min(y1) {
+                    for x in bx..(bx + BLOCK.0).min(x1) {
+                        pixels.push((y - y0) * w + (x - x0));
+                        ray.push(rays.pixel_ray(x as u32, y as u32));
+                    }
+                }
+                let hits = self.hits(&ray, rays.t_near, rays.t_far);
+                for (&at, hit) in pixels.iter().zip(hits) {
+                    out[at] = hit;
+                }
+            }
+        }
+        out
+    }
+
+    /// The hit of `prim` at `t` along `o + t d`, with its normal.
+    fn finished(
+        &self,
+        prim: Prim,
+        (t, bary, facing): (f32, Vec2, Option<Vec3>),
+        (o, d): (Vec3, Vec3),
+    ) -> Hit {
         let normal = self.normal(prim, o + d * t, bary, d, facing);
-        Some(Hit {
+        Hit {
             t,
             shape: prim.shape,
             index: prim.index,
             bary,
             normal,
-        })
+        }
     }
 
     /// Where `prim` is first hit and drawn in `(t_min, t_max)`: past the

@@ -361,6 +361,206 @@ fn every_simd_level_finds_the_same_hits() {
     eprintln!("levels run here: {levels:?}");
 }
 
+/// A closed surface lets no ray through: rays aimed at the mesh's shared
+/// edges and corners, where a test that computes an edge differently for
+/// its two triangles leaves cracks of rounding, all hit it, in the wide
+/// tree at every SIMD level and in the GPU's binary one.
+#[test]
+fn no_ray_slips_between_triangles_that_share_an_edge() {
+    // A bumpy grid of 40 x 40 quads over [-1, 1]^2, each split in two,
+    // the diagonals alternating, turned off the axes by an instance.
+    let n = 40u32;
+    let mut seed = 11u32;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed as f32 / u32::MAX as f32
+    };
+    let mut p = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (
+                i as f32 / n as f32 * 2.0 - 1.0,
+                j as f32 / n as f32 * 2.0 - 1.0,
+            );
+            p.push(Vec3::new(
+                x,
+                y,
+                0.1 * (3.1 * x).sin() * (2.3 * y).cos() + 0.01 * rnd(),
+            ));
+        }
+    }
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let mut tris = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            if (i + j) % 2 == 0 {
+                tris.extend([[a, b, c], [a, c, d]]);
+            } else {
+                tris.extend([[a, b, d], [b, c, d]]);
+            }
+        }
+    }
+    let turn = Mat4::from_rotation_x(0.37) * Mat4::from_rotation_z(0.21);
+    let world: Vec<Vec3> = p.iter().map(|&v| turn.transform_point3(v)).collect();
+    let edges: Vec<[Vec3; 2]> = tris
+        .iter()
+        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+        .map(|e| e.map(|v| world[v as usize]))
+        .collect();
+    let (count, vertices) = (tris.len(), p.len());
+    let mesh = Shape::triangles(p, tris, Kept::All(count), None, input(vertices, count)).unwrap();
+    let placed = [PlacedShape::new(
+        Arc::new(mesh.shape),
+        SurfaceMaterial::default(),
+        turn,
+    )];
+    let set = ShapeSet::build(&placed).unwrap();
+    let binary = ShapeSet::build_binary(&placed).unwrap();
+    let levels: Vec<Level> = Level::ALL.into_iter().filter(|l| l.runs()).collect();
+    let mut rays = 0;
+    for [a, b] in edges {
+        // Corners of the grid's rim and points on its rim's edges may be
+        // grazed from outside; the points aimed at keep inside it.
+        let centre = world[at(n / 2, n / 2) as usize];
+        for s in [0.0, 0.25, 0.5, 0.61803] {
+            let target = a + (b - a) * s;
+            if (target - centre).length() > 0.9 {
+                continue;
+            }
+            // From the side the bumps face and from behind, steep and oblique.
+            let from =
+                Vec3::new(rnd() - 0.5, rnd() - 0.5, 1.0) * if rnd() < 0.5 { 4.0 } else { -4.0 };
+            let o = target + turn.transform_vector3(from);
+            let d = target - o;
+            rays += 1;
+            let every = set
+                .prims
+                .iter()
+                .filter(|p| set.distance(**p, o, d, 0.0, 2.0).is_some())
+                .count();
+            assert!(
+                every > 0,
+                "scalar: none of {} for {target}",
+                set.prims.len()
+            );
+            for (tree, hit) in [
+                ("wide", set.hit(o, d, 0.0, 2.0)),
+                ("binary", binary.hit(o, d, 0.0, 2.0)),
+            ] {
+                assert!(
+                    hit.is_some(),
+                    "{tree}: the ray to {target} (s {s}) from {o} slipped through"
+                );
+            }
+            for &level in &levels {
+                assert!(
+                    set.hit_on(level, o, d, 0.0, 2.0).is_some(),
+                    "{level:?}: to {target}"
+                );
+            }
+        }
+    }
+    assert!(rays > 10_000, "{rays} rays");
+}
+
+/// Rays traced eight together find what each finds alone, at every SIMD
+/// level: neighbouring rays from one eye (the packet's way down the tree),
+/// parallel rays from neighbouring origins, part-filled packets, and rays
+/// in every direction (one by one inside).
+#[test]
+fn packets_find_the_hits_single_rays_find() {
+    let (placed, mut rnd) = cloud(20_000);
+    let set = ShapeSet::build(&placed).unwrap();
+    let levels: Vec<Level> = Level::ALL.into_iter().filter(|l| l.runs()).collect();
+    let (mut hits, mut ties) = (0, 0);
+    for k in 0..1500 {
+        let o = Vec3::new(rnd(), rnd(), rnd()) * 8.0 - 4.0;
+        let ahead = (Vec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0 - o).normalize();
+        let spread = [0.002, 0.02, 0.3, 3.0][k % 4];
+        let parallel = k % 5 == 0;
+        let n = if k % 7 == 0 { 1 + k % PACKET } else { PACKET };
+        let rays: Vec<(Vec3, Vec3)> = (0..n)
+            .map(|_| {
+                let jitter = Vec3::new(rnd(), rnd(), rnd()) - 0.5;
+                match parallel {
+                    true => (o + jitter * spread, ahead),
+                    false => (o, (ahead + jitter * spread).normalize()),
+                }
+            })
+            .collect();
+        let t_min = rnd() * 0.3;
+        for &level in &levels {
+            let together = set.hits_on(level, &rays, t_min, 7.0);
+            assert!(together[n..].iter().all(Option::is_none));
+            for (i, &(o, d)) in rays.iter().enumerate() {
+                let alone = set.hit_on(level, o, d, t_min, 7.0);
+                match (together[i], alone) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) if a == b => hits += 1,
+                    // Two primitives at the very same distance: either.
+                    (Some(a), Some(b)) if a.t == b.t => ties += 1,
+                    (a, b) => panic!("{level:?} ray {i} of {n}: together {a:?}, alone {b:?}"),
+                }
+            }
+        }
+    }
+    assert!(hits > 3000 && ties * 100 < hits, "{hits} hits, {ties} ties");
+}
+
+/// The CPU renderer finds its camera rays' first surfaces in packets:
+/// the frame is the one it makes tracing them one by one.
+#[test]
+fn a_frame_of_packets_is_the_frame_of_single_rays() {
+    let (placed, _) = cloud(4000);
+    let scene = Scene::of_shapes(placed.to_vec()).unwrap();
+    let desc = FrameDesc::new(UVec2::splat(N))
+        .with_color(ColorFormat::Rgba32F)
+        .with_depth();
+    let [together, alone] = [true, false].map(|on| {
+        CpuRenderer::new()
+            .with_surface_packets(on)
+            .render(&scene, &camera().0, &RenderSettings::default(), &desc)
+            .unwrap()
+    });
+    assert_eq!(together.depth, alone.depth);
+    let covered = alone
+        .depth
+        .as_ref()
+        .unwrap()
+        .iter()
+        .filter(|d| d.is_finite())
+        .count();
+    assert!(
+        covered > (N * N / 2) as usize,
+        "{covered} pixels show a surface"
+    );
+    let ssim = crate::render::ssim(&together, &alone).unwrap();
+    assert!(ssim > 0.9999, "SSIM {ssim}");
+}
+
+/// A direction's components of -0 (as a camera's arithmetic can give)
+/// take the tree's boxes from the side their inverse says: such rays hit
+/// what rays of +0 components hit, alone and in packets.
+#[test]
+fn negative_zero_directions_hit_what_positive_zero_ones_hit() {
+    let (placed, mut rnd) = cloud(2000);
+    let set = ShapeSet::build(&placed).unwrap();
+    let mut hits = 0;
+    for _ in 0..400 {
+        let o = Vec3::new(rnd() * 4.0 - 2.0, rnd() * 4.0 - 2.0, 5.0);
+        let plus = set.hit(o, Vec3::new(0.0, 0.0, -1.0), 0.0, 20.0);
+        let minus = set.hit(o, Vec3::new(-0.0, -0.0, -1.0), 0.0, 20.0);
+        assert_eq!(plus.map(|h| h.t), minus.map(|h| h.t), "from {o}");
+        let packet = set.hits(&[(o, Vec3::new(-0.0, -0.0, -1.0)); 2], 0.0, 20.0);
+        assert_eq!(packet[0].map(|h| h.t), plus.map(|h| h.t), "from {o}");
+        hits += u32::from(plus.is_some());
+    }
+    assert!(hits > 40, "{hits} rays hit");
+}
+
 /// Checks every pixel of the orthographic view down -z that `expect`
 /// has an answer for: nothing there (`Some(None)`) or a surface at height
 /// z of color c (`Some(Some((z, c)))`); silhouette pixels, which may go

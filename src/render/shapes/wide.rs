@@ -1,7 +1,7 @@
 //! The CPU's traversal of a shape set: the binary BVH collapsed into nodes
 //! of eight children whose boxes one ray tests at once, over leaves whose
 //! triangles sit in world space eight to a block, also tested at once
-//! (Möller and Trumbore's test with the scalar one's arithmetic, lane by
+//! (the watertight test of intersect.rs with its arithmetic, lane by
 //! lane, so both find the same hits to the bit). Spheres, cones, curves,
 //! and triangles whose opacity can hide parts of them stay in a leaf's
 //! list for the caller to test one by one.
@@ -16,6 +16,7 @@ use glam::{Vec2, Vec3};
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
 
+use super::intersect::Shear;
 use super::pages::ask_huge;
 use crate::render::simd::Level;
 
@@ -34,7 +35,7 @@ const EMPTY: u32 = u32::MAX;
 /// A box's far distance is stretched by this much, so that rounding in
 /// the slab test cannot make a ray miss a box it grazes (Ize, "Robust
 /// BVH Ray Traversal", 2013: 1 + 2 gamma(3)).
-const ROBUST: f32 = 1.0 + 3.0 * f32::EPSILON;
+pub const ROBUST: f32 = 1.0 + 3.0 * f32::EPSILON;
 
 /// Eight children's boxes, an axis at a time, and what each child is.
 #[derive(Clone, Copy)]
@@ -51,23 +52,24 @@ const EMPTY_NODE: Node = Node {
     child: [EMPTY; WIDTH],
 };
 
-/// Eight triangles in world space: a corner and the two edges from it,
-/// an axis at a time; lanes past the leaf's last triangle have zero edges
-/// (a zero determinant, never hit).
+/// Eight triangles in world space, their corners an axis at a time (the
+/// corners themselves, not edges from one of them: the watertight test
+/// needs each edge from its own two corners); lanes past the leaf's last
+/// triangle have three equal corners (a zero determinant, never hit).
 #[derive(Clone, Copy)]
 #[repr(C, align(32))]
 struct Block {
     a: [[f32; WIDTH]; 3],
-    e1: [[f32; WIDTH]; 3],
-    e2: [[f32; WIDTH]; 3],
+    b: [[f32; WIDTH]; 3],
+    c: [[f32; WIDTH]; 3],
     /// The shape set's primitive in each lane.
     prim: [u32; WIDTH],
 }
 
 const EMPTY_BLOCK: Block = Block {
     a: [[0.0; WIDTH]; 3],
-    e1: [[0.0; WIDTH]; 3],
-    e2: [[0.0; WIDTH]; 3],
+    b: [[0.0; WIDTH]; 3],
+    c: [[0.0; WIDTH]; 3],
     prim: [EMPTY; WIDTH],
 };
 
@@ -157,6 +159,28 @@ struct Ray {
     /// Whether each component of d is negative: then the box's far plane
     /// on that axis is its low one.
     neg: [bool; 3],
+    shear: Shear,
+}
+
+impl Ray {
+    fn new(o: Vec3, d: Vec3) -> Ray {
+        let safe = |c: f32| {
+            if c.abs() < f32::MIN_POSITIVE {
+                1.0 / f32::MIN_POSITIVE.copysign(c)
+            } else {
+                1.0 / c
+            }
+        };
+        let inv = [safe(d.x), safe(d.y), safe(d.z)];
+        Ray {
+            o,
+            d,
+            inv,
+            // From the inverse: a component of -0 has a negative one.
+            neg: inv.map(|i| i < 0.0),
+            shear: Shear::of(d),
+        }
+    }
 }
 
 /// `max` and `min` as one compare and select, the same on every level.
@@ -386,19 +410,7 @@ impl Wide {
         t_max: f32,
         other: &mut dyn FnMut(u32, f32) -> Option<(f32, Vec2)>,
     ) -> Option<Found> {
-        let safe = |c: f32| {
-            if c.abs() < f32::MIN_POSITIVE {
-                1.0 / f32::MIN_POSITIVE.copysign(c)
-            } else {
-                1.0 / c
-            }
-        };
-        let ray = Ray {
-            o,
-            d,
-            inv: [safe(d.x), safe(d.y), safe(d.z)],
-            neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
-        };
+        let ray = Ray::new(o, d);
         // Left uninitialised: a ray reads only the entries it wrote, and
         // zeroing a stack per ray costs more than most traversals.
         let mut local = [const { MaybeUninit::<(u32, f32)>::uninit() }; 256];
@@ -441,50 +453,322 @@ impl Wide {
                 }
                 continue;
             }
-            let leaf = self.leaves[(reference & !LEAF) as usize];
-            let blocks = &self.blocks[leaf.block as usize..(leaf.block + leaf.blocks) as usize];
-            for block in blocks {
-                if let Some((lane, t, u, v)) = cross(block, &ray, t_min, far) {
-                    far = t;
-                    let edge =
-                        |e: &[[f32; WIDTH]; 3]| Vec3::new(e[0][lane], e[1][lane], e[2][lane]);
-                    best = Some(Found {
-                        prim: block.prim[lane],
-                        t,
-                        bary: Vec2::new(u, v),
-                        facing: Some(edge(&block.e1).cross(edge(&block.e2))),
-                    });
-                }
+            self.leaf(reference, &ray, t_min, (&mut far, &mut best), &mut *other);
+        }
+        best
+    }
+
+    /// Tests `ray` against every primitive of leaf `reference` nearer
+    /// than `far`, which the nearest hit found shortens.
+    #[inline(always)]
+    fn leaf(
+        &self,
+        reference: u32,
+        ray: &Ray,
+        t_min: f32,
+        (far, best): (&mut f32, &mut Option<Found>),
+        other: &mut dyn FnMut(u32, f32) -> Option<(f32, Vec2)>,
+    ) {
+        let leaf = self.leaves[(reference & !LEAF) as usize];
+        let blocks = &self.blocks[leaf.block as usize..(leaf.block + leaf.blocks) as usize];
+        for block in blocks {
+            if let Some((lane, t, u, v)) = cross(block, ray, t_min, *far) {
+                *far = t;
+                let corner = |e: &[[f32; WIDTH]; 3]| Vec3::new(e[0][lane], e[1][lane], e[2][lane]);
+                let a = corner(&block.a);
+                *best = Some(Found {
+                    prim: block.prim[lane],
+                    t,
+                    bary: Vec2::new(u, v),
+                    facing: Some((corner(&block.b) - a).cross(corner(&block.c) - a)),
+                });
             }
-            let balls = &self.balls[leaf.ball as usize..(leaf.ball + leaf.balls) as usize];
-            for ball in balls {
-                if let Some((lane, t)) = meet(ball, &ray, t_min, far) {
-                    far = t;
-                    best = Some(Found {
-                        prim: ball.prim[lane],
+        }
+        let balls = &self.balls[leaf.ball as usize..(leaf.ball + leaf.balls) as usize];
+        for ball in balls {
+            if let Some((lane, t)) = meet(ball, ray, t_min, *far) {
+                *far = t;
+                *best = Some(Found {
+                    prim: ball.prim[lane],
+                    t,
+                    bary: Vec2::ZERO,
+                    facing: None,
+                });
+            }
+        }
+        let others = &self.others[leaf.other as usize..(leaf.other + leaf.others) as usize];
+        for &p in others {
+            if let Some((t, bary)) = other(p, *far) {
+                if t < *far {
+                    *far = t;
+                    *best = Some(Found {
+                        prim: p,
                         t,
-                        bary: Vec2::ZERO,
+                        bary,
                         facing: None,
                     });
                 }
             }
-            let others = &self.others[leaf.other as usize..(leaf.other + leaf.others) as usize];
-            for &p in others {
-                if let Some((t, bary)) = other(p, far) {
-                    if t < far {
-                        far = t;
-                        best = Some(Found {
-                            prim: p,
-                            t,
-                            bary,
-                            facing: None,
-                        });
+        }
+    }
+
+    /// The nearest hits of up to WIDTH rays traced together, each with
+    /// `t` in `(t_min, t_max)`: what [`Wide::closest`] finds for each
+    /// (the same primitive but where two are hit at the very same
+    /// distance). `other(ray, p, t_max)` tests primitive `p` of a leaf's
+    /// list for ray `ray`.
+    ///
+    /// Rays whose directions agree in sign on every axis, as a few
+    /// neighbouring pixels' camera rays do, go down the tree together:
+    /// an inner node's boxes are tested once for all of them, by interval
+    /// arithmetic over their origins and inverse directions (Wald et al.,
+    /// "SIMD Ray Stream Tracing", and Reshetov's frustum culling use the
+    /// same bound), with the operations the single ray's test uses, so
+    /// the bound holds to the bit; a leaf's box is then tested for each
+    /// ray, and each tests the leaf only where it enters it. Other rays
+    /// go one by one.
+    pub fn closest_packet(
+        &self,
+        level: Level,
+        rays: &[(Vec3, Vec3)],
+        (t_min, t_max): (f32, f32),
+        other: &mut dyn FnMut(usize, u32, f32) -> Option<(f32, Vec2)>,
+    ) -> [Option<Found>; WIDTH] {
+        assert!(rays.len() <= WIDTH, "a packet holds at most {WIDTH} rays");
+        if self.root == EMPTY || rays.is_empty() {
+            return [None; WIDTH];
+        }
+        #[cfg(target_arch = "x86_64")]
+        {
+            if level == Level::Avx512 && level.runs() {
+                // SAFETY: this CPU runs AVX-512 F, VL, DQ, BW, AVX2 and FMA.
+                return unsafe { self.packet_avx512(rays, t_min, t_max, other) };
+            }
+            if level >= Level::Avx2 && Level::Avx2.runs() {
+                // SAFETY: this CPU runs AVX2 and FMA.
+                return unsafe { self.packet_avx2(rays, t_min, t_max, other) };
+            }
+        }
+        let _ = level;
+        self.packet_body(rays, t_min, t_max, other)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
+    unsafe fn packet_avx512(
+        &self,
+        rays: &[(Vec3, Vec3)],
+        t_min: f32,
+        t_max: f32,
+        other: &mut dyn FnMut(usize, u32, f32) -> Option<(f32, Vec2)>,
+    ) -> [Option<Found>; WIDTH] {
+        self.packet_body(rays, t_min, t_max, other)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn packet_avx2(
+        &self,
+        rays: &[(Vec3, Vec3)],
+        t_min: f32,
+        t_max: f32,
+        other: &mut dyn FnMut(usize, u32, f32) -> Option<(f32, Vec2)>,
+    ) -> [Option<Found>; WIDTH] {
+        self.packet_body(rays, t_min, t_max, other)
+    }
+
+    #[inline(always)]
+    fn packet_body(
+        &self,
+        rays: &[(Vec3, Vec3)],
+        t_min: f32,
+        t_max: f32,
+        other: &mut dyn FnMut(usize, u32, f32) -> Option<(f32, Vec2)>,
+    ) -> [Option<Found>; WIDTH] {
+        let n = rays.len();
+        // Lanes past the last ray repeat it: they widen no interval and
+        // are never active.
+        let one: [Ray; WIDTH] = std::array::from_fn(|i| {
+            let (o, d) = rays[i.min(n - 1)];
+            Ray::new(o, d)
+        });
+        let mut best = [None; WIDTH];
+        let neg = one[0].neg;
+        if one.iter().any(|r| r.neg != neg) {
+            for (i, ray) in one.iter().enumerate().take(n) {
+                best[i] =
+                    self.closest_body(ray.o, ray.d, t_min, t_max, &mut |p, far| other(i, p, far));
+            }
+            return best;
+        }
+        // Each axis's origins and inverse directions, lane by lane and as
+        // intervals.
+        let lanes =
+            |f: &dyn Fn(&Ray) -> f32| -> [f32; WIDTH] { std::array::from_fn(|i| f(&one[i])) };
+        let o: [[f32; WIDTH]; 3] = std::array::from_fn(|a| lanes(&|r| r.o[a]));
+        let inv: [[f32; WIDTH]; 3] = std::array::from_fn(|a| lanes(&|r| r.inv[a]));
+        let span = |v: &[f32; WIDTH]| {
+            v.iter()
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &x| {
+                    (min(lo, x), max(hi, x))
+                })
+        };
+        let o_span: Spans = std::array::from_fn(|a| span(&o[a]));
+        let inv_span: Spans = std::array::from_fn(|a| span(&inv[a]));
+        let all = (1u32 << n) - 1;
+        let mut far = [t_max; WIDTH];
+        let mut local = [const { MaybeUninit::<(u32, f32, u32)>::uninit() }; 256];
+        let mut heap = Vec::new();
+        let stack: &mut [MaybeUninit<(u32, f32, u32)>] = if self.stack <= local.len() {
+            &mut local
+        } else {
+            heap.resize(self.stack, MaybeUninit::uninit());
+            &mut heap
+        };
+        stack[0] = MaybeUninit::new((self.root, t_min, all));
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            // SAFETY: entries below `top` were all written.
+            let (reference, near, mask) = unsafe { stack[top].assume_init() };
+            // The farthest any of the entry's rays still looks.
+            let mut reach = f32::NEG_INFINITY;
+            for (i, &f) in far.iter().enumerate() {
+                if mask & (1 << i) != 0 {
+                    reach = max(reach, f);
+                }
+            }
+            if near >= reach {
+                continue;
+            }
+            if reference & LEAF != 0 {
+                let mut left = mask;
+                while left != 0 {
+                    let i = left.trailing_zeros() as usize;
+                    left &= left - 1;
+                    if near < far[i] {
+                        let mut each = |p: u32, f: f32| other(i, p, f);
+                        self.leaf(
+                            reference,
+                            &one[i],
+                            t_min,
+                            (&mut far[i], &mut best[i]),
+                            &mut each,
+                        );
                     }
                 }
+                continue;
+            }
+            let node = &self.nodes[reference as usize];
+            let (tn, mut slots) = enter_all(node, neg, (&o_span, &inv_span), t_min, reach);
+            let base = top;
+            while slots != 0 {
+                let slot = slots.trailing_zeros() as usize;
+                slots &= slots - 1;
+                let child = node.child[slot];
+                let rays_in = if child & LEAF != 0 {
+                    mask & enter_each(node, slot, neg, (&o, &inv), t_min, &far)
+                } else {
+                    mask
+                };
+                if rays_in == 0 {
+                    continue;
+                }
+                let entry = (child, tn[slot], rays_in);
+                let mut j = top;
+                // SAFETY: entries from `base` below `top` were written.
+                while j > base && unsafe { stack[j - 1].assume_init() }.1 < entry.1 {
+                    stack[j] = stack[j - 1];
+                    j -= 1;
+                }
+                stack[j] = MaybeUninit::new(entry);
+                top += 1;
             }
         }
         best
     }
+}
+
+/// A packet's least and greatest value of something on each axis.
+type Spans = [(f32, f32); 3];
+
+/// A lower bound of where any of a packet's rays enters each of `node`'s
+/// boxes, within `(t_min, t_max)`, and a bit per box one of them may
+/// enter. The rays' directions share the signs `neg`; `spans` are their
+/// origins' and inverse directions' intervals on each axis. Each bound is
+/// the single ray's operations on an interval's end, chosen by sign:
+/// rounding is monotonic, so no ray's own distance passes it.
+#[inline(always)]
+fn enter_all(
+    node: &Node,
+    neg: [bool; 3],
+    (o, inv): (&Spans, &Spans),
+    t_min: f32,
+    t_max: f32,
+) -> ([f32; WIDTH], u32) {
+    let mut near = [t_min; WIDTH];
+    let mut far = [t_max; WIDTH];
+    for axis in 0..3 {
+        let ((o_lo, o_hi), (i_lo, i_hi)) = (o[axis], inv[axis]);
+        let (lo, hi) = (&node.lo[axis], &node.hi[axis]);
+        for k in 0..WIDTH {
+            // The least entry and the greatest exit over the packet.
+            let (n, f) = if neg[axis] {
+                let x = hi[k] - o_lo;
+                let y = lo[k] - o_hi;
+                (
+                    if x >= 0.0 { x * i_lo } else { x * i_hi },
+                    if y <= 0.0 { y * i_lo } else { y * i_hi },
+                )
+            } else {
+                let x = lo[k] - o_hi;
+                let y = hi[k] - o_lo;
+                (
+                    if x >= 0.0 { x * i_lo } else { x * i_hi },
+                    if y >= 0.0 { y * i_hi } else { y * i_lo },
+                )
+            };
+            near[k] = max(near[k], n);
+            far[k] = min(far[k], f);
+        }
+    }
+    let mut mask = 0;
+    for k in 0..WIDTH {
+        mask |= u32::from(near[k] <= far[k] * ROBUST) << k;
+    }
+    (near, mask)
+}
+
+/// Which of a packet's rays enter `node`'s box `slot` before their own
+/// `far`: [`enter`]'s test for each ray, lane by lane.
+#[inline(always)]
+fn enter_each(
+    node: &Node,
+    slot: usize,
+    neg: [bool; 3],
+    (o, inv): (&[[f32; WIDTH]; 3], &[[f32; WIDTH]; 3]),
+    t_min: f32,
+    far: &[f32; WIDTH],
+) -> u32 {
+    let plane = |axis: usize| {
+        let (lo, hi) = (node.lo[axis][slot], node.hi[axis][slot]);
+        if neg[axis] {
+            (hi, lo)
+        } else {
+            (lo, hi)
+        }
+    };
+    let ((nx, fx), (ny, fy), (nz, fz)) = (plane(0), plane(1), plane(2));
+    let mut mask = 0;
+    for i in 0..WIDTH {
+        let tx = ((nx - o[0][i]) * inv[0][i], (fx - o[0][i]) * inv[0][i]);
+        let ty = ((ny - o[1][i]) * inv[1][i], (fy - o[1][i]) * inv[1][i]);
+        let tz = ((nz - o[2][i]) * inv[2][i], (fz - o[2][i]) * inv[2][i]);
+        let near = max(max(tx.0, ty.0), max(tz.0, t_min));
+        let exit = min(min(tx.1, ty.1), min(tz.1, far[i])) * ROBUST;
+        mask |= u32::from(near <= exit) << i;
+    }
+    mask
 }
 
 /// What one part of a wide tree holds, counted before it is made.
@@ -661,11 +945,10 @@ impl<'a> Out<'a> {
             }
             Kind::Triangle => {
                 let [a, b, c] = prims.triangle(p);
-                let (e1, e2) = (b - a, c - a);
                 for axis in 0..3 {
                     block.a[axis][lane] = a[axis];
-                    block.e1[axis][lane] = e1[axis];
-                    block.e2[axis][lane] = e2[axis];
+                    block.b[axis][lane] = b[axis];
+                    block.c[axis][lane] = c[axis];
                 }
                 block.prim[lane] = p;
                 lane += 1;
@@ -791,43 +1074,38 @@ fn meet(ball: &Ball, ray: &Ray, t_min: f32, t_max: f32) -> Option<(usize, f32)> 
 
 /// The nearest of `block`'s triangles `ray` crosses within `(t_min,
 /// t_max)`: its lane, distance and barycentrics. The arithmetic is
-/// intersect.rs's `triangle`, operation for operation, and so are the
-/// negated comparisons (a NaN passes them there too).
+/// intersect.rs's `sheared_triangle`, operation for operation, and so
+/// are the negated comparisons (a NaN passes them there too).
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 #[inline(always)]
 fn cross(block: &Block, ray: &Ray, t_min: f32, t_max: f32) -> Option<(usize, f32, f32, f32)> {
-    let (o, d) = (ray.o, ray.d);
+    let o = ray.o;
+    let [kx, ky, kz] = ray.shear.k;
+    let [sx, sy, sz] = ray.shear.s;
+    let (ox, oy, oz) = (o[kx], o[ky], o[kz]);
+    // The corners' coordinates in the ray's frame, the ray's axis last.
+    let (axs, ays, azs) = (&block.a[kx], &block.a[ky], &block.a[kz]);
+    let (bxs, bys, bzs) = (&block.b[kx], &block.b[ky], &block.b[kz]);
+    let (cxs, cys, czs) = (&block.c[kx], &block.c[ky], &block.c[kz]);
     let mut ts = [0f32; WIDTH];
     let mut us = [0f32; WIDTH];
     let mut vs = [0f32; WIDTH];
     for i in 0..WIDTH {
-        let (e1x, e1y, e1z) = (block.e1[0][i], block.e1[1][i], block.e1[2][i]);
-        let (e2x, e2y, e2z) = (block.e2[0][i], block.e2[1][i], block.e2[2][i]);
-        // p = d x e2
-        let px = d.y * e2z - e2y * d.z;
-        let py = d.z * e2x - e2z * d.x;
-        let pz = d.x * e2y - e2x * d.y;
-        let det = (e1x * px) + (e1y * py) + (e1z * pz);
+        let (az, bz, cz) = (azs[i] - oz, bzs[i] - oz, czs[i] - oz);
+        let (ax, ay) = ((axs[i] - ox) - sx * az, (ays[i] - oy) - sy * az);
+        let (bx, by) = ((bxs[i] - ox) - sx * bz, (bys[i] - oy) - sy * bz);
+        let (cx, cy) = ((cxs[i] - ox) - sx * cz, (cys[i] - oy) - sy * cz);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let inside = !((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0));
+        let det = u + v + w;
+        let t = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
         let inv = 1.0 / det;
-        let sx = o.x - block.a[0][i];
-        let sy = o.y - block.a[1][i];
-        let sz = o.z - block.a[2][i];
-        let u = ((sx * px) + (sy * py) + (sz * pz)) * inv;
-        // q = s x e1
-        let qx = sy * e1z - e1y * sz;
-        let qy = sz * e1x - e1z * sx;
-        let qz = sx * e1y - e1x * sy;
-        let v = ((d.x * qx) + (d.y * qy) + (d.z * qz)) * inv;
-        let t = ((e2x * qx) + (e2y * qy) + (e2z * qz)) * inv;
-        let ok = det != 0.0
-            && det.abs() < f32::INFINITY
-            && (0.0..=1.0).contains(&u)
-            && !(v < 0.0)
-            && !(u + v > 1.0)
-            && t > t_min
-            && t < t_max;
+        let t = t * inv;
+        let ok = inside && det != 0.0 && det.abs() < f32::INFINITY && t > t_min && t < t_max;
         ts[i] = if ok { t } else { f32::INFINITY };
-        (us[i], vs[i]) = (u, v);
+        (us[i], vs[i]) = (v * inv, w * inv);
     }
     let mut lane = WIDTH;
     let mut nearest = f32::INFINITY;

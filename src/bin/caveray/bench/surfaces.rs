@@ -85,6 +85,10 @@ struct SurfacesReport {
 #[derive(Serialize)]
 struct Run {
     renderer: RendererInfo,
+    /// On the CPU: whether camera rays went to their first surface in
+    /// packets of eight neighbours or one by one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    camera_rays: Option<&'static str>,
     /// The mesh alone, then inside its volume (not with --bumpy).
     mesh: Timing,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -168,6 +172,9 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
     }
     if !args.no_cpu {
         renderers.push(Renderer::Cpu(CpuRenderer::new()));
+        renderers.push(Renderer::Cpu(
+            CpuRenderer::new().with_surface_packets(false),
+        ));
     }
     let scenes = 1 + usize::from(mixed.is_some());
     let mut progress = Progress::new(renderers.len() * scenes * cameras.len());
@@ -178,7 +185,8 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
     for renderer in &mut renderers {
         let name = match renderer {
             Renderer::Gpu(_) => "gpu",
-            Renderer::Cpu(_) => "cpu",
+            Renderer::Cpu(c) if c.uses_surface_packets() => "cpu",
+            Renderer::Cpu(_) => "cpu 1-ray",
         };
         let mut timing = |scene: &Scene, what: &str, keep: &mut Vec<Frame>| {
             let mut ms = Vec::new();
@@ -189,7 +197,8 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
                     .map_err(|e| Failure::Runtime(e.to_string()))?;
                 let took = t.elapsed().as_secs_f64() * 1e3;
                 progress.step(&format!("{name} {what} view {i} {took:.1} ms"));
-                if i == 0 && what == kept {
+                // The GPU's and the first CPU's.
+                if i == 0 && what == kept && keep.len() < 2 {
                     keep.push(frame);
                 }
                 ms.push(took);
@@ -210,12 +219,13 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
         };
         runs.push(Run {
             renderer: RendererInfo::of(renderer),
+            camera_rays: rays_of(renderer),
             mesh: mesh_timing,
             mixed: mixed_timing,
         });
     }
     let gpu_cpu_ssim = match firsts.as_slice() {
-        [g, c] => ssim(g, c).ok(),
+        [g, c] if !args.no_gpu => ssim(g, c).ok(),
         _ => None,
     };
     let report = SurfacesReport {
@@ -257,7 +267,8 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
     for (run, renderer) in report.runs.iter().zip(&renderers) {
         let name = match renderer {
             Renderer::Gpu(g) => g.adapter().name.clone(),
-            Renderer::Cpu(_) => "cpu".to_string(),
+            Renderer::Cpu(c) if c.uses_surface_packets() => "cpu".to_string(),
+            Renderer::Cpu(_) => "cpu, rays one by one".to_string(),
         };
         print!(
             "{name:<10} {:>14.1} {:>9.1} {:>9.2}",
@@ -275,4 +286,13 @@ pub fn run(args: SurfacesArgs) -> Result<(), Failure> {
     }
     println!("written to {}", args.json.display());
     Ok(())
+}
+
+/// How a renderer sends camera rays to their first surface (the CPU's).
+fn rays_of(renderer: &Renderer) -> Option<&'static str> {
+    match renderer {
+        Renderer::Gpu(_) => None,
+        Renderer::Cpu(c) if c.uses_surface_packets() => Some("packets"),
+        Renderer::Cpu(_) => Some("single"),
+    }
 }

@@ -404,7 +404,58 @@ fn renderers(figures: &mut BTreeMap<String, f64>) -> Result<(), Failure> {
     );
     let binary = ShapeSet::build_binary(shapes).map_err(runtime)?;
     figures.insert("cpu.wide_over_binary".into(), traversals(&binary, &traced)?);
+    figures.insert(
+        "cpu.surface_packets_speedup".into(),
+        packet_speedup(&traced)?,
+    );
     Ok(())
+}
+
+/// The camera rays' first surfaces found one by one and in packets of
+/// neighbours (the protocol's four views, each way four times,
+/// interleaved, on one thread): the single rays' fastest time over the
+/// packets', median over the views. Both must find hits at the same
+/// distances.
+fn packet_speedup(set: &ShapeSet) -> Result<f64, Failure> {
+    let size = rays_size();
+    let (w, h) = (size.x as usize, size.y as usize);
+    let mut ratios = Vec::new();
+    for rays in protocol_views(4)? {
+        let single = || {
+            let clock = std::time::Instant::now();
+            let mut hits = Vec::with_capacity(w * h);
+            for y in 0..size.y {
+                for x in 0..size.x {
+                    let (o, d) = rays.pixel_ray(x, y);
+                    hits.push(set.hit(o, d, rays.t_near, rays.t_far).map(|h| h.t));
+                }
+            }
+            (clock.elapsed().as_secs_f64(), hits)
+        };
+        let packets = || {
+            let clock = std::time::Instant::now();
+            let hits = set.camera_hits(&rays, (0, 0), (w, h));
+            let elapsed = clock.elapsed().as_secs_f64();
+            (
+                elapsed,
+                hits.iter().map(|h| h.map(|h| h.t)).collect::<Vec<_>>(),
+            )
+        };
+        let (mut fastest_single, mut fastest_packets) = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..4 {
+            let (ts, hits_single) = single();
+            let (tp, hits_packets) = packets();
+            if hits_single != hits_packets {
+                return Err(Failure::Runtime(
+                    "packets of camera rays found other hits than the rays one by one".into(),
+                ));
+            }
+            fastest_single = fastest_single.min(ts);
+            fastest_packets = fastest_packets.min(tp);
+        }
+        ratios.push(fastest_single / fastest_packets);
+    }
+    Ok(median(ratios))
 }
 
 /// The same rays' nearest hits in two shape sets (the protocol's four

@@ -131,6 +131,13 @@ const RULES: &[Rule] = &[
         limit: Some(1.2),
     },
     Rule {
+        name: "cpu.surface_packets_speedup",
+        what: "camera rays traced to their first surface eight together (blocks of 4 x 2 pixels going down the wide BVH as one) against one by one, on the CT head's isosurface (stride 4), fastest of four interleaved, median over 4 views, one thread; both must find hits at the same distances: the single rays' time over the packets'",
+        better: Better::Higher,
+        margin: Some(1.25),
+        limit: Some(1.0),
+    },
+    Rule {
         name: "cpu.tets_over_grid",
         what: "an unstructured field on the CPU: a frame of the Marschner-Lobb signal on 33^3 vertices cut into 196,608 tetrahedra over a frame of the same grid (128², 4 views, interleaved, skipping on), median over the views; the tetrahedra are found by walking from cell to cell",
         better: Better::Lower,
