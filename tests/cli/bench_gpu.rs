@@ -2,7 +2,8 @@
 //! token size (GPU_BENCH_QUICK=1) on lavapipe: every benchmark writes its
 //! JSON with the adapter, timed without the shader cache, and the summary
 //! holds every table; on a software adapter it says these are not GPU
-//! timings.
+//! timings; where the CPU has AVX-512, its volume packets run at both
+//! widths.
 
 use std::process::Command;
 
@@ -63,6 +64,20 @@ fn the_gpu_benchmark_script_writes_every_report_with_its_adapter() {
         for a in adapters {
             assert_eq!(a["device_type"], "Cpu", "{file}: {a}");
             assert_eq!(a["shader_cache"], "disabled", "{file}: {a}");
+        }
+    }
+    // Where the CPU has AVX-512, its volume packets at each width, the
+    // width each report says.
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    if cpuinfo.split_whitespace().any(|flag| flag == "avx512f") {
+        for round in [1, 2] {
+            for simd in ["avx2", "avx512"] {
+                assert!(summary.contains(&format!("== cpu {simd} {round}: caveray bench raycast")));
+                let path = out.join(format!("cpu_simd_{simd}_{round}.json"));
+                let report: Value =
+                    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+                assert_eq!(report["cpu_packets"], simd, "{}", path.display());
+            }
         }
     }
 }

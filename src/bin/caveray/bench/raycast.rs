@@ -100,6 +100,9 @@ struct RaycastReport {
     bounding_radius_m: f64,
     steps: u32,
     cpu_views: Vec<usize>,
+    /// The lanes the CPU renderer's volume packets take here (avx512,
+    /// avx2; none: the scalar path), as CAVERAY_SIMD may narrow them.
+    cpu_packets: &'static str,
     volumes: Vec<VolumeRuns>,
 }
 
@@ -341,6 +344,9 @@ pub fn run(args: RaycastArgs) -> Result<(), Failure> {
         bounding_radius_m: radius,
         steps: args.steps,
         cpu_views,
+        cpu_packets: CpuRenderer::new()
+            .packet_level()
+            .map_or("none", |l| l.name()),
         volumes,
     };
     write_json(&report, &args.json)?;
