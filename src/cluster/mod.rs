@@ -23,7 +23,7 @@ pub use region::Region;
 pub use split::{Brick, Split};
 
 /// Processes in the job that started this one, as the launcher says
-/// (OpenMPI's `mpirun`, or a PMI launcher), where it says one; without
+/// (Open MPI's `mpirun`, or a PMI launcher such as MPICH's hydra), where it says one; without
 /// the `mpi` feature such a job cannot be joined, and each of its
 /// processes would render every view.
 pub fn launched_size() -> Option<usize> {

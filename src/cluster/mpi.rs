@@ -1,112 +1,34 @@
 //! The few MPI calls a CAVE cluster needs (init, rank and size, barrier,
-//! gather, and the all-to-all of direct-send compositing), declared by
-//! hand against Open MPI's C ABI (Debian's `libopenmpi-dev`): there its
-//! handles are pointers, the predefined ones the addresses of its objects
-//! (`MPI_COMM_WORLD` is `&ompi_mpi_comm_world`). Errors abort the job, as
-//! MPI's default handler does; where a rank refuses a collective (a size
-//! past MPI's int counts) every rank learns of it first, so that none is
-//! left waiting.
+//! gather, and the all-to-all of direct-send compositing), through the
+//! bindings rsmpi's `mpi-sys` generates at build time for the MPI found
+//! on the machine (its `mpicc`, or `MPICC`): Open MPI, MPICH and MPICH's
+//! derivatives alike, whose handles differ (pointers in one, integers in
+//! the other) and which its `RSMPI_*` constants hide. The calls are made
+//! on raw handles rather than through rsmpi's safe layer because a device
+//! inside a host must work on a duplicate of a world the host may have
+//! initialised, and must never finalise the host's. Errors abort the
+//! job, as MPI's default handler does; where a rank refuses a collective
+//! (a size past MPI's int counts) every rank learns of it first, so that
+//! none is left waiting.
 
-use std::ffi::{c_char, c_int, c_void};
-use std::ptr::addr_of_mut;
+use std::ffi::c_int;
 
-/// One of Open MPI's predefined objects, used only by address.
-#[repr(C)]
-struct Predefined {
-    _private: [u8; 0],
+use mpi::ffi::{
+    MPI_Abort, MPI_Allgather, MPI_Allgatherv, MPI_Alltoall, MPI_Alltoallv, MPI_Barrier, MPI_Comm,
+    MPI_Comm_dup, MPI_Comm_rank, MPI_Comm_size, MPI_Datatype, MPI_Finalize, MPI_Finalized,
+    MPI_Gather, MPI_Gatherv, MPI_Init, MPI_Init_thread, MPI_Initialized, MPI_Query_thread,
+};
+
+/// MPI_COMM_WORLD.
+fn world() -> MPI_Comm {
+    // SAFETY: a constant mpi-sys's C shim sets once, read only.
+    unsafe { mpi::ffi::RSMPI_COMM_WORLD }
 }
 
-#[link(name = "mpi")]
-extern "C" {
-    static mut ompi_mpi_comm_world: Predefined;
-    static mut ompi_mpi_byte: Predefined;
-    fn MPI_Initialized(flag: *mut c_int) -> c_int;
-    fn MPI_Init(argc: *mut c_int, argv: *mut *mut *mut c_char) -> c_int;
-    fn MPI_Init_thread(
-        argc: *mut c_int,
-        argv: *mut *mut *mut c_char,
-        required: c_int,
-        provided: *mut c_int,
-    ) -> c_int;
-    fn MPI_Finalized(flag: *mut c_int) -> c_int;
-    fn MPI_Query_thread(provided: *mut c_int) -> c_int;
-    fn MPI_Comm_dup(comm: *mut c_void, duplicate: *mut *mut c_void) -> c_int;
-    fn MPI_Abort(comm: *mut c_void, code: c_int) -> c_int;
-    fn MPI_Allgather(
-        send: *const c_void,
-        send_count: c_int,
-        send_type: *mut c_void,
-        recv: *mut c_void,
-        recv_count: c_int,
-        recv_type: *mut c_void,
-        comm: *mut c_void,
-    ) -> c_int;
-    fn MPI_Allgatherv(
-        send: *const c_void,
-        send_count: c_int,
-        send_type: *mut c_void,
-        recv: *mut c_void,
-        recv_counts: *const c_int,
-        displacements: *const c_int,
-        recv_type: *mut c_void,
-        comm: *mut c_void,
-    ) -> c_int;
-    fn MPI_Finalize() -> c_int;
-    fn MPI_Comm_rank(comm: *mut c_void, rank: *mut c_int) -> c_int;
-    fn MPI_Comm_size(comm: *mut c_void, size: *mut c_int) -> c_int;
-    fn MPI_Barrier(comm: *mut c_void) -> c_int;
-    fn MPI_Gather(
-        send: *const c_void,
-        send_count: c_int,
-        send_type: *mut c_void,
-        recv: *mut c_void,
-        recv_count: c_int,
-        recv_type: *mut c_void,
-        root: c_int,
-        comm: *mut c_void,
-    ) -> c_int;
-    fn MPI_Gatherv(
-        send: *const c_void,
-        send_count: c_int,
-        send_type: *mut c_void,
-        recv: *mut c_void,
-        recv_counts: *const c_int,
-        displacements: *const c_int,
-        recv_type: *mut c_void,
-        root: c_int,
-        comm: *mut c_void,
-    ) -> c_int;
-    fn MPI_Alltoall(
-        send: *const c_void,
-        send_count: c_int,
-        send_type: *mut c_void,
-        recv: *mut c_void,
-        recv_count: c_int,
-        recv_type: *mut c_void,
-        comm: *mut c_void,
-    ) -> c_int;
-    fn MPI_Alltoallv(
-        send: *const c_void,
-        send_counts: *const c_int,
-        send_displacements: *const c_int,
-        send_type: *mut c_void,
-        recv: *mut c_void,
-        recv_counts: *const c_int,
-        recv_displacements: *const c_int,
-        recv_type: *mut c_void,
-        comm: *mut c_void,
-    ) -> c_int;
-}
-
-/// MPI_COMM_WORLD: the address of Open MPI's predefined communicator
-/// (taking an extern static's address reads nothing).
-fn world() -> *mut c_void {
-    addr_of_mut!(ompi_mpi_comm_world).cast()
-}
-
-/// MPI_BYTE, likewise.
-fn byte() -> *mut c_void {
-    addr_of_mut!(ompi_mpi_byte).cast()
+/// A byte, as MPI counts them.
+fn byte() -> MPI_Datatype {
+    // SAFETY: likewise.
+    unsafe { mpi::ffi::RSMPI_UINT8_T }
 }
 
 fn check(what: &str, code: c_int) -> Result<(), String> {
@@ -118,7 +40,7 @@ fn check(what: &str, code: c_int) -> Result<(), String> {
 }
 
 /// MPI_THREAD_SERIALIZED: calls from any thread, one at a time.
-const THREAD_SERIALIZED: c_int = 2;
+const THREAD_SERIALIZED: c_int = mpi::ffi::MPI_THREAD_SERIALIZED as c_int;
 
 /// This process's place in a communicator of the job: MPI_COMM_WORLD for
 /// the tool, a duplicate of it for a device inside a host (so that its
@@ -126,7 +48,7 @@ const THREAD_SERIALIZED: c_int = 2;
 pub struct World {
     rank: usize,
     size: usize,
-    comm: *mut c_void,
+    comm: MPI_Comm,
 }
 
 // SAFETY: the communicator is a handle MPI lets any thread use; callers
@@ -173,7 +95,7 @@ impl World {
         }
         let low = |provided: c_int| {
             format!(
-                "this process's MPI provides thread level {provided}, below MPI_THREAD_SERIALIZED (2), \
+                "this process's MPI provides thread level {provided}, below MPI_THREAD_SERIALIZED ({THREAD_SERIALIZED}), \
                  which rendering threads need: initialise it with MPI_Init_thread"
             )
         };
@@ -214,14 +136,17 @@ impl World {
                 libc::atexit(finalise_at_exit);
             }
         }
-        let mut comm = std::ptr::null_mut();
+        let mut comm = std::mem::MaybeUninit::<MPI_Comm>::uninit();
         // SAFETY: a collective on the world communicator, every rank's
-        // device joining alike.
-        check("MPI_Comm_dup", unsafe { MPI_Comm_dup(world(), &mut comm) })?;
-        Self::place(comm)
+        // device joining alike; MPI writes the duplicate's handle.
+        check("MPI_Comm_dup", unsafe {
+            MPI_Comm_dup(world(), comm.as_mut_ptr())
+        })?;
+        // SAFETY: MPI_Comm_dup succeeded, so it wrote the handle.
+        Self::place(unsafe { comm.assume_init() })
     }
 
-    fn place(comm: *mut c_void) -> Result<Self, String> {
+    fn place(comm: MPI_Comm) -> Result<Self, String> {
         let (mut rank, mut size) = (0, 0);
         // SAFETY: a communicator valid after MPI_Init.
         unsafe {

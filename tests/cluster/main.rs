@@ -1,6 +1,6 @@
 //! `caveray render` as an MPI job (built with `--features mpi`, run by
-//! scripts/test): `mpirun --oversubscribe -np 4` shares the Cologne CAVE's
-//! walls out over four ranks, which gather on rank 0 the same images the
+//! scripts/test under Open MPI and under MPICH): the Cologne CAVE's
+//! walls shared out over four ranks, which gather on rank 0 the same images the
 //! single process renders, and the timings of each rank; or cuts the
 //! volume into four bricks, one per rank, whose partial images are
 //! composited by direct-send into the single process's image; and a C
@@ -30,25 +30,46 @@ fn caveray(launcher: Option<u32>, args: &[&str]) {
     let mut command = match launcher {
         None => Command::new(caveray),
         Some(n) => {
-            let mut c = Command::new("mpirun");
-            c.args(["--oversubscribe", "-np", &n.to_string(), caveray]);
+            let mut c = mpirun(n, false);
+            c.arg(caveray);
             c
         }
     };
-    // Open MPI refuses to run as root unless told (containers, CI).
-    let run = command
-        .args(args)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .output()
-        .unwrap_or_else(|e| {
-            panic!("cannot start {launcher:?}: {e} (scripts/deps installs openmpi-bin)")
-        });
+    let run = command.args(args).output().unwrap_or_else(|e| {
+        panic!("cannot start {launcher:?}: {e} (scripts/deps installs the MPIs CAVERAY_MPI names)")
+    });
     assert!(
         run.status.success(),
         "{launcher:?}: {}",
         String::from_utf8_lossy(&run.stderr)
     );
+}
+
+/// The launcher of the MPI this build is for (`CAVERAY_MPI`, which
+/// scripts/test sets: `openmpi`, the default, or `mpich`) for `n` ranks
+/// on this machine, passing LD_LIBRARY_PATH on where `library_path` says
+/// (MPICH's launcher passes the whole environment).
+fn mpirun(n: u32, library_path: bool) -> Command {
+    let n = n.to_string();
+    match std::env::var("CAVERAY_MPI").as_deref() {
+        Ok("mpich") => {
+            let mut c = Command::new("mpiexec.mpich");
+            c.args(["-n", &n]);
+            c
+        }
+        Ok("openmpi") | Err(_) => {
+            let mut c = Command::new("mpirun.openmpi");
+            c.args(["--oversubscribe", "-np", &n]);
+            if library_path {
+                c.args(["-x", "LD_LIBRARY_PATH"]);
+            }
+            // Open MPI refuses to run as root unless told (containers, CI).
+            c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+                .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+            c
+        }
+        Ok(other) => panic!("CAVERAY_MPI={other}: openmpi or mpich"),
+    }
 }
 
 fn config() -> PathBuf {
@@ -356,23 +377,14 @@ fn run_host(
     let mut command = match launcher {
         None => Command::new(program),
         Some(n) => {
-            let mut c = Command::new("mpirun");
-            c.args([
-                "--oversubscribe",
-                "-np",
-                &n.to_string(),
-                "-x",
-                "LD_LIBRARY_PATH",
-            ])
-            .arg(program);
+            let mut c = mpirun(n, true);
+            c.arg(program);
             c
         }
     };
     let out = command
         .args(args)
         .env("LD_LIBRARY_PATH", path)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout).to_string();
@@ -393,13 +405,10 @@ fn a_c_host_on_four_ranks_maps_the_whole_volumes_image() {
     let d = dir.to_str().unwrap();
     // Without their regions the bricks' bounds overlap by their aprons:
     // every rank refuses the frame, and none waits for another.
-    let refused = Command::new("mpirun")
-        .args(["--oversubscribe", "-np", "4", "-x", "LD_LIBRARY_PATH"])
+    let refused = mpirun(4, true)
         .arg(program)
         .args([d, "unowned"])
         .env("LD_LIBRARY_PATH", path)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&refused.stdout);

@@ -92,11 +92,21 @@ static ANARISpatialField tetrahedra(ANARIDevice dev, const float *values, int nx
   return field;
 }
 
-static int env_int(const char *name, int otherwise)
+/* The first of the launchers' variables that is set: Open MPI's, then the
+ * PMI ones that MPICH's hydra and PMIx launchers set. */
+static int env_int(const char *const names[3], int otherwise)
 {
-  const char *v = getenv(name);
-  return v ? atoi(v) : otherwise;
+  int i;
+  for (i = 0; i < 3; ++i) {
+    const char *v = getenv(names[i]);
+    if (v)
+      return atoi(v);
+  }
+  return otherwise;
 }
+
+static const char *const RANK_VARS[3] = {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"};
+static const char *const SIZE_VARS[3] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"};
 
 int main(int argc, char **argv)
 {
@@ -104,8 +114,8 @@ int main(int argc, char **argv)
   int whole = argc > 2 && strcmp(argv[2], "whole") == 0;
   int unowned = argc > 2 && strcmp(argv[2], "unowned") == 0;
   int cells = argc > 3 && strcmp(argv[3], "cells") == 0;
-  int rank = whole ? 0 : env_int("OMPI_COMM_WORLD_RANK", 0);
-  int ranks = whole ? 1 : env_int("OMPI_COMM_WORLD_SIZE", 1);
+  int rank = whole ? 0 : env_int(RANK_VARS, 0);
+  int ranks = whole ? 1 : env_int(SIZE_VARS, 1);
   /* Rank r owns the cells between vertices lo and hi along x. */
   int lo = (N - 1) * rank / ranks, hi = (N - 1) * (rank + 1) / ranks;
   int first = lo > 0 ? lo - 1 : 0, last = hi < N - 1 ? hi + 1 : N - 1;
