@@ -521,9 +521,9 @@ impl Wide {
     /// Rays whose directions agree in sign on every axis, as a few
     /// neighbouring pixels' camera rays do, go down the tree together:
     /// an inner node's boxes are tested once for all of them, by interval
-    /// arithmetic over their origins and inverse directions (Wald et al.,
-    /// "SIMD Ray Stream Tracing", and Reshetov's frustum culling use the
-    /// same bound), with the operations the single ray's test uses, so
+    /// arithmetic over their origins and inverse directions (Boulos et
+    /// al., "Geometric and Arithmetic Culling Methods for Entire Ray
+    /// Packets", 2006), with the operations the single ray's test uses, so
     /// the bound holds to the bit; a leaf's box is then tested for each
     /// ray, and each tests the leaf only where it enters it. Other rays
     /// go one by one.
