@@ -258,17 +258,21 @@ fn a_surface_in_a_volume_ends_the_march_and_the_nearer_depth_is_reported() {
     assert_eq!(i.pixel(N - 1, N - 1), alone.pixel(N - 1, N - 1));
 }
 
-/// A cloud of `triangles` small triangles (some of them sharing edges)
-/// and 100 spheres, turned by an instance, the same spheres unturned,
-/// and a source of random numbers in [0, 1].
-fn cloud(triangles: u32) -> ([PlacedShape; 3], impl FnMut() -> f32) {
-    let mut seed = 7u32;
-    let mut rnd = move || {
+/// Numbers in [0, 1] from `seed`, the same on every run (xorshift).
+fn random(mut seed: u32) -> impl FnMut() -> f32 {
+    move || {
         seed ^= seed << 13;
         seed ^= seed >> 17;
         seed ^= seed << 5;
         seed as f32 / u32::MAX as f32
-    };
+    }
+}
+
+/// A cloud of `triangles` small triangles (some of them sharing edges)
+/// and 100 spheres, turned by an instance, the same spheres unturned,
+/// and a source of random numbers in [0, 1].
+fn cloud(triangles: u32) -> ([PlacedShape; 3], impl FnMut() -> f32) {
+    let mut rnd = random(7);
     let mut p = Vec::new();
     let mut tris = Vec::new();
     for k in 0..triangles / 2 {
@@ -370,13 +374,7 @@ fn no_ray_slips_between_triangles_that_share_an_edge() {
     // A bumpy grid of 40 x 40 quads over [-1, 1]^2, each split in two,
     // the diagonals alternating, turned off the axes by an instance.
     let n = 40u32;
-    let mut seed = 11u32;
-    let mut rnd = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 17;
-        seed ^= seed << 5;
-        seed as f32 / u32::MAX as f32
-    };
+    let mut rnd = random(11);
     let mut p = Vec::new();
     for j in 0..=n {
         for i in 0..=n {
