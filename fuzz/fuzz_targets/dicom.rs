@@ -2,4 +2,7 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| caveray_fuzz::harness::dicom(data));
+fuzz_target!(
+    init: caveray_fuzz::harness::codec_panics_are_errors(),
+    |data: &[u8]| caveray_fuzz::harness::dicom(data)
+);
