@@ -85,19 +85,10 @@ pub fn load_dicom(path: &Path) -> Result<VolumeFile, DataError> {
             ),
         }
     })?;
-    // Slices come sorted along their normal, so a multi-frame file's
-    // frames follow one another: it is read and decoded once.
-    let mut open: Option<(PathBuf, Vec<u8>)> = None;
     let mut file = assemble(members, &name, |slice| {
-        if open.as_ref().is_none_or(|(f, _)| *f != slice.file) {
-            let bytes = file_bytes(&slice.file)?;
-            let object = open_object(&bytes, &slice.file.display().to_string(), true)?;
-            open = Some((slice.file.clone(), decode(&object, slice, bytes.len())?));
-        }
-        Ok(open
-            .as_ref()
-            .map_or(&[][..], |(_, d)| slice.frame_in(d))
-            .to_vec())
+        let bytes = file_bytes(&slice.file)?;
+        let object = open_object(&bytes, &slice.file.display().to_string(), true)?;
+        decode(&object, slice, bytes.len())
     })?;
     file.details.insert(0, ("series", Value::from(uid)));
     file.details.push(("series_in_folder", Value::from(count)));
@@ -114,11 +105,7 @@ pub fn load_dicom(path: &Path) -> Result<VolumeFile, DataError> {
 pub fn parse_dicom(bytes: &[u8], name: &str) -> Result<VolumeFile, DataError> {
     let object = open_object(bytes, name, true)?;
     let slices = slices_of(&object, Path::new(name))?;
-    let data = match slices.first() {
-        Some(first) => decode(&object, first, bytes.len())?,
-        None => Vec::new(),
-    };
-    assemble(slices, name, |slice| Ok(slice.frame_in(&data).to_vec()))
+    assemble(slices, name, |first| decode(&object, first, bytes.len()))
 }
 
 fn io(name: &str) -> impl Fn(std::io::Error) -> DataError + '_ {

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use glam::{DMat3, DMat4, DVec2, DVec3, UVec3, Vec3};
+use rayon::prelude::*;
 use serde_json::Value;
 
 use super::super::stored::{out_of_memory, voxel_count, Stored};
@@ -60,7 +61,7 @@ impl Slice {
 
     /// This slice's frame of its file's decoded frames (checked to hold
     /// them all).
-    pub fn frame_in<'a>(&self, frames: &'a [u8]) -> &'a [u8] {
+    fn frame_in<'a>(&self, frames: &'a [u8]) -> &'a [u8] {
         let at = self.frame as usize * self.frame_len();
         frames.get(at..at + self.frame_len()).unwrap_or_default()
     }
@@ -87,11 +88,12 @@ impl Slice {
 }
 
 /// The volume of `slices` (one series), ordered along their normal and
-/// checked to form a grid, each slice's decoded frame from `frame`.
+/// checked to form a grid; `decode` gives the decoded frames of a slice's
+/// file, each file's once.
 pub(super) fn assemble(
     mut slices: Vec<Slice>,
     name: &str,
-    mut frame: impl FnMut(&Slice) -> Result<Vec<u8>, DataError>,
+    decode: impl Fn(&Slice) -> Result<Vec<u8>, DataError> + Sync,
 ) -> Result<VolumeFile, DataError> {
     let Some(first) = slices.first().cloned() else {
         return Err(bad(name, "files", "no slices".into()));
@@ -173,12 +175,12 @@ pub(super) fn assemble(
         bytemuck::pod_collect_to_vec(raw)
     }
     let voxels = match (uniform, first.stored) {
-        (true, Stored::U8) => Voxels::U8(gather(&slices, n, name, &mut frame, native)?.into()),
-        (true, Stored::U16) => Voxels::U16(gather(&slices, n, name, &mut frame, native)?.into()),
-        (true, Stored::I16) => Voxels::I16(gather(&slices, n, name, &mut frame, native)?.into()),
+        (true, Stored::U8) => Voxels::U8(gather(&slices, n, name, &decode, native)?.into()),
+        (true, Stored::U16) => Voxels::U16(gather(&slices, n, name, &decode, native)?.into()),
+        (true, Stored::I16) => Voxels::I16(gather(&slices, n, name, &decode, native)?.into()),
         // Each slice's own rescale, to 32-bit floats.
         _ => Voxels::F32(
-            gather(&slices, n, name, &mut frame, |s, raw| {
+            gather(&slices, n, name, &decode, |s, raw| {
                 let big = cfg!(target_endian = "big");
                 s.stored.decode(raw, big, rescale(s)).unwrap_or_default()
             })?
@@ -220,26 +222,46 @@ pub(super) fn assemble(
 }
 
 /// The series' voxels in type `T`, each slice's frame normalized and
-/// turned by `turn`, into one buffer reserved first: held once.
-fn gather<T>(
+/// turned by `turn`, into one buffer reserved first: held once. Files are
+/// decoded in parallel, a run of slices from one file (a multi-frame
+/// file's frames, which follow one another once sorted) once.
+fn gather<T: bytemuck::Pod + Send>(
     slices: &[Slice],
     n: usize,
     name: &str,
-    frame: &mut impl FnMut(&Slice) -> Result<Vec<u8>, DataError>,
-    turn: impl Fn(&Slice, &[u8]) -> Vec<T>,
+    decode: &(impl Fn(&Slice) -> Result<Vec<u8>, DataError> + Sync),
+    turn: impl Fn(&Slice, &[u8]) -> Vec<T> + Sync,
 ) -> Result<Vec<T>, DataError> {
     let mut voxels = Vec::new();
-    let bytes = (n * std::mem::size_of::<T>()) as u64;
-    let source = out_of_memory(bytes);
-    voxels.try_reserve_exact(n).map_err(|_| DataError::Io {
+    let source = out_of_memory((n * std::mem::size_of::<T>()) as u64);
+    let io = DataError::Io {
         file: name.into(),
         source,
-    })?;
-    let mut raw = Vec::new();
-    for slice in slices {
-        raw.clear();
-        slice.normalize(&frame(slice)?, &mut raw);
-        voxels.extend(turn(slice, &raw));
+    };
+    voxels.try_reserve_exact(n).map_err(|_| io)?;
+    voxels.resize(n, T::zeroed());
+    let per_slice = n / slices.len();
+    let mut runs = Vec::new();
+    let mut rest = voxels.as_mut_slice();
+    for run in slices.chunk_by(|a, b| a.file == b.file) {
+        let (mine, others) = rest.split_at_mut(run.len() * per_slice);
+        runs.push((run, mine));
+        rest = others;
     }
+    runs.into_par_iter().try_for_each(|(run, out)| {
+        let frames = decode(&run[0])?;
+        let mut raw = Vec::new();
+        for (slice, out) in run.iter().zip(out.chunks_exact_mut(per_slice)) {
+            raw.clear();
+            slice.normalize(slice.frame_in(&frames), &mut raw);
+            let values = turn(slice, &raw);
+            if values.len() != out.len() {
+                let why = format!("{} of {} pixels decoded", values.len(), out.len());
+                return Err(bad(&slice.label(), "PixelData", why));
+            }
+            out.copy_from_slice(&values);
+        }
+        Ok(())
+    })?;
     Ok(voxels)
 }
