@@ -147,7 +147,20 @@ fn without_hdf5_a_flash_file_is_refused_by_name() {
         return;
     };
     let path = dir.join("sedov_hdf5_chk_0001");
-    let render = caveray(&["render", "--volume", path.to_str().unwrap()]);
+    let rig = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cave_configs/cologne_5wall.toml"
+    );
+    let out = dir.join("out");
+    let render = caveray(&[
+        "render",
+        "--config",
+        rig,
+        "--volume",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let said = String::from_utf8_lossy(&render.stderr);
     assert!(!render.status.success());
     assert!(said.contains("built without HDF5"), "{said}");
