@@ -233,7 +233,7 @@ fn decode(object: &Object, slice: &Slice, file_len: usize) -> Result<Vec<u8>, Da
     // A codec that panics on a broken frame must not take the host down:
     // its panic is this file's error.
     let decoded = catch_unwind(AssertUnwindSafe(|| {
-        object.decode_pixel_data().map(|d| d.data().to_vec())
+        object.decode_pixel_data().map(|d| d.into_data())
     }));
     let why = match decoded {
         Ok(Ok(data)) if data.len() as u64 >= bytes => return Ok(data),
