@@ -28,6 +28,8 @@ pub struct Shot {
     pub source: Source,
     pub inputs: Arc<Inputs>,
     pub taken: Instant,
+    /// The render's own time, not its wait in the render thread's queue.
+    pub took: Duration,
 }
 
 /// A frame's background rendering: the newest complete image and whether
@@ -43,14 +45,48 @@ struct BackState {
     /// The slot of the render in flight (its stop flag stops it).
     running: Option<Arc<FrameSlot>>,
     newest: Option<Arc<Shot>>,
-    /// Each warp mode's time, a running mean in ms (by `WarpMode as
-    /// usize`; 0: not measured yet): the presenter starts that long (and a
-    /// margin) before the deadline, and passes over a mode that would miss
-    /// it. A passed-over mode's mean decays, so it is tried again now and
-    /// then (about once a second at 90 Hz for one 4x too slow).
-    costs: [f64; 4],
+    /// Each warp mode's time (by `WarpMode as usize`), from the moment
+    /// the presenter meant to wake: the presenter starts that long before
+    /// the deadline, and passes over a mode that would miss it. A
+    /// passed-over mode's time decays, so it is tried again now and then
+    /// (about once a second at 90 Hz for one 4x too slow).
+    costs: [Cost; 4],
     /// Whether the host has heard that its warp was passed over.
     told: bool,
+}
+
+/// A warp's time in ms, as TCP times a round trip (Jacobson and Karels):
+/// a running mean and mean deviation, so that the time reserved covers
+/// the spread a loaded machine adds (waking up late, warps of other
+/// frames ahead in the pool), not only the mean.
+#[derive(Clone, Copy, Default)]
+struct Cost {
+    /// 0: not measured yet.
+    mean: f64,
+    deviation: f64,
+}
+
+impl Cost {
+    fn add(&mut self, ms: f64) {
+        if self.mean == 0.0 {
+            (self.mean, self.deviation) = (ms, ms / 2.0);
+        } else {
+            let error = ms - self.mean;
+            self.mean += 0.25 * error;
+            self.deviation += 0.25 * (error.abs() - self.deviation);
+        }
+    }
+
+    /// What to reserve before the deadline: the mean, four deviations and
+    /// half a millisecond.
+    fn reserve(self) -> Duration {
+        Duration::from_secs_f64((self.mean + 4.0 * self.deviation + 0.5) / 1e3)
+    }
+
+    fn decay(&mut self) {
+        self.mean *= 0.97;
+        self.deviation *= 0.97;
+    }
 }
 
 impl Background {
@@ -333,8 +369,6 @@ pub struct Present {
 /// Fills `p.slot` by the deadline, telling the host first (INFO) when the
 /// frame could not show what it asked for.
 pub fn present(p: Present) {
-    // Time for the warp itself, and a margin for waking up.
-    let reserve = |ms: f64| Duration::from_secs_f64((1.25 * ms + 0.5) / 1e3);
     // The warp asked for, unless it took too long last time: then quad,
     // then none, whichever fits (`caveray.warp` says which was shown).
     let (chosen, mut note) = {
@@ -342,7 +376,7 @@ pub fn present(p: Present) {
         // Unmeasured: tried, to learn its time.
         let fits = |m: WarpMode| {
             let cost = s.costs[m as usize];
-            cost == 0.0 || reserve(cost) < p.deadline
+            cost.mean == 0.0 || cost.reserve() < p.deadline
         };
         let chosen = [p.warp, WarpMode::Quad, WarpMode::None]
             .into_iter()
@@ -353,29 +387,31 @@ pub fn present(p: Present) {
             format!(
                 "warp '{}' takes {:.1} ms, too long for the {:.1} ms deadline: '{}' is shown while it would miss it (caveray.warp says which)",
                 p.warp.name(),
-                s.costs[p.warp as usize],
+                s.costs[p.warp as usize].mean,
                 p.deadline.as_secs_f64() * 1e3,
                 chosen.name()
             )
         });
         if chosen != p.warp {
-            s.costs[p.warp as usize] *= 0.97;
+            s.costs[p.warp as usize].decay();
         }
         (chosen, note)
     };
     let cost = p.background.lock().costs[chosen as usize];
     // A warp not timed yet gets half the deadline to show what it takes.
-    let lead = if cost == 0.0 {
+    let lead = if cost.mean == 0.0 {
         p.deadline / 2
     } else {
-        reserve(cost)
+        cost.reserve()
     };
     let until = p.called + p.deadline.saturating_sub(lead);
     let newest = p.background.newest_by(&p.inputs, until, &p.slot);
     if p.slot.stopped() {
         return discarded(&p);
     }
-    let clock = Instant::now();
+    // A warp's time counts from when the presenter meant to wake (or woke
+    // for the image it waited for), so that waking late is reserved for.
+    let clock = Instant::now().min(until);
     let (frame, shown) = match newest {
         None => {
             note = Some("no image has been rendered yet: the frame shows its background".into());
@@ -384,12 +420,16 @@ pub fn present(p: Present) {
                 ShownImage {
                     age_ms: -1.0,
                     warp: WarpMode::None,
+                    own: false,
+                    render_ms: 0.0,
                 },
             )
         }
         Some(shot) => {
             let age_ms = p.called.saturating_duration_since(shot.taken).as_secs_f32() * 1e3;
-            let mode = if shot.inputs == p.inputs {
+            let own = shot.inputs == p.inputs;
+            let render_ms = shot.took.as_secs_f32() * 1e3;
+            let mode = if own {
                 WarpMode::None
             } else if chosen == WarpMode::None && shot.source.size != p.desc.size {
                 // A resized frame cannot show the old image as it is.
@@ -403,14 +443,25 @@ pub fn present(p: Present) {
                 .warp(&p, &shot, &settings)
                 .and_then(|w| w.frame(&p.desc, p.color));
             match warped {
-                Ok(frame) => (Ok(frame), ShownImage { age_ms, warp: mode }),
+                Ok(frame) => (
+                    Ok(frame),
+                    ShownImage {
+                        age_ms,
+                        warp: mode,
+                        own,
+                        render_ms,
+                    },
+                ),
                 Err(e) => {
                     if e == RenderError::Stopped {
-                        // Its time so far is a floor for its mean, so the
-                        // next frames start it earlier or pass it over.
+                        // Its time so far, where longer than its mean, is one
+                        // of its times: the next frames start it earlier or
+                        // pass it over.
                         let ms = clock.elapsed().as_secs_f64() * 1e3;
                         let cost = &mut p.background.lock().costs[mode as usize];
-                        *cost = cost.max(ms);
+                        if ms > cost.mean {
+                            cost.add(ms);
+                        }
                     }
                     note = Some(match e {
                         RenderError::Stopped => format!(
@@ -429,6 +480,8 @@ pub fn present(p: Present) {
                             ShownImage {
                                 age_ms,
                                 warp: WarpMode::None,
+                                own,
+                                render_ms,
                             },
                         )
                     } else {
@@ -449,6 +502,8 @@ pub fn present(p: Present) {
                             ShownImage {
                                 age_ms: -1.0,
                                 warp: WarpMode::None,
+                                own: false,
+                                render_ms: 0.0,
                             },
                         )
                     }
@@ -458,12 +513,7 @@ pub fn present(p: Present) {
     };
     if shown.age_ms >= 0.0 {
         let ms = clock.elapsed().as_secs_f64() * 1e3;
-        let cost = &mut p.background.lock().costs[shown.warp as usize];
-        *cost = if *cost == 0.0 {
-            ms
-        } else {
-            0.75 * *cost + 0.25 * ms
-        };
+        p.background.lock().costs[shown.warp as usize].add(ms);
     }
     if p.slot.stopped() {
         // Discarded while it warped: what it made is not shown.
@@ -489,4 +539,28 @@ fn discarded(p: &Present) {
         message,
     });
     p.slot.finish(Err(DISCARDED.into()), p.called.elapsed());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cost;
+
+    #[test]
+    fn a_steady_warp_reserves_its_time_and_a_jittery_one_its_spread() {
+        let mut steady = Cost::default();
+        for _ in 0..40 {
+            steady.add(2.0);
+        }
+        // The deviation dies away: the mean and the half millisecond.
+        assert!((steady.reserve().as_secs_f64() * 1e3 - 2.5).abs() < 0.01);
+        let mut jittery = Cost::default();
+        for i in 0..40 {
+            jittery.add(if i % 4 == 3 { 8.0 } else { 2.0 });
+        }
+        // Every fourth warp takes 8 ms: the reserve covers it, where the
+        // mean alone (3.5 ms) would not.
+        let reserved = jittery.reserve().as_secs_f64() * 1e3;
+        assert!(reserved > 8.0, "{reserved}");
+        assert!(reserved < 20.0, "{reserved}");
+    }
 }

@@ -188,6 +188,7 @@ impl Engine {
                 source: Source::empty(inputs.desc.size, view.rays, 0).map_err(|e| e.to_string())?,
                 inputs,
                 taken: called,
+                took: Duration::ZERO,
             }));
         }
         Ok(present)

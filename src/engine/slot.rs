@@ -23,6 +23,13 @@ pub struct ShownImage {
     pub age_ms: f32,
     /// The warp applied; `None` for the image of this very camera.
     pub warp: WarpMode,
+    /// Whether the image was rendered for this render's very inputs (its
+    /// camera, scene and settings), not an older one shown warped or as
+    /// it is.
+    pub own: bool,
+    /// How long the render of the image shown took (ms); 0 for the
+    /// background.
+    pub render_ms: f32,
 }
 
 /// Shared between the device and the thread rendering into the frame.

@@ -196,6 +196,7 @@ fn run_background(job: RenderJob, renderer: &mut Option<(Backend, Renderer)>, re
             source,
             inputs: Arc::clone(inputs),
             taken: back.taken,
+            took: started.elapsed(),
         })),
         Err(e) => {
             if !stopped {
