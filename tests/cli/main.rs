@@ -15,4 +15,5 @@ mod inspect;
 mod render;
 mod replay;
 mod rig_syntax;
+mod view;
 mod volumes;

@@ -11,6 +11,7 @@ mod render_display;
 mod replay;
 mod report;
 mod scene;
+mod view;
 
 use std::process::ExitCode;
 
@@ -45,6 +46,9 @@ enum Command {
     /// every displayed frame against the ideal one, per warp mode (writes
     /// JSON, SVG traces and strips of frames).
     Replay(replay::ReplayArgs),
+    /// Walk through a rig on the desktop: every wall rendered live for a
+    /// simulated head, through deadline frames and warps, with controls.
+    View(view::ViewArgs),
 }
 
 /// The tracked head, as the rig states it unless overridden.
@@ -171,6 +175,7 @@ fn main() -> ExitCode {
         Command::Inspect(args) => inspect::run(args),
         Command::Bench(command) => bench::run(command),
         Command::Replay(args) => replay::run(args),
+        Command::View(args) => view::run(args),
     };
     let succeeded = result.is_ok();
     let code = match result {

@@ -195,6 +195,8 @@ pub struct Loaded {
     /// Metres a unit of the file's world, where its header says.
     metres_per_unit: Option<f64>,
     tf: TransferFunction,
+    /// The preset's name or the ParaView file `tf` came from.
+    tf_name: String,
     /// Presets span the data's range; a ParaView map keeps its own.
     stretch_tf: bool,
     placement: PlacementArgs,
@@ -369,33 +371,92 @@ impl VolumeArgs {
             (spec.to_string(), volume.into(), tf, entry.orientation())
         };
         let tf_spec = self.tf.as_deref().unwrap_or(default_tf);
-        let (tf, stretch_tf) = if Path::new(tf_spec).is_file() {
-            let tf = load_paraview(Path::new(tf_spec)).map_err(|e| usage(&e))?;
-            // ParaView ranges are in the data's own units: the stored
-            // numbers of a raw or manifest volume, whose fixed-point
-            // values are read as [0, 1], or a file's rescaled values.
-            let (mut lo, mut hi) = tf.value_range();
-            if let Some(volume) = volume.structured() {
-                if volume.scaling() == volume.voxels().fixed_point() {
-                    (lo, hi) = (volume.scaling().apply(lo), volume.scaling().apply(hi));
-                }
-            }
-            let tf = tf.with_value_range(lo, hi).map_err(|e| usage(&e))?;
-            (tf, false)
-        } else {
-            (preset(tf_spec).map_err(|e| usage(&e))?, true)
-        };
+        let (tf, stretch_tf) = transfer_function(tf_spec, &volume)?;
         Ok(Loaded {
             name,
             volume,
             index_to_file,
             metres_per_unit,
             tf,
+            tf_name: tf_spec.to_string(),
             stretch_tf,
             placement: self.placement,
             orientation,
             mesh: self.mesh,
         })
+    }
+}
+
+/// The transfer function `spec` names for `volume`: a ParaView map file
+/// (kept over its own range) or a preset (stretched over the data's range,
+/// the `bool`).
+fn transfer_function(
+    spec: &str,
+    volume: &SpatialField,
+) -> Result<(TransferFunction, bool), Failure> {
+    let usage = |e: &dyn std::fmt::Display| Failure::Usage(e.to_string());
+    if !Path::new(spec).is_file() {
+        return Ok((preset(spec).map_err(|e| usage(&e))?, true));
+    }
+    let tf = load_paraview(Path::new(spec)).map_err(|e| usage(&e))?;
+    // ParaView ranges are in the data's own units: the stored numbers of a
+    // raw or manifest volume, whose fixed-point values are read as [0, 1],
+    // or a file's rescaled values.
+    let (mut lo, mut hi) = tf.value_range();
+    if let Some(volume) = volume.structured() {
+        if volume.scaling() == volume.voxels().fixed_point() {
+            (lo, hi) = (volume.scaling().apply(lo), volume.scaling().apply(hi));
+        }
+    }
+    let tf = tf.with_value_range(lo, hi).map_err(|e| usage(&e))?;
+    Ok((tf, false))
+}
+
+/// What `caveray view` changes of a placed volume while it runs: a move
+/// after the placement, and the opacity of the transfer function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Look {
+    /// Applied in the rig's space after the volume is placed.
+    pub moved: glam::Mat4,
+    /// Every opacity times this (clamped to 1).
+    pub opacity_gain: f32,
+    /// Opacities below this fraction of the value range become 0.
+    pub opacity_floor: f32,
+}
+
+impl Default for Look {
+    fn default() -> Self {
+        Self {
+            moved: glam::Mat4::IDENTITY,
+            opacity_gain: 1.0,
+            opacity_floor: 0.0,
+        }
+    }
+}
+
+impl Look {
+    /// `tf` with this look's opacity curve.
+    fn reshape(&self, tf: TransferFunction) -> Result<TransferFunction, Failure> {
+        if self.opacity_gain == 1.0 && self.opacity_floor <= 0.0 {
+            return Ok(tf);
+        }
+        let table = tf.table();
+        let last = (table.len() - 1).max(1) as f32;
+        let opacities = table
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let t = i as f32 / last;
+                if t < self.opacity_floor {
+                    0.0
+                } else {
+                    (c.w * self.opacity_gain).clamp(0.0, 1.0)
+                }
+            })
+            .collect();
+        let colors = table.iter().map(|c| c.truncate().extend(1.0)).collect();
+        TransferFunction::new(colors, opacities, tf.value_range(), tf.unit_distance())
+            .map_err(|e| Failure::Usage(e.to_string()))
     }
 }
 
@@ -448,6 +509,32 @@ impl Loaded {
         world: Units,
         range: Option<(f32, f32)>,
     ) -> Result<Scene, Failure> {
+        self.placed_as(default, frame, world, range, &Look::default())
+    }
+
+    /// The transfer function `spec` names (a preset or a ParaView map) in
+    /// place of the one the volume was loaded with.
+    pub fn set_tf(&mut self, spec: &str) -> Result<(), Failure> {
+        (self.tf, self.stretch_tf) = transfer_function(spec, &self.volume)?;
+        self.tf_name = spec.to_string();
+        Ok(())
+    }
+
+    /// The preset's name or the ParaView file the transfer function came
+    /// from.
+    pub fn tf_name(&self) -> &str {
+        &self.tf_name
+    }
+
+    /// `placed_in`, then moved and its opacities reshaped by `look`.
+    pub fn placed_as(
+        &self,
+        default: ScenePlacement,
+        frame: &HeadFrame,
+        world: Units,
+        range: Option<(f32, f32)>,
+        look: &Look,
+    ) -> Result<Scene, Failure> {
         let runtime = |e: &dyn std::fmt::Display| Failure::Runtime(e.to_string());
         let placement = self.placement(default)?;
         let (lo, hi) = self.bounds();
@@ -482,7 +569,8 @@ impl Loaded {
                 tf = tf.with_value_range(lo, hi).map_err(|e| runtime(&e))?;
             }
         }
-        let transform = placement.transform(frame).as_mat4() * fitted;
+        let tf = look.reshape(tf)?;
+        let transform = look.moved * placement.transform(frame).as_mat4() * fitted;
         let mesh = match volume.structured() {
             Some(grid) => self.mesh.shape(grid, transform)?,
             None => None,
