@@ -67,6 +67,11 @@ pub struct HeadArgs {
 }
 
 impl HeadArgs {
+    /// The time along the rig's head path asked for, if any.
+    pub fn time(&self) -> Option<f64> {
+        self.time
+    }
+
     pub fn pose(&self, rig: &Rig) -> Result<HeadPose, Failure> {
         if let Some(t) = self.time {
             if !t.is_finite() {

@@ -72,6 +72,9 @@ pub struct ViewArgs {
     /// Play the rig's head path from the start.
     #[arg(long)]
     play: bool,
+    /// Start with the controls hidden (H shows them).
+    #[arg(long)]
+    no_controls: bool,
     /// Render this many displayed frames without a window, then stop.
     #[arg(long)]
     headless_frames: Option<u64>,
@@ -390,7 +393,7 @@ impl Viewer {
                     pose.position,
                     ypr,
                     r.built_for.tf.clone(),
-                    0.0,
+                    args.head.time().unwrap_or(0.0),
                     !r.rig.viewer.path.is_empty(),
                 )
             }
@@ -420,9 +423,9 @@ impl Viewer {
             look: args.look,
             playing: args.play && path,
             time,
-            orbit: [0.0, 25.0, 1.6],
+            orbit: [0.0, 20.0, 0.9],
             display_view: 0,
-            show_panel: true,
+            show_panel: !args.no_controls,
             show_figures: true,
         };
         let walls = match &shown {

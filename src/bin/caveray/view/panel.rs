@@ -81,10 +81,7 @@ fn controls(ui: &mut egui::Ui, c: &mut Controls, figures: &Figures) {
         // A display renders from its own eye line: no head, no volume
         // controls; its panel above, the chosen view below.
         ui.label("The interleaved panel, then one view (an isosurface per view, on the CPU).");
-        ui.add(
-            egui::Slider::new(&mut c.display_view, 0..=figures.display_views - 1)
-                .text("view"),
-        );
+        ui.add(egui::Slider::new(&mut c.display_view, 0..=figures.display_views - 1).text("view"));
         notes(ui, figures);
         return;
     }
