@@ -66,7 +66,8 @@ pub struct PaneStats {
     /// Frames that showed a warped image, and their own image.
     pub warped: u64,
     pub own: u64,
-    /// Frame times of the newest frames (for the rate).
+    /// When the newest frame came, and the rate frames come at (a running
+    /// mean).
     pub last_at: Option<Instant>,
     pub rate_hz: f64,
     pub last: Option<ShownImage>,
@@ -189,8 +190,8 @@ impl Live {
         out
     }
 
-    /// Drops what every pane showed: after a change of scene, the frames
-    /// in flight still finish, and the next show the new inputs.
+    /// Forgets what `pane` showed (after a change of scene): it counts as
+    /// converged again once a frame of the new inputs shows its own image.
     pub fn forget(&mut self, pane: usize) {
         let p = &mut self.panes[pane];
         p.current = false;

@@ -162,7 +162,6 @@ pub struct Viewer {
     composer: Composer,
     egui: egui::Context,
     hz: f64,
-    deadline_given: Option<f32>,
     shots: Shots,
     frames: Vec<f64>,
     last_frame: Option<Instant>,
@@ -170,6 +169,7 @@ pub struct Viewer {
     frame_ms: f64,
     started: Instant,
     config: String,
+    /// The volume's name (a rig's; a display's is in its file).
     volume_name: String,
     converged: bool,
     quit: bool,
@@ -274,16 +274,23 @@ pub fn run(args: ViewArgs) -> Result<(), Failure> {
     }
 }
 
-/// Runs rayon's global pool, where the CPU ray caster works, at idle
-/// priority (SCHED_IDLE): on a machine of few cores, the window's frames
-/// and the deadline frames' warps (on a pool of their own) then keep the
-/// display's rate, and the background renders take the time that is left,
-/// which is what asynchronous rendering assumes of them.
+/// The nice value of the CPU ray caster's workers: the lowest priority
+/// that still gets a share of a busy machine (SCHED_IDLE would get none,
+/// and a machine busy with other work would never see the walls converge).
+const RENDER_NICENESS: i32 = 19;
+
+/// Lowers the priority of rayon's global pool, where the CPU ray caster
+/// works: on a machine of few cores, the window's frames and the deadline
+/// frames' warps (on a pool of their own) then keep the display's rate,
+/// and the background renders take the time that is left, which is what
+/// asynchronous rendering assumes of them.
 fn yield_renders_to_display() {
     rayon::broadcast(|_| {
-        let param = libc::sched_param { sched_priority: 0 };
-        // SAFETY: a plain system call on this thread's own id (0).
-        unsafe { libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) };
+        // SAFETY: a plain system call on this thread's own id.
+        unsafe {
+            let tid = libc::gettid();
+            libc::setpriority(libc::PRIO_PROCESS, tid as libc::id_t, RENDER_NICENESS);
+        }
     });
 }
 
@@ -439,6 +446,10 @@ impl Viewer {
             gpu.info.name,
             gpu.info.backend
         );
+        let volume_name = match &shown {
+            Shown::Rig(r) => r.loaded.name.clone(),
+            Shown::Display(_) => String::new(),
+        };
         let egui = egui::Context::default();
         egui.set_visuals(egui::Visuals::dark());
         Ok(Self {
@@ -449,7 +460,6 @@ impl Viewer {
             composer,
             egui,
             hz,
-            deadline_given: args.deadline,
             shots: Shots {
                 path: args.screenshot.clone(),
                 taken: 0,
@@ -461,7 +471,7 @@ impl Viewer {
             frame_ms: 0.0,
             started: Instant::now(),
             config: args.config.display().to_string(),
-            volume_name: String::new(),
+            volume_name,
             converged: false,
             quit: false,
             renderer_label,
@@ -664,9 +674,6 @@ impl Viewer {
         }
         c.orbit_by(input.drag_orbit.0, input.drag_orbit.1);
         c.zoom(input.zoom);
-        if self.deadline_given.is_none() && c.deadline_ms <= 0.0 {
-            c.deadline_ms = (1000.0 / self.hz) as f32;
-        }
     }
 
     /// What the 3D part draws this frame.

@@ -11,8 +11,8 @@ use super::live::PaneStats;
 /// What the overlay shows of one wall.
 pub struct WallFigures<'a> {
     pub name: &'a str,
-    /// The eyes rendered, with their figures.
-    pub eyes: Vec<(&'static str, PaneStats)>,
+    /// The eyes rendered (left, then right), each its figures.
+    pub eyes: Vec<PaneStats>,
 }
 
 /// What the window reports besides the walls.
@@ -238,11 +238,7 @@ fn overlay(ui: &mut egui::Ui, f: &Figures) {
     text(ui, "wall        age ms   render ms  warp        Hz".into());
     for w in &f.walls {
         let each = |part: &dyn Fn(&PaneStats) -> String| {
-            w.eyes
-                .iter()
-                .map(|(_, s)| part(s))
-                .collect::<Vec<_>>()
-                .join("/")
+            w.eyes.iter().map(part).collect::<Vec<_>>().join("/")
         };
         let shown = |s: &PaneStats| s.last.filter(|l| l.age_ms >= 0.0);
         let age = each(&|s| shown(s).map_or("-".into(), |l| format!("{:.0}", l.age_ms)));
@@ -255,7 +251,7 @@ fn overlay(ui: &mut egui::Ui, f: &Figures) {
         let hz = w
             .eyes
             .iter()
-            .map(|(_, s)| s.rate_hz)
+            .map(|s| s.rate_hz)
             .fold(f64::INFINITY, f64::min);
         let hz = if hz.is_finite() {
             format!("{hz:3.0}")

@@ -22,7 +22,7 @@ use crate::Failure;
 
 pub struct RigShow {
     pub rig: Rig,
-    loaded: Loaded,
+    pub loaded: Loaded,
     scene: Scene,
     pub built_for: Rendering,
     built_at: Instant,
@@ -273,7 +273,7 @@ impl RigShow {
     }
 
     /// Each wall's name and its eyes' figures.
-    pub fn figures(&self) -> Vec<(&str, Vec<(&'static str, PaneStats)>)> {
+    pub fn figures(&self) -> Vec<(&str, Vec<PaneStats>)> {
         self.rig
             .walls
             .iter()
@@ -282,7 +282,7 @@ impl RigShow {
                 let eyes = [0, 1]
                     .into_iter()
                     .filter(|s| self.asked.contains(&(2 * w + s)))
-                    .map(|s| (["L", "R"][s], self.live.stats(2 * w + s)))
+                    .map(|s| self.live.stats(2 * w + s))
                     .collect();
                 (wall.name.as_str(), eyes)
             })
