@@ -288,8 +288,9 @@ fn in_a_window_keys_and_a_drag_move_the_head_and_the_walls_converge_to_render() 
 
     // Walk forward for a while, then drag to the right to turn the head
     // (in the rig's viewport, right of the controls).
+    // Held long enough for frames to see it however loaded the machine is.
     x.xdotool(&["keydown", "w"]);
-    std::thread::sleep(Duration::from_millis(400));
+    std::thread::sleep(Duration::from_millis(600));
     x.xdotool(&["keyup", "w"]);
     x.xdotool(&["mousemove", "--window", &window, "600", "400"]);
     x.xdotool(&["mousedown", "1"]);

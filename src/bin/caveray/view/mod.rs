@@ -12,6 +12,7 @@ mod display;
 mod live;
 mod panel;
 mod rig;
+mod scenes;
 mod window;
 
 use std::path::{Path, PathBuf};
@@ -447,7 +448,7 @@ impl Viewer {
             gpu.info.backend
         );
         let volume_name = match &shown {
-            Shown::Rig(r) => r.loaded.name.clone(),
+            Shown::Rig(r) => r.name.clone(),
             Shown::Display(_) => String::new(),
         };
         let egui = egui::Context::default();

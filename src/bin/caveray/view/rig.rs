@@ -3,7 +3,6 @@
 //! part of the window draws from outside, from the head or laid flat.
 
 use std::path::Path;
-use std::time::{Duration, Instant};
 
 use anari_library_caveray::cave::{Eye, Rig};
 use anari_library_caveray::engine::Deadline;
@@ -15,17 +14,23 @@ use serde::Serialize;
 use super::compose::{flat_stage, LineVertex, Stage, WallDraw};
 use super::controls::{Controls, Look, Rendering};
 use super::live::{self, Ask, Live, PaneStats};
+use super::scenes::{same_look, Placing, Scenes};
 use crate::options::{RenderOptions, Strategy};
 use crate::render::wall_size;
-use crate::scene::{Loaded, Look as VolumeLook, VolumeArgs};
+use crate::scene::VolumeArgs;
 use crate::Failure;
 
 pub struct RigShow {
     pub rig: Rig,
-    pub loaded: Loaded,
+    /// The volume's name.
+    pub name: String,
+    /// Where the volume's scenes are made, the one shown and what it was
+    /// made for.
+    scenes: Scenes,
     scene: Scene,
     pub built_for: Rendering,
-    built_at: Instant,
+    /// The placed volume's centre, which it turns about.
+    volume_centre: DVec3,
     pub live: Live,
     settings: RenderSettings,
     strategy: Strategy,
@@ -152,15 +157,27 @@ impl RigShow {
             backend: render.backend,
         };
         let scene = loaded.placed(rig.scene, &rig.viewer.frame, rig.units)?;
+        let (vlo, vhi) = scene.bounds();
         let corners: Vec<DVec3> = rig.walls.iter().flat_map(|w| w.screen.corners()).collect();
         let lo = corners.iter().fold(DVec3::MAX, |m, c| m.min(*c));
         let hi = corners.iter().fold(DVec3::MIN, |m, c| m.max(*c));
         let panes = 2 * rig.walls.len();
-        Ok(Self {
+        let name = loaded.name.clone();
+        let mut scenes = Scenes::new(
             loaded,
+            Placing {
+                placement: rig.scene,
+                frame: rig.viewer.frame,
+                units: rig.units,
+            },
+        )?;
+        scenes.shown(&built_for);
+        Ok(Self {
+            name,
+            scenes,
             scene,
             built_for,
-            built_at: Instant::now(),
+            volume_centre: (0.5 * (vlo + vhi)).as_dvec3(),
             live: Live::new(panes),
             settings: render.settings(),
             strategy: render.strategy,
@@ -172,63 +189,27 @@ impl RigShow {
         })
     }
 
-    /// A new scene where the volume's look changed (at most every 150 ms
-    /// while a slider moves).
+    /// Takes the scene made since the last refresh, and asks for a new
+    /// one where the volume's look changed (one at a time, off this thread).
     pub fn rebuild(&mut self, c: &Controls, notes: &mut Vec<String>) {
         let want = &c.rendering;
-        let look_changed = want.tf != self.built_for.tf
-            || want.opacity_gain != self.built_for.opacity_gain
-            || want.opacity_floor != self.built_for.opacity_floor
-            || want.volume_offset != self.built_for.volume_offset
-            || want.volume_yaw != self.built_for.volume_yaw
-            || want.volume_pitch != self.built_for.volume_pitch;
         self.settings.step_factor = want.step_factor;
         self.settings.shading = want.shading;
-        if !look_changed || self.built_at.elapsed() < Duration::from_millis(150) {
-            if !look_changed {
-                self.built_for.step_factor = want.step_factor;
-                self.built_for.shading = want.shading;
-                self.built_for.backend = want.backend;
-            }
-            return;
-        }
-        self.built_at = Instant::now();
-        if want.tf != self.built_for.tf {
-            if let Err(Failure::Usage(e) | Failure::Runtime(e)) = self.loaded.set_tf(&want.tf) {
-                notes.push(e);
-                return;
-            }
-        }
-        let placed = self
-            .loaded
-            .placed(self.rig.scene, &self.rig.viewer.frame, self.rig.units);
-        let centre = match &placed {
-            Ok(s) => {
-                let (lo, hi) = s.bounds();
-                (0.5 * (lo + hi)).as_dvec3()
-            }
-            Err(_) => self.rig.scene.centre,
-        };
-        let look = VolumeLook {
-            moved: c.volume_move(&self.rig, centre).as_mat4(),
-            opacity_gain: want.opacity_gain,
-            opacity_floor: want.opacity_floor,
-        };
-        match self.loaded.placed_as(
-            self.rig.scene,
-            &self.rig.viewer.frame,
-            self.rig.units,
-            None,
-            &look,
-        ) {
-            Ok(scene) => {
-                self.scene = scene;
-                self.built_for = want.clone();
-                for pane in 0..2 * self.rig.walls.len() {
-                    self.live.forget(pane);
+        if let Some(made) = self.scenes.take() {
+            match made.scene {
+                Ok(scene) => {
+                    self.scene = scene;
+                    self.built_for = made.rendering;
+                    for pane in 0..2 * self.rig.walls.len() {
+                        self.live.forget(pane);
+                    }
                 }
+                Err(e) => notes.push(e),
             }
-            Err(Failure::Usage(e) | Failure::Runtime(e)) => notes.push(e),
+        }
+        if !same_look(want, &self.built_for) {
+            let moved = c.volume_move(&self.rig, self.volume_centre).as_mat4();
+            self.scenes.want(want, moved);
         }
     }
 
