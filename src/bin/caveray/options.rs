@@ -91,6 +91,18 @@ pub struct RenderOptions {
     pub gpu_memory_budget: Option<u64>,
 }
 
+impl Default for RenderOptions {
+    /// The options as the command line's defaults set them.
+    fn default() -> Self {
+        #[derive(clap::Parser)]
+        struct Only {
+            #[command(flatten)]
+            options: RenderOptions,
+        }
+        <Only as clap::Parser>::parse_from(["caveray"]).options
+    }
+}
+
 impl RenderOptions {
     pub fn settings(&self) -> RenderSettings {
         RenderSettings {

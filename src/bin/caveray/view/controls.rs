@@ -8,6 +8,8 @@ use anari_library_caveray::render::warp::WarpMode;
 use anari_library_caveray::render::{Backend, Shading};
 use glam::{DMat4, DQuat, DVec3};
 
+use crate::options::RenderOptions;
+
 /// How the rig is seen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Look {
@@ -112,6 +114,24 @@ pub struct Rendering {
     pub step_factor: f32,
     pub shading: Shading,
     pub backend: Backend,
+}
+
+impl Rendering {
+    /// The volume where it was placed, with the preset or map `tf` as it
+    /// is, rendered as `options` say.
+    pub fn at_rest(tf: String, options: &RenderOptions) -> Self {
+        Self {
+            tf,
+            opacity_gain: 1.0,
+            opacity_floor: 0.0,
+            volume_offset: DVec3::ZERO,
+            volume_yaw: 0.0,
+            volume_pitch: 0.0,
+            step_factor: options.step_factor,
+            shading: options.shading,
+            backend: options.backend,
+        }
+    }
 }
 
 /// The window's state: head, volume, renderer settings, how it is shown.
@@ -279,17 +299,7 @@ mod tests {
         Controls {
             head: rig.viewer.head.position,
             ypr: DVec3::ZERO,
-            rendering: Rendering {
-                tf: "ct".into(),
-                opacity_gain: 1.0,
-                opacity_floor: 0.0,
-                volume_offset: DVec3::ZERO,
-                volume_yaw: 0.0,
-                volume_pitch: 0.0,
-                step_factor: 1.0,
-                shading: Shading::None,
-                backend: Backend::Cpu,
-            },
+            rendering: Rendering::at_rest("ct".into(), &RenderOptions::default()),
             warp: WarpMode::Quad,
             deadline_ms: 16.0,
             stereo: Stereo::Left,

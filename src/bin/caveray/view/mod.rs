@@ -20,7 +20,6 @@ use std::time::{Duration, Instant};
 
 use anari_library_caveray::engine::Deadline;
 use anari_library_caveray::render::warp::WarpMode;
-use anari_library_caveray::render::Backend;
 use clap::Args;
 use glam::{DVec3, UVec2};
 use serde::Serialize;
@@ -409,17 +408,7 @@ impl Viewer {
         };
         let rendering = match &shown {
             Shown::Rig(r) => r.built_for.clone(),
-            Shown::Display(_) => Rendering {
-                tf,
-                opacity_gain: 1.0,
-                opacity_floor: 0.0,
-                volume_offset: DVec3::ZERO,
-                volume_yaw: 0.0,
-                volume_pitch: 0.0,
-                step_factor: args.render.step_factor,
-                shading: args.render.shading,
-                backend: args.render.backend,
-            },
+            Shown::Display(_) => Rendering::at_rest(tf, &args.render),
         };
         let controls = Controls {
             head,
@@ -824,17 +813,7 @@ fn placeholder_controls() -> Controls {
     Controls {
         head: DVec3::ZERO,
         ypr: DVec3::ZERO,
-        rendering: Rendering {
-            tf: String::new(),
-            opacity_gain: 1.0,
-            opacity_floor: 0.0,
-            volume_offset: DVec3::ZERO,
-            volume_yaw: 0.0,
-            volume_pitch: 0.0,
-            step_factor: 1.0,
-            shading: Default::default(),
-            backend: Backend::Auto,
-        },
+        rendering: Rendering::at_rest(String::new(), &RenderOptions::default()),
         warp: WarpMode::None,
         deadline_ms: 0.0,
         stereo: Stereo::Left,

@@ -145,17 +145,7 @@ impl RigShow {
                 .map_err(|e| Failure::Usage(format!("wall \"{}\": {e}", wall.name)))?;
         }
         let loaded = volume.load()?;
-        let built_for = Rendering {
-            tf: loaded.tf_name().to_string(),
-            opacity_gain: 1.0,
-            opacity_floor: 0.0,
-            volume_offset: DVec3::ZERO,
-            volume_yaw: 0.0,
-            volume_pitch: 0.0,
-            step_factor: render.step_factor,
-            shading: render.shading,
-            backend: render.backend,
-        };
+        let built_for = Rendering::at_rest(loaded.tf_name().to_string(), render);
         let scene = loaded.placed(rig.scene, &rig.viewer.frame, rig.units)?;
         let (vlo, vhi) = scene.bounds();
         let corners: Vec<DVec3> = rig.walls.iter().flat_map(|w| w.screen.corners()).collect();

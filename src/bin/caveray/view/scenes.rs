@@ -132,7 +132,6 @@ fn make(loaded: &mut Loaded, p: Placing, a: &Ask) -> Result<Scene, Failure> {
 mod tests {
     use super::*;
     use crate::scene::VolumeArgs;
-    use anari_library_caveray::render::{Backend, Shading};
     use clap::Parser;
     use glam::DVec3;
     use std::time::{Duration, Instant};
@@ -145,15 +144,8 @@ mod tests {
 
     fn rendering(tf: &str, gain: f32) -> Rendering {
         Rendering {
-            tf: tf.into(),
             opacity_gain: gain,
-            opacity_floor: 0.0,
-            volume_offset: DVec3::ZERO,
-            volume_yaw: 0.0,
-            volume_pitch: 0.0,
-            step_factor: 1.0,
-            shading: Shading::None,
-            backend: Backend::Cpu,
+            ..Rendering::at_rest(tf.into(), &Default::default())
         }
     }
 
