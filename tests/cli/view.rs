@@ -143,8 +143,24 @@ fn bad_view_options_are_refused_with_their_reasons() {
             "expected left, right, anaglyph or side-by-side",
         ),
         (vec!["--deadline", "0"], "--deadline must be 1 to 10000 ms"),
+        (
+            vec![
+                "--config",
+                "cave_configs/lenticular_8view.toml",
+                "--eyes",
+                "anaglyph",
+                "--play",
+            ],
+            "--play and --eyes do not apply to a multi-view display",
+        ),
     ] {
-        let mut args = vec!["view", "--config", RIG];
+        let config = if extra.contains(&"--config") {
+            &[][..]
+        } else {
+            &["--config", RIG][..]
+        };
+        let mut args = vec!["view"];
+        args.extend_from_slice(config);
         args.extend_from_slice(&extra);
         let out = caveray(&args);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -387,4 +403,38 @@ fn in_a_window_keys_and_a_drag_move_the_head_and_the_walls_converge_to_render() 
         "the front wall did not change after the move"
     );
     assert!(changed >= 1);
+}
+
+#[test]
+fn a_multi_view_display_shows_its_panel_beside_one_view() {
+    let dir = scratch("display");
+    let shot = dir.join("display.png");
+    let out = caveray(&[
+        "view",
+        "--config",
+        "cave_configs/lenticular_8view.toml",
+        "--volume",
+        "phantom:24",
+        "--scale",
+        "0.1",
+        "--headless-frames",
+        "20",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let info = json(&shot.with_extension("json"));
+    let walls = info["walls"].as_array().unwrap();
+    let names: Vec<&str> = walls.iter().map(|w| w["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["panel", "view 0"]);
+    // The panel and the view pixel for pixel, at the display's 1920 x 1200
+    // times 0.1.
+    for w in walls {
+        assert_eq!(w["rect"][2].as_u64(), Some(192), "{w}");
+        assert_eq!(w["rect"][3].as_u64(), Some(120), "{w}");
+    }
 }

@@ -180,7 +180,7 @@ fn main() -> ExitCode {
         Command::Inspect(args) => inspect::run(args),
         Command::Bench(command) => bench::run(command),
         Command::Replay(args) => replay::run(args),
-        Command::View(args) => view::run(args),
+        Command::View(args) => view::run(args, &given("view")),
     };
     let succeeded = result.is_ok();
     let code = match result {

@@ -26,7 +26,7 @@ use serde::Serialize;
 
 use crate::options::RenderOptions;
 use crate::scene::VolumeArgs;
-use crate::{Failure, HeadArgs};
+use crate::{Failure, Given, HeadArgs};
 
 use compose::{Composer, Gpu, Overlay, Stage};
 use controls::{Controls, Held, Look, Rendering, Stereo};
@@ -237,7 +237,29 @@ struct Percentiles {
     max: f64,
 }
 
-pub fn run(args: ViewArgs) -> Result<(), Failure> {
+pub fn run(args: ViewArgs, given: &Given) -> Result<(), Failure> {
+    if crate::render_display::is_display(&args.config) {
+        given.refuse(
+            &[
+                "--head",
+                "--head-ypr",
+                "--time",
+                "--play",
+                "--eyes",
+                "--look",
+                "--warp",
+                "--deadline",
+                "--strategy",
+                "--shading",
+                "--backend",
+                "--step-factor",
+                "--gpu-sampling",
+            ],
+            ["does", "do"],
+            "not apply to a multi-view display, which shows its panel and one view, each an \
+             isosurface rendered on the CPU from the display's own eye line",
+        )?;
+    }
     if !(args.scale.is_finite() && args.scale > 0.0 && args.scale <= 4.0) {
         return Err(Failure::Usage(format!(
             "--scale must be in (0, 4], got {}",
