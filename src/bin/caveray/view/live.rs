@@ -19,7 +19,7 @@ use anari_library_caveray::render::{Backend, FrameDesc, RenderSettings, StreamWa
 use anari_library_caveray::scene::Scene;
 use glam::UVec2;
 
-/// Messages the engine's threads leave for the window, newest last.
+/// How many of the engine's newest messages the window keeps to show.
 const KEEP_NOTES: usize = 6;
 
 /// What one refresh asks of every pane.

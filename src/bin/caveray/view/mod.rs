@@ -206,8 +206,7 @@ struct ShotWall {
     rect: Option<[u32; 4]>,
 }
 
-/// Rendered frames of a pane past which a run's figures are taken (the
-/// first ones compile and fill caches).
+/// What `--json` writes when the run ends.
 #[derive(Serialize)]
 struct Report {
     config: String,
