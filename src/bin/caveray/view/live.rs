@@ -46,10 +46,11 @@ struct Pane {
     renders: FrameRenders,
     /// The inputs of the frame being presented.
     asked: Option<Arc<Inputs>>,
-    /// The newest frame's shown image, and whether it was of the views
-    /// asked for now.
+    /// The inputs of the newest frame shown, and what it showed.
+    shown_for: Option<Arc<Inputs>>,
     last: Option<ShownImage>,
-    current: bool,
+    /// The inputs of the current head, asked for this refresh.
+    wanted: Option<Arc<Inputs>>,
     stats: PaneStats,
 }
 
@@ -115,7 +116,11 @@ impl Live {
     pub fn converged(&self, wanted: &[usize]) -> bool {
         wanted.iter().all(|&i| {
             let p = &self.panes[i];
-            p.current && p.last.is_some_and(|s| s.own)
+            let current = match (&p.shown_for, &p.wanted) {
+                (Some(shown), Some(wanted)) => **shown == **wanted,
+                _ => false,
+            };
+            current && p.last.is_some_and(|s| s.own)
         })
     }
 
@@ -147,6 +152,7 @@ impl Live {
                 accumulate: false,
                 share: None,
             });
+            pane.wanted = Some(Arc::clone(&inputs));
             if pane.renders.slot.is_busy() {
                 continue;
             }
@@ -161,7 +167,7 @@ impl Live {
                     };
                     drop(state);
                     pane.last = Some(shown);
-                    pane.current = *asked == *inputs;
+                    pane.shown_for = Some(asked);
                     pane.stats.record(&presented, ask.deadline.after);
                     out.push((index, presented));
                 }
@@ -194,7 +200,7 @@ impl Live {
     /// converged again once a frame of the new inputs shows its own image.
     pub fn forget(&mut self, pane: usize) {
         let p = &mut self.panes[pane];
-        p.current = false;
+        p.shown_for = None;
         p.last = None;
     }
 }

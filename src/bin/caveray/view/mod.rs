@@ -541,12 +541,9 @@ impl Viewer {
         self.last_frame = Some(now);
         self.apply(input, dt);
 
-        let figures_walls;
-        let mut notes = Vec::new();
-        let (path_seconds, display_views);
         match &mut self.shown {
             Shown::Rig(r) => {
-                r.rebuild(&self.controls, &mut notes);
+                r.rebuild(&self.controls);
                 let deadline = Deadline {
                     after: Duration::from_secs_f32(self.controls.deadline_ms / 1e3),
                     warp: self.controls.warp,
@@ -561,10 +558,6 @@ impl Viewer {
                     );
                 }
                 self.converged = r.live.converged(&r.asked);
-                figures_walls = r.figures();
-                notes.extend(r.live.notes());
-                path_seconds = r.rig.viewer.path.last().map_or(0.0, |k| k.time);
-                display_views = 0;
             }
             Shown::Display(d) => {
                 d.want(self.controls.display_view);
@@ -573,23 +566,27 @@ impl Viewer {
                         .set_image(&self.gpu, slot, 0, Some((size, &pixels)));
                 }
                 self.converged = d.converged(self.controls.display_view);
-                figures_walls = Vec::new();
-                notes.extend(d.notes());
-                path_seconds = 0.0;
-                display_views = d.views();
             }
         }
         let mut platform = None;
         if let Some(raw) = raw {
+            // What the panel and the overlay show, gathered only when egui
+            // runs.
+            let (walls, notes, path_seconds, display_views) = match &self.shown {
+                Shown::Rig(r) => (
+                    r.figures(),
+                    r.notes(),
+                    r.rig.viewer.path.last().map_or(0.0, |k| k.time),
+                    0,
+                ),
+                Shown::Display(d) => (Vec::new(), d.notes(), 0.0, d.views()),
+            };
             let figures = Figures {
                 fps: self.fps,
                 frame_ms: self.frame_ms,
-                walls: figures_walls
-                    .iter()
-                    .map(|(name, eyes)| WallFigures {
-                        name,
-                        eyes: eyes.clone(),
-                    })
+                walls: walls
+                    .into_iter()
+                    .map(|(name, eyes)| WallFigures { name, eyes })
                     .collect(),
                 converged: self.converged,
                 renderer: &self.renderer_label,

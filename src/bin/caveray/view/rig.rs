@@ -31,6 +31,8 @@ pub struct RigShow {
     pub built_for: Rendering,
     /// The placed volume's centre, which it turns about.
     volume_centre: DVec3,
+    /// Why the last look asked for was refused, until one is made.
+    refused: Option<String>,
     pub live: Live,
     settings: RenderSettings,
     strategy: Strategy,
@@ -168,6 +170,7 @@ impl RigShow {
             scene,
             built_for,
             volume_centre: (0.5 * (vlo + vhi)).as_dvec3(),
+            refused: None,
             live: Live::new(panes),
             settings: render.settings(),
             strategy: render.strategy,
@@ -181,7 +184,7 @@ impl RigShow {
 
     /// Takes the scene made since the last refresh, and asks for a new
     /// one where the volume's look changed (one at a time, off this thread).
-    pub fn rebuild(&mut self, c: &Controls, notes: &mut Vec<String>) {
+    pub fn rebuild(&mut self, c: &Controls) {
         let want = &c.rendering;
         self.settings.step_factor = want.step_factor;
         self.settings.shading = want.shading;
@@ -190,11 +193,15 @@ impl RigShow {
                 Ok(scene) => {
                     self.scene = scene;
                     self.built_for = made.rendering;
+                    self.refused = None;
                     for pane in 0..2 * self.rig.walls.len() {
                         self.live.forget(pane);
                     }
                 }
-                Err(e) => notes.push(e),
+                Err(e) => {
+                    eprintln!("caveray view: {e}");
+                    self.refused = Some(e);
+                }
             }
         }
         if !same_look(want, &self.built_for) {
@@ -241,6 +248,13 @@ impl RigShow {
             deadline,
         };
         self.live.refresh(&ask, &views)
+    }
+
+    /// The engine's newest messages, and why a look was refused.
+    pub fn notes(&self) -> Vec<String> {
+        let mut notes = self.live.notes();
+        notes.extend(self.refused.clone());
+        notes
     }
 
     /// Each wall's name and its eyes' figures.
